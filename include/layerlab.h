@@ -1,0 +1,21 @@
+/*
+ * layerlab — layered material reflectance (Jakob, d'Eon, Jakob, Marschner,
+ * "A Comprehensive Framework for Rendering Layered Materials", SIGGRAPH 2014).
+ *
+ * The umbrella header: include this one. Plain C99, usable from C++.
+ *   ll_common.h   versions, status codes, error messages, threads
+ *   ll_quad.h     quadrature rules
+ *   ll_layer.h    layers: words (diffuse, media, interfaces) and grammar (adding, doubling)
+ *   ll_bsdf.h     .bsdf files: write, open, evaluate, sample
+ *   ll_material.h the material language and its compiler
+ */
+#ifndef LAYERLAB_H
+#define LAYERLAB_H
+
+#include "layerlab/ll_common.h"
+#include "layerlab/ll_quad.h"
+#include "layerlab/ll_layer.h"
+#include "layerlab/ll_bsdf.h"
+#include "layerlab/ll_material.h"
+
+#endif /* LAYERLAB_H */

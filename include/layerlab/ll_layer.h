@@ -1,0 +1,209 @@
+/*
+ * layerlab — layers: the scattering matrices of one slab or interface, per
+ * Fourier order of the azimuth, and the adding-doubling method that combines
+ * them (Jakob, d'Eon, Jakob, Marschner: "A Comprehensive Framework for
+ * Rendering Layered Materials", SIGGRAPH 2014, sections 4-6).
+ *
+ * Conventions (the original layerlab's):
+ *  - mu is a zenith cosine of a *direction of travel*: mu > 0 travels down
+ *    (light arriving from above the layer), mu < 0 travels up. A layer lit
+ *    from above reflects into mu < 0 and transmits into mu > 0.
+ *  - phi_d is the azimuth between the two directions, in the convention of
+ *    the original: for a smooth interface the specular reflection of mu_i is
+ *    mu_o = -mu_i at phi_d = 0... see ll_layer_eval.
+ *  - f(mu_o, mu_i, phi) = sum_l f_l(mu_o, mu_i) cos(l phi); each order l is an
+ *    n x n matrix with four h x h blocks (h = n / 2): rows = outgoing,
+ *    columns = incident, R^t (lit from above, reflected up), R^b, T^tb
+ *    (lit from above, transmitted down) and T^bt.
+ *
+ * Ownership and threads: an ll_layer is created by ll_layer_create or
+ * ll_layer_clone and freed by ll_layer_destroy. A layer may be read (eval,
+ * matrix, albedo) from many threads at once; calls that modify a layer need
+ * exclusive access to it. Internally, adding, doubling and interface
+ * construction use ll_get_thread_count() threads; results are identical for
+ * any thread count. Every setter and combination either succeeds or leaves
+ * its output layer exactly as it was.
+ */
+#ifndef LAYERLAB_LL_LAYER_H
+#define LAYERLAB_LL_LAYER_H
+
+#include "ll_common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct ll_layer ll_layer;
+
+/* ------------------------------------------------------------ life cycle */
+
+/* Create a layer on the given zenith-cosine discretisation: n_nodes nodes
+ * in [-1, 1] (even count >= 2, no node at 0, finite, distinct, symmetric
+ * about 0: the nodes of a quadrature rule), their integration weights
+ * (positive, finite), and n_orders >= 1 Fourier orders. Nodes may be given
+ * in ascending order (as the ll_quad_* rules write them). The new layer is
+ * clear: no reflection, full transmission (R = 0, T = I for every order).
+ * *out receives the layer, or NULL on failure. */
+LL_API ll_status ll_layer_create(const double *nodes, const double *weights,
+                                 size_t n_nodes, size_t n_orders, ll_layer **out);
+
+/* A deep copy (internally, unchanged Fourier orders are shared copy-on-write,
+ * so a clone is cheap). */
+LL_API ll_status ll_layer_clone(const ll_layer *layer, ll_layer **out);
+
+/* Free a layer; NULL is fine. */
+LL_API void ll_layer_destroy(ll_layer *layer);
+
+/* Number of zenith-cosine nodes n, and of Fourier orders m. 0 for NULL. */
+LL_API size_t ll_layer_node_count(const ll_layer *layer);
+LL_API size_t ll_layer_order_count(const ll_layer *layer);
+
+/* Copy the nodes and weights in ascending node order (as given to
+ * ll_layer_create). Either buffer may be NULL; each holds node_count values. */
+LL_API ll_status ll_layer_get_nodes(const ll_layer *layer, double *nodes, double *weights);
+
+/* Number of matrix entries actually stored (over all orders and blocks);
+ * the rest are zero. A measure of memory use: about 8 bytes each. */
+LL_API size_t ll_layer_stored_count(const ll_layer *layer);
+
+/* ----------------------------------------------------------------- words
+ * Each setter replaces the layer's contents. */
+
+/* Lambertian reflector with the given albedo in [0, 1] on both sides:
+ * f = albedo / pi on the reflection blocks, Fourier order 0 only, no
+ * transmission. */
+LL_API ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo);
+
+/* Phase function of an infinitesimally thin isotropic medium with single-
+ * scattering albedo in [0, 1]: p = albedo / (4 pi). Use ll_layer_expand to
+ * give it a thickness. */
+LL_API ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo);
+
+/* Henyey-Greenstein phase function with asymmetry g in (-1, 1).
+ * The phase matrices are built from the Legendre expansion of the phase
+ * function (chi_k = g^k) truncated with the delta-M method (Wiscombe 1977)
+ * at as many terms as the quadrature integrates exactly; the truncated
+ * forward peak is kept as an exact forward (identity) term. This makes the
+ * discrete scattering conserve energy exactly and matches discrete-ordinate
+ * codes such as DISORT, where pointwise sampling of a peaked phase function
+ * would lose energy. */
+LL_API ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g);
+
+/* von Mises-Fisher phase function p ~ exp(kappa cos theta), kappa >= 0
+ * (kappa = 0 is isotropic); same construction as Henyey-Greenstein. */
+LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa);
+
+/* Rough interface with a Beckmann microfacet distribution (Walter et al.
+ * 2007) between the medium above and one of relative index
+ * eta = eta_re + i eta_im below. eta_im > 0: a conductor (opaque, reflects
+ * on both sides as seen from above); eta_im == 0: a dielectric (reflects and
+ * transmits; eta_re < 1 is allowed). alpha > 0 is the Beckmann roughness;
+ * alpha below LL_MICROFACET_MIN_ALPHA is rejected (the series would need
+ * more orders than any layer can hold). conserve_energy != 0 adds the
+ * paper's multiple-scattering compensation term (recommended: on).
+ * n_orders_internal: Fourier orders used internally (0 = the layer's). */
+#define LL_MICROFACET_MIN_ALPHA 1e-3
+LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
+                                         double alpha, int conserve_energy,
+                                         size_t n_orders_internal);
+
+/* A measured isotropic BRDF in the MERL format ("Matusik et al. 2003",
+ * .binary files), colour channel 0, 1 or 2 (R, G, B). The file's values are
+ * multiplied by the MERL scale factors (1/1500, 1.15/1500, 1.66/1500) which
+ * give reflectance in units of 1/sr. n_orders_internal as above. */
+LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
+                                      size_t n_orders_internal);
+
+/* ------------------------------------------------------------- grammar */
+
+/* Adding equations (Grant and Hunt 1969): out = top stacked on bottom.
+ * top, bottom and out must have the same nodes and order count; out may be
+ * top or bottom (or both). homogeneous != 0 promises that top and bottom are
+ * the same symmetric slab (R^t = R^b, T^tb = T^bt), which halves the work.
+ * Each Fourier order: one LU factorisation per gain matrix, then solves and
+ * products (LAPACK getrf/getrs, BLAS gemm), orders in parallel. */
+LL_API ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                              int homogeneous);
+
+/* layer = top stacked on layer. */
+LL_API ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top);
+/* layer = layer stacked on bottom. */
+LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom);
+
+/* Doubling: the layer holds a phase function (set_isotropic, set_henyey_
+ * greenstein, set_von_mises_fisher); turn it into a slab of optical
+ * thickness tau >= 0 (tau = 0 gives a clear layer). Starts from a thin
+ * slab tau0 <= min(2 min|mu|, 2^-15) chosen so that tau0 2^k = tau exactly,
+ * and adds it to itself k times. */
+LL_API ll_status ll_layer_expand(ll_layer *layer, double tau);
+
+/* Turn the layer upside down (swap top and bottom). */
+LL_API ll_status ll_layer_reverse(ll_layer *layer);
+
+/* Make the layer clear (R = 0, T = I). */
+LL_API ll_status ll_layer_clear(ll_layer *layer);
+
+/* ------------------------------------------------------------- reading */
+
+/* The BSDF value f(mu_o, mu_i, phi_d) without cosine factor, interpolated
+ * between nodes with Catmull-Rom splines in mu and summed over Fourier
+ * orders; negative results clamp to 0. Argument order and conventions are
+ * the original layerlab's Layer::eval. Returns 0 for NULL or NaN input. */
+LL_API double ll_layer_eval(const ll_layer *layer, double mu_o, double mu_i, double phi_d);
+
+/* Vectorised ll_layer_eval: out[k] = eval(mu_o[k], mu_i[k], phi_d[k]) for
+ * k < count. phi_d may be NULL (0 everywhere). */
+LL_API ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_o,
+                                    const double *mu_i, const double *phi_d, double *out);
+
+/* The n x n BSDF matrix of Fourier order `order`, integration weights and
+ * cosine factors removed (values of f_l), rows (outgoing) and columns
+ * (incident) in ascending node order, stored row-major:
+ * out[row * n + col]. out holds n * n doubles. */
+LL_API ll_status ll_layer_matrix(const ll_layer *layer, size_t order, double *out);
+
+/* Directional-hemispherical totals for light travelling in direction mu_i
+ * (mu_i > 0: arriving from above; mu_i < 0: from below), |mu_i| in (0, 1]:
+ * the fraction reflected and the fraction transmitted, the unscattered
+ * part of the transmission included. Either output may be NULL. */
+LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *reflectance,
+                                 double *transmittance);
+
+/* ---------------------------------------------------------- heuristics */
+
+/* The resolution (even node count n, Fourier orders m) that a Henyey-
+ * Greenstein medium with asymmetry g in (-1, 1) needs (the original
+ * layerlab's parameterHeuristicHG). */
+LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
+
+/* The resolution that a rough interface needs (the paper's fits,
+ * parameterHeuristicMicrofacet, extended to every eta: dielectric fits are
+ * interpolated in eta, eta < 1 uses 1/eta, and eta beyond the fitted range
+ * 1.1..1.7 uses the nearest fit scaled by the width of the refracted lobe;
+ * conductors use the generic conductor fit). alpha > 0. */
+LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im,
+                                         size_t *n_nodes, size_t *n_orders);
+
+/* ------------------------------------------------------------- Fresnel */
+
+/* Unpolarised Fresnel reflectance of a smooth dielectric boundary with
+ * relative index eta (transmitted side / incident side) for light arriving
+ * with cos_theta_i (the sign chooses the side: cos_theta_i < 0 means the
+ * light arrives from the other side, where the relative index is 1/eta).
+ * cos_theta_t (nullable) receives the cosine of the refracted direction with
+ * the sign of the side it leaves into, 0 under total internal reflection. */
+LL_API double ll_fresnel_dielectric(double cos_theta_i, double eta, double *cos_theta_t);
+
+/* Unpolarised Fresnel reflectance of a conductor of complex relative index
+ * eta_re + i eta_im, cos_theta_i in [0, 1]. */
+LL_API double ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im);
+
+/* Hemispherical averages 2 * integral_0^1 F(mu) mu dmu: the fraction of
+ * uniformly diffuse light that the boundary reflects. */
+LL_API double ll_fresnel_dielectric_average(double eta);
+LL_API double ll_fresnel_conductor_average(double eta_re, double eta_im);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_LAYER_H */

@@ -1,0 +1,75 @@
+/*
+ * layerlab — the material language: a text description of a layer stack
+ * (top to bottom, one word per line) compiled into layers or a .bsdf file.
+ * The language is described in the README and by `llbuild --help`.
+ *
+ * An ll_material is immutable once parsed: it may be built from several
+ * threads at once.
+ */
+#ifndef LAYERLAB_LL_MATERIAL_H
+#define LAYERLAB_LL_MATERIAL_H
+
+#include "ll_common.h"
+#include "ll_layer.h"
+#include "ll_bsdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct ll_material ll_material;
+
+/* Parse a material description. source_name (nullable) names the text in
+ * messages ("coated.layers:3:14: ..."). Errors: LL_ERROR_PARSE with file,
+ * line, column and what was expected in ll_last_error_message(). */
+LL_API ll_status ll_material_parse(const char *text, const char *source_name,
+                                   ll_material **out);
+/* The same for a file; relative `file=` paths inside resolve against the
+ * file's directory. */
+LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
+LL_API void ll_material_destroy(ll_material *material);
+
+/* Progress: fraction in [0, 1] of the whole build, a short stage name
+ * ("dielectric interface", "medium", "adding", "writing"). Called on the
+ * thread that called the build. */
+typedef void (*ll_progress_fn)(double fraction, const char *stage, void *user);
+
+typedef struct ll_build_options {
+    size_t struct_size;        /* sizeof(ll_build_options)                         */
+    size_t n_nodes;            /* 0: the material's setting, else the heuristic     */
+    size_t n_orders;           /* 0: likewise                                       */
+    size_t n_channels;         /* 0: from the material; 1 or 3 forces               */
+    size_t threads;            /* 0: all processors                                 */
+    double error_goal;         /* 0: the material's setting, else 1e-3              */
+    ll_progress_fn progress;   /* nullable                                          */
+    void *progress_user;
+    const volatile int *cancel;/* nullable; nonzero stops with LL_ERROR_CANCELLED   */
+} ll_build_options;
+
+#define LL_BUILD_OPTIONS_INIT { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL }
+
+/* The resolution and channel count a build with these options would use. */
+LL_API ll_status ll_material_resolution(const ll_material *material,
+                                        const ll_build_options *opts, size_t *n_nodes,
+                                        size_t *n_orders, size_t *n_channels);
+
+/* Build and write a .bsdf file (atomically; a failed or cancelled build
+ * leaves no file and does not touch an existing one). */
+LL_API ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
+                                   const char *out_path);
+
+/* Build in memory: layers receives n_channels layers (caller frees each with
+ * ll_layer_destroy); header (nullable) receives the eta and alpha that a
+ * file of this stack carries. */
+LL_API ll_status ll_material_build_layers(const ll_material *material,
+                                          const ll_build_options *opts,
+                                          ll_layer *layers[3], size_t *n_channels,
+                                          ll_bsdf_write_options *header);
+
+/* Number of words (layers) in the stack. */
+LL_API size_t ll_material_word_count(const ll_material *material);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_MATERIAL_H */

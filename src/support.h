@@ -1,0 +1,51 @@
+/*
+ * Internal support: error reporting, checked allocation, threads.
+ * Everything here is private to liblayerlab (hidden visibility).
+ */
+#ifndef LL_SUPPORT_H
+#define LL_SUPPORT_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "layerlab/ll_common.h"
+
+#if defined(__GNUC__)
+#  define LL_PRINTF(a, b) __attribute__((format(printf, a, b)))
+#  define LL_INTERNAL __attribute__((visibility("hidden")))
+#else
+#  define LL_PRINTF(a, b)
+#  define LL_INTERNAL
+#endif
+
+/* Record a failure for ll_last_error_message() on this thread and return
+ * status, so that call sites read `return ll_fail(LL_ERROR_..., "...", ...)`. */
+LL_INTERNAL ll_status ll_fail(ll_status status, const char *fmt, ...) LL_PRINTF(2, 3);
+
+/* Overflow-checked size arithmetic: return 0 on overflow, else 1 and *out. */
+LL_INTERNAL int ll_size_mul(size_t a, size_t b, size_t *out);
+LL_INTERNAL int ll_size_add(size_t a, size_t b, size_t *out);
+
+/* malloc/calloc of count * size bytes with the multiplication checked; NULL on
+ * overflow or failure (count == 0 gives a valid 1-byte block). */
+LL_INTERNAL void *ll_alloc_array(size_t count, size_t size);
+LL_INTERNAL void *ll_calloc_array(size_t count, size_t size);
+
+/* Threads that a parallel region started by the calling thread may use. */
+LL_INTERNAL size_t ll_threads_for_calling_thread(void);
+
+/* Run body(i, ctx) for i in [0, count) on up to ll_get_thread_count() threads
+ * (dynamic schedule). Inside body, BLAS/LAPACK run single-threaded, so every
+ * item is computed by exactly the same sequence of operations whatever the
+ * thread count: results are bit-identical. body returns LL_OK or a status;
+ * the first failure (lowest index) is returned and its message kept. */
+typedef ll_status (*ll_parallel_body)(size_t index, void *ctx);
+LL_INTERNAL ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx);
+
+/* Helpers for argument checks. */
+LL_INTERNAL int ll_is_finite(double x);
+
+#define LL_PI 3.14159265358979323846
+#define LL_INV_PI 0.31830988618379067154
+#define LL_INV_FOUR_PI 0.07957747154594766788
+
+#endif /* LL_SUPPORT_H */
