@@ -1,0 +1,301 @@
+"""Loading liblayerlab and describing its C ABI to ctypes.
+
+The package has no compiled extension: every call goes through the library's
+stable C ABI (``include/layerlab.h``), so one pure-Python package serves every
+Python version. This module finds the shared library, checks its version,
+declares the prototypes of the functions the package uses, and turns a
+failing ``ll_status`` into a Python exception carrying the library's message.
+
+Search order (the first that loads wins):
+  1. the path in the environment variable ``LAYERLAB_LIBRARY``;
+  2. an installed prefix: ``$(pkg-config --variable=libdir layerlab)``;
+  3. the system's library path (``ctypes.util.find_library`` and the soname).
+"""
+
+import ctypes
+import ctypes.util
+import os
+import subprocess
+
+from ._errors import UnsupportedError, error_for_status
+
+# The soname tracks the ABI (liblayerlab.so.ABI_VERSION); the package speaks
+# ABI 1 and needs at least the release that introduced every function below.
+ABI_VERSION = 1
+REQUIRED_MAJOR = 0
+MINIMUM_VERSION = (0, 1, 0)
+
+# ------------------------------------------------------------ C types
+
+c_double_p = ctypes.POINTER(ctypes.c_double)
+c_float_p = ctypes.POINTER(ctypes.c_float)
+c_size_t_p = ctypes.POINTER(ctypes.c_size_t)
+status_t = ctypes.c_int32
+
+
+class LayerStruct(ctypes.Structure):
+    """Opaque ``ll_layer``."""
+
+
+class BsdfStruct(ctypes.Structure):
+    """Opaque ``ll_bsdf``."""
+
+
+class MaterialStruct(ctypes.Structure):
+    """Opaque ``ll_material``."""
+
+
+layer_p = ctypes.POINTER(LayerStruct)
+bsdf_p = ctypes.POINTER(BsdfStruct)
+material_p = ctypes.POINTER(MaterialStruct)
+
+
+class BsdfWriteOptions(ctypes.Structure):
+    """``ll_bsdf_write_options`` (size-tagged)."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("eta", ctypes.c_double),
+                ("alpha", ctypes.c_double * 2),
+                ("metadata", ctypes.c_char_p),
+                ("error_goal", ctypes.c_double)]
+
+    def __init__(self):
+        # The values of LL_BSDF_WRITE_OPTIONS_INIT.
+        super().__init__(ctypes.sizeof(BsdfWriteOptions), 1.0, (0.0, 0.0), None, 1e-3)
+
+
+class BsdfInfo(ctypes.Structure):
+    """``ll_bsdf_info`` (size-tagged)."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("n_nodes", ctypes.c_size_t),
+                ("max_order", ctypes.c_size_t),
+                ("n_channels", ctypes.c_size_t),
+                ("n_bases", ctypes.c_size_t),
+                ("n_parameters", ctypes.c_size_t),
+                ("n_coeffs", ctypes.c_size_t),
+                ("eta", ctypes.c_double),
+                ("alpha", ctypes.c_double * 2),
+                ("metadata", ctypes.c_char_p),
+                ("metadata_size", ctypes.c_size_t),
+                ("file_size", ctypes.c_size_t),
+                ("flags", ctypes.c_uint32)]
+
+    def __init__(self):
+        super().__init__()
+        self.struct_size = ctypes.sizeof(BsdfInfo)
+
+
+progress_fn = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_char_p, ctypes.c_void_p)
+
+
+class BuildOptions(ctypes.Structure):
+    """``ll_build_options`` (size-tagged)."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("n_nodes", ctypes.c_size_t),
+                ("n_orders", ctypes.c_size_t),
+                ("n_channels", ctypes.c_size_t),
+                ("threads", ctypes.c_size_t),
+                ("error_goal", ctypes.c_double),
+                ("progress", progress_fn),
+                ("progress_user", ctypes.c_void_p),
+                ("cancel", ctypes.POINTER(ctypes.c_int))]
+
+    def __init__(self):
+        super().__init__()
+        self.struct_size = ctypes.sizeof(BuildOptions)
+
+
+_S, _D, _Z, _I = status_t, ctypes.c_double, ctypes.c_size_t, ctypes.c_int
+_P3 = ctypes.c_double * 3
+
+# name: (return type, argument types), exactly as declared in include/layerlab/.
+PROTOTYPES = {
+    # ll_common.h
+    "ll_version_number": (_I, []),
+    "ll_version_string": (ctypes.c_char_p, []),
+    "ll_status_string": (ctypes.c_char_p, [_S]),
+    "ll_last_error_message": (ctypes.c_char_p, []),
+    "ll_set_thread_count": (_S, [_Z]),
+    "ll_get_thread_count": (_Z, []),
+    # ll_quad.h
+    "ll_quad_gauss_legendre": (_S, [_Z, c_double_p, c_double_p]),
+    "ll_quad_gauss_lobatto": (_S, [_Z, c_double_p, c_double_p]),
+    "ll_quad_composite_simpson": (_S, [_Z, c_double_p, c_double_p]),
+    "ll_quad_composite_simpson38": (_S, [_Z, c_double_p, c_double_p]),
+    # ll_layer.h
+    "ll_layer_create": (_S, [c_double_p, c_double_p, _Z, _Z, ctypes.POINTER(layer_p)]),
+    "ll_layer_clone": (_S, [layer_p, ctypes.POINTER(layer_p)]),
+    "ll_layer_destroy": (None, [layer_p]),
+    "ll_layer_node_count": (_Z, [layer_p]),
+    "ll_layer_order_count": (_Z, [layer_p]),
+    "ll_layer_get_nodes": (_S, [layer_p, c_double_p, c_double_p]),
+    "ll_layer_stored_count": (_Z, [layer_p]),
+    "ll_layer_set_diffuse": (_S, [layer_p, _D]),
+    "ll_layer_set_isotropic": (_S, [layer_p, _D]),
+    "ll_layer_set_henyey_greenstein": (_S, [layer_p, _D, _D]),
+    "ll_layer_set_von_mises_fisher": (_S, [layer_p, _D, _D]),
+    "ll_layer_set_microfacet": (_S, [layer_p, _D, _D, _D, _I, _Z]),
+    "ll_layer_set_matusik": (_S, [layer_p, ctypes.c_char_p, _I, _Z]),
+    "ll_layer_add": (_S, [layer_p, layer_p, layer_p, _I]),
+    "ll_layer_add_to_top": (_S, [layer_p, layer_p]),
+    "ll_layer_add_to_bottom": (_S, [layer_p, layer_p]),
+    "ll_layer_expand": (_S, [layer_p, _D]),
+    "ll_layer_reverse": (_S, [layer_p]),
+    "ll_layer_clear": (_S, [layer_p]),
+    "ll_layer_eval": (_D, [layer_p, _D, _D, _D]),
+    "ll_layer_eval_many": (_S, [layer_p, _Z, c_double_p, c_double_p, c_double_p, c_double_p]),
+    "ll_layer_matrix": (_S, [layer_p, _Z, c_double_p]),
+    "ll_layer_albedo": (_S, [layer_p, _D, c_double_p, c_double_p]),
+    "ll_heuristic_henyey_greenstein": (_S, [_D, c_size_t_p, c_size_t_p]),
+    "ll_heuristic_microfacet": (_S, [_D, _D, _D, c_size_t_p, c_size_t_p]),
+    "ll_fresnel_dielectric": (_D, [_D, _D, c_double_p]),
+    "ll_fresnel_conductor": (_D, [_D, _D, _D]),
+    "ll_fresnel_dielectric_average": (_D, [_D]),
+    "ll_fresnel_conductor_average": (_D, [_D, _D]),
+    # ll_bsdf.h
+    "ll_bsdf_write": (_S, [ctypes.c_char_p, ctypes.POINTER(layer_p), _Z,
+                           ctypes.POINTER(BsdfWriteOptions)]),
+    "ll_bsdf_open": (_S, [ctypes.c_char_p, ctypes.POINTER(bsdf_p)]),
+    "ll_bsdf_open_memory": (_S, [ctypes.c_void_p, _Z, ctypes.POINTER(bsdf_p)]),
+    "ll_bsdf_release": (None, [bsdf_p]),
+    "ll_bsdf_get_info": (_S, [bsdf_p, ctypes.POINTER(BsdfInfo)]),
+    "ll_bsdf_get_parameter": (_S, [bsdf_p, _Z, c_size_t_p, ctypes.POINTER(c_float_p)]),
+    "ll_bsdf_nodes": (c_float_p, [bsdf_p]),
+    "ll_bsdf_eval": (_S, [bsdf_p, _D, _D, _D, c_float_p, _P3]),
+    "ll_bsdf_pdf": (_D, [bsdf_p, _D, _D, _D, c_float_p]),
+    "ll_bsdf_sample": (_S, [bsdf_p, _D, ctypes.c_double * 2, c_float_p, c_double_p, c_double_p,
+                            c_double_p, _P3]),
+    "ll_bsdf_eval_dir": (_S, [bsdf_p, _P3, _P3, _I, c_float_p, _P3]),
+    "ll_bsdf_pdf_dir": (_D, [bsdf_p, _P3, _P3, c_float_p]),
+    "ll_bsdf_sample_dir": (_S, [bsdf_p, _P3, ctypes.c_double * 2, _I, c_float_p, _P3,
+                                c_double_p, _P3]),
+    # ll_material.h
+    "ll_material_parse": (_S, [ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(material_p)]),
+    "ll_material_parse_file": (_S, [ctypes.c_char_p, ctypes.POINTER(material_p)]),
+    "ll_material_destroy": (None, [material_p]),
+    "ll_material_resolution": (_S, [material_p, ctypes.POINTER(BuildOptions), c_size_t_p,
+                                    c_size_t_p, c_size_t_p]),
+    "ll_material_build": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.c_char_p]),
+    "ll_material_build_layers": (_S, [material_p, ctypes.POINTER(BuildOptions), layer_p * 3,
+                                      c_size_t_p, ctypes.POINTER(BsdfWriteOptions)]),
+    "ll_material_word_count": (_Z, [material_p]),
+}
+
+
+class Library:
+    """The loaded liblayerlab. Functions are declared on first use, so a
+    library that lacks one (an older build) still serves everything else and
+    the missing one fails with a clear :class:`UnsupportedError`."""
+
+    def __init__(self, cdll, path, how):
+        self._cdll = cdll
+        self.path = path
+        self.how = how
+
+    def __getattr__(self, name):
+        if name not in PROTOTYPES:
+            raise AttributeError(name)
+        try:
+            fn = getattr(self._cdll, name)
+        except AttributeError:
+            fn = _missing(name, self.path)
+        else:
+            fn.restype, fn.argtypes = PROTOTYPES[name]
+        setattr(self, name, fn)  # cache: later lookups skip __getattr__
+        return fn
+
+
+def _missing(name, path):
+    def fail(*_args):
+        raise UnsupportedError(
+            "%s is not exported by the loaded liblayerlab (%s); this build of the library "
+            "predates the function, rebuild or reinstall it" % (name, path), 6)
+    return fail
+
+
+def _candidates():
+    """(description, path or name) pairs in search order; LAYERLAB_LIBRARY is
+    handled by the caller because a wrong explicit path must not fall through."""
+    found = []
+    try:
+        libdir = subprocess.run(["pkg-config", "--variable=libdir", "layerlab"],
+                                capture_output=True, text=True, timeout=30)
+        if libdir.returncode == 0 and libdir.stdout.strip():
+            d = libdir.stdout.strip()
+            for name in ("liblayerlab.so.%d" % ABI_VERSION, "liblayerlab.dylib"):
+                found.append(("pkg-config libdir", os.path.join(d, name)))
+        else:
+            found.append(("pkg-config", None))
+    except (OSError, subprocess.SubprocessError):
+        found.append(("pkg-config (not installed)", None))
+    name = ctypes.util.find_library("layerlab")
+    if name:
+        found.append(("ctypes.util.find_library('layerlab')", name))
+    found.append(("system library path", "liblayerlab.so.%d" % ABI_VERSION))
+    return found
+
+
+def _check_version(cdll, path):
+    fn = cdll.ll_version_number
+    fn.restype, fn.argtypes = ctypes.c_int, []
+    number = fn()
+    major, minor, patch = number // 10000, number // 100 % 100, number % 100
+    if major != REQUIRED_MAJOR or (major, minor, patch) < MINIMUM_VERSION:
+        raise ImportError(
+            "liblayerlab at %s is version %d.%d.%d; this package needs %d.x, at least %d.%d.%d "
+            "(ABI %d)" % ((path, major, minor, patch, REQUIRED_MAJOR) + MINIMUM_VERSION
+                          + (ABI_VERSION,)))
+
+
+def load():
+    """Find, load and version-check liblayerlab; ImportError says what was tried."""
+    explicit = os.environ.get("LAYERLAB_LIBRARY")
+    if explicit:
+        candidates = [("LAYERLAB_LIBRARY", explicit)]
+    else:
+        candidates = _candidates()
+    tried = []
+    for how, target in candidates:
+        if target is None:
+            tried.append("%s: no layerlab package found" % how)
+            continue
+        try:
+            cdll = ctypes.CDLL(target)
+        except OSError as e:
+            tried.append("%s: %s (%s)" % (how, target, e))
+            continue
+        try:
+            cdll.ll_version_number
+        except AttributeError:
+            tried.append("%s: %s is not liblayerlab (no ll_version_number)" % (how, target))
+            continue
+        _check_version(cdll, target)
+        return Library(cdll, target, how)
+    hint = ("set LAYERLAB_LIBRARY to the path of liblayerlab.so, or `make install` the library "
+            "so that pkg-config finds it")
+    raise ImportError("layerlab: cannot load the C library liblayerlab. Tried:\n  - "
+                      + "\n  - ".join(tried) + "\n" + hint)
+
+
+lib = load()
+
+
+def last_message(status):
+    text = lib.ll_last_error_message()
+    message = text.decode("utf-8", "replace") if text else ""
+    if not message:
+        message = lib.ll_status_string(status).decode("utf-8", "replace")
+    return message
+
+
+def check(status):
+    """Raise the exception for a failing ll_status (with the thread's message)."""
+    if status != 0:
+        raise error_for_status(status, last_message(status))
+
+
+def fspath(path):
+    """A path-like object as the bytes the C library expects."""
+    return os.fsencode(os.fspath(path))

@@ -1,0 +1,184 @@
+"""``Material``: the material language (a layer stack described as text, top
+to bottom, one word per line) compiled into layers or a ``.bsdf`` file, over
+``ll_material`` in ``layerlab/ll_material.h``."""
+
+import ctypes
+import weakref
+
+from ._errors import CancelledError
+from ._native import (BsdfWriteOptions, BuildOptions, check, fspath, layer_p, lib, material_p,
+                      progress_fn)
+from ._util import count_argument, real_argument
+from .layer import Layer
+from .storage import BSDFStorage
+
+__all__ = ["Material", "CancelFlag"]
+
+
+class CancelFlag:
+    """A flag that stops a running build: pass it as ``cancel=`` to
+    :meth:`Material.build` and call :meth:`set` from another thread (the
+    library releases the GIL while it builds). The build then raises
+    :class:`layerlab.CancelledError` and leaves no output file."""
+
+    def __init__(self):
+        self._value = ctypes.c_int(0)
+
+    def set(self):
+        self._value.value = 1
+
+    def clear(self):
+        self._value.value = 0
+
+    def is_set(self):
+        return self._value.value != 0
+
+
+class _Build:
+    """The ll_build_options of one build, with the Python callback kept
+    alive and any exception it raised kept for re-raising."""
+
+    def __init__(self, nodes, orders, channels, threads, error_goal, progress, cancel):
+        self.opts = BuildOptions()
+        self.opts.n_nodes = count_argument(nodes, "nodes")
+        self.opts.n_orders = count_argument(orders, "orders")
+        self.opts.n_channels = count_argument(channels, "channels")
+        self.opts.threads = count_argument(threads, "threads")
+        self.opts.error_goal = real_argument(error_goal, "error_goal")
+        self.error = None
+        # A callback that raises cannot unwind through C: the exception is
+        # kept, the cancel flag raised, and the exception re-raised after C
+        # returns (so Ctrl-C inside a progress callback stops the build).
+        self.flag = cancel if cancel is not None else CancelFlag()
+        self.opts.cancel = ctypes.pointer(self.flag._value)
+        self.callback = None
+        if progress is not None:
+            def trampoline(fraction, stage, _user):
+                if self.error is not None:
+                    return
+                try:
+                    progress(fraction, stage.decode("utf-8", "replace") if stage else "")
+                except BaseException as e:  # noqa: B902 - re-raised after the C call
+                    self.error = e
+                    self.flag.set()
+            self.callback = progress_fn(trampoline)
+            self.opts.progress = self.callback
+
+    def run(self, call):
+        try:
+            check(call(ctypes.byref(self.opts)))
+        except CancelledError:
+            if self.error is not None:
+                raise self.error from None
+            raise
+        if self.error is not None:
+            raise self.error
+
+
+class Material:
+    """A parsed material description (immutable; may be built from several
+    threads at once).
+
+    Create one with :meth:`parse` (text) or :meth:`parse_file` (a
+    ``.layers`` file); errors raise :class:`layerlab.ParseError` with
+    ``file:line:column`` and what was expected. Then :meth:`build` writes a
+    ``.bsdf`` file and :meth:`build_layers` returns the layers in memory.
+
+    The build keywords, shared by :meth:`build`, :meth:`build_layers` and
+    :meth:`resolution` (0 means "the material's setting, else the
+    default"): ``nodes``, ``orders`` (resolution), ``channels`` (1 or 3),
+    ``threads`` (0: all processors), ``error_goal`` (series truncation);
+    :meth:`build` and :meth:`build_layers` also take ``progress``, a
+    callable ``progress(fraction, stage)``, and ``cancel``, a
+    :class:`CancelFlag`.
+    """
+
+    def __init__(self, handle):
+        if not isinstance(handle, material_p) or not handle:
+            raise TypeError("use Material.parse(text) or Material.parse_file(path)")
+        self._handle = handle
+        self._finalizer = weakref.finalize(self, lib.ll_material_destroy, handle)
+
+    @classmethod
+    def parse(cls, text, source_name=None):
+        """parse(text, source_name=None) -> Material
+
+        Parse a material description; ``source_name`` names the text in
+        error messages.
+        """
+        handle = material_p()
+        name = None if source_name is None else str(source_name).encode("utf-8")
+        check(lib.ll_material_parse(str(text).encode("utf-8"), name, ctypes.byref(handle)))
+        return cls(handle)
+
+    @classmethod
+    def parse_file(cls, path):
+        """parse_file(path) -> Material
+
+        Parse a material file; relative ``file=`` paths inside it resolve
+        against the file's directory.
+        """
+        handle = material_p()
+        check(lib.ll_material_parse_file(fspath(path), ctypes.byref(handle)))
+        return cls(handle)
+
+    def __len__(self):
+        """The number of words (layers) in the stack"""
+        return lib.ll_material_word_count(self._handle)
+
+    def resolution(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0):
+        """resolution(...) -> (nodes, orders, channels)
+
+        The node count, Fourier order count and channel count that a build
+        with these keywords would use.
+        """
+        build = _Build(nodes, orders, channels, threads, error_goal, None, None)
+        n, m, c = ctypes.c_size_t(), ctypes.c_size_t(), ctypes.c_size_t()
+        build.run(lambda opts: lib.ll_material_resolution(self._handle, opts, ctypes.byref(n),
+                                                          ctypes.byref(m), ctypes.byref(c)))
+        return n.value, m.value, c.value
+
+    def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
+              progress=None, cancel=None):
+        """build(path, ...) -> BSDFStorage
+
+        Build the material and write it to ``path`` as a ``.bsdf`` file
+        (atomically: a failed or cancelled build leaves no file and does not
+        touch an existing one); returns the opened file.
+        """
+        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel)
+        target = fspath(path)
+        build.run(lambda opts: lib.ll_material_build(self._handle, opts, target))
+        return BSDFStorage(path)
+
+    def build_layers(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
+                     progress=None, cancel=None):
+        """build_layers(...) -> (layers, header)
+
+        Build the material in memory: a list of one Layer (monochrome) or
+        three (R, G, B), and the header a file of this stack carries, a dict
+        with ``eta`` and ``alpha`` (top, bottom) -- the keyword arguments
+        :meth:`BSDFStorage.fromLayer` takes.
+        """
+        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel)
+        handles = (layer_p * 3)()
+        count = ctypes.c_size_t()
+        header = BsdfWriteOptions()
+        build.run(lambda opts: lib.ll_material_build_layers(self._handle, opts, handles,
+                                                            ctypes.byref(count),
+                                                            ctypes.byref(header)))
+        layers = []
+        for k in range(3):
+            if not handles[k]:
+                continue
+            if k < count.value:
+                layer = Layer.__new__(Layer)
+                layer._adopt(handles[k])
+                layers.append(layer)
+            else:  # not promised by the header; never leak one
+                lib.ll_layer_destroy(handles[k])
+        return layers, {"eta": header.eta, "alpha": (header.alpha[0], header.alpha[1])}
+
+    def __repr__(self):
+        return "Material[words=%d]" % len(self)
+

@@ -1,0 +1,388 @@
+"""``BSDFStorage``: ``.bsdf`` files ("SCATFUN" v1, the format pbrt-v3's
+``fourier`` material reads) written from layers, opened, evaluated and
+sampled, over ``ll_bsdf`` in ``layerlab/ll_bsdf.h``."""
+
+import ctypes
+import os
+import weakref
+
+import numpy as np
+
+from ._errors import InvalidArgumentError, UnsupportedError
+from ._native import BsdfInfo, BsdfWriteOptions, bsdf_p, c_float_p, check, fspath, layer_p, lib
+from ._util import count_argument, real_argument
+from .layer import Layer
+
+__all__ = ["BSDFStorage", "mem_string"]
+
+_TRANSPORT = {"radiance": 0, "importance": 1}
+
+
+def mem_string(size):
+    """A byte count as the original layerlab printed it: "3.3 MiB", "512 B"."""
+    value = float(size)
+    suffixes = ("B", "KiB", "MiB", "GiB", "TiB", "PiB")
+    k = 0
+    while k < len(suffixes) - 1 and value > 1024.0:
+        value /= 1024.0
+        k += 1
+    return "%.*f %s" % (0 if k == 0 else 1, value, suffixes[k])
+
+
+def _alpha_pair(alpha):
+    """Header roughness (top, bottom); one number sets both."""
+    if np.ndim(alpha) == 0:
+        a = real_argument(alpha, "alpha")
+        return a, a
+    values = [real_argument(a, "alpha") for a in alpha]
+    if len(values) != 2:
+        raise InvalidArgumentError("alpha must be one number or a (top, bottom) pair, got %d "
+                                   "values" % len(values))
+    return values[0], values[1]
+
+
+def _write(filename, layers, eta, alpha, metadata, errorGoal):
+    for k, layer in enumerate(layers):
+        if not isinstance(layer, Layer):
+            raise TypeError("layer %d must be a layerlab.Layer, not %s" % (k, type(layer).__name__))
+    opts = BsdfWriteOptions()
+    opts.eta = real_argument(eta, "eta")
+    opts.alpha[0], opts.alpha[1] = _alpha_pair(alpha)
+    opts.metadata = None if metadata is None else str(metadata).encode("utf-8")
+    opts.error_goal = real_argument(errorGoal, "errorGoal")
+    handles = (layer_p * len(layers))(*[layer._handle for layer in layers])
+    check(lib.ll_bsdf_write(fspath(filename), handles, len(layers), ctypes.byref(opts)))
+
+
+def _vector3(v, name):
+    a = np.asarray(v, dtype=np.float64)
+    if a.shape != (3,):
+        raise InvalidArgumentError("%s must be a 3-vector, got shape %s" % (name, a.shape))
+    return (ctypes.c_double * 3)(*a)
+
+
+def _uniform_pair(sample):
+    a = np.asarray(sample, dtype=np.float64)
+    if a.shape != (2,):
+        raise InvalidArgumentError("sample must be two uniform numbers in [0, 1), got shape %s"
+                                   % (a.shape,))
+    return (ctypes.c_double * 2)(*a)
+
+
+def _transport(mode):
+    try:
+        return _TRANSPORT[mode]
+    except (KeyError, TypeError):
+        raise InvalidArgumentError("mode must be 'radiance' or 'importance', not %r"
+                                   % (mode,)) from None
+
+
+class BSDFStorage:
+    """An opened ``.bsdf`` file: an isotropic BSDF stored as Catmull-Rom
+    splines in the two zenith cosines and a Fourier series in the azimuth.
+
+    ``BSDFStorage(filename)`` opens and fully validates a file (a damaged
+    one raises :class:`layerlab.FormatError`, an unreadable one
+    :class:`OSError`). Files are created with :meth:`fromLayer` and
+    :meth:`fromLayerRGB`. An opened file is immutable; :meth:`close` (or a
+    ``with`` block) releases it early.
+
+    Two conventions: :meth:`eval`, :meth:`pdf` and :meth:`sample` take zenith
+    cosines as :meth:`Layer.eval` does (``mu_i > 0`` arrives from above,
+    reflection goes to ``mu_o < 0``); :meth:`evalDir`, :meth:`pdfDir` and
+    :meth:`sampleDir` take a renderer's directions (local frame, z = normal,
+    ``wo`` to the viewer, ``wi`` to the light, both pointing away).
+    """
+
+    def __init__(self, filename, readOnly=True):
+        if not readOnly:
+            raise UnsupportedError("BSDFStorage: opened files are immutable; write a new file "
+                                   "with fromLayer()/fromLayerRGB()", 6)
+        handle = bsdf_p()
+        check(lib.ll_bsdf_open(fspath(filename), ctypes.byref(handle)))
+        self._init(handle, os.fspath(filename))
+
+    @classmethod
+    def fromBytes(cls, data, name="<memory>"):
+        """Open a ``.bsdf`` file held in memory (``bytes`` or any buffer)."""
+        data = bytes(data)
+        handle = bsdf_p()
+        check(lib.ll_bsdf_open_memory(data, len(data), ctypes.byref(handle)))
+        self = cls.__new__(cls)
+        self._init(handle, name)
+        return self
+
+    def _init(self, handle, filename):
+        self._handle = handle
+        self._finalizer = weakref.finalize(self, lib.ll_bsdf_release, handle)
+        self.filename = filename
+        info = BsdfInfo()
+        check(lib.ll_bsdf_get_info(handle, ctypes.byref(info)))
+        self._info = info
+        raw = info.metadata or b""
+        self._metadata = raw.decode("utf-8", "replace")
+
+    def _live(self):
+        if self._handle is None:
+            raise ValueError("BSDFStorage %r is closed" % self.filename)
+        return self._handle
+
+    def close(self):
+        """Release the file now (it is released anyway when the object goes)"""
+        self._finalizer()
+        self._handle = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ------------------------------------------------------------ writing
+
+    @classmethod
+    def fromLayer(cls, filename, layer, eta=1.0, alpha=0.0, metadata=None, errorGoal=1e-3):
+        """fromLayer(filename, layer, eta=1.0, alpha=0.0, metadata=None,
+        errorGoal=1e-3) -> BSDFStorage
+
+        Create a BSDF storage file from a Layer (monochromatic) and open it.
+        The file is written atomically: on failure an existing file is left
+        untouched.
+
+        Parameter ``eta``:
+            The header's relative index, eta(bottom) / eta(top); 1 for an
+            opaque stack (renderers use it for refraction)
+
+        Parameter ``alpha``:
+            The header's Beckmann roughness: one number, or the pair (top
+            interface, bottom interface); informational
+
+        Parameter ``metadata``:
+            Text stored in the file (default: a JSON description)
+
+        Parameter ``errorGoal``:
+            Each Fourier series is cut where the tail's sum falls below this
+            fraction of its first coefficient (default 1e-3)
+        """
+        _write(filename, [layer], eta, alpha, metadata, errorGoal)
+        return cls(filename)
+
+    @classmethod
+    def fromLayerRGB(cls, filename, layerR, layerG, layerB, eta=1.0, alpha=0.0, metadata=None,
+                     errorGoal=1e-3):
+        """fromLayerRGB(filename, layerR, layerG, layerB, eta=1.0, alpha=0.0,
+        metadata=None, errorGoal=1e-3) -> BSDFStorage
+
+        Create a BSDF storage file from three Layers (RGB; stored as Y, R, B)
+        and open it. The layers must share their nodes and order count. The
+        keyword arguments are those of :meth:`fromLayer`.
+        """
+        _write(filename, [layerR, layerG, layerB], eta, alpha, metadata, errorGoal)
+        return cls(filename)
+
+    # ------------------------------------------------------------ header
+
+    @property
+    def nodeCount(self):
+        """The number of zenith-cosine nodes (two of them at mu = 0)"""
+        return self._info.n_nodes
+
+    @property
+    def maxOrder(self):
+        """The length of the longest Fourier series"""
+        return self._info.max_order
+
+    @property
+    def channelCount(self):
+        """The number of color channels (1 or 3)"""
+        return self._info.n_channels
+
+    @property
+    def basisCount(self):
+        """The number of basis functions (1 unless textured)"""
+        return self._info.n_bases
+
+    @property
+    def parameterCount(self):
+        """The number of textured parameters"""
+        return self._info.n_parameters
+
+    @property
+    def coefficientCount(self):
+        """The number of float32 Fourier coefficients stored"""
+        return self._info.n_coeffs
+
+    @property
+    def size(self):
+        """The size of the file in bytes"""
+        return self._info.file_size
+
+    @property
+    def metadata(self):
+        """The metadata text stored in the file"""
+        return self._metadata
+
+    @property
+    def eta(self):
+        """The relative index of refraction, eta(bottom) / eta(top)"""
+        return self._info.eta
+
+    @property
+    def extrapolated(self):
+        """Whether the file uses harmonic extrapolation (header flag 2)"""
+        return bool(self._info.flags & 2)
+
+    def alpha(self, i):
+        """The Beckmann roughness of interface ``i`` (0: top, 1: bottom)"""
+        i = count_argument(i, "i")
+        if i >= 2:
+            raise IndexError("alpha index %d is not 0 (top) or 1 (bottom)" % i)
+        return self._info.alpha[i]
+
+    @property
+    def nodes(self):
+        """The file's zenith-cosine nodes (ascending; a float32 copy)"""
+        ptr = lib.ll_bsdf_nodes(self._live())
+        return np.ctypeslib.as_array(ptr, shape=(self.nodeCount,)).copy()
+
+    def _parameter(self, i):
+        i = count_argument(i, "i")
+        if i >= self.parameterCount:
+            raise IndexError("parameter %d is beyond the file's %d" % (i, self.parameterCount))
+        count = ctypes.c_size_t()
+        positions = c_float_p()
+        check(lib.ll_bsdf_get_parameter(self._live(), i, ctypes.byref(count),
+                                        ctypes.byref(positions)))
+        if count.value == 0:
+            return np.empty(0, np.float32)
+        return np.ctypeslib.as_array(positions, shape=(count.value,)).copy()
+
+    def parameterSampleCount(self, i):
+        """The number of samples of textured parameter ``i``"""
+        return self._parameter(i).size
+
+    def parameterSamplePositions(self, i):
+        """The sample positions of textured parameter ``i`` (a list)"""
+        return [float(x) for x in self._parameter(i)]
+
+    # ------------------------------------------------------------ evaluation
+
+    def _basis(self, basisCoeffs):
+        if basisCoeffs is None:
+            return None, None
+        coeffs = np.ascontiguousarray(basisCoeffs, dtype=np.float32).reshape(-1)
+        if coeffs.size != self.basisCount:
+            raise InvalidArgumentError("basisCoeffs has %d values; the file has %d basis "
+                                       "functions" % (coeffs.size, self.basisCount))
+        return coeffs, coeffs.ctypes.data_as(c_float_p)
+
+    def eval(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None):
+        """eval(mu_i, mu_o, phi_d=0, basisCoeffs=None) -> numpy array (..., 3)
+
+        Evaluate the model (the BSDF without cosine factor, R, G, B; three
+        equal values for a one-channel file) for the given values of mu_i,
+        mu_o and phi_d. Numbers or arrays that broadcast together; the
+        result has the broadcast shape plus a last axis of 3.
+        """
+        handle = self._live()
+        keep, coeffs = self._basis(basisCoeffs)
+        mi, mo, ph = np.broadcast_arrays(np.asarray(mu_i, np.float64),
+                                         np.asarray(mu_o, np.float64),
+                                         np.asarray(phi_d, np.float64))
+        out = np.empty(mi.shape + (3,))
+        rgb = (ctypes.c_double * 3)()
+        for index in np.ndindex(mi.shape):
+            check(lib.ll_bsdf_eval(handle, float(mi[index]), float(mo[index]), float(ph[index]),
+                                   coeffs, rgb))
+            out[index] = tuple(rgb)
+        del keep
+        return out
+
+    def pdf(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None):
+        """pdf(mu_i, mu_o, phi_d=0, basisCoeffs=None) -> float or numpy array
+
+        The probability density per solid angle with which :meth:`sample`
+        picks (mu_o, phi_d) given mu_i. Broadcasts like :meth:`eval`.
+        """
+        handle = self._live()
+        keep, coeffs = self._basis(basisCoeffs)
+        mi, mo, ph = np.broadcast_arrays(np.asarray(mu_i, np.float64),
+                                         np.asarray(mu_o, np.float64),
+                                         np.asarray(phi_d, np.float64))
+        out = np.empty(mi.shape)
+        for index in np.ndindex(mi.shape):
+            out[index] = lib.ll_bsdf_pdf(handle, float(mi[index]), float(mo[index]),
+                                         float(ph[index]), coeffs)
+        del keep
+        return float(out) if out.ndim == 0 else out
+
+    def sample(self, mu_i, sample, basisCoeffs=None):
+        """sample(mu_i, sample, basisCoeffs=None) -> (weight, mu_o, phi_d, pdf)
+
+        Importance sample the model for light arriving along ``mu_i``, from
+        two uniform numbers ``sample`` in [0, 1). Returns the weight
+        f * |mu_o| / pdf (R, G, B array), the sampled mu_o and phi_d, and the
+        pdf. A zero weight and pdf mean that no direction was found.
+        """
+        handle = self._live()
+        keep, coeffs = self._basis(basisCoeffs)
+        mu_o, phi_d, pdf = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
+        weight = (ctypes.c_double * 3)()
+        check(lib.ll_bsdf_sample(handle, real_argument(mu_i, "mu_i"), _uniform_pair(sample),
+                                 coeffs, ctypes.byref(mu_o), ctypes.byref(phi_d),
+                                 ctypes.byref(pdf), weight))
+        del keep
+        return np.array(weight), mu_o.value, phi_d.value, pdf.value
+
+    def evalDir(self, wo, wi, mode="radiance", basisCoeffs=None):
+        """evalDir(wo, wi, mode="radiance", basisCoeffs=None) -> numpy array (3,)
+
+        The BSDF value f(wo, wi) (no cosine) for renderer directions in the
+        local shading frame, as pbrt-v3's ``BxDF::f``. ``mode`` is
+        "radiance" (scales by eta^2 across a dielectric, as radiance
+        requires) or "importance".
+        """
+        keep, coeffs = self._basis(basisCoeffs)
+        rgb = (ctypes.c_double * 3)()
+        check(lib.ll_bsdf_eval_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
+                                   _transport(mode), coeffs, rgb))
+        del keep
+        return np.array(rgb)
+
+    def pdfDir(self, wo, wi, basisCoeffs=None):
+        """pdfDir(wo, wi, basisCoeffs=None) -> float
+
+        The density (per solid angle) of sampling ``wi`` given ``wo``, as
+        pbrt-v3's ``Pdf(wo, wi)``.
+        """
+        keep, coeffs = self._basis(basisCoeffs)
+        value = lib.ll_bsdf_pdf_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
+                                    coeffs)
+        del keep
+        return value
+
+    def sampleDir(self, wo, sample, mode="radiance", basisCoeffs=None):
+        """sampleDir(wo, sample, mode="radiance", basisCoeffs=None) -> (f, wi, pdf)
+
+        Sample ``wi`` given ``wo`` as pbrt-v3's ``FourierBSDF::Sample_f``
+        does (the same ``sample`` gives the same direction); returns f(wo,
+        wi) (R, G, B array), the unit vector ``wi`` and its pdf.
+        """
+        keep, coeffs = self._basis(basisCoeffs)
+        wi = (ctypes.c_double * 3)()
+        rgb = (ctypes.c_double * 3)()
+        pdf = ctypes.c_double()
+        check(lib.ll_bsdf_sample_dir(self._live(), _vector3(wo, "wo"), _uniform_pair(sample),
+                                     _transport(mode), coeffs, wi, ctypes.byref(pdf), rgb))
+        del keep
+        return np.array(rgb), np.array(wi), pdf.value
+
+    def __repr__(self):
+        mmap = 'MemoryMappedFile[filename="%s", size=%s]' % (self.filename,
+                                                              mem_string(self.size))
+        if self._handle is None:
+            return "BSDFStorage[mmap = %s, closed]" % mmap
+        return ("BSDFStorage[mmap = %s, nNodes = %d, nMaxOrder = %d, nChannels = %d, "
+                "nBases = %d, eta = %s]" % (mmap, self.nodeCount, self.maxOrder,
+                                            self.channelCount, self.basisCount,
+                                            "%g" % self.eta))

@@ -1,0 +1,51 @@
+"""Shared set-up of the layerlab Python tests.
+
+- Without LAYERLAB_LIBRARY, use the checkout's own build (build/lib), so a
+  plain `pytest` in python/ tests the library built next to it.
+- matplotlib draws headless (Agg).
+- Pictures go to $LAYERLAB_PY_OUT, else <checkout>/out/python/.
+- Measured times are printed at the end of the run.
+"""
+
+import os
+import pathlib
+
+CHECKOUT = pathlib.Path(__file__).resolve().parents[2]
+SHARED = CHECKOUT.parent / "shared"
+
+if not os.environ.get("LAYERLAB_LIBRARY"):
+    _built = CHECKOUT / "build" / "lib" / "liblayerlab.so"
+    if _built.exists():
+        os.environ["LAYERLAB_LIBRARY"] = str(_built)
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+import pytest  # noqa: E402
+
+TIMINGS = {}
+
+
+@pytest.fixture(scope="session")
+def out_dir():
+    path = pathlib.Path(os.environ.get("LAYERLAB_PY_OUT") or CHECKOUT / "out" / "python")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@pytest.fixture(scope="session")
+def timings():
+    return TIMINGS
+
+
+@pytest.fixture(scope="session")
+def shared_dir():
+    return SHARED
+
+
+def pytest_terminal_summary(terminalreporter):
+    if TIMINGS:
+        terminalreporter.write_sep("-", "layerlab measured times")
+        for name, seconds in TIMINGS.items():
+            terminalreporter.write_line("%-55s %8.3f s" % (name, seconds))

@@ -1,0 +1,32 @@
+#!/bin/sh
+# The Python package's tests, run by `make test` (target test-python) with
+# BUILD=<build dir>. Tests the package in python/ against $BUILD's library;
+# installs numpy, matplotlib and pytest quietly when they are missing.
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+BUILD=${BUILD:-build}
+case $BUILD in /*) build_dir=$BUILD ;; *) build_dir=$root/$BUILD ;; esac
+PYTHON=${PYTHON:-python3}
+
+LAYERLAB_LIBRARY=$build_dir/lib/liblayerlab.so
+export LAYERLAB_LIBRARY
+if [ ! -e "$LAYERLAB_LIBRARY" ]; then
+  echo "python/tests/run.sh: $LAYERLAB_LIBRARY does not exist (run make first)" >&2
+  exit 1
+fi
+
+missing=
+for module in numpy matplotlib pytest; do
+  "$PYTHON" -c "import $module" 2>/dev/null || missing="$missing $module"
+done
+if [ -n "$missing" ]; then
+  echo "python/tests/run.sh: installing$missing"
+  "$PYTHON" -m pip install -q --disable-pip-version-check $missing
+fi
+
+# Test the source tree, not some installed copy; PNGs go to out/python/.
+PYTHONPATH=$root/python${PYTHONPATH:+:$PYTHONPATH}
+export PYTHONPATH
+cd "$root/python"
+exec "$PYTHON" -m pytest -q -p no:cacheprovider tests
