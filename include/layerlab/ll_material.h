@@ -1,7 +1,18 @@
 /*
  * layerlab — the material language: a text description of a layer stack
  * (top to bottom, one word per line) compiled into layers or a .bsdf file.
- * The language is described in the README and by `llbuild --help`.
+ * The language is described in docs/material-language.md and by
+ * `llbuild --help`:
+ *
+ *     # rough gold under a rough clear coat holding a thin blue-scattering layer
+ *     dielectric  eta=1.5 alpha=0.1
+ *     medium      albedo=0.25,0.0,0.95 g=0.5 tau=0.5
+ *     conductor   eta=Au alpha=0.1
+ *
+ * Named metals (eta=Au) are read from NAME.eta.spd / NAME.k.spd spectra
+ * found through $LAYERLAB_IOR_DIR, the material file's ior/ folder,
+ * PREFIX/share/layerlab/ior next to the installed library, or a shared/ior
+ * folder of a source checkout (in that order).
  *
  * An ll_material is immutable once parsed: it may be built from several
  * threads at once.
@@ -21,11 +32,14 @@ typedef struct ll_material ll_material;
 
 /* Parse a material description. source_name (nullable) names the text in
  * messages ("coated.layers:3:14: ..."). Errors: LL_ERROR_PARSE with file,
- * line, column and what was expected in ll_last_error_message(). */
+ * line, column and what was expected in ll_last_error_message() (also for
+ * an unknown metal name or a missing or malformed measured file); *out is
+ * NULL on failure. Relative `file=` paths resolve against the working
+ * directory. */
 LL_API ll_status ll_material_parse(const char *text, const char *source_name,
                                    ll_material **out);
 /* The same for a file; relative `file=` paths inside resolve against the
- * file's directory. */
+ * file's directory. LL_ERROR_IO if it cannot be read. */
 LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
 LL_API void ll_material_destroy(ll_material *material);
 
@@ -54,7 +68,11 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
                                         size_t *n_orders, size_t *n_channels);
 
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
- * leaves no file and does not touch an existing one). */
+ * leaves no file and does not touch an existing one). opts may be NULL.
+ * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
+ * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY, LL_ERROR_IO (writing). The
+ * worker-thread count of the calling thread (ll_set_thread_count) is
+ * opts->threads during the build and restored after it. */
 LL_API ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
                                    const char *out_path);
 
@@ -68,6 +86,30 @@ LL_API ll_status ll_material_build_layers(const ll_material *material,
 
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
+
+/* What a build with these options would take, estimated without building
+ * (llbuild --dry-run). Memory is an upper bound: every Fourier order of the
+ * live layers stored densely (the compact storage usually needs less).
+ * Time comes from operation counts and per-operation rates measured on a
+ * 2-core x86-64 machine with OpenBLAS (docs/material-language.md,
+ * "Estimates"); expect it within a factor of about 2 on similar machines. */
+typedef struct ll_build_estimate {
+    size_t struct_size;   /* set by the caller: sizeof(ll_build_estimate)       */
+    size_t n_nodes;       /* resolution and channels the build would use         */
+    size_t n_orders;
+    size_t n_channels;
+    size_t layers_built;  /* word layers built, after sharing between channels   */
+    size_t additions;     /* adding steps (doubling steps not included)          */
+    size_t doublings;     /* doubling steps of all media                         */
+    double peak_bytes;    /* upper bound of the memory the build holds at once   */
+    double seconds;       /* estimated wall time with opts->threads threads      */
+} ll_build_estimate;
+
+#define LL_BUILD_ESTIMATE_INIT { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0 }
+
+LL_API ll_status ll_material_estimate(const ll_material *material,
+                                      const ll_build_options *opts,
+                                      ll_build_estimate *estimate);
 
 #ifdef __cplusplus
 }
