@@ -1,0 +1,214 @@
+/*
+ * Helpers shared by the .bsdf tests (test_bsdf_*.c): quadrature nodes,
+ * synthetic layers built through the internal column builder (so the tests
+ * need no interface or medium code), scratch directories and files.
+ */
+#ifndef LL_TEST_BSDF_UTIL_H
+#define LL_TEST_BSDF_UTIL_H
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <layerlab.h>
+#include "layer_internal.h"
+
+#define LL_TEST_GOLDEN LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
+#define LL_TEST_PI 3.14159265358979323846
+
+/* Gauss-Legendre nodes and weights on [-1, 1], ascending (Newton's method
+ * on the Legendre recurrence; no node at 0 for even n). */
+static inline void ll_test_gauss_legendre(size_t n, double *x, double *w)
+{
+    size_t i, k;
+    for (i = 0; i < (n + 1) / 2; ++i) {
+        double z = cos(LL_TEST_PI * ((double)i + 0.75) / ((double)n + 0.5)), dp = 0.0;
+        for (k = 0; k < 100; ++k) {
+            double p0 = 1.0, p1 = z, step;
+            size_t j;
+            for (j = 2; j <= n; ++j) {
+                double p2 = ((2.0 * (double)j - 1.0) * z * p1 - ((double)j - 1.0) * p0) /
+                            (double)j;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = (double)n * (z * p1 - p0) / (z * z - 1.0);
+            step = p1 / dp;
+            z -= step;
+            if (fabs(step) < 1e-15)
+                break;
+        }
+        x[i] = -z;
+        x[n - 1 - i] = z;
+        w[i] = w[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+
+/* A clear layer on n Gauss-Legendre nodes with m orders. */
+static inline ll_layer *ll_test_layer(size_t n, size_t m)
+{
+    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
+    ll_layer *l = NULL;
+    assert_non_null(x);
+    assert_non_null(w);
+    ll_test_gauss_legendre(n, x, w);
+    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
+    free(x);
+    free(w);
+    return l;
+}
+
+/* f_k(mu_o, mu_i): the BSDF's order-k coefficient (without weights) for
+ * outgoing mu_o and incident mu_i, in the layer convention. */
+typedef double (*ll_test_bsdf_fn)(size_t k, double mu_o, double mu_i, const void *ctx);
+
+/* Set every order of l to fn, folding the surface weights into the columns
+ * as the words do (method.md, "Discretisation"). */
+static inline void ll_test_fill(ll_layer *l, ll_test_bsdf_fn fn, const void *ctx)
+{
+    size_t n = l->n, m = l->m, k, row, col;
+    ll_order_builder **builders = calloc(m, sizeof *builders);
+    double *column = malloc(n * sizeof *column);
+    assert_non_null(builders);
+    assert_non_null(column);
+    for (k = 0; k < m; ++k) {
+        assert_int_equal(ll_order_builder_create(n, &builders[k]), LL_OK);
+        for (col = 0; col < n; ++col) {
+            for (row = 0; row < n; ++row)
+                column[row] = fn(k, l->nodes[row], l->nodes[col], ctx) *
+                              ll_layer_surface_factor(l, col, k);
+            assert_int_equal(ll_order_builder_set_column(builders[k], col, column, 0.0), LL_OK);
+        }
+    }
+    assert_int_equal(ll_layer_set_from_builders(l, builders), LL_OK);
+    free(builders);
+    free(column);
+}
+
+/* A BSDF whose file representation is exact between nodes too: f_k is
+ * constant in mu_o and proportional to |mu_i|, so the stored f |mu_o| is
+ * bilinear in |mu_o|, |mu_i| and vanishes at the mu = 0 nodes, which both
+ * Catmull-Rom interpolants reproduce exactly. scale[0] scales reflection
+ * from above, scale[1] transmission downward, scale[2] reflection from
+ * below, scale[3] transmission upward. */
+typedef struct ll_test_smooth {
+    double scale[4];
+    double decay;      /* coefficient k is decay^k (k >= 1)  */
+} ll_test_smooth;
+
+static inline double ll_test_smooth_fn(size_t k, double mu_o, double mu_i, const void *ctx)
+{
+    const ll_test_smooth *p = ctx;
+    int block = mu_i > 0.0 ? (mu_o < 0.0 ? 0 : 1) : (mu_o > 0.0 ? 2 : 3);
+    /* f = sum_k c_k cos(k phi) with c_0 = 1: non-negative for decay <= 1/2. */
+    double c = k == 0 ? 1.0 : pow(p->decay, (double)k);
+    return p->scale[block] * c * fabs(mu_i) / LL_TEST_PI;
+}
+
+/* A rough, lobe-shaped BSDF (not reproduced exactly between nodes): used
+ * at the nodes themselves, where the file must match the layer exactly. */
+static inline double ll_test_lobe_fn(size_t k, double mu_o, double mu_i, const void *ctx)
+{
+    double sharp = *(const double *)ctx;
+    double spec = exp(-sharp * (mu_o + mu_i) * (mu_o + mu_i)); /* near mu_o = -mu_i */
+    double phase = 0.3 + 0.2 * sin(7.0 * mu_o + 3.0 * mu_i);
+    return (1.0 + spec * 4.0) * phase * exp(-0.15 * (double)k * (1.0 + fabs(mu_o))) / LL_TEST_PI;
+}
+
+/* A scratch directory, removed (with its files) by ll_test_rmdir. */
+static inline void ll_test_mkdtemp(char *dir, size_t size)
+{
+    const char *base = getenv("TMPDIR");
+    snprintf(dir, size, "%s/ll_bsdf_test.XXXXXX", base && *base ? base : "/tmp");
+    assert_non_null(mkdtemp(dir));
+}
+
+static inline size_t ll_test_count_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    size_t count = 0;
+    assert_non_null(d);
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0)
+            ++count;
+    closedir(d);
+    return count;
+}
+
+static inline void ll_test_rmdir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    char path[1024];
+    if (!d)
+        return;
+    while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+            continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
+/* The bytes of a file (malloc'ed; *size set). */
+static inline unsigned char *ll_test_read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *data;
+    long len;
+    assert_non_null(f);
+    assert_int_equal(fseek(f, 0, SEEK_END), 0);
+    len = ftell(f);
+    assert_true(len >= 0);
+    assert_int_equal(fseek(f, 0, SEEK_SET), 0);
+    data = malloc((size_t)len + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *size = (size_t)len;
+    return data;
+}
+
+static inline void ll_test_write_file(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, size, f), size);
+    assert_int_equal(fclose(f), 0);
+}
+
+/* Deterministic uniform numbers in [0, 1) (xorshift64*). */
+static inline double ll_test_uniform(uint64_t *state)
+{
+    uint64_t x = *state;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    *state = x;
+    return (double)((x * 0x2545F4914F6CDD1DULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static inline int ll_test_close(double a, double b, double rel, double abs_tol)
+{
+    return fabs(a - b) <= abs_tol + rel * fabs(b);
+}
+
+static inline double ll_test_luminance(const double rgb[3])
+{
+    return 0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2];
+}
+
+#endif /* LL_TEST_BSDF_UTIL_H */
