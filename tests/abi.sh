@@ -1,0 +1,171 @@
+#!/bin/sh
+# ABI and header checks (see shared/docs/style.md, items 1-4):
+#   (a) every public header compiles alone as pedantic C99 and as C++11,
+#       includes only <stddef.h>/<stdint.h> and other layerlab headers;
+#       a C++ program links against the library (extern "C" guards work);
+#   (b) the shared library exports ll_* symbols only;
+#   (c) its soname is liblayerlab.so.<LL_ABI_VERSION>;
+#   (d) `make install PREFIX=<tmp>` works and a program built with
+#       `$(pkg-config --cflags --libs layerlab)` runs against the installed copy.
+# Run by `make test` with BUILD, CC and CXX set; prints one line per check and
+# "N passed, N failed"; exits non-zero when a check fails.
+set -u
+
+BUILD=${BUILD:-build}
+CC=${CC:-cc}
+CXX=${CXX:-c++}
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+case $BUILD in
+    /*) BUILD_DIR=$BUILD ;;
+    *) BUILD_DIR=$SRC/$BUILD ;;
+esac
+LIB=$BUILD_DIR/lib/liblayerlab.so
+HEADER_COMMON=$SRC/include/layerlab/ll_common.h
+
+passed=0
+failed=0
+pass() { echo "PASS: $1"; passed=$((passed + 1)); }
+fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
+# Indent a file's last lines under a failure.
+show() { tail -n "${2:-15}" "$1" | sed 's/^/    /'; }
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/layerlab-abi.XXXXXX") || exit 1
+trap 'rm -rf "$tmp"' EXIT
+trap 'exit 1' HUP INT TERM
+
+# A sanitizer build of the library needs the sanitizer runtime in every
+# program that loads it.
+SAN_FLAGS=
+if [ -f "$LIB" ] && nm -D --undefined-only "$LIB" 2>/dev/null | grep -q '__asan_'; then
+    SAN_FLAGS="-fsanitize=address,undefined"
+fi
+
+# ----------------------------------------------------------- (a) headers
+for header in "$SRC"/include/layerlab.h "$SRC"/include/layerlab/ll_*.h; do
+    name=${header#"$SRC"/include/}
+    printf '#include <%s>\n' "$name" > "$tmp/alone.c"
+    if $CC -std=c99 -pedantic -Wall -Wextra -Werror -Wstrict-prototypes \
+        -I"$SRC/include" -c "$tmp/alone.c" -o "$tmp/alone.o" > "$tmp/cc.log" 2>&1; then
+        pass "$name compiles alone as C99 ($CC -std=c99 -pedantic -Wall -Wextra -Werror)"
+    else
+        fail "$name does not compile alone as C99"
+        show "$tmp/cc.log"
+    fi
+    cp "$tmp/alone.c" "$tmp/alone.cpp"
+    if $CXX -std=c++11 -pedantic -Wall -Wextra -Werror \
+        -I"$SRC/include" -c "$tmp/alone.cpp" -o "$tmp/alone.o" > "$tmp/cxx.log" 2>&1; then
+        pass "$name compiles alone as C++11 ($CXX -std=c++11 -pedantic -Wall -Wextra -Werror)"
+    else
+        fail "$name does not compile alone as C++11"
+        show "$tmp/cxx.log"
+    fi
+    others=$(grep '^[[:space:]]*#[[:space:]]*include' "$header" |
+        grep -v -e '<stddef\.h>' -e '<stdint\.h>' -e '"ll_[a-z_]*\.h"' -e '"layerlab/ll_[a-z_]*\.h"')
+    if [ -z "$others" ]; then
+        pass "$name includes only <stddef.h>, <stdint.h> and layerlab headers"
+    else
+        fail "$name includes more than <stddef.h>, <stdint.h> and layerlab headers: $others"
+    fi
+done
+
+cat > "$tmp/linkage.cpp" <<'EOF'
+#include <layerlab.h>
+int main() { return ll_version_number() == LL_VERSION_NUMBER ? 0 : 1; }
+EOF
+if [ ! -f "$LIB" ]; then
+    fail "no $LIB (build the library first: make BUILD=$BUILD)"
+elif $CXX -std=c++11 $SAN_FLAGS -I"$SRC/include" "$tmp/linkage.cpp" -o "$tmp/linkage" \
+        -L"$BUILD_DIR/lib" -Wl,-rpath,"$BUILD_DIR/lib" -llayerlab > "$tmp/link.log" 2>&1 &&
+    "$tmp/linkage" >> "$tmp/link.log" 2>&1; then
+    pass "a C++ program links against $BUILD/lib/liblayerlab.so and runs (C linkage)"
+else
+    fail "a C++ program does not link against or run with $BUILD/lib/liblayerlab.so"
+    show "$tmp/link.log"
+fi
+
+# ------------------------------------------------------ (b) exported symbols
+if [ -f "$LIB" ]; then
+    # Symbol versions (name@@LAYERLAB_1) are stripped; the version node itself
+    # is listed as an absolute symbol LAYERLAB_<n>, which is not an export.
+    if nm -D --defined-only "$LIB" > "$tmp/nm.txt" 2> "$tmp/nm.log"; then
+        stray=$(awk '{ name = $NF; sub(/@.*/, "", name);
+                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+$/) next;
+                       if (name !~ /^ll_/) print name }' "$tmp/nm.txt" | sort -u)
+        count=$(awk '{ name = $NF; sub(/@.*/, "", name); if (name ~ /^ll_/) n++ }
+                     END { print n + 0 }' "$tmp/nm.txt")
+        if [ -n "$stray" ]; then
+            fail "liblayerlab.so exports symbols other than ll_*: $(echo $stray)"
+        elif [ "$count" -eq 0 ]; then
+            fail "liblayerlab.so exports no ll_* symbol at all"
+        else
+            pass "liblayerlab.so exports only ll_* symbols ($count of them)"
+        fi
+    else
+        fail "nm -D --defined-only $LIB failed"
+        show "$tmp/nm.log"
+    fi
+fi
+
+# ----------------------------------------------------------------- (c) soname
+abi=$(sed -n 's/^#define LL_ABI_VERSION \([0-9][0-9]*\).*/\1/p' "$HEADER_COMMON")
+if [ -f "$LIB" ]; then
+    soname=$(readelf -d "$LIB" 2>/dev/null | sed -n 's/.*(SONAME).*\[\(.*\)\].*/\1/p')
+    if [ -z "$abi" ]; then
+        fail "no LL_ABI_VERSION in include/layerlab/ll_common.h"
+    elif [ "$soname" = "liblayerlab.so.$abi" ] && [ -e "$BUILD_DIR/lib/$soname" ]; then
+        pass "soname is liblayerlab.so.$abi (LL_ABI_VERSION $abi) and $BUILD/lib/$soname exists"
+    else
+        fail "soname is '$soname', expected liblayerlab.so.$abi (LL_ABI_VERSION $abi) with a link in $BUILD/lib"
+    fi
+fi
+
+# ------------------------------------------------ (d) install and pkg-config
+prefix=$tmp/prefix
+if ${MAKE:-make} -C "$SRC" install PREFIX="$prefix" BUILD="$BUILD" CC="$CC" CXX="$CXX" \
+        > "$tmp/install.log" 2>&1; then
+    pass "make install PREFIX=<tmp> BUILD=$BUILD"
+    cat > "$tmp/x.c" <<'EOF'
+#include <stdio.h>
+#include <string.h>
+#include <layerlab.h>
+int main(void)
+{
+    if (ll_version_number() != LL_VERSION_NUMBER ||
+        strcmp(ll_version_string(), LL_VERSION_STRING) != 0)
+        return 1;
+    printf("layerlab %s\n", ll_version_string());
+    return 0;
+}
+EOF
+    flags=$(PKG_CONFIG_PATH=$prefix/lib/pkgconfig pkg-config --cflags --libs layerlab 2> "$tmp/pc.log")
+    if [ $? -ne 0 ]; then
+        fail "pkg-config does not find layerlab.pc in the install prefix"
+        show "$tmp/pc.log"
+    else
+        case $flags in
+            *"$prefix/include"*"$prefix/lib"* | *"$prefix/lib"*"$prefix/include"*)
+                pass "the installed layerlab.pc points into the install prefix" ;;
+            *)
+                fail "the installed layerlab.pc does not point into the install prefix (pkg-config gives: $flags; it was generated for another PREFIX)" ;;
+        esac
+        # shellcheck disable=SC2086
+        if $CC $SAN_FLAGS "$tmp/x.c" -o "$tmp/x" $flags > "$tmp/x.log" 2>&1 &&
+            "$tmp/x" > "$tmp/x.out" 2>> "$tmp/x.log"; then
+            if LD_TRACE_LOADED_OBJECTS=1 "$tmp/x" 2>/dev/null |
+                grep -q "liblayerlab\.so\.$abi => $prefix/lib/"; then
+                pass "cc x.c \$(pkg-config --cflags --libs layerlab) builds and runs against the installed copy ($(cat "$tmp/x.out"))"
+            else
+                fail "the program built with pkg-config does not load the installed liblayerlab.so.$abi"
+            fi
+        else
+            fail "cc x.c \$(pkg-config --cflags --libs layerlab) does not build or run"
+            show "$tmp/x.log"
+        fi
+    fi
+else
+    fail "make install PREFIX=<tmp> BUILD=$BUILD failed"
+    show "$tmp/install.log"
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
