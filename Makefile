@@ -92,12 +92,17 @@ $(STATIC): $(LIB_OBJ)
 	rm -f $@
 	ar rcs $@ $(LIB_OBJ)
 
-$(BUILD)/lib/layerlab.pc: Makefile
-	@mkdir -p $(dir $@)
-	@printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INCDIR)' '' \
+# layerlab.pc names the install directories, so it is written for the
+# PREFIX/LIBDIR/INCDIR in effect: at build time for the default, and again
+# by `make install` for the ones given there.
+write_pc = printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INCDIR)' '' \
 	  'Name: layerlab' 'Description: Layered material reflectance (adding-doubling, .bsdf files)' \
 	  'Version: $(VERSION)' 'Cflags: -I$${includedir}' 'Libs: -L$${libdir} -Wl,-rpath,$${libdir} -llayerlab' \
-	  'Libs.private: $(BLAS_LIBS) -fopenmp -lm -lpthread' > $@
+	  'Libs.private: $(BLAS_LIBS) -fopenmp -lm -lpthread' > $(1)
+
+$(BUILD)/lib/layerlab.pc: Makefile
+	@mkdir -p $(dir $@)
+	@$(call write_pc,$@)
 
 tools: $(TOOLS)
 
@@ -152,7 +157,7 @@ install: all
 	ln -sf liblayerlab.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/liblayerlab.so
 	install -m 644 $(STATIC) $(DESTDIR)$(LIBDIR)/
-	install -m 644 $(BUILD)/lib/layerlab.pc $(DESTDIR)$(PKGDIR)/
+	$(call write_pc,$(DESTDIR)$(PKGDIR)/layerlab.pc)
 	@# the tools find the library through their RUNPATH $$ORIGIN/../lib
 	for t in $(TOOLS); do install -m 755 $$t $(DESTDIR)$(BINDIR)/; done
 
