@@ -17,6 +17,7 @@
  * layer code needs (it pairs mu with -mu).
  */
 #include "support.h"
+#include "layerlab/ll_quad.h"
 
 #include <float.h>
 #include <math.h>

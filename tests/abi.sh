@@ -104,6 +104,20 @@ if [ -f "$LIB" ]; then
         fail "nm -D --defined-only $LIB failed"
         show "$tmp/nm.log"
     fi
+    # Every function the headers declare with LL_API is exported (a source
+    # file that forgets to include its header defines it hidden).
+    declared=$(grep -h '^LL_API ' include/layerlab/*.h |
+               sed -n 's/^[^(]*[ *]\(ll_[a-z0-9_]*\)(.*/\1/p' | sort -u)
+    missing=""
+    for f in $declared; do
+        awk -v f="$f" '{ name = $NF; sub(/@.*/, "", name); if (name == f) found = 1 }
+                       END { exit !found }' "$tmp/nm.txt" || missing="$missing $f"
+    done
+    if [ -n "$missing" ]; then
+        fail "declared in the headers but not exported:$missing"
+    else
+        pass "every LL_API function of the headers is exported ($(echo $declared | wc -w))"
+    fi
 fi
 
 # ----------------------------------------------------------------- (c) soname
