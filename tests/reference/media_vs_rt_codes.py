@@ -73,7 +73,7 @@ def main():
         if albedo < 1.0:
             for mu0 in (1.0, 0.5):
                 legendre_moments = g ** np.arange(160)
-                mu, flux_up, flux_down, _, _ = pydisort(
+                mu, flux_up, flux_down, _ = pydisort(
                     np.array([tau]), np.array([albedo]), 64, legendre_moments[None, :], mu0,
                     1.0, 0.0, NLeg=64, f_arr=legendre_moments[64], only_flux=True)
                 rd = flux_up(0.0) / mu0
