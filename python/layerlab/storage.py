@@ -69,6 +69,13 @@ def _uniform_pair(sample):
     return (ctypes.c_double * 2)(*a)
 
 
+def _broadcast_points(*arrays):
+    """The broadcast shape of the arguments and their values as flat lists
+    (plain floats: the cheapest thing to hand to ctypes point by point)."""
+    arrays = np.broadcast_arrays(*[np.asarray(a, np.float64) for a in arrays])
+    return arrays[0].shape, [a.reshape(-1).tolist() for a in arrays]
+
+
 def _transport(mode):
     try:
         return _TRANSPORT[mode]
@@ -285,18 +292,15 @@ class BSDFStorage:
         result has the broadcast shape plus a last axis of 3.
         """
         handle = self._live()
-        keep, coeffs = self._basis(basisCoeffs)
-        mi, mo, ph = np.broadcast_arrays(np.asarray(mu_i, np.float64),
-                                         np.asarray(mu_o, np.float64),
-                                         np.asarray(phi_d, np.float64))
-        out = np.empty(mi.shape + (3,))
+        _keep, coeffs = self._basis(basisCoeffs)
+        shape, points = _broadcast_points(mu_i, mu_o, phi_d)
+        out = np.empty((len(points[0]), 3))
         rgb = (ctypes.c_double * 3)()
-        for index in np.ndindex(mi.shape):
-            check(lib.ll_bsdf_eval(handle, float(mi[index]), float(mo[index]), float(ph[index]),
-                                   coeffs, rgb))
-            out[index] = tuple(rgb)
-        del keep
-        return out
+        fn = lib.ll_bsdf_eval
+        for k, (mi, mo, ph) in enumerate(zip(*points)):
+            check(fn(handle, mi, mo, ph, coeffs, rgb))
+            out[k] = rgb
+        return out.reshape(shape + (3,))
 
     def pdf(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None):
         """pdf(mu_i, mu_o, phi_d=0, basisCoeffs=None) -> float or numpy array
@@ -305,15 +309,11 @@ class BSDFStorage:
         picks (mu_o, phi_d) given mu_i. Broadcasts like :meth:`eval`.
         """
         handle = self._live()
-        keep, coeffs = self._basis(basisCoeffs)
-        mi, mo, ph = np.broadcast_arrays(np.asarray(mu_i, np.float64),
-                                         np.asarray(mu_o, np.float64),
-                                         np.asarray(phi_d, np.float64))
-        out = np.empty(mi.shape)
-        for index in np.ndindex(mi.shape):
-            out[index] = lib.ll_bsdf_pdf(handle, float(mi[index]), float(mo[index]),
-                                         float(ph[index]), coeffs)
-        del keep
+        _keep, coeffs = self._basis(basisCoeffs)
+        shape, points = _broadcast_points(mu_i, mu_o, phi_d)
+        fn = lib.ll_bsdf_pdf
+        out = np.array([fn(handle, mi, mo, ph, coeffs) for mi, mo, ph in zip(*points)],
+                       dtype=np.float64).reshape(shape)
         return float(out) if out.ndim == 0 else out
 
     def sample(self, mu_i, sample, basisCoeffs=None):
@@ -325,13 +325,12 @@ class BSDFStorage:
         pdf. A zero weight and pdf mean that no direction was found.
         """
         handle = self._live()
-        keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs)
         mu_o, phi_d, pdf = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
         weight = (ctypes.c_double * 3)()
         check(lib.ll_bsdf_sample(handle, real_argument(mu_i, "mu_i"), _uniform_pair(sample),
                                  coeffs, ctypes.byref(mu_o), ctypes.byref(phi_d),
                                  ctypes.byref(pdf), weight))
-        del keep
         return np.array(weight), mu_o.value, phi_d.value, pdf.value
 
     def evalDir(self, wo, wi, mode="radiance", basisCoeffs=None):
@@ -342,11 +341,10 @@ class BSDFStorage:
         "radiance" (scales by eta^2 across a dielectric, as radiance
         requires) or "importance".
         """
-        keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs)
         rgb = (ctypes.c_double * 3)()
         check(lib.ll_bsdf_eval_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
                                    _transport(mode), coeffs, rgb))
-        del keep
         return np.array(rgb)
 
     def pdfDir(self, wo, wi, basisCoeffs=None):
@@ -355,10 +353,9 @@ class BSDFStorage:
         The density (per solid angle) of sampling ``wi`` given ``wo``, as
         pbrt-v3's ``Pdf(wo, wi)``.
         """
-        keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs)
         value = lib.ll_bsdf_pdf_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
                                     coeffs)
-        del keep
         return value
 
     def sampleDir(self, wo, sample, mode="radiance", basisCoeffs=None):
@@ -368,13 +365,12 @@ class BSDFStorage:
         does (the same ``sample`` gives the same direction); returns f(wo,
         wi) (R, G, B array), the unit vector ``wi`` and its pdf.
         """
-        keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs)
         wi = (ctypes.c_double * 3)()
         rgb = (ctypes.c_double * 3)()
         pdf = ctypes.c_double()
         check(lib.ll_bsdf_sample_dir(self._live(), _vector3(wo, "wo"), _uniform_pair(sample),
                                      _transport(mode), coeffs, wi, ctypes.byref(pdf), rgb))
-        del keep
         return np.array(rgb), np.array(wi), pdf.value
 
     def __repr__(self):

@@ -8,6 +8,10 @@ root=$(cd "$here/../.." && pwd)
 BUILD=${BUILD:-build}
 case $BUILD in /*) build_dir=$BUILD ;; *) build_dir=$root/$BUILD ;; esac
 PYTHON=${PYTHON:-python3}
+if ! command -v "$PYTHON" >/dev/null 2>&1; then
+  echo "python/tests/run.sh: $PYTHON not found; the Python package needs Python 3.8 or later" >&2
+  exit 1
+fi
 
 LAYERLAB_LIBRARY=$build_dir/lib/liblayerlab.so
 export LAYERLAB_LIBRARY

@@ -23,28 +23,29 @@ import layerlab as ll
 # ---------------------------------------------------------------- the seed's helper
 
 def plot_layer(layer, phi_d=0.0, title=None, filename=None, resolution=200):
-    """The seed's plot_layer: the four blocks of a layer side by side (T^bt,
-    R^t over R^b, T^tb, as in the scattering matrix), each an image over
+    """The seed's plot_layer: the four blocks of a layer laid out as in its
+    scattering matrix (T^bt, R^t over R^b, T^tb), each an image over
     (mu_i, mu_o) of the BSDF times |mu_i mu_o| at azimuth phi_d, with a colour
     bar whose scale is clipped at the 99th percentile."""
-    t = np.linspace(0, 1, resolution)
+    ranges = {-1: np.linspace(-1, 0, resolution), +1: np.linspace(0, 1, resolution)}
     fig, axes = plt.subplots(2, 2, figsize=(9, 8))
-    # (sign of mu_i, sign of mu_o, name): outgoing up (mu_o < 0) on the top row,
-    # incident from below (mu_i < 0) in the left column.
+    # (sign of mu_i, sign of mu_o, name): rows are outgoing (mu_o < 0, light
+    # leaving upwards, on top), columns incident (mu_i < 0, from below, left).
     blocks = [(-1, -1, "$T^{bt}$"), (+1, -1, "$R^{t}$"),
               (-1, +1, "$R^{b}$"), (+1, +1, "$T^{tb}$")]
     data = {}
     for ax, (si, so, name) in zip(axes.flat, blocks):
-        mu_i, mu_o = np.meshgrid(si * t, so * t)
+        mu_i, mu_o = np.meshgrid(ranges[si], ranges[so])
         values = layer.eval(mu_o, mu_i, phi_d) * np.abs(mu_i * mu_o)
         vmax = np.percentile(values, 99)
-        image = ax.imshow(values, origin="lower", extent=(0, si, 0, so), aspect="auto",
-                          vmin=0, vmax=vmax if vmax > 0 else 1, cmap="inferno")
+        extent = (ranges[si][0], ranges[si][-1], ranges[so][-1], ranges[so][0])
+        image = ax.imshow(values, extent=extent, aspect="auto", vmin=0,
+                          vmax=vmax if vmax > 0 else 1, cmap="inferno")
         ax.set_title(name)
         ax.set_xlabel(r"$\mu_i$")
         ax.set_ylabel(r"$\mu_o$")
         fig.colorbar(image, ax=ax)
-        data[name] = values
+        data[name] = (mu_i, mu_o, values)
     if title:
         fig.suptitle(title)
     fig.tight_layout()
@@ -156,10 +157,12 @@ def test_cell_diffuse_layer(mu_w10, out_dir):
     assert repr(layer).startswith("Layer[resolution=10x10, fourierOrders=1, nonZeros=")
     data = plot_layer(layer, title="diffuse, albedo 0.5", filename=out_dir / "seed_diffuse.png")
     _check_png(out_dir / "seed_diffuse.png")
-    t = np.linspace(0, 1, 200)
-    mu_i, mu_o = np.meshgrid(t, -t)
-    np.testing.assert_allclose(data["$R^{t}$"], 0.5 / np.pi * np.abs(mu_i * mu_o), atol=1e-12)
-    assert np.all(data["$T^{tb}$"] == 0) and np.all(data["$T^{bt}$"] == 0)
+    mu_i, mu_o, values = data["$R^{t}$"]
+    assert mu_i.min() == 0 and mu_i.max() == 1 and mu_o.min() == -1 and mu_o.max() == 0
+    np.testing.assert_allclose(values, 0.5 / np.pi * np.abs(mu_i * mu_o), atol=1e-12)
+    mu_i, mu_o, values = data["$R^{b}$"]
+    np.testing.assert_allclose(values, 0.5 / np.pi * np.abs(mu_i * mu_o), atol=1e-12)
+    assert np.all(data["$T^{tb}$"][2] == 0) and np.all(data["$T^{bt}$"][2] == 0)
 
 
 # ---------------------------------------------------------------- cells: rough interfaces
@@ -212,7 +215,7 @@ def test_cell_dielectric(dielectric, out_dir, timings):
     timings["plot_layer (4 x 200x200 evaluations + PNG), dielectric"] = time.perf_counter() - start
     _check_png(out_dir / "seed_dielectric.png")
     # A dielectric reflects and transmits on both sides ...
-    assert all(data[name].max() > 0 for name in data)
+    assert all(values.max() > 0 for _, _, values in data.values())
     # ... and, with the energy compensation, loses nothing.
     for mu_i in (0.2, 0.5, 0.9, -0.5):
         r, t = dielectric.albedo(mu_i)
@@ -224,7 +227,7 @@ def test_cell_conductor(conductor, out_dir):
                       filename=out_dir / "seed_conductor.png")
     _check_png(out_dir / "seed_conductor.png")
     # Opaque: no transmission anywhere.
-    assert np.all(data["$T^{tb}$"] == 0) and np.all(data["$T^{bt}$"] == 0)
+    assert np.all(data["$T^{tb}$"][2] == 0) and np.all(data["$T^{bt}$"][2] == 0)
     # eta = i reflects everything (|(c - i)/(c + i)| = 1).
     for mu_i in (0.3, 0.7, 1.0):
         r, t = conductor.albedo(mu_i)
@@ -235,7 +238,7 @@ def test_cell_coated_conductor(coated, conductor, out_dir):
     data = plot_layer(coated, title="rough conductor under a rough dielectric coat",
                       filename=out_dir / "seed_coated.png")
     _check_png(out_dir / "seed_coated.png")
-    assert np.all(data["$T^{tb}$"] == 0)
+    assert np.all(data["$T^{tb}$"][2] == 0)
     # Neither part absorbs, so the stack reflects everything too.
     for mu_i in (0.3, 0.7, 1.0):
         r, t = coated.albedo(mu_i)
