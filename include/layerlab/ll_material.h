@@ -84,6 +84,17 @@ LL_API ll_status ll_material_build_layers(const ll_material *material,
                                           ll_layer *layers[3], size_t *n_channels,
                                           ll_bsdf_write_options *header);
 
+/* Write layers that ll_material_build_layers returned (n_channels of them,
+ * 1 or 3) to out_path as a .bsdf file with this material's header (eta,
+ * alpha), its JSON description as metadata and the truncation error of
+ * opts or the material. Atomic, like ll_material_build: opts->cancel is
+ * checked once the file is complete and before it replaces out_path, so a
+ * cancelled or failed write leaves no file and keeps an existing one.
+ * opts may be NULL; only error_goal and cancel are read. */
+LL_API ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
+                                   ll_layer *const *layers, size_t n_channels,
+                                   const char *out_path);
+
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
 
