@@ -1,0 +1,350 @@
+/*
+ * The benchmark driver (`make bench` -> bench/run.sh -> this program): runs
+ * every measuring program in its own process, the requested number of
+ * times, collects the samples, prints the table and writes the JSON file.
+ *
+ * usage: driver --bin DIR --work DIR --shared DIR --json PATH
+ *               [--runs N] [--original DIR] [--commit TEXT] [--compiler TEXT]
+ *
+ *   --bin       where run.sh put the programs recipe, adding and eval
+ *   --work      scratch directory for the recipes' .bsdf files
+ *   --shared    the shared material folder (testdata/roughgold_alpha_0.2.bsdf)
+ *   --original  optional: a directory with one executable per recipe name
+ *               (coated-gold, coated-gold-medium, coated-diffuse) that builds
+ *               the same material with another implementation, e.g. a
+ *               wrapper running the original layerlab's recipe; each is
+ *               timed like ours, side by side, and the ratios use it.
+ */
+#include "bench_util.h"
+#include "child.h"
+#include "metrics.h"
+#include "plan.h"
+#include "report.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/utsname.h>
+#include <time.h>
+#include <unistd.h>
+
+typedef struct config {
+    const char *bin_dir, *work_dir, *shared_dir, *json_path, *original_dir;
+    size_t runs, cores;
+    size_t threads[8];   /* scaling: 1, 2, 4, ... and the core count */
+    size_t thread_count;
+} config;
+
+static void path_join(char *out, size_t size, const char *dir, const char *name)
+{
+    if ((size_t)snprintf(out, size, "%s/%s", dir, name) >= size)
+        bench_die("driver: path %s/%s is too long", dir, name);
+}
+
+static void record_load(bench_store *store, const char *when)
+{
+    double load[3] = { 0, 0, 0 };
+    char key[64], text[96];
+    if (getloadavg(load, 3) != 3)
+        return;
+    snprintf(key, sizeof key, "load.%s", when);
+    snprintf(text, sizeof text, "%.2f %.2f %.2f", load[0], load[1], load[2]);
+    bench_store_info(store, key, text);
+}
+
+/* The first "name : value" line of a /proc file whose name matches. */
+static void record_proc_field(bench_store *store, const char *path, const char *field,
+                              const char *key)
+{
+    char line[512];
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return;
+    while (fgets(line, sizeof line, f)) {
+        char *colon = strchr(line, ':');
+        if (strncmp(line, field, strlen(field)) == 0 && colon) {
+            char *value = colon + 1, *nl = strchr(value, '\n');
+            while (*value == ' ' || *value == '\t')
+                ++value;
+            if (nl)
+                *nl = '\0';
+            bench_store_info(store, key, value);
+            break;
+        }
+    }
+    fclose(f);
+}
+
+static void record_machine(const config *cfg, bench_store *store)
+{
+    struct utsname u;
+    char text[256];
+    time_t now = time(NULL);
+    snprintf(text, sizeof text, "%zu", cfg->cores);
+    bench_store_info(store, "machine.cores", text);
+    record_proc_field(store, "/proc/cpuinfo", "model name", "machine.cpu");
+    record_proc_field(store, "/proc/meminfo", "MemTotal", "machine.memory");
+    if (uname(&u) == 0) {
+        snprintf(text, sizeof text, "%s %s %s", u.sysname, u.release, u.machine);
+        bench_store_info(store, "machine.kernel", text);
+    }
+    strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", gmtime(&now));
+    bench_store_info(store, "date", text);
+    snprintf(text, sizeof text, "%zu", cfg->runs);
+    bench_store_info(store, "runs", text);
+    bench_store_info(store, "layerlab_version", ll_version_string());
+}
+
+static void child_failed(bench_store *store, const char *what, const bench_child_result *r)
+{
+    char message[1200];
+    snprintf(message, sizeof message, "%s failed (wait status %d); see its messages above",
+             what, r->status);
+    fprintf(stderr, "bench: %s\n", message);
+    bench_store_error(store, message);
+}
+
+/* 1. The three recipes at all threads, interleaved run by run so that a
+ * burst of load elsewhere spreads over all of them. */
+static void run_recipes(const config *cfg, bench_store *store)
+{
+    char recipe_bin[1024], out_path[1024], out_name[128], prefix[128], id[160];
+    size_t run, r;
+    int failed[BENCH_RECIPE_COUNT] = { 0 };
+
+    path_join(recipe_bin, sizeof recipe_bin, cfg->bin_dir, "recipe");
+    record_load(store, "recipes");
+    for (run = 0; run < cfg->runs; ++run)
+        for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
+            const char *name = bench_recipes[r].name;
+            char *argv[5];
+            bench_child_result res;
+            struct stat st;
+            if (failed[r])
+                continue;
+            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
+            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
+            argv[0] = recipe_bin;
+            argv[1] = (char *)name;
+            argv[2] = out_path;
+            argv[3] = "0";
+            argv[4] = NULL;
+            fprintf(stderr, "bench: recipe %s, run %zu of %zu\n", name, run + 1, cfg->runs);
+            snprintf(prefix, sizeof prefix, "recipe.%s.", name);
+            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
+                child_failed(store, name, &res);
+                failed[r] = 1;
+                continue;
+            }
+            snprintf(id, sizeof id, "recipe.%s.wall", name);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "recipe.%s.cpu", name);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "recipe.%s.peak_rss", name);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            if (stat(out_path, &st) == 0) {
+                snprintf(id, sizeof id, "recipe.%s.output", name);
+                bench_store_add(store, id, "MB", (double)st.st_size * 1e-6);
+            }
+        }
+}
+
+/* The same recipes built by another implementation (--original). */
+static void run_original(const config *cfg, bench_store *store)
+{
+    char path[1024], id[160];
+    size_t run, r;
+    if (!cfg->original_dir)
+        return;
+    record_load(store, "original");
+    for (run = 0; run < cfg->runs; ++run)
+        for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
+            const char *name = bench_recipes[r].name;
+            char *argv[2];
+            bench_child_result res;
+            path_join(path, sizeof path, cfg->original_dir, name);
+            if (access(path, X_OK) != 0)
+                continue;
+            argv[0] = path;
+            argv[1] = NULL;
+            fprintf(stderr, "bench: original %s, run %zu of %zu\n", name, run + 1, cfg->runs);
+            if (!bench_run_child(argv, NULL, "original.ignored.", store, &res)) {
+                child_failed(store, path, &res);
+                continue;
+            }
+            snprintf(id, sizeof id, "original.%s.wall", name);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "original.%s.cpu", name);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "original.%s.peak_rss", name);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+        }
+}
+
+/* 4. Coated gold at 1, 2, 4, ... threads: the library's own count
+ * (ll_set_thread_count) and OpenMP/OpenBLAS limited to the same. */
+static void run_scaling(const config *cfg, bench_store *store)
+{
+    char recipe_bin[1024], out_path[1024], threads_arg[32], omp_env[64], blas_env[64], id[160];
+    size_t run, t;
+    path_join(recipe_bin, sizeof recipe_bin, cfg->bin_dir, "recipe");
+    path_join(out_path, sizeof out_path, cfg->work_dir, "scaling.bsdf");
+    record_load(store, "scaling");
+    for (run = 0; run < cfg->runs; ++run)
+        for (t = 0; t < cfg->thread_count; ++t) {
+            char *argv[5], *env[3];
+            bench_child_result res;
+            snprintf(threads_arg, sizeof threads_arg, "%zu", cfg->threads[t]);
+            snprintf(omp_env, sizeof omp_env, "OMP_NUM_THREADS=%zu", cfg->threads[t]);
+            snprintf(blas_env, sizeof blas_env, "OPENBLAS_NUM_THREADS=%zu", cfg->threads[t]);
+            argv[0] = recipe_bin;
+            argv[1] = "coated-gold";
+            argv[2] = out_path;
+            argv[3] = threads_arg;
+            argv[4] = NULL;
+            env[0] = omp_env;
+            env[1] = blas_env;
+            env[2] = NULL;
+            fprintf(stderr, "bench: coated-gold at %zu thread(s), run %zu of %zu\n",
+                    cfg->threads[t], run + 1, cfg->runs);
+            if (!bench_run_child(argv, env, "scaling.ignored.", store, &res)) {
+                child_failed(store, "scaling", &res);
+                return;
+            }
+            snprintf(id, sizeof id, "scaling.coated-gold.t%zu.wall", cfg->threads[t]);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "scaling.coated-gold.t%zu.cpu", cfg->threads[t]);
+            bench_store_add(store, id, "s", res.cpu);
+        }
+    remove(out_path);
+}
+
+/* 2. Adding throughput against dgemm at 1 thread and at all cores. */
+static void run_adding(const config *cfg, bench_store *store)
+{
+    char bin[1024], runs[32], threads[64], sizes[BENCH_ADD_SIZE_COUNT][32];
+    char *argv[4 + BENCH_ADD_SIZE_COUNT];
+    bench_child_result res;
+    size_t i;
+    path_join(bin, sizeof bin, cfg->bin_dir, "adding");
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    if (cfg->cores > 1)
+        snprintf(threads, sizeof threads, "1,%zu", cfg->cores);
+    else
+        snprintf(threads, sizeof threads, "1");
+    argv[0] = bin;
+    argv[1] = runs;
+    argv[2] = threads;
+    for (i = 0; i < BENCH_ADD_SIZE_COUNT; ++i) {
+        snprintf(sizes[i], sizeof sizes[i], "%zu", bench_add_sizes[i]);
+        argv[3 + i] = sizes[i];
+    }
+    argv[3 + BENCH_ADD_SIZE_COUNT] = NULL;
+    record_load(store, "adding");
+    fprintf(stderr, "bench: adding vs dgemm at %s thread(s)\n", threads);
+    if (!bench_run_child(argv, NULL, "", store, &res))
+        child_failed(store, "adding", &res);
+}
+
+/* 3. Evaluation on the golden file and on our coated-diffuse output. */
+static void run_eval(const config *cfg, bench_store *store)
+{
+    char bin[1024], runs[32], golden[1024], diffuse[1024];
+    const char *files[2], *labels[2] = { "roughgold", "coated-diffuse" };
+    size_t i;
+    path_join(bin, sizeof bin, cfg->bin_dir, "eval");
+    path_join(golden, sizeof golden, cfg->shared_dir, "testdata/roughgold_alpha_0.2.bsdf");
+    path_join(diffuse, sizeof diffuse, cfg->work_dir, "coated-diffuse.bsdf");
+    files[0] = golden;
+    files[1] = diffuse;
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    record_load(store, "eval");
+    for (i = 0; i < 2; ++i) {
+        char *argv[5];
+        bench_child_result res;
+        char what[64];
+        if (access(files[i], R_OK) != 0) {
+            snprintf(what, sizeof what, "eval %s: no file %s", labels[i],
+                     i == 0 ? "(shared/testdata missing)" : "(the recipe failed)");
+            fprintf(stderr, "bench: %s\n", what);
+            bench_store_error(store, what);
+            continue;
+        }
+        argv[0] = bin;
+        argv[1] = (char *)files[i];
+        argv[2] = (char *)labels[i];
+        argv[3] = runs;
+        argv[4] = NULL;
+        fprintf(stderr, "bench: evaluation on %s\n", labels[i]);
+        snprintf(what, sizeof what, "eval %s", labels[i]);
+        if (!bench_run_child(argv, NULL, "", store, &res))
+            child_failed(store, what, &res);
+    }
+}
+
+static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
+{
+    int a;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    size_t t;
+    memset(cfg, 0, sizeof *cfg);
+    cfg->runs = 3;
+    for (a = 1; a + 1 < argc; a += 2) {
+        const char *key = argv[a], *value = argv[a + 1];
+        if (strcmp(key, "--bin") == 0)
+            cfg->bin_dir = value;
+        else if (strcmp(key, "--work") == 0)
+            cfg->work_dir = value;
+        else if (strcmp(key, "--shared") == 0)
+            cfg->shared_dir = value;
+        else if (strcmp(key, "--json") == 0)
+            cfg->json_path = value;
+        else if (strcmp(key, "--original") == 0)
+            cfg->original_dir = value[0] ? value : NULL;
+        else if (strcmp(key, "--runs") == 0)
+            cfg->runs = bench_parse_size(value, "--runs");
+        else if (strcmp(key, "--commit") == 0)
+            bench_store_info(store, "git_commit", value);
+        else if (strcmp(key, "--compiler") == 0)
+            bench_store_info(store, "compiler", value);
+        else
+            bench_die("driver: unknown option %s", key);
+    }
+    if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->shared_dir || !cfg->json_path)
+        bench_die("usage: %s --bin DIR --work DIR --shared DIR --json PATH [--runs N] "
+                  "[--original DIR] [--commit TEXT] [--compiler TEXT]", argv[0]);
+    if (cfg->runs < 3)
+        bench_die("driver: --runs %zu: every figure is a median of at least 3 runs", cfg->runs);
+    cfg->cores = cores > 0 ? (size_t)cores : 1;
+    for (t = 1; t < cfg->cores && cfg->thread_count < 7; t *= 2)
+        cfg->threads[cfg->thread_count++] = t;
+    cfg->threads[cfg->thread_count++] = cfg->cores;
+}
+
+int main(int argc, char **argv)
+{
+    config cfg;
+    bench_store store;
+    int status;
+
+    bench_store_init(&store);
+    parse_args(argc, argv, &cfg, &store);
+    record_machine(&cfg, &store);
+    record_load(&store, "start");
+
+    run_recipes(&cfg, &store);
+    run_original(&cfg, &store);
+    run_scaling(&cfg, &store);
+    run_adding(&cfg, &store);
+    run_eval(&cfg, &store);
+
+    record_load(&store, "end");
+    bench_report_table(stdout, &store);
+    status = bench_report_json(cfg.json_path, &store);
+    if (status == 0)
+        printf("\nwrote %s\n", cfg.json_path);
+    status = status != 0 || store.error_count != 0;
+    bench_store_free(&store);
+    return status;
+}

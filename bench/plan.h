@@ -1,0 +1,52 @@
+/*
+ * What the benchmark measures, shared by the driver (which runs it) and
+ * the report (which lays it out), and the reference figures of issue 7.
+ */
+#ifndef BENCH_PLAN_H
+#define BENCH_PLAN_H
+
+#include <stddef.h>
+
+#define BENCH_RECIPE_COUNT 3
+#define BENCH_ADD_SIZE_COUNT 3
+#define BENCH_STAGE_COUNT 5
+#define BENCH_EVAL_FUNCTION_COUNT 3
+
+typedef struct bench_recipe_ref {
+    const char *name;
+    double original_wall_s;   /* the original layerlab, issue 7: whole process, median of 3 */
+    double original_rss_mib;  /* its peak resident memory                                  */
+} bench_recipe_ref;
+
+static const bench_recipe_ref bench_recipes[BENCH_RECIPE_COUNT] = {
+    { "coated-gold", 2.87, 186.0 },
+    { "coated-gold-medium", 3.86, 185.0 },
+    { "coated-diffuse", 28.3, 2.38 * 1024.0 },
+};
+
+static const size_t bench_add_sizes[BENCH_ADD_SIZE_COUNT] = { 200, 500, 1000 };
+
+/* Stage names as the recipe program reports them (bench/recipe.c). */
+static const char *const bench_stages[BENCH_STAGE_COUNT] = { "setup", "interfaces", "media",
+                                                             "adding", "writing" };
+
+typedef struct bench_eval_ref {
+    const char *function;     /* metric suffix                          */
+    const char *pbrt_name;    /* pbrt-v3 FourierBSDF method             */
+    double pbrt_low_ns, pbrt_high_ns; /* issue 7, on roughgold_alpha_0.2 */
+} bench_eval_ref;
+
+static const bench_eval_ref bench_eval_functions[BENCH_EVAL_FUNCTION_COUNT] = {
+    { "eval_dir", "f", 400.0, 600.0 },
+    { "pdf_dir", "Pdf", 170.0, 270.0 },
+    { "sample_dir", "Sample_f", 1200.0, 1800.0 },
+};
+
+/* Targets of issue 7. */
+#define BENCH_TARGET_SPEEDUP 5.0       /* recipes: at least 5x faster than the original   */
+#define BENCH_TARGET_MEMORY_RATIO 0.5  /* ... with at most half its peak memory           */
+#define BENCH_TARGET_ADD_RATIO 0.5     /* ll_layer_add >= half of dgemm for n >= 500      */
+#define BENCH_TARGET_ADD_MIN_N 500
+#define BENCH_TARGET_EVAL_SPEEDUP 1.5  /* eval/pdf/sample >= 1.5x faster than pbrt-v3     */
+
+#endif /* BENCH_PLAN_H */

@@ -1,0 +1,219 @@
+/* The table that `make bench` prints; see report.h. */
+#include "plan.h"
+#include "report.h"
+#include "targets.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+/* A figure with about three significant digits, without exponents. */
+static void format_value(char *out, size_t size, double x)
+{
+    double a = fabs(x);
+    if (!isfinite(x))
+        snprintf(out, size, "-");
+    else if (a >= 100.0)
+        snprintf(out, size, "%.0f", x);
+    else if (a >= 10.0)
+        snprintf(out, size, "%.1f", x);
+    else if (a >= 1.0)
+        snprintf(out, size, "%.2f", x);
+    else
+        snprintf(out, size, "%.3f", x);
+}
+
+/* "median [min..max]" of a series, or "-" if it was not measured. */
+static const char *format_stats(char *out, size_t size, bench_stats st)
+{
+    char med[32], lo[32], hi[32];
+    if (st.count == 0) {
+        snprintf(out, size, "-");
+        return out;
+    }
+    format_value(med, sizeof med, st.median);
+    format_value(lo, sizeof lo, st.min);
+    format_value(hi, sizeof hi, st.max);
+    snprintf(out, size, "%s [%s..%s]", med, lo, hi);
+    return out;
+}
+
+/* Stats of the series whose id is formatted from fmt (printf-style). */
+static bench_stats stats_of(const bench_store *s, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static bench_stats stats_of(const bench_store *s, const char *fmt, ...)
+{
+    char id[192];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(id, sizeof id, fmt, ap);
+    va_end(ap);
+    return bench_store_stats(s, id);
+}
+
+static const char *info_or(const bench_store *s, const char *key, const char *fallback)
+{
+    const char *text = bench_store_info_get(s, key);
+    return text ? text : fallback;
+}
+
+static void print_header(FILE *out, const bench_store *s)
+{
+    fprintf(out, "\nlayerlab benchmarks (layerlab %s, commit %s, %s)\n",
+            info_or(s, "layerlab_version", "?"), info_or(s, "git_commit", "?"),
+            info_or(s, "date", "?"));
+    fprintf(out, "machine: %s cores, %s, %s memory, %s\n", info_or(s, "machine.cores", "?"),
+            info_or(s, "machine.cpu", "?"), info_or(s, "machine.memory", "?"),
+            info_or(s, "machine.kernel", "?"));
+    fprintf(out, "OpenBLAS: %s\n", info_or(s, "openblas_config", "?"));
+    fprintf(out, "load average (1/5/15 min): start %s, end %s\n", info_or(s, "load.start", "?"),
+            info_or(s, "load.end", "?"));
+    fprintf(out, "every figure: median [min..max] of %s runs\n", info_or(s, "runs", "?"));
+}
+
+static void print_recipes(FILE *out, const bench_store *s)
+{
+    size_t r, k;
+    char a[128], b[128], c[128], d[128];
+    fprintf(out, "\n1. Recipes of the original at its resolutions (whole process, all cores)\n");
+    fprintf(out, "%-20s %-24s %-24s %-24s %-20s\n", "recipe", "wall s", "CPU s", "peak MiB",
+            "output MB");
+    for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
+        const char *name = bench_recipes[r].name;
+        bench_stats ow = stats_of(s, "original.%s.wall", name);
+        fprintf(out, "%-20s %-24s %-24s %-24s %-20s\n", name,
+                format_stats(a, sizeof a, stats_of(s, "recipe.%s.wall", name)),
+                format_stats(b, sizeof b, stats_of(s, "recipe.%s.cpu", name)),
+                format_stats(c, sizeof c, stats_of(s, "recipe.%s.peak_rss", name)),
+                format_stats(d, sizeof d, stats_of(s, "recipe.%s.output", name)));
+        fprintf(out, "%-20s stages, wall s:", "");
+        for (k = 0; k < BENCH_STAGE_COUNT; ++k) {
+            char id[160];
+            snprintf(id, sizeof id, "recipe.%s.stage.%s", name, bench_stages[k]);
+            format_value(a, sizeof a, bench_store_stats(s, id).median);
+            fprintf(out, " %s %s", bench_stages[k], a);
+        }
+        fputc('\n', out);
+        if (ow.count) {
+            fprintf(out, "%-20s original, side by side: wall %s", "",
+                    format_stats(a, sizeof a, ow));
+            fprintf(out, "  CPU %s", format_stats(b, sizeof b,
+                                                  stats_of(s, "original.%s.cpu", name)));
+            fprintf(out, "  peak MiB %s\n",
+                    format_stats(c, sizeof c, stats_of(s, "original.%s.peak_rss", name)));
+        } else {
+            format_value(a, sizeof a, bench_recipes[r].original_wall_s);
+            format_value(b, sizeof b, bench_recipes[r].original_rss_mib);
+            fprintf(out, "%-20s original (issue 7 figures, another machine): wall %s s, "
+                         "peak %s MiB\n", "", a, b);
+        }
+    }
+}
+
+static void print_adding(FILE *out, const bench_store *s)
+{
+    const char *cores_text = bench_store_info_get(s, "machine.cores");
+    size_t cores = cores_text ? (size_t)strtoul(cores_text, NULL, 10) : 1, i, k;
+    size_t threads[2];
+    char a[128], b[128], c[128], d[128];
+    threads[0] = 1;
+    threads[1] = cores;
+    fprintf(out, "\n2. Adding: ll_layer_add on full layers vs OpenBLAS dgemm (GFLOP/s; "
+                 "adding counted as 8/3 n^3 per order, dgemm on the h = n/2 blocks)\n");
+    fprintf(out, "%-6s %-8s %-24s %-24s %-24s %-24s\n", "n", "threads", "ll_layer_add",
+            "dgemm h x h", "ratio", "dgemm n x n");
+    for (i = 0; i < BENCH_ADD_SIZE_COUNT; ++i)
+        for (k = 0; k < (cores > 1 ? 2u : 1u); ++k) {
+            size_t n = bench_add_sizes[i], t = threads[k];
+            char id[96];
+            bench_stats st[4];
+            const char *suffix[4] = { "add", "dgemm_h", "ratio", "dgemm_n" };
+            int j;
+            for (j = 0; j < 4; ++j) {
+                snprintf(id, sizeof id, "add.n%zu.t%zu.%s", n, t, suffix[j]);
+                st[j] = bench_store_stats(s, id);
+            }
+            fprintf(out, "%-6zu %-8zu %-24s %-24s %-24s %-24s\n", n, t,
+                    format_stats(a, sizeof a, st[0]), format_stats(b, sizeof b, st[1]),
+                    format_stats(c, sizeof c, st[2]), format_stats(d, sizeof d, st[3]));
+        }
+}
+
+static void print_eval(FILE *out, const bench_store *s)
+{
+    const char *labels[2] = { "roughgold", "coated-diffuse" };
+    size_t i, f;
+    char a[128];
+    fprintf(out, "\n3. Evaluation, ns per call (1 thread, 10^6 random directions, fixed seed)\n");
+    fprintf(out, "%-20s", "file");
+    for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f)
+        fprintf(out, " ll_bsdf_%-16s", bench_eval_functions[f].function);
+    fputc('\n', out);
+    for (i = 0; i < 2; ++i) {
+        fprintf(out, "%-20s", labels[i]);
+        for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f) {
+            char id[96];
+            snprintf(id, sizeof id, "eval.%s.%s", labels[i], bench_eval_functions[f].function);
+            fprintf(out, " %-24s", format_stats(a, sizeof a, bench_store_stats(s, id)));
+        }
+        fputc('\n', out);
+    }
+    fprintf(out, "%-20s", "pbrt-v3 (issue 7)");
+    for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f) {
+        char range[48];
+        snprintf(range, sizeof range, "%.0f-%.0f (%s)", bench_eval_functions[f].pbrt_low_ns,
+                 bench_eval_functions[f].pbrt_high_ns, bench_eval_functions[f].pbrt_name);
+        fprintf(out, " %-24s", range);
+    }
+    fputc('\n', out);
+}
+
+static void print_scaling(FILE *out, const bench_store *s)
+{
+    size_t t;
+    double one = stats_of(s, "scaling.coated-gold.t%zu.wall", (size_t)1).median;
+    char a[128], b[128], c[32];
+    fprintf(out, "\n4. Scaling: coated-gold (library, OpenMP and OpenBLAS limited to the "
+                 "thread count)\n");
+    fprintf(out, "%-8s %-24s %-24s %-10s\n", "threads", "wall s", "CPU s", "speedup");
+    for (t = 1; t <= 4096; ++t) {
+        bench_stats w = stats_of(s, "scaling.coated-gold.t%zu.wall", t);
+        if (w.count == 0)
+            continue;
+        format_value(c, sizeof c, one / w.median);
+        fprintf(out, "%-8zu %-24s %-24s %-10s\n", t, format_stats(a, sizeof a, w),
+                format_stats(b, sizeof b, stats_of(s, "scaling.coated-gold.t%zu.cpu", t)),
+                c);
+    }
+}
+
+static void print_targets(FILE *out, const bench_store *s)
+{
+    bench_target targets[BENCH_MAX_TARGETS];
+    size_t count = bench_compute_targets(s, targets), i;
+    char v[32], g[32];
+    fprintf(out, "\nTargets (issue 7)\n");
+    for (i = 0; i < count; ++i) {
+        format_value(v, sizeof v, targets[i].value);
+        format_value(g, sizeof g, targets[i].goal);
+        fprintf(out, "  [%s] %-52s %8s (goal %s %s; vs %s)\n", targets[i].met ? " met " : "NOT met",
+                targets[i].what, v, targets[i].at_least ? ">=" : "<=", g, targets[i].basis);
+    }
+    for (i = 0; i < s->error_count; ++i)
+        fprintf(out, "  error: %s\n", s->errors[i]);
+}
+
+void bench_report_table(FILE *out, const bench_store *store)
+{
+    print_header(out, store);
+    print_recipes(out, store);
+    print_adding(out, store);
+    print_eval(out, store);
+    print_scaling(out, store);
+    print_targets(out, store);
+}
