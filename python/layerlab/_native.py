@@ -107,6 +107,24 @@ class BuildOptions(ctypes.Structure):
         self.struct_size = ctypes.sizeof(BuildOptions)
 
 
+class BuildEstimate(ctypes.Structure):
+    """``ll_build_estimate`` (size-tagged)."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("n_nodes", ctypes.c_size_t),
+                ("n_orders", ctypes.c_size_t),
+                ("n_channels", ctypes.c_size_t),
+                ("layers_built", ctypes.c_size_t),
+                ("additions", ctypes.c_size_t),
+                ("doublings", ctypes.c_size_t),
+                ("peak_bytes", ctypes.c_double),
+                ("seconds", ctypes.c_double)]
+
+    def __init__(self):
+        super().__init__()
+        self.struct_size = ctypes.sizeof(BuildEstimate)
+
+
 _S, _D, _Z, _I = status_t, ctypes.c_double, ctypes.c_size_t, ctypes.c_int
 _P3 = ctypes.c_double * 3
 
@@ -180,7 +198,11 @@ PROTOTYPES = {
     "ll_material_build": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.c_char_p]),
     "ll_material_build_layers": (_S, [material_p, ctypes.POINTER(BuildOptions), layer_p * 3,
                                       c_size_t_p, ctypes.POINTER(BsdfWriteOptions)]),
+    "ll_material_write": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.POINTER(layer_p),
+                               _Z, ctypes.c_char_p]),
     "ll_material_word_count": (_Z, [material_p]),
+    "ll_material_estimate": (_S, [material_p, ctypes.POINTER(BuildOptions),
+                                  ctypes.POINTER(BuildEstimate)]),
 }
 
 

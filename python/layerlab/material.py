@@ -6,7 +6,7 @@ import ctypes
 import weakref
 
 from ._errors import CancelledError
-from ._native import (BsdfWriteOptions, BuildOptions, check, fspath, layer_p, lib, material_p,
+from ._native import (BsdfWriteOptions, BuildEstimate, BuildOptions, check, fspath, layer_p, lib, material_p,
                       progress_fn)
 from ._util import count_argument, real_argument
 from .layer import Layer
@@ -138,6 +138,23 @@ class Material:
                                                           ctypes.byref(m), ctypes.byref(c)))
         return n.value, m.value, c.value
 
+    def estimate(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0):
+        """estimate(...) -> dict
+
+        What a build with these keywords would take, estimated without
+        building (as ``llbuild --dry-run``): ``nodes``, ``orders``,
+        ``channels``, ``layers_built``, ``additions``, ``doublings``,
+        ``peak_bytes`` (an upper bound) and ``seconds`` (wall time; within a
+        factor of about 2 on machines like the one it was calibrated on).
+        """
+        build = _Build(nodes, orders, channels, threads, error_goal, None, None)
+        est = BuildEstimate()
+        build.run(lambda opts: lib.ll_material_estimate(self._handle, opts, ctypes.byref(est)))
+        return {"nodes": est.n_nodes, "orders": est.n_orders, "channels": est.n_channels,
+                "layers_built": est.layers_built, "additions": est.additions,
+                "doublings": est.doublings, "peak_bytes": est.peak_bytes,
+                "seconds": est.seconds}
+
     def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
               progress=None, cancel=None):
         """build(path, ...) -> BSDFStorage
@@ -178,6 +195,25 @@ class Material:
             else:  # not promised by the header; never leak one
                 lib.ll_layer_destroy(handles[k])
         return layers, {"eta": header.eta, "alpha": (header.alpha[0], header.alpha[1])}
+
+    def write(self, path, layers, error_goal=0.0, cancel=None):
+        """write(path, layers, error_goal=0, cancel=None) -> BSDFStorage
+
+        Write layers that :meth:`build_layers` returned (1 or 3) to ``path``
+        as a ``.bsdf`` file with this material's header (eta, alpha) and
+        description; atomic like :meth:`build`. Returns the opened file.
+        """
+        layers = list(layers)
+        for k, layer in enumerate(layers):
+            if not isinstance(layer, Layer):
+                raise TypeError("layer %d must be a layerlab.Layer, not %s"
+                                % (k, type(layer).__name__))
+        build = _Build(0, 0, 0, 0, error_goal, None, cancel)
+        handles = (layer_p * max(len(layers), 1))(*[layer._handle for layer in layers])
+        target = fspath(path)
+        build.run(lambda opts: lib.ll_material_write(self._handle, opts, handles, len(layers),
+                                                     target))
+        return BSDFStorage(path)
 
     def __repr__(self):
         return "Material[words=%d]" % len(self)

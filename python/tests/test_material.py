@@ -21,6 +21,10 @@ def test_parse_and_build_layers_in_memory():
     assert repr(material) == "Material[words=2]"
     n, m, channels = material.resolution(nodes=40, orders=20)
     assert (n, m, channels) == (40, 20, 1)
+    est = material.estimate(nodes=40, orders=20)
+    assert (est["nodes"], est["orders"], est["channels"]) == (40, 20, 1)
+    assert est["layers_built"] == 2 and est["additions"] == 1 and est["doublings"] == 0
+    assert est["peak_bytes"] > 0 and est["seconds"] > 0
     layers, header = material.build_layers(nodes=40, orders=20)
     assert len(layers) == 1 and layers[0].resolution == 40 and layers[0].fourierOrders == 20
     assert header["eta"] == 1.0  # an opaque stack
@@ -52,8 +56,13 @@ def test_rgb_material_and_build_to_file(tmp_path):
     assert fractions == sorted(fractions)
     rgb = storage.eval(0.7, -0.7)
     assert rgb[0] < rgb[1] < rgb[2]
-    layers, _ = material.build_layers(nodes=30, orders=10)
+    layers, header = material.build_layers(nodes=30, orders=10)
     assert len(layers) == 3
+    again = material.write(tmp_path / "again.bsdf", layers)
+    assert again.channelCount == 3 and again.eta == header["eta"]
+    np.testing.assert_allclose(again.eval(0.7, -0.7), rgb, rtol=1e-6)
+    with pytest.raises(TypeError):
+        material.write(tmp_path / "bad.bsdf", [layers[0], "x", layers[2]])
 
 
 def test_parse_errors_name_line_and_column(tmp_path):
