@@ -146,9 +146,10 @@ class TableCache {
         }
         Table table(bsdf);
         if (reason.empty()) return table;
-        if (report)
-            report("fourier material: cannot use \"" + path + "\": " + reason +
-                   "; the material renders black");
+        // layerlab's own messages name the file already; ours may not.
+        if (path.empty() || reason.find(path) == std::string::npos)
+            reason = "cannot use \"" + path + "\": " + reason;
+        if (report) report("fourier material: " + reason + "; the material renders black");
         return Table();
     }
 
