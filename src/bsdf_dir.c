@@ -13,14 +13,17 @@
 
 #include <math.h>
 
-/* A direction's length, or 0 if it is not a usable (finite, non-zero) one. */
+/* A direction's length, or 0 if it is not a usable (finite, non-zero) one.
+ * Unit vectors (what renderers pass) skip the square root: dividing by a
+ * length within 1e-12 of 1 would change nothing that matters. */
 static double length_of(const double w[3])
 {
-    double len;
-    if (!ll_is_finite(w[0]) || !ll_is_finite(w[1]) || !ll_is_finite(w[2]))
+    double len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    if (fabs(len2 - 1.0) <= 1e-12)
+        return 1.0;
+    if (!(len2 > 0.0) || !ll_is_finite(len2))
         return 0.0;
-    len = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    return ll_is_finite(len) ? len : 0.0;
+    return sqrt(len2);
 }
 
 static double clamp_unit(double x) { return x > 1.0 ? 1.0 : (x < -1.0 ? -1.0 : x); }

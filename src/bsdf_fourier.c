@@ -4,11 +4,11 @@
  *
  * A series here is the spline-weighted sum of up to 16 stored series
  * (ll_bsdf_series). Rather than adding them into a buffer as long as the
- * longest series in the file (whose length comes from the file), the cosines
- * cos(k phi) are generated in fixed-size chunks by the Chebyshev recurrence
- * cos((k+1) phi) = 2 cos(phi) cos(k phi) - cos((k-1) phi) and each stored
- * series is dotted with the chunk. Stack use is constant and the work is the
- * same as summing first: one multiply-add per stored coefficient.
+ * longest series in the file (a length that comes from the file), orders are
+ * processed in fixed-size chunks: the harmonics cos(k phi) of a chunk come
+ * from a Chebyshev recurrence (below) and each stored series is dotted
+ * with them (bsdf_kernels.c), weighted by its spline weight. Stack use is
+ * constant, the work one multiply-add per stored coefficient.
  */
 #include "bsdf_internal.h"
 
@@ -19,111 +19,144 @@
  * halves pi below 1e-12 in 42 of them. */
 #define LL_BSDF_PHI_ITERATIONS 64
 
-/* Fill c[j] = cos((k0 + j) phi) for j < count and advance the recurrence
- * state (cos of the previous and the current order). */
-static void cos_chunk(double cos_phi, size_t count, double *prev, double *cur, double *c)
+void ll_bsdf_harmonics_start(ll_harmonics *h, double cos_phi, double sin_phi, int sine)
 {
-    size_t j;
-    double p = *prev, q = *cur;
-    for (j = 0; j < count; ++j) {
-        double next = 2.0 * cos_phi * q - p;
-        c[j] = q;
-        p = q;
-        q = next;
+    double x[5];
+    int k;
+    x[0] = sine ? 0.0 : 1.0;
+    x[1] = sine ? sin_phi : cos_phi;
+    for (k = 2; k <= 4; ++k)
+        x[k] = 2.0 * cos_phi * x[k - 1] - x[k - 2];
+    /* cos is even and sin odd: x_{-j} = +-x_j. */
+    for (k = 0; k < 4; ++k) {
+        h->cur[k] = x[k];
+        h->prev[k] = sine ? -x[4 - k] : x[4 - k];
     }
-    *prev = p;
-    *cur = q;
+    h->twice_cos4 = 2.0 * (2.0 * (2.0 * cos_phi * cos_phi - 1.0) * (2.0 * cos_phi * cos_phi - 1.0) - 1.0);
 }
 
-static double dot(const float *a, const double *c, size_t count)
-{
-    size_t j;
-    double sum = 0.0;
-    for (j = 0; j < count; ++j)
-        sum += (double)a[j] * c[j];
-    return sum;
-}
-
-/* out[c] += sum over the entries and bases of weight * <series from k0, chunk>. */
-static void add_chunk(const ll_bsdf_series *s, size_t n_channels, size_t k0, size_t count,
-                      const double *chunk, double *out)
-{
-    size_t p, c, basis, nb = s->n_bases;
-    for (p = 0; p < s->count; ++p) {
-        size_t len = s->length[p], m;
-        if (len <= k0)
-            continue;
-        m = len - k0 < count ? len - k0 : count;
-        for (c = 0; c < n_channels; ++c)
-            for (basis = 0; basis < nb; ++basis) {
-                double w = s->weight[p] * (double)s->basis[basis];
-                if (w != 0.0)
-                    out[c] += w * dot(s->coeff[p] + (c * nb + basis) * len + k0, chunk, m);
-            }
-    }
-}
+/* The chunk length rounded up to the recurrence's group of four (the
+ * chunk buffers have room: LL_BSDF_CHUNK is a multiple of 4). */
+static size_t group_of_four(size_t count) { return (count + 3) & ~(size_t)3; }
 
 void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels, double cos_phi,
                          double out[3])
 {
-    double chunk[LL_BSDF_CHUNK], prev = cos_phi, cur = 1.0; /* cos(-phi), cos(0) */
+    double cosines[LL_BSDF_CHUNK];
+    int vector = ll_bsdf_kernels_vector();
+    ll_harmonics h;
     size_t k0;
     out[0] = out[1] = out[2] = 0.0;
+    ll_bsdf_harmonics_start(&h, cos_phi, 0.0, 0); /* the sine is not needed for cosines */
     for (k0 = 0; k0 < s->max_length; k0 += LL_BSDF_CHUNK) {
         size_t count = s->max_length - k0 < LL_BSDF_CHUNK ? s->max_length - k0 : LL_BSDF_CHUNK;
-        cos_chunk(cos_phi, count, &prev, &cur, chunk);
-        add_chunk(s, n_channels, k0, count, chunk, out);
+        ll_bsdf_harmonics_next(vector, &h, group_of_four(count), cosines);
+        ll_bsdf_dot_chunk(vector, s, n_channels, k0, count, cosines, out);
     }
+}
+
+/* Coefficient k of the luminance series. */
+static double series_coefficient(const ll_bsdf_series *s, size_t k)
+{
+    size_t p, basis, nb = s->n_bases;
+    double sum = 0.0;
+    if (k >= s->max_length)
+        return 0.0;
+    if (s->dense)
+        return s->dense[k];
+    for (p = 0; p < s->count; ++p)
+        if (k < s->length[p])
+            for (basis = 0; basis < nb; ++basis)
+                sum += s->weight[p] * (double)s->basis[basis] *
+                       (double)s->coeff[p][basis * s->length[p] + k];
+    return sum;
+}
+
+double ll_bsdf_series_mean(const ll_bsdf_series *s) { return series_coefficient(s, 0); }
+
+void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense, ll_bsdf_series *d)
+{
+    int vector = ll_bsdf_kernels_vector();
+    size_t p, basis, k, nb = s->n_bases;
+    for (k = 0; k < group_of_four(s->max_length); ++k)
+        dense[k] = 0.0;
+    for (p = 0; p < s->count; ++p)
+        for (basis = 0; basis < nb; ++basis) {
+            double w = s->weight[p] * (double)s->basis[basis];
+            if (w != 0.0)
+                ll_bsdf_add_scaled(vector, dense, s->coeff[p] + basis * s->length[p], w,
+                                   s->length[p]);
+        }
+    *d = *s;
+    d->count = 0;
+    d->dense = dense;
 }
 
 /* The luminance series and its integral at phi in [0, pi]:
  *   f(phi) = sum_k a_k cos(k phi),
  *   F(phi) = a_0 phi + sum_{k>=1} a_k sin(k phi) / k  (= integral_0^phi f).
- * Both come from one pass: the integral uses a chunk holding phi for k = 0
- * and sin(k phi) / k beyond (sines by the same recurrence as the cosines). */
-static void series_integral(const ll_bsdf_series *s, const double *recip, double phi,
-                            double *F, double *f)
+ * One pass: the integral's chunk holds phi for k = 0 and sin(k phi) / k
+ * beyond. */
+static void series_integral(const ll_bsdf_series *s, const double *recip, int vector,
+                            double phi, double *F, double *f)
 {
     double cosines[LL_BSDF_CHUNK], sines[LL_BSDF_CHUNK];
     double cos_phi = cos(phi), sin_phi = sin(phi);
-    double c_prev = cos_phi, c_cur = 1.0, s_prev = -sin_phi, s_cur = 0.0;
-    double sum_f[3] = { 0.0, 0.0, 0.0 }, sum_F[3] = { 0.0, 0.0, 0.0 };
+    ll_harmonics hc, hs;
     size_t k0, j;
+    *F = *f = 0.0;
+    ll_bsdf_harmonics_start(&hc, cos_phi, sin_phi, 0);
+    ll_bsdf_harmonics_start(&hs, cos_phi, sin_phi, 1);
+    if (s->dense) {
+        /* One fused pass; recip[0] = 0, so order 0 adds its a_0 phi here. */
+        ll_bsdf_integral_dense(vector, s->dense, recip, group_of_four(s->max_length), &hc, &hs,
+                               F, f);
+        *F += s->dense[0] * phi;
+        return;
+    }
     for (k0 = 0; k0 < s->max_length; k0 += LL_BSDF_CHUNK) {
         size_t count = s->max_length - k0 < LL_BSDF_CHUNK ? s->max_length - k0 : LL_BSDF_CHUNK;
-        cos_chunk(cos_phi, count, &c_prev, &c_cur, cosines);
-        for (j = 0; j < count; ++j) {
-            double next = 2.0 * cos_phi * s_cur - s_prev;
-            sines[j] = (k0 + j) ? s_cur * recip[k0 + j] : phi;
-            s_prev = s_cur;
-            s_cur = next;
+        ll_bsdf_harmonics_next(vector, &hc, group_of_four(count), cosines);
+        ll_bsdf_harmonics_next(vector, &hs, group_of_four(count), sines);
+        for (j = 0; j < count; ++j)
+            sines[j] *= recip[k0 + j];
+        if (k0 == 0)
+            sines[0] = phi;
+        {
+            double out_f[3] = { 0.0, 0.0, 0.0 }, out_F[3] = { 0.0, 0.0, 0.0 };
+            ll_bsdf_dot_chunk(vector, s, 1, k0, count, cosines, out_f);
+            ll_bsdf_dot_chunk(vector, s, 1, k0, count, sines, out_F);
+            *f += out_f[0];
+            *F += out_F[0];
         }
-        add_chunk(s, 1, k0, count, cosines, sum_f);
-        add_chunk(s, 1, k0, count, sines, sum_F);
     }
-    *F = sum_F[0];
-    *f = sum_f[0];
 }
 
-/* a_0 of the luminance series: its mean over phi. */
-static double series_mean(const ll_bsdf_series *s)
+/* A first guess for the phi with F(phi) = u F(pi): the exact inverse for
+ * the wrapped Cauchy (Poisson kernel) series a_k = 2 a_0 r^k that shares
+ * a_0 and a_1 with the series,
+ *     F(phi) / F(pi) = (2 / pi) atan((1 + r) / (1 - r) tan(phi / 2)).
+ * Lobes peaked at phi = 0 (r > 0) or pi (r < 0) start near their answer,
+ * which halves the Newton steps that pbrt-v3's start at pi / 2 needs. */
+static double initial_phi(const ll_bsdf_series *s, double a0, double u)
 {
-    double one = 1.0, out[3] = { 0.0, 0.0, 0.0 };
-    add_chunk(s, 1, 0, 1, &one, out);
-    return out[0];
+    double r = series_coefficient(s, 1) / (2.0 * a0), phi;
+    if (!(r < 0.99))
+        r = 0.99;
+    if (!(r > -0.99))
+        r = -0.99;
+    phi = 2.0 * atan((1.0 - r) / (1.0 + r) * tan(0.5 * LL_PI * u));
+    return (phi > 0.0 && phi < LL_PI) ? phi : 0.5 * LL_PI;
 }
 
-double ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
-                             double *phi_out, double *pdf_phi)
+int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
+                          double *phi_out)
 {
-    double a0 = series_mean(s), lo = 0.0, hi = LL_PI, phi = 0.5 * LL_PI, F = 0.0, f = 0.0;
-    double target, tolerance;
-    int flip, it;
+    double a0 = ll_bsdf_series_mean(s), lo = 0.0, hi = LL_PI, phi, F, f, target;
+    int flip, it, vector = ll_bsdf_kernels_vector();
 
-    *phi_out = 0.0;
-    *pdf_phi = 0.0;
-    if (!(a0 > 0.0))
-        return 0.0;
+    if (!(a0 > 0.0) || !ll_is_finite(a0))
+        return 0;
     /* pbrt-v3's SampleFourier: the series is even in phi, so u picks a half
      * (u >= 1/2 the mirrored one) and is stretched back to [0, 1]. */
     flip = u >= 0.5;
@@ -131,28 +164,36 @@ double ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, doubl
     if (u < 0.0) u = 0.0;
     if (u > 1.0) u = 1.0;
     target = u * a0 * LL_PI;
-    tolerance = 1e-12 * a0 * LL_PI;
+    phi = initial_phi(s, a0, u);
 
     /* Newton-bisection for F(phi) = target: F(0) = 0 <= target <= F(pi) =
      * a0 pi, so [lo, hi] always brackets a root; a Newton step that leaves
      * the bracket (or divides by f = 0) is replaced by bisection, and the
-     * iteration count is bounded, so the loop ends whatever the series. */
+     * number of steps is bounded, so the loop ends whatever the series. A
+     * Newton step below 1e-9 is taken without another evaluation: the
+     * convergence is quadratic, its error is far below that. */
     for (it = 0; it < LL_BSDF_PHI_ITERATIONS; ++it) {
         double step;
-        series_integral(s, recip, phi, &F, &f);
+        series_integral(s, recip, vector, phi, &F, &f);
         F -= target;
         if (F > 0.0)
             hi = phi;
         else
             lo = phi;
-        if (fabs(F) <= tolerance || hi - lo <= 1e-12 || it + 1 == LL_BSDF_PHI_ITERATIONS)
+        if (F == 0.0 || hi - lo <= 1e-12)
             break;
         step = phi - F / f;
-        phi = (step > lo && step < hi) ? step : 0.5 * (lo + hi);
+        if (step > lo && step < hi) {
+            int done = fabs(step - phi) <= 1e-9;
+            phi = step;
+            if (done)
+                break;
+        } else {
+            phi = 0.5 * (lo + hi);
+        }
     }
     if (flip)
         phi = 2.0 * LL_PI - phi;
-    *phi_out = phi;
-    *pdf_phi = f / (2.0 * LL_PI * a0);
-    return f;
+    *phi_out = phi >= 2.0 * LL_PI ? 0.0 : phi;
+    return 1;
 }

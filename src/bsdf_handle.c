@@ -24,6 +24,8 @@ void ll_bsdf_free(ll_bsdf *b)
     free(b->pairs);
     free(b->coeffs);
     free(b->recip);
+    free(b->bucket_first);
+    free(b->bucket_last);
     free(b->metadata);
     free(b);
 }

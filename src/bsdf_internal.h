@@ -42,7 +42,12 @@ struct ll_bsdf {
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
     float *coeffs;              /* [n_coeffs]                                  */
-    double *recip;              /* [max_order] 1 / k (recip[0] unused)         */
+    double *recip;              /* [max_order rounded up to 4] 1 / k, with 0 at
+                                   k = 0 and beyond max_order                  */
+    size_t n_buckets;           /* uniform buckets over [nodes[0], nodes[n-1]] */
+    double bucket_scale;        /* n_buckets / (nodes[n-1] - nodes[0])         */
+    uint32_t *bucket_first;     /* [n_buckets] spline interval at the bucket's  */
+    uint32_t *bucket_last;      /* start and at its end (ll_find_interval)      */
     char *metadata;             /* NUL-terminated copy                         */
     size_t metadata_size;
 };
@@ -61,6 +66,8 @@ typedef struct ll_bsdf_series {
     uint32_t max_length;
     size_t n_bases;
     const float *basis;         /* n_bases weights (never NULL)                */
+    const double *dense;        /* if set: the luminance series already summed
+                                   (max_length values); the rest is unused     */
 } ll_bsdf_series;
 
 /* Free every part of a (possibly half-built) bsdf; NULL is fine. */
@@ -70,7 +77,9 @@ LL_INTERNAL void ll_bsdf_free(ll_bsdf *b);
 LL_INTERNAL extern const float ll_bsdf_unit_basis[1];
 
 /* Spline weights of mu against the file's nodes (pbrt-v3's
- * CatmullRomWeights). 0 if mu is outside the nodes' range or NaN. */
+ * CatmullRomWeights). 0 if mu is outside the nodes' range or NaN. The
+ * interval search starts from a bucket table, with exactly the result of
+ * a search over all nodes. */
 LL_INTERNAL int ll_bsdf_weights(const ll_bsdf *b, double mu, ptrdiff_t *offset, double w[4]);
 
 /* Gather the series of (mu_i, mu_o) into s; 0 if either cosine is out of
@@ -81,17 +90,63 @@ LL_INTERNAL int ll_bsdf_gather(const ll_bsdf *b, double mu_i, double mu_o, const
 LL_INTERNAL int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                                         double mu_o, const float *basis, ll_bsdf_series *s);
 
-/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi). */
+/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi);
+ * s must not be a densified series. */
 LL_INTERNAL void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels,
                                      double cos_phi, double out[3]);
 
+/* cos(k phi) (or sin(k phi)) for consecutive k by the Chebyshev recurrence
+ * x_{k+4} = 2 cos(4 phi) x_k - x_{k-4}, run as four interleaved chains:
+ * the plain three-term recurrence is one long chain of dependent
+ * multiply-adds, which leaves the processor waiting; four independent ones
+ * overlap (and fill one AVX register). Like the plain one, the recurrence's
+ * error grows only linearly with the number of steps. */
+typedef struct ll_harmonics {
+    double twice_cos4;   /* 2 cos(4 phi)                                 */
+    double prev[4];      /* x_{k+r-4}, r = 0..3                          */
+    double cur[4];       /* x_{k+r}: the next four values to hand out    */
+} ll_harmonics;
+
+/* Start at k = 0 with x_k = cos(k phi) (sine = 0) or sin(k phi) (sine = 1). */
+LL_INTERNAL void ll_bsdf_harmonics_start(ll_harmonics *h, double cos_phi, double sin_phi,
+                                         int sine);
+/* out[0 .. count) = the next count values, count a multiple of 4
+ * (bsdf_kernels.c; vector as below). */
+LL_INTERNAL void ll_bsdf_harmonics_next(int vector, ll_harmonics *h, size_t count, double *out);
+
+/* a_0 of the luminance series: its mean over phi. */
+LL_INTERNAL double ll_bsdf_series_mean(const ll_bsdf_series *s);
+
+/* The luminance series summed into dense[0 .. s->max_length), zero-padded
+ * to a multiple of 4, and d set up to evaluate it (each Newton step then
+ * reads one series, not 16). */
+LL_INTERNAL void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense,
+                                        ll_bsdf_series *d);
+
 /* Sample phi in [0, 2 pi) from the luminance series (channel 0) with u in
  * [0, 1], as pbrt-v3's SampleFourier: u < 1/2 picks [0, pi], else the
- * mirror half. Writes phi and its density; returns the series' value at
- * phi. 0 with *pdf_phi = 0 if the series has no positive mean. recip holds
- * 1 / k for k < s->max_length. */
-LL_INTERNAL double ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
-                                         double *phi, double *pdf_phi);
+ * mirror half. 0 if the series has no positive mean (no phi written), else
+ * 1. recip holds 1 / k for k < s->max_length. */
+LL_INTERNAL int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
+                                      double *phi);
+
+/* Inner loops (bsdf_kernels.c). vector: use the AVX2/FMA versions, which
+ * only ll_bsdf_kernels_vector() (this processor has them) allows; the
+ * portable ones always work. Results differ only by rounding.
+ * dot_chunk: out[c] += sum_p w_p sum_j a_{p,c}[k0 + j] h[j] over
+ *   j < count, k0 + j < length_p, c < n_channels (s->dense unused);
+ * add_scaled: acc[j] += w a[j], j < m;
+ * integral_dense: *f = sum a[k] cos(k phi), *F = sum a[k] recip[k] sin(k phi)
+ *   over k < n4 (a multiple of 4; a and recip have n4 values), the
+ *   harmonics hc (cosines) and hs (sines) started at k = 0. */
+LL_INTERNAL int ll_bsdf_kernels_vector(void);
+LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels,
+                                   size_t k0, size_t count, const double *h, double out[3]);
+LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w,
+                                    size_t m);
+LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
+                                        size_t n4, const ll_harmonics *hc,
+                                        const ll_harmonics *hs, double *F, double *f);
 
 /* Catmull-Rom spline interpolation, over the incident weights (off_i, w_i),
  * of the per-row tables cdf or a0 at outgoing node o, with basis weights. */

@@ -10,9 +10,10 @@
 
 #include <math.h>
 
-/* The luminance series is summed into a stack buffer of this many floats
- * when it fits (one series instead of up to 16 for each Newton step);
- * longer ones are evaluated term by term, which needs no buffer at all. */
+/* The luminance series is summed into a stack buffer of this many doubles
+ * (8 KiB) when it fits, so that each Newton step reads one series instead
+ * of up to 16; longer ones are evaluated chunk by chunk from the stored
+ * series, which needs no buffer sized by the file at all. */
 #define LL_BSDF_DENSE_ORDERS 1024
 #define LL_BSDF_MU_ITERATIONS 64
 
@@ -106,36 +107,14 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
     return 1;
 }
 
-/* The luminance part of s summed into dense[0 .. s->max_length). */
-static void sum_luminance(const ll_bsdf_series *s, float *dense, ll_bsdf_series *d)
-{
-    size_t p, k, basis, nb = s->n_bases;
-    for (k = 0; k < s->max_length; ++k)
-        dense[k] = 0.0f;
-    for (p = 0; p < s->count; ++p)
-        for (basis = 0; basis < nb; ++basis) {
-            float w = (float)(s->weight[p] * (double)s->basis[basis]);
-            const float *a = s->coeff[p] + basis * s->length[p];
-            for (k = 0; k < s->length[p]; ++k)
-                dense[k] += w * a[k];
-        }
-    d->count = 1;
-    d->coeff[0] = dense;
-    d->length[0] = s->max_length;
-    d->weight[0] = 1.0;
-    d->max_length = s->max_length;
-    d->n_bases = 1;
-    d->basis = ll_bsdf_unit_basis;
-}
-
 int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const float *basis,
                         double *mu_o, double *phi_d, double *pdf, double sums[3])
 {
-    float dense[LL_BSDF_DENSE_ORDERS];
+    double dense[LL_BSDF_DENSE_ORDERS];
     ll_bsdf_series s, d;
     const ll_bsdf_series *luminance = &s;
     ptrdiff_t off_i;
-    double w_i[4], pdf_mu = 0.0, pdf_phi = 0.0, y;
+    double w_i[4], pdf_mu = 0.0, a0;
 
     *mu_o = 0.0;
     *phi_d = 0.0;
@@ -145,19 +124,24 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
         !sample_mu(b, off_i, w_i, basis, u[1], mu_o, &pdf_mu) ||
         !ll_bsdf_gather_weighted(b, off_i, w_i, *mu_o, basis, &s) || s.count == 0)
         return 0;
-    if (s.max_length <= LL_BSDF_DENSE_ORDERS && (s.count > 1 || s.n_bases > 1)) {
-        sum_luminance(&s, dense, &d);
+    if (s.max_length <= LL_BSDF_DENSE_ORDERS) {
+        ll_bsdf_series_densify(&s, dense, &d);
         luminance = &d;
     }
-    y = ll_bsdf_series_sample(luminance, b->recip, u[0], phi_d, &pdf_phi);
-    *pdf = pdf_mu * pdf_phi;
+    if (!ll_bsdf_series_sample(luminance, b->recip, u[0], phi_d))
+        return 0;
+    /* The value and density at the sampled phi from the series itself (not
+     * the Newton iterate's last evaluation), so that they equal what eval
+     * and pdf compute for the returned direction: pdf_phi = f / (2 pi a_0)
+     * (pbrt-v3's SampleFourier). */
+    ll_bsdf_series_eval(&s, b->n_channels, cos(*phi_d), sums);
+    a0 = ll_bsdf_series_mean(&s);
+    *pdf = pdf_mu * sums[0] / (2.0 * LL_PI * a0);
     if (!(*pdf > 0.0) || !ll_is_finite(*pdf)) {
         *pdf = 0.0;
+        sums[0] = sums[1] = sums[2] = 0.0;
         return 0;
     }
-    if (b->n_channels == 3)
-        ll_bsdf_series_eval(&s, 3, cos(*phi_d), sums);
-    sums[0] = y;
     return 1;
 }
 

@@ -1,6 +1,5 @@
 /*
- * Helpers shared by the .bsdf tests (test_bsdf_*.c): quadrature nodes,
- * synthetic layers built through the internal column builder (so the tests
+ * Helpers shared by the .bsdf tests (test_bsdf_*.c): synthetic layers built through the internal column builder (so the tests
  * need no interface or medium code), scratch directories and files.
  */
 #ifndef LL_TEST_BSDF_UTIL_H
@@ -26,42 +25,15 @@
 #define LL_TEST_GOLDEN LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
 #define LL_TEST_PI 3.14159265358979323846
 
-/* Gauss-Legendre nodes and weights on [-1, 1], ascending (Newton's method
- * on the Legendre recurrence; no node at 0 for even n). */
-static inline void ll_test_gauss_legendre(size_t n, double *x, double *w)
-{
-    size_t i, k;
-    for (i = 0; i < (n + 1) / 2; ++i) {
-        double z = cos(LL_TEST_PI * ((double)i + 0.75) / ((double)n + 0.5)), dp = 0.0;
-        for (k = 0; k < 100; ++k) {
-            double p0 = 1.0, p1 = z, step;
-            size_t j;
-            for (j = 2; j <= n; ++j) {
-                double p2 = ((2.0 * (double)j - 1.0) * z * p1 - ((double)j - 1.0) * p0) /
-                            (double)j;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = (double)n * (z * p1 - p0) / (z * z - 1.0);
-            step = p1 / dp;
-            z -= step;
-            if (fabs(step) < 1e-15)
-                break;
-        }
-        x[i] = -z;
-        x[n - 1 - i] = z;
-        w[i] = w[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-}
-
-/* A clear layer on n Gauss-Legendre nodes with m orders. */
+/* A clear layer on n Gauss-Lobatto nodes (as files are made: the nodes
+ * include +-1, so the file covers every direction) with m orders. */
 static inline ll_layer *ll_test_layer(size_t n, size_t m)
 {
     double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
     ll_layer *l = NULL;
     assert_non_null(x);
     assert_non_null(w);
-    ll_test_gauss_legendre(n, x, w);
+    assert_int_equal(ll_quad_gauss_lobatto(n, x, w), LL_OK);
     assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
     free(x);
     free(w);

@@ -1,0 +1,270 @@
+/*
+ * Sampling is consistent with evaluation: the returned pdf is pdf() of the
+ * returned direction, the weight is f |cos| / pdf, the sampled directions
+ * follow pdf() (chi-square), and pdf() integrates to 1 over the sphere.
+ */
+#include "test_bsdf_util.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#  define LL_TEST_SANITIZED 1
+#elif defined(__has_feature)
+#  if __has_feature(address_sanitizer)
+#    define LL_TEST_SANITIZED 1
+#  endif
+#endif
+#ifndef LL_TEST_SANITIZED
+#  define LL_TEST_SANITIZED 0
+#endif
+
+/* 10^6 samples normally; fewer under the (much slower) sanitizers. */
+#define LL_TEST_SAMPLES (LL_TEST_SANITIZED ? 200000 : 1000000)
+
+static char g_dir[512];
+static ll_bsdf *g_lobe, *g_white, *g_golden;
+
+static ll_bsdf *write_open(const char *name, const ll_layer *l, double goal)
+{
+    char path[600];
+    const ll_layer *layers[1];
+    ll_bsdf_write_options opts = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_bsdf *b = NULL;
+    layers[0] = l;
+    opts.error_goal = goal;
+    snprintf(path, sizeof path, "%s/%s", g_dir, name);
+    if (ll_bsdf_write(path, layers, 1, &opts) != LL_OK || ll_bsdf_open(path, &b) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    return b;
+}
+
+static int setup(void **state)
+{
+    ll_layer *l;
+    double sharp = 8.0;
+    (void)state;
+    ll_test_mkdtemp(g_dir, sizeof g_dir);
+    l = ll_test_layer(24, 40);
+    ll_test_fill(l, ll_test_lobe_fn, &sharp);
+    g_lobe = write_open("lobe.bsdf", l, 1e-3);
+    ll_layer_destroy(l);
+    l = ll_test_layer(16, 1);
+    assert_int_equal(ll_layer_set_diffuse(l, 1.0), LL_OK);
+    g_white = write_open("white.bsdf", l, 1e-3);
+    ll_layer_destroy(l);
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, &g_golden), LL_OK);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    ll_bsdf_release(g_lobe);
+    ll_bsdf_release(g_white);
+    ll_bsdf_release(g_golden);
+    ll_test_rmdir(g_dir);
+    return 0;
+}
+
+/* Layer convention: every sample's pdf and weight against pdf() and eval(). */
+static void consistency(void **state)
+{
+    uint64_t rng = 2024;
+    long k, zero = 0;
+    (void)state;
+    for (k = 0; k < LL_TEST_SAMPLES; ++k) {
+        double mu_i = 2.0 * ll_test_uniform(&rng) - 1.0, u[2], mu_o, phi, pdf, w[3], f[3], p;
+        u[0] = ll_test_uniform(&rng);
+        u[1] = ll_test_uniform(&rng);
+        assert_int_equal(ll_bsdf_sample(g_lobe, mu_i, u, NULL, &mu_o, &phi, &pdf, w), LL_OK);
+        if (pdf == 0.0) {
+            ++zero;
+            assert_true(w[0] == 0.0);
+            continue;
+        }
+        assert_true(mu_o >= -1.0 && mu_o <= 1.0 && phi >= 0.0 && phi <= 2.0 * LL_TEST_PI);
+        p = ll_bsdf_pdf(g_lobe, mu_i, mu_o, phi, NULL);
+        if (!ll_test_close(pdf, p, 1e-5, 1e-9))
+            fail_msg("sample %ld: pdf %.9g, pdf() %.9g (mu_i %g mu_o %g phi %g)", k, pdf, p,
+                     mu_i, mu_o, phi);
+        assert_int_equal(ll_bsdf_eval(g_lobe, mu_i, mu_o, phi, NULL, f), LL_OK);
+        if (!ll_test_close(w[0], f[0] * fabs(mu_o) / pdf, 1e-5, 1e-9))
+            fail_msg("sample %ld: weight %.9g, f |mu_o| / pdf %.9g", k, w[0],
+                     f[0] * fabs(mu_o) / pdf);
+    }
+    /* Only directions with a zero CDF row (mu_i near 0) give no sample. */
+    assert_true(zero < LL_TEST_SAMPLES / 100);
+}
+
+/* Renderer convention on the golden file (RGB). */
+static void consistency_golden(void **state)
+{
+    uint64_t rng = 77;
+    long k, n = LL_TEST_SAMPLES / 5;
+    (void)state;
+    for (k = 0; k < n; ++k) {
+        double ct = ll_test_uniform(&rng), ph = 2.0 * LL_TEST_PI * ll_test_uniform(&rng);
+        double wo[3] = { sqrt(1.0 - ct * ct) * cos(ph), sqrt(1.0 - ct * ct) * sin(ph), ct };
+        double u[2], wi[3], pdf, f[3], g[3], p;
+        int c;
+        u[0] = ll_test_uniform(&rng);
+        u[1] = ll_test_uniform(&rng);
+        assert_int_equal(
+            ll_bsdf_sample_dir(g_golden, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f), LL_OK);
+        assert_true(fabs(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2] - 1.0) < 1e-12);
+        if (pdf == 0.0)
+            continue;
+        p = ll_bsdf_pdf_dir(g_golden, wo, wi, NULL);
+        if (!ll_test_close(pdf, p, 1e-5, 1e-9))
+            fail_msg("sample %ld: pdf %.9g, pdf_dir %.9g", k, pdf, p);
+        assert_int_equal(ll_bsdf_eval_dir(g_golden, wo, wi, LL_TRANSPORT_RADIANCE, NULL, g),
+                         LL_OK);
+        for (c = 0; c < 3; ++c)
+            if (!ll_test_close(f[c], g[c], 1e-5, 1e-9))
+                fail_msg("sample %ld channel %d: f %.9g, eval_dir %.9g", k, c, f[c], g[c]);
+    }
+}
+
+/* integral of pdf(mu_i, .) over the sphere, by Gauss-Legendre in phi and a
+ * composite rule in mu_o whose panels end at the file's nodes (the pdf is a
+ * cubic in mu_o between them). */
+static double pdf_integral(const ll_bsdf *b, double mu_i)
+{
+    static const double gx[4] = { -0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                                  0.8611363115940526 };
+    static const double gw[4] = { 0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                                  0.3478548451374538 };
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    const float *nodes = ll_bsdf_nodes(b);
+    double total = 0.0;
+    size_t k, a, c, j;
+    assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+    for (k = 0; k + 1 < info.n_nodes; ++k) {
+        double x0 = nodes[k], x1 = nodes[k + 1];
+        if (!(x1 > x0))
+            continue;
+        for (a = 0; a < 4; ++a) {
+            double mu = 0.5 * (x0 + x1) + 0.5 * (x1 - x0) * gx[a], sum = 0.0;
+            /* 64 panels in phi, 4 points each: the series is smooth. */
+            for (j = 0; j < 64; ++j)
+                for (c = 0; c < 4; ++c) {
+                    double phi = LL_TEST_PI / 64.0 * ((double)j + 0.5 + 0.5 * gx[c]);
+                    sum += gw[c] * 0.5 * ll_bsdf_pdf(b, mu_i, mu, phi, NULL);
+                }
+            /* phi over [0, pi], doubled (the series is even). */
+            total += gw[a] * 0.5 * (x1 - x0) * 2.0 * sum * LL_TEST_PI / 64.0;
+        }
+    }
+    return total;
+}
+
+static void pdf_integrates_to_one(void **state)
+{
+    static const double mus[] = { 1.0, 0.73, 0.31, -0.5, -0.95 };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof mus / sizeof mus[0]; ++k) {
+        double white = pdf_integral(g_white, mus[k]), lobe = pdf_integral(g_lobe, mus[k]);
+        if (fabs(white - 1.0) > 1e-4 || fabs(lobe - 1.0) > 2e-3)
+            fail_msg("mu_i %g: integral of pdf %.6f (white), %.6f (lobe)", mus[k], white, lobe);
+    }
+    /* The non-absorbing file reflects everything: integral f |mu_o| = 1
+     * (away from grazing incidence, see the round-trip test). */
+    {
+        double mu_i = 0.8, total = 0.0, rgb[3];
+        size_t j, n = 4000;
+        for (j = 0; j < n; ++j) {
+            double mu_o = -((double)j + 0.5) / (double)n;
+            assert_int_equal(ll_bsdf_eval(g_white, mu_i, mu_o, 0.0, NULL, rgb), LL_OK);
+            total += rgb[0] * fabs(mu_o) * 2.0 * LL_TEST_PI / (double)n;
+        }
+        assert_true(fabs(total - 1.0) < 1e-6);
+    }
+    /* The golden file: 0.81 albedo is the README's "about", the pdf is 1. */
+    {
+        double p = pdf_integral(g_golden, 0.6);
+        assert_true(fabs(p - 1.0) < 2e-3);
+    }
+}
+
+/* Wilson-Hilferty: is chi2 with dof degrees of freedom below the
+ * 1 - 1e-5 quantile? */
+static int chi2_accept(double chi2, double dof)
+{
+    double z = (pow(chi2 / dof, 1.0 / 3.0) - (1.0 - 2.0 / (9.0 * dof))) / sqrt(2.0 / (9.0 * dof));
+    return z < 4.27;
+}
+
+/* Sampled (mu_o, phi) histogram against the integral of pdf() per bin. */
+static void chi_square_case(const ll_bsdf *b, double mu_i, uint64_t seed)
+{
+    enum { NM = 20, NP = 16, SUB = 6 };
+    static double expected[NM * NP];
+    static long observed[NM * NP];
+    long k, n = LL_TEST_SAMPLES / 4;
+    uint64_t rng = seed;
+    double chi2 = 0.0, pooled_e = 0.0, pooled_o = 0.0, total = 0.0;
+    size_t bin, dof = 0;
+    memset(observed, 0, sizeof observed);
+    for (bin = 0; bin < NM * NP; ++bin) {
+        size_t im = bin / NP, ip = bin % NP, a, c;
+        double sum = 0.0, dm = 2.0 / NM, dp = 2.0 * LL_TEST_PI / NP;
+        for (a = 0; a < SUB; ++a)
+            for (c = 0; c < SUB; ++c) {
+                double mu = -1.0 + dm * ((double)im + ((double)a + 0.5) / SUB);
+                double phi = dp * ((double)ip + ((double)c + 0.5) / SUB);
+                sum += ll_bsdf_pdf(b, mu_i, mu, phi, NULL);
+            }
+        expected[bin] = sum * dm * dp / (SUB * SUB) * (double)n;
+        total += expected[bin];
+    }
+    assert_true(fabs(total / (double)n - 1.0) < 5e-3);
+    for (k = 0; k < n; ++k) {
+        double u[2], mu_o, phi, pdf, w[3];
+        size_t im, ip;
+        u[0] = ll_test_uniform(&rng);
+        u[1] = ll_test_uniform(&rng);
+        assert_int_equal(ll_bsdf_sample(b, mu_i, u, NULL, &mu_o, &phi, &pdf, w), LL_OK);
+        assert_true(pdf > 0.0);
+        im = (size_t)((mu_o + 1.0) / 2.0 * NM);
+        ip = (size_t)(phi / (2.0 * LL_TEST_PI) * NP);
+        if (im >= NM) im = NM - 1;
+        if (ip >= NP) ip = NP - 1;
+        observed[im * NP + ip]++;
+    }
+    /* Bins expecting fewer than 5 samples are pooled into one. */
+    for (bin = 0; bin < NM * NP; ++bin) {
+        if (expected[bin] < 5.0) {
+            pooled_e += expected[bin];
+            pooled_o += (double)observed[bin];
+            continue;
+        }
+        chi2 += ((double)observed[bin] - expected[bin]) * ((double)observed[bin] - expected[bin]) /
+                expected[bin];
+        ++dof;
+    }
+    if (pooled_e >= 5.0) {
+        chi2 += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
+        ++dof;
+    }
+    if (!chi2_accept(chi2, (double)(dof - 1)))
+        fail_msg("mu_i %g: chi-square %.1f with %zu bins", mu_i, chi2, dof);
+}
+
+static void chi_square(void **state)
+{
+    (void)state;
+    chi_square_case(g_lobe, 0.7, 1);
+    chi_square_case(g_lobe, -0.35, 2);
+    chi_square_case(g_golden, 0.6, 3);
+    chi_square_case(g_golden, 0.15, 4);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(consistency),
+        cmocka_unit_test(consistency_golden),
+        cmocka_unit_test(pdf_integrates_to_one),
+        cmocka_unit_test(chi_square),
+    };
+    return cmocka_run_group_tests_name("bsdf_sampling", tests, setup, teardown);
+}
