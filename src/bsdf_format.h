@@ -40,6 +40,12 @@ enum {
     LL_BSDF_AT_UNUSED = 56   /* two floats, written as zero */
 };
 
+/* The header's eta is a relative index of refraction; values outside this
+ * range are not physical and would scale radiance by eta^2 beyond reason
+ * (the file is taken as damaged). */
+#define LL_BSDF_ETA_MIN 1e-3
+#define LL_BSDF_ETA_MAX 1e3
+
 /* Stored colour channels: luminance first, then red and blue (the original
  * layerlab's fromLayerRGB); green is rebuilt from them when reading. */
 #define LL_BSDF_Y_FROM_R 0.212671

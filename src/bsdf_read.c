@@ -158,9 +158,14 @@ static ll_status check_header(const unsigned char *p, size_t available, size_t s
         return file_error(LL_ERROR_FORMAT, file,
                           "nParameters = %u exceeds nParameterValues = %u",
                           (unsigned)h->n_parameters, (unsigned)h->n_parameter_values);
-    if (!isfinite(h->eta) || !(h->eta > 0.0f))
-        return file_error(LL_ERROR_FORMAT, file, "eta = %g (must be positive and finite)",
-                          (double)h->eta);
+    if (!(h->eta >= LL_BSDF_ETA_MIN && h->eta <= LL_BSDF_ETA_MAX))
+        return file_error(LL_ERROR_FORMAT, file,
+                          "eta = %g is not a relative index of refraction in [%g, %g]",
+                          (double)h->eta, LL_BSDF_ETA_MIN, LL_BSDF_ETA_MAX);
+    if (h->max_order > h->n_coeffs)
+        return file_error(LL_ERROR_FORMAT, file,
+                          "nMaxOrder = %u exceeds nCoeffs = %u (no series can be that long)",
+                          (unsigned)h->max_order, (unsigned)h->n_coeffs);
     if (!isfinite(h->alpha[0]) || !(h->alpha[0] >= 0.0f) || !isfinite(h->alpha[1]) ||
         !(h->alpha[1] >= 0.0f))
         return file_error(LL_ERROR_FORMAT, file,
@@ -276,7 +281,7 @@ static ll_status read_cdf(ll_bsdf *b, const unsigned char *p, const char *file)
 
 static ll_status read_table(ll_bsdf *b, const unsigned char *p, const char *file)
 {
-    size_t k, count = b->n_nodes * b->n_nodes, block_per_order, longest = 0;
+    size_t k, count = b->n_nodes * b->n_nodes, block_per_order, longest = 0, total = 0;
     /* Cannot overflow: n_channels * n_bases floats of CDF-sized data fit the file. */
     block_per_order = b->n_channels * b->n_bases;
     for (k = 0; k < count; ++k) {
@@ -299,7 +304,19 @@ static ll_status read_table(ll_bsdf *b, const unsigned char *p, const char *file
         b->pairs[k].length = length;
         if (length > longest)
             longest = length;
+        if (length > 0)
+            total += block; /* both <= n_coeffs: no overflow */
+        if (total > b->n_coeffs)
+            break;
     }
+    /* Writers store the blocks one after another; a table whose blocks do
+     * not add up to the coefficient count was not written for this header
+     * (e.g. a wrong nChannels). */
+    if (total != b->n_coeffs)
+        return file_error(LL_ERROR_FORMAT, file,
+                          "the offset table's series hold %s%zu coefficients, but nCoeffs = %zu",
+                          total > b->n_coeffs ? "more than " : "", total > b->n_coeffs ?
+                          b->n_coeffs : total, b->n_coeffs);
     if (longest != b->max_order)
         return file_error(LL_ERROR_FORMAT, file,
                           "nMaxOrder = %zu but the longest series has %zu coefficients",

@@ -84,9 +84,10 @@ static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
         memcpy(&job->opts, opts, size < sizeof *opts ? size : sizeof *opts);
         job->opts.struct_size = sizeof *opts;
     }
-    if (!ll_is_finite(job->opts.eta) || !(job->opts.eta > 0.0) || job->opts.eta > FLT_MAX)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: eta = %g is not a positive float",
-                       job->fn, job->opts.eta);
+    if (!(job->opts.eta >= LL_BSDF_ETA_MIN && job->opts.eta <= LL_BSDF_ETA_MAX))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: eta = %g is not a relative index of refraction in [%g, %g]",
+                       job->fn, job->opts.eta, LL_BSDF_ETA_MIN, LL_BSDF_ETA_MAX);
     if (!(job->opts.alpha[0] >= 0.0 && job->opts.alpha[0] <= FLT_MAX) ||
         !(job->opts.alpha[1] >= 0.0 && job->opts.alpha[1] <= FLT_MAX))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
