@@ -6,22 +6,49 @@
  * An opened file (ll_bsdf) is immutable and reference counted: it may be
  * evaluated and sampled from any number of threads at once, and shared by
  * every object that uses the same file (ll_bsdf_retain / ll_bsdf_release;
- * retain and release are thread-safe too).
+ * retain and release are thread-safe too). Evaluation and sampling allocate
+ * nothing; their stack use is bounded independently of the file.
  *
  * Two conventions:
- *  - Layer convention (as ll_layer_eval): mu_i > 0 is light arriving from
- *    above, travelling down; reflection goes to mu_o < 0. phi_d as in
- *    ll_layer_eval.
+ *  - Layer convention (ll_bsdf_eval, ll_bsdf_pdf, ll_bsdf_sample), the
+ *    file's own axes and those of ll_layer_eval: mu_i and mu_o are cosines
+ *    of directions of travel, mu > 0 travelling down, so mu_i > 0 is light
+ *    arriving from above and reflection goes to mu_o < 0; phi_d is the
+ *    azimuth between the two directions of travel (phi_d = 0 with
+ *    mu_o = -mu_i is the mirror direction). For the layer L a file was
+ *    written from,
+ *        ll_bsdf_eval(b, mu_i, mu_o, phi_d) == ll_layer_eval(L, mu_o, mu_i, phi_d)
+ *    at the layer's nodes to float precision and the series truncation.
+ *    Between nodes both interpolate with Catmull-Rom splines, the file over
+ *    f |mu_o| with two extra nodes at mu = 0 where it is pinned to 0 (the
+ *    original layerlab's format), so near grazing angles the two differ by
+ *    the interpolation error. Cosines beyond the file's outermost nodes give
+ *    0 (write layers on Gauss-Lobatto nodes, which include +-1).
  *  - Renderer convention (the *_dir calls): a local shading frame with
  *    z = the surface normal (the top side); wo points to the viewer and wi
- *    to the light, both away from the surface (as pbrt-v3's BxDF::f(wo, wi)).
- *    f is returned without the cosine factor. In LL_TRANSPORT_RADIANCE mode
- *    the value across a dielectric boundary is scaled by eta^2 as radiance
- *    requires; LL_TRANSPORT_IMPORTANCE omits that factor (as pbrt-v3 does
- *    for light paths).
- * rgb outputs are (R, G, B); one-channel files give three equal values.
- * Negative values clamp to 0. basis_coeffs: one weight per basis function of
- * a textured file (NULL for an untextured one).
+ *    to the light, both away from the surface (pbrt-v3's BxDF::f(wo, wi));
+ *    the vectors need not be normalised. f is returned without the cosine
+ *    factor. These calls are pbrt-v3's FourierBSDF exactly: they evaluate
+ *    the layer convention at
+ *        mu_i = wo.z / |wo|             (pbrt-v3's muO = CosTheta(wo)),
+ *        mu_o = -wi.z / |wi|            (pbrt-v3's muI = CosTheta(-wi)),
+ *        cos phi_d = -(wo.x wi.x + wo.y wi.y) / (|wo.xy| |wi.xy|)
+ *                                       (CosDPhi(-wi, wo); 1 if either
+ *                                        direction is the normal),
+ *    i.e. light travelling along -wo and leaving along wi, which equals
+ *    the response to light from wi seen along wo by reciprocity, up to the
+ *    eta^2 of transmission: in LL_TRANSPORT_RADIANCE mode a transmitted
+ *    value (wo and wi on opposite sides) is multiplied by (1 / eta)^2 when
+ *    wi is below the surface (wi.z < 0 < wo.z) and by eta^2 when wo is
+ *    below, as pbrt-v3's FourierBSDF::f does for camera paths;
+ *    LL_TRANSPORT_IMPORTANCE (light paths) omits the factor. eta is the
+ *    file's eta(bottom) / eta(top). The layer-convention calls never scale.
+ * rgb outputs are (R, G, B); one-channel files give three equal values;
+ * three-channel files store Y, R, B and rebuild G = 1.39829 Y - 0.100913 B
+ * - 0.297375 R (pbrt-v3). Negative values clamp to 0.
+ * basis_coeffs: for a textured file, one weight per basis function
+ * (ll_bsdf_info.n_bases floats, applied to every channel; required); for an
+ * untextured file NULL (weight 1) or one weight that scales the result.
  */
 #ifndef LAYERLAB_LL_BSDF_H
 #define LAYERLAB_LL_BSDF_H
@@ -41,7 +68,13 @@ typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_trans
 
 /* Options for writing. Set struct_size = sizeof(ll_bsdf_write_options) (the
  * INIT macro does); the library reads only the fields that struct_size
- * covers, so programs built against older headers keep working. */
+ * covers, so programs built against older headers keep working.
+ * eta must lie in [1e-3, 1e3], alpha be finite and non-negative.
+ * error_goal: a pair's series ends after the last order at which the sum of
+ * |coefficient| over that order and all higher ones still exceeds
+ * error_goal times the order-0 matrix entry (the original layerlab's rule;
+ * that entry is twice the azimuthal mean a_0), the longest over channels
+ * and bases; 0 keeps every non-zero order. */
 typedef struct ll_bsdf_write_options {
     size_t struct_size;
     double eta;          /* header eta: eta(bottom)/eta(top); 1 for opaque stacks */
@@ -54,19 +87,31 @@ typedef struct ll_bsdf_write_options {
     { sizeof(ll_bsdf_write_options), 1.0, { 0.0, 0.0 }, NULL, 1e-3 }
 
 /* Write layers[0 .. n_channels-1] (1 channel, or 3: R, G, B, stored as
- * Y, R, B) to path. All layers must share nodes and order count. opts may be
- * NULL (defaults). Atomic: the file is written to a temporary file in the
- * same directory, flushed and renamed over path; on any failure path is
- * untouched and no temporary file remains. Returns LL_ERROR_IO (message
- * names the path and the system error) or LL_ERROR_INVALID_ARGUMENT. */
+ * Y, R, B) to path. All layers must share nodes and order count, and hold
+ * surfaces or slabs (what the words and adding-doubling produce; a phase
+ * function set on a layer but not yet expanded to a thickness is not a
+ * BSDF). What is stored follows the original layerlab's BSDFStorage
+ * (bsdf-format.md): the nodes with two mu = 0 nodes inserted, coefficients
+ * f_k |mu_o| as float32, the CDF for sampling; the default metadata is a
+ * JSON description (generator, nodes, orders, channels, eta, alpha, error
+ * goal). opts may be NULL (defaults). Atomic: the file is written to a
+ * temporary file in the same directory, flushed (fsync) and renamed over
+ * path, created with mode 0644; on any failure path is untouched and no
+ * temporary file remains. Returns LL_ERROR_IO (message names the path and
+ * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
+ * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
+ * LL_ERROR_OUT_OF_MEMORY. */
 LL_API ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers,
                                size_t n_channels, const ll_bsdf_write_options *opts);
 
 /* Textured file: n_parameters parameters, parameter p sampled at
- * param_counts[p] positions (the param_positions array holds them all,
- * parameter 0's first). n_bases = product of the counts; layers holds
- * n_bases * n_channels layers, basis-major (layers[basis * n_channels + ch]),
- * with the basis index running over parameter 0 fastest. */
+ * param_counts[p] >= 1 positions (the param_positions array holds them
+ * all, parameter 0's first; each parameter's strictly increasing).
+ * n_bases = product of the counts; layers holds n_bases * n_channels
+ * layers, basis-major (layers[basis * n_channels + ch]), with the basis
+ * index running over parameter 0 fastest. Each basis gets its own CDF.
+ * n_parameters = 0 writes an untextured file (as ll_bsdf_write). Same
+ * statuses and atomicity as ll_bsdf_write. */
 LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
                                         size_t n_channels, size_t n_parameters,
                                         const size_t *param_counts,
@@ -75,9 +120,20 @@ LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const 
 
 /* ------------------------------------------------------------- reading */
 
-/* Open and fully validate a file. Every structural problem yields
- * LL_ERROR_FORMAT with a message naming the file and the field; I/O
- * problems LL_ERROR_IO. *out is NULL on failure. */
+/* Open and fully validate a file: identifier and version (version 2 files
+ * of the later "Layer Laboratory", which reuse the identifier with another
+ * layout, are refused by name), flags, every count against the real file
+ * size with overflow-checked arithmetic (before anything sized by the
+ * header is allocated), nodes finite and ascending (one value at most
+ * twice), parameters, CDF rows (finite, from 0, non-decreasing), every
+ * offset-table entry inside the coefficients with length <= nMaxOrder (and
+ * nMaxOrder the longest), the blocks adding up to nCoeffs, every
+ * coefficient finite, eta in [1e-3, 1e3], alpha finite and >= 0. Every
+ * problem yields LL_ERROR_FORMAT with a message naming the file ("<path>"
+ * or <memory>) and the field; harmonic extrapolation (flags bit 1)
+ * LL_ERROR_UNSUPPORTED; I/O problems (missing file, not a regular file)
+ * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure. Memory:
+ * about twice the file. */
 LL_API ll_status ll_bsdf_open(const char *path, ll_bsdf **out);
 
 /* The same from memory (the bytes are copied; data may be freed after). */
@@ -118,33 +174,54 @@ LL_API const float *ll_bsdf_nodes(const ll_bsdf *b);
 
 /* ------------------------------------------------- layer convention */
 
+/* f(mu_i -> mu_o, phi_d) without cosine, as ll_layer_eval (see the top of
+ * this file). Cosines are clamped into [-1, 1]. LL_ERROR_INVALID_ARGUMENT
+ * for NULL b or rgb, non-finite arguments, or missing basis weights of a
+ * textured file (rgb is then 0). */
 LL_API ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
                               const float *basis_coeffs, double rgb[3]);
 
-/* Probability density (per solid angle) that ll_bsdf_sample picks (mu_o,
- * phi_d) given mu_i. */
+/* Probability density (per solid angle, d mu_o d phi_d) that
+ * ll_bsdf_sample picks (mu_o, phi_d) given mu_i: the luminance f |mu_o|
+ * over the luminance albedo (0 where that is not positive). 0 for invalid
+ * arguments. */
 LL_API double ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
                           const float *basis_coeffs);
 
 /* Sample an outgoing direction for light arriving along mu_i, from the
- * uniform numbers u[0], u[1] in [0, 1): writes mu_o, phi_d, the pdf and the
- * weight f * |mu_o| / pdf. A zero weight and pdf mean no direction. */
+ * uniform numbers u[0], u[1] in [0, 1] (as pbrt-v3's Sample_f: u[1] picks
+ * mu_o by inverting the luminance's spline CDF, u[0] picks phi_d in
+ * [0, 2 pi) from the Fourier series, u[0] >= 1/2 the mirrored half):
+ * writes mu_o, phi_d, the pdf (equal to ll_bsdf_pdf there) and the weight
+ * f * |mu_o| / pdf. A zero weight and pdf mean no direction (e.g. no light
+ * is scattered from mu_i). The inversions are Newton-bisection with a
+ * bounded number of steps. LL_ERROR_INVALID_ARGUMENT for NULL pointers,
+ * non-finite mu_i, u outside [0, 1]. */
 LL_API ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
                                 const float *basis_coeffs, double *mu_o, double *phi_d,
                                 double *pdf, double weight_rgb[3]);
 
 /* ---------------------------------------------- renderer convention */
 
+/* f(wo, wi) without cosine (pbrt-v3's FourierBSDF::f; mapping and the
+ * transport mode's eta^2 at the top of this file).
+ * LL_ERROR_INVALID_ARGUMENT for NULL pointers, zero or non-finite
+ * directions, an unknown mode or missing basis weights (rgb is then 0). */
 LL_API ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
                                   ll_transport mode, const float *basis_coeffs,
                                   double rgb[3]);
 
-/* pdf of sampling wi given wo (per solid angle), as pbrt-v3's Pdf(wo, wi). */
+/* pdf of sampling wi given wo (per solid angle of wi), as pbrt-v3's
+ * Pdf(wo, wi); 0 for invalid arguments. */
 LL_API double ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
                               const float *basis_coeffs);
 
 /* Sample wi given wo as pbrt-v3's FourierBSDF::Sample_f does (same u gives
- * the same direction); writes wi (unit length), its pdf and f(wo, wi). */
+ * the same direction, to the solver's precision); writes wi (unit length,
+ * also when wo is the normal: its azimuth is then taken from +x), its pdf
+ * (equal to ll_bsdf_pdf_dir(wo, wi)) and f(wo, wi) (equal to
+ * ll_bsdf_eval_dir). pdf 0 and f 0 mean no direction (wi is then the
+ * normal). Errors as ll_bsdf_eval_dir, and u outside [0, 1]. */
 LL_API ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double u[2],
                                     ll_transport mode, const float *basis_coeffs,
                                     double wi[3], double *pdf, double rgb[3]);
