@@ -435,6 +435,62 @@ static void custom_metadata_and_eta(void **state)
     ll_layer_destroy(l);
 }
 
+/* A physically built stack: a Henyey-Greenstein slab (adding-doubling)
+ * over a diffuse base. At the nodes the file is the layer; the file's
+ * albedo (its f |mu_o| integrated over the sphere) matches the layer's
+ * quadrature albedo. */
+static void medium_over_diffuse_round_trip(void **state)
+{
+    const size_t n = 24, m = 12;
+    ll_layer *slab = ll_test_layer(n, m), *base = ll_test_layer(n, m);
+    const ll_layer *layers[1];
+    ll_bsdf_write_options opts = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_bsdf *b;
+    double x[24];
+    uint64_t rng = 17;
+    size_t i, o;
+    (void)state;
+    assert_int_equal(ll_layer_set_henyey_greenstein(slab, 0.9, 0.5), LL_OK);
+    assert_int_equal(ll_layer_expand(slab, 0.7), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(base, 0.5), LL_OK);
+    assert_int_equal(ll_layer_add_to_bottom(slab, base), LL_OK);
+    assert_int_equal(ll_layer_get_nodes(slab, x, NULL), LL_OK);
+    layers[0] = slab;
+    opts.error_goal = 0.0;
+    b = write_and_open("medium.bsdf", layers, 1, &opts);
+    for (i = 0; i < n; ++i)
+        for (o = 0; o < n; ++o) {
+            double phi = 2.0 * LL_TEST_PI * ll_test_uniform(&rng), rgb[3];
+            double expect = ll_layer_eval(slab, x[o], x[i], phi);
+            assert_int_equal(ll_bsdf_eval(b, x[i], x[o], phi, NULL, rgb), LL_OK);
+            if (!ll_test_close(rgb[0], expect, 1e-5, 1e-7))
+                fail_msg("node pair (%zu, %zu): file %.9g layer %.9g", o, i, rgb[0], expect);
+        }
+    /* Albedo at a few incident nodes away from grazing: the file's spline
+     * integral against the layer's quadrature sum. */
+    for (i = n / 2 + 3; i < n; i += 4) {
+        double R, T, total = 0.0;
+        size_t j, k, steps = 2000;
+        assert_int_equal(ll_layer_albedo(slab, x[i], &R, &T), LL_OK);
+        for (j = 0; j < steps; ++j) {
+            double mu_o = -1.0 + 2.0 * ((double)j + 0.5) / (double)steps, ring = 0.0;
+            for (k = 0; k < 32; ++k) {
+                double rgb[3];
+                assert_int_equal(
+                    ll_bsdf_eval(b, x[i], mu_o, LL_TEST_PI * ((double)k + 0.5) / 32.0, NULL, rgb),
+                    LL_OK);
+                ring += rgb[0];
+            }
+            total += ring / 32.0 * 2.0 * LL_TEST_PI * fabs(mu_o) * 2.0 / (double)steps;
+        }
+        if (fabs(total - (R + T)) > 5e-3 * (R + T))
+            fail_msg("mu_i %g: file albedo %.6f, layer %.6f", x[i], total, R + T);
+    }
+    ll_bsdf_release(b);
+    ll_layer_destroy(slab);
+    ll_layer_destroy(base);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -445,6 +501,7 @@ int main(void)
         cmocka_unit_test(textured_round_trip),
         cmocka_unit_test(byte_layout),
         cmocka_unit_test(custom_metadata_and_eta),
+        cmocka_unit_test(medium_over_diffuse_round_trip),
     };
     return cmocka_run_group_tests_name("bsdf_roundtrip", tests, setup, teardown);
 }
