@@ -410,8 +410,10 @@ def fresnelDielectric(cosThetaI, eta):
 
     Unpolarized Fresnel reflectance of a smooth dielectric boundary of
     relative index ``eta`` (transmitted side over incident side), and the
-    cosine of the refracted direction (0 under total internal reflection).
-    ``cosThetaI < 0`` means light arriving from the other side.
+    cosine of the refracted direction, whose sign is that of the side it
+    leaves into, i.e. opposite to ``cosThetaI`` (0 under total internal
+    reflection). ``cosThetaI < 0`` means light arriving from the other side,
+    where the relative index is ``1/eta``.
     """
     cos_t = ctypes.c_double()
     f = lib.ll_fresnel_dielectric(real_argument(cosThetaI, "cosThetaI"),

@@ -4,7 +4,7 @@
   plain `pytest` in python/ tests the library built next to it.
 - matplotlib draws headless (Agg).
 - Pictures go to $LAYERLAB_PY_OUT, else <checkout>/out/python/.
-- Measured times are printed at the end of the run.
+- Measured times (seconds, or (value, unit) pairs) print at the end of the run.
 """
 
 import os
@@ -47,5 +47,6 @@ def shared_dir():
 def pytest_terminal_summary(terminalreporter):
     if TIMINGS:
         terminalreporter.write_sep("-", "layerlab measured times")
-        for name, seconds in TIMINGS.items():
-            terminalreporter.write_line("%-55s %8.3f s" % (name, seconds))
+        for name, value in TIMINGS.items():
+            value, unit = value if isinstance(value, tuple) else (value, "s")
+            terminalreporter.write_line("%-55s %8.3f %s" % (name, value, unit))

@@ -230,7 +230,11 @@ def test_heuristics_and_fresnel():
     n2, m2 = ll.parameterHeuristicMicrofacet(alpha=0.1, eta=0.2 + 3j)
     assert n2 % 2 == 0 and m2 > 0
     f, cos_t = ll.fresnelDielectric(1.0, 1.5)
-    assert f == pytest.approx(0.04, abs=1e-12) and cos_t == pytest.approx(1.0)
+    # The refracted cosine has the sign of the side it leaves into: the
+    # other side, so the opposite sign (the original's convention).
+    assert f == pytest.approx(0.04, abs=1e-12) and cos_t == pytest.approx(-1.0)
+    f, cos_t = ll.fresnelDielectric(-0.9, 1.5)  # from inside: Snell with 1.5 / 1
+    assert 0 < f < 1 and cos_t == pytest.approx(np.sqrt(1 - 1.5 ** 2 * (1 - 0.9 ** 2)))
     assert ll.fresnelDielectric(0.1, 1 / 1.5)[0] == pytest.approx(1.0)  # total internal reflection
     assert ll.fresnelConductor(1.0, 0 + 1j) == pytest.approx(1.0)
     # |(n - 1 + ik) / (n + 1 + ik)|^2 at normal incidence
