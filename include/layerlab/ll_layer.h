@@ -8,9 +8,11 @@
  *  - mu is a zenith cosine of a *direction of travel*: mu > 0 travels down
  *    (light arriving from above the layer), mu < 0 travels up. A layer lit
  *    from above reflects into mu < 0 and transmits into mu > 0.
- *  - phi_d is the azimuth between the two directions, in the convention of
- *    the original: for a smooth interface the specular reflection of mu_i is
- *    mu_o = -mu_i at phi_d = 0... see ll_layer_eval.
+ *  - phi_d is the difference between the azimuths of the two directions of
+ *    travel (the original layerlab's convention): at phi_d = 0 their
+ *    horizontal components point the same way. So a mirror sends mu_i to
+ *    mu_o = -mu_i at phi_d = 0, light passing straight through keeps
+ *    phi_d = 0, and phi_d = pi is backscattering.
  *  - f(mu_o, mu_i, phi) = sum_l f_l(mu_o, mu_i) cos(l phi); each order l is an
  *    n x n matrix with four h x h blocks (h = n / 2): rows = outgoing,
  *    columns = incident, R^t (lit from above, reflected up), R^b, T^tb
@@ -97,11 +99,39 @@ LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, d
  * 2007) between the medium above and one of relative index
  * eta = eta_re + i eta_im below. eta_im > 0: a conductor (opaque, reflects
  * on both sides as seen from above); eta_im == 0: a dielectric (reflects and
- * transmits; eta_re < 1 is allowed). alpha > 0 is the Beckmann roughness;
- * alpha below LL_MICROFACET_MIN_ALPHA is rejected (the series would need
- * more orders than any layer can hold). conserve_energy != 0 adds the
- * paper's multiple-scattering compensation term (recommended: on).
- * n_orders_internal: Fourier orders used internally (0 = the layer's). */
+ * transmits; eta_re < 1 is allowed; eta_re == 1 is no interface at all and
+ * makes the layer clear).
+ *
+ * The BSDF is the original layerlab's (microfacet.cpp), in the layer's
+ * conventions above: Beckmann D with roughness alpha, Smith shadowing by
+ * Walter's rational approximation of G1, unpolarised Fresnel reflectance
+ * (ll_fresnel_dielectric / ll_fresnel_conductor at the microfacet), and
+ * Walter's refraction Jacobian including eta^2, so that the transmission
+ * blocks obey f_bt(a, b) = f_tb(b, a) / eta^2 (radiance, not importance).
+ * Light from below sees the relative index 1/eta.
+ *
+ * alpha > 0 is the Beckmann roughness; alpha below LL_MICROFACET_MIN_ALPHA
+ * is rejected: the Fourier series of a smoother interface would need more
+ * orders than any layer can hold. conserve_energy != 0 adds the paper's
+ * multiple-scattering compensation to order 0 (recommended: on): the energy
+ * that single scattering loses to shadowing returns as a low-rank term,
+ * split between reflection and transmission by their current ratio (and
+ * eta^2-reciprocal) for a dielectric, scaled by the hemispherical Fresnel
+ * average for a conductor; a non-absorbing dielectric then conserves energy
+ * (R + T = 1 per incident direction).
+ *
+ * n_orders_internal: the Fourier orders the lobes are resolved with, at
+ * least the layer's (0 = the layer's). A lobe sharper than that many orders
+ * can hold (grazing angles) is widened as in the original, but keeping the
+ * true lobe's energy (the original's widening adds up to 10% there). Use
+ * ll_heuristic_microfacet for the resolution a material needs.
+ *
+ * The azimuthal series are accurate to a few 1e-4 of each lobe's peak
+ * (measured against direct integration of the BSDF; the original's to
+ * 1e-3..2e-2) and truncated after the last term above 1e-3 of the first.
+ * Interfaces are built in parallel over incident directions. Returns
+ * LL_ERROR_INVALID_ARGUMENT (NULL layer, alpha or eta out of range) or
+ * LL_ERROR_OUT_OF_MEMORY; on failure the layer is unchanged. */
 #define LL_MICROFACET_MIN_ALPHA 1e-3
 LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
                                          double alpha, int conserve_energy,
@@ -176,30 +206,49 @@ LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *ref
  * layerlab's parameterHeuristicHG). */
 LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
-/* The resolution that a rough interface needs (the paper's fits,
- * parameterHeuristicMicrofacet, extended to every eta: dielectric fits are
- * interpolated in eta, eta < 1 uses 1/eta, and eta beyond the fitted range
- * 1.1..1.7 uses the nearest fit scaled by the width of the refracted lobe;
- * conductors use the generic conductor fit). alpha > 0. */
+/* The resolution (even node count n, Fourier orders m) that a rough
+ * interface needs: the paper's fits (the original's
+ * parameterHeuristicMicrofacet), n or m = max(A + B ln(alpha)^4 alpha,
+ * C + D alpha^-1.2), alpha clamped to 1, extended to every eta:
+ *  - conductors (eta_im > 0) use the generic conductor fit;
+ *  - a dielectric is the same from both sides, so eta < 1 uses 1/eta;
+ *  - between the fitted eta = 1.1, 1.3, 1.5, 1.7, n and m are interpolated
+ *    linearly in eta (the original takes the larger neighbour);
+ *  - above 1.7 the 1.7 fit holds: a denser medium widens the refracted
+ *    lobe, and the reflected lobe, now the narrowest, does not change;
+ *  - below 1.1 the refracted lobe narrows like (eta - 1) / eta (which the
+ *    four fits follow within 10%), so the 1.1 fit is evaluated at alpha
+ *    times (eta - 1) / eta / (0.1 / 1.1), with eta taken as at least 1.05
+ *    (a narrower lobe exceeds any practical resolution and is widened by
+ *    ll_layer_set_microfacet); eta = 1 exactly is no interface: (2, 1).
+ * alpha >= LL_MICROFACET_MIN_ALPHA. LL_ERROR_INVALID_ARGUMENT also when the
+ * result would exceed what a layer can hold. */
 LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im,
                                          size_t *n_nodes, size_t *n_orders);
 
-/* ------------------------------------------------------------- Fresnel */
+/* ------------------------------------------------------------- Fresnel
+ * These return a reflectance, so an invalid argument (NaN, out of range)
+ * gives NaN and a message for ll_last_error_message(). Thread-safe. */
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric boundary with
- * relative index eta (transmitted side / incident side) for light arriving
- * with cos_theta_i (the sign chooses the side: cos_theta_i < 0 means the
- * light arrives from the other side, where the relative index is 1/eta).
- * cos_theta_t (nullable) receives the cosine of the refracted direction with
- * the sign of the side it leaves into, 0 under total internal reflection. */
+ * relative index eta > 0 (transmitted side / incident side) for light
+ * arriving with cos_theta_i in [-1, 1] (the sign chooses the side:
+ * cos_theta_i < 0 means the light arrives from the other side, where the
+ * relative index is 1/eta). cos_theta_t (nullable) receives the cosine of
+ * the refracted direction with the sign of the side it leaves into (the
+ * opposite of cos_theta_i), 0 under total internal reflection (which
+ * returns 1). */
 LL_API double ll_fresnel_dielectric(double cos_theta_i, double eta, double *cos_theta_t);
 
 /* Unpolarised Fresnel reflectance of a conductor of complex relative index
- * eta_re + i eta_im, cos_theta_i in [0, 1]. */
+ * eta_re + i eta_im (both >= 0, not both 0; eta_im = 0 is a dielectric),
+ * cos_theta_i in [0, 1]. */
 LL_API double ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im);
 
 /* Hemispherical averages 2 * integral_0^1 F(mu) mu dmu: the fraction of
- * uniformly diffuse light that the boundary reflects. */
+ * uniformly diffuse light that the boundary reflects (accurate to about
+ * 1e-14, by tanh-sinh quadrature). For a dielectric, light arriving from
+ * the side where the relative index is eta. */
 LL_API double ll_fresnel_dielectric_average(double eta);
 LL_API double ll_fresnel_conductor_average(double eta_re, double eta_im);
 
