@@ -99,11 +99,13 @@ LL_API ll_status ll_material_write(const ll_material *material, const ll_build_o
 LL_API size_t ll_material_word_count(const ll_material *material);
 
 /* What a build with these options would take, estimated without building
- * (llbuild --dry-run). Memory is an upper bound: every Fourier order of the
- * live layers stored densely (the compact storage usually needs less).
- * Time comes from operation counts and per-operation rates measured on a
- * 2-core x86-64 machine with OpenBLAS (docs/material-language.md,
- * "Estimates"); expect it within a factor of about 2 on similar machines. */
+ * (llbuild --dry-run). Memory: the layers alive at once (partial stacks,
+ * one level's word layers, one result being combined) stored densely,
+ * times the fraction of that the compact storage used in the examples'
+ * builds, plus the process. Time: entry and operation counts times rates
+ * measured on a 2-core x86-64 machine with OpenBLAS. Both were within a
+ * factor of 2 of the measured builds of the examples
+ * (docs/material-language.md, "Estimates"). */
 typedef struct ll_build_estimate {
     size_t struct_size;   /* set by the caller: sizeof(ll_build_estimate)       */
     size_t n_nodes;       /* resolution and channels the build would use         */
@@ -112,7 +114,7 @@ typedef struct ll_build_estimate {
     size_t layers_built;  /* word layers built, after sharing between channels   */
     size_t additions;     /* adding steps (doubling steps not included)          */
     size_t doublings;     /* doubling steps of all media                         */
-    double peak_bytes;    /* upper bound of the memory the build holds at once   */
+    double peak_bytes;    /* estimated peak memory of the build, bytes           */
     double seconds;       /* estimated wall time with opts->threads threads      */
 } ll_build_estimate;
 

@@ -1,0 +1,124 @@
+#!/bin/sh
+# llbuild, the command: help, version, exit codes (0 done, 1 bad input,
+# 2 I/O, 3 numerical), --dry-run, the summary, and that an interrupted
+# build (SIGINT / SIGTERM) leaves no output file.
+# Run by `make test` from the checkout with BUILD set.
+set -u
+BUILD=${BUILD:-build}
+llbuild="$BUILD/bin/llbuild"
+tmp=$(mktemp -d /tmp/llbuild_test.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+ok() { passed=$((passed + 1)); }
+bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
+
+# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
+expect() {
+    want=$1; what=$2; shift 3
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then ok; else
+        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
+    fi
+}
+
+# contains FILE TEXT DESCRIPTION
+contains() {
+    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
+}
+
+if [ ! -x "$llbuild" ]; then
+    echo "llbuild.sh: $llbuild is not built"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+
+# --- help and version
+expect 0 "--help" -- "$llbuild" --help
+contains "$tmp/out" "conductor eta=NAME" "--help shows the language"
+contains "$tmp/out" "exit codes" "--help lists the exit codes"
+expect 0 "--version" -- "$llbuild" --version
+contains "$tmp/out" "llbuild (layerlab) [0-9]" "--version"
+
+# --- bad input: 1
+expect 1 "no arguments" -- "$llbuild"
+expect 1 "unknown option" -- "$llbuild" --frobnicate examples/plastic.layers -o "$tmp/x.bsdf"
+expect 1 "no output" -- "$llbuild" examples/plastic.layers
+expect 1 "odd nodes" -- "$llbuild" --nodes 15 examples/plastic.layers -o "$tmp/x.bsdf"
+printf 'dielectric eta=1.5 alpha=0.1\nconductor eta=Au alpha=0.1\ndiffuse albedo=0.5\n' >"$tmp/bad.layers"
+expect 1 "parse error" -- "$llbuild" "$tmp/bad.layers" -o "$tmp/x.bsdf"
+contains "$tmp/err" "bad.layers:2:1: conductor is opaque" "parse error names file:line:column"
+printf 'diffuse albedo=1.5\n' >"$tmp/bad2.layers"
+expect 1 "value error" -- "$llbuild" "$tmp/bad2.layers" -o "$tmp/x.bsdf"
+contains "$tmp/err" "bad2.layers:1:16: albedo=1.5 is out of range" "value error position"
+printf 'conductor eta=Unobtainium alpha=0.1\n' >"$tmp/bad3.layers"
+expect 1 "unknown metal" -- "$llbuild" "$tmp/bad3.layers" -o "$tmp/x.bsdf"
+contains "$tmp/err" "unknown metal 'Unobtainium'" "unknown metal"
+[ ! -e "$tmp/x.bsdf" ] && ok || bad "a failed build left $tmp/x.bsdf"
+
+# --- I/O: 2
+expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
+expect 2 "unwritable output" -- "$llbuild" --nodes 8 --orders 2 examples/frosted-glass.layers \
+    -o "$tmp/no/such/dir/x.bsdf"
+
+# --- out of memory: 3. A diffuse layer on 12000 nodes needs 576 MB for its
+# order 0; with the address space capped at 400 MB the build fails cleanly.
+# (Not under AddressSanitizer, which reserves terabytes of address space.)
+printf 'diffuse albedo=0.5\n' >"$tmp/big.layers"
+case "$BUILD" in
+*san*) ;;
+*)
+    expect 3 "out of memory" -- sh -c "ulimit -v 400000; exec '$llbuild' --nodes 12000 \
+        --orders 1 --quiet '$tmp/big.layers' -o '$tmp/big.bsdf'"
+    contains "$tmp/err" "out of memory" "out-of-memory message"
+    [ ! -e "$tmp/big.bsdf" ] && ok || bad "a failed build left big.bsdf"
+    ;;
+esac
+
+# --- dry run: resolution, memory, time; no file
+expect 0 "--dry-run" -- "$llbuild" --dry-run examples/coated-gold.layers -o "$tmp/dry.bsdf"
+contains "$tmp/out" "^resolution" "--dry-run resolution"
+contains "$tmp/out" "^memory" "--dry-run memory"
+contains "$tmp/out" "^time" "--dry-run time"
+[ ! -e "$tmp/dry.bsdf" ] && ok || bad "--dry-run wrote a file"
+expect 0 "--dry-run --mono" -- "$llbuild" --dry-run --mono --nodes 30 --orders 7 examples/coated-gold.layers
+contains "$tmp/out" "30 nodes x 7 Fourier orders, 1 channel" "--dry-run honours options"
+
+# --- a build: summary on stdout, plain progress lines on stderr (no TTY)
+expect 0 "build" -- "$llbuild" --nodes 16 --orders 8 examples/plastic.layers -o "$tmp/plastic.bsdf"
+[ -s "$tmp/plastic.bsdf" ] && ok || bad "no plastic.bsdf"
+contains "$tmp/out" "^orders kept" "summary: orders kept"
+contains "$tmp/out" "^file  *[0-9]* bytes" "summary: file size"
+contains "$tmp/out" "^albedo" "summary: albedo"
+contains "$tmp/out" "^wall time" "summary: wall time"
+contains "$tmp/err" "llbuild: .*% " "plain progress lines"
+expect 0 "--quiet" -- "$llbuild" --quiet --nodes 16 --orders 8 examples/plastic.layers -o "$tmp/q.bsdf"
+if [ -s "$tmp/out" ] || [ -s "$tmp/err" ]; then bad "--quiet printed something"; else ok; fi
+expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orders 8 \
+    examples/coated-gold.layers -o "$tmp/mono.bsdf"
+contains "$tmp/out" "16 nodes x 8 Fourier orders, 1 channel" "--mono"
+
+# --- interrupted builds leave no file. A thick forward-scattering medium
+# on many nodes doubles for several seconds; signal it once it runs.
+printf 'medium albedo=0.99 g=0.9 tau=1e9\n' >"$tmp/slow.layers"
+for sig in INT TERM; do
+    rm -f "$tmp/slow.bsdf" "$tmp/slow.err"
+    "$llbuild" --nodes 120 --orders 40 "$tmp/slow.layers" -o "$tmp/slow.bsdf" \
+        >/dev/null 2>"$tmp/slow.err" &
+    pid=$!
+    i=0
+    while [ $i -lt 100 ] && ! grep -q "medium" "$tmp/slow.err" 2>/dev/null; do
+        sleep 0.1; i=$((i + 1))
+    done
+    kill -s $sig $pid
+    wait $pid 2>/dev/null
+    status=$?
+    if [ $status -gt 128 ]; then ok; else bad "SIG$sig: exit $status, expected death by signal"; fi
+    if ls "$tmp" | grep -q '^slow\.bsdf'; then bad "SIG$sig left $(ls "$tmp" | grep slow.bsdf)"; else ok; fi
+    contains "$tmp/slow.err" "interrupted; no file written" "SIG$sig message"
+done
+
+echo "llbuild.sh: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]
