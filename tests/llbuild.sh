@@ -58,6 +58,19 @@ expect 1 "unknown metal" -- "$llbuild" "$tmp/bad3.layers" -o "$tmp/x.bsdf"
 contains "$tmp/err" "unknown metal 'Unobtainium'" "unknown metal"
 [ ! -e "$tmp/x.bsdf" ] && ok || bad "a failed build left $tmp/x.bsdf"
 
+# --- --ior-dir: a metal of one's own
+mkdir -p "$tmp/spectra"
+printf '400 0.5\n700 0.5\n' >"$tmp/spectra/Fakium.eta.spd"
+printf '400 3\n700 3\n' >"$tmp/spectra/Fakium.k.spd"
+printf 'conductor eta=Fakium alpha=0.3\n' >"$tmp/fake.layers"
+expect 1 "metal outside the search list" -- "$llbuild" --dry-run "$tmp/fake.layers"
+expect 0 "--ior-dir" -- "$llbuild" --dry-run --ior-dir "$tmp/spectra" "$tmp/fake.layers"
+contains "$tmp/out" "3 channels" "a named metal is RGB"
+mkdir -p "$tmp/ior"
+cp "$tmp/spectra/"Fakium.* "$tmp/ior/"
+expect 0 "spectra in ior/ beside the material" -- "$llbuild" --dry-run "$tmp/fake.layers"
+rm -rf "$tmp/ior"
+
 # --- I/O: 2
 expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
 expect 2 "unwritable output" -- "$llbuild" --nodes 8 --orders 2 examples/frosted-glass.layers \
