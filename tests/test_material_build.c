@@ -114,6 +114,40 @@ static void examples_build_at_low_resolution(void **state)
     }
 }
 
+/* Top to bottom: an interface above an absorbing slab reflects as the bare
+ * interface does, one below it is seen through the slab twice (e^(-2 tau/mu)
+ * weaker). A white base under a clear coat reflects everything. */
+static void words_stack_top_to_bottom(void **state)
+{
+    ll_material *above = parse("dielectric eta=1.5 alpha=0.3\nmedium albedo=0 tau=1");
+    ll_material *below = parse("medium albedo=0 tau=1\ndielectric eta=1.5 alpha=0.3");
+    ll_material *bare = parse("dielectric eta=1.5 alpha=0.3");
+    ll_material *white = parse("dielectric eta=1.5 alpha=0.3\ndiffuse albedo=1");
+    ll_layer *a[3] = { NULL, NULL, NULL }, *b[3] = { NULL, NULL, NULL };
+    ll_layer *c[3] = { NULL, NULL, NULL }, *w[3] = { NULL, NULL, NULL };
+    double Ra, Rb, Rc, Rw, T;
+    (void)state;
+    build(above, 92, 61, 1, a);
+    build(below, 92, 61, 1, b);
+    build(bare, 92, 61, 1, c);
+    build(white, 92, 61, 1, w);
+    assert_int_equal(ll_layer_albedo(a[0], 0.9, &Ra, &T), LL_OK);
+    assert_int_equal(ll_layer_albedo(b[0], 0.9, &Rb, &T), LL_OK);
+    assert_int_equal(ll_layer_albedo(c[0], 0.9, &Rc, &T), LL_OK);
+    assert_int_equal(ll_layer_albedo(w[0], 0.9, &Rw, &T), LL_OK);
+    assert_float_equal(Ra, Rc, 1e-3 * Rc);
+    assert_true(Rb < 0.3 * Rc && Rb > 0.0);
+    assert_float_equal(Rw, 1.0, 5e-3);
+    destroy3(a);
+    destroy3(b);
+    destroy3(c);
+    destroy3(w);
+    ll_material_destroy(above);
+    ll_material_destroy(below);
+    ll_material_destroy(bare);
+    ll_material_destroy(white);
+}
+
 /* The albedo (reflected) of a file for light from mu_i, integrated over the
  * file's own spline nodes in mu_o (3-point Gauss per interval) and over the
  * azimuth with more points than the series has terms (exact for it). */
@@ -496,6 +530,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(examples_build_at_low_resolution),
+        cmocka_unit_test(words_stack_top_to_bottom),
         cmocka_unit_test(coated_gold_is_darker_than_bare_gold),
         cmocka_unit_test(channels_share_what_is_equal),
         cmocka_unit_test(measured_brdf_builds_under_a_coat),
