@@ -1,0 +1,191 @@
+/*
+ * llplot — the material being drawn: a .bsdf file opened with ll_bsdf_open,
+ * or a material file compiled in memory with ll_material_build_layers.
+ */
+#include "llplot.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* A material compiled for a picture only needs to look right, not to match
+ * a renderer to three digits: unless --nodes/--orders say otherwise, cap
+ * the heuristic resolution so that even glossy stacks compile in seconds.
+ * (Too few orders blur a narrow highlight; too few nodes make it ripple.) */
+#define PREVIEW_MAX_NODES 120
+#define PREVIEW_MAX_ORDERS 200
+
+static int is_bsdf_file(const char *path, int *is_bsdf)
+{
+    char magic[7];
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot open: %s", path, strerror(errno));
+    *is_bsdf = fread(magic, 1, sizeof magic, f) == sizeof magic &&
+               memcmp(magic, "SCATFUN", sizeof magic) == 0;
+    if (ferror(f)) {
+        int err = errno;
+        fclose(f);
+        return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot read: %s", path, strerror(err));
+    }
+    fclose(f);
+    return LLPLOT_EXIT_OK;
+}
+
+/* A textured file is drawn for one basis function: weights one-hot. */
+static int choose_basis(const llplot_options *o, llplot_source *s)
+{
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    ll_status st = ll_bsdf_get_info(s->bsdf, &info);
+    if (st != LL_OK)
+        return llplot_fail_ll(st, o->input);
+    s->n_channels = info.n_channels;
+    if (info.n_bases <= 1) {
+        if (o->basis > 0)
+            return llplot_fail(LLPLOT_EXIT_INPUT, "%s: --basis %zu given, but the file is not textured",
+                               o->input, o->basis);
+        return LLPLOT_EXIT_OK;
+    }
+    if (o->basis >= info.n_bases)
+        return llplot_fail(LLPLOT_EXIT_INPUT, "%s: --basis %zu, but the file has %zu basis functions",
+                           o->input, o->basis, info.n_bases);
+    s->basis_coeffs = calloc(info.n_bases, sizeof(float));
+    if (!s->basis_coeffs)
+        return llplot_fail(LLPLOT_EXIT_IO, "out of memory");
+    s->basis_coeffs[o->basis] = 1.0f;
+    return LLPLOT_EXIT_OK;
+}
+
+/* Sampling is only reachable through an opened .bsdf: write the compiled
+ * layers to a private temporary file, open it, and remove it at once (the
+ * opened table lives in memory). */
+static int open_compiled_file(const llplot_options *o, llplot_source *s,
+                              const ll_bsdf_write_options *header)
+{
+    const char *tmp = getenv("TMPDIR");
+    char dir[4096], path[4200];
+    ll_status st;
+    int code = LLPLOT_EXIT_OK;
+    if (!tmp || !tmp[0])
+        tmp = "/tmp";
+    if ((size_t)snprintf(dir, sizeof dir, "%s/llplot-XXXXXX", tmp) >= sizeof dir)
+        return llplot_fail(LLPLOT_EXIT_IO, "TMPDIR is too long");
+    if (!mkdtemp(dir))
+        return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot create a temporary directory: %s", dir,
+                           strerror(errno));
+    snprintf(path, sizeof path, "%s/preview.bsdf", dir);
+    st = ll_bsdf_write(path, (const ll_layer *const *)s->layers, s->n_layers, header);
+    if (st == LL_OK)
+        st = ll_bsdf_open(path, &s->bsdf);
+    if (st != LL_OK)
+        code = llplot_fail_ll(st, o->input);
+    unlink(path);
+    rmdir(dir);
+    return code;
+}
+
+/* Compiling a glossy stack takes seconds: show how far it got when stderr
+ * is a terminal (one line, rewritten in place). */
+static void show_progress(double fraction, const char *stage, void *user)
+{
+    fprintf(stderr, "\rllplot: compiling %s: %3.0f%% %-24s", (const char *)user,
+            100.0 * fraction, stage ? stage : "");
+    fflush(stderr);
+}
+
+static int compile_material(const llplot_options *o, int need_sampling, llplot_source *s)
+{
+    ll_material *material = NULL;
+    ll_build_options opts = LL_BUILD_OPTIONS_INIT;
+    ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+    size_t n_nodes = 0, n_orders = 0, n_channels = 0;
+    ll_status st = ll_material_parse_file(o->input, &material);
+    int code = LLPLOT_EXIT_OK;
+    if (st != LL_OK)
+        return llplot_fail_ll(st, o->input);
+    opts.n_nodes = o->nodes;
+    opts.n_orders = o->orders;
+    opts.threads = o->threads;
+    if (isatty(STDERR_FILENO)) {
+        opts.progress = show_progress;
+        opts.progress_user = (void *)o->input;
+    }
+    st = ll_material_resolution(material, &opts, &n_nodes, &n_orders, &n_channels);
+    if (st != LL_OK) {
+        code = llplot_fail_ll(st, o->input);
+        goto done;
+    }
+    if (o->nodes == 0 && n_nodes > PREVIEW_MAX_NODES)
+        opts.n_nodes = PREVIEW_MAX_NODES;
+    if (o->orders == 0 && n_orders > PREVIEW_MAX_ORDERS)
+        opts.n_orders = PREVIEW_MAX_ORDERS;
+    if (opts.n_nodes != o->nodes || opts.n_orders != o->orders)
+        fprintf(stderr,
+                "llplot: %s: previewing at %zu nodes and %zu orders (the material asks for %zu "
+                "and %zu; set --nodes/--orders to change)\n",
+                o->input, opts.n_nodes ? opts.n_nodes : n_nodes,
+                opts.n_orders ? opts.n_orders : n_orders, n_nodes, n_orders);
+    st = ll_material_build_layers(material, &opts, s->layers, &s->n_layers, &header);
+    if (opts.progress)
+        fputc('\n', stderr);
+    if (st != LL_OK) {
+        code = llplot_fail_ll(st, o->input);
+        goto done;
+    }
+    s->n_channels = s->n_layers;
+    if (need_sampling)
+        code = open_compiled_file(o, s, &header);
+done:
+    ll_material_destroy(material);
+    return code;
+}
+
+int llplot_source_open(const llplot_options *o, int need_sampling, llplot_source *s)
+{
+    const char *slash = strrchr(o->input, '/');
+    int is_bsdf = 0, code;
+    ll_status st;
+    memset(s, 0, sizeof *s);
+    snprintf(s->label, sizeof s->label, "%s", slash ? slash + 1 : o->input);
+    code = is_bsdf_file(o->input, &is_bsdf);
+    if (code != LLPLOT_EXIT_OK)
+        return code;
+    if (!is_bsdf) {
+        if (o->basis > 0)
+            return llplot_fail(LLPLOT_EXIT_INPUT, "%s: --basis applies to textured .bsdf files only",
+                               o->input);
+        code = compile_material(o, need_sampling, s);
+    } else {
+        st = ll_bsdf_open(o->input, &s->bsdf);
+        code = st == LL_OK ? choose_basis(o, s) : llplot_fail_ll(st, o->input);
+    }
+    if (code != LLPLOT_EXIT_OK)
+        llplot_source_close(s);
+    return code;
+}
+
+void llplot_source_close(llplot_source *s)
+{
+    size_t c;
+    for (c = 0; c < 3; ++c)
+        ll_layer_destroy(s->layers[c]);
+    ll_bsdf_release(s->bsdf);
+    free(s->basis_coeffs);
+    memset(s, 0, sizeof *s);
+}
+
+void llplot_source_eval(const llplot_source *s, double mu_i, double mu_o, double phi_d,
+                        double rgb[3])
+{
+    size_t c;
+    if (s->n_layers > 0) {
+        /* The layers themselves: exact node values, no series truncation. */
+        for (c = 0; c < 3; ++c)
+            rgb[c] = ll_layer_eval(s->layers[c < s->n_layers ? c : 0], mu_o, mu_i, phi_d);
+        return;
+    }
+    if (ll_bsdf_eval(s->bsdf, mu_i, mu_o, phi_d, s->basis_coeffs, rgb) != LL_OK)
+        rgb[0] = rgb[1] = rgb[2] = 0.0;
+}
