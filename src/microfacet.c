@@ -731,57 +731,81 @@ typedef struct layer_job {
     double *ref0;                /* n x n or NULL (conductor compensation) */
 } layer_job;
 
-/* Doubles of scratch for one column: its series, the series' scratch and
- * orders 1..m-1 of the column (n each); 0 if that overflows. */
+/* Doubles of scratch for one column: every row's series (m each; only the
+ * pages that the series reach are touched), the series' scratch and one
+ * column of the matrix; 0 if that overflows. */
 static size_t column_doubles(size_t n, size_t m)
 {
-    size_t count, orders, scratch;
-    if (m > (SIZE_MAX - 2 * FILON_SAMPLES - 2 * CHEB) / 8 ||
-        !ll_size_mul(n, m > 1 ? m - 1 : 1, &orders))
-        return 0;
-    scratch = ll_microfacet_scratch_size(m);
-    if (!ll_size_add(m, scratch, &count) || !ll_size_add(count, orders, &count))
+    size_t count, rows;
+    if (m > (SIZE_MAX - 2 * FILON_SAMPLES - 2 * CHEB) / 8 || !ll_size_mul(n, m, &rows) ||
+        !ll_size_add(rows, ll_microfacet_scratch_size(m), &count) ||
+        !ll_size_add(count, n, &count) || count > SIZE_MAX / sizeof(double))
         return 0;
     return count;
 }
 
-/* One incident column: every outgoing node, every order. */
+/* Rows by decreasing series length (ties by index: deterministic). */
+typedef struct row_length {
+    size_t row, len;
+} row_length;
+
+static int longer_first(const void *a, const void *b)
+{
+    const row_length *x = a, *y = b;
+    if (x->len != y->len)
+        return x->len > y->len ? -1 : 1;
+    return x->row < y->row ? -1 : x->row > y->row;
+}
+
+/* One incident column: every outgoing node, every order. The high orders
+ * of a column are nonzero only in the few rows near its lobes, so each
+ * order's column is filled from the rows whose series reach it (a prefix
+ * of the rows sorted by length) and cleared again, instead of sweeping
+ * n x m values. */
 static ll_status layer_column(size_t col, void *ctx)
 {
     const layer_job *job = ctx;
     const ll_layer *l = job->layer;
-    size_t n = l->n, m = l->m, h = n / 2, row, k, max_len = 0, len;
-    double *series, *scratch, *orders, factor;
-    ll_status s = LL_OK;
+    size_t n = l->n, m = l->m, h = n / 2, row, k, j, count;
+    double *pool, *scratch, *column, factor;
+    row_length *rows = ll_alloc_array(n, sizeof *rows);
     double *memory = ll_alloc_array(job->column_doubles, sizeof(double));
-    if (!memory)
+    ll_status s = LL_OK;
+    if (!memory || !rows) {
+        free(memory);
+        free(rows);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
-    series = memory;
-    scratch = series + m;
-    orders = scratch + ll_microfacet_scratch_size(m); /* orders 1.. m-1, n each */
-    if (m > 1)
-        memset(orders, 0, n * (m - 1) * sizeof(double));
+    }
+    pool = memory;                                   /* row r's series at r m */
+    scratch = pool + n * m;
+    column = scratch + ll_microfacet_scratch_size(m); /* n, kept zero between uses */
     for (row = 0; row < n && s == LL_OK; ++row) {
         /* The reference (F = 1) is only needed for R^t: up from above. */
         double *ref = job->ref0 && row < h && col >= h ? &job->ref0[col * n + row] : NULL;
         /* Depth grows opposite to the normal: the series takes -mu. */
-        s = ll_microfacet_series(job->mf, -l->nodes[row], -l->nodes[col], m, series, &len, ref,
-                                 scratch);
-        job->order0[col * n + row] = len ? series[0] : 0.0;
-        for (k = 1; k < len; ++k)
-            orders[(k - 1) * n + row] = series[k];
-        if (len > max_len)
-            max_len = len;
+        rows[row].row = row;
+        s = ll_microfacet_series(job->mf, -l->nodes[row], -l->nodes[col], m, pool + row * m,
+                                 &rows[row].len, ref, scratch);
+        job->order0[col * n + row] = rows[row].len ? pool[row * m] : 0.0;
     }
-    /* Orders past the column's longest series stay empty in the builders. */
-    factor = ll_layer_surface_factor(l, col, 1);
-    for (k = 1; k < max_len && s == LL_OK; ++k) {
-        double *column = orders + (k - 1) * n;
-        for (row = 0; row < n; ++row)
-            column[row] *= factor;
-        s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
+    if (s == LL_OK) {
+        qsort(rows, n, sizeof *rows, longer_first);
+        memset(column, 0, n * sizeof(double));
+        factor = ll_layer_surface_factor(l, col, 1);
+        count = n;
+        /* Orders past the column's longest series stay empty in the builders. */
+        for (k = 1; k < rows[0].len && s == LL_OK; ++k) {
+            while (count > 0 && rows[count - 1].len <= k)
+                --count;
+            for (j = 0; j < count; ++j)
+                column[rows[j].row] = pool[rows[j].row * m + k] * factor;
+            s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
+            for (j = 0; j < count; ++j)
+                column[rows[j].row] = 0.0;
+        }
     }
     free(memory);
+    free(rows);
     return s;
 }
 
