@@ -245,9 +245,8 @@ def _candidates():
         libdir = subprocess.run(["pkg-config", "--variable=libdir", "layerlab"],
                                 capture_output=True, text=True, timeout=30)
         if libdir.returncode == 0 and libdir.stdout.strip():
-            d = libdir.stdout.strip()
-            for name in ("liblayerlab.so.%d" % ABI_VERSION, "liblayerlab.dylib"):
-                found.append(("pkg-config libdir", os.path.join(d, name)))
+            found.append(("pkg-config libdir",
+                          os.path.join(libdir.stdout.strip(), "liblayerlab.so.%d" % ABI_VERSION)))
         else:
             found.append(("pkg-config", None))
     except (OSError, subprocess.SubprocessError):
@@ -259,16 +258,16 @@ def _candidates():
     return found
 
 
-def _check_version(cdll, path):
+def _version_problem(cdll):
+    """None if the library's version suits this package, else why not."""
     fn = cdll.ll_version_number
     fn.restype, fn.argtypes = ctypes.c_int, []
     number = fn()
     major, minor, patch = number // 10000, number // 100 % 100, number % 100
     if major != REQUIRED_MAJOR or (major, minor, patch) < MINIMUM_VERSION:
-        raise ImportError(
-            "liblayerlab at %s is version %d.%d.%d; this package needs %d.x, at least %d.%d.%d "
-            "(ABI %d)" % ((path, major, minor, patch, REQUIRED_MAJOR) + MINIMUM_VERSION
-                          + (ABI_VERSION,)))
+        return ("is version %d.%d.%d; this package needs %d.x, at least %d.%d.%d (ABI %d)"
+                % ((major, minor, patch, REQUIRED_MAJOR) + MINIMUM_VERSION + (ABI_VERSION,)))
+    return None
 
 
 def load():
@@ -293,7 +292,10 @@ def load():
         except AttributeError:
             tried.append("%s: %s is not liblayerlab (no ll_version_number)" % (how, target))
             continue
-        _check_version(cdll, target)
+        problem = _version_problem(cdll)
+        if problem:  # an old copy earlier in the search order must not hide a good one
+            tried.append("%s: %s %s" % (how, target, problem))
+            continue
         return Library(cdll, target, how)
     hint = ("set LAYERLAB_LIBRARY to the path of liblayerlab.so, or `make install` the library "
             "so that pkg-config finds it")

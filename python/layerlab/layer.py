@@ -42,6 +42,12 @@ class Layer:
     ``Layer(nodes, weights, fourierOrders=1)`` creates a clear layer (no
     reflection, full transmission); ``Layer(other)`` copies a layer.
 
+    Threads: a layer may be read (eval, matrix, albedo) from many threads at
+    once, but a call that changes it (a setter, adding, expand, reverse,
+    clear) must not overlap any other call on the same layer. The library
+    releases the GIL while it computes and uses its own worker threads
+    (see :func:`layerlab.setThreadCount`).
+
     Parameter ``nodes``:
         The zenith-angle cosines of the discretisation: an even number of
         them, symmetric about 0, none at 0 (e.g. ``quad.gaussLobatto(n)``)
