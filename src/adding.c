@@ -12,6 +12,9 @@
 
 #include <cblas.h>
 #include <lapacke.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -304,7 +307,27 @@ typedef struct expand_job {
     double tau0;
     size_t doublings;
     ll_order **result;
+    const ll_expand_monitor *monitor;
+    size_t finished; /* orders done (atomic) */
 } expand_job;
+
+static int cancelled(const expand_job *job)
+{
+    return job->monitor && job->monitor->cancel && *job->monitor->cancel;
+}
+
+/* Count a finished order; the calling thread (OpenMP thread 0) reports. */
+static void order_finished(expand_job *job)
+{
+    size_t done = __atomic_add_fetch(&job->finished, 1, __ATOMIC_RELAXED);
+    if (!job->monitor || !job->monitor->progress)
+        return;
+#ifdef _OPENMP
+    if (omp_get_thread_num() != 0)
+        return;
+#endif
+    job->monitor->progress((double)done / (double)job->layer->m, job->monitor->user);
+}
 
 /* Is the block zero off its diagonal? */
 static int is_diagonal(const double *x, size_t h)
@@ -354,6 +377,10 @@ static ll_status expand_one_order(size_t k, void *ctx)
         memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
     } else {
         for (d = 0; d < job->doublings; ++d) {
+            if (cancelled(job)) {
+                s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
+                goto done;
+            }
             /* The slab added to itself: its top is the bottom's copy. */
             memcpy(w.top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
             memcpy(w.top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
@@ -376,16 +403,30 @@ static ll_status expand_one_order(size_t k, void *ctx)
     w.out.zero[LL_BLOCK_TTB] = w.out.zero[LL_BLOCK_TBT] =
         all_zero(w.out.blk[LL_BLOCK_TTB], h * h);
     s = store_dense(&w.out, h, &job->result[k]);
+    if (s == LL_OK)
+        order_finished(job);
 done:
     workspace_free(&w);
     return s;
 }
 
-ll_status ll_layer_expand(ll_layer *layer, double tau)
+void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings)
+{
+    /* Initial thickness: Grant and Hunt's bound tau0 <= 2 min|mu| keeps the
+     * first-order slab non-negative; 2^-15 keeps its error small. Round so
+     * that tau0 2^k hits tau exactly. */
+    double t0 = fmin(2.0 * min_mu, ldexp(1.0, -15));
+    size_t k = tau > t0 ? (size_t)ceil(log2(tau / t0)) : 0;
+    *doublings = k;
+    *tau0 = ldexp(tau, -(int)k);
+}
+
+ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
+                                    const ll_expand_monitor *monitor)
 {
     expand_job job;
-    double min_mu = 1.0, tau0;
-    size_t i, k, doublings;
+    double min_mu = 1.0;
+    size_t i, k;
     ll_status s;
 
     if (!layer)
@@ -399,19 +440,13 @@ ll_status ll_layer_expand(ll_layer *layer, double tau)
     if (tau == 0.0)
         return ll_layer_clear(layer);
 
-    /* Initial thickness: Grant and Hunt's bound tau0 <= 2 min|mu| keeps the
-     * first-order slab non-negative; 2^-15 keeps its error small. Round so
-     * that tau0 2^k hits tau exactly. */
     for (i = 0; i < layer->n; ++i)
         if (fabs(layer->nodes[i]) < min_mu)
             min_mu = fabs(layer->nodes[i]);
-    tau0 = fmin(2.0 * min_mu, ldexp(1.0, -15));
-    doublings = tau > tau0 ? (size_t)ceil(log2(tau / tau0)) : 0;
-    tau0 = ldexp(tau, -(int)doublings);
-
     job.layer = layer;
-    job.tau0 = tau0;
-    job.doublings = doublings;
+    ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
+    job.monitor = monitor;
+    job.finished = 0;
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
@@ -425,4 +460,9 @@ ll_status ll_layer_expand(ll_layer *layer, double tau)
     ll_layer_replace_orders(layer, job.result);
     free(job.result);
     return LL_OK;
+}
+
+ll_status ll_layer_expand(ll_layer *layer, double tau)
+{
+    return ll_layer_expand_monitored(layer, tau, NULL);
 }

@@ -103,4 +103,21 @@ LL_INTERNAL double ll_layer_medium_factor(const ll_layer *l, size_t col, size_t 
  * builders[l] finished into order l; takes ownership of the builders. */
 LL_INTERNAL ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_builder **builders);
 
+/* ---- doubling with progress and cancellation (for long builds) */
+typedef struct ll_expand_monitor {
+    const volatile int *cancel;                       /* nullable; nonzero stops */
+    void (*progress)(double fraction, void *user);    /* nullable; calling thread */
+    void *user;
+} ll_expand_monitor;
+
+/* ll_layer_expand with a monitor: progress reports the fraction of Fourier
+ * orders finished, on the calling thread; a raised cancel flag stops the
+ * doublings early with LL_ERROR_CANCELLED and leaves the layer unchanged. */
+LL_INTERNAL ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
+                                                const ll_expand_monitor *monitor);
+
+/* The doubling schedule of ll_layer_expand for nodes whose smallest |mu| is
+ * min_mu: the initial thickness tau0 and the count k with tau0 2^k = tau. */
+LL_INTERNAL void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings);
+
 #endif /* LL_LAYER_INTERNAL_H */

@@ -9,6 +9,7 @@
  * until a word differs. A grey stack built as RGB costs one channel.
  */
 #include "material.h"
+#include "layer_internal.h"
 #include "merl.h"
 #include "layerlab/ll_quad.h"
 
@@ -97,33 +98,39 @@ static ll_status word_failed(const build *b, size_t w, ll_status s)
                    word->column, ll_word_kind_name(word->kind), detail);
 }
 
-/* Doubling (ll_layer_expand) one step at a time, so that a long expansion
- * reports progress and can be cancelled: the expansion to tau / 2^k starts
- * from the same thin slab ll_layer_expand(tau) does and doubles 0 times;
- * the k homogeneous additions then double it to tau. */
+/* Progress of a doubling: the share of the medium's estimated cost that
+ * the finished Fourier orders represent. */
+typedef struct expand_progress {
+    build *b;
+    double start, cost;
+} expand_progress;
+
+static void report_expansion(double fraction, void *user)
+{
+    expand_progress *e = user;
+    e->b->done = e->start + fraction * e->cost;
+    report(e->b, "medium");
+}
+
+/* ll_layer_expand, reporting progress and honouring the cancel flag while
+ * the orders are doubled. */
 static ll_status expand_medium(build *b, ll_layer *l, double tau)
 {
-    double *mu = ll_alloc_array(b->n, sizeof(double)), min_mu = 1.0, step;
-    size_t i, k;
+    expand_progress e;
+    ll_expand_monitor monitor;
+    size_t k;
     ll_status s;
-    if (!mu)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory expanding a medium");
-    s = ll_layer_get_nodes(l, mu, NULL);
-    for (i = 0; i < b->n; ++i)
-        if (fabs(mu[i]) < min_mu)
-            min_mu = fabs(mu[i]);
-    free(mu);
-    k = tau > 0.0 ? ll_doubling_count(tau, min_mu) : 0;
-    if (s == LL_OK)
-        s = ll_layer_expand(l, ldexp(tau, -(int)k));
-    step = ll_cost_add(b->n, b->orders, ll_get_thread_count());
-    for (i = 0; i < k && s == LL_OK; ++i) {
-        s = check_cancel(b);
-        if (s == LL_OK)
-            s = ll_layer_add(l, l, l, 1);
-        b->done += step;
-        report(b, "medium");
-    }
+    double tau0;
+
+    ll_expand_schedule(tau, 1.0, &tau0, &k);
+    e.b = b;
+    e.start = b->done;
+    e.cost = (double)k * ll_cost_add(b->n, b->orders, ll_get_thread_count());
+    monitor.cancel = b->o.cancel;
+    monitor.progress = report_expansion;
+    monitor.user = &e;
+    s = ll_layer_expand_monitored(l, tau, &monitor);
+    b->done = e.start + e.cost;
     return s;
 }
 

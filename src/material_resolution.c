@@ -9,6 +9,7 @@
  * ll_heuristic_microfacet / ll_heuristic_henyey_greenstein).
  */
 #include "material.h"
+#include "layer_internal.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -182,8 +183,10 @@ double ll_cost_add(size_t n, size_t m, size_t threads)
 
 size_t ll_doubling_count(double tau, double min_mu)
 {
-    double tau0 = fmin(2.0 * min_mu, ldexp(1.0, -15));
-    return tau > tau0 ? (size_t)ceil(log2(tau / tau0)) : 0;
+    double tau0;
+    size_t k;
+    ll_expand_schedule(tau, min_mu, &tau0, &k);
+    return k;
 }
 
 double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
