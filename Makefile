@@ -20,6 +20,10 @@ LIBDIR  ?= $(PREFIX)/lib
 INCDIR  ?= $(PREFIX)/include
 BINDIR  ?= $(PREFIX)/bin
 PKGDIR  ?= $(LIBDIR)/pkgconfig
+DATADIR ?= $(PREFIX)/share/layerlab
+# Measured spectra of metals for `conductor eta=Au` (installed so that an
+# installed llbuild finds them; see docs/material-language.md).
+IOR_SRC ?= $(firstword $(wildcard ../shared/ior))
 
 BUILD   ?= build
 CC      ?= cc
@@ -159,11 +163,13 @@ install: all
 	install -m 644 $(STATIC) $(DESTDIR)$(LIBDIR)/
 	$(call write_pc,$(DESTDIR)$(PKGDIR)/layerlab.pc)
 	@# the tools find the library through their RUNPATH $$ORIGIN/../lib
+	if [ -n "$(IOR_SRC)" ]; then install -d $(DESTDIR)$(DATADIR)/ior && \
+	  install -m 644 $(IOR_SRC)/*.spd $(DESTDIR)$(DATADIR)/ior/; fi
 	for t in $(TOOLS); do install -m 755 $$t $(DESTDIR)$(BINDIR)/; done
 
 uninstall:
 	rm -f $(DESTDIR)$(LIBDIR)/liblayerlab.* $(DESTDIR)$(PKGDIR)/layerlab.pc $(DESTDIR)$(INCDIR)/layerlab.h
-	rm -rf $(DESTDIR)$(INCDIR)/layerlab
+	rm -rf $(DESTDIR)$(INCDIR)/layerlab $(DESTDIR)$(DATADIR)
 	for t in $(TOOL_NAMES); do rm -f $(DESTDIR)$(BINDIR)/$$t; done
 
 clean:
