@@ -131,8 +131,9 @@ LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, d
  * resolved, and directional albedos can then exceed 1 by any amount, most
  * at the nodes mu = +-1 (as in the original). At the resolution of
  * ll_heuristic_microfacet a non-absorbing dielectric with conserve_energy
- * keeps R + T = 1 to 1e-15 for eta = 1.5 and 1 / 1.05 .. 1.05, and within
- * 2e-3 for eta = 0.5 .. 10 (measured, alpha 0.05 .. 10).
+ * keeps R + T = 1 to 1e-15 for eta = 1.5 (measured for alpha 0.05 .. 10;
+ * also for eta = 0.95 and 1.05 at alpha 0.3 .. 10), and within 2e-3 for
+ * eta = 0.5 and 10.
  *
  * The azimuthal series are accurate to a few 1e-4 of each lobe's peak
  * (measured against direct integration of the BSDF; the original's to
