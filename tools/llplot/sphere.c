@@ -8,7 +8,8 @@
  * (pbrt-v3's FourierBSDF::Sample_f): its weight f cos / pdf is nearly
  * constant (within 0.5% for the rough gold test file), so the noise left is
  * that of the sky within the lobe. The delta key light is evaluated exactly.
- * Light that the BSDF transmits into the sphere is absorbed there.
+ * Light that a transmissive stack lets into the sphere is followed through
+ * it (the sphere is filled with what lies below the stack) until it leaves.
  *
  * Each pixel has its own random stream derived from (seed, pixel index), so
  * pictures are reproducible and independent of the thread count. The two
@@ -100,57 +101,115 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* The shading frame at a sphere point: tangents t, b, normal n, and the
- * direction to the camera in it (the camera looks along -z, so wo is
- * (0, 0, 1) in world space). */
-typedef struct shading_point {
-    double t[3], b[3], n[3], wo[3];
-} shading_point;
+/* The shading frame at a point of the unit sphere: tangents t, b, the
+ * outward normal n, and the position p (equal to n on a unit sphere). */
+typedef struct shading_frame {
+    double t[3], b[3], n[3];
+} shading_frame;
 
-static void shading_point_at(double sx, double sy, shading_point *p)
+static void shading_frame_at(const double p[3], shading_frame *f)
 {
-    p->n[0] = sx;
-    p->n[1] = sy;
-    p->n[2] = sqrt(1.0 - sx * sx - sy * sy);
-    frame_from_normal(p->n, p->t, p->b);
-    p->wo[0] = p->t[2];
-    p->wo[1] = p->b[2];
-    p->wo[2] = p->n[2];
+    int c;
+    for (c = 0; c < 3; ++c)
+        f->n[c] = p[c];
+    frame_from_normal(f->n, f->t, f->b);
 }
 
-/* Reflected environment light, one sample importance-sampled by the BSDF:
- * f cos / pdf times the sky radiance in the sampled direction. */
-static void shade_environment(const sphere_job *job, const shading_point *p, const double u[2],
-                              double out[3])
+static void to_local(const shading_frame *f, const double w[3], double out[3])
+{
+    out[0] = dot3(w, f->t);
+    out[1] = dot3(w, f->b);
+    out[2] = dot3(w, f->n);
+}
+
+static void to_world(const shading_frame *f, const double w[3], double out[3])
+{
+    int c;
+    for (c = 0; c < 3; ++c)
+        out[c] = f->t[c] * w[0] + f->b[c] * w[1] + f->n[c] * w[2];
+}
+
+/* Bounces inside the sphere before a path is abandoned (total internal
+ * reflection in a glass ball can keep light in for long; what is left
+ * after this many bounces is a fraction of a percent). */
+#define MAX_BOUNCES 8
+
+/* Environment light reflected toward the camera, one path importance-
+ * sampled by the BSDF: each bounce multiplies the throughput by f cos / pdf.
+ * A direction above the surface leaves to the sky. One below it enters the
+ * sphere, which is filled with whatever lies under the stack (air for a
+ * coated sheet, glass for a frosted-glass interface): the path crosses the
+ * sphere in a straight line and meets the stack again from below at the far
+ * side, where the BSDF's bottom half (R^b, T^bt) takes over. Opaque stacks
+ * never get there. The first bounce uses the stratified numbers u, later
+ * ones the pixel's random stream. */
+static void shade_environment(const sphere_job *job, const double hit[3], const double u[2],
+                              uint64_t *state, double out[3])
 {
     const llplot_source *s = job->source;
-    double wi[3], f[3], pdf = 0.0;
-    int c;
+    double p[3], d[3], throughput[3] = { 1.0, 1.0, 1.0 }, v[2];
+    int c, bounce;
     out[0] = out[1] = out[2] = 0.0;
-    if (ll_bsdf_sample_dir(s->bsdf, p->wo, u, LL_TRANSPORT_RADIANCE, s->basis_coeffs, wi, &pdf,
-                           f) == LL_OK &&
-        pdf > 0.0 && wi[2] > 0.0) {
-        double w_world[3], env[3];
+    for (c = 0; c < 3; ++c)
+        p[c] = hit[c];
+    /* The camera looks along -z. */
+    d[0] = 0.0;
+    d[1] = 0.0;
+    d[2] = -1.0;
+    v[0] = u[0];
+    v[1] = u[1];
+    for (bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
+        shading_frame f;
+        double wo[3], back[3], wi[3], w[3], fr[3], pdf = 0.0, env[3], t;
+        shading_frame_at(p, &f);
         for (c = 0; c < 3; ++c)
-            w_world[c] = p->t[c] * wi[0] + p->b[c] * wi[1] + p->n[c] * wi[2];
-        llplot_env_radiance(w_world, env);
+            back[c] = -d[c];
+        to_local(&f, back, wo);
+        if (ll_bsdf_sample_dir(s->bsdf, wo, v, LL_TRANSPORT_RADIANCE, s->basis_coeffs, wi, &pdf,
+                               fr) != LL_OK ||
+            !(pdf > 0.0))
+            return;
         for (c = 0; c < 3; ++c)
-            out[c] = f[c] * wi[2] / pdf * env[c];
+            throughput[c] *= fr[c] * fabs(wi[2]) / pdf;
+        to_world(&f, wi, w);
+        if (wi[2] > 0.0) {
+            llplot_env_radiance(w, env);
+            for (c = 0; c < 3; ++c)
+                out[c] = throughput[c] * env[c];
+            return;
+        }
+        if (!(throughput[0] > 0.0 || throughput[1] > 0.0 || throughput[2] > 0.0))
+            return;
+        /* Inside: the chord from p (|p| = 1) along w ends at p + t w with
+         * t = -2 p.w (positive, since w points inward). */
+        t = -2.0 * dot3(p, w);
+        for (c = 0; c < 3; ++c) {
+            p[c] += t * w[c];
+            d[c] = w[c];
+        }
+        t = sqrt(dot3(p, p));
+        for (c = 0; c < 3; ++c)
+            p[c] /= t;
+        v[0] = uniform01(state);
+        v[1] = uniform01(state);
     }
 }
 
-/* Reflected key light: a delta direction, evaluated exactly. */
-static void shade_key(const sphere_job *job, const shading_point *p, double out[3])
+/* Reflected key light: a delta direction, evaluated exactly. It is seen
+ * in reflection only (not through a transmissive sphere). */
+static void shade_key(const sphere_job *job, const double hit[3], double out[3])
 {
     const llplot_source *s = job->source;
-    double l[3], f[3];
+    const double camera[3] = { 0.0, 0.0, 1.0 };
+    double l[3], wo[3], f[3];
+    shading_frame frame;
     int c;
     out[0] = out[1] = out[2] = 0.0;
-    l[0] = dot3(job->key_dir, p->t);
-    l[1] = dot3(job->key_dir, p->b);
-    l[2] = dot3(job->key_dir, p->n);
+    shading_frame_at(hit, &frame);
+    to_local(&frame, job->key_dir, l);
+    to_local(&frame, camera, wo);
     if (l[2] > 0.0 &&
-        ll_bsdf_eval_dir(s->bsdf, p->wo, l, LL_TRANSPORT_RADIANCE, s->basis_coeffs, f) == LL_OK)
+        ll_bsdf_eval_dir(s->bsdf, wo, l, LL_TRANSPORT_RADIANCE, s->basis_coeffs, f) == LL_OK)
         for (c = 0; c < 3; ++c)
             out[c] = f[c] * l[2] * job->key_e[c];
 }
@@ -177,26 +236,27 @@ static void sphere_row(size_t y, void *ctx)
         double covered = 0.0, key_positions = 0.0;
         for (i = 0; i < job->spp; ++i) {
             double px = (double)x + uniform01(&state), py = (double)y + uniform01(&state);
-            double sx = (px - half) / radius, sy = (half - py) / radius, u[2], L[3];
+            double sx = (px - half) / radius, sy = (half - py) / radius, u[2], L[3], hit[3];
             int key = i % KEY_STRIDE == 0;
-            shading_point p;
             /* Positions off the sphere count, as zero, toward both
              * averages: the pixel value is premultiplied by coverage. */
             key_positions += key;
             if (sx * sx + sy * sy >= 1.0)
                 continue;
             covered += 1.0;
-            shading_point_at(sx, sy, &p);
+            hit[0] = sx;
+            hit[1] = sy;
+            hit[2] = sqrt(1.0 - sx * sx - sy * sy);
             u[0] = to_unit(sobol_dim1((uint32_t)i) ^ shift0);
             u[1] = to_unit(sobol_dim2((uint32_t)i) ^ shift1);
             /* A failed or degenerate sample counts as black rather than
              * poisoning the pixel. */
-            shade_environment(job, &p, u, L);
+            shade_environment(job, hit, u, &state, L);
             if (finite3(L))
                 for (c = 0; c < 3; ++c)
                     env_sum[c] += L[c];
             if (key) {
-                shade_key(job, &p, L);
+                shade_key(job, hit, L);
                 if (finite3(L))
                     for (c = 0; c < 3; ++c)
                         key_sum[c] += L[c];

@@ -466,6 +466,43 @@ static void test_material_input(void **state)
     (void)state;
 }
 
+/* A transmissive stack: light that enters the sphere must be followed
+ * through it (here a rough glass ball, which shows the sky through itself)
+ * rather than lost, which would leave only the few percent that the
+ * interface reflects. */
+static void test_sphere_transmissive(void **state)
+{
+    char in[4096], out[4096];
+    FILE *f;
+    exr_picture p;
+    double sum = 0.0;
+    int x, y, n = 0;
+    path_in_work(in, sizeof in, "glass.layers");
+    f = fopen(in, "w");
+    assert_non_null(f);
+    fputs("dielectric eta=1.5 alpha=0.3\n", f);
+    fclose(f);
+    path_in_work(out, sizeof out, "glass.exr");
+    assert_int_equal(run_llplot("--sphere", in, "-o", out, "--size", "24", "--spp", "8",
+                                "--nodes", "40", "--orders", "40", (char *)NULL),
+                     0);
+    read_exr(out, &p);
+    for (y = 0; y < 24; ++y)
+        for (x = 0; x < 24; ++x)
+            if (exr_at(&p, "A", x, y) == 1.0f) {
+                float g = exr_at(&p, "G", x, y);
+                assert_true(isfinite(g) && g >= 0.0f);
+                sum += g;
+                ++n;
+            }
+    free(p.data);
+    assert_true(n > 150);
+    print_message("rough glass ball: mean green radiance %.3f over %d pixels\n", sum / n, n);
+    /* The sky is about 0.5, the ground 0.07; reflection alone gives < 0.05. */
+    assert_true(sum / n > 0.15);
+    (void)state;
+}
+
 /* The polar data of a diffuse .bsdf: albedo/pi cos(theta_o) on both sides. */
 static void test_polar_exr_diffuse(void **state)
 {
@@ -663,6 +700,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_sphere_exr_diffuse),
         cmocka_unit_test(test_blocks_exr_diffuse),
         cmocka_unit_test(test_material_input),
+        cmocka_unit_test(test_sphere_transmissive),
         cmocka_unit_test(test_polar_exr_diffuse),
         cmocka_unit_test(test_png_outputs),
         cmocka_unit_test(test_sphere_reproducible),
