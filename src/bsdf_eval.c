@@ -97,6 +97,14 @@ double ll_bsdf_row_value(const ll_bsdf *b, const double *table, ptrdiff_t off_i,
     size_t n = b->n_nodes, nb = b->n_bases, k;
     double value = 0.0;
     int a;
+    if (nb == 1 && basis[0] == 1.0f) {
+        /* Untextured: the interpolation alone (spline weights outside the
+         * table are exactly 0, the entries they would read stay unread). */
+        for (a = 0; a < 4; ++a)
+            if (w_i[a] != 0.0)
+                value += w_i[a] * table[(size_t)(off_i + a) * n + o];
+        return value;
+    }
     for (a = 0; a < 4; ++a) {
         const double *entry;
         double sum = 0.0;

@@ -21,18 +21,20 @@
 
 void ll_bsdf_harmonics_start(ll_harmonics *h, double cos_phi, double sin_phi, int sine)
 {
-    double x[5];
-    int k;
-    x[0] = sine ? 0.0 : 1.0;
-    x[1] = sine ? sin_phi : cos_phi;
-    for (k = 2; k <= 4; ++k)
-        x[k] = 2.0 * cos_phi * x[k - 1] - x[k - 2];
-    /* cos is even and sin odd: x_{-j} = +-x_j. */
-    for (k = 0; k < 4; ++k) {
-        h->cur[k] = x[k];
-        h->prev[k] = sine ? -x[4 - k] : x[4 - k];
-    }
-    h->twice_cos4 = 2.0 * (2.0 * (2.0 * cos_phi * cos_phi - 1.0) * (2.0 * cos_phi * cos_phi - 1.0) - 1.0);
+    /* x_1 .. x_4 by the three-term recurrence; cos is even and sin odd,
+     * so x_{-j} = +-x_j. */
+    double c2 = 2.0 * cos_phi, x1 = sine ? sin_phi : cos_phi, x0 = sine ? 0.0 : 1.0;
+    double x2 = c2 * x1 - x0, x3 = c2 * x2 - x1, x4 = c2 * x3 - x2, sign = sine ? -1.0 : 1.0;
+    double cos2 = c2 * cos_phi - 1.0;
+    h->cur[0] = x0;
+    h->cur[1] = x1;
+    h->cur[2] = x2;
+    h->cur[3] = x3;
+    h->prev[0] = sign * x4;
+    h->prev[1] = sign * x3;
+    h->prev[2] = sign * x2;
+    h->prev[3] = sign * x1;
+    h->twice_cos4 = 2.0 * (2.0 * cos2 * cos2 - 1.0);
 }
 
 /* The chunk length rounded up to the recurrence's group of four (the

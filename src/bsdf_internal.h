@@ -41,7 +41,10 @@ struct ll_bsdf {
     double *cdf;                /* [(i * n + o) * n_bases + b]                 */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
-    float *coeffs;              /* [n_coeffs]                                  */
+    float *coeffs;              /* [n_coeffs + 4]: 4 zeros after the stored
+                                   ones, so that vector loads of a series'
+                                   last group (up to 3 values past its end)
+                                   stay inside the array                      */
     double *recip;              /* [max_order rounded up to 4] 1 / k, with 0 at
                                    k = 0 and beyond max_order                  */
     size_t n_buckets;           /* uniform buckets over [nodes[0], nodes[n-1]] */

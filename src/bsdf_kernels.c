@@ -137,71 +137,86 @@ LL_AVX2 static double hsum(__m256d v)
 
 LL_AVX2 static __m256d load4(const float *a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
 
-/* The first `rest` (1..3) floats at a, the other lanes 0: a masked load
- * never touches the masked-out memory, so no read passes the series. */
-LL_AVX2 static __m256d load_tail(const float *a, size_t rest)
+/* Lane masks keeping the first r values of a group of 4 (r = 0: all). */
+static const uint64_t ll_group_masks[4][4] = {
+    { ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0 },
+    { ~(uint64_t)0, 0, 0, 0 },
+    { ~(uint64_t)0, ~(uint64_t)0, 0, 0 },
+    { ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0, 0 },
+};
+
+/* The last group of a series: 4 values loaded, those past its end
+ * cleared. The load may read up to 3 floats past the series, which stay
+ * inside the coefficient array (padded by 4, bsdf_internal.h). */
+LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
 {
-    __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
-    __m128i mask = _mm_cmpgt_epi32(_mm_set1_epi32((int)rest), lanes);
-    return _mm256_cvtps_pd(_mm_maskload_ps(a, mask));
+    return _mm256_and_pd(load4(a), mask);
+}
+
+/* Weighted dot products of one stored series (channels `stride` apart)
+ * with h over m >= 1 values, added to the channel accumulators. */
+LL_AVX2 __attribute__((always_inline)) static inline void
+series_dot_avx2(const float *a, size_t stride, size_t n_channels,
+                                    const double *h, size_t m, double w, __m256d *acc0,
+                                    __m256d *acc1, __m256d *acc2)
+{
+    size_t last = (m - 1) & ~(size_t)3, j = 0;
+    __m256d mask = _mm256_castsi256_pd(
+        _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
+    __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
+    if (n_channels == 3) {
+        const float *r = a + stride, *b = a + 2 * stride;
+        __m256d s2 = _mm256_setzero_pd(), hv;
+        for (; j < last; j += 4) {
+            hv = _mm256_loadu_pd(h + j);
+            s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
+            s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
+            s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
+        }
+        hv = _mm256_loadu_pd(h + last);
+        s0 = _mm256_fmadd_pd(load_last(a + last, mask), hv, s0);
+        s1 = _mm256_fmadd_pd(load_last(r + last, mask), hv, s1);
+        s2 = _mm256_fmadd_pd(load_last(b + last, mask), hv, s2);
+        *acc1 = _mm256_fmadd_pd(s1, wv, *acc1);
+        *acc2 = _mm256_fmadd_pd(s2, wv, *acc2);
+    } else {
+        for (; j + 8 <= last; j += 8) {
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+            s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
+        }
+        if (j < last)
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+        s1 = _mm256_fmadd_pd(load_last(a + last, mask), _mm256_loadu_pd(h + last), s1);
+        s0 = _mm256_add_pd(s0, s1);
+    }
+    *acc0 = _mm256_fmadd_pd(s0, wv, *acc0);
 }
 
 /* The dot products of each stored series with h over its overlap with the
  * chunk, weighted, summed per channel. The accumulators stay in registers
  * across the series (an accumulator in memory would chain every series to
  * the previous one through a store and a load); h has room for the chunk
- * rounded up to 4 values, and the last partial group of a series is read
- * with a masked load. */
+ * rounded up to 4 values. */
 LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, size_t k0,
                                    size_t count, const double *h, double out[3])
 {
     __m256d acc0 = _mm256_setzero_pd(), acc1 = _mm256_setzero_pd(), acc2 = _mm256_setzero_pd();
     size_t p, basis, nb = s->n_bases;
     for (p = 0; p < s->count; ++p) {
-        size_t len = s->length[p], m, full, rest, stride = nb * len;
+        size_t len = s->length[p], m;
         if (len <= k0)
             continue;
         m = len - k0 < count ? len - k0 : count;
-        full = m & ~(size_t)3;
-        rest = m & 3;
+        if (nb == 1) {
+            series_dot_avx2(s->coeff[p] + k0, len, n_channels, h, m,
+                            s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
+            continue;
+        }
         for (basis = 0; basis < nb; ++basis) {
-            const float *a = s->coeff[p] + basis * len + k0;
             double w = s->weight[p] * (double)s->basis[basis];
-            __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
-            size_t j = 0;
-            if (w == 0.0)
-                continue;
-            if (n_channels == 3) {
-                const float *r = a + stride, *b = a + 2 * stride;
-                __m256d s2 = _mm256_setzero_pd();
-                for (; j < full; j += 4) {
-                    __m256d hv = _mm256_loadu_pd(h + j);
-                    s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
-                    s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
-                    s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
-                }
-                if (rest) {
-                    __m256d hv = _mm256_loadu_pd(h + j);
-                    s0 = _mm256_fmadd_pd(load_tail(a + j, rest), hv, s0);
-                    s1 = _mm256_fmadd_pd(load_tail(r + j, rest), hv, s1);
-                    s2 = _mm256_fmadd_pd(load_tail(b + j, rest), hv, s2);
-                }
-                acc1 = _mm256_fmadd_pd(s1, wv, acc1);
-                acc2 = _mm256_fmadd_pd(s2, wv, acc2);
-            } else {
-                for (; j + 8 <= full; j += 8) {
-                    s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
-                    s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
-                }
-                if (j < full) {
-                    s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
-                    j += 4;
-                }
-                if (rest)
-                    s1 = _mm256_fmadd_pd(load_tail(a + j, rest), _mm256_loadu_pd(h + j), s1);
-                s0 = _mm256_add_pd(s0, s1);
-            }
-            acc0 = _mm256_fmadd_pd(s0, wv, acc0);
+            if (w != 0.0)
+                series_dot_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h, m, w,
+                                &acc0, &acc1, &acc2);
         }
     }
     out[0] += hsum(acc0);

@@ -376,7 +376,7 @@ static ll_status allocate(ll_bsdf *b, const char *file)
     b->cdf = ll_alloc_array(cdf_count, sizeof *b->cdf);
     b->a0 = ll_alloc_array(cdf_count, sizeof *b->a0);
     b->pairs = ll_alloc_array(n2, sizeof *b->pairs);
-    b->coeffs = ll_alloc_array(b->n_coeffs, sizeof *b->coeffs);
+    b->coeffs = ll_calloc_array(b->n_coeffs + 4, sizeof *b->coeffs);
     /* Padded so that vector loops over whole groups of 4 stay inside. */
     b->recip = ll_alloc_array(b->max_order + 4, sizeof *b->recip);
     b->metadata = malloc(b->metadata_size + 1);

@@ -135,7 +135,7 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
      * and pdf compute for the returned direction: pdf_phi = f / (2 pi a_0)
      * (pbrt-v3's SampleFourier). */
     ll_bsdf_series_eval(&s, b->n_channels, cos(*phi_d), sums);
-    a0 = ll_bsdf_series_mean(&s);
+    a0 = ll_bsdf_series_mean(luminance);
     *pdf = pdf_mu * sums[0] / (2.0 * LL_PI * a0);
     if (!(*pdf > 0.0) || !ll_is_finite(*pdf)) {
         *pdf = 0.0;
