@@ -256,8 +256,8 @@ static ll_status compute_offsets(write_job *job)
         if (!ll_size_mul(job->length[k], block, &size) || !ll_size_add(total, size, &total) ||
             total > UINT32_MAX)
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                           "%s: more than 2^32 - 1 coefficients (lower the error goal's "
-                           "precision or the resolution)",
+                           "%s: more than 2^32 - 1 coefficients (raise error_goal or "
+                           "lower the resolution)",
                            job->fn);
     }
     job->n_coeffs = total;
