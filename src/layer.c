@@ -365,23 +365,28 @@ static ptrdiff_t direction_weights(const ll_layer *l, double mu, double other, d
     return negative ? offset : offset + (ptrdiff_t)h;
 }
 
-/* The azimuthal Fourier coefficients f_l of the interpolated BSDF. */
+/* The interpolated BSDF: for each Fourier order, the 4 x 4 spline stencil
+ * of weighted matrix entries around (mu_o, mu_i), summed with cos(k phi).
+ * The stencil's rows lie in one half of a column, so each of the four
+ * columns contributes through one stored run. */
 static double eval_point(const ll_layer *l, double mu_o, double mu_i, double phi_d)
 {
-    double wo[4], wi[4], result = 0.0, scale[4];
-    ptrdiff_t oo, oi;
+    double wo[4], wi[4], scale[4], result = 0.0;
+    ptrdiff_t oo, oi, row0;
     size_t h = l->n / 2, k;
-    int a, b;
+    int a, b, half_o, half_i;
     double c1, cos_prev, cos_cur;
 
     oo = direction_weights(l, mu_o, mu_i, wo);
     oi = direction_weights(l, mu_i, mu_o, wi);
-    /* Both indices stay within one half: a weight of a node beyond the end
-     * of the half is 0 by construction, so it is skipped below. */
+    /* Which half each stencil lies in; a weight of a node beyond the end
+     * of the half is 0 by construction and is skipped. */
+    half_o = oo >= (ptrdiff_t)h - 1;
+    half_i = oi >= (ptrdiff_t)h - 1;
+    row0 = oo - (half_o ? (ptrdiff_t)h : 0);
     for (b = 0; b < 4; ++b) {
-        ptrdiff_t col = oi + b;
-        ptrdiff_t half0 = oi < (ptrdiff_t)h - 1 ? 0 : (ptrdiff_t)h;
-        if (wi[b] == 0.0 || col < half0 || col >= half0 + (ptrdiff_t)h)
+        ptrdiff_t col = oi + b, c = col - (half_i ? (ptrdiff_t)h : 0);
+        if (wi[b] == 0.0 || c < 0 || c >= (ptrdiff_t)h)
             scale[b] = 0.0;
         else
             scale[b] = wi[b] / (fabs(l->nodes[col]) * l->weights[col]);
@@ -391,17 +396,24 @@ static double eval_point(const ll_layer *l, double mu_o, double mu_i, double phi
     cos_cur = 1.0;
     for (k = 0; k < l->m; ++k) {
         const ll_order *o = l->orders[k];
-        double sum = 0.0, next;
+        double next;
         if (o) {
-            for (a = 0; a < 4; ++a) {
-                ptrdiff_t row = oo + a;
-                ptrdiff_t half0 = oo < (ptrdiff_t)h - 1 ? 0 : (ptrdiff_t)h;
-                if (wo[a] == 0.0 || row < half0 || row >= half0 + (ptrdiff_t)h)
+            double sum = 0.0;
+            for (b = 0; b < 4; ++b) {
+                size_t seg;
+                ptrdiff_t lo, len;
+                const double *val;
+                if (scale[b] == 0.0)
                     continue;
-                for (b = 0; b < 4; ++b)
-                    if (scale[b] != 0.0)
-                        sum += wo[a] * scale[b] *
-                               ll_order_get(o, (size_t)row, (size_t)(oi + b));
+                seg = 2 * (size_t)(oi + b) + (size_t)half_o;
+                lo = (ptrdiff_t)o->lo[seg];
+                len = (ptrdiff_t)o->len[seg];
+                val = o->val + o->off[seg];
+                for (a = 0; a < 4; ++a) {
+                    ptrdiff_t r = row0 + a;
+                    if (wo[a] != 0.0 && r >= lo && r < lo + len)
+                        sum += wo[a] * scale[b] * val[r - lo];
+                }
             }
             result += sum * cos_cur * (k == 0 ? 0.5 : 1.0);
         }

@@ -83,6 +83,11 @@ typedef struct ll_order_builder ll_order_builder;
 LL_INTERNAL ll_status ll_order_builder_create(size_t n, ll_order_builder **out);
 LL_INTERNAL ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col,
                                                   const double *column, double drop);
+/* The same when the caller knows that rows outside [row_lo, row_hi) are zero
+ * (only that range is scanned). */
+LL_INTERNAL ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
+                                                        const double *column, size_t row_lo,
+                                                        size_t row_hi, double drop);
 /* Finish: *out = the order (NULL if all zero); frees the builder. */
 LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
 LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);

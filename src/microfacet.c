@@ -797,9 +797,15 @@ static ll_status layer_column(size_t col, void *ctx)
         for (k = 1; k < rows[0].len && s == LL_OK; ++k) {
             while (count > 0 && rows[count - 1].len <= k)
                 --count;
-            for (j = 0; j < count; ++j)
+            size_t lo = n, hi = 0;
+            for (j = 0; j < count; ++j) {
                 column[rows[j].row] = pool[rows[j].row * m + k] * factor;
-            s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
+                if (rows[j].row < lo)
+                    lo = rows[j].row;
+                if (rows[j].row + 1 > hi)
+                    hi = rows[j].row + 1;
+            }
+            s = ll_order_builder_set_column_range(job->builders[k], col, column, lo, hi, 0.0);
             for (j = 0; j < count; ++j)
                 column[rows[j].row] = 0.0;
         }

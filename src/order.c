@@ -340,14 +340,22 @@ void ll_order_builder_destroy(ll_order_builder *b)
     free(b);
 }
 
-ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col, const double *column,
-                                      double drop)
+ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
+                                            const double *column, size_t row_lo,
+                                            size_t row_hi, double drop)
 {
     size_t h = b->n / 2;
     int half;
     for (half = 0; half < 2; ++half) {
-        size_t s = 2 * col + (size_t)half, lo, len;
-        find_run(column + (size_t)half * h, h, drop, &lo, &len);
+        size_t s = 2 * col + (size_t)half, first = (size_t)half * h, lo = 0, len = 0;
+        /* Scan only the rows that may be non-zero: a sparse column of a
+         * high order costs its length, not n. */
+        size_t a = row_lo > first ? row_lo - first : 0;
+        size_t e = row_hi < first + h ? (row_hi > first ? row_hi - first : 0) : h;
+        if (a < e) {
+            find_run(column + first + a, e - a, drop, &lo, &len);
+            lo += a;
+        }
         free(b->seg[s]);
         b->seg[s] = NULL;
         b->lo[s] = (uint32_t)lo;
@@ -356,11 +364,17 @@ ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col, const dou
             b->seg[s] = malloc(len * sizeof(double));
             if (!b->seg[s])
                 return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory building an order");
-            memcpy(b->seg[s], column + (size_t)half * h + lo, len * sizeof(double));
+            memcpy(b->seg[s], column + first + lo, len * sizeof(double));
             b->len[s] = (uint32_t)len;
         }
     }
     return LL_OK;
+}
+
+ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col, const double *column,
+                                      double drop)
+{
+    return ll_order_builder_set_column_range(b, col, column, 0, b->n, drop);
 }
 
 ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out)
