@@ -100,10 +100,9 @@ void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense, ll_bsdf_seri
  * One pass: the integral's chunk holds phi for k = 0 and sin(k phi) / k
  * beyond. */
 static void series_integral(const ll_bsdf_series *s, const double *recip, int vector,
-                            double phi, double *F, double *f)
+                            double phi, double cos_phi, double sin_phi, double *F, double *f)
 {
     double cosines[LL_BSDF_CHUNK], sines[LL_BSDF_CHUNK];
-    double cos_phi = cos(phi), sin_phi = sin(phi);
     ll_harmonics hc, hs;
     size_t k0, j;
     *F = *f = 0.0;
@@ -134,6 +133,22 @@ static void series_integral(const ll_bsdf_series *s, const double *recip, int ve
     }
 }
 
+/* cos and sin of phi + d from those of phi, for |d| <= 1/5: Taylor series
+ * of cos d and sin d to the 10th/11th order (remainder below 1e-17), then
+ * the angle-addition formulas. A Newton step near convergence is small, and
+ * this costs a fraction of a libm sincos. */
+static void rotate(double *c, double *s, double d)
+{
+    double d2 = d * d;
+    double cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 *
+                                                                      (1.0 - d2 / 90.0))));
+    double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0 *
+                                                                          (1.0 - d2 / 110.0)))));
+    double c1 = *c * cd - *s * sd, s1 = *s * cd + *c * sd;
+    *c = c1;
+    *s = s1;
+}
+
 /* A first guess for the phi with F(phi) = u F(pi): the exact inverse for
  * the wrapped Cauchy (Poisson kernel) series a_k = 2 a_0 r^k that shares
  * a_0 and a_1 with the series,
@@ -154,7 +169,7 @@ static double initial_phi(const ll_bsdf_series *s, double a0, double u)
 int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
                           double *phi_out)
 {
-    double a0 = ll_bsdf_series_mean(s), lo = 0.0, hi = LL_PI, phi, F, f, target;
+    double a0 = ll_bsdf_series_mean(s), lo = 0.0, hi = LL_PI, phi, F, f, target, c, sn;
     int flip, it, vector = ll_bsdf_kernels_vector();
 
     if (!(a0 > 0.0) || !ll_is_finite(a0))
@@ -167,6 +182,8 @@ int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u
     if (u > 1.0) u = 1.0;
     target = u * a0 * LL_PI;
     phi = initial_phi(s, a0, u);
+    c = cos(phi);
+    sn = sin(phi);
 
     /* Newton-bisection for F(phi) = target: F(0) = 0 <= target <= F(pi) =
      * a0 pi, so [lo, hi] always brackets a root; a Newton step that leaves
@@ -176,7 +193,7 @@ int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u
      * convergence is quadratic, its error is far below that. */
     for (it = 0; it < LL_BSDF_PHI_ITERATIONS; ++it) {
         double step;
-        series_integral(s, recip, vector, phi, &F, &f);
+        series_integral(s, recip, vector, phi, c, sn, &F, &f);
         F -= target;
         if (F > 0.0)
             hi = phi;
@@ -187,11 +204,19 @@ int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u
         step = phi - F / f;
         if (step > lo && step < hi) {
             int done = fabs(step - phi) <= 1e-9;
+            if (fabs(step - phi) <= 0.2) {
+                rotate(&c, &sn, step - phi);
+            } else {
+                c = cos(step);
+                sn = sin(step);
+            }
             phi = step;
             if (done)
                 break;
         } else {
             phi = 0.5 * (lo + hi);
+            c = cos(phi);
+            sn = sin(phi);
         }
     }
     if (flip)
