@@ -184,9 +184,9 @@ static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t
         for (col = 0; col < n; ++col)
             for (half = 0; half < 2; ++half) {
                 size_t seg = 2 * col + (size_t)half;
-                for (j = 0; j < o->len[seg]; ++j) {
-                    size_t row = (size_t)half * h + o->lo[seg] + j, at = col * n + row;
-                    double v = o->val[o->off[seg] + j], ref;
+                for (j = 0; j < o->seg[seg].len; ++j) {
+                    size_t row = (size_t)half * h + o->seg[seg].lo + j, at = col * n + row;
+                    double v = o->val[o->seg[seg].off + j], ref;
                     if (!ll_is_finite(v))
                         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                                        "%s: the layer has a non-finite value (order %zu, "

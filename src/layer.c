@@ -406,9 +406,9 @@ static double eval_point(const ll_layer *l, double mu_o, double mu_i, double phi
                 if (scale[b] == 0.0)
                     continue;
                 seg = 2 * (size_t)(oi + b) + (size_t)half_o;
-                lo = (ptrdiff_t)o->lo[seg];
-                len = (ptrdiff_t)o->len[seg];
-                val = o->val + o->off[seg];
+                lo = (ptrdiff_t)o->seg[seg].lo;
+                len = (ptrdiff_t)o->seg[seg].len;
+                val = o->val + o->seg[seg].off;
                 for (a = 0; a < 4; ++a) {
                     ptrdiff_t r = row0 + a;
                     if (wo[a] != 0.0 && r >= lo && r < lo + len)

@@ -26,12 +26,17 @@
 #include "support.h"
 #include "layerlab/ll_layer.h"
 
+/* One run: rows [lo, lo + len) of a half column, values at val + off. The
+ * three fields sit together because evaluation reads them together. */
+typedef struct ll_segment {
+    uint32_t lo, len;
+    size_t off;
+} ll_segment;
+
 typedef struct ll_order {
     int refcount;      /* atomic */
     size_t n;          /* matrix size                                   */
-    uint32_t *lo;      /* [2n] first stored row within the half         */
-    uint32_t *len;     /* [2n] stored rows                              */
-    size_t *off;       /* [2n + 1] offsets into val                     */
+    ll_segment *seg;   /* [2n + 1]; seg[2n].off = values stored         */
     double *val;       /* stored values, segment after segment          */
 } ll_order;
 

@@ -18,9 +18,7 @@ void ll_order_release(ll_order *o)
 {
     if (!o || __atomic_sub_fetch(&o->refcount, 1, __ATOMIC_ACQ_REL) != 0)
         return;
-    free(o->lo);
-    free(o->len);
-    free(o->off);
+    free(o->seg);
     free(o->val);
     free(o);
 }
@@ -34,18 +32,14 @@ static ll_order *order_alloc(size_t n, size_t stored)
         goto fail;
     o->refcount = 1;
     o->n = n;
-    o->lo = ll_alloc_array(segs, sizeof *o->lo);
-    o->len = ll_alloc_array(segs, sizeof *o->len);
-    o->off = ll_alloc_array(segs + 1, sizeof *o->off);
+    o->seg = ll_calloc_array(segs + 1, sizeof *o->seg);
     o->val = ll_alloc_array(stored, sizeof *o->val);
-    if (!o->lo || !o->len || !o->off || !o->val)
+    if (!o->seg || !o->val)
         goto fail;
     return o;
 fail:
     if (o) {
-        free(o->lo);
-        free(o->len);
-        free(o->off);
+        free(o->seg);
         free(o->val);
         free(o);
     }
@@ -117,16 +111,16 @@ ll_status ll_order_from_blocks(const double *const blocks[4], size_t h, double d
     for (col = 0; col < n; ++col) {
         for (half = 0; half < 2; ++half) {
             size_t s = 2 * col + (size_t)half;
-            o->lo[s] = (uint32_t)lo[s];
-            o->len[s] = (uint32_t)len[s];
-            o->off[s] = total;
+            o->seg[s].lo = (uint32_t)lo[s];
+            o->seg[s].len = (uint32_t)len[s];
+            o->seg[s].off = total;
             if (len[s])
                 memcpy(o->val + total, block_column(blocks, h, col, half) + lo[s],
                        len[s] * sizeof(double));
             total += len[s];
         }
     }
-    o->off[2 * n] = total;
+    o->seg[2 * n].off = total;
     free(lo);
     free(len);
     *out = o;
@@ -179,8 +173,8 @@ int ll_order_block_to_dense(const ll_order *o, size_t n, int block, double *dens
     block_layout(block, h, &col0, &half);
     for (c = 0; c < h; ++c) {
         size_t s = 2 * (col0 + c) + (size_t)half;
-        if (o->len[s]) {
-            memcpy(dense + c * h + o->lo[s], o->val + o->off[s], o->len[s] * sizeof(double));
+        if (o->seg[s].len) {
+            memcpy(dense + c * h + o->seg[s].lo, o->val + o->seg[s].off, o->seg[s].len * sizeof(double));
             any = 1;
         }
     }
@@ -197,9 +191,9 @@ void ll_order_to_dense(const ll_order *o, size_t n, double *dense)
     for (col = 0; col < n; ++col)
         for (half = 0; half < 2; ++half) {
             size_t s = 2 * col + (size_t)half;
-            if (o->len[s])
-                memcpy(dense + col * n + (size_t)half * h + o->lo[s], o->val + o->off[s],
-                       o->len[s] * sizeof(double));
+            if (o->seg[s].len)
+                memcpy(dense + col * n + (size_t)half * h + o->seg[s].lo, o->val + o->seg[s].off,
+                       o->seg[s].len * sizeof(double));
         }
 }
 
@@ -212,7 +206,7 @@ int ll_order_block_is_zero(const ll_order *o, int block)
     h = o->n / 2;
     block_layout(block, h, &col0, &half);
     for (c = 0; c < h; ++c)
-        if (o->len[2 * (col0 + c) + (size_t)half])
+        if (o->seg[2 * (col0 + c) + (size_t)half].len)
             return 0;
     return 1;
 }
@@ -227,12 +221,12 @@ double ll_order_get(const ll_order *o, size_t row, size_t col)
     half = row >= h;
     r = half ? row - h : row;
     s = 2 * col + (size_t)half;
-    if (r < o->lo[s] || r >= (size_t)o->lo[s] + o->len[s])
+    if (r < o->seg[s].lo || r >= (size_t)o->seg[s].lo + o->seg[s].len)
         return 0.0;
-    return o->val[o->off[s] + (r - o->lo[s])];
+    return o->val[o->seg[s].off + (r - o->seg[s].lo)];
 }
 
-size_t ll_order_stored(const ll_order *o) { return o ? o->off[2 * o->n] : 0; }
+size_t ll_order_stored(const ll_order *o) { return o ? o->seg[2 * o->n].off : 0; }
 
 ll_status ll_order_reversed(const ll_order *o, ll_order **out)
 {
@@ -255,14 +249,14 @@ ll_status ll_order_reversed(const ll_order *o, ll_order **out)
             size_t src_col = col < h ? col + h : col - h;
             for (half = 0; half < 2; ++half) {
                 size_t s = 2 * col + (size_t)half, t = 2 * src_col + (size_t)(1 - half);
-                r->lo[s] = o->lo[t];
-                r->len[s] = o->len[t];
-                r->off[s] = total;
-                memcpy(r->val + total, o->val + o->off[t], o->len[t] * sizeof(double));
-                total += o->len[t];
+                r->seg[s].lo = o->seg[t].lo;
+                r->seg[s].len = o->seg[t].len;
+                r->seg[s].off = total;
+                memcpy(r->val + total, o->val + o->seg[t].off, o->seg[t].len * sizeof(double));
+                total += o->seg[t].len;
             }
         }
-        r->off[2 * n] = total;
+        r->seg[2 * n].off = total;
     }
     *out = r;
     return LL_OK;
@@ -278,22 +272,22 @@ ll_status ll_order_identity(size_t n, ll_order **out)
     for (col = 0; col < n; ++col) {
         /* T blocks: column col < h has its diagonal in half 0, else half 1. */
         size_t s_t = 2 * col + (col < h ? 0 : 1), s_r = 2 * col + (col < h ? 1 : 0);
-        o->lo[s_t] = (uint32_t)(col < h ? col : col - h);
-        o->len[s_t] = 1;
-        o->lo[s_r] = 0;
-        o->len[s_r] = 0;
+        o->seg[s_t].lo = (uint32_t)(col < h ? col : col - h);
+        o->seg[s_t].len = 1;
+        o->seg[s_r].lo = 0;
+        o->seg[s_r].len = 0;
     }
     for (col = 0; col < 2 * n; ++col)
-        o->off[col] = 0;
+        o->seg[col].off = 0;
     {
         size_t total = 0, s;
         for (s = 0; s < 2 * n; ++s) {
-            o->off[s] = total;
-            if (o->len[s])
+            o->seg[s].off = total;
+            if (o->seg[s].len)
                 o->val[total] = 1.0;
-            total += o->len[s];
+            total += o->seg[s].len;
         }
-        o->off[2 * n] = total;
+        o->seg[2 * n].off = total;
     }
     *out = o;
     return LL_OK;
@@ -395,14 +389,14 @@ ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out)
     }
     total = 0;
     for (s = 0; s < segs; ++s) {
-        o->lo[s] = b->len[s] ? b->lo[s] : 0;
-        o->len[s] = b->len[s];
-        o->off[s] = total;
+        o->seg[s].lo = b->len[s] ? b->lo[s] : 0;
+        o->seg[s].len = b->len[s];
+        o->seg[s].off = total;
         if (b->len[s])
             memcpy(o->val + total, b->seg[s], b->len[s] * sizeof(double));
         total += b->len[s];
     }
-    o->off[segs] = total;
+    o->seg[segs].off = total;
     ll_order_builder_destroy(b);
     *out = o;
     return LL_OK;
