@@ -264,7 +264,6 @@ ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *ou
                        int homogeneous)
 {
     add_job job;
-    size_t k;
     ll_status s;
 
     s = ll_layer_check_compatible(top, bottom, "ll_layer_add");
@@ -279,15 +278,7 @@ ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *ou
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
     s = ll_parallel_for(top->m, add_one_order, &job);
-    if (s != LL_OK) {
-        for (k = 0; k < top->m; ++k)
-            ll_order_release(job.result[k]);
-        free(job.result);
-        return s;
-    }
-    ll_layer_replace_orders(out, job.result);
-    free(job.result);
-    return LL_OK;
+    return ll_layer_commit_orders(out, job.result, s);
 }
 
 ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top)
@@ -426,7 +417,7 @@ ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
 {
     expand_job job;
     double min_mu = 1.0;
-    size_t i, k;
+    size_t i;
     ll_status s;
 
     if (!layer)
@@ -451,15 +442,7 @@ ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
     s = ll_parallel_for(layer->m, expand_one_order, &job);
-    if (s != LL_OK) {
-        for (k = 0; k < layer->m; ++k)
-            ll_order_release(job.result[k]);
-        free(job.result);
-        return s;
-    }
-    ll_layer_replace_orders(layer, job.result);
-    free(job.result);
-    return LL_OK;
+    return ll_layer_commit_orders(layer, job.result, s);
 }
 
 ll_status ll_layer_expand(ll_layer *layer, double tau)

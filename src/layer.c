@@ -195,6 +195,19 @@ void ll_layer_replace_orders(ll_layer *layer, ll_order **new_orders)
     }
 }
 
+ll_status ll_layer_commit_orders(ll_layer *layer, ll_order **new_orders, ll_status status)
+{
+    size_t k;
+    if (status == LL_OK) {
+        ll_layer_replace_orders(layer, new_orders);
+    } else {
+        for (k = 0; k < layer->m; ++k)
+            ll_order_release(new_orders[k]);
+    }
+    free(new_orders);
+    return status;
+}
+
 ll_status ll_layer_check_compatible(const ll_layer *a, const ll_layer *b, const char *fn)
 {
     if (!a || !b)
@@ -237,15 +250,7 @@ ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_builder **builder
             ll_order_builder_destroy(builders[k]);
         builders[k] = NULL;
     }
-    if (s != LL_OK) {
-        for (k = 0; k < m; ++k)
-            ll_order_release(orders[k]);
-        free(orders);
-        return s;
-    }
-    ll_layer_replace_orders(layer, orders);
-    free(orders);
-    return LL_OK;
+    return ll_layer_commit_orders(layer, orders, s);
 }
 
 /* ---------------------------------------------------------------- words */
@@ -332,15 +337,7 @@ ll_status ll_layer_reverse(ll_layer *layer)
         else
             s = ll_order_reversed(layer->orders[k], &orders[k]);
     }
-    if (s != LL_OK) {
-        for (k = 0; k < m; ++k)
-            ll_order_release(orders[k]);
-        free(orders);
-        return s;
-    }
-    ll_layer_replace_orders(layer, orders);
-    free(orders);
-    return LL_OK;
+    return ll_layer_commit_orders(layer, orders, s);
 }
 
 /* -------------------------------------------------------------- reading */

@@ -101,6 +101,11 @@ LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);
 /* Replace all orders of layer with new_orders[0..m-1] (takes ownership of
  * the references; releases the old ones). */
 LL_INTERNAL void ll_layer_replace_orders(ll_layer *layer, ll_order **new_orders);
+/* The end of every whole-layer computation: on success (status LL_OK) the
+ * new orders replace the layer's; on failure they are released and the
+ * layer stays as it was. Frees the array either way; returns status. */
+LL_INTERNAL ll_status ll_layer_commit_orders(ll_layer *layer, ll_order **new_orders,
+                                             ll_status status);
 /* Check that two layers can be combined (same n, m, nodes); message names fn. */
 LL_INTERNAL ll_status ll_layer_check_compatible(const ll_layer *a, const ll_layer *b,
                                                 const char *fn);

@@ -159,16 +159,9 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     job.forward = albedo * chi[K];
     job.diag = diag;
     s = ll_parallel_for(layer->m, medium_order, &job);
-    if (s == LL_OK) {
-        ll_layer_replace_orders(layer, job.result);
-        free(job.result);
-        job.result = NULL;
-    }
+    s = ll_layer_commit_orders(layer, job.result, s);
+    job.result = NULL;
 done:
-    if (job.result && s != LL_OK) {
-        for (k = 0; k < layer->m; ++k)
-            ll_order_release(job.result[k]);
-    }
     free(job.result);
     free(moment);
     free(diag);
