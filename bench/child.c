@@ -111,7 +111,8 @@ int bench_run_child(char *const argv[], char *const env[], const char *prefix,
                   (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
     result->peak_rss_mib = (double)ru.ru_maxrss / 1024.0; /* Linux: KiB */
     result->ok = WIFEXITED(result->status) && WEXITSTATUS(result->status) == 0;
-    parse_output(output, prefix, store);
+    if (prefix)
+        parse_output(output, prefix, store);
     free(output);
     return result->ok;
 }

@@ -19,8 +19,8 @@ typedef struct bench_child_result {
 /* Run argv[0] (a path) with arguments argv (NULL-terminated). env: extra
  * "NAME=value" settings for the child (NULL-terminated list, or NULL).
  * Protocol lines of its stdout are stored with ids and keys prefixed by
- * prefix; other lines are ignored. stderr is passed through. Returns
- * result->ok. */
+ * prefix (NULL: its output is not kept); other lines are ignored. stderr
+ * is passed through. Returns result->ok. */
 int bench_run_child(char *const argv[], char *const env[], const char *prefix,
                     bench_store *store, bench_child_result *result);
 

@@ -150,35 +150,49 @@ static void run_recipes(const config *cfg, bench_store *store)
         }
 }
 
-/* The same recipes built by another implementation (--original). */
-static void run_original(const config *cfg, bench_store *store)
+/* One timed run of an executable of the --original directory, if present:
+ * adds original.<name>.wall, .cpu and .peak_rss. */
+static void run_original_program(const config *cfg, bench_store *store, const char *name,
+                                 size_t run)
 {
     char path[1024], id[160];
+    char *argv[2];
+    bench_child_result res;
+    path_join(path, sizeof path, cfg->original_dir, name);
+    if (access(path, X_OK) != 0)
+        return;
+    argv[0] = path;
+    argv[1] = NULL;
+    fprintf(stderr, "bench: original %s, run %zu of %zu\n", name, run + 1, cfg->runs);
+    if (!bench_run_child(argv, NULL, NULL, store, &res)) {
+        child_failed(store, path, &res);
+        return;
+    }
+    snprintf(id, sizeof id, "original.%s.wall", name);
+    bench_store_add(store, id, "s", res.wall);
+    snprintf(id, sizeof id, "original.%s.cpu", name);
+    bench_store_add(store, id, "s", res.cpu);
+    snprintf(id, sizeof id, "original.%s.peak_rss", name);
+    bench_store_add(store, id, "MiB", res.peak_rss_mib);
+}
+
+/* The same recipes built by another implementation (--original): for each
+ * recipe NAME the executable NAME, and optionally NAME.preamble, which runs
+ * only what that recipe does before it builds any layer (for the original:
+ * the Python interpreter, imports and the scipy integration of gold's
+ * index), so that the comparison can be read with and without it. */
+static void run_original(const config *cfg, bench_store *store)
+{
+    char name[160];
     size_t run, r;
     if (!cfg->original_dir)
         return;
     record_load(store, "original");
     for (run = 0; run < cfg->runs; ++run)
         for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
-            const char *name = bench_recipes[r].name;
-            char *argv[2];
-            bench_child_result res;
-            path_join(path, sizeof path, cfg->original_dir, name);
-            if (access(path, X_OK) != 0)
-                continue;
-            argv[0] = path;
-            argv[1] = NULL;
-            fprintf(stderr, "bench: original %s, run %zu of %zu\n", name, run + 1, cfg->runs);
-            if (!bench_run_child(argv, NULL, "original.ignored.", store, &res)) {
-                child_failed(store, path, &res);
-                continue;
-            }
-            snprintf(id, sizeof id, "original.%s.wall", name);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "original.%s.cpu", name);
-            bench_store_add(store, id, "s", res.cpu);
-            snprintf(id, sizeof id, "original.%s.peak_rss", name);
-            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            run_original_program(cfg, store, bench_recipes[r].name, run);
+            snprintf(name, sizeof name, "%s.preamble", bench_recipes[r].name);
+            run_original_program(cfg, store, name, run);
         }
 }
 
@@ -187,6 +201,7 @@ static void run_original(const config *cfg, bench_store *store)
 static void run_scaling(const config *cfg, bench_store *store)
 {
     char recipe_bin[1024], out_path[1024], threads_arg[32], omp_env[64], blas_env[64], id[160];
+    char prefix[96];
     size_t run, t;
     path_join(recipe_bin, sizeof recipe_bin, cfg->bin_dir, "recipe");
     path_join(out_path, sizeof out_path, cfg->work_dir, "scaling.bsdf");
@@ -208,7 +223,8 @@ static void run_scaling(const config *cfg, bench_store *store)
             env[2] = NULL;
             fprintf(stderr, "bench: coated-gold at %zu thread(s), run %zu of %zu\n",
                     cfg->threads[t], run + 1, cfg->runs);
-            if (!bench_run_child(argv, env, "scaling.ignored.", store, &res)) {
+            snprintf(prefix, sizeof prefix, "scaling.coated-gold.t%zu.", cfg->threads[t]);
+            if (!bench_run_child(argv, env, prefix, store, &res)) {
                 child_failed(store, "scaling", &res);
                 return;
             }

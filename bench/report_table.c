@@ -86,6 +86,7 @@ static void print_recipes(FILE *out, const bench_store *s)
     for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
         const char *name = bench_recipes[r].name;
         bench_stats ow = stats_of(s, "original.%s.wall", name);
+        bench_stats pre = stats_of(s, "original.%s.preamble.wall", name);
         fprintf(out, "%-20s %-24s %-24s %-24s %-20s\n", name,
                 format_stats(a, sizeof a, stats_of(s, "recipe.%s.wall", name)),
                 format_stats(b, sizeof b, stats_of(s, "recipe.%s.cpu", name)),
@@ -100,12 +101,24 @@ static void print_recipes(FILE *out, const bench_store *s)
         }
         fputc('\n', out);
         if (ow.count) {
+            bench_stats oc = stats_of(s, "original.%s.cpu", name);
+            bench_stats ours_w = stats_of(s, "recipe.%s.wall", name);
+            bench_stats ours_c = stats_of(s, "recipe.%s.cpu", name);
             fprintf(out, "%-20s original, side by side: wall %s", "",
                     format_stats(a, sizeof a, ow));
-            fprintf(out, "  CPU %s", format_stats(b, sizeof b,
-                                                  stats_of(s, "original.%s.cpu", name)));
+            fprintf(out, "  CPU %s", format_stats(b, sizeof b, oc));
             fprintf(out, "  peak MiB %s\n",
                     format_stats(c, sizeof c, stats_of(s, "original.%s.peak_rss", name)));
+            format_value(a, sizeof a, ow.median / ours_w.median);
+            format_value(b, sizeof b, oc.median / ours_c.median);
+            fprintf(out, "%-20s   speedup: wall %sx, CPU %sx", "", a, b);
+            if (pre.count) {
+                format_value(a, sizeof a, (ow.median - pre.median) / ours_w.median);
+                format_value(c, sizeof c, pre.median);
+                fprintf(out, ", wall without its preamble (%s s: interpreter, imports, IOR) "
+                             "%sx", c, a);
+            }
+            fputc('\n', out);
         } else {
             format_value(a, sizeof a, bench_recipes[r].original_wall_s);
             format_value(b, sizeof b, bench_recipes[r].original_rss_mib);
