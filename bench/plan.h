@@ -9,7 +9,7 @@
 
 #define BENCH_RECIPE_COUNT 3
 #define BENCH_ADD_SIZE_COUNT 3
-#define BENCH_STAGE_COUNT 5
+#define BENCH_STAGE_COUNT 6
 #define BENCH_EVAL_FUNCTION_COUNT 3
 
 typedef struct bench_recipe_ref {
@@ -27,8 +27,9 @@ static const bench_recipe_ref bench_recipes[BENCH_RECIPE_COUNT] = {
 static const size_t bench_add_sizes[BENCH_ADD_SIZE_COUNT] = { 200, 500, 1000 };
 
 /* Stage names as the recipe program reports them (bench/recipe.c). */
-static const char *const bench_stages[BENCH_STAGE_COUNT] = { "setup", "interfaces", "media",
-                                                             "adding", "writing" };
+static const char *const bench_stages[BENCH_STAGE_COUNT] = {
+    "setup", "interfaces", "media", "expanding", "adding", "writing"
+};
 
 typedef struct bench_eval_ref {
     const char *function;     /* metric suffix                          */

@@ -6,7 +6,8 @@
  *
  *     setup       quadrature and layer creation
  *     interfaces  ll_layer_set_microfacet / ll_layer_set_diffuse
- *     media       ll_layer_set_henyey_greenstein + ll_layer_expand
+ *     media       ll_layer_set_henyey_greenstein (the phase matrices)
+ *     expanding   ll_layer_expand (doubling to the optical thickness)
  *     adding      ll_layer_add_to_top
  *     writing     ll_bsdf_write
  *
@@ -20,10 +21,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { STAGE_SETUP, STAGE_INTERFACES, STAGE_MEDIA, STAGE_ADDING, STAGE_WRITING, STAGE_COUNT };
+enum {
+    STAGE_SETUP,
+    STAGE_INTERFACES,
+    STAGE_MEDIA,
+    STAGE_EXPANDING,
+    STAGE_ADDING,
+    STAGE_WRITING,
+    STAGE_COUNT
+};
 
-static const char *const stage_names[STAGE_COUNT] = { "setup", "interfaces", "media",
-                                                      "adding", "writing" };
+static const char *const stage_names[STAGE_COUNT] = { "setup",     "interfaces", "media",
+                                                      "expanding", "adding",     "writing" };
 
 typedef enum { BASE_GOLD, BASE_DIFFUSE } base_kind;
 
@@ -120,6 +129,8 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
             stage_begin(clk, STAGE_MEDIA);
             bench_check(ll_layer_set_henyey_greenstein(medium, medium_albedo[c], medium_g),
                         "ll_layer_set_henyey_greenstein");
+            stage_end(clk);
+            stage_begin(clk, STAGE_EXPANDING);
             bench_check(ll_layer_expand(medium, medium_tau), "ll_layer_expand");
             stage_end(clk);
             stage_begin(clk, STAGE_ADDING);
