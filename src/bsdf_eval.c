@@ -6,36 +6,8 @@
  */
 #include "bsdf_internal.h"
 #include "bsdf_format.h"
-#include "spline.h"
 
 #include <math.h>
-
-int ll_bsdf_weights(const ll_bsdf *b, double mu, ptrdiff_t *offset, double w[4])
-{
-    /* The nodes were validated at open (ascending, a value at most twice,
-     * distinct end pairs), so no interval used here has zero width. */
-    const double *x = b->nodes;
-    size_t n = b->n_nodes, k, first, last;
-    if (!(mu >= x[0] && mu <= x[n - 1]))
-        return 0;
-    k = (size_t)((mu - x[0]) * b->bucket_scale);
-    if (k >= b->n_buckets)
-        k = b->n_buckets - 1;
-    first = b->bucket_first[k];
-    last = b->bucket_last[k];
-    /* If mu lies in the intervals first .. last (rounding in k aside), the
-     * nodes first-1 .. last+2 hold everything the spline weights read, and
-     * on them the search and the arithmetic are exactly the full ones (the
-     * end conditions hold in both or in neither). */
-    if (x[first] <= mu && (mu < x[last + 1] || last + 2 == n)) {
-        size_t s0 = first > 0 ? first - 1 : 0, e = last + 2 < n ? last + 2 : n - 1;
-        if (ll_spline_weights(x + s0, e - s0 + 1, mu, offset, w, 0)) {
-            *offset += (ptrdiff_t)s0;
-            return 1;
-        }
-    }
-    return ll_spline_weights(x, n, mu, offset, w, 0);
-}
 
 int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                             double mu_o, const float *basis, ll_bsdf_series *s)

@@ -25,7 +25,7 @@ void ll_bsdf_free(ll_bsdf *b)
     free(b->coeffs);
     free(b->recip);
     free(b->bucket_first);
-    free(b->bucket_last);
+    free(b->intervals);
     free(b->metadata);
     free(b);
 }

@@ -20,6 +20,13 @@ typedef struct ll_bsdf_pair {
     uint32_t length;  /* series length (0 = the BSDF is zero there)        */
 } ll_bsdf_pair;
 
+/* One spline interval [x0, x0 + 1 / inv_width] of the nodes, with the
+ * difference-quotient factors of its end derivatives (0 at the ends of the
+ * node range, where the differences are one-sided). */
+typedef struct ll_bsdf_interval {
+    double x0, inv_width, f0, f1;
+} ll_bsdf_interval;
+
 struct ll_bsdf {
     int refcount;               /* atomic; the object is immutable otherwise   */
     size_t n_nodes;
@@ -41,16 +48,17 @@ struct ll_bsdf {
     double *cdf;                /* [(i * n + o) * n_bases + b]                 */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
-    float *coeffs;              /* [n_coeffs + 4]: 4 zeros after the stored
-                                   ones, so that vector loads of a series'
-                                   last group (up to 3 values past its end)
-                                   stay inside the array                      */
+    double *coeffs;             /* [n_coeffs + 4] as double (the inner loops
+                                   then need no conversions; twice the file's
+                                   bytes), then 4 zeros, so that vector loads
+                                   of a series' last group (up to 3 values past
+                                   its end) stay inside the array             */
     double *recip;              /* [max_order rounded up to 4] 1 / k, with 0 at
                                    k = 0 and beyond max_order                  */
+    ll_bsdf_interval *intervals;/* [n_nodes - 1] spline constants (bsdf_spline.c) */
     size_t n_buckets;           /* uniform buckets over [nodes[0], nodes[n-1]] */
     double bucket_scale;        /* n_buckets / (nodes[n-1] - nodes[0])         */
-    uint32_t *bucket_first;     /* [n_buckets] spline interval at the bucket's  */
-    uint32_t *bucket_last;      /* start and at its end (ll_find_interval)      */
+    uint32_t *bucket_first;     /* [n_buckets] interval at the bucket's start  */
     char *metadata;             /* NUL-terminated copy                         */
     size_t metadata_size;
 };
@@ -63,7 +71,7 @@ struct ll_bsdf {
 #define LL_BSDF_SERIES_MAX 16
 typedef struct ll_bsdf_series {
     size_t count;
-    const float *coeff[LL_BSDF_SERIES_MAX];
+    const double *coeff[LL_BSDF_SERIES_MAX];
     uint32_t length[LL_BSDF_SERIES_MAX];
     double weight[LL_BSDF_SERIES_MAX];
     uint32_t max_length;
@@ -79,11 +87,12 @@ LL_INTERNAL void ll_bsdf_free(ll_bsdf *b);
 /* Basis weight used when an untextured file is evaluated without any. */
 LL_INTERNAL extern const float ll_bsdf_unit_basis[1];
 
-/* Spline weights of mu against the file's nodes (pbrt-v3's
- * CatmullRomWeights). 0 if mu is outside the nodes' range or NaN. The
- * interval search starts from a bucket table, with exactly the result of
- * a search over all nodes. */
+/* Spline weights of mu against the file's nodes (bsdf_spline.c): those of
+ * ll_spline_weights (pbrt-v3's CatmullRomWeights) from constants prepared
+ * at open. 0 if mu is outside the nodes' range or NaN. */
 LL_INTERNAL int ll_bsdf_weights(const ll_bsdf *b, double mu, ptrdiff_t *offset, double w[4]);
+/* Fill b->intervals, b->bucket_* from b->nodes (validated). */
+LL_INTERNAL void ll_bsdf_spline_prepare(ll_bsdf *b);
 
 /* Gather the series of (mu_i, mu_o) into s; 0 if either cosine is out of
  * range (then the BSDF is zero there). basis: n_bases weights. */
@@ -145,7 +154,7 @@ LL_INTERNAL int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *rec
 LL_INTERNAL int ll_bsdf_kernels_vector(void);
 LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels,
                                    size_t k0, size_t count, const double *h, double out[3]);
-LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w,
+LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w,
                                     size_t m);
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,

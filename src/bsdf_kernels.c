@@ -1,6 +1,6 @@
 /*
  * The inner loops of .bsdf evaluation and sampling: dot products of stored
- * Fourier coefficients (float) with a chunk of harmonics cos(k phi) or
+ * Fourier coefficients with a chunk of harmonics cos(k phi) or
  * sin(k phi) / k (double), weighted sums of stored series, and the series
  * and its integral in one pass for sampling phi.
  *
@@ -21,18 +21,18 @@
 /* ------------------------------------------------------------- portable */
 
 /* Four partial sums: one accumulator would be a chain of dependent adds. */
-static double dot_float(const float *a, const double *h, size_t m)
+static double dot_portable(const double *a, const double *h, size_t m)
 {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
     size_t j = 0;
     for (; j + 4 <= m; j += 4) {
-        s0 += (double)a[j] * h[j];
-        s1 += (double)a[j + 1] * h[j + 1];
-        s2 += (double)a[j + 2] * h[j + 2];
-        s3 += (double)a[j + 3] * h[j + 3];
+        s0 += a[j] * h[j];
+        s1 += a[j + 1] * h[j + 1];
+        s2 += a[j + 2] * h[j + 2];
+        s3 += a[j + 3] * h[j + 3];
     }
     for (; j < m; ++j)
-        s0 += (double)a[j] * h[j];
+        s0 += a[j] * h[j];
     return (s0 + s1) + (s2 + s3);
 }
 
@@ -50,7 +50,7 @@ static void dot_chunk_portable(const ll_bsdf_series *s, size_t n_channels, size_
             if (w == 0.0)
                 continue;
             for (c = 0; c < n_channels; ++c)
-                out[c] += w * dot_float(s->coeff[p] + (c * nb + basis) * len + k0, h, m);
+                out[c] += w * dot_portable(s->coeff[p] + (c * nb + basis) * len + k0, h, m);
         }
     }
 }
@@ -88,11 +88,11 @@ static void harmonics_next_portable(ll_harmonics *h, size_t count, double *restr
     h->prev[3] = p3;
 }
 
-static void add_scaled_portable(double *acc, const float *a, double w, size_t m)
+static void add_scaled_portable(double *acc, const double *a, double w, size_t m)
 {
     size_t j;
     for (j = 0; j < m; ++j)
-        acc[j] += w * (double)a[j];
+        acc[j] += w * a[j];
 }
 
 static void integral_portable(const double *a, const double *recip, size_t n4,
@@ -135,7 +135,7 @@ LL_AVX2 static double hsum(__m256d v)
     return _mm_cvtsd_f64(_mm_add_sd(lo, _mm_unpackhi_pd(lo, lo)));
 }
 
-LL_AVX2 static __m256d load4(const float *a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
+LL_AVX2 static __m256d load4(const double *a) { return _mm256_loadu_pd(a); }
 
 /* Lane masks keeping the first r values of a group of 4 (r = 0: all). */
 static const uint64_t ll_group_masks[4][4] = {
@@ -146,9 +146,9 @@ static const uint64_t ll_group_masks[4][4] = {
 };
 
 /* The last group of a series: 4 values loaded, those past its end
- * cleared. The load may read up to 3 floats past the series, which stay
+ * cleared. The load may read up to 3 values past the series, which stay
  * inside the coefficient array (padded by 4, bsdf_internal.h). */
-LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
+LL_AVX2 static __m256d load_last(const double *a, const __m256d mask)
 {
     return _mm256_and_pd(load4(a), mask);
 }
@@ -156,7 +156,7 @@ LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
 /* Weighted dot products of one stored series (channels `stride` apart)
  * with h over m >= 1 values, added to the channel accumulators. */
 LL_AVX2 __attribute__((always_inline)) static inline void
-series_dot_avx2(const float *a, size_t stride, size_t n_channels,
+series_dot_avx2(const double *a, size_t stride, size_t n_channels,
                                     const double *h, size_t m, double w, __m256d *acc0,
                                     __m256d *acc1, __m256d *acc2)
 {
@@ -165,7 +165,7 @@ series_dot_avx2(const float *a, size_t stride, size_t n_channels,
         _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
     __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
     if (n_channels == 3) {
-        const float *r = a + stride, *b = a + 2 * stride;
+        const double *r = a + stride, *b = a + 2 * stride;
         __m256d s2 = _mm256_setzero_pd(), hv;
         for (; j < last; j += 4) {
             hv = _mm256_loadu_pd(h + j);
@@ -226,12 +226,21 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
     }
 }
 
+/* Four doubles of a harmonics state, which ll_bsdf_harmonics_start has
+ * just written one by one: read them one by one too (a vector load of
+ * four separate recent stores cannot be forwarded and waits for them to
+ * reach the cache). */
+LL_AVX2 static __m256d load_state(const double v[4])
+{
+    return _mm256_setr_pd(v[0], v[1], v[2], v[3]);
+}
+
 /* cos or sin chunk: the four chains of ll_harmonics are the lanes of one
  * vector, advanced by one fused multiply-subtract. */
 LL_AVX2 static void harmonics_next_avx2(ll_harmonics *hm, size_t count, double *out)
 {
     __m256d t = _mm256_set1_pd(hm->twice_cos4);
-    __m256d c = _mm256_loadu_pd(hm->cur), cp = _mm256_loadu_pd(hm->prev);
+    __m256d c = load_state(hm->cur), cp = load_state(hm->prev);
     size_t j;
     for (j = 0; j < count; j += 4) {
         __m256d next = _mm256_fmsub_pd(t, c, cp);
@@ -243,14 +252,14 @@ LL_AVX2 static void harmonics_next_avx2(ll_harmonics *hm, size_t count, double *
     _mm256_storeu_pd(hm->prev, cp);
 }
 
-LL_AVX2 static void add_scaled_avx2(double *acc, const float *a, double w, size_t m)
+LL_AVX2 static void add_scaled_avx2(double *acc, const double *a, double w, size_t m)
 {
     __m256d wv = _mm256_set1_pd(w);
     size_t j = 0;
     for (; j + 4 <= m; j += 4)
         _mm256_storeu_pd(acc + j, _mm256_fmadd_pd(load4(a + j), wv, _mm256_loadu_pd(acc + j)));
     for (; j < m; ++j)
-        acc[j] += w * (double)a[j];
+        acc[j] += w * a[j];
 }
 
 /* The four harmonic chains of ll_harmonics are the four lanes of a vector:
@@ -260,8 +269,8 @@ LL_AVX2 static void integral_avx2(const double *a, const double *recip, size_t n
                                   double *f)
 {
     __m256d t = _mm256_set1_pd(hc->twice_cos4);
-    __m256d c = _mm256_loadu_pd(hc->cur), cp = _mm256_loadu_pd(hc->prev);
-    __m256d sn = _mm256_loadu_pd(hs->cur), sp = _mm256_loadu_pd(hs->prev);
+    __m256d c = load_state(hc->cur), cp = load_state(hc->prev);
+    __m256d sn = load_state(hs->cur), sp = load_state(hs->prev);
     __m256d fa = _mm256_setzero_pd(), Fa = _mm256_setzero_pd();
     size_t j;
     for (j = 0; j < n4; j += 4) {
@@ -306,7 +315,7 @@ void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels, s
     dot_chunk_portable(s, n_channels, k0, count, h, out);
 }
 
-void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w, size_t m)
+void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w, size_t m)
 {
 #if LL_BSDF_HAVE_AVX2_PATH
     if (vector) {

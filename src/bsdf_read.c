@@ -12,7 +12,6 @@
  */
 #include "bsdf_internal.h"
 #include "bsdf_format.h"
-#include "spline.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -351,18 +350,7 @@ static void derive_tables(ll_bsdf *b)
     }
     for (k = 0; k < b->max_order + 4; ++k)
         b->recip[k] = (k > 0 && k < b->max_order) ? 1.0 / (double)k : 0.0;
-    /* Bucket table for the spline interval search (ll_bsdf_weights). */
-    {
-        double lo = b->nodes[0], width = b->nodes[n - 1] - lo;
-        b->bucket_scale = (double)b->n_buckets / width;
-        for (k = 0; k < b->n_buckets; ++k) {
-            double x0 = lo + width * (double)k / (double)b->n_buckets;
-            double x1 = k + 1 == b->n_buckets ? b->nodes[n - 1]
-                                              : lo + width * (double)(k + 1) / (double)b->n_buckets;
-            b->bucket_first[k] = (uint32_t)ll_find_interval(b->nodes, n, x0);
-            b->bucket_last[k] = (uint32_t)ll_find_interval(b->nodes, n, x1);
-        }
-    }
+    ll_bsdf_spline_prepare(b);
 }
 
 static ll_status allocate(ll_bsdf *b, const char *file)
@@ -382,10 +370,10 @@ static ll_status allocate(ll_bsdf *b, const char *file)
     b->metadata = malloc(b->metadata_size + 1);
     b->n_buckets = 4 * b->n_nodes; /* n_nodes^2 table entries fit the file */
     b->bucket_first = ll_alloc_array(b->n_buckets, sizeof *b->bucket_first);
-    b->bucket_last = ll_alloc_array(b->n_buckets, sizeof *b->bucket_last);
+    b->intervals = ll_alloc_array(b->n_nodes - 1, sizeof *b->intervals);
     if (!b->nodes_f || !b->nodes || !b->param_counts || !b->param_first ||
         !b->param_positions || !b->cdf || !b->a0 || !b->pairs || !b->coeffs || !b->recip ||
-        !b->metadata || !b->bucket_first || !b->bucket_last)
+        !b->metadata || !b->bucket_first || !b->intervals)
         return file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory for a %zu-byte file",
                           b->file_size);
     return LL_OK;

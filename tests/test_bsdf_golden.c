@@ -5,6 +5,8 @@
  * renderer-convention calls, plus the layer convention's mapping.
  */
 #include "test_bsdf_util.h"
+#include "bsdf_internal.h"
+#include "spline.h"
 
 static ll_bsdf *open_golden(void)
 {
@@ -297,6 +299,53 @@ static void memory_refcount_info(void **state)
     ll_bsdf_release(a);
 }
 
+/* The prepared spline weights (bsdf_spline.c) are ll_spline_weights'. */
+static void check_weights(const ll_bsdf *b, double mu)
+{
+    ptrdiff_t o1 = 0, o2 = 0;
+    double w1[4], w2[4];
+    int r1 = ll_bsdf_weights(b, mu, &o1, w1), r2 = ll_spline_weights(b->nodes, b->n_nodes, mu,
+                                                                     &o2, w2, 0);
+    int k;
+    assert_int_equal(r1, r2);
+    if (!r1)
+        return;
+    if (o1 != o2)
+        fail_msg("mu %.17g: offset %td, ll_spline_weights %td", mu, o1, o2);
+    for (k = 0; k < 4; ++k)
+        if (!(fabs(w1[k] - w2[k]) <= 1e-13))
+            fail_msg("mu %.17g: weight %d = %.17g, ll_spline_weights %.17g", mu, k, w1[k], w2[k]);
+}
+
+static void prepared_spline_weights(void **state)
+{
+    ll_bsdf *b = open_golden(), *small = NULL;
+    uint64_t rng = 99;
+    size_t k;
+    unsigned char *data;
+    size_t size;
+    (void)state;
+    for (k = 0; k < b->n_nodes; ++k) {
+        check_weights(b, b->nodes[k]);
+        check_weights(b, nextafter(b->nodes[k], 2.0));
+        check_weights(b, nextafter(b->nodes[k], -2.0));
+    }
+    for (k = 0; k < 200000; ++k)
+        check_weights(b, 2.2 * ll_test_uniform(&rng) - 1.1);
+    check_weights(b, NAN);
+    check_weights(b, -0.0);
+    /* A file with four nodes, two of them at 0. */
+    data = ll_test_read_file(LL_SOURCE_DIR "/tests/fuzz/corpus/seed-diffuse_n2", &size);
+    assert_int_equal(ll_bsdf_open_memory(data, size, &small), LL_OK);
+    for (k = 0; k < 20000; ++k)
+        check_weights(small, 2.2 * ll_test_uniform(&rng) - 1.1);
+    for (k = 0; k < small->n_nodes; ++k)
+        check_weights(small, small->nodes[k]);
+    free(data);
+    ll_bsdf_release(small);
+    ll_bsdf_release(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -307,6 +356,7 @@ int main(void)
         cmocka_unit_test(degenerate_inputs),
         cmocka_unit_test(bad_arguments),
         cmocka_unit_test(memory_refcount_info),
+        cmocka_unit_test(prepared_spline_weights),
     };
     return cmocka_run_group_tests_name("bsdf_golden", tests, NULL, NULL);
 }
