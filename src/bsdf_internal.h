@@ -16,7 +16,7 @@
 
 /* One (offset, length) entry of the offset table. */
 typedef struct ll_bsdf_pair {
-    uint32_t offset;  /* first float of the pair's block within coeffs     */
+    uint32_t offset;  /* first coefficient of the pair's block in coeffs   */
     uint32_t length;  /* series length (0 = the BSDF is zero there)        */
 } ll_bsdf_pair;
 
@@ -53,8 +53,9 @@ struct ll_bsdf {
                                    bytes), then 4 zeros, so that vector loads
                                    of a series' last group (up to 3 values past
                                    its end) stay inside the array             */
-    double *recip;              /* [max_order rounded up to 4] 1 / k, with 0 at
-                                   k = 0 and beyond max_order                  */
+    double *recip;              /* [max_order + 4] 1 / k, with 0 at k = 0 and
+                                   from max_order on (vector loops read whole
+                                   groups of 4)                                */
     ll_bsdf_interval *intervals;/* [n_nodes - 1] spline constants (bsdf_spline.c) */
     size_t n_buckets;           /* uniform buckets over [nodes[0], nodes[n-1]] */
     double bucket_scale;        /* n_buckets / (nodes[n-1] - nodes[0])         */
