@@ -248,6 +248,15 @@ static ll_status add_one_order(size_t k, void *ctx)
 
     if (!ot && !ob)
         return LL_OK; /* nothing reflects or transmits in this order */
+    /* An order that is all zero absorbs everything that enters it, so only
+     * the other layer's reflection from its outer side survives: R^t of the
+     * top over an absorbing bottom, R^b of the bottom under an absorbing top.
+     * (A diffuse base has only order 0: this spares a coat over it all the
+     * dense work of its other orders.) */
+    if (!ob)
+        return ll_order_keep_block(ot, LL_BLOCK_RT, &job->result[k]);
+    if (!ot)
+        return ll_order_keep_block(ob, LL_BLOCK_RB, &job->result[k]);
     s = workspace_init(&w, n / 2);
     if (s != LL_OK)
         return s;

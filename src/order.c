@@ -226,6 +226,49 @@ double ll_order_get(const ll_order *o, size_t row, size_t col)
     return o->val[o->seg[s].off + (r - o->seg[s].lo)];
 }
 
+ll_status ll_order_keep_block(const ll_order *o, int block, ll_order **out)
+{
+    size_t n, h, col0, c, total = 0, s;
+    int half, only_block = 1;
+    ll_order *r;
+
+    *out = NULL;
+    if (!o || ll_order_block_is_zero(o, block))
+        return LL_OK;
+    n = o->n;
+    h = n / 2;
+    block_layout(block, h, &col0, &half);
+    for (s = 0; s < 2 * n; ++s) {
+        int in_block = (s % 2 == (size_t)half) && s / 2 >= col0 && s / 2 < col0 + h;
+        if (!in_block && o->seg[s].len)
+            only_block = 0;
+    }
+    if (only_block) {
+        /* Nothing else is stored: share the order itself. */
+        *out = ll_order_retain((ll_order *)o);
+        return LL_OK;
+    }
+    for (c = 0; c < h; ++c)
+        total += o->seg[2 * (col0 + c) + (size_t)half].len;
+    r = order_alloc(n, total);
+    if (!r)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory storing a %zu x %zu order", n, n);
+    total = 0;
+    for (s = 0; s < 2 * n; ++s) {
+        int in_block = (s % 2 == (size_t)half) && s / 2 >= col0 && s / 2 < col0 + h;
+        r->seg[s].off = total;
+        if (in_block && o->seg[s].len) {
+            r->seg[s].lo = o->seg[s].lo;
+            r->seg[s].len = o->seg[s].len;
+            memcpy(r->val + total, o->val + o->seg[s].off, o->seg[s].len * sizeof(double));
+            total += o->seg[s].len;
+        }
+    }
+    r->seg[2 * n].off = total;
+    *out = r;
+    return LL_OK;
+}
+
 size_t ll_order_stored(const ll_order *o) { return o ? o->seg[2 * o->n].off : 0; }
 
 ll_status ll_order_reversed(const ll_order *o, ll_order **out)
