@@ -4,6 +4,7 @@
  */
 #include "layer_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -50,9 +51,10 @@ fail:
 static void find_run(const double *x, size_t count, double drop, size_t *lo, size_t *len)
 {
     size_t a = 0, b = count;
-    while (a < b && !(x[a] > drop || x[a] < -drop))
+    /* fabs(NaN) <= drop is false: a NaN is kept (and shows), never trimmed. */
+    while (a < b && fabs(x[a]) <= drop)
         ++a;
-    while (b > a && !(x[b - 1] > drop || x[b - 1] < -drop))
+    while (b > a && fabs(x[b - 1]) <= drop)
         --b;
     *lo = a;
     *len = b - a;
