@@ -171,12 +171,15 @@ static ll_status check_layers(write_job *job)
  * tail exceeds error_goal * |M_0|. Visits stored entries only. Also checks
  * that every stored value is finite. */
 static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t *len,
-                               double *tail)
+                               double *tail, double *ref0)
 {
     size_t n = job->n, h = job->h, col, j, k;
     int half;
     memset(len, 0, n * n * sizeof *len);
     memset(tail, 0, n * n * sizeof *tail);
+    /* Order 0 densely (column-major, like `at` below): the reference of every
+     * tail test, which looked up one by one cost a cache miss each. */
+    ll_order_to_dense(l->orders[0], n, ref0);
     for (k = job->m; k-- > 0;) {
         const ll_order *o = l->orders[k];
         if (!o)
@@ -200,7 +203,7 @@ static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t
                     if (len[at] != 0)
                         continue; /* already decided */
                     tail[at] += fabs(v);
-                    ref = fabs(ll_order_get(l->orders[0], row, col));
+                    ref = fabs(ref0[at]);
                     if (tail[at] > job->opts.error_goal * ref)
                         len[at] = (uint32_t)(k + 1);
                 }
@@ -209,8 +212,7 @@ static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t
     /* A pair whose tail never exceeded the goal keeps order 0 alone, and
      * one with M_0 = 0 nothing (the original's rule). */
     for (j = 0; j < n * n; ++j) {
-        size_t row = j % n, c = j / n;
-        if (ll_order_get(l->orders[0], row, c) == 0.0)
+        if (ref0[j] == 0.0)
             len[j] = 0;
         else if (len[j] == 0)
             len[j] = 1;
@@ -223,13 +225,14 @@ static ll_status compute_lengths(write_job *job)
     size_t n = job->n, nn = job->nn, count = job->n_bases * job->n_channels, k, i, o;
     uint32_t *len = ll_alloc_array(n * n, sizeof *len);
     double *tail = ll_alloc_array(n * n, sizeof *tail);
+    double *ref0 = ll_alloc_array(n * n, sizeof *ref0);
     ll_status s = LL_OK;
-    if (!len || !tail) {
+    if (!len || !tail || !ref0) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
         goto done;
     }
     for (k = 0; k < count && s == LL_OK; ++k) {
-        s = layer_lengths(job, job->layers[k], len, tail);
+        s = layer_lengths(job, job->layers[k], len, tail, ref0);
         for (i = 0; i < nn && s == LL_OK; ++i)
             for (o = 0; o < nn; ++o) {
                 size_t li = layer_index(i, job->h), lo = layer_index(o, job->h);
@@ -241,6 +244,7 @@ static ll_status compute_lengths(write_job *job)
 done:
     free(len);
     free(tail);
+    free(ref0);
     return s;
 }
 
@@ -391,25 +395,87 @@ static void put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_s
 
 /* The coefficient block, pair after pair in table order, each pair
  * [channel][basis][k]. Fails if a value overflows float. */
+/* Copy (or clear) column col of a layer's orders k < kmax into
+ * stage[row * m + k]: each order's two runs of that column are read once,
+ * where looking every coefficient up separately cost a cache miss each. */
+static void stage_column(const ll_layer *l, size_t col, size_t kmax, double *stage, int clear)
+{
+    size_t h = l->n / 2, m = l->m, k, j;
+    int half;
+    for (k = 0; k < kmax; ++k) {
+        const ll_order *o = l->orders[k];
+        if (!o)
+            continue;
+        for (half = 0; half < 2; ++half) {
+            const ll_segment *sg = &o->seg[2 * col + (size_t)half];
+            double *dst = stage + ((size_t)half * h + sg->lo) * m + k;
+            for (j = 0; j < sg->len; ++j)
+                dst[j * m] = clear ? 0.0 : o->val[sg->off + j];
+        }
+    }
+}
+
 static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
 {
-    size_t nn = job->nn, i, o, c, b, k;
-    for (i = 0; i < nn; ++i)
-        for (o = 0; o < nn; ++o) {
-            size_t len = job->length[i * nn + o];
-            for (c = 0; c < job->n_channels; ++c)
-                for (b = 0; b < job->n_bases; ++b)
+    size_t nn = job->nn, n = job->n, m = job->m, count = job->n_bases * job->n_channels;
+    size_t i, o, c, b, k, L, per_layer;
+    double *stage;
+    ll_status s = LL_OK;
+
+    if (!ll_size_mul(n, m, &per_layer) ||
+        !(stage = ll_calloc_array(count, per_layer * sizeof(double))))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory staging coefficients",
+                       job->fn);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        size_t li = layer_index(i, job->h), kmax = 0;
+        const ll_layer *l0 = job->layers[0];
+        double factor[2];
+        if (li == (size_t)-1)
+            continue; /* the mu = 0 nodes hold no coefficients */
+        for (o = 0; o < nn; ++o)
+            if (job->length[i * nn + o] > kmax)
+                kmax = job->length[i * nn + o];
+        for (L = 0; L < count; ++L)
+            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 0);
+        /* a_k = M_k(o, i) |mu_o| / (pi |mu_i| w_i), times 1/2 for k = 0
+         * (bsdf-format.md): the layer's column factor of order 0 and k > 0. */
+        factor[0] = ll_layer_surface_factor(l0, li, 0);
+        factor[1] = ll_layer_surface_factor(l0, li, 1);
+        for (o = 0; o < nn && s == LL_OK; ++o) {
+            size_t len = job->length[i * nn + o], lo = layer_index(o, job->h);
+            double mu_o;
+            if (len == 0)
+                continue;
+            mu_o = fabs(l0->nodes[lo]);
+            for (c = 0; c < job->n_channels && s == LL_OK; ++c)
+                for (b = 0; b < job->n_bases && s == LL_OK; ++b) {
+                    const double *set = stage + b * job->n_channels * per_layer + lo * m;
                     for (k = 0; k < len; ++k) {
-                        double v = stored_coeff(job, c, b, o, i, k);
-                        if (!(fabs(v) <= FLT_MAX))
-                            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                                           "%s: coefficient %zu of node pair (%zu, %zu) is %g, "
-                                           "beyond float range",
-                                           job->fn, k, o, i, v);
+                        double v, f = factor[k > 0];
+                        if (job->n_channels == 1 || c == 1)
+                            v = set[k] * mu_o / f;
+                        else if (c == 2)
+                            v = set[2 * per_layer + k] * mu_o / f;
+                        else
+                            v = LL_BSDF_Y_FROM_R * (set[k] * mu_o / f) +
+                                LL_BSDF_Y_FROM_G * (set[per_layer + k] * mu_o / f) +
+                                LL_BSDF_Y_FROM_B * (set[2 * per_layer + k] * mu_o / f);
+                        if (!(fabs(v) <= FLT_MAX)) {
+                            s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                                        "%s: coefficient %zu of node pair (%zu, %zu) is %g, "
+                                        "beyond float range",
+                                        job->fn, k, o, i, v);
+                            break;
+                        }
                         ll_bsdf_out_f32(out, (float)v);
                     }
+                }
         }
-    return LL_OK;
+        for (L = 0; L < count; ++L)
+            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
+    }
+    free(stage);
+    return s;
 }
 
 static ll_status put_file(const write_job *job, const char *path)
