@@ -39,7 +39,6 @@ int ll_bsdf_weights(const ll_bsdf *b, double mu, ptrdiff_t *offset, double w[4])
     const double *x = b->nodes;
     const ll_bsdf_interval *iv;
     size_t n = b->n_nodes, k;
-    double t, t2, t3, d0, d1;
     if (!(mu >= x[0] && mu <= x[n - 1]))
         return 0;
     k = (size_t)((mu - x[0]) * b->bucket_scale);
@@ -53,29 +52,7 @@ int ll_bsdf_weights(const ll_bsdf *b, double mu, ptrdiff_t *offset, double w[4])
     while (k + 2 < n && x[k + 1] <= mu)
         ++k;
     iv = &b->intervals[k];
-    t = (mu - iv->x0) * iv->inv_width;
-    t2 = t * t;
-    t3 = t2 * t;
-    w[0] = 0.0;
-    w[1] = 2 * t3 - 3 * t2 + 1;
-    w[2] = -2 * t3 + 3 * t2;
-    w[3] = 0.0;
-    d0 = t3 - 2 * t2 + t;
-    d1 = t3 - t2;
-    if (k > 0) {
-        w[2] += d0 * iv->f0;
-        w[0] -= d0 * iv->f0;
-    } else {
-        w[2] += d0;
-        w[1] -= d0;
-    }
-    if (k + 2 < n) {
-        w[3] += d1 * iv->f1;
-        w[1] -= d1 * iv->f1;
-    } else {
-        w[2] += d1;
-        w[1] -= d1;
-    }
+    ll_spline_basis((mu - iv->x0) * iv->inv_width, iv->f0, iv->f1, k > 0, k + 2 < n, w);
     *offset = (ptrdiff_t)k - 1;
     return 1;
 }

@@ -16,7 +16,7 @@
 
 /* MERL's own reader (BRDFRead.cpp: RED_SCALE, GREEN_SCALE, BLUE_SCALE) turns
  * the stored numbers into reflectance in 1/sr with these factors. The
- * original layerlab multiplied by a further 2 ("XXX too dark?"); that factor
+ * original layerlab multiplied by a further 2 (marked "too dark?" there); that factor
  * has no physical basis (its DCT already yields the cosine-series
  * coefficients of f itself), so it is not applied here. */
 #define LL_MERL_SCALE_R (1.0 / 1500.0)

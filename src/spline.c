@@ -23,7 +23,7 @@ int ll_spline_weights(const double *nodes, size_t size, double x, ptrdiff_t *off
                       double w[4], int extrapolate)
 {
     size_t idx;
-    double x0, x1, width, t, t2, t3, d0, d1;
+    double x0, x1, width;
 
     if (size < 2 || x != x)
         return 0;
@@ -34,36 +34,9 @@ int ll_spline_weights(const double *nodes, size_t size, double x, ptrdiff_t *off
     x0 = nodes[idx];
     x1 = nodes[idx + 1];
     width = x1 - x0;
-    t = (x - x0) / width;
-    t2 = t * t;
-    t3 = t2 * t;
-
-    /* Hermite basis for the values at x0 and x1 ... */
-    w[0] = 0.0;
-    w[1] = 2 * t3 - 3 * t2 + 1;
-    w[2] = -2 * t3 + 3 * t2;
-    w[3] = 0.0;
+    ll_spline_basis((x - x0) / width, idx > 0 ? width / (x1 - nodes[idx - 1]) : 0.0,
+                    idx + 2 < size ? width / (nodes[idx + 2] - x0) : 0.0, idx > 0,
+                    idx + 2 < size, w);
     *offset = (ptrdiff_t)idx - 1;
-
-    /* ... and for the derivatives, turned into node weights by finite
-     * differences (central inside, one-sided at the ends). */
-    d0 = t3 - 2 * t2 + t;
-    d1 = t3 - t2;
-    if (idx > 0) {
-        double factor = width / (x1 - nodes[idx - 1]);
-        w[2] += d0 * factor;
-        w[0] -= d0 * factor;
-    } else {
-        w[2] += d0;
-        w[1] -= d0;
-    }
-    if (idx + 2 < size) {
-        double factor = width / (nodes[idx + 2] - x0);
-        w[3] += d1 * factor;
-        w[1] -= d1 * factor;
-    } else {
-        w[2] += d1;
-        w[1] -= d1;
-    }
     return 1;
 }
