@@ -228,11 +228,6 @@ double ll_layer_surface_factor(const ll_layer *l, size_t col, size_t order)
     return l->weights[col] * fabs(l->nodes[col]) * LL_PI * (order == 0 ? 2.0 : 1.0);
 }
 
-double ll_layer_medium_factor(const ll_layer *l, size_t col, size_t order)
-{
-    return l->weights[col] * LL_PI * (order == 0 ? 2.0 : 1.0);
-}
-
 ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_builder **builders)
 {
     size_t k, m = layer->m;

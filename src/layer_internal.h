@@ -112,10 +112,9 @@ LL_INTERNAL ll_status ll_layer_commit_orders(ll_layer *layer, ll_order **new_ord
 /* Check that two layers can be combined (same n, m, nodes); message names fn. */
 LL_INTERNAL ll_status ll_layer_check_compatible(const ll_layer *a, const ll_layer *b,
                                                 const char *fn);
-/* Column factor of the weight folding: w |mu| pi (surface) or w pi (medium),
- * times 2 for order 0. */
+/* Column factor of the weight folding of surfaces: w |mu| pi, times 2 for
+ * order 0 (media fold w pi; see media.c). */
 LL_INTERNAL double ll_layer_surface_factor(const ll_layer *l, size_t col, size_t order);
-LL_INTERNAL double ll_layer_medium_factor(const ll_layer *l, size_t col, size_t order);
 
 /* Set every order from per-order builders (helper for the words):
  * builders[l] finished into order l; takes ownership of the builders. */

@@ -80,8 +80,6 @@ size_t ll_get_thread_count(void)
     return tls_thread_count ? tls_thread_count : processor_count();
 }
 
-size_t ll_threads_for_calling_thread(void) { return ll_get_thread_count(); }
-
 int ll_size_mul(size_t a, size_t b, size_t *out)
 {
     if (a != 0 && b > SIZE_MAX / a)

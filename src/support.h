@@ -30,9 +30,6 @@ LL_INTERNAL int ll_size_add(size_t a, size_t b, size_t *out);
 LL_INTERNAL void *ll_alloc_array(size_t count, size_t size);
 LL_INTERNAL void *ll_calloc_array(size_t count, size_t size);
 
-/* Threads that a parallel region started by the calling thread may use. */
-LL_INTERNAL size_t ll_threads_for_calling_thread(void);
-
 /* Run body(i, ctx) for i in [0, count) on up to ll_get_thread_count() threads
  * (dynamic schedule). Inside body, BLAS/LAPACK run single-threaded, so every
  * item is computed by exactly the same sequence of operations whatever the
