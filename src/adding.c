@@ -31,8 +31,7 @@ typedef struct workspace {
     size_t h;
     dense_order top, bottom, out;
     double *gain_tb, *gain_bt; /* h x h LU factors, then h x h scratch  */
-    double *rhs;               /* h x 2h                                */
-    double *prod;              /* h x 2h                                */
+    double *rhs;               /* h x h: Ra Tb                          */
     lapack_int *piv_tb, *piv_bt;
     void *memory;
 } workspace;
@@ -45,8 +44,8 @@ static ll_status workspace_init(workspace *w, size_t h)
     double *p;
     memset(w, 0, sizeof *w);
     w->h = h;
-    /* 12 blocks + 2 x (gain, Z) + 2 x (h x 2h) = 20 h^2 doubles, plus pivots. */
-    if (!ll_size_mul(h, h, &hh) || !ll_size_mul(hh, 20, &doubles) ||
+    /* 12 blocks + 2 x (gain, Z) + rhs = 17 h^2 doubles, plus pivots. */
+    if (!ll_size_mul(h, h, &hh) || !ll_size_mul(hh, 17, &doubles) ||
         !ll_size_add(doubles, h, &doubles) || !ll_size_add(doubles, h, &doubles))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "adding: %zu nodes are too many", 2 * h);
     w->memory = ll_alloc_array(doubles, sizeof(double));
@@ -61,8 +60,7 @@ static ll_status workspace_init(workspace *w, size_t h)
     }
     w->gain_tb = p; p += 2 * hh;
     w->gain_bt = p; p += 2 * hh;
-    w->rhs = p; p += 2 * hh;
-    w->prod = p; p += 2 * hh;
+    w->rhs = p; p += hh;
     w->piv_tb = (lapack_int *)p; p += h;
     w->piv_bt = (lapack_int *)p;
     return LL_OK;
@@ -139,17 +137,17 @@ static void right_solve(size_t h, const double *lu, const lapack_int *piv, doubl
  *     T_out = Z Ta_through,   R_out = Rb_out + Z Ra_in Tb_back
  * which gives T^tb and R^b of the sum for a = top (and, with the roles
  * mirrored, T^bt and R^t). Solving for Z from the right needs h right-hand
- * sides where solving G X = [Ta | Ra Tb] would need 2h, and the two
- * products become one gemm. zero flags skip products with zero operands.
+ * sides where solving G X = [Ta | Ra Tb] would need 2h; the products are
+ * written straight into the output blocks (R_out accumulates onto Rb_out
+ * with beta = 1). zero flags skip products with zero operands.
  */
 static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const double *Rb_in,
                           int zRb_in, const double *Ta_through, int zTa_through,
                           const double *Tb_back, int zTb_back, const double *Tb_through,
                           int zTb_through, const double *Rb_out, int zRb_out, double *gain,
-                          lapack_int *piv, double *rhs, double *prod, double *T_out,
-                          double *R_out)
+                          lapack_int *piv, double *rhs, double *T_out, double *R_out)
 {
-    size_t hh = h * h, i;
+    size_t hh = h * h;
     int coupled = !zRa_in && !zRb_in; /* multiple reflections between the layers */
     int reflect_back = !zRa_in && !zTb_back;
     double *Z = gain + hh; /* scratch after the gain matrix (see workspace) */
@@ -167,21 +165,18 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
             return s;
         right_solve(h, gain, piv, Z);
     }
-    /* [T_out | P] = Z [Ta_through | Ra_in Tb_back] */
-    memcpy(rhs, Ta_through, hh * sizeof(double));
-    if (reflect_back) {
-        gemm(h, h, 1.0, Ra_in, Tb_back, 0.0, rhs + hh);
-        gemm(h, 2 * h, 1.0, Z, rhs, 0.0, prod);
-    } else {
-        gemm(h, h, 1.0, Z, rhs, 0.0, prod);
-        memset(prod + hh, 0, hh * sizeof(double));
-    }
-    memcpy(T_out, prod, hh * sizeof(double));
-    if (zRb_out)
-        memcpy(R_out, prod + hh, hh * sizeof(double));
+    /* T_out = Z Ta_through and R_out = Rb_out + Z (Ra_in Tb_back), the
+     * products written straight into the output blocks. */
+    if (zTa_through)
+        memset(T_out, 0, hh * sizeof(double));
     else
-        for (i = 0; i < hh; ++i)
-            R_out[i] = Rb_out[i] + prod[hh + i];
+        gemm(h, h, 1.0, Z, Ta_through, 0.0, T_out);
+    memcpy(R_out, Rb_out, hh * sizeof(double));
+    (void)zRb_out; /* a zero block is stored zero-filled */
+    if (reflect_back) {
+        gemm(h, h, 1.0, Ra_in, Tb_back, 0.0, rhs);
+        gemm(h, h, 1.0, Z, rhs, 1.0, R_out);
+    }
     return LL_OK;
 }
 
@@ -198,7 +193,7 @@ static ll_status add_dense(workspace *w, int homogeneous)
                  b->zero[LL_BLOCK_RT], t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB],
                  b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT], b->blk[LL_BLOCK_TTB],
                  b->zero[LL_BLOCK_TTB], b->blk[LL_BLOCK_RB], b->zero[LL_BLOCK_RB], w->gain_tb,
-                 w->piv_tb, w->rhs, w->prod, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB]);
+                 w->piv_tb, w->rhs, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB]);
     if (s != LL_OK)
         return s;
     if (homogeneous) {
@@ -211,7 +206,7 @@ static ll_status add_dense(workspace *w, int homogeneous)
                      t->zero[LL_BLOCK_RB], b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT],
                      t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB], t->blk[LL_BLOCK_TBT],
                      t->zero[LL_BLOCK_TBT], t->blk[LL_BLOCK_RT], t->zero[LL_BLOCK_RT],
-                     w->gain_bt, w->piv_bt, w->rhs, w->prod, o->blk[LL_BLOCK_TBT],
+                     w->gain_bt, w->piv_bt, w->rhs, o->blk[LL_BLOCK_TBT],
                      o->blk[LL_BLOCK_RT]);
         if (s != LL_OK)
             return s;
