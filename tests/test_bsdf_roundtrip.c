@@ -7,25 +7,9 @@
 #include "test_bsdf_util.h"
 #include "bsdf_format.h"
 
-static char g_dir[512];
-
-static int setup(void **state)
-{
-    (void)state;
-    ll_test_mkdtemp(g_dir, sizeof g_dir);
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    ll_test_rmdir(g_dir);
-    return 0;
-}
-
 static void path_in_dir(char *path, size_t size, const char *name)
 {
-    snprintf(path, size, "%s/%s", g_dir, name);
+    snprintf(path, size, "%s/%s", ll_test_dir(), name);
 }
 
 static ll_bsdf *write_and_open(const char *name, const ll_layer *const *layers, size_t channels,
@@ -577,5 +561,5 @@ int main(void)
         cmocka_unit_test(medium_over_diffuse_round_trip),
         cmocka_unit_test(rough_gold_matches_original),
     };
-    return cmocka_run_group_tests_name("bsdf_roundtrip", tests, setup, teardown);
+    return cmocka_run_group_tests_name("bsdf_roundtrip", tests, ll_test_dir_setup, ll_test_dir_teardown);
 }

@@ -1,44 +1,16 @@
 /*
- * Helpers shared by the .bsdf tests (test_bsdf_*.c): synthetic layers built through the internal column builder (so the tests
- * need no interface or medium code), scratch directories and files.
+ * Helpers shared by the .bsdf tests (test_bsdf_*.c): synthetic layers built
+ * through the internal column builder (so the tests need no interface or
+ * medium code); the general helpers are in test_util.h.
  */
 #ifndef LL_TEST_BSDF_UTIL_H
 #define LL_TEST_BSDF_UTIL_H
 
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
-#include <dirent.h>
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <layerlab.h>
+#include "test_util.h"
 #include "layer_internal.h"
 
 #define LL_TEST_GOLDEN LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
 #define LL_TEST_PI 3.14159265358979323846
-
-/* A clear layer on n Gauss-Lobatto nodes (as files are made: the nodes
- * include +-1, so the file covers every direction) with m orders. */
-static inline ll_layer *ll_test_layer(size_t n, size_t m)
-{
-    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
-    ll_layer *l = NULL;
-    assert_non_null(x);
-    assert_non_null(w);
-    assert_int_equal(ll_quad_gauss_lobatto(n, x, w), LL_OK);
-    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
-    free(x);
-    free(w);
-    return l;
-}
 
 /* f_k(mu_o, mu_i): the BSDF's order-k coefficient (without weights) for
  * outgoing mu_o and incident mu_i, in the layer convention. */
@@ -95,87 +67,6 @@ static inline double ll_test_lobe_fn(size_t k, double mu_o, double mu_i, const v
     double spec = exp(-sharp * (mu_o + mu_i) * (mu_o + mu_i)); /* near mu_o = -mu_i */
     double phase = 0.3 + 0.2 * sin(7.0 * mu_o + 3.0 * mu_i);
     return (1.0 + spec * 4.0) * phase * exp(-0.15 * (double)k * (1.0 + fabs(mu_o))) / LL_TEST_PI;
-}
-
-/* A scratch directory, removed (with its files) by ll_test_rmdir. */
-static inline void ll_test_mkdtemp(char *dir, size_t size)
-{
-    const char *base = getenv("TMPDIR");
-    snprintf(dir, size, "%s/ll_bsdf_test.XXXXXX", base && *base ? base : "/tmp");
-    assert_non_null(mkdtemp(dir));
-}
-
-static inline size_t ll_test_count_entries(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    size_t count = 0;
-    assert_non_null(d);
-    while ((e = readdir(d)) != NULL)
-        if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0)
-            ++count;
-    closedir(d);
-    return count;
-}
-
-static inline void ll_test_rmdir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    char path[1024];
-    if (!d)
-        return;
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        unlink(path);
-    }
-    closedir(d);
-    rmdir(dir);
-}
-
-/* The bytes of a file (malloc'ed; *size set). */
-static inline unsigned char *ll_test_read_file(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *data;
-    long len;
-    assert_non_null(f);
-    assert_int_equal(fseek(f, 0, SEEK_END), 0);
-    len = ftell(f);
-    assert_true(len >= 0);
-    assert_int_equal(fseek(f, 0, SEEK_SET), 0);
-    data = malloc((size_t)len + 1);
-    assert_non_null(data);
-    assert_int_equal(fread(data, 1, (size_t)len, f), (size_t)len);
-    fclose(f);
-    *size = (size_t)len;
-    return data;
-}
-
-static inline void ll_test_write_file(const char *path, const void *data, size_t size)
-{
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    assert_int_equal(fwrite(data, 1, size, f), size);
-    assert_int_equal(fclose(f), 0);
-}
-
-/* Deterministic uniform numbers in [0, 1) (xorshift64*). */
-static inline double ll_test_uniform(uint64_t *state)
-{
-    uint64_t x = *state;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    *state = x;
-    return (double)((x * 0x2545F4914F6CDD1DULL) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static inline int ll_test_close(double a, double b, double rel, double abs_tol)
-{
-    return fabs(a - b) <= abs_tol + rel * fabs(b);
 }
 
 static inline double ll_test_luminance(const double rgb[3])

@@ -10,30 +10,14 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 
-static char g_dir[512];
-
-static int setup(void **state)
-{
-    (void)state;
-    ll_test_mkdtemp(g_dir, sizeof g_dir);
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    ll_test_rmdir(g_dir);
-    return 0;
-}
-
 static const char OLD_CONTENT[] = "the previous file";
 
 /* A target holding OLD_CONTENT, alone in the scratch directory. */
 static void fresh_target(char *path, size_t size)
 {
-    ll_test_rmdir(g_dir);
-    assert_int_equal(mkdir(g_dir, 0700), 0);
-    snprintf(path, size, "%s/target.bsdf", g_dir);
+    ll_test_rmdir(ll_test_dir());
+    assert_int_equal(mkdir(ll_test_dir(), 0700), 0);
+    snprintf(path, size, "%s/target.bsdf", ll_test_dir());
     ll_test_write_file(path, OLD_CONTENT, sizeof OLD_CONTENT);
 }
 
@@ -45,7 +29,7 @@ static void assert_untouched(const char *path)
     assert_memory_equal(d, OLD_CONTENT, size);
     free(d);
     /* No temporary file beside it. */
-    assert_int_equal(ll_test_count_entries(g_dir), 1);
+    assert_int_equal(ll_test_count_entries(ll_test_dir()), 1);
 }
 
 static ll_layer *diffuse_layer(size_t n, size_t m, double albedo)
@@ -132,14 +116,14 @@ static void bad_paths(void **state)
     one[0] = a;
     fresh_target(path, sizeof path);
     /* A directory that does not exist. */
-    snprintf(dir_as_file, sizeof dir_as_file, "%s/missing/sub/x.bsdf", g_dir);
+    snprintf(dir_as_file, sizeof dir_as_file, "%s/missing/sub/x.bsdf", ll_test_dir());
     assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
     assert_non_null(strstr(ll_last_error_message(), "missing/sub/x.bsdf"));
     /* A path naming a directory. */
-    snprintf(dir_as_file, sizeof dir_as_file, "%s/", g_dir);
+    snprintf(dir_as_file, sizeof dir_as_file, "%s/", ll_test_dir());
     assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
     /* An existing directory as the target: the rename fails. */
-    snprintf(dir_as_file, sizeof dir_as_file, "%s/adir", g_dir);
+    snprintf(dir_as_file, sizeof dir_as_file, "%s/adir", ll_test_dir());
     assert_int_equal(mkdir(dir_as_file, 0700), 0);
     assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
     assert_int_equal(rmdir(dir_as_file), 0);
@@ -196,7 +180,7 @@ static void replaces_atomically(void **state)
     assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
     one[0] = b;
     assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
-    assert_int_equal(ll_test_count_entries(g_dir), 1);
+    assert_int_equal(ll_test_count_entries(ll_test_dir()), 1);
     assert_int_equal(ll_bsdf_open(path, &f), LL_OK);
     assert_int_equal(ll_bsdf_eval(f, 0.8, -0.8, 0.0, NULL, rgb), LL_OK);
     assert_true(fabs(rgb[0] - 0.75 / LL_TEST_PI) < 1e-6);
@@ -208,10 +192,10 @@ static void replaces_atomically(void **state)
     {
         char cwd[1024];
         assert_non_null(getcwd(cwd, sizeof cwd));
-        assert_int_equal(chdir(g_dir), 0);
+        assert_int_equal(chdir(ll_test_dir()), 0);
         assert_int_equal(ll_bsdf_write("relative.bsdf", one, 1, NULL), LL_OK);
         assert_int_equal(chdir(cwd), 0);
-        assert_int_equal(ll_test_count_entries(g_dir), 2);
+        assert_int_equal(ll_test_count_entries(ll_test_dir()), 2);
     }
     ll_layer_destroy(a);
     ll_layer_destroy(b);
@@ -250,5 +234,5 @@ int main(void)
         cmocka_unit_test(replaces_atomically),
         cmocka_unit_test(short_options),
     };
-    return cmocka_run_group_tests_name("bsdf_write", tests, setup, teardown);
+    return cmocka_run_group_tests_name("bsdf_write", tests, ll_test_dir_setup, ll_test_dir_teardown);
 }

@@ -14,20 +14,7 @@
 
 #include <layerlab.h>
 #include "layer_internal.h"
-
-/* A layer on n Gauss-Lobatto nodes with m orders. */
-static ll_layer *make_layer(size_t n, size_t m)
-{
-    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
-    ll_layer *l = NULL;
-    assert_non_null(x);
-    assert_non_null(w);
-    assert_int_equal(ll_quad_gauss_lobatto(n, x, w), LL_OK);
-    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
-    free(x);
-    free(w);
-    return l;
-}
+#include "test_util.h"
 
 static void get_nodes(const ll_layer *l, double *x, double *w)
 {
@@ -42,7 +29,7 @@ static void get_nodes(const ll_layer *l, double *x, double *w)
  * this factor (5e-5 at n = 128). */
 static void diffuse_evaluates_to_albedo_over_pi(void **state)
 {
-    ll_layer *l = make_layer(128, 1);
+    ll_layer *l = ll_test_layer(128, 1);
     double x[128];
     size_t i;
     (void)state;
@@ -69,7 +56,7 @@ static void diffuse_evaluates_to_albedo_over_pi(void **state)
 
 static void matrix_removes_the_weights(void **state)
 {
-    ll_layer *l = make_layer(8, 2);
+    ll_layer *l = ll_test_layer(8, 2);
     double M[64];
     size_t r, c;
     (void)state;
@@ -109,7 +96,7 @@ static void assert_layers_equal(const ll_layer *a, const ll_layer *b, double tol
 
 static void clear_layer_is_identity_for_add(void **state)
 {
-    ll_layer *l = make_layer(24, 8), *clear = make_layer(24, 8), *sum = make_layer(24, 8);
+    ll_layer *l = ll_test_layer(24, 8), *clear = ll_test_layer(24, 8), *sum = ll_test_layer(24, 8);
     (void)state;
     assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.8, 0.6), LL_OK);
     assert_int_equal(ll_layer_expand(l, 0.7), LL_OK);
@@ -124,7 +111,7 @@ static void clear_layer_is_identity_for_add(void **state)
 
 static void adding_is_associative(void **state)
 {
-    ll_layer *a = make_layer(20, 6), *b = make_layer(20, 6), *c = make_layer(20, 6);
+    ll_layer *a = ll_test_layer(20, 6), *b = ll_test_layer(20, 6), *c = ll_test_layer(20, 6);
     ll_layer *ab_c, *a_bc;
     (void)state;
     assert_int_equal(ll_layer_set_henyey_greenstein(a, 0.9, 0.5), LL_OK);
@@ -207,7 +194,7 @@ static void assert_energy_conserved(const ll_layer *l, double tol)
 
 static void isotropic_slab_conserves_energy(void **state)
 {
-    ll_layer *l = make_layer(48, 1);
+    ll_layer *l = ll_test_layer(48, 1);
     (void)state;
     assert_int_equal(ll_layer_set_isotropic(l, 1.0), LL_OK);
     assert_int_equal(ll_layer_expand(l, 2.0), LL_OK);
@@ -218,7 +205,7 @@ static void isotropic_slab_conserves_energy(void **state)
 static void peaked_hg_slab_conserves_energy(void **state)
 {
     /* The original loses 12% here (R = 0.107 instead of 0.122 at n = 128). */
-    ll_layer *l = make_layer(128, 128);
+    ll_layer *l = ll_test_layer(128, 128);
     double R, T;
     (void)state;
     assert_int_equal(ll_layer_set_henyey_greenstein(l, 1.0, 0.9), LL_OK);
@@ -231,7 +218,7 @@ static void peaked_hg_slab_conserves_energy(void **state)
 
 static void very_thick_slab_does_not_drift(void **state)
 {
-    ll_layer *thick = make_layer(32, 1), *thinner = make_layer(32, 1);
+    ll_layer *thick = ll_test_layer(32, 1), *thinner = ll_test_layer(32, 1);
     double T1000, T100;
     (void)state;
     assert_int_equal(ll_layer_set_isotropic(thick, 1.0), LL_OK);
@@ -255,7 +242,7 @@ static void isotropic_slab_matches_reference(void **state)
 {
     /* Index-matched isotropic slab, albedo 0.99, tau 1, normal incidence:
      * R = 0.3329, T = 0.6510 including the unscattered beam (exp(-1)). */
-    ll_layer *l = make_layer(64, 1);
+    ll_layer *l = ll_test_layer(64, 1);
     double R, T;
     (void)state;
     assert_int_equal(ll_layer_set_isotropic(l, 0.99), LL_OK);
@@ -268,7 +255,7 @@ static void isotropic_slab_matches_reference(void **state)
 
 static void medium_is_reciprocal(void **state)
 {
-    ll_layer *l = make_layer(16, 4);
+    ll_layer *l = ll_test_layer(16, 4);
     double M[256];
     size_t k, r, c;
     (void)state;
@@ -288,7 +275,7 @@ static void medium_is_reciprocal(void **state)
 
 static void vmf_zero_kappa_is_isotropic(void **state)
 {
-    ll_layer *a = make_layer(16, 3), *b = make_layer(16, 3);
+    ll_layer *a = ll_test_layer(16, 3), *b = ll_test_layer(16, 3);
     (void)state;
     assert_int_equal(ll_layer_set_von_mises_fisher(a, 0.7, 0.0), LL_OK);
     assert_int_equal(ll_layer_set_isotropic(b, 0.7), LL_OK);
@@ -302,7 +289,7 @@ static void vmf_zero_kappa_is_isotropic(void **state)
 
 static void reverse_swaps_sides(void **state)
 {
-    ll_layer *a = make_layer(16, 2), *d = make_layer(16, 2);
+    ll_layer *a = ll_test_layer(16, 2), *d = ll_test_layer(16, 2);
     double R1, T1, R2, T2;
     (void)state;
     assert_int_equal(ll_layer_set_isotropic(a, 0.9), LL_OK);
@@ -326,7 +313,7 @@ static void reverse_swaps_sides(void **state)
 
 static ll_layer *threaded_build(size_t threads)
 {
-    ll_layer *l = make_layer(40, 20), *d = make_layer(40, 20);
+    ll_layer *l = ll_test_layer(40, 20), *d = ll_test_layer(40, 20);
     assert_int_equal(ll_set_thread_count(threads), LL_OK);
     assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.95, 0.7), LL_OK);
     assert_int_equal(ll_layer_expand(l, 2.5), LL_OK);
@@ -355,7 +342,7 @@ static void invalid_arguments_are_rejected(void **state)
     double x[6] = { -0.9, -0.5, -0.1, 0.1, 0.5, 0.9 }, w[6] = { 0.2, 0.4, 0.4, 0.4, 0.4, 0.2 };
     double x0[6] = { -0.9, -0.5, 0.0, 0.1, 0.5, 0.9 };
     double xn[6] = { -0.9, -0.5, -0.1, 0.1, NAN, 0.9 };
-    ll_layer *l = NULL, *other = make_layer(8, 1), *a = make_layer(6, 1);
+    ll_layer *l = NULL, *other = ll_test_layer(8, 1), *a = ll_test_layer(6, 1);
     (void)state;
     assert_int_equal(ll_layer_create(x, w, 5, 1, &l), LL_ERROR_INVALID_ARGUMENT);
     assert_null(l);

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
+#include "test_util.h"
 
 #define EXAMPLES LL_SOURCE_DIR "/examples/"
 
@@ -26,16 +27,15 @@ static char tmpdir[64];
 static int make_tmpdir(void **state)
 {
     (void)state;
-    strcpy(tmpdir, "/tmp/ll_build_XXXXXX");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    ll_test_mkdtemp(tmpdir, sizeof tmpdir);
+    return 0;
 }
 
 static int remove_tmpdir(void **state)
 {
-    char cmd[128];
     (void)state;
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-    return system(cmd) == 0 ? 0 : -1;
+    ll_test_rmdir(tmpdir);
+    return 0;
 }
 
 static ll_material *parse(const char *text)

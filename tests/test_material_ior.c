@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
+#include "test_util.h"
 #include "ior.h"
 
 #define IOR_DIR LL_SOURCE_DIR "/../shared/ior"
@@ -166,6 +167,20 @@ static void short_spectrum_is_held_at_its_ends(void **state)
 
 static char tmpdir[64];
 
+static int make_tmpdir(void **state)
+{
+    (void)state;
+    ll_test_mkdtemp(tmpdir, sizeof tmpdir);
+    return 0;
+}
+
+static int remove_tmpdir(void **state)
+{
+    (void)state;
+    ll_test_rmdir(tmpdir);
+    return 0;
+}
+
 static void write_text(const char *name, const char *text)
 {
     char path[256];
@@ -175,21 +190,6 @@ static void write_text(const char *name, const char *text)
     assert_non_null(f);
     fputs(text, f);
     fclose(f);
-}
-
-static int make_tmpdir(void **state)
-{
-    (void)state;
-    strcpy(tmpdir, "/tmp/ll_ior_XXXXXX");
-    return mkdtemp(tmpdir) ? 0 : -1;
-}
-
-static int remove_tmpdir(void **state)
-{
-    char cmd[128];
-    (void)state;
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-    return system(cmd) == 0 ? 0 : -1;
 }
 
 static void broken_spectra_are_rejected_with_line(void **state)

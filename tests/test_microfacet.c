@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include <layerlab.h>
+#include "test_util.h"
 #include "filon.h"
 #include "microfacet.h"
 #include "series.h"
@@ -25,18 +26,9 @@
 
 static ll_layer *make_layer(size_t n, size_t m, double *x, double *w)
 {
-    double *nodes = malloc(n * sizeof *nodes), *weights = malloc(n * sizeof *weights);
-    ll_layer *l = NULL;
-    assert_non_null(nodes);
-    assert_non_null(weights);
-    assert_int_equal(ll_quad_gauss_lobatto(n, nodes, weights), LL_OK);
-    assert_int_equal(ll_layer_create(nodes, weights, n, m, &l), LL_OK);
-    if (x)
-        memcpy(x, nodes, n * sizeof *x);
-    if (w)
-        memcpy(w, weights, n * sizeof *w);
-    free(nodes);
-    free(weights);
+    ll_layer *l = ll_test_layer(n, m);
+    if (x || w)
+        assert_int_equal(ll_layer_get_nodes(l, x, w), LL_OK);
     return l;
 }
 

@@ -1,0 +1,148 @@
+/*
+ * Helpers every test program may use: layers on Gauss-Lobatto nodes,
+ * scratch directories (with a cmocka group fixture), files, random numbers.
+ */
+#ifndef LL_TEST_UTIL_H
+#define LL_TEST_UTIL_H
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <layerlab.h>
+#include "layer_internal.h"
+
+/* A clear layer on n Gauss-Lobatto nodes (as files are made: the nodes
+ * include +-1, so the file covers every direction) with m orders. */
+static inline ll_layer *ll_test_layer(size_t n, size_t m)
+{
+    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
+    ll_layer *l = NULL;
+    assert_non_null(x);
+    assert_non_null(w);
+    assert_int_equal(ll_quad_gauss_lobatto(n, x, w), LL_OK);
+    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
+    free(x);
+    free(w);
+    return l;
+}
+
+/* A scratch directory, removed (with everything in it) by ll_test_rmdir. */
+static inline void ll_test_mkdtemp(char *dir, size_t size)
+{
+    const char *base = getenv("TMPDIR");
+    snprintf(dir, size, "%s/ll_test.XXXXXX", base && *base ? base : "/tmp");
+    assert_non_null(mkdtemp(dir));
+}
+
+static inline size_t ll_test_count_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    size_t count = 0;
+    assert_non_null(d);
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0)
+            ++count;
+    closedir(d);
+    return count;
+}
+
+static inline void ll_test_rmdir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    struct stat st;
+    char path[1024];
+    if (!d)
+        return;
+    while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+            continue;
+        if ((size_t)snprintf(path, sizeof path, "%s/%s", dir, e->d_name) >= sizeof path)
+            continue;
+        if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode))
+            ll_test_rmdir(path);
+        else
+            unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
+/* One scratch directory per test program, as a cmocka group fixture:
+ * cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown). */
+static inline char *ll_test_dir(void)
+{
+    static char dir[512];
+    return dir;
+}
+
+static inline int ll_test_dir_setup(void **state)
+{
+    (void)state;
+    ll_test_mkdtemp(ll_test_dir(), 512);
+    return 0;
+}
+
+static inline int ll_test_dir_teardown(void **state)
+{
+    (void)state;
+    ll_test_rmdir(ll_test_dir());
+    return 0;
+}
+
+/* The bytes of a file (malloc'ed; *size set). */
+static inline unsigned char *ll_test_read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *data;
+    long len;
+    assert_non_null(f);
+    assert_int_equal(fseek(f, 0, SEEK_END), 0);
+    len = ftell(f);
+    assert_true(len >= 0);
+    assert_int_equal(fseek(f, 0, SEEK_SET), 0);
+    data = malloc((size_t)len + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *size = (size_t)len;
+    return data;
+}
+
+static inline void ll_test_write_file(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, size, f), size);
+    assert_int_equal(fclose(f), 0);
+}
+
+/* Deterministic uniform numbers in [0, 1) (xorshift64*). */
+static inline double ll_test_uniform(uint64_t *state)
+{
+    uint64_t x = *state;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    *state = x;
+    return (double)((x * 0x2545F4914F6CDD1DULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static inline int ll_test_close(double a, double b, double rel, double abs_tol)
+{
+    return fabs(a - b) <= abs_tol + rel * fabs(b);
+}
+
+#endif /* LL_TEST_UTIL_H */
