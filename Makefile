@@ -31,7 +31,7 @@ CXX     ?= c++
 MULTIARCH := $(shell $(CC) -print-multiarch 2>/dev/null)
 
 # OpenBLAS: prefer the OpenMP build, which runs single-threaded inside our own
-# parallel regions (see src/support.c); fall back to whatever -lopenblas is.
+# parallel regions (see src/support/support.c); fall back to whatever -lopenblas is.
 OPENBLAS_DIR ?= $(firstword $(wildcard /usr/lib/$(MULTIARCH)/openblas-openmp))
 ifneq ($(OPENBLAS_DIR),)
 BLAS_LIBS := -L$(OPENBLAS_DIR) -Wl,-rpath,$(OPENBLAS_DIR) -llapacke -lopenblas
@@ -50,7 +50,7 @@ endif
 CFLAGS_LIB += $(SAN)
 LDLIBS_LIB := $(BLAS_LIBS) -fopenmp -lm -lpthread
 
-LIB_SRC  := $(sort $(wildcard src/*.c))
+LIB_SRC  := $(sort $(wildcard src/*/*.c))
 LIB_OBJ  := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
 SONAME   := liblayerlab.so.$(ABI_VERSION)
 SHARED   := $(BUILD)/lib/liblayerlab.so.$(VERSION)
@@ -59,9 +59,9 @@ STATIC   := $(BUILD)/lib/liblayerlab.a
 # Tools: each directory tools/NAME/ holds the sources of one program NAME.
 TOOL_NAMES := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard tools/*/*.c)))))
 TOOLS    := $(TOOL_NAMES:%=$(BUILD)/bin/%)
-TOOL_CFLAGS := -std=c99 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(SAN) \
+TOOL_CFLAGS = -std=c99 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(SAN) \
                $(shell pkg-config --cflags cairo OpenEXR 2>/dev/null)
-TOOL_LIBS := $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
+TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 
 # Tests: each tests/test_*.c is one cmocka program, linked statically so it
 # can reach internal functions too.
@@ -80,7 +80,7 @@ deps:
 
 lib: $(SHARED) $(STATIC) $(BUILD)/lib/layerlab.pc
 
-$(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) $(wildcard include/*.h include/layerlab/*.h) | deps
+$(BUILD)/obj/%.o: src/%.c $(wildcard src/*/*.h) $(wildcard include/*.h include/layerlab/*.h) | deps
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_LIB) -c $< -o $@
 

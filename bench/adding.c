@@ -15,7 +15,7 @@
  *     [T | R'] = Z [Ta | P]      gemm (2h cols)  4 h^3
  * i.e. 32/3 h^3, and 64/3 h^3 = 8/3 n^3 for one order (the O(n^2) work of
  * expanding and compressing the blocks is not counted). This is also the
- * count of the arithmetic src/adding.c performs on full blocks; a cheaper
+ * count of the arithmetic src/grammar/adding.c performs on full blocks; a cheaper
  * formulation would give a *lower* GFLOP/s for the same time, so nothing
  * is flattered by it.
  *

@@ -7,7 +7,7 @@
  * nothing leaks (LeakSanitizer checks at exit under SANITIZE=1).
  */
 #include "test_bsdf_util.h"
-#include "bsdf_format.h"
+#include "storage/bsdf_format.h"
 
 /* The golden file's layout (shared/testdata/README.md). */
 enum {

@@ -5,8 +5,8 @@
  * renderer-convention calls, plus the layer convention's mapping.
  */
 #include "test_bsdf_util.h"
-#include "bsdf_internal.h"
-#include "spline.h"
+#include "storage/bsdf_internal.h"
+#include "numerics/spline.h"
 
 static ll_bsdf *open_golden(void)
 {

@@ -5,7 +5,7 @@
  * the eta^2 factor of radiance transport.
  */
 #include "test_bsdf_util.h"
-#include "bsdf_format.h"
+#include "storage/bsdf_format.h"
 
 static void path_in_dir(char *path, size_t size, const char *name)
 {

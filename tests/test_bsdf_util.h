@@ -7,7 +7,7 @@
 #define LL_TEST_BSDF_UTIL_H
 
 #include "test_util.h"
-#include "layer_internal.h"
+#include "layer/layer.h"
 
 #define LL_TEST_GOLDEN LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
 #define LL_TEST_PI 3.14159265358979323846

@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include <layerlab.h>
-#include "layer_internal.h"
+#include "layer/layer.h"
 #include "test_util.h"
 
 static void get_nodes(const ll_layer *l, double *x, double *w)

@@ -17,7 +17,7 @@
 
 #include <layerlab.h>
 #include "test_util.h"
-#include "ior.h"
+#include "material/ior.h"
 
 #define IOR_DIR LL_SOURCE_DIR "/../shared/ior"
 #define GOLD_FILE LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
-#include "merl.h"
+#include "words/merl.h"
 
 #define TH 12
 #define TD 10

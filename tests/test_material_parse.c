@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
-#include "material.h"
+#include "material/material.h"
 
 /* Parse text that must fail with LL_ERROR_PARSE and a message that starts
  * with `where` and contains `what`. */

@@ -18,9 +18,9 @@
 
 #include <layerlab.h>
 #include "test_util.h"
-#include "filon.h"
-#include "microfacet.h"
-#include "series.h"
+#include "numerics/filon.h"
+#include "words/microfacet.h"
+#include "numerics/series.h"
 
 /* ---------------------------------------------------------- helpers */
 

@@ -20,7 +20,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
-#include "layer_internal.h"
+#include "layer/layer.h"
 
 /* A clear layer on n Gauss-Lobatto nodes (as files are made: the nodes
  * include +-1, so the file covers every direction) with m orders. */

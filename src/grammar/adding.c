@@ -1,0 +1,455 @@
+/*
+ * The grammar of layers: adding (Grant and Hunt 1969; Jakob et al. 2014,
+ * section 5) and doubling (section 5.2). This is the only code that
+ * combines layers.
+ *
+ * Each Fourier order is independent, so orders run in parallel
+ * (ll_parallel_for); inside an order the blocks are expanded to dense
+ * column-major h x h matrices and combined with LAPACK (getrf/getrs) and
+ * BLAS-3 (gemm), then compressed back.
+ */
+#include "grammar/grammar.h"
+
+#include <cblas.h>
+#include <lapacke.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Dense blocks of one order; zero[] says which are identically zero. */
+typedef struct dense_order {
+    double *blk[4]; /* indexed by LL_BLOCK_* */
+    int zero[4];
+} dense_order;
+
+/* Per-thread scratch: two inputs, one output, the gain matrices and the
+ * right-hand sides. Allocated per order (one malloc), so nothing is shared. */
+typedef struct workspace {
+    size_t h;
+    dense_order top, bottom, out;
+    double *gain_tb, *gain_bt; /* h x h LU factors, then h x h scratch  */
+    double *rhs;               /* h x h: Ra Tb                          */
+    lapack_int *piv_tb, *piv_bt;
+    void *memory;
+} workspace;
+
+static void workspace_free(workspace *w) { free(w->memory); }
+
+static ll_status workspace_init(workspace *w, size_t h)
+{
+    size_t hh, doubles, k;
+    double *p;
+    memset(w, 0, sizeof *w);
+    w->h = h;
+    /* 12 blocks + 2 x (gain, Z) + rhs = 17 h^2 doubles, plus pivots. */
+    if (!ll_size_mul(h, h, &hh) || !ll_size_mul(hh, 17, &doubles) ||
+        !ll_size_add(doubles, h, &doubles) || !ll_size_add(doubles, h, &doubles))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "adding: %zu nodes are too many", 2 * h);
+    w->memory = ll_alloc_array(doubles, sizeof(double));
+    if (!w->memory)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                       "adding: out of memory for the work matrices of %zu nodes", 2 * h);
+    p = w->memory;
+    for (k = 0; k < 4; ++k) {
+        w->top.blk[k] = p; p += hh;
+        w->bottom.blk[k] = p; p += hh;
+        w->out.blk[k] = p; p += hh;
+    }
+    w->gain_tb = p; p += 2 * hh;
+    w->gain_bt = p; p += 2 * hh;
+    w->rhs = p; p += hh;
+    w->piv_tb = (lapack_int *)p; p += h;
+    w->piv_bt = (lapack_int *)p;
+    return LL_OK;
+}
+
+static void load_order(const ll_order *o, size_t n, dense_order *d)
+{
+    int k;
+    for (k = 0; k < 4; ++k)
+        d->zero[k] = !ll_order_block_to_dense(o, n, k, d->blk[k]);
+}
+
+/* C = alpha A B + beta C for h x h (A) times h x cols (B), column-major. */
+static void gemm(size_t h, size_t cols, double alpha, const double *A, const double *B,
+                 double beta, double *C)
+{
+    cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, (blasint)h, (blasint)cols,
+                (blasint)h, alpha, A, (blasint)h, B, (blasint)h, beta, C, (blasint)h);
+}
+
+/* gain = I - A B, LU-factored in place. */
+static ll_status factor_gain(size_t h, const double *A, const double *B, double *gain,
+                             lapack_int *piv)
+{
+    size_t i;
+    lapack_int info;
+    gemm(h, h, -1.0, A, B, 0.0, gain);
+    for (i = 0; i < h; ++i)
+        gain[i * h + i] += 1.0;
+    info = LAPACKE_dgetrf_work(LAPACK_COL_MAJOR, (lapack_int)h, (lapack_int)h, gain,
+                               (lapack_int)h, piv);
+    if (info != 0)
+        return ll_fail(LL_ERROR_NUMERICAL,
+                       "adding: the gain matrix I - R R is singular (getrf info %d); a "
+                       "non-absorbing stack of two perfect reflectors has no finite solution",
+                       (int)info);
+    return LL_OK;
+}
+
+static int all_zero(const double *x, size_t count)
+{
+    size_t i;
+    for (i = 0; i < count; ++i)
+        if (x[i] != 0.0)
+            return 0;
+    return 1;
+}
+
+/* Z = B G^-1 from the LU factors of G (G = P L U, as getrf leaves them):
+ * Z P L U = B is solved by two right-sided triangular solves and the column
+ * interchanges of P undone in reverse order. In place on B (h x h). */
+static void right_solve(size_t h, const double *lu, const lapack_int *piv, double *B)
+{
+    size_t i, r;
+    cblas_dtrsm(CblasColMajor, CblasRight, CblasUpper, CblasNoTrans, CblasNonUnit, (blasint)h,
+                (blasint)h, 1.0, lu, (blasint)h, B, (blasint)h);
+    cblas_dtrsm(CblasColMajor, CblasRight, CblasLower, CblasNoTrans, CblasUnit, (blasint)h,
+                (blasint)h, 1.0, lu, (blasint)h, B, (blasint)h);
+    for (i = h; i-- > 0;) {
+        size_t j = (size_t)piv[i] - 1; /* LAPACK pivots are 1-based */
+        if (j != i)
+            for (r = 0; r < h; ++r) {
+                double t = B[i * h + r];
+                B[i * h + r] = B[j * h + r];
+                B[j * h + r] = t;
+            }
+    }
+}
+
+/*
+ * One half of the adding equations (method.md; Grant and Hunt 1969). For
+ * light entering through layer a towards layer b:
+ *     Z = Tb_through (I - Ra_in Rb_in)^-1
+ *     T_out = Z Ta_through,   R_out = Rb_out + Z Ra_in Tb_back
+ * which gives T^tb and R^b of the sum for a = top (and, with the roles
+ * mirrored, T^bt and R^t). Solving for Z from the right needs h right-hand
+ * sides where solving G X = [Ta | Ra Tb] would need 2h; the products are
+ * written straight into the output blocks (R_out accumulates onto Rb_out
+ * with beta = 1). zero flags skip products with zero operands.
+ */
+static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const double *Rb_in,
+                          int zRb_in, const double *Ta_through, int zTa_through,
+                          const double *Tb_back, int zTb_back, const double *Tb_through,
+                          int zTb_through, const double *Rb_out, int zRb_out, double *gain,
+                          lapack_int *piv, double *rhs, double *T_out, double *R_out)
+{
+    size_t hh = h * h;
+    int coupled = !zRa_in && !zRb_in; /* multiple reflections between the layers */
+    int reflect_back = !zRa_in && !zTb_back;
+    double *Z = gain + hh; /* scratch after the gain matrix (see workspace) */
+    ll_status s;
+
+    if (zTb_through || (zTa_through && !reflect_back)) {
+        memset(T_out, 0, hh * sizeof(double));
+        memcpy(R_out, Rb_out, hh * sizeof(double));
+        return LL_OK;
+    }
+    memcpy(Z, Tb_through, hh * sizeof(double));
+    if (coupled) {
+        s = factor_gain(h, Ra_in, Rb_in, gain, piv);
+        if (s != LL_OK)
+            return s;
+        right_solve(h, gain, piv, Z);
+    }
+    /* T_out = Z Ta_through and R_out = Rb_out + Z (Ra_in Tb_back), the
+     * products written straight into the output blocks. */
+    if (zTa_through)
+        memset(T_out, 0, hh * sizeof(double));
+    else
+        gemm(h, h, 1.0, Z, Ta_through, 0.0, T_out);
+    memcpy(R_out, Rb_out, hh * sizeof(double));
+    (void)zRb_out; /* a zero block is stored zero-filled */
+    if (reflect_back) {
+        gemm(h, h, 1.0, Ra_in, Tb_back, 0.0, rhs);
+        gemm(h, h, 1.0, Z, rhs, 1.0, R_out);
+    }
+    return LL_OK;
+}
+
+/* out = top on bottom, both dense. homogeneous: top == bottom, symmetric. */
+static ll_status add_dense(workspace *w, int homogeneous)
+{
+    size_t h = w->h;
+    dense_order *t = &w->top, *b = &w->bottom, *o = &w->out;
+    ll_status s;
+    int k;
+
+    /* Downward: through the top into the bottom -> T^tb and R^b. */
+    s = half_add(h, t->blk[LL_BLOCK_RB], t->zero[LL_BLOCK_RB], b->blk[LL_BLOCK_RT],
+                 b->zero[LL_BLOCK_RT], t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB],
+                 b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT], b->blk[LL_BLOCK_TTB],
+                 b->zero[LL_BLOCK_TTB], b->blk[LL_BLOCK_RB], b->zero[LL_BLOCK_RB], w->gain_tb,
+                 w->piv_tb, w->rhs, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB]);
+    if (s != LL_OK)
+        return s;
+    if (homogeneous) {
+        /* Both sides of a symmetric slab are the same. */
+        memcpy(o->blk[LL_BLOCK_TBT], o->blk[LL_BLOCK_TTB], h * h * sizeof(double));
+        memcpy(o->blk[LL_BLOCK_RT], o->blk[LL_BLOCK_RB], h * h * sizeof(double));
+    } else {
+        /* Upward: through the bottom into the top -> T^bt and R^t. */
+        s = half_add(h, b->blk[LL_BLOCK_RT], b->zero[LL_BLOCK_RT], t->blk[LL_BLOCK_RB],
+                     t->zero[LL_BLOCK_RB], b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT],
+                     t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB], t->blk[LL_BLOCK_TBT],
+                     t->zero[LL_BLOCK_TBT], t->blk[LL_BLOCK_RT], t->zero[LL_BLOCK_RT],
+                     w->gain_bt, w->piv_bt, w->rhs, o->blk[LL_BLOCK_TBT],
+                     o->blk[LL_BLOCK_RT]);
+        if (s != LL_OK)
+            return s;
+    }
+    for (k = 0; k < 4; ++k)
+        o->zero[k] = all_zero(o->blk[k], h * h);
+    return LL_OK;
+}
+
+static ll_status store_dense(const dense_order *d, size_t h, ll_order **out)
+{
+    const double *blocks[4];
+    int k;
+    for (k = 0; k < 4; ++k)
+        blocks[k] = d->zero[k] ? NULL : d->blk[k];
+    return ll_order_from_blocks(blocks, h, LL_DROP_THRESHOLD, out);
+}
+
+/* ----------------------------------------------------------------- adding */
+
+typedef struct add_job {
+    const ll_layer *top, *bottom;
+    ll_order **result;
+    int homogeneous;
+} add_job;
+
+static ll_status add_one_order(size_t k, void *ctx)
+{
+    add_job *job = ctx;
+    const ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
+    size_t n = job->top->n;
+    workspace w;
+    ll_status s;
+
+    if (!ot && !ob)
+        return LL_OK; /* nothing reflects or transmits in this order */
+    /* An order that is all zero absorbs everything that enters it, so only
+     * the other layer's reflection from its outer side survives: R^t of the
+     * top over an absorbing bottom, R^b of the bottom under an absorbing top.
+     * (A diffuse base has only order 0: this spares a coat over it all the
+     * dense work of its other orders.) */
+    if (!ob)
+        return ll_order_keep_block(ot, LL_BLOCK_RT, &job->result[k]);
+    if (!ot)
+        return ll_order_keep_block(ob, LL_BLOCK_RB, &job->result[k]);
+    s = workspace_init(&w, n / 2);
+    if (s != LL_OK)
+        return s;
+    load_order(ot, n, &w.top);
+    load_order(ob, n, &w.bottom);
+    s = add_dense(&w, job->homogeneous);
+    if (s == LL_OK)
+        s = store_dense(&w.out, n / 2, &job->result[k]);
+    workspace_free(&w);
+    return s;
+}
+
+ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                       int homogeneous)
+{
+    add_job job;
+    ll_status s;
+
+    s = ll_layer_check_compatible(top, bottom, "ll_layer_add");
+    if (s == LL_OK)
+        s = ll_layer_check_compatible(top, out, "ll_layer_add (output)");
+    if (s != LL_OK)
+        return s;
+    job.top = top;
+    job.bottom = bottom;
+    job.homogeneous = homogeneous != 0;
+    job.result = ll_calloc_array(top->m, sizeof(ll_order *));
+    if (!job.result)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
+    s = ll_parallel_for(top->m, add_one_order, &job);
+    return ll_layer_commit_orders(out, job.result, s);
+}
+
+ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top)
+{
+    return ll_layer_add(top, layer, layer, 0);
+}
+
+ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
+{
+    return ll_layer_add(layer, bottom, layer, 0);
+}
+
+/* --------------------------------------------------------------- doubling */
+
+typedef struct expand_job {
+    const ll_layer *layer;
+    double tau0;
+    size_t doublings;
+    ll_order **result;
+    const ll_expand_monitor *monitor;
+    size_t finished; /* orders done (atomic) */
+} expand_job;
+
+static int cancelled(const expand_job *job)
+{
+    return job->monitor && job->monitor->cancel && *job->monitor->cancel;
+}
+
+/* Count a finished order; the calling thread (OpenMP thread 0) reports. */
+static void order_finished(expand_job *job)
+{
+    size_t done = __atomic_add_fetch(&job->finished, 1, __ATOMIC_RELAXED);
+    if (!job->monitor || !job->monitor->progress)
+        return;
+#ifdef _OPENMP
+    if (omp_get_thread_num() != 0)
+        return;
+#endif
+    job->monitor->progress((double)done / (double)job->layer->m, job->monitor->user);
+}
+
+/* Is the block zero off its diagonal? */
+static int is_diagonal(const double *x, size_t h)
+{
+    size_t r, c;
+    for (c = 0; c < h; ++c)
+        for (r = 0; r < h; ++r)
+            if (r != c && x[c * h + r] != 0.0)
+                return 0;
+    return 1;
+}
+
+static ll_status expand_one_order(size_t k, void *ctx)
+{
+    expand_job *job = ctx;
+    const ll_layer *l = job->layer;
+    size_t n = l->n, h = n / 2, r, c, d;
+    workspace w;
+    double *R, *T;
+    ll_status s;
+
+    s = workspace_init(&w, h);
+    if (s != LL_OK)
+        return s;
+    /* The phase matrices of a medium are the same seen from either side, so
+     * R^t and T^tb describe the slab. Initial thin slab (Grant and Hunt 1969,
+     * first order in tau0): R = (tau0 / mu_o) P_R and T = I + (tau0 / mu_o)
+     * (P_T - I). With phase matrices that conserve energy exactly this
+     * conserves energy exactly too, and adding preserves it. */
+    load_order(l->orders[k], n, &w.top);
+    R = w.top.blk[LL_BLOCK_RT];
+    T = w.top.blk[LL_BLOCK_TTB];
+    for (c = 0; c < h; ++c)
+        for (r = 0; r < h; ++r) {
+            double scale = job->tau0 / l->nodes[h + r];
+            R[c * h + r] *= scale;
+            T[c * h + r] = (r == c ? 1.0 : 0.0) + scale * (T[c * h + r] - (r == c ? 1.0 : 0.0));
+        }
+
+    if (w.top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
+        /* Nothing scatters sideways in this order (only the unscattered and
+         * exactly-forward part): each doubling squares the diagonal. */
+        for (c = 0; c < h; ++c)
+            for (d = 0; d < job->doublings; ++d)
+                T[c * h + c] *= T[c * h + c];
+        memset(w.out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
+        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+    } else {
+        for (d = 0; d < job->doublings; ++d) {
+            if (cancelled(job)) {
+                s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
+                goto done;
+            }
+            /* The slab added to itself: its top is the bottom's copy. */
+            memcpy(w.top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
+            memcpy(w.top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
+            w.top.zero[LL_BLOCK_RT] = w.top.zero[LL_BLOCK_RB] = all_zero(R, h * h);
+            w.top.zero[LL_BLOCK_TTB] = w.top.zero[LL_BLOCK_TBT] = 0;
+            memcpy(w.bottom.blk, w.top.blk, sizeof w.top.blk);
+            memcpy(w.bottom.zero, w.top.zero, sizeof w.top.zero);
+            s = add_dense(&w, 1);
+            if (s != LL_OK)
+                goto done;
+            memcpy(R, w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+            memcpy(T, w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+        }
+        memcpy(w.out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
+        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+    }
+    memcpy(w.out.blk[LL_BLOCK_RB], w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+    memcpy(w.out.blk[LL_BLOCK_TBT], w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+    w.out.zero[LL_BLOCK_RT] = w.out.zero[LL_BLOCK_RB] = all_zero(w.out.blk[LL_BLOCK_RT], h * h);
+    w.out.zero[LL_BLOCK_TTB] = w.out.zero[LL_BLOCK_TBT] =
+        all_zero(w.out.blk[LL_BLOCK_TTB], h * h);
+    s = store_dense(&w.out, h, &job->result[k]);
+    if (s == LL_OK)
+        order_finished(job);
+done:
+    workspace_free(&w);
+    return s;
+}
+
+void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings)
+{
+    /* Initial thickness: Grant and Hunt's bound tau0 <= 2 min|mu| keeps the
+     * first-order slab non-negative; 2^-15 keeps its error small. Round so
+     * that tau0 2^k hits tau exactly. */
+    double t0 = fmin(2.0 * min_mu, ldexp(1.0, -15));
+    size_t k = tau > t0 ? (size_t)ceil(log2(tau / t0)) : 0;
+    *doublings = k;
+    *tau0 = ldexp(tau, -(int)k);
+}
+
+ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
+                                    const ll_expand_monitor *monitor)
+{
+    expand_job job;
+    double min_mu = 1.0;
+    size_t i;
+    ll_status s;
+
+    if (!layer)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_layer_expand: layer is NULL");
+    if (!(tau >= 0.0) || !ll_is_finite(tau))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_layer_expand: optical thickness %g is not a finite number >= 0", tau);
+    if (tau > 1e12)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_layer_expand: optical thickness %g is beyond 1e12", tau);
+    if (tau == 0.0)
+        return ll_layer_clear(layer);
+
+    for (i = 0; i < layer->n; ++i)
+        if (fabs(layer->nodes[i]) < min_mu)
+            min_mu = fabs(layer->nodes[i]);
+    job.layer = layer;
+    ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
+    job.monitor = monitor;
+    job.finished = 0;
+    job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
+    if (!job.result)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
+    s = ll_parallel_for(layer->m, expand_one_order, &job);
+    return ll_layer_commit_orders(layer, job.result, s);
+}
+
+ll_status ll_layer_expand(ll_layer *layer, double tau)
+{
+    return ll_layer_expand_monitored(layer, tau, NULL);
+}

@@ -1,0 +1,28 @@
+/*
+ * The grammar of layers: adding (Grant and Hunt 1969) and doubling, the only
+ * code that combines layers. Public entry points are in layerlab/ll_layer.h;
+ * these are the internal extras that the material builder uses.
+ */
+#ifndef LL_GRAMMAR_GRAMMAR_H
+#define LL_GRAMMAR_GRAMMAR_H
+
+#include "layer/layer.h"
+
+/* ---- doubling with progress and cancellation (for long builds) */
+typedef struct ll_expand_monitor {
+    const volatile int *cancel;                       /* nullable; nonzero stops */
+    void (*progress)(double fraction, void *user);    /* nullable; calling thread */
+    void *user;
+} ll_expand_monitor;
+
+/* ll_layer_expand with a monitor: progress reports the fraction of Fourier
+ * orders finished, on the calling thread; a raised cancel flag stops the
+ * doublings early with LL_ERROR_CANCELLED and leaves the layer unchanged. */
+LL_INTERNAL ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
+                                                const ll_expand_monitor *monitor);
+
+/* The doubling schedule of ll_layer_expand for nodes whose smallest |mu| is
+ * min_mu: the initial thickness tau0 and the count k with tau0 2^k = tau. */
+LL_INTERNAL void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings);
+
+#endif /* LL_GRAMMAR_GRAMMAR_H */

@@ -1,0 +1,86 @@
+/*
+ * One Fourier order of a layer's scattering matrix, stored compactly.
+ *
+ * Storage (ll_order): high Fourier orders are mostly zero, and the non-zero
+ * part of a column of a block is one contiguous run of rows (a scattering
+ * lobe), so each column of each block keeps only its run [lo, lo + len).
+ * A column of the full matrix has two halves (rows < h and rows >= h), and
+ * segment (col, half) belongs to block:
+ *      half 0 (rows < h,  outgoing up):   col < h: T^bt   col >= h: R^t
+ *      half 1 (rows >= h, outgoing down): col < h: R^b    col >= h: T^tb
+ * An order whose every run is empty is stored as NULL. Orders are immutable
+ * once built and reference counted, so clones and layers that differ only in
+ * a few orders (the channels of an RGB stack) share the rest.
+ */
+#ifndef LL_LAYER_ORDER_H
+#define LL_LAYER_ORDER_H
+
+#include "support/support.h"
+
+/* One run: rows [lo, lo + len) of a half column, values at val + off. The
+ * three fields sit together because evaluation reads them together. */
+typedef struct ll_segment {
+    uint32_t lo, len;
+    size_t off;
+} ll_segment;
+
+typedef struct ll_order {
+    int refcount;      /* atomic */
+    size_t n;          /* matrix size                                   */
+    ll_segment *seg;   /* [2n + 1]; seg[2n].off = values stored         */
+    double *val;       /* stored values, segment after segment          */
+} ll_order;
+
+/* Blocks of an order, as indices for the helpers below. */
+enum { LL_BLOCK_TBT = 0, LL_BLOCK_RT = 1, LL_BLOCK_RB = 2, LL_BLOCK_TTB = 3 };
+
+/* Entries with magnitude at or below this are not stored after a
+ * combination (the matrices are dimensionless transfer coefficients of
+ * order one; cf. the original's prune(1, 1e-9)). */
+#define LL_DROP_THRESHOLD 1e-12
+
+/* ---- orders */
+LL_INTERNAL ll_order *ll_order_retain(ll_order *o);
+LL_INTERNAL void ll_order_release(ll_order *o);
+
+/* Compress a dense column-major n x n matrix, dropping entries with
+ * |x| <= drop at both ends of each run. *out = NULL if nothing remains. */
+LL_INTERNAL ll_status ll_order_from_dense(const double *dense, size_t n, double drop,
+                                          ll_order **out);
+/* Compress four dense column-major h x h blocks (any may be NULL = zero). */
+LL_INTERNAL ll_status ll_order_from_blocks(const double *const blocks[4], size_t h,
+                                           double drop, ll_order **out);
+/* Expand (o may be NULL): dense column-major n x n, or one h x h block.
+ * Returns 1 if the block has any stored value, else 0 (and zero-fills). */
+LL_INTERNAL void ll_order_to_dense(const ll_order *o, size_t n, double *dense);
+LL_INTERNAL int ll_order_block_to_dense(const ll_order *o, size_t n, int block, double *dense);
+/* Is a block (or the whole order) all zero? */
+LL_INTERNAL int ll_order_block_is_zero(const ll_order *o, int block);
+/* Entry (row, col) of the full weighted matrix. */
+LL_INTERNAL double ll_order_get(const ll_order *o, size_t row, size_t col);
+/* The order with only one block kept (NULL if that block is zero); shares o
+ * itself when nothing else is stored. */
+LL_INTERNAL ll_status ll_order_keep_block(const ll_order *o, int block, ll_order **out);
+/* Number of stored values. */
+LL_INTERNAL size_t ll_order_stored(const ll_order *o);
+/* The order with its top and bottom swapped (reverse), or NULL for NULL. */
+LL_INTERNAL ll_status ll_order_reversed(const ll_order *o, ll_order **out);
+/* A clear order: T = I, R = 0. */
+LL_INTERNAL ll_status ll_order_identity(size_t n, ll_order **out);
+
+/* ---- building an order column by column (interfaces, media, MERL):
+ * thread-safe for distinct columns; trims exact zeros (|x| <= drop). */
+typedef struct ll_order_builder ll_order_builder;
+LL_INTERNAL ll_status ll_order_builder_create(size_t n, ll_order_builder **out);
+LL_INTERNAL ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col,
+                                                  const double *column, double drop);
+/* The same when the caller knows that rows outside [row_lo, row_hi) are zero
+ * (only that range is scanned). */
+LL_INTERNAL ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
+                                                        const double *column, size_t row_lo,
+                                                        size_t row_hi, double drop);
+/* Finish: *out = the order (NULL if all zero); frees the builder. */
+LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
+LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);
+
+#endif /* LL_LAYER_ORDER_H */

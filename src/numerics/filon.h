@@ -1,0 +1,21 @@
+/*
+ * Cosine moments of sampled functions by Filon quadrature (numerics only).
+ */
+#ifndef LL_FILON_H
+#define LL_FILON_H
+
+#include <stddef.h>
+#include "support/support.h"
+
+/* Filon's rule (L. N. G. Filon 1928) for b_l = integral_a^b g(phi)
+ * cos(l phi) dphi, l < n_moments: g is replaced by the piecewise quadratic
+ * through n_samples (odd, >= 3) equidistant samples g_k = g(a + k h'),
+ * h' = (b - a) / (n_samples - 1), and each panel is integrated exactly, so
+ * the rule stays exact however fast cos(l phi) oscillates.
+ *
+ * Adds b_l to moments[l] for l < n_moments; scratch holds 7 n_moments
+ * doubles. */
+LL_INTERNAL void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
+                                  size_t n_moments, double *moments, double *scratch);
+
+#endif /* LL_FILON_H */

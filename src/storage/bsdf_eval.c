@@ -1,0 +1,176 @@
+/*
+ * Evaluating an opened .bsdf file in the layer convention (the file's own
+ * axes; ll_bsdf.h): f and the sampling density, as pbrt-v3's FourierBSDF::f
+ * and ::Pdf compute them (Jakob et al. 2014, sec. 7; bsdf-format.md,
+ * "Evaluation").
+ */
+#include "storage/bsdf_internal.h"
+#include "storage/bsdf_format.h"
+
+#include <math.h>
+
+int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
+                            double mu_o, const float *basis, ll_bsdf_series *s)
+{
+    size_t n = b->n_nodes;
+    ptrdiff_t off_o;
+    double w_o[4];
+    int a, c;
+
+    s->count = 0;
+    s->max_length = 0;
+    s->n_bases = b->n_bases;
+    s->basis = basis;
+    s->dense = NULL;
+    if (!ll_bsdf_weights(b, mu_o, &off_o, w_o))
+        return 0;
+    /* Nodes outside the table have weight exactly 0 (spline.h), so every
+     * index used below is inside it. */
+    for (a = 0; a < 4; ++a) {
+        const ll_bsdf_pair *row;
+        if (w_i[a] == 0.0)
+            continue;
+        row = b->pairs + (size_t)(off_i + a) * n;
+        for (c = 0; c < 4; ++c) {
+            double w = w_i[a] * w_o[c];
+            const ll_bsdf_pair *pr;
+            if (w == 0.0)
+                continue;
+            pr = row + (off_o + c);
+            if (pr->length == 0)
+                continue;
+            s->coeff[s->count] = b->coeffs + pr->offset;
+            s->length[s->count] = pr->length;
+            s->weight[s->count] = w;
+            if (pr->length > s->max_length)
+                s->max_length = pr->length;
+            s->count++;
+        }
+    }
+    return 1;
+}
+
+int ll_bsdf_gather(const ll_bsdf *b, double mu_i, double mu_o, const float *basis,
+                   ll_bsdf_series *s)
+{
+    ptrdiff_t off_i;
+    double w_i[4];
+    s->count = 0;
+    s->max_length = 0;
+    s->dense = NULL;
+    if (!ll_bsdf_weights(b, mu_i, &off_i, w_i))
+        return 0;
+    return ll_bsdf_gather_weighted(b, off_i, w_i, mu_o, basis, s);
+}
+
+double ll_bsdf_row_value(const ll_bsdf *b, const double *table, ptrdiff_t off_i,
+                         const double w_i[4], size_t o, const float *basis)
+{
+    size_t n = b->n_nodes, nb = b->n_bases, k;
+    double value = 0.0;
+    int a;
+    if (nb == 1 && basis[0] == 1.0f) {
+        /* Untextured: the interpolation alone (spline weights outside the
+         * table are exactly 0, the entries they would read stay unread). */
+        for (a = 0; a < 4; ++a)
+            if (w_i[a] != 0.0)
+                value += w_i[a] * table[(size_t)(off_i + a) * n + o];
+        return value;
+    }
+    for (a = 0; a < 4; ++a) {
+        const double *entry;
+        double sum = 0.0;
+        if (w_i[a] == 0.0)
+            continue;
+        entry = table + ((size_t)(off_i + a) * n + o) * nb;
+        for (k = 0; k < nb; ++k)
+            sum += (double)basis[k] * entry[k];
+        value += w_i[a] * sum;
+    }
+    return value;
+}
+
+void ll_bsdf_to_rgb(const ll_bsdf *b, const double sums[3], double scale, double rgb[3])
+{
+    /* Luminance is clamped first (pbrt-v3: Y = max(0, Fourier(...))), then
+     * green is rebuilt from Y, R, B and every channel clamped at 0. */
+    double y = sums[0] > 0.0 ? sums[0] : 0.0;
+    int c;
+    if (b->n_channels == 1) {
+        rgb[0] = rgb[1] = rgb[2] = y * scale;
+    } else {
+        double r = sums[1], bl = sums[2];
+        double g = LL_BSDF_G_FROM_Y * y + LL_BSDF_G_FROM_B * bl + LL_BSDF_G_FROM_R * r;
+        rgb[0] = r * scale;
+        rgb[1] = g * scale;
+        rgb[2] = bl * scale;
+    }
+    for (c = 0; c < 3; ++c)
+        if (!(rgb[c] > 0.0))
+            rgb[c] = 0.0;
+}
+
+void ll_bsdf_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
+                      const float *basis, double extra_scale, double rgb[3])
+{
+    ll_bsdf_series s;
+    double sums[3];
+    rgb[0] = rgb[1] = rgb[2] = 0.0;
+    /* The stored series is f * |mu_o| (bsdf-format.md); at mu_o = 0 the
+     * value is taken as 0, as pbrt-v3 does. */
+    if (mu_o == 0.0 || !ll_bsdf_gather(b, mu_i, mu_o, basis, &s) || s.count == 0)
+        return;
+    ll_bsdf_series_eval(&s, b->n_channels, cos_phi, sums);
+    ll_bsdf_to_rgb(b, sums, extra_scale / fabs(mu_o), rgb);
+}
+
+double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
+                       const float *basis)
+{
+    ll_bsdf_series s;
+    ptrdiff_t off_i;
+    double w_i[4], sums[3], rho;
+    if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
+        !ll_bsdf_gather_weighted(b, off_i, w_i, mu_o, basis, &s) || s.count == 0)
+        return 0.0;
+    /* The last CDF entry of a row is the integral of a_0 over mu_o: times
+     * 2 pi it is the albedo that normalises the density f |mu_o| / albedo. */
+    rho = 2.0 * LL_PI * ll_bsdf_row_value(b, b->cdf, off_i, w_i, b->n_nodes - 1, basis);
+    ll_bsdf_series_eval(&s, 1, cos_phi, sums);
+    return (rho > 0.0 && sums[0] > 0.0) ? sums[0] / rho : 0.0;
+}
+
+/* ---------------------------------------------------------- public calls */
+
+/* Clamp a cosine into [-1, 1] (rounding can push a unit vector's z past
+ * 1); NaN and infinities are rejected by the callers. */
+static double clamp_cosine(double mu) { return mu > 1.0 ? 1.0 : (mu < -1.0 ? -1.0 : mu); }
+
+ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                       const float *basis_coeffs, double rgb[3])
+{
+    const float *basis;
+    ll_status s;
+    if (!b || !rgb)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_eval: bsdf or rgb is NULL");
+    rgb[0] = rgb[1] = rgb[2] = 0.0;
+    if (!ll_is_finite(mu_i) || !ll_is_finite(mu_o) || !ll_is_finite(phi_d))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_eval: mu_i = %g, mu_o = %g, phi_d = %g must be finite", mu_i,
+                       mu_o, phi_d);
+    s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_eval", &basis);
+    if (s != LL_OK)
+        return s;
+    ll_bsdf_eval_cos(b, clamp_cosine(mu_i), clamp_cosine(mu_o), cos(phi_d), basis, 1.0, rgb);
+    return LL_OK;
+}
+
+double ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                   const float *basis_coeffs)
+{
+    const float *basis;
+    if (!b || !ll_is_finite(mu_i) || !ll_is_finite(mu_o) || !ll_is_finite(phi_d) ||
+        ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf", &basis) != LL_OK)
+        return 0.0;
+    return ll_bsdf_pdf_cos(b, clamp_cosine(mu_i), clamp_cosine(mu_o), cos(phi_d), basis);
+}

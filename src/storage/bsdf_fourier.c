@@ -1,0 +1,226 @@
+/*
+ * The azimuthal Fourier series of a .bsdf file (Jakob et al. 2014, sec. 7):
+ * evaluating f(phi) = sum_k a_k cos(k phi) and sampling phi from it.
+ *
+ * A series here is the spline-weighted sum of up to 16 stored series
+ * (ll_bsdf_series). Rather than adding them into a buffer as long as the
+ * longest series in the file (a length that comes from the file), orders are
+ * processed in fixed-size chunks: the harmonics cos(k phi) of a chunk come
+ * from a Chebyshev recurrence (below) and each stored series is dotted
+ * with them (bsdf_kernels.c), weighted by its spline weight. Stack use is
+ * constant, the work one multiply-add per stored coefficient.
+ */
+#include "storage/bsdf_internal.h"
+
+#include <math.h>
+
+#define LL_BSDF_CHUNK 64
+/* Newton-bisection on [0, pi] ends within this many steps: bisection alone
+ * halves pi below 1e-12 in 42 of them. */
+#define LL_BSDF_PHI_ITERATIONS 64
+
+void ll_bsdf_harmonics_start(ll_harmonics *h, double cos_phi, double sin_phi, int sine)
+{
+    /* x_1 .. x_4 by the three-term recurrence; cos is even and sin odd,
+     * so x_{-j} = +-x_j. */
+    double c2 = 2.0 * cos_phi, x1 = sine ? sin_phi : cos_phi, x0 = sine ? 0.0 : 1.0;
+    double x2 = c2 * x1 - x0, x3 = c2 * x2 - x1, x4 = c2 * x3 - x2, sign = sine ? -1.0 : 1.0;
+    double cos2 = c2 * cos_phi - 1.0;
+    h->cur[0] = x0;
+    h->cur[1] = x1;
+    h->cur[2] = x2;
+    h->cur[3] = x3;
+    h->prev[0] = sign * x4;
+    h->prev[1] = sign * x3;
+    h->prev[2] = sign * x2;
+    h->prev[3] = sign * x1;
+    h->twice_cos4 = 2.0 * (2.0 * cos2 * cos2 - 1.0);
+}
+
+/* The chunk length rounded up to the recurrence's group of four (the
+ * chunk buffers have room: LL_BSDF_CHUNK is a multiple of 4). */
+static size_t group_of_four(size_t count) { return (count + 3) & ~(size_t)3; }
+
+void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels, double cos_phi,
+                         double out[3])
+{
+    double cosines[LL_BSDF_CHUNK];
+    int vector = ll_bsdf_kernels_vector();
+    ll_harmonics h;
+    size_t k0;
+    out[0] = out[1] = out[2] = 0.0;
+    ll_bsdf_harmonics_start(&h, cos_phi, 0.0, 0); /* the sine is not needed for cosines */
+    for (k0 = 0; k0 < s->max_length; k0 += LL_BSDF_CHUNK) {
+        size_t count = s->max_length - k0 < LL_BSDF_CHUNK ? s->max_length - k0 : LL_BSDF_CHUNK;
+        ll_bsdf_harmonics_next(vector, &h, group_of_four(count), cosines);
+        ll_bsdf_dot_chunk(vector, s, n_channels, k0, count, cosines, out);
+    }
+}
+
+/* Coefficient k of the luminance series. */
+static double series_coefficient(const ll_bsdf_series *s, size_t k)
+{
+    size_t p, basis, nb = s->n_bases;
+    double sum = 0.0;
+    if (k >= s->max_length)
+        return 0.0;
+    if (s->dense)
+        return s->dense[k];
+    for (p = 0; p < s->count; ++p)
+        if (k < s->length[p])
+            for (basis = 0; basis < nb; ++basis)
+                sum += s->weight[p] * (double)s->basis[basis] *
+                       (double)s->coeff[p][basis * s->length[p] + k];
+    return sum;
+}
+
+double ll_bsdf_series_mean(const ll_bsdf_series *s) { return series_coefficient(s, 0); }
+
+void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense, ll_bsdf_series *d)
+{
+    int vector = ll_bsdf_kernels_vector();
+    size_t p, basis, k, nb = s->n_bases;
+    for (k = 0; k < group_of_four(s->max_length); ++k)
+        dense[k] = 0.0;
+    for (p = 0; p < s->count; ++p)
+        for (basis = 0; basis < nb; ++basis) {
+            double w = s->weight[p] * (double)s->basis[basis];
+            if (w != 0.0)
+                ll_bsdf_add_scaled(vector, dense, s->coeff[p] + basis * s->length[p], w,
+                                   s->length[p]);
+        }
+    *d = *s;
+    d->count = 0;
+    d->dense = dense;
+}
+
+/* The luminance series and its integral at phi in [0, pi]:
+ *   f(phi) = sum_k a_k cos(k phi),
+ *   F(phi) = a_0 phi + sum_{k>=1} a_k sin(k phi) / k  (= integral_0^phi f).
+ * One pass: the integral's chunk holds phi for k = 0 and sin(k phi) / k
+ * beyond. */
+static void series_integral(const ll_bsdf_series *s, const double *recip, int vector,
+                            double phi, double cos_phi, double sin_phi, double *F, double *f)
+{
+    double cosines[LL_BSDF_CHUNK], sines[LL_BSDF_CHUNK];
+    ll_harmonics hc, hs;
+    size_t k0, j;
+    *F = *f = 0.0;
+    ll_bsdf_harmonics_start(&hc, cos_phi, sin_phi, 0);
+    ll_bsdf_harmonics_start(&hs, cos_phi, sin_phi, 1);
+    if (s->dense) {
+        /* One fused pass; recip[0] = 0, so order 0 adds its a_0 phi here. */
+        ll_bsdf_integral_dense(vector, s->dense, recip, group_of_four(s->max_length), &hc, &hs,
+                               F, f);
+        *F += s->dense[0] * phi;
+        return;
+    }
+    for (k0 = 0; k0 < s->max_length; k0 += LL_BSDF_CHUNK) {
+        size_t count = s->max_length - k0 < LL_BSDF_CHUNK ? s->max_length - k0 : LL_BSDF_CHUNK;
+        ll_bsdf_harmonics_next(vector, &hc, group_of_four(count), cosines);
+        ll_bsdf_harmonics_next(vector, &hs, group_of_four(count), sines);
+        for (j = 0; j < count; ++j)
+            sines[j] *= recip[k0 + j];
+        if (k0 == 0)
+            sines[0] = phi;
+        {
+            double out_f[3] = { 0.0, 0.0, 0.0 }, out_F[3] = { 0.0, 0.0, 0.0 };
+            ll_bsdf_dot_chunk(vector, s, 1, k0, count, cosines, out_f);
+            ll_bsdf_dot_chunk(vector, s, 1, k0, count, sines, out_F);
+            *f += out_f[0];
+            *F += out_F[0];
+        }
+    }
+}
+
+/* cos and sin of phi + d from those of phi, for |d| <= 1/5: Taylor series
+ * of cos d and sin d to the 10th/11th order (remainder below 1e-17), then
+ * the angle-addition formulas. A Newton step near convergence is small, and
+ * this costs a fraction of a libm sincos. */
+static void rotate(double *c, double *s, double d)
+{
+    double d2 = d * d;
+    double cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 *
+                                                                      (1.0 - d2 / 90.0))));
+    double sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0 *
+                                                                          (1.0 - d2 / 110.0)))));
+    double c1 = *c * cd - *s * sd, s1 = *s * cd + *c * sd;
+    *c = c1;
+    *s = s1;
+}
+
+/* A first guess for the phi with F(phi) = u F(pi): the exact inverse for
+ * the wrapped Cauchy (Poisson kernel) series a_k = 2 a_0 r^k that shares
+ * a_0 and a_1 with the series,
+ *     F(phi) / F(pi) = (2 / pi) atan((1 + r) / (1 - r) tan(phi / 2)).
+ * Lobes peaked at phi = 0 (r > 0) or pi (r < 0) start near their answer,
+ * which halves the Newton steps that pbrt-v3's start at pi / 2 needs. */
+static double initial_phi(const ll_bsdf_series *s, double a0, double u)
+{
+    double r = series_coefficient(s, 1) / (2.0 * a0), phi;
+    if (!(r < 0.99))
+        r = 0.99;
+    if (!(r > -0.99))
+        r = -0.99;
+    phi = 2.0 * atan((1.0 - r) / (1.0 + r) * tan(0.5 * LL_PI * u));
+    return (phi > 0.0 && phi < LL_PI) ? phi : 0.5 * LL_PI;
+}
+
+int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *recip, double u,
+                          double *phi_out)
+{
+    double a0 = ll_bsdf_series_mean(s), lo = 0.0, hi = LL_PI, phi, F, f, target, c, sn;
+    int flip, it, vector = ll_bsdf_kernels_vector();
+
+    if (!(a0 > 0.0) || !ll_is_finite(a0))
+        return 0;
+    /* pbrt-v3's SampleFourier: the series is even in phi, so u picks a half
+     * (u >= 1/2 the mirrored one) and is stretched back to [0, 1]. */
+    flip = u >= 0.5;
+    u = flip ? 2.0 - 2.0 * u : 2.0 * u;
+    if (u < 0.0) u = 0.0;
+    if (u > 1.0) u = 1.0;
+    target = u * a0 * LL_PI;
+    phi = initial_phi(s, a0, u);
+    c = cos(phi);
+    sn = sin(phi);
+
+    /* Newton-bisection for F(phi) = target: F(0) = 0 <= target <= F(pi) =
+     * a0 pi, so [lo, hi] always brackets a root; a Newton step that leaves
+     * the bracket (or divides by f = 0) is replaced by bisection, and the
+     * number of steps is bounded, so the loop ends whatever the series. A
+     * Newton step below 1e-9 is taken without another evaluation: the
+     * convergence is quadratic, its error is far below that. */
+    for (it = 0; it < LL_BSDF_PHI_ITERATIONS; ++it) {
+        double step;
+        series_integral(s, recip, vector, phi, c, sn, &F, &f);
+        F -= target;
+        if (F > 0.0)
+            hi = phi;
+        else
+            lo = phi;
+        if (F == 0.0 || hi - lo <= 1e-12)
+            break;
+        step = phi - F / f;
+        if (step > lo && step < hi) {
+            int done = fabs(step - phi) <= 1e-9;
+            if (fabs(step - phi) <= 0.2) {
+                rotate(&c, &sn, step - phi);
+            } else {
+                c = cos(step);
+                sn = sin(step);
+            }
+            phi = step;
+            if (done)
+                break;
+        } else {
+            phi = 0.5 * (lo + hi);
+            c = cos(phi);
+            sn = sin(phi);
+        }
+    }
+    if (flip)
+        phi = 2.0 * LL_PI - phi;
+    *phi_out = phi >= 2.0 * LL_PI ? 0.0 : phi;
+    return 1;
+}

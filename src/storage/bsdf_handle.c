@@ -1,0 +1,116 @@
+/*
+ * The life of an opened .bsdf file: reference counting (an opened file is
+ * immutable, so sharing it between materials and threads needs nothing but
+ * an atomic count) and the read-only queries.
+ */
+#include "storage/bsdf_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+const float ll_bsdf_unit_basis[1] = { 1.0f };
+
+void ll_bsdf_free(ll_bsdf *b)
+{
+    if (!b)
+        return;
+    free(b->nodes_f);
+    free(b->nodes);
+    free(b->param_counts);
+    free(b->param_first);
+    free(b->param_positions);
+    free(b->cdf);
+    free(b->a0);
+    free(b->pairs);
+    free(b->coeffs);
+    free(b->recip);
+    free(b->bucket_first);
+    free(b->intervals);
+    free(b->metadata);
+    free(b);
+}
+
+ll_bsdf *ll_bsdf_retain(ll_bsdf *b)
+{
+    if (b)
+        __atomic_add_fetch(&b->refcount, 1, __ATOMIC_RELAXED);
+    return b;
+}
+
+void ll_bsdf_release(ll_bsdf *b)
+{
+    /* Acquire-release: the thread that frees sees every other thread's
+     * last use of the object completed. */
+    if (b && __atomic_sub_fetch(&b->refcount, 1, __ATOMIC_ACQ_REL) == 0)
+        ll_bsdf_free(b);
+}
+
+ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
+{
+    ll_bsdf_info full;
+    size_t size;
+    if (!b || !info)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_get_info: bsdf or info is NULL");
+    size = info->struct_size;
+    if (size < sizeof(size_t))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_get_info: info->struct_size = %zu is too small (set it to "
+                       "sizeof(ll_bsdf_info) or use LL_BSDF_INFO_INIT)",
+                       size);
+    memset(&full, 0, sizeof full);
+    full.struct_size = size;
+    full.n_nodes = b->n_nodes;
+    full.max_order = b->max_order;
+    full.n_channels = b->n_channels;
+    full.n_bases = b->n_bases;
+    full.n_parameters = b->n_parameters;
+    full.n_coeffs = b->n_coeffs;
+    full.eta = b->eta;
+    full.alpha[0] = b->alpha[0];
+    full.alpha[1] = b->alpha[1];
+    full.metadata = b->metadata;
+    full.metadata_size = b->metadata_size;
+    full.file_size = b->file_size;
+    full.flags = b->flags;
+    /* Write only the fields the caller's (possibly older, smaller) struct has. */
+    memcpy(info, &full, size < sizeof full ? size : sizeof full);
+    return LL_OK;
+}
+
+ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,
+                                const float **positions)
+{
+    if (!b || !count || !positions)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_get_parameter: bsdf, count or positions is NULL");
+    if (p >= b->n_parameters)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_get_parameter: parameter %zu does not exist (the file has %zu)",
+                       p, b->n_parameters);
+    *count = b->param_counts[p];
+    *positions = b->param_positions + b->param_first[p];
+    return LL_OK;
+}
+
+const float *ll_bsdf_nodes(const ll_bsdf *b) { return b ? b->nodes_f : NULL; }
+
+ll_status ll_bsdf_check_basis(const ll_bsdf *b, const float *basis_coeffs, const char *fn,
+                              const float **basis)
+{
+    size_t k;
+    if (!basis_coeffs) {
+        if (b->n_bases != 1)
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "%s: the file is textured (%zu basis functions); basis_coeffs "
+                           "must give their weights",
+                           fn, b->n_bases);
+        *basis = ll_bsdf_unit_basis;
+        return LL_OK;
+    }
+    for (k = 0; k < b->n_bases; ++k)
+        if (!ll_is_finite(basis_coeffs[k]))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: basis_coeffs[%zu] = %g is not finite",
+                           fn, k, (double)basis_coeffs[k]);
+    *basis = basis_coeffs;
+    return LL_OK;
+}

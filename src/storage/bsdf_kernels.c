@@ -1,0 +1,354 @@
+/*
+ * The inner loops of .bsdf evaluation and sampling: dot products of stored
+ * Fourier coefficients with a chunk of harmonics cos(k phi) or
+ * sin(k phi) / k (double), weighted sums of stored series, and the series
+ * and its integral in one pass for sampling phi.
+ *
+ * Every x86-64 processor runs the portable versions; processors with AVX2
+ * and FMA run vector versions chosen at run time (style.md: no mandatory
+ * ISA extension). Both compute in double; they differ only in the order of
+ * the additions.
+ */
+#include "storage/bsdf_internal.h"
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define LL_BSDF_HAVE_AVX2_PATH 1
+#include <immintrin.h>
+#else
+#define LL_BSDF_HAVE_AVX2_PATH 0
+#endif
+
+/* ------------------------------------------------------------- portable */
+
+/* Four partial sums: one accumulator would be a chain of dependent adds. */
+static double dot_portable(const double *a, const double *h, size_t m)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t j = 0;
+    for (; j + 4 <= m; j += 4) {
+        s0 += a[j] * h[j];
+        s1 += a[j + 1] * h[j + 1];
+        s2 += a[j + 2] * h[j + 2];
+        s3 += a[j + 3] * h[j + 3];
+    }
+    for (; j < m; ++j)
+        s0 += a[j] * h[j];
+    return (s0 + s1) + (s2 + s3);
+}
+
+static void dot_chunk_portable(const ll_bsdf_series *s, size_t n_channels, size_t k0,
+                               size_t count, const double *h, double out[3])
+{
+    size_t p, basis, c, nb = s->n_bases;
+    for (p = 0; p < s->count; ++p) {
+        size_t len = s->length[p], m;
+        if (len <= k0)
+            continue;
+        m = len - k0 < count ? len - k0 : count;
+        for (basis = 0; basis < nb; ++basis) {
+            double w = s->weight[p] * (double)s->basis[basis];
+            if (w == 0.0)
+                continue;
+            for (c = 0; c < n_channels; ++c)
+                out[c] += w * dot_portable(s->coeff[p] + (c * nb + basis) * len + k0, h, m);
+        }
+    }
+}
+
+/* The state lives in locals during the loop so that the four chains stay in
+ * registers (through h, every step would wait on a store and a load). */
+static void harmonics_next_portable(ll_harmonics *h, size_t count, double *restrict out)
+{
+    double t = h->twice_cos4;
+    double c0 = h->cur[0], c1 = h->cur[1], c2 = h->cur[2], c3 = h->cur[3];
+    double p0 = h->prev[0], p1 = h->prev[1], p2 = h->prev[2], p3 = h->prev[3];
+    size_t j;
+    for (j = 0; j < count; j += 4) {
+        double n0 = t * c0 - p0, n1 = t * c1 - p1, n2 = t * c2 - p2, n3 = t * c3 - p3;
+        out[j] = c0;
+        out[j + 1] = c1;
+        out[j + 2] = c2;
+        out[j + 3] = c3;
+        p0 = c0;
+        p1 = c1;
+        p2 = c2;
+        p3 = c3;
+        c0 = n0;
+        c1 = n1;
+        c2 = n2;
+        c3 = n3;
+    }
+    h->cur[0] = c0;
+    h->cur[1] = c1;
+    h->cur[2] = c2;
+    h->cur[3] = c3;
+    h->prev[0] = p0;
+    h->prev[1] = p1;
+    h->prev[2] = p2;
+    h->prev[3] = p3;
+}
+
+static void add_scaled_portable(double *acc, const double *a, double w, size_t m)
+{
+    size_t j;
+    for (j = 0; j < m; ++j)
+        acc[j] += w * a[j];
+}
+
+static void integral_portable(const double *a, const double *recip, size_t n4,
+                              const ll_harmonics *hc, const ll_harmonics *hs, double *F,
+                              double *f)
+{
+    double c[4], cp[4], sn[4], sp[4], fa[4] = { 0, 0, 0, 0 }, Fa[4] = { 0, 0, 0, 0 };
+    double t = hc->twice_cos4;
+    size_t j;
+    int r;
+    for (r = 0; r < 4; ++r) {
+        c[r] = hc->cur[r];
+        cp[r] = hc->prev[r];
+        sn[r] = hs->cur[r];
+        sp[r] = hs->prev[r];
+    }
+    for (j = 0; j < n4; j += 4)
+        for (r = 0; r < 4; ++r) {
+            double nc = t * c[r] - cp[r], ns = t * sn[r] - sp[r];
+            fa[r] += a[j + (size_t)r] * c[r];
+            Fa[r] += a[j + (size_t)r] * recip[j + (size_t)r] * sn[r];
+            cp[r] = c[r];
+            c[r] = nc;
+            sp[r] = sn[r];
+            sn[r] = ns;
+        }
+    *f = (fa[0] + fa[1]) + (fa[2] + fa[3]);
+    *F = (Fa[0] + Fa[1]) + (Fa[2] + Fa[3]);
+}
+
+/* ------------------------------------------------------------ AVX2, FMA */
+
+#if LL_BSDF_HAVE_AVX2_PATH
+#define LL_AVX2 __attribute__((target("avx2,fma")))
+
+LL_AVX2 static double hsum(__m256d v)
+{
+    __m128d lo = _mm256_castpd256_pd128(v), hi = _mm256_extractf128_pd(v, 1);
+    lo = _mm_add_pd(lo, hi);
+    return _mm_cvtsd_f64(_mm_add_sd(lo, _mm_unpackhi_pd(lo, lo)));
+}
+
+LL_AVX2 static __m256d load4(const double *a) { return _mm256_loadu_pd(a); }
+
+/* Lane masks keeping the first r values of a group of 4 (r = 0: all). */
+static const uint64_t ll_group_masks[4][4] = {
+    { ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0 },
+    { ~(uint64_t)0, 0, 0, 0 },
+    { ~(uint64_t)0, ~(uint64_t)0, 0, 0 },
+    { ~(uint64_t)0, ~(uint64_t)0, ~(uint64_t)0, 0 },
+};
+
+/* The last group of a series: 4 values loaded, those past its end
+ * cleared. The load may read up to 3 values past the series, which stay
+ * inside the coefficient array (padded by 4, bsdf_internal.h). */
+LL_AVX2 static __m256d load_last(const double *a, const __m256d mask)
+{
+    return _mm256_and_pd(load4(a), mask);
+}
+
+/* Weighted dot products of one stored series (channels `stride` apart)
+ * with h over m >= 1 values, added to the channel accumulators. */
+LL_AVX2 __attribute__((always_inline)) static inline void
+series_dot_avx2(const double *a, size_t stride, size_t n_channels,
+                                    const double *h, size_t m, double w, __m256d *acc0,
+                                    __m256d *acc1, __m256d *acc2)
+{
+    size_t last = (m - 1) & ~(size_t)3, j = 0;
+    __m256d mask = _mm256_castsi256_pd(
+        _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
+    __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
+    if (n_channels == 3) {
+        const double *r = a + stride, *b = a + 2 * stride;
+        __m256d s2 = _mm256_setzero_pd(), hv;
+        for (; j < last; j += 4) {
+            hv = _mm256_loadu_pd(h + j);
+            s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
+            s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
+            s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
+        }
+        hv = _mm256_loadu_pd(h + last);
+        s0 = _mm256_fmadd_pd(load_last(a + last, mask), hv, s0);
+        s1 = _mm256_fmadd_pd(load_last(r + last, mask), hv, s1);
+        s2 = _mm256_fmadd_pd(load_last(b + last, mask), hv, s2);
+        *acc1 = _mm256_fmadd_pd(s1, wv, *acc1);
+        *acc2 = _mm256_fmadd_pd(s2, wv, *acc2);
+    } else {
+        for (; j + 8 <= last; j += 8) {
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+            s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
+        }
+        if (j < last)
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+        s1 = _mm256_fmadd_pd(load_last(a + last, mask), _mm256_loadu_pd(h + last), s1);
+        s0 = _mm256_add_pd(s0, s1);
+    }
+    *acc0 = _mm256_fmadd_pd(s0, wv, *acc0);
+}
+
+/* The dot products of each stored series with h over its overlap with the
+ * chunk, weighted, summed per channel. The accumulators stay in registers
+ * across the series (an accumulator in memory would chain every series to
+ * the previous one through a store and a load); h has room for the chunk
+ * rounded up to 4 values. */
+LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, size_t k0,
+                                   size_t count, const double *h, double out[3])
+{
+    __m256d acc0 = _mm256_setzero_pd(), acc1 = _mm256_setzero_pd(), acc2 = _mm256_setzero_pd();
+    size_t p, basis, nb = s->n_bases;
+    for (p = 0; p < s->count; ++p) {
+        size_t len = s->length[p], m;
+        if (len <= k0)
+            continue;
+        m = len - k0 < count ? len - k0 : count;
+        if (nb == 1) {
+            series_dot_avx2(s->coeff[p] + k0, len, n_channels, h, m,
+                            s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
+            continue;
+        }
+        for (basis = 0; basis < nb; ++basis) {
+            double w = s->weight[p] * (double)s->basis[basis];
+            if (w != 0.0)
+                series_dot_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h, m, w,
+                                &acc0, &acc1, &acc2);
+        }
+    }
+    out[0] += hsum(acc0);
+    if (n_channels == 3) {
+        out[1] += hsum(acc1);
+        out[2] += hsum(acc2);
+    }
+}
+
+/* Four doubles of a harmonics state, which ll_bsdf_harmonics_start has
+ * just written one by one: read them one by one too (a vector load of
+ * four separate recent stores cannot be forwarded and waits for them to
+ * reach the cache). */
+LL_AVX2 static __m256d load_state(const double v[4])
+{
+    return _mm256_setr_pd(v[0], v[1], v[2], v[3]);
+}
+
+/* cos or sin chunk: the four chains of ll_harmonics are the lanes of one
+ * vector, advanced by one fused multiply-subtract. */
+LL_AVX2 static void harmonics_next_avx2(ll_harmonics *hm, size_t count, double *out)
+{
+    __m256d t = _mm256_set1_pd(hm->twice_cos4);
+    __m256d c = load_state(hm->cur), cp = load_state(hm->prev);
+    size_t j;
+    for (j = 0; j < count; j += 4) {
+        __m256d next = _mm256_fmsub_pd(t, c, cp);
+        _mm256_storeu_pd(out + j, c);
+        cp = c;
+        c = next;
+    }
+    _mm256_storeu_pd(hm->cur, c);
+    _mm256_storeu_pd(hm->prev, cp);
+}
+
+LL_AVX2 static void add_scaled_avx2(double *acc, const double *a, double w, size_t m)
+{
+    __m256d wv = _mm256_set1_pd(w);
+    size_t j = 0;
+    for (; j + 4 <= m; j += 4)
+        _mm256_storeu_pd(acc + j, _mm256_fmadd_pd(load4(a + j), wv, _mm256_loadu_pd(acc + j)));
+    for (; j < m; ++j)
+        acc[j] += w * a[j];
+}
+
+/* The four harmonic chains of ll_harmonics are the four lanes of a vector:
+ * one fused multiply-subtract advances all of them. */
+LL_AVX2 static void integral_avx2(const double *a, const double *recip, size_t n4,
+                                  const ll_harmonics *hc, const ll_harmonics *hs, double *F,
+                                  double *f)
+{
+    __m256d t = _mm256_set1_pd(hc->twice_cos4);
+    __m256d c = load_state(hc->cur), cp = load_state(hc->prev);
+    __m256d sn = load_state(hs->cur), sp = load_state(hs->prev);
+    __m256d fa = _mm256_setzero_pd(), Fa = _mm256_setzero_pd();
+    size_t j;
+    for (j = 0; j < n4; j += 4) {
+        __m256d av = _mm256_loadu_pd(a + j), nc, ns;
+        fa = _mm256_fmadd_pd(av, c, fa);
+        Fa = _mm256_fmadd_pd(_mm256_mul_pd(av, _mm256_loadu_pd(recip + j)), sn, Fa);
+        nc = _mm256_fmsub_pd(t, c, cp);
+        ns = _mm256_fmsub_pd(t, sn, sp);
+        cp = c;
+        c = nc;
+        sp = sn;
+        sn = ns;
+    }
+    *f = hsum(fa);
+    *F = hsum(Fa);
+}
+
+/* The processor's features, as the compiler's runtime (libgcc or
+ * compiler-rt) detected them before main: read-only here. */
+static int have_avx2(void)
+{
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+}
+#else
+static int have_avx2(void) { return 0; }
+#endif
+
+/* ----------------------------------------------------------- dispatch */
+
+int ll_bsdf_kernels_vector(void) { return have_avx2(); }
+
+void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels, size_t k0,
+                       size_t count, const double *h, double out[3])
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        dot_chunk_avx2(s, n_channels, k0, count, h, out);
+        return;
+    }
+#endif
+    (void)vector;
+    dot_chunk_portable(s, n_channels, k0, count, h, out);
+}
+
+void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w, size_t m)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        add_scaled_avx2(acc, a, w, m);
+        return;
+    }
+#endif
+    (void)vector;
+    add_scaled_portable(acc, a, w, m);
+}
+
+void ll_bsdf_integral_dense(int vector, const double *a, const double *recip, size_t n4,
+                            const ll_harmonics *hc, const ll_harmonics *hs, double *F,
+                            double *f)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        integral_avx2(a, recip, n4, hc, hs, F, f);
+        return;
+    }
+#endif
+    (void)vector;
+    integral_portable(a, recip, n4, hc, hs, F, f);
+}
+
+void ll_bsdf_harmonics_next(int vector, ll_harmonics *h, size_t count, double *out)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        harmonics_next_avx2(h, count, out);
+        return;
+    }
+#endif
+    (void)vector;
+    harmonics_next_portable(h, count, out);
+}

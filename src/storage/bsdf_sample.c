@@ -1,0 +1,172 @@
+/*
+ * Importance sampling an opened .bsdf file (Jakob et al. 2014, sec. 7.2),
+ * mapping u to the same direction as pbrt-v3's FourierBSDF::Sample_f:
+ * u[1] picks mu_o by inverting the Catmull-Rom CDF of the interpolated
+ * order-0 row (SampleCatmullRom2D), u[0] picks phi from the Fourier series
+ * (SampleFourier). Both inversions are Newton-bisection with a maintained
+ * bracket and a bounded number of steps.
+ */
+#include "storage/bsdf_internal.h"
+
+#include <math.h>
+
+/* The luminance series is summed into a stack buffer of this many doubles
+ * (8 KiB) when it fits, so that each Newton step reads one series instead
+ * of up to 16; longer ones are evaluated chunk by chunk from the stored
+ * series, which needs no buffer sized by the file at all. */
+#define LL_BSDF_DENSE_ORDERS 1024
+#define LL_BSDF_MU_ITERATIONS 64
+
+/* pbrt-v3's FindInterval over the interpolated CDF row: the largest index
+ * in [0, n - 2] whose value is <= target (the row is non-decreasing). */
+static size_t find_cdf_interval(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
+                                const float *basis, double target)
+{
+    size_t first = 0, len = b->n_nodes;
+    while (len > 0) {
+        size_t half = len >> 1, middle = first + half;
+        if (ll_bsdf_row_value(b, b->cdf, off_i, w_i, middle, basis) <= target) {
+            first = middle + 1;
+            len -= half + 1;
+        } else {
+            len = half;
+        }
+    }
+    if (first == 0)
+        return 0;
+    return first - 1 > b->n_nodes - 2 ? b->n_nodes - 2 : first - 1;
+}
+
+/* Pick mu_o from u: the CDF row interpolated over the incident weights,
+ * then the exact position inside the chosen spline segment by inverting the
+ * segment's integral, the quartic
+ *   F(t) = int_0^t p(s) ds, p the cubic Hermite of (f0, f1, d0, d1),
+ * (pbrt-v3's SampleCatmullRom2D). Writes the density in mu_o. */
+static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], const float *basis,
+                     double u, double *mu_o, double *pdf_mu)
+{
+    const double *x = b->nodes;
+    size_t n = b->n_nodes, idx;
+    double maximum, target, f0, f1, d0, d1, x0, x1, width, r, t, lo = 0.0, hi = 1.0;
+    double F = 0.0, f = 0.0, tolerance;
+    int it;
+
+    maximum = ll_bsdf_row_value(b, b->cdf, off_i, w_i, n - 1, basis);
+    if (!(maximum > 0.0))
+        return 0;
+    target = u * maximum;
+    idx = find_cdf_interval(b, off_i, w_i, basis, target);
+    x0 = x[idx];
+    x1 = x[idx + 1];
+    width = x1 - x0;
+    f0 = ll_bsdf_row_value(b, b->a0, off_i, w_i, idx, basis);
+    f1 = ll_bsdf_row_value(b, b->a0, off_i, w_i, idx + 1, basis);
+    if (!(width > 0.0)) {
+        /* Only the interval between the two mu = 0 nodes has no width; a
+         * consistent CDF never selects it, an inconsistent one gets x0. */
+        *mu_o = x0;
+        *pdf_mu = f0 / maximum;
+        return 1;
+    }
+    r = (target - ll_bsdf_row_value(b, b->cdf, off_i, w_i, idx, basis)) / width;
+    d0 = idx > 0 ? width * (f1 - ll_bsdf_row_value(b, b->a0, off_i, w_i, idx - 1, basis)) /
+                       (x1 - x[idx - 1])
+                 : f1 - f0;
+    d1 = idx + 2 < n ? width * (ll_bsdf_row_value(b, b->a0, off_i, w_i, idx + 2, basis) - f0) /
+                           (x[idx + 2] - x0)
+                     : f1 - f0;
+
+    /* Start from the inverse of the linear interpolant's integral (the
+     * radicand is clamped: it is negative only through rounding or a
+     * negative segment). */
+    if (f0 != f1) {
+        double radicand = f0 * f0 + 2.0 * r * (f1 - f0);
+        t = (f0 - sqrt(radicand > 0.0 ? radicand : 0.0)) / (f0 - f1);
+    } else {
+        t = r / f0;
+    }
+    tolerance = 1e-12 * (fabs(f0) + fabs(f1) + fabs(d0) + fabs(d1));
+    for (it = 0; it < LL_BSDF_MU_ITERATIONS; ++it) {
+        if (!(t >= lo && t <= hi))
+            t = 0.5 * (lo + hi);
+        /* F and its derivative p in Horner form. */
+        F = t * (f0 + t * (0.5 * d0 + t * ((1.0 / 3.0) * (-2.0 * d0 - d1) + f1 - f0 +
+                                          t * (0.25 * (d0 + d1) + 0.5 * (f0 - f1)))));
+        f = f0 + t * (d0 + t * (-2.0 * d0 - d1 + 3.0 * (f1 - f0) +
+                                t * (d0 + d1 + 2.0 * (f0 - f1))));
+        if (fabs(F - r) <= tolerance || hi - lo <= 1e-12 || it + 1 == LL_BSDF_MU_ITERATIONS)
+            break;
+        if (F - r < 0.0)
+            lo = t;
+        else
+            hi = t;
+        t -= (F - r) / f;
+    }
+    *mu_o = x0 + width * t;
+    *pdf_mu = f / maximum;
+    return 1;
+}
+
+int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const float *basis,
+                        double *mu_o, double *phi_d, double *pdf, double sums[3])
+{
+    double dense[LL_BSDF_DENSE_ORDERS];
+    ll_bsdf_series s, d;
+    const ll_bsdf_series *luminance = &s;
+    ptrdiff_t off_i;
+    double w_i[4], pdf_mu = 0.0, a0;
+
+    *mu_o = 0.0;
+    *phi_d = 0.0;
+    *pdf = 0.0;
+    sums[0] = sums[1] = sums[2] = 0.0;
+    if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
+        !sample_mu(b, off_i, w_i, basis, u[1], mu_o, &pdf_mu) ||
+        !ll_bsdf_gather_weighted(b, off_i, w_i, *mu_o, basis, &s) || s.count == 0)
+        return 0;
+    if (s.max_length <= LL_BSDF_DENSE_ORDERS) {
+        ll_bsdf_series_densify(&s, dense, &d);
+        luminance = &d;
+    }
+    if (!ll_bsdf_series_sample(luminance, b->recip, u[0], phi_d))
+        return 0;
+    /* The value and density at the sampled phi from the series itself (not
+     * the Newton iterate's last evaluation), so that they equal what eval
+     * and pdf compute for the returned direction: pdf_phi = f / (2 pi a_0)
+     * (pbrt-v3's SampleFourier). */
+    ll_bsdf_series_eval(&s, b->n_channels, cos(*phi_d), sums);
+    a0 = ll_bsdf_series_mean(luminance);
+    *pdf = pdf_mu * sums[0] / (2.0 * LL_PI * a0);
+    if (!(*pdf > 0.0) || !ll_is_finite(*pdf)) {
+        *pdf = 0.0;
+        sums[0] = sums[1] = sums[2] = 0.0;
+        return 0;
+    }
+    return 1;
+}
+
+ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
+                         const float *basis_coeffs, double *mu_o, double *phi_d, double *pdf,
+                         double weight_rgb[3])
+{
+    const float *basis;
+    double sums[3];
+    ll_status st;
+    if (!b || !u || !mu_o || !phi_d || !pdf || !weight_rgb)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_sample: a required pointer is NULL");
+    *mu_o = *phi_d = *pdf = 0.0;
+    weight_rgb[0] = weight_rgb[1] = weight_rgb[2] = 0.0;
+    if (!ll_is_finite(mu_i) || !(u[0] >= 0.0 && u[0] <= 1.0) || !(u[1] >= 0.0 && u[1] <= 1.0))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_sample: mu_i = %g must be finite and u = (%g, %g) in [0, 1]",
+                       mu_i, u[0], u[1]);
+    st = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_sample", &basis);
+    if (st != LL_OK)
+        return st;
+    if (mu_i > 1.0) mu_i = 1.0;
+    if (mu_i < -1.0) mu_i = -1.0;
+    /* weight = f |mu_o| / pdf, and the stored sums are f |mu_o| already. */
+    if (ll_bsdf_sample_core(b, mu_i, u, basis, mu_o, phi_d, pdf, sums))
+        ll_bsdf_to_rgb(b, sums, 1.0 / *pdf, weight_rgb);
+    return LL_OK;
+}

@@ -1,0 +1,577 @@
+/*
+ * Writing layers as a .bsdf file (shared/docs/bsdf-format.md), what the
+ * original layerlab's BSDFStorage::fromLayerGeneral stores:
+ *
+ *  - nodes: the layer's, ascending, with two explicit mu = 0 nodes in the
+ *    middle, [-x_{h-1} .. -x_0, 0, 0, x_0 .. x_{h-1}], with the layer's
+ *    signs (file node o < h is layer node h-1-o, o >= h+2 is layer node
+ *    o-2): then pbrt-v3's muI = CosTheta(-wi) for light arriving from above
+ *    is negative like a layer's upward-travelling outgoing direction, and
+ *    top reflection reads the R^t block. The rows and columns of the zero
+ *    nodes hold nothing; they pin the splines to 0 at grazing angles.
+ *  - coefficients: a_k(o, i) = M_k(o, i) |mu_o| / (pi |mu_i| w_i), halved
+ *    for k = 0, i.e. the layer's order-k entry with its column's surface
+ *    weight factor (ll_layer_surface_factor) divided out and the outgoing
+ *    cosine kept in, so that sum_k a_k cos(k phi) = f |mu_o|. Layers must
+ *    hold surfaces or slabs (the adding-doubling results), not a bare phase
+ *    function before ll_layer_expand, whose columns are weighted by w pi.
+ *  - truncation: the series of a pair ends after the last order k at which
+ *    the tail sum_{j >= k} |M_j| still exceeds error_goal * |M_0|, over all
+ *    channels and bases (the original's rule, relative to the order-0 matrix
+ *    entry, i.e. to 2 |a_0|); a pair with M_0 = 0 stores nothing. Unlike the
+ *    original, an exact zero inside a series does not end it early.
+ *  - colour: R, G, B layers are stored as Y, R, B.
+ *  - CDF: per incident node and basis, the running integral over outgoing
+ *    nodes of the stored a_0 of channel 0 (luminance), each Catmull-Rom
+ *    segment integrated exactly over the file's (float) nodes, so the last
+ *    entry is the albedo / 2 pi that the reader normalises with. A segment
+ *    whose integral is negative (spline overshoot next to a zero) adds 0,
+ *    keeping rows non-decreasing as readers require.
+ */
+#include "storage/bsdf_file_out.h"
+#include "storage/bsdf_format.h"
+#include "layer/layer.h"
+#include "layerlab/ll_bsdf.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Everything known about one file before its bytes are produced. */
+typedef struct write_job {
+    const char *fn;
+    const ll_layer *const *layers; /* [n_bases * n_channels] */
+    size_t n_channels, n_bases, n_parameters, n_parameter_values;
+    const size_t *param_counts;
+    const double *param_positions;
+    ll_bsdf_write_options opts;
+    size_t n, h, m;                /* layer nodes, half, orders            */
+    size_t nn;                     /* file nodes = n + 2                   */
+    float *nodes;                  /* [nn] file nodes                      */
+    uint32_t *length;              /* [nn * nn] series length, i * nn + o  */
+    uint32_t *offset;              /* [nn * nn]                            */
+    float *cdf;                    /* [(i * nn + o) * n_bases + b]         */
+    size_t max_order, n_coeffs;
+    char *metadata;                /* default JSON, when opts has none     */
+} write_job;
+
+/* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */
+static size_t layer_index(size_t f, size_t h)
+{
+    if (f < h)
+        return h - 1 - f;
+    if (f >= h + 2)
+        return f - 2;
+    return (size_t)-1;
+}
+
+/* ------------------------------------------------------------ arguments */
+
+static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
+{
+    ll_bsdf_write_options defaults = LL_BSDF_WRITE_OPTIONS_INIT;
+    job->opts = defaults;
+    if (opts) {
+        size_t size = opts->struct_size;
+        if (size < sizeof(size_t))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "%s: opts->struct_size = %zu (use LL_BSDF_WRITE_OPTIONS_INIT)",
+                           job->fn, size);
+        /* Read only what the caller's struct has; newer fields keep their
+         * defaults. */
+        memcpy(&job->opts, opts, size < sizeof *opts ? size : sizeof *opts);
+        job->opts.struct_size = sizeof *opts;
+    }
+    if (!(job->opts.eta >= LL_BSDF_ETA_MIN && job->opts.eta <= LL_BSDF_ETA_MAX))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: eta = %g is not a relative index of refraction in [%g, %g]",
+                       job->fn, job->opts.eta, LL_BSDF_ETA_MIN, LL_BSDF_ETA_MAX);
+    if (!(job->opts.alpha[0] >= 0.0 && job->opts.alpha[0] <= FLT_MAX) ||
+        !(job->opts.alpha[1] >= 0.0 && job->opts.alpha[1] <= FLT_MAX))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: alpha = (%g, %g) must be finite and non-negative", job->fn,
+                       job->opts.alpha[0], job->opts.alpha[1]);
+    if (!(job->opts.error_goal >= 0.0 && job->opts.error_goal <= DBL_MAX))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: error_goal = %g must be finite and non-negative", job->fn,
+                       job->opts.error_goal);
+    if (job->opts.metadata && strlen(job->opts.metadata) > UINT32_MAX)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the metadata is longer than 4 GiB",
+                       job->fn);
+    return LL_OK;
+}
+
+static ll_status check_parameters(write_job *job)
+{
+    size_t p, k, bases = 1, values = 0;
+    if (job->n_parameters > 0 && (!job->param_counts || !job->param_positions))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: param_counts or param_positions is NULL", job->fn);
+    for (p = 0; p < job->n_parameters; ++p) {
+        size_t c = job->param_counts[p];
+        if (c < 1 || !ll_size_mul(bases, c, &bases) || !ll_size_add(values, c, &values) ||
+            bases > UINT32_MAX || values > UINT32_MAX)
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "%s: parameter %zu has %zu positions (need at least 1, and at most "
+                           "2^32 - 1 bases and positions in all)",
+                           job->fn, p, c);
+        for (k = 0; k < c; ++k) {
+            double x = job->param_positions[values - c + k];
+            /* Strictly increasing after rounding to the stored float. */
+            if (!ll_is_finite(x) || fabs(x) > FLT_MAX ||
+                (k > 0 && !((float)x > (float)job->param_positions[values - c + k - 1])))
+                return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                               "%s: parameter %zu: position %zu = %g is not finite and "
+                               "increasing (as a float)",
+                               job->fn, p, k, x);
+        }
+    }
+    if (job->n_parameters > UINT32_MAX)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu parameters are too many", job->fn,
+                       job->n_parameters);
+    job->n_bases = bases;
+    job->n_parameter_values = values;
+    return LL_OK;
+}
+
+static ll_status check_layers(write_job *job)
+{
+    size_t k, count;
+    ll_status s;
+    if (!job->layers)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", job->fn);
+    if (job->n_channels != 1 && job->n_channels != 3)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", job->fn,
+                       job->n_channels);
+    if (!ll_size_mul(job->n_bases, job->n_channels, &count))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: too many layers", job->fn);
+    for (k = 0; k < count; ++k) {
+        if (!job->layers[k])
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers[%zu] is NULL", job->fn, k);
+        if ((s = ll_layer_check_compatible(job->layers[0], job->layers[k], job->fn)) != LL_OK)
+            return s;
+    }
+    job->n = job->layers[0]->n;
+    job->h = job->n / 2;
+    job->m = job->layers[0]->m;
+    job->nn = job->n + 2;
+    if (job->nn > UINT32_MAX / 2)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", job->fn, job->n);
+    return LL_OK;
+}
+
+/* ------------------------------------------------------- series lengths */
+
+/* Truncated series lengths of one layer, indexed col * n + row (layer
+ * indices), by the tail-sum rule of the file comment: scanning orders from
+ * the top, a pair's length is fixed at the first order where its running
+ * tail exceeds error_goal * |M_0|. Visits stored entries only. Also checks
+ * that every stored value is finite. */
+static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t *len,
+                               double *tail, double *ref0)
+{
+    size_t n = job->n, h = job->h, col, j, k;
+    int half;
+    memset(len, 0, n * n * sizeof *len);
+    memset(tail, 0, n * n * sizeof *tail);
+    /* Order 0 densely (column-major, like `at` below): the reference of every
+     * tail test, which looked up one by one cost a cache miss each. */
+    ll_order_to_dense(l->orders[0], n, ref0);
+    for (k = job->m; k-- > 0;) {
+        const ll_order *o = l->orders[k];
+        if (!o)
+            continue;
+        for (col = 0; col < n; ++col)
+            for (half = 0; half < 2; ++half) {
+                size_t seg = 2 * col + (size_t)half;
+                for (j = 0; j < o->seg[seg].len; ++j) {
+                    size_t row = (size_t)half * h + o->seg[seg].lo + j, at = col * n + row;
+                    double v = o->val[o->seg[seg].off + j], ref;
+                    if (!ll_is_finite(v))
+                        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                                       "%s: the layer has a non-finite value (order %zu, "
+                                       "row %zu, column %zu)",
+                                       job->fn, k, row, col);
+                    if (k == 0) {
+                        if (len[at] == 0 && v != 0.0)
+                            len[at] = 1;
+                        continue;
+                    }
+                    if (len[at] != 0)
+                        continue; /* already decided */
+                    tail[at] += fabs(v);
+                    ref = fabs(ref0[at]);
+                    if (tail[at] > job->opts.error_goal * ref)
+                        len[at] = (uint32_t)(k + 1);
+                }
+            }
+    }
+    /* A pair whose tail never exceeded the goal keeps order 0 alone, and
+     * one with M_0 = 0 nothing (the original's rule). */
+    for (j = 0; j < n * n; ++j) {
+        if (ref0[j] == 0.0)
+            len[j] = 0;
+        else if (len[j] == 0)
+            len[j] = 1;
+    }
+    return LL_OK;
+}
+
+static ll_status compute_lengths(write_job *job)
+{
+    size_t n = job->n, nn = job->nn, count = job->n_bases * job->n_channels, k, i, o;
+    uint32_t *len = ll_alloc_array(n * n, sizeof *len);
+    double *tail = ll_alloc_array(n * n, sizeof *tail);
+    double *ref0 = ll_alloc_array(n * n, sizeof *ref0);
+    ll_status s = LL_OK;
+    if (!len || !tail || !ref0) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+        goto done;
+    }
+    for (k = 0; k < count && s == LL_OK; ++k) {
+        s = layer_lengths(job, job->layers[k], len, tail, ref0);
+        for (i = 0; i < nn && s == LL_OK; ++i)
+            for (o = 0; o < nn; ++o) {
+                size_t li = layer_index(i, job->h), lo = layer_index(o, job->h);
+                uint32_t *dst = &job->length[i * nn + o];
+                if (li != (size_t)-1 && lo != (size_t)-1 && len[li * n + lo] > *dst)
+                    *dst = len[li * n + lo];
+            }
+    }
+done:
+    free(len);
+    free(tail);
+    free(ref0);
+    return s;
+}
+
+static ll_status compute_offsets(write_job *job)
+{
+    size_t k, total = 0, block = job->n_bases * job->n_channels;
+    job->max_order = 0;
+    for (k = 0; k < job->nn * job->nn; ++k) {
+        size_t size;
+        job->offset[k] = (uint32_t)total;
+        if (job->length[k] > job->max_order)
+            job->max_order = job->length[k];
+        if (!ll_size_mul(job->length[k], block, &size) || !ll_size_add(total, size, &total) ||
+            total > UINT32_MAX)
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "%s: more than 2^32 - 1 coefficients (raise error_goal or "
+                           "lower the resolution)",
+                           job->fn);
+    }
+    job->n_coeffs = total;
+    return LL_OK;
+}
+
+/* --------------------------------------------------------- coefficients */
+
+/* a_k of one layer at file pair (o, i), as a double (see the file comment). */
+static double layer_coeff(const ll_layer *l, size_t lo, size_t li, size_t k)
+{
+    return ll_order_get(l->orders[k], lo, li) * fabs(l->nodes[lo]) /
+           ll_layer_surface_factor(l, li, k);
+}
+
+/* Stored coefficient k of channel ch (Y, R, B for colour files), basis b,
+ * at file pair (o, i); the pair must not touch a mu = 0 node. */
+static double stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, size_t i,
+                           size_t k)
+{
+    size_t lo = layer_index(o, job->h), li = layer_index(i, job->h);
+    const ll_layer *const *set = job->layers + b * job->n_channels;
+    if (job->n_channels == 1)
+        return layer_coeff(set[0], lo, li, k);
+    if (ch == 1)
+        return layer_coeff(set[0], lo, li, k);
+    if (ch == 2)
+        return layer_coeff(set[2], lo, li, k);
+    return LL_BSDF_Y_FROM_R * layer_coeff(set[0], lo, li, k) +
+           LL_BSDF_Y_FROM_G * layer_coeff(set[1], lo, li, k) +
+           LL_BSDF_Y_FROM_B * layer_coeff(set[2], lo, li, k);
+}
+
+/* ------------------------------------------------------------------ CDF */
+
+static void integrate_row(const float *nodes, const double *values, size_t n, float *cdf,
+                          size_t stride)
+{
+    double sum = 0.0;
+    size_t k;
+    cdf[0] = 0.0f;
+    for (k = 0; k + 1 < n; ++k) {
+        double x0 = nodes[k], x1 = nodes[k + 1], f0 = values[k], f1 = values[k + 1];
+        double width = x1 - x0, d0, d1, segment;
+        /* Catmull-Rom derivatives (times the width) by finite differences,
+         * one-sided at the ends, as the readers interpolate. */
+        d0 = k > 0 ? width * (f1 - values[k - 1]) / (x1 - nodes[k - 1]) : f1 - f0;
+        d1 = k + 2 < n ? width * (values[k + 2] - f0) / (nodes[k + 2] - x0) : f1 - f0;
+        /* Exact integral of the cubic Hermite segment. */
+        segment = ((d0 - d1) * (1.0 / 12.0) + (f0 + f1) * 0.5) * width;
+        if (segment > 0.0)
+            sum += segment;
+        cdf[(k + 1) * stride] = (float)sum;
+    }
+}
+
+static ll_status compute_cdf(write_job *job)
+{
+    size_t nn = job->nn, nb = job->n_bases, i, o, b;
+    double *values = ll_alloc_array(nn, sizeof *values);
+    if (!values)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+    for (i = 0; i < nn; ++i)
+        for (b = 0; b < nb; ++b) {
+            for (o = 0; o < nn; ++o)
+                /* The value a reader will see: the stored float. */
+                values[o] = job->length[i * nn + o]
+                                ? (double)(float)stored_coeff(job, 0, b, o, i, 0)
+                                : 0.0;
+            integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
+        }
+    free(values);
+    return LL_OK;
+}
+
+/* ------------------------------------------------------------- metadata */
+
+static ll_status default_metadata(write_job *job)
+{
+    char text[1024];
+    int len = snprintf(
+        text, sizeof text,
+        "{\n"
+        "    \"generator\": \"layerlab %s\",\n"
+        "    \"nodes\": %zu,\n"
+        "    \"layer_nodes\": %zu,\n"
+        "    \"orders\": %zu,\n"
+        "    \"max_order\": %zu,\n"
+        "    \"channels\": %s,\n"
+        "    \"bases\": %zu,\n"
+        "    \"parameters\": %zu,\n"
+        "    \"eta\": %.9g,\n"
+        "    \"alpha\": [%.9g, %.9g],\n"
+        "    \"error_goal\": %.9g\n"
+        "}\n",
+        ll_version_string(), job->nn, job->n, job->m, job->max_order,
+        job->n_channels == 1 ? "[\"Y\"]" : "[\"Y\", \"R\", \"B\"]", job->n_bases,
+        job->n_parameters, job->opts.eta, job->opts.alpha[0], job->opts.alpha[1],
+        job->opts.error_goal);
+    if (len < 0 || (size_t)len >= sizeof text)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the metadata does not fit", job->fn);
+    job->metadata = malloc((size_t)len + 1);
+    if (!job->metadata)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+    memcpy(job->metadata, text, (size_t)len + 1);
+    return LL_OK;
+}
+
+/* ------------------------------------------------------------ the bytes */
+
+static void put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_size)
+{
+    unsigned char h[LL_BSDF_HEADER_SIZE];
+    memset(h, 0, sizeof h);
+    memcpy(h, LL_BSDF_MAGIC, LL_BSDF_MAGIC_SIZE);
+    h[LL_BSDF_AT_VERSION] = LL_BSDF_VERSION;
+    ll_le_put_u32(h + LL_BSDF_AT_FLAGS, LL_BSDF_FLAG_BSDF);
+    ll_le_put_u32(h + LL_BSDF_AT_NODES, (uint32_t)job->nn);
+    ll_le_put_u32(h + LL_BSDF_AT_COEFFS, (uint32_t)job->n_coeffs);
+    ll_le_put_u32(h + LL_BSDF_AT_MAX_ORDER, (uint32_t)job->max_order);
+    ll_le_put_u32(h + LL_BSDF_AT_CHANNELS, (uint32_t)job->n_channels);
+    ll_le_put_u32(h + LL_BSDF_AT_BASES, (uint32_t)job->n_bases);
+    ll_le_put_u32(h + LL_BSDF_AT_METADATA_BYTES, (uint32_t)metadata_size);
+    ll_le_put_u32(h + LL_BSDF_AT_PARAMETERS, (uint32_t)job->n_parameters);
+    ll_le_put_u32(h + LL_BSDF_AT_PARAMETER_VALUES, (uint32_t)job->n_parameter_values);
+    ll_le_put_f32(h + LL_BSDF_AT_ETA, (float)job->opts.eta);
+    ll_le_put_f32(h + LL_BSDF_AT_ALPHA, (float)job->opts.alpha[0]);
+    ll_le_put_f32(h + LL_BSDF_AT_ALPHA + 4, (float)job->opts.alpha[1]);
+    ll_bsdf_out_bytes(out, h, sizeof h);
+}
+
+/* The coefficient block, pair after pair in table order, each pair
+ * [channel][basis][k]. Fails if a value overflows float. */
+/* Copy (or clear) column col of a layer's orders k < kmax into
+ * stage[row * m + k]: each order's two runs of that column are read once,
+ * where looking every coefficient up separately cost a cache miss each. */
+static void stage_column(const ll_layer *l, size_t col, size_t kmax, double *stage, int clear)
+{
+    size_t h = l->n / 2, m = l->m, k, j;
+    int half;
+    for (k = 0; k < kmax; ++k) {
+        const ll_order *o = l->orders[k];
+        if (!o)
+            continue;
+        for (half = 0; half < 2; ++half) {
+            const ll_segment *sg = &o->seg[2 * col + (size_t)half];
+            double *dst = stage + ((size_t)half * h + sg->lo) * m + k;
+            for (j = 0; j < sg->len; ++j)
+                dst[j * m] = clear ? 0.0 : o->val[sg->off + j];
+        }
+    }
+}
+
+static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
+{
+    size_t nn = job->nn, n = job->n, m = job->m, count = job->n_bases * job->n_channels;
+    size_t i, o, c, b, k, L, per_layer;
+    double *stage;
+    ll_status s = LL_OK;
+
+    if (!ll_size_mul(n, m, &per_layer) ||
+        !(stage = ll_calloc_array(count, per_layer * sizeof(double))))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory staging coefficients",
+                       job->fn);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        size_t li = layer_index(i, job->h), kmax = 0;
+        const ll_layer *l0 = job->layers[0];
+        double factor[2];
+        if (li == (size_t)-1)
+            continue; /* the mu = 0 nodes hold no coefficients */
+        for (o = 0; o < nn; ++o)
+            if (job->length[i * nn + o] > kmax)
+                kmax = job->length[i * nn + o];
+        for (L = 0; L < count; ++L)
+            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 0);
+        /* a_k = M_k(o, i) |mu_o| / (pi |mu_i| w_i), times 1/2 for k = 0
+         * (bsdf-format.md): the layer's column factor of order 0 and k > 0. */
+        factor[0] = ll_layer_surface_factor(l0, li, 0);
+        factor[1] = ll_layer_surface_factor(l0, li, 1);
+        for (o = 0; o < nn && s == LL_OK; ++o) {
+            size_t len = job->length[i * nn + o], lo = layer_index(o, job->h);
+            double mu_o;
+            if (len == 0)
+                continue;
+            mu_o = fabs(l0->nodes[lo]);
+            for (c = 0; c < job->n_channels && s == LL_OK; ++c)
+                for (b = 0; b < job->n_bases && s == LL_OK; ++b) {
+                    const double *set = stage + b * job->n_channels * per_layer + lo * m;
+                    for (k = 0; k < len; ++k) {
+                        double v, f = factor[k > 0];
+                        if (job->n_channels == 1 || c == 1)
+                            v = set[k] * mu_o / f;
+                        else if (c == 2)
+                            v = set[2 * per_layer + k] * mu_o / f;
+                        else
+                            v = LL_BSDF_Y_FROM_R * (set[k] * mu_o / f) +
+                                LL_BSDF_Y_FROM_G * (set[per_layer + k] * mu_o / f) +
+                                LL_BSDF_Y_FROM_B * (set[2 * per_layer + k] * mu_o / f);
+                        if (!(fabs(v) <= FLT_MAX)) {
+                            s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                                        "%s: coefficient %zu of node pair (%zu, %zu) is %g, "
+                                        "beyond float range",
+                                        job->fn, k, o, i, v);
+                            break;
+                        }
+                        ll_bsdf_out_f32(out, (float)v);
+                    }
+                }
+        }
+        for (L = 0; L < count; ++L)
+            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
+    }
+    free(stage);
+    return s;
+}
+
+static ll_status put_file(const write_job *job, const char *path)
+{
+    const char *metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
+    size_t nn = job->nn, k, metadata_size = strlen(metadata);
+    ll_bsdf_out *out;
+    ll_status s = ll_bsdf_out_begin(path, job->fn, &out);
+    if (s != LL_OK)
+        return s;
+    put_header(out, job, metadata_size);
+    for (k = 0; k < nn; ++k)
+        ll_bsdf_out_f32(out, job->nodes[k]);
+    for (k = 0; k < job->n_parameters; ++k)
+        ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
+    for (k = 0; k < job->n_parameter_values; ++k)
+        ll_bsdf_out_f32(out, (float)job->param_positions[k]);
+    for (k = 0; k < nn * nn * job->n_bases; ++k)
+        ll_bsdf_out_f32(out, job->cdf[k]);
+    for (k = 0; k < nn * nn; ++k) {
+        ll_bsdf_out_u32(out, job->offset[k]);
+        ll_bsdf_out_u32(out, job->length[k]);
+    }
+    s = put_coefficients(out, job);
+    if (s != LL_OK) {
+        ll_bsdf_out_abort(out);
+        return s;
+    }
+    ll_bsdf_out_bytes(out, metadata, metadata_size);
+    return ll_bsdf_out_commit(out);
+}
+
+/* ---------------------------------------------------------------- driver */
+
+static ll_status prepare(write_job *job)
+{
+    size_t nn = job->nn, k, cdf_count;
+    ll_status s;
+    if (!ll_size_mul(nn * nn, job->n_bases, &cdf_count))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: too many bases", job->fn);
+    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
+    job->length = ll_calloc_array(nn * nn, sizeof *job->length);
+    job->offset = ll_alloc_array(nn * nn, sizeof *job->offset);
+    job->cdf = ll_alloc_array(cdf_count, sizeof *job->cdf);
+    if (!job->nodes || !job->length || !job->offset || !job->cdf)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+    for (k = 0; k < nn; ++k) {
+        size_t l = layer_index(k, job->h);
+        job->nodes[k] = l == (size_t)-1 ? 0.0f : (float)job->layers[0]->nodes[l];
+    }
+    if ((s = compute_lengths(job)) != LL_OK || (s = compute_offsets(job)) != LL_OK ||
+        (s = compute_cdf(job)) != LL_OK)
+        return s;
+    if (!job->opts.metadata)
+        return default_metadata(job);
+    return LL_OK;
+}
+
+static ll_status write_general(const char *fn, const char *path, const ll_layer *const *layers,
+                               size_t n_channels, size_t n_parameters,
+                               const size_t *param_counts, const double *param_positions,
+                               const ll_bsdf_write_options *opts)
+{
+    write_job job;
+    ll_status s;
+    memset(&job, 0, sizeof job);
+    job.fn = fn;
+    job.layers = layers;
+    job.n_channels = n_channels;
+    job.n_parameters = n_parameters;
+    job.param_counts = param_counts;
+    job.param_positions = param_positions;
+    if (!path || !*path)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn);
+    if ((s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
+        (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
+        s = put_file(&job, path);
+    free(job.nodes);
+    free(job.length);
+    free(job.offset);
+    free(job.cdf);
+    free(job.metadata);
+    return s;
+}
+
+ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers, size_t n_channels,
+                        const ll_bsdf_write_options *opts)
+{
+    return write_general("ll_bsdf_write", path, layers, n_channels, 0, NULL, NULL, opts);
+}
+
+ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
+                                 size_t n_channels, size_t n_parameters,
+                                 const size_t *param_counts, const double *param_positions,
+                                 const ll_bsdf_write_options *opts)
+{
+    return write_general("ll_bsdf_write_textured", path, layers, n_channels, n_parameters,
+                         param_counts, param_positions, opts);
+}

@@ -1,0 +1,58 @@
+/*
+ * The azimuthal Fourier series of the rough (Beckmann microfacet) interface
+ * for one pair of zenith cosines: the engine of ll_layer_set_microfacet,
+ * exposed internally for tests.
+ *
+ * Convention (the original layerlab's microfacetFourierSeries, which the
+ * layer calls with mu = -node because depth grows opposite to the normal):
+ * wi = (-sin_i, 0, -mu_i) points back toward the light, wo = (sin_o cos phi,
+ * sin_o sin phi, mu_o) is the direction the light leaves along, the pair
+ * reflects when -mu_i mu_o > 0, and light with -mu_i > 0 arrives from the
+ * side where the relative index is eta (from the other side it is 1/eta).
+ */
+#ifndef LL_MICROFACET_H
+#define LL_MICROFACET_H
+
+#include <stddef.h>
+#include "support/support.h"
+
+/* Truncation goal of every series: coefficients below this fraction of the
+ * first are dropped (the original's ERROR_GOAL). */
+#define LL_MICROFACET_RELERR 1e-3
+
+typedef struct ll_microfacet ll_microfacet;
+
+/* The model: complex relative index, Beckmann roughness, the number of
+ * Fourier orders n_orders it is resolved with (a lobe too sharp for them is
+ * widened, keeping its energy) and the most orders max_len any series will
+ * be asked for. Arguments are not checked here. */
+LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha,
+                                           size_t n_orders, size_t max_len,
+                                           ll_microfacet **out);
+LL_INTERNAL void ll_microfacet_destroy(ll_microfacet *mf);
+
+/* Precompute the least-squares fits that the pairs (mu[a], mu[b]),
+ * a, b < count, will use (in parallel). Required before ll_microfacet_series
+ * for those pairs. */
+LL_INTERNAL ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t count);
+
+/* Doubles of scratch that ll_microfacet_series needs for max_len terms. */
+LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);
+
+/* The cosine series of f(mu_o, mu_i, phi) (BSDF without cosine factor):
+ * writes *len <= max_len terms to out (0 when the pair does not scatter).
+ * ref0 (nullable) receives the order-0 term of the same series with the
+ * Fresnel factor set to 1 (what a perfect mirror of the same roughness
+ * reflects; the conductor's energy compensation needs it). scratch holds
+ * ll_microfacet_scratch_size(max_len) doubles. Thread-safe for a prepared
+ * mf; fails (LL_ERROR_INVALID_ARGUMENT) for a pair that was not prepared. */
+LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o, double mu_i,
+                                           size_t max_len, double *out, size_t *len,
+                                           double *ref0, double *scratch);
+
+/* The Smith shadowing-masking term G1 of a direction with |tan theta| =
+ * tan_theta for Beckmann roughness alpha, by the rational approximation of
+ * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */
+LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
+
+#endif /* LL_MICROFACET_H */
