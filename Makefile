@@ -31,7 +31,7 @@ CXX     ?= c++
 MULTIARCH := $(shell $(CC) -print-multiarch 2>/dev/null)
 
 # OpenBLAS: prefer the OpenMP build, which runs single-threaded inside our own
-# parallel regions (see src/support/support.c); fall back to whatever -lopenblas is.
+# parallel regions (see src/support/threads.c); fall back to whatever -lopenblas is.
 OPENBLAS_DIR ?= $(firstword $(wildcard /usr/lib/$(MULTIARCH)/openblas-openmp))
 ifneq ($(OPENBLAS_DIR),)
 BLAS_LIBS := -L$(OPENBLAS_DIR) -Wl,-rpath,$(OPENBLAS_DIR) -llapacke -lopenblas

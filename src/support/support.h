@@ -21,6 +21,11 @@
  * status, so that call sites read `return ll_fail(LL_ERROR_..., "...", ...)`. */
 LL_INTERNAL ll_status ll_fail(ll_status status, const char *fmt, ...) LL_PRINTF(2, 3);
 
+/* Capacity of the message buffer, and a copy of this thread's message (so
+ * that a parallel loop can carry a worker's message to the caller). */
+#define LL_MESSAGE_CAPACITY 1024
+LL_INTERNAL void ll_message_copy(char *dst, size_t capacity);
+
 /* Overflow-checked size arithmetic: return 0 on overflow, else 1 and *out. */
 LL_INTERNAL int ll_size_mul(size_t a, size_t b, size_t *out);
 LL_INTERNAL int ll_size_add(size_t a, size_t b, size_t *out);

@@ -23,7 +23,7 @@ sources=$(ls src/storage/bsdf_*.c | grep -v -e bsdf_write.c -e bsdf_file_out.c)
 $CLANG -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
     -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=undefined \
-    tests/fuzz/fuzz_bsdf.c $sources src/numerics/spline.c src/support/support.c -lm -o "$out/fuzz_bsdf"
+    tests/fuzz/fuzz_bsdf.c $sources src/numerics/spline.c src/support/error.c src/support/alloc.c -lm -o "$out/fuzz_bsdf"
 
 seeds="tests/fuzz/corpus"
 [ -d ../shared/testdata ] && seeds="$seeds ../shared/testdata"

@@ -1,15 +1,11 @@
 /*
- * Error messages (thread-local), checked allocation and the parallel loop.
- *
- * The only mutable state in the library is per thread: the last error
- * message and the worker-thread count requested by the calling thread.
+ * The parallel loop over independent items (Fourier orders, columns) and
+ * the worker-thread count of the calling thread. This is the only part of
+ * support/ that needs OpenMP; the reader library does without it.
  */
 #include "support/support.h"
 
-#include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
+#include <stdint.h>
 #include <string.h>
 
 #ifdef _OPENMP
@@ -19,41 +15,7 @@
 #include <xmmintrin.h>
 #endif
 
-#define LL_MESSAGE_CAPACITY 1024
-
-static __thread char tls_message[LL_MESSAGE_CAPACITY];
 static __thread size_t tls_thread_count; /* 0 = all processors */
-
-int ll_version_number(void) { return LL_VERSION_NUMBER; }
-
-const char *ll_version_string(void) { return LL_VERSION_STRING; }
-
-const char *ll_status_string(ll_status status)
-{
-    switch (status) {
-    case LL_OK: return "success";
-    case LL_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case LL_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case LL_ERROR_IO: return "input/output error";
-    case LL_ERROR_FORMAT: return "malformed file";
-    case LL_ERROR_NUMERICAL: return "numerical failure";
-    case LL_ERROR_UNSUPPORTED: return "unsupported";
-    case LL_ERROR_PARSE: return "parse error";
-    case LL_ERROR_CANCELLED: return "cancelled";
-    default: return "unknown status";
-    }
-}
-
-const char *ll_last_error_message(void) { return tls_message; }
-
-ll_status ll_fail(ll_status status, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(tls_message, sizeof tls_message, fmt, ap);
-    va_end(ap);
-    return status;
-}
 
 static size_t processor_count(void)
 {
@@ -79,40 +41,6 @@ size_t ll_get_thread_count(void)
 {
     return tls_thread_count ? tls_thread_count : processor_count();
 }
-
-int ll_size_mul(size_t a, size_t b, size_t *out)
-{
-    if (a != 0 && b > SIZE_MAX / a)
-        return 0;
-    *out = a * b;
-    return 1;
-}
-
-int ll_size_add(size_t a, size_t b, size_t *out)
-{
-    if (b > SIZE_MAX - a)
-        return 0;
-    *out = a + b;
-    return 1;
-}
-
-void *ll_alloc_array(size_t count, size_t size)
-{
-    size_t bytes;
-    if (!ll_size_mul(count, size, &bytes))
-        return NULL;
-    return malloc(bytes ? bytes : 1);
-}
-
-void *ll_calloc_array(size_t count, size_t size)
-{
-    size_t bytes;
-    if (!ll_size_mul(count, size, &bytes))
-        return NULL;
-    return calloc(bytes ? count : 1, bytes ? size : 1);
-}
-
-int ll_is_finite(double x) { return isfinite(x) != 0; }
 
 /* Subnormal numbers (below 2.2e-308) carry no physics here, but the decaying
  * high Fourier orders produce them and they slow BLAS kernels down several
@@ -169,7 +97,7 @@ ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
                     if ((size_t)i < first_index) {
                         first_index = (size_t)i;
                         first_status = s;
-                        memcpy(first_message, tls_message, sizeof first_message);
+                        ll_message_copy(first_message, sizeof first_message);
                     }
                 }
             }
@@ -183,13 +111,13 @@ ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
         ll_status s = body((size_t)i, ctx);
         if (s != LL_OK) {
             first_status = s;
-            memcpy(first_message, tls_message, sizeof first_message);
+            ll_message_copy(first_message, sizeof first_message);
             break;
         }
     }
     restore_float_mode(saved_mode);
 #endif
     if (first_status != LL_OK)
-        memcpy(tls_message, first_message, sizeof tls_message);
+        ll_fail(first_status, "%s", first_message);
     return first_status;
 }
