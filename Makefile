@@ -21,9 +21,11 @@ INCDIR  ?= $(PREFIX)/include
 BINDIR  ?= $(PREFIX)/bin
 PKGDIR  ?= $(LIBDIR)/pkgconfig
 DATADIR ?= $(PREFIX)/share/layerlab
-# Measured spectra of metals for `conductor eta=Au` (installed so that an
-# installed llbuild finds them; see docs/material-language.md).
-IOR_SRC ?= $(firstword $(wildcard ../shared/ior))
+# Measured spectra of metals for `conductor eta=Au` (data/ior/README.md). The
+# library looks for them in ../share/layerlab/ior from its own folder
+# (src/material/ior.c), so they are installed to PREFIX/share/layerlab/ior and
+# copied to $(BUILD)/share/layerlab/ior in a build tree: one rule for both.
+IOR_SRC ?= data/ior
 
 BUILD   ?= build
 CC      ?= cc
@@ -108,6 +110,15 @@ $(BUILD)/lib/layerlab.pc: Makefile
 	@mkdir -p $(dir $@)
 	@$(call write_pc,$@)
 
+# The build tree's copy of the spectra, beside $(BUILD)/lib as an installed
+# copy is beside PREFIX/lib (recursive variables: SANITIZE changes BUILD).
+IOR_BUILT = $(patsubst $(IOR_SRC)/%,$(BUILD)/share/layerlab/ior/%,$(wildcard $(IOR_SRC)/*.spd))
+lib: $(IOR_BUILT)
+$(TESTS): | $(IOR_BUILT)
+$(BUILD)/share/layerlab/ior/%.spd: $(IOR_SRC)/%.spd
+	@mkdir -p $(dir $@)
+	cp $< $@
+
 tools: $(TOOLS)
 
 .SECONDEXPANSION:
@@ -163,8 +174,8 @@ install: all
 	install -m 644 $(STATIC) $(DESTDIR)$(LIBDIR)/
 	$(call write_pc,$(DESTDIR)$(PKGDIR)/layerlab.pc)
 	@# the tools find the library through their RUNPATH $$ORIGIN/../lib
-	if [ -n "$(IOR_SRC)" ]; then install -d $(DESTDIR)$(DATADIR)/ior && \
-	  install -m 644 $(IOR_SRC)/*.spd $(DESTDIR)$(DATADIR)/ior/; fi
+	install -d $(DESTDIR)$(DATADIR)/ior
+	install -m 644 $(IOR_SRC)/*.spd $(IOR_SRC)/README.md $(DESTDIR)$(DATADIR)/ior/
 	for t in $(TOOLS); do install -m 755 $$t $(DESTDIR)$(BINDIR)/; done
 
 uninstall:

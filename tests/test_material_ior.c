@@ -3,6 +3,7 @@
  * colour channel (CIE 1931 matching functions, XYZ -> linear sRGB), and the
  * search for the spectra.
  */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -19,8 +20,8 @@
 #include "test_util.h"
 #include "material/ior.h"
 
-#define IOR_DIR LL_SOURCE_DIR "/../shared/ior"
-#define GOLD_FILE LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
+#define IOR_DIR LL_SOURCE_DIR "/data/ior"
+#define GOLD_FILE LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf"
 
 /* The three numbers after `"key": [` in text. */
 static void read_json_triple(const char *text, const char *key, double out[3])
@@ -62,7 +63,7 @@ static void gold_matches_the_reference_file(void **state)
     assert_int_equal(fseek(f, 0, SEEK_SET), 0);
     assert_int_equal(fread(bytes, 1, (size_t)size, f), (size_t)size);
     fclose(f);
-    /* The metadata is the file's last 682 bytes (shared/testdata/README.md). */
+    /* The metadata is the file's last 682 bytes (tests/data/README.md). */
     read_json_triple(bytes + size - 682, "\"eta_cond\"", eta_ref);
     read_json_triple(bytes + size - 682, "\"k_cond\"", k_ref);
     free(bytes);
@@ -82,7 +83,7 @@ static void gold_matches_the_reference_file(void **state)
     assert_true(au.k_y < au.k[0] && au.k_y > au.k[2]);
 }
 
-/* Every metal of shared/ior reads and gives physical indices. */
+/* Every metal of data/ior reads and gives physical indices. */
 static void every_shared_metal_is_usable(void **state)
 {
     static const char *const names[] = { "Ag", "Al", "Au", "Be", "Cr", "Cu", "Cu2O", "CuO",
@@ -235,8 +236,9 @@ static void search_uses_the_environment_first(void **state)
     assert_int_equal(ll_metal_ior_lookup("Au", NULL, &m), LL_OK);
     assert_float_equal(m.eta_y, 0.5, 1e-12);
     assert_float_equal(m.k_y, 3.0, 1e-12);
-    /* A name only the checkout's shared/ior has is still found there (the
-     * tests run from the checkout, beside ../shared). */
+    /* A name only the library's own spectra have is still found there (this
+     * program links liblayerlab.a, so its folder build/tests leads to
+     * build/share/layerlab/ior, the build's copy of data/ior). */
     assert_int_equal(ll_metal_ior_lookup("Cu", NULL, &m), LL_OK);
     assert_int_equal(ll_metal_ior_lookup("Nope", NULL, &m), LL_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(ll_last_error_message(), "unknown metal 'Nope'"));
@@ -244,30 +246,57 @@ static void search_uses_the_environment_first(void **state)
     assert_int_equal(ll_metal_ior_lookup("../Au", NULL, &m), LL_ERROR_INVALID_ARGUMENT);
     assert_int_equal(ll_metal_ior_lookup("", NULL, &m), LL_ERROR_INVALID_ARGUMENT);
     assert_int_equal(unsetenv("LAYERLAB_IOR_DIR"), 0);
-    /* Without it, gold comes from shared/ior again. */
+    /* Without it, gold comes from the library's spectra again. */
     assert_int_equal(ll_metal_ior_lookup("Au", LL_SOURCE_DIR "/examples", &au), LL_OK);
     assert_true(au.eta[0] < 0.2);
 }
 
-/* The search list: environment, the material's ior/, the install prefix,
- * then shared/ior above the material's folder. */
+/* The search list is exactly: environment, the material's ior/, then
+ * ../share/layerlab/ior from the folder of the code that runs (here this
+ * statically linked program, build/tests) - nothing else, in particular no
+ * folder outside the project (docs/material-language.md, "Named metals"). */
 static void search_list_is_in_the_documented_order(void **state)
 {
-    char *dirs = NULL, *env, *mat, *prefix, *tree;
+    char *dirs = NULL, *tests_dir, expected[4200];
     (void)state;
+    tests_dir = realpath(LL_BUILD_DIR "/tests", NULL);
+    assert_non_null(tests_dir);
+    snprintf(expected, sizeof expected, "/a\n/b\n/m/ior\n%s/../share/layerlab/ior\n", tests_dir);
     assert_int_equal(setenv("LAYERLAB_IOR_DIR", "/a:/b", 1), 0);
     assert_int_equal(ll_ior_search_dirs("/m", &dirs), LL_OK);
-    env = strstr(dirs, "/a\n/b\n");
-    mat = strstr(dirs, "/m/ior\n");
-    prefix = strstr(dirs, "/../share/layerlab/ior\n");
-    tree = strstr(dirs, "/m/../shared/ior\n");
-    assert_true(env == dirs);
-    assert_non_null(mat);
-    assert_non_null(prefix);
-    assert_non_null(tree);
-    assert_true(env < mat && mat < prefix && prefix < tree);
+    assert_string_equal(dirs, expected);
     free(dirs);
     assert_int_equal(unsetenv("LAYERLAB_IOR_DIR"), 0);
+    /* Without the environment and a material folder only the library's
+     * own spectra remain. */
+    snprintf(expected, sizeof expected, "%s/../share/layerlab/ior\n", tests_dir);
+    assert_int_equal(ll_ior_search_dirs(NULL, &dirs), LL_OK);
+    assert_string_equal(dirs, expected);
+    free(dirs);
+    free(tests_dir);
+}
+
+/* The build tree holds the spectra where the rule looks (make copies
+ * data/ior to build/share/layerlab/ior), and the lookup does not depend on
+ * the working directory: from an empty folder, with no $LAYERLAB_IOR_DIR
+ * and no material folder, gold is found and equals the project's data/ior. */
+static void build_tree_spectra_are_found_from_any_directory(void **state)
+{
+    char cwd[4096];
+    ll_metal_ior found, source;
+    int c;
+    (void)state;
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_int_equal(access(LL_BUILD_DIR "/share/layerlab/ior/Au.eta.spd", R_OK), 0);
+    assert_int_equal(unsetenv("LAYERLAB_IOR_DIR"), 0);
+    assert_int_equal(chdir(tmpdir), 0);
+    assert_int_equal(ll_metal_ior_lookup("Au", NULL, &found), LL_OK);
+    assert_int_equal(chdir(cwd), 0);
+    assert_int_equal(ll_metal_ior_from_dir(IOR_DIR, "Au", &source), LL_OK);
+    for (c = 0; c < 3; ++c) {
+        assert_true(found.eta[c] == source.eta[c]);
+        assert_true(found.k[c] == source.k[c]);
+    }
 }
 
 int main(void)
@@ -282,6 +311,7 @@ int main(void)
         cmocka_unit_test(broken_spectra_are_rejected_with_line),
         cmocka_unit_test(search_uses_the_environment_first),
         cmocka_unit_test(search_list_is_in_the_documented_order),
+        cmocka_unit_test(build_tree_spectra_are_found_from_any_directory),
     };
     return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

@@ -10,9 +10,11 @@
  *     conductor   eta=Au alpha=0.1
  *
  * Named metals (eta=Au) are read from NAME.eta.spd / NAME.k.spd spectra
- * found through $LAYERLAB_IOR_DIR, the material file's ior/ folder,
- * PREFIX/share/layerlab/ior next to the installed library, or a shared/ior
- * folder of a source checkout (in that order).
+ * found, in this order, in the folders of $LAYERLAB_IOR_DIR, the material
+ * file's ior/ folder, and ../share/layerlab/ior from the folder of the
+ * loaded liblayerlab (PREFIX/share/layerlab/ior once installed; in a build
+ * tree build/share/layerlab/ior, the copy of the project's data/ior that
+ * make puts there).
  *
  * An ll_material is immutable once parsed: it may be built from several
  * threads at once.

@@ -251,23 +251,36 @@ static void list_add(dir_list *l, const char *a, const char *b)
     l->len += (size_t)snprintf(l->text + l->len, l->cap - l->len, "%s%s\n", a, b ? b : "");
 }
 
-/* Where the running library (or the program it is linked into) lives: its
- * directory, in buf. 0 if unknown. */
+/* Where the running library lives: the directory of the object that holds
+ * this function's code (dladdr on a function, not on data, so that the
+ * answer is the file the code was loaded from: liblayerlab.so for the
+ * tools and the Python package, the program itself when it links
+ * liblayerlab.a, as the tests do). The name is made absolute and free of
+ * symlinks (realpath), so a library loaded by a relative path or through
+ * its soname link gives its real folder; /proc/self/exe is the fallback
+ * when dladdr knows no file. Written to buf; 0 if unknown. */
 static int library_dir(char *buf, size_t size)
 {
-    static const char anchor = 0;
+    ll_status (*self)(const char *, char **) = ll_ior_search_dirs;
+    void *address;
     Dl_info info;
-    char *slash;
+    char *real = NULL, *slash;
     ssize_t n = -1;
-    if (dladdr(&anchor, &info) && info.dli_fname && strchr(info.dli_fname, '/') &&
-        strlen(info.dli_fname) < size) {
-        strcpy(buf, info.dli_fname);
+
+    /* A function pointer travels to dladdr's void * by its bytes (POSIX
+     * requires the two to have the same representation; ISO C has no cast). */
+    memcpy(&address, &self, sizeof address < sizeof self ? sizeof address : sizeof self);
+    if (dladdr(address, &info) && info.dli_fname && info.dli_fname[0])
+        real = realpath(info.dli_fname, NULL);
+    if (real && strlen(real) < size) {
+        strcpy(buf, real);
         n = (ssize_t)strlen(buf);
     } else {
         n = readlink("/proc/self/exe", buf, size - 1);
         if (n > 0)
             buf[n] = '\0';
     }
+    free(real);
     if (n <= 0)
         return 0;
     slash = strrchr(buf, '/');
@@ -280,23 +293,12 @@ static int library_dir(char *buf, size_t size)
     return 1;
 }
 
-/* `start/shared/ior`, `start/../shared/ior`, ... up to three parents. */
-static void add_source_tree(dir_list *l, const char *start)
-{
-    static const char *const up[] = { "/shared/ior", "/../shared/ior", "/../../shared/ior",
-                                       "/../../../shared/ior" };
-    size_t i;
-    for (i = 0; i < sizeof up / sizeof up[0]; ++i)
-        list_add(l, start, up[i]);
-}
-
 ll_status ll_ior_search_dirs(const char *material_dir, char **out)
 {
     dir_list l = { NULL, 0, 0, 0 };
     const char *env = getenv("LAYERLAB_IOR_DIR");
-    char lib[4096], cwd[4096];
+    char lib[4096];
     int have_lib = library_dir(lib, sizeof lib);
-    int have_cwd = getcwd(cwd, sizeof cwd) != NULL;
 
     *out = NULL;
     /* 1. The user's explicit choice: a colon-separated list. */
@@ -318,17 +320,14 @@ ll_status ll_ior_search_dirs(const char *material_dir, char **out)
     /* 2. Spectra kept next to the material. */
     if (material_dir)
         list_add(&l, material_dir, "/ior");
-    /* 3. An installed layerlab: PREFIX/lib/liblayerlab.so (or PREFIX/bin/
-     *    program) -> PREFIX/share/layerlab/ior. */
+    /* 3. The spectra that come with the library, found from the library's
+     *    own folder by one rule: PREFIX/lib -> PREFIX/share/layerlab/ior
+     *    after `make install`, and build/lib (or build/tests, build/bin for
+     *    programs linked statically) -> build/share/layerlab/ior in a build
+     *    tree, where make copies the project's data/ior. Nothing depends on
+     *    the working directory or on folders beside the checkout. */
     if (have_lib)
         list_add(&l, lib, "/../share/layerlab/ior");
-    /* 4. A source checkout with the project's shared/ folder beside it. */
-    if (material_dir)
-        add_source_tree(&l, material_dir);
-    if (have_cwd)
-        add_source_tree(&l, cwd);
-    if (have_lib)
-        add_source_tree(&l, lib);
     if (l.failed) {
         free(l.text);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory listing the ior directories");
@@ -418,7 +417,7 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
         append_names(names, sizeof names, first_existing);
     s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
                 "unknown metal '%s': no %s.eta.spd and %s.k.spd in $LAYERLAB_IOR_DIR, the "
-                "material's ior/ folder, PREFIX/share/layerlab/ior or a shared/ior folder "
+                "material's ior/ folder or the library's ../share/layerlab/ior "
                 "(%s%s%s%s)",
                 name, name, name, first_existing ? "known in " : "no ior folder found",
                 first_existing ? first_existing : "", first_existing ? ": " : "", names);

@@ -1,6 +1,6 @@
 /*
  * Named metals: measured complex refractive indices n + i k (the files
- * NAME.eta.spd and NAME.k.spd of shared/ior) reduced to one complex index
+ * NAME.eta.spd and NAME.k.spd of data/ior) reduced to one complex index
  * per colour channel, as the original layerlab recipes do
  * (recipes/utils/cie.py): average n and k over the visible spectrum with
  * the CIE 1931 colour-matching functions as weights, then convert the
@@ -51,7 +51,9 @@ LL_INTERNAL ll_status ll_metal_ior_from_dir(const char *dir, const char *name,
                                             ll_metal_ior *out);
 
 /* The directories searched for spectra, in order, as one string with the
- * entries separated by '\n' (malloc'ed; the caller frees). material_dir
+ * entries separated by '\n' (malloc'ed; the caller frees): those of
+ * $LAYERLAB_IOR_DIR, material_dir/ior, then LIBDIR/../share/layerlab/ior
+ * where LIBDIR is the folder of the loaded liblayerlab (dladdr). material_dir
  * (nullable) is the directory of the material file being read. */
 LL_INTERNAL ll_status ll_ior_search_dirs(const char *material_dir, char **out);
 

@@ -5,7 +5,7 @@
  * Indices: a dielectric's eta is relative to the medium right above it (the
  * issue's convention: `dielectric eta=1.5` is a coat in air). A conductor's
  * eta is the metal's own index, relative to vacuum, as tables and the
- * spectra of shared/ior list it; the interface the light meets is the metal
+ * spectra of data/ior list it; the interface the light meets is the metal
  * against the dielectric above it, so the word's relative index is
  * eta_metal / (product of the dielectric etas above). (The original
  * recipes, e.g. recipes/coated-gold.py, pass the metal's vacuum index
