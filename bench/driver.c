@@ -3,12 +3,12 @@
  * every measuring program in its own process, the requested number of
  * times, collects the samples, prints the table and writes the JSON file.
  *
- * usage: driver --bin DIR --work DIR --shared DIR --json PATH
+ * usage: driver --bin DIR --work DIR --testdata DIR --json PATH
  *               [--runs N] [--original DIR] [--commit TEXT] [--compiler TEXT]
  *
  *   --bin       where run.sh put the programs recipe, adding and eval
  *   --work      scratch directory for the recipes' .bsdf files
- *   --shared    the shared material folder (testdata/roughgold_alpha_0.2.bsdf)
+ *   --testdata  the folder of the golden file roughgold_alpha_0.2.bsdf (tests/data)
  *   --original  optional: a directory with one executable per recipe name
  *               (coated-gold, coated-gold-medium, coated-diffuse) that builds
  *               the same material with another implementation, e.g. a
@@ -30,7 +30,7 @@
 #include <unistd.h>
 
 typedef struct config {
-    const char *bin_dir, *work_dir, *shared_dir, *json_path, *original_dir;
+    const char *bin_dir, *work_dir, *testdata_dir, *json_path, *original_dir;
     size_t runs, cores;
     size_t threads[8];   /* scaling: 1, 2, 4, ... and the core count */
     size_t thread_count;
@@ -270,7 +270,7 @@ static void run_eval(const config *cfg, bench_store *store)
     const char *files[2], *labels[2] = { "roughgold", "coated-diffuse" };
     size_t i;
     path_join(bin, sizeof bin, cfg->bin_dir, "eval");
-    path_join(golden, sizeof golden, cfg->shared_dir, "testdata/roughgold_alpha_0.2.bsdf");
+    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
     path_join(diffuse, sizeof diffuse, cfg->work_dir, "coated-diffuse.bsdf");
     files[0] = golden;
     files[1] = diffuse;
@@ -282,7 +282,7 @@ static void run_eval(const config *cfg, bench_store *store)
         char what[64];
         if (access(files[i], R_OK) != 0) {
             snprintf(what, sizeof what, "eval %s: no file %s", labels[i],
-                     i == 0 ? "(shared/testdata missing)" : "(the recipe failed)");
+                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
             fprintf(stderr, "bench: %s\n", what);
             bench_store_error(store, what);
             continue;
@@ -312,8 +312,8 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
             cfg->bin_dir = value;
         else if (strcmp(key, "--work") == 0)
             cfg->work_dir = value;
-        else if (strcmp(key, "--shared") == 0)
-            cfg->shared_dir = value;
+        else if (strcmp(key, "--testdata") == 0)
+            cfg->testdata_dir = value;
         else if (strcmp(key, "--json") == 0)
             cfg->json_path = value;
         else if (strcmp(key, "--original") == 0)
@@ -327,8 +327,8 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
         else
             bench_die("driver: unknown option %s", key);
     }
-    if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->shared_dir || !cfg->json_path)
-        bench_die("usage: %s --bin DIR --work DIR --shared DIR --json PATH [--runs N] "
+    if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->testdata_dir || !cfg->json_path)
+        bench_die("usage: %s --bin DIR --work DIR --testdata DIR --json PATH [--runs N] "
                   "[--original DIR] [--commit TEXT] [--compiler TEXT]", argv[0]);
     if (cfg->runs < 3)
         bench_die("driver: --runs %zu: every figure is a median of at least 3 runs", cfg->runs);

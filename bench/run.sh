@@ -10,7 +10,6 @@
 #   CC                  C compiler (default cc)
 #   LL_BENCH_RUNS       runs per figure, >= 3 (default 3)
 #   LL_BENCH_JSON       output file (default bench/results.json)
-#   LL_BENCH_SHARED     the shared material folder (default ../shared)
 #   LL_BENCH_ORIGINAL   optional directory of executables named after the
 #                       recipes, timed side by side (docs/benchmarks.md)
 set -eu
@@ -20,7 +19,6 @@ BUILD=${BUILD:-build-bench}
 CC=${CC:-cc}
 RUNS=${LL_BENCH_RUNS:-3}
 JSON=${LL_BENCH_JSON:-bench/results.json}
-SHARED=${LL_BENCH_SHARED:-../shared}
 ORIGINAL=${LL_BENCH_ORIGINAL:-}
 
 if [ ! -f "$BUILD/lib/liblayerlab.so" ]; then
@@ -72,6 +70,6 @@ if [ "$COMMIT" != unknown ] && [ -n "$(git status --porcelain -- src include 2>/
 fi
 COMPILER=$($CC --version 2>/dev/null | head -n 1)
 
-exec "$BIN/driver" --bin "$BIN" --work "$WORK" --shared "$SHARED" --json "$JSON" \
+exec "$BIN/driver" --bin "$BIN" --work "$WORK" --testdata tests/data --json "$JSON" \
     --runs "$RUNS" --original "$ORIGINAL" --commit "$COMMIT" \
     --compiler "$COMPILER -O3 -march=x86-64-v2"

@@ -1,5 +1,5 @@
 #!/bin/sh
-# ABI and header checks (see shared/docs/style.md, items 1-4):
+# ABI and header checks (see docs/style.md, items 1-4):
 #   (a) every public header compiles alone as pedantic C99 and as C++11,
 #       includes only <stddef.h>/<stdint.h> and other layerlab headers;
 #       a C++ program links against the library (extern "C" guards work);

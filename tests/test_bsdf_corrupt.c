@@ -9,7 +9,7 @@
 #include "test_bsdf_util.h"
 #include "storage/bsdf_format.h"
 
-/* The golden file's layout (shared/testdata/README.md). */
+/* The golden file's layout (tests/data/README.md). */
 enum {
     G_NODES = 64,
     G_N = 58,

@@ -1,7 +1,7 @@
 /*
  * The golden file roughgold_alpha_0.2.bsdf (written by the original tools,
  * shipped with pbrt-v3's tests): its header facts, and pbrt-v3's
- * FourierBSDF numbers (shared/testdata/README.md) reproduced through the
+ * FourierBSDF numbers (tests/data/README.md) reproduced through the
  * renderer-convention calls, plus the layer convention's mapping.
  */
 #include "test_bsdf_util.h"

@@ -475,7 +475,7 @@ static void medium_over_diffuse_round_trip(void **state)
     ll_layer_destroy(base);
 }
 
-/* Rough gold as the original tools made shared/testdata/roughgold_alpha_0.2
+/* Rough gold as the original tools made tests/data/roughgold_alpha_0.2
  * (Beckmann alpha 0.2, the metadata's per-channel complex index, 56
  * Gauss-Lobatto nodes, the heuristic's orders): the file written here must
  * be the layer at its nodes, and must agree with the original's file for

@@ -9,7 +9,7 @@
 #include "test_util.h"
 #include "layer/layer.h"
 
-#define LL_TEST_GOLDEN LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf"
+#define LL_TEST_GOLDEN LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf"
 #define LL_TEST_PI 3.14159265358979323846
 
 /* f_k(mu_o, mu_i): the BSDF's order-k coefficient (without weights) for

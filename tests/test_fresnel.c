@@ -89,7 +89,7 @@ static void dielectric_matches_complex_amplitudes(void **state)
 
 static void conductor_matches_complex_amplitudes(void **state)
 {
-    /* Gold's RGB index of shared/testdata, aluminium near 550 nm, a weak
+    /* Gold's RGB index of tests/data, aluminium near 550 nm, a weak
      * absorber, and the mirror eta = i (which reflects everything). */
     static const double idx[][2] = { { 0.14355224039215753, 3.9839744793223466 },
                                      { 0.3774377780596837, 2.384954234733302 },

@@ -150,7 +150,7 @@ static void words_stack_top_to_bottom(void **state)
 
 /* End to end against the original tools: `conductor eta=Au alpha=0.2` at
  * its default resolution (58 file nodes, as theirs) evaluates like
- * shared/testdata/roughgold_alpha_0.2.bsdf within 1% for directions up to
+ * tests/data/roughgold_alpha_0.2.bsdf within 1% for directions up to
  * 63 degrees from the normal (our gold indices differ from theirs by up to
  * 1.2%; at grazing angles the interface models differ by a few percent). */
 static void rough_gold_matches_the_original_file(void **state)
@@ -165,8 +165,7 @@ static void rough_gold_matches_the_original_file(void **state)
     snprintf(path, sizeof path, "%s/roughgold.bsdf", tmpdir);
     assert_int_equal(ll_material_build(m, NULL, path), LL_OK);
     assert_int_equal(ll_bsdf_open(path, &ours), LL_OK);
-    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/../shared/testdata/roughgold_alpha_0.2.bsdf",
-                                  &ref),
+    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", &ref),
                      LL_OK);
     assert_int_equal(ll_bsdf_get_info(ours, &info), LL_OK);
     assert_int_equal(info.n_nodes, 58);

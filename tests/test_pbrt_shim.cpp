@@ -5,7 +5,7 @@
  *
  * Three kinds of evidence:
  *  - the golden file: the numbers pbrt-v3's own FourierBSDF gives for it
- *    (its BSDFs.Fourier unit test; ../shared/testdata/README.md);
+ *    (its BSDFs.Fourier unit test; tests/data/README.md);
  *  - a synthetic file built here byte by byte, whose every value follows in
  *    closed form from pbrt-v3's FourierBSDF::f / Pdf formulas: it pins down
  *    which table index is which direction, the azimuth convention, and the
@@ -558,7 +558,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     const std::string golden =
-        std::string(argv[1]) + "/../shared/testdata/roughgold_alpha_0.2.bsdf";
+        std::string(argv[1]) + "/tests/data/roughgold_alpha_0.2.bsdf";
     const std::string dir = argv[2];
 
     test_golden_values(golden);

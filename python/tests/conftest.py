@@ -11,7 +11,7 @@ import os
 import pathlib
 
 CHECKOUT = pathlib.Path(__file__).resolve().parents[2]
-SHARED = CHECKOUT.parent / "shared"
+TESTDATA = CHECKOUT / "tests" / "data"
 
 if not os.environ.get("LAYERLAB_LIBRARY"):
     _built = CHECKOUT / "build" / "lib" / "liblayerlab.so"
@@ -40,8 +40,9 @@ def timings():
 
 
 @pytest.fixture(scope="session")
-def shared_dir():
-    return SHARED
+def testdata_dir():
+    """The project's test files (tests/data/README.md)."""
+    return TESTDATA
 
 
 def pytest_terminal_summary(terminalreporter):

@@ -154,8 +154,8 @@ def test_open_errors(tmp_path):
 # ---------------------------------------------------------------- golden file
 
 @pytest.fixture(scope="module")
-def golden(shared_dir):
-    return ll.BSDFStorage(shared_dir / "testdata" / "roughgold_alpha_0.2.bsdf")
+def golden(testdata_dir):
+    return ll.BSDFStorage(testdata_dir / "roughgold_alpha_0.2.bsdf")
 
 
 def test_golden_header(golden):
@@ -169,7 +169,7 @@ def test_golden_header(golden):
 
 
 def test_golden_matches_pbrt_v3(golden):
-    # pbrt-v3's FourierBSDF on this file (shared/testdata/README.md).
+    # pbrt-v3's FourierBSDF on this file (tests/data/README.md).
     wo = np.array([-0.5, -0.5, 0.8]) / np.linalg.norm([-0.5, -0.5, 0.8])
     wi = np.array([0.4, 0.52, 0.7]) / np.linalg.norm([0.4, 0.52, 0.7])
     f = golden.evalDir(wo, wi, mode="importance")
@@ -184,8 +184,8 @@ def test_golden_matches_pbrt_v3(golden):
         golden.evalDir(wo, wi, mode="photons")
 
 
-def test_golden_from_bytes_and_damage(golden, shared_dir):
-    data = (shared_dir / "testdata" / "roughgold_alpha_0.2.bsdf").read_bytes()
+def test_golden_from_bytes_and_damage(golden, testdata_dir):
+    data = (testdata_dir / "roughgold_alpha_0.2.bsdf").read_bytes()
     copy = ll.BSDFStorage.fromBytes(data)
     np.testing.assert_array_equal(copy.eval(0.5, -0.4, 0.3), golden.eval(0.5, -0.4, 0.3))
     for cut in (10, 64, 1000, len(data) - 1):

@@ -5,7 +5,7 @@
 # UndefinedBehaviorSanitizer against the reader's sources only (every
 # src/bsdf_*.c but the writer, plus spline.c and support.c: the reader
 # needs no layer code), then runs it from the seed corpus tests/fuzz/corpus
-# and the golden files in ../shared/testdata. New interesting inputs go to
+# and the golden file in tests/data. New interesting inputs go to
 # $BUILD/fuzz/corpus, findings to $BUILD/fuzz/crash-* (add a finding to
 # tests/fuzz/corpus once fixed: the cmocka suite replays that directory).
 # Exit status: libFuzzer's (non-zero on a finding).
@@ -26,7 +26,7 @@ $CLANG -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
     tests/fuzz/fuzz_bsdf.c $sources src/numerics/spline.c src/support/error.c src/support/alloc.c -lm -o "$out/fuzz_bsdf"
 
 seeds="tests/fuzz/corpus"
-[ -d ../shared/testdata ] && seeds="$seeds ../shared/testdata"
+seeds="$seeds tests/data"
 echo "fuzz: running for $seconds s (seeds: $seeds; new inputs: $out/corpus)"
 # shellcheck disable=SC2086
 exec "$out/fuzz_bsdf" -max_total_time="$seconds" -artifact_prefix="$out/" \
