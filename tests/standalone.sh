@@ -1,7 +1,7 @@
 #!/bin/sh
 # The project stands alone (issue 13): it owns every file it needs.
 #   (a) nothing in the project refers to a folder beside or above the
-#       checkout (the old ../shared/{ior,testdata,docs});
+#       checkout (the old shared folder with its ior, testdata and docs);
 #   (b) every document the code cites by name exists in docs/, and every
 #       section cited as `name.md, "Section"` is a heading there (alone or
 #       followed by a parenthesis), every
