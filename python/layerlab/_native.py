@@ -274,6 +274,12 @@ def load():
     """Find, load and version-check liblayerlab; ImportError says what was tried."""
     explicit = os.environ.get("LAYERLAB_LIBRARY")
     if explicit:
+        # A relative path is made absolute now: the library finds its data
+        # (the metal spectra in ../share/layerlab/ior) from the path it was
+        # loaded by, which must not change meaning when the program changes
+        # its working directory. A bare name keeps the loader's search.
+        if os.sep in explicit:
+            explicit = os.path.abspath(explicit)
         candidates = [("LAYERLAB_LIBRARY", explicit)]
     else:
         candidates = _candidates()

@@ -25,6 +25,24 @@ def run_python(code, env_changes, cwd="/", pythonpath=str(PACKAGE_DIR)):
                           text=True, timeout=120)
 
 
+def test_relative_library_path_still_finds_the_spectra_after_chdir(tmp_path):
+    # The library looks for its metal spectra beside the file it was loaded
+    # from; a relative LAYERLAB_LIBRARY must not lose them when the program
+    # changes directory afterwards.
+    library = pathlib.Path(ll.libraryPath()).resolve()
+    relative = os.path.relpath(str(library), str(library.parents[2]))
+    code = textwrap.dedent("""
+        import os, layerlab as ll
+        os.chdir(%r)
+        ll.Material.parse("conductor eta=Au alpha=0.2\\n")
+        print("found Au")
+    """ % str(tmp_path))
+    out = run_python(code, {"LAYERLAB_LIBRARY": relative, "LAYERLAB_IOR_DIR": ""},
+                     cwd=str(library.parents[2]))
+    assert out.returncode == 0, out.stderr
+    assert "found Au" in out.stdout
+
+
 def test_explicit_path_that_does_not_load_says_so():
     out = run_python("import layerlab", {"LAYERLAB_LIBRARY": "/nonexistent/liblayerlab.so"})
     assert out.returncode != 0
