@@ -159,6 +159,10 @@ static ll_status run_vmf(ll_layer *l, const ll_monitor *m)
 {
     return ll_layer_set_von_mises_fisher_ex(l, 0.8, 5.0, m);
 }
+static ll_status run_diffuse(ll_layer *l, const ll_monitor *m)
+{
+    return ll_layer_set_diffuse_ex(l, 0.3, m);
+}
 static ll_status run_matusik(ll_layer *l, const ll_monitor *m)
 {
     return ll_layer_set_matusik_ex(l, merl_path, 1, 0, m);
@@ -173,6 +177,7 @@ static const operation operations[] = {
     { "henyey-greenstein", prep_diffuse, run_hg },
     { "von mises-fisher", prep_diffuse, run_vmf },
     { "matusik", prep_hg, run_matusik },
+    { "diffuse", prep_hg, run_diffuse },
 };
 
 static ll_layer *prepared(const operation *op)

@@ -76,6 +76,12 @@ LL_API size_t ll_layer_stored_count(const ll_layer *layer);
  * transmission. */
 LL_API ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo);
 
+/* ll_layer_set_diffuse with a monitor (ll_common.h; NULL = the plain call):
+ * O(n^2), seconds at n = 30000. Stage "diffuse", one unit per column, on
+ * the calling thread; LL_ERROR_CANCELLED leaves the layer as it was. */
+LL_API ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo,
+                                         const ll_monitor *monitor);
+
 /* Phase function of an infinitesimally thin isotropic medium with single-
  * scattering albedo in [0, 1]: p = albedo / (4 pi). Use ll_layer_expand to
  * give it a thickness. */

@@ -343,6 +343,14 @@ int main(int argc, char **argv)
         ll_progress_update(0.97, "writing", &bar);
         s = ll_material_write(m, &o, layers, n_channels, a.output);
     }
+    if (s == LL_OK) {
+        /* The file is complete: from here on a signal just ends llbuild
+         * (reading the file back for the summary is not worth waiting for). */
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (cancel_flag)
+            raise(cancel_signal ? cancel_signal : SIGINT);
+    }
     ll_progress_finish(&bar, s == LL_OK);
     if (s == LL_ERROR_CANCELLED) {
         /* (A signal after the file was complete is too late to matter: the
