@@ -1,6 +1,6 @@
 #!/bin/sh
 # llbuild under SIGINT / SIGTERM at every stage of a build: quadrature,
-# interface, phase function, doubling, adding, writing. Each input sits in
+# diffuse, interface, phase function, doubling, adding, writing. Each input sits in
 # its stage for seconds; once llbuild's progress names the stage the test
 # signals it and checks the exit status (130 for SIGINT, 143 for SIGTERM:
 # death by the signal), the message, that no file and no temporary is left,
@@ -79,6 +79,8 @@ interrupt() {
 
 # O(n^2) Gauss-Lobatto rule: seconds at 16000 nodes.
 interrupt quadrature INT quadrature 'set nodes=16000 orders=1\ndiffuse albedo=0.5\n'
+# The diffuse word is O(n^2) in one thread.
+interrupt diffuse TERM diffuse 'set nodes=12000 orders=1\ndiffuse albedo=0.5\n'
 # A rough dielectric resolved on many orders: seconds of series per column.
 interrupt interface TERM "dielectric interface" \
     'set nodes=600 orders=150\ndielectric eta=1.5 alpha=0.05\n'
