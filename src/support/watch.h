@@ -71,8 +71,9 @@ LL_INTERNAL ll_status ll_watch_finish(ll_watch *w, ll_status s, const char *fn);
 
 /* ll_parallel_for, polled: the owner takes items like every thread and,
  * once none are left to take, keeps polling (reporting progress, seeing a
- * cancel) every few milliseconds until the other threads are done, so a
- * long item on a worker does not silence the callback. w may be NULL. */
+ * cancel) every millisecond until the other threads are done, so a long
+ * item on a worker does not silence the callback (without a callback it
+ * waits at the barrier as ll_parallel_for does). w may be NULL. */
 LL_INTERNAL ll_status ll_parallel_for_watched(size_t count, ll_parallel_body body, void *ctx,
                                               ll_watch *w);
 
