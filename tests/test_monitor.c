@@ -446,6 +446,78 @@ static void deprecated_cancel_flag_and_bad_monitors(void **state)
     ll_layer_destroy(l);
 }
 
+/* The material builds: the same layers and file with a monitor; a cancel
+ * at the first, a middle and the last report returns no layers, writes no
+ * file, keeps an existing one and leaves no temporary. */
+static void material_builds_with_a_monitor(void **state)
+{
+    static const when moments[] = { AT_FIRST, AT_MIDDLE, AT_LAST };
+    static const char text[] = "set nodes=40 orders=8\n"
+                               "dielectric eta=1.5 alpha=0.3\n"
+                               "medium albedo=0.8 g=0.5 tau=0.5\n"
+                               "diffuse albedo=0.5\n";
+    ll_material *mat = NULL;
+    ll_layer *plain[3] = { NULL, NULL, NULL }, *watched[3] = { NULL, NULL, NULL };
+    size_t nch = 0, nch2 = 0, j, entries, saved = ll_get_thread_count();
+    char path[700], plain_path[700];
+    unsigned char *a, *b;
+    size_t size_a, size_b;
+    recorder r;
+    ll_monitor m = recorder_monitor(&r, NEVER);
+    snapshot want;
+    (void)state;
+    assert_int_equal(ll_set_thread_count(1), LL_OK);
+    assert_int_equal(ll_material_parse(text, "monitor.layers", &mat), LL_OK);
+    assert_int_equal(ll_material_build_layers(mat, NULL, plain, &nch, NULL), LL_OK);
+    assert_int_equal(ll_material_build_layers_ex(mat, NULL, &m, watched, &nch2, NULL), LL_OK);
+    assert_int_equal(nch, nch2);
+    want = take(plain[0]);
+    assert_same(&want, watched[0], "ll_material_build_layers_ex");
+    free(want.values);
+    assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
+    assert_true(r.saw_middle);
+    assert_false(r.wrong_thread);
+    snprintf(plain_path, sizeof plain_path, "%s/material-plain.bsdf", ll_test_dir());
+    snprintf(path, sizeof path, "%s/material.bsdf", ll_test_dir());
+    assert_int_equal(ll_material_build(mat, NULL, plain_path), LL_OK);
+    m = recorder_monitor(&r, NEVER);
+    assert_int_equal(ll_material_build_ex(mat, NULL, &m, path), LL_OK);
+    assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
+    assert_string_equal(r.stage, "writing");
+    a = ll_test_read_file(plain_path, &size_a);
+    b = ll_test_read_file(path, &size_b);
+    assert_int_equal(size_a, size_b);
+    assert_memory_equal(a, b, size_a);
+    free(b);
+    entries = ll_test_count_entries(ll_test_dir());
+    for (j = 0; j < 3; ++j) {
+        ll_layer *none[3] = { NULL, NULL, NULL };
+        char fresh[720];
+        m = recorder_monitor(&r, moments[j]);
+        assert_int_equal(ll_material_build_layers_ex(mat, NULL, &m, none, &nch2, NULL),
+                         LL_ERROR_CANCELLED);
+        assert_true(none[0] == NULL && none[1] == NULL && none[2] == NULL);
+        m = recorder_monitor(&r, moments[j]);
+        assert_int_equal(ll_material_build_ex(mat, NULL, &m, path), LL_ERROR_CANCELLED);
+        b = ll_test_read_file(path, &size_b);
+        assert_int_equal(size_a, size_b);
+        assert_memory_equal(a, b, size_a);
+        free(b);
+        snprintf(fresh, sizeof fresh, "%s/material-fresh%zu.bsdf", ll_test_dir(), j);
+        m = recorder_monitor(&r, moments[j]);
+        assert_int_equal(ll_material_build_ex(mat, NULL, &m, fresh), LL_ERROR_CANCELLED);
+        assert_int_equal(access(fresh, F_OK), -1);
+        assert_int_equal(ll_test_count_entries(ll_test_dir()), entries);
+    }
+    free(a);
+    for (j = 0; j < 3; ++j) {
+        ll_layer_destroy(plain[j]);
+        ll_layer_destroy(watched[j]);
+    }
+    ll_material_destroy(mat);
+    ll_set_thread_count(saved);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -455,6 +527,7 @@ int main(void)
         cmocka_unit_test(quadrature_with_a_monitor),
         cmocka_unit_test(writer_with_a_monitor),
         cmocka_unit_test(deprecated_cancel_flag_and_bad_monitors),
+        cmocka_unit_test(material_builds_with_a_monitor),
     };
     return cmocka_run_group_tests(tests, setup, ll_test_dir_teardown);
 }
