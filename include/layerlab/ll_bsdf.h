@@ -118,6 +118,16 @@ LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const 
                                         const double *param_positions,
                                         const ll_bsdf_write_options *opts);
 
+/* ll_bsdf_write with a monitor (ll_common.h; NULL = the plain call). Stage
+ * "writing": series lengths, offsets, CDF, then the bytes. Progress runs on
+ * the calling thread (the writer uses no other); the writer polls once per
+ * column or node row of every pass, and LL_ERROR_CANCELLED (also at the
+ * last report, which comes before the temporary file is renamed) leaves no
+ * file and keeps an existing one. */
+LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers,
+                                  size_t n_channels, const ll_bsdf_write_options *opts,
+                                  const ll_monitor *monitor);
+
 /* ------------------------------------------------------------- reading */
 
 /* Open and fully validate a file: identifier and version (version 2 files

@@ -89,6 +89,28 @@ LL_API ll_status ll_set_thread_count(size_t n_threads);
 /* The effective count for the calling thread (>= 1). */
 LL_API size_t ll_get_thread_count(void);
 
+/* ----------------------------------------------------------------- monitor
+ * Progress of a long call, as Embree's progress monitor: called on the calling thread with the
+ * fraction done in [0, 1] and a short stage name; a non-zero return cancels the call, which then
+ * returns LL_ERROR_CANCELLED and leaves its output unchanged.
+ *
+ * The callback is only ever called from the thread that made the call (never from a worker
+ * thread: workers poll an internal flag that the calling thread raises when the callback
+ * returns non-zero), at least once with 0 when the work starts and once with 1 just before the
+ * result is committed (a cancel at that last report still leaves the output unchanged), and in
+ * between as the work advances (fractions never decrease), while the calling thread waits for
+ * workers too. Stage names are static strings such as "quadrature", "interface", "phase
+ * function", "doubling", "adding", "measured", "writing". The callback must not call layerlab
+ * on the layer being computed. A monitor may be passed to several calls, also at once from
+ * several threads if its callback is thread-safe. */
+typedef int (*ll_monitor_fn)(void *user, double fraction, const char *stage);
+typedef struct ll_monitor {
+    size_t struct_size;     /* sizeof(ll_monitor) */
+    ll_monitor_fn progress; /* nullable */
+    void *user;
+} ll_monitor;
+#define LL_MONITOR_INIT { sizeof(ll_monitor), NULL, NULL }
+
 #ifdef __cplusplus
 }
 #endif

@@ -76,6 +76,12 @@ LL_API size_t ll_layer_stored_count(const ll_layer *layer);
  * transmission. */
 LL_API ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo);
 
+/* ll_layer_set_diffuse with a monitor (ll_common.h; NULL = the plain call):
+ * O(n^2), seconds at n = 30000. Stage "diffuse", one unit per column, on
+ * the calling thread; LL_ERROR_CANCELLED leaves the layer as it was. */
+LL_API ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo,
+                                         const ll_monitor *monitor);
+
 /* Phase function of an infinitesimally thin isotropic medium with single-
  * scattering albedo in [0, 1]: p = albedo / (4 pi). Use ll_layer_expand to
  * give it a thickness. */
@@ -94,6 +100,18 @@ LL_API ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, 
 /* von Mises-Fisher phase function p ~ exp(kappa cos theta), kappa >= 0
  * (kappa = 0 is isotropic); same construction as Henyey-Greenstein. */
 LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa);
+
+/* The three media setters with a monitor (ll_common.h; NULL = the plain
+ * call). Stage "phase function", one unit per Fourier order; progress is
+ * called on the calling thread only, cancel is seen by every worker within
+ * one node row of an order's construction (and between its BLAS products)
+ * and returns LL_ERROR_CANCELLED with the layer exactly as it was. */
+LL_API ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo,
+                                           const ll_monitor *monitor);
+LL_API ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
+                                                   const ll_monitor *monitor);
+LL_API ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
+                                                  const ll_monitor *monitor);
 
 /* Rough interface with a Beckmann microfacet distribution (Walter et al.
  * 2007) between the medium above and one of relative index
@@ -146,12 +164,30 @@ LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double 
                                          double alpha, int conserve_energy,
                                          size_t n_orders_internal);
 
+/* ll_layer_set_microfacet with a monitor (ll_common.h; NULL = the plain
+ * call). Stage "interface": the fits of the series (a tenth), the columns
+ * (most of it, one unit per incident node), the energy compensation.
+ * Progress runs on the calling thread only; every worker polls once per
+ * node pair of its column, so a cancel stops the call within one pair's
+ * series, and LL_ERROR_CANCELLED leaves the layer exactly as it was. */
+LL_API ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_im,
+                                            double alpha, int conserve_energy,
+                                            size_t n_orders_internal,
+                                            const ll_monitor *monitor);
+
 /* A measured isotropic BRDF in the MERL format ("Matusik et al. 2003",
  * .binary files), colour channel 0, 1 or 2 (R, G, B). The file's values are
  * multiplied by the MERL scale factors (1/1500, 1.15/1500, 1.66/1500) which
  * give reflectance in units of 1/sr. n_orders_internal as above. */
 LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
                                       size_t n_orders_internal);
+
+/* ll_layer_set_matusik with a monitor (ll_common.h; NULL = the plain call).
+ * Stage "measured": reading the file, then one unit per incident node.
+ * Progress runs on the calling thread only; workers poll once per outgoing
+ * node, and LL_ERROR_CANCELLED leaves the layer exactly as it was. */
+LL_API ll_status ll_layer_set_matusik_ex(ll_layer *layer, const char *path, int channel,
+                                         size_t n_orders_internal, const ll_monitor *monitor);
 
 /* ------------------------------------------------------------- grammar */
 
@@ -164,6 +200,13 @@ LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int cha
 LL_API ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
                               int homogeneous);
 
+/* ll_layer_add with a monitor (ll_common.h; NULL = the plain call). Stage
+ * "adding", one unit per Fourier order. Progress runs on the calling thread
+ * only; workers poll between the O(h^3) BLAS/LAPACK calls of each order
+ * (h = n / 2), and LL_ERROR_CANCELLED leaves out exactly as it was. */
+LL_API ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                                 int homogeneous, const ll_monitor *monitor);
+
 /* layer = top stacked on layer. */
 LL_API ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top);
 /* layer = layer stacked on bottom. */
@@ -175,6 +218,14 @@ LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
  * slab tau0 <= min(2 min|mu|, 2^-15) chosen so that tau0 2^k = tau exactly,
  * and adds it to itself k times. */
 LL_API ll_status ll_layer_expand(ll_layer *layer, double tau);
+
+/* ll_layer_expand with a monitor (ll_common.h; NULL = the plain call).
+ * Stage "doubling", one unit per doubling step of each Fourier order.
+ * Progress runs on the calling thread only; workers poll before every
+ * doubling step and between its BLAS/LAPACK calls, and LL_ERROR_CANCELLED
+ * leaves the layer exactly as it was (the phase function, not a partial
+ * slab). */
+LL_API ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *monitor);
 
 /* Turn the layer upside down (swap top and bottom). */
 LL_API ll_status ll_layer_reverse(ll_layer *layer);

@@ -59,7 +59,8 @@ typedef struct ll_build_options {
     double error_goal;         /* 0: the material's setting, else 1e-3              */
     ll_progress_fn progress;   /* nullable                                          */
     void *progress_user;
-    const volatile int *cancel;/* nullable; nonzero stops with LL_ERROR_CANCELLED   */
+    const volatile int *cancel;/* nullable; nonzero stops with LL_ERROR_CANCELLED
+                                  (deprecated: prefer an ll_monitor, *_ex below)  */
 } ll_build_options;
 
 #define LL_BUILD_OPTIONS_INIT { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL }
@@ -85,6 +86,26 @@ LL_API ll_status ll_material_build_layers(const ll_material *material,
                                           const ll_build_options *opts,
                                           ll_layer *layers[3], size_t *n_channels,
                                           ll_bsdf_write_options *header);
+
+/* The two builds with a monitor (ll_common.h; NULL = the plain call): the
+ * fraction of the whole build (cost-weighted, as opts->progress, which is
+ * still called too) and the stage ("quadrature", "dielectric interface",
+ * "medium", "adding", "writing", ...), on the calling thread only. A
+ * non-zero return stops the build within one step of the inner loops of
+ * whatever stage runs (every layer call polls) with LL_ERROR_CANCELLED: no
+ * file is written and an existing one is kept; no layers are returned.
+ * opts->cancel, a flag that may be raised from a signal handler, works the
+ * same way and is kept as a deprecated alias of a monitor that returns
+ * non-zero: the calling thread reads it at least every 20 ms while a layer
+ * call runs (also while it waits for workers), and the workers stop at
+ * their next poll. */
+LL_API ll_status ll_material_build_ex(const ll_material *material, const ll_build_options *opts,
+                                      const ll_monitor *monitor, const char *out_path);
+LL_API ll_status ll_material_build_layers_ex(const ll_material *material,
+                                             const ll_build_options *opts,
+                                             const ll_monitor *monitor, ll_layer *layers[3],
+                                             size_t *n_channels,
+                                             ll_bsdf_write_options *header);
 
 /* Write layers that ll_material_build_layers returned (n_channels of them,
  * 1 or 3) to out_path as a .bsdf file with this material's header (eta,

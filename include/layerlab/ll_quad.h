@@ -28,6 +28,18 @@ LL_API ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights
  * with weights 0.02222222, 0.13330599, 0.22488934, 0.29204268, 0.32753976, ... */
 LL_API ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights);
 
+/* The Gauss rules with a monitor (ll_common.h; NULL = the plain call). Each
+ * node costs O(n) (n = 30000 takes seconds), so these report stage
+ * "quadrature", one unit per node pair, and poll once per node (per
+ * Newton sweep). progress is called on the calling thread (the rules use no
+ * other). With a callback the rule is computed into scratch memory (16 n
+ * bytes, so LL_ERROR_OUT_OF_MEMORY is possible) and copied out at the end:
+ * LL_ERROR_CANCELLED leaves both buffers exactly as they were. */
+LL_API ll_status ll_quad_gauss_legendre_ex(size_t n, double *nodes, double *weights,
+                                           const ll_monitor *monitor);
+LL_API ll_status ll_quad_gauss_lobatto_ex(size_t n, double *nodes, double *weights,
+                                          const ll_monitor *monitor);
+
 /* Composite Simpson: odd n >= 3 equidistant nodes (n-1 even intervals),
  * exact for cubics. */
 LL_API ll_status ll_quad_composite_simpson(size_t n, double *nodes, double *weights);

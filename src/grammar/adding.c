@@ -9,12 +9,10 @@
  * BLAS-3 (gemm), then compressed back.
  */
 #include "grammar/grammar.h"
+#include "support/watch.h"
 
 #include <cblas.h>
 #include <lapacke.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,6 +32,7 @@ typedef struct workspace {
     double *rhs;               /* h x h: Ra Tb                          */
     lapack_int *piv_tb, *piv_bt;
     void *memory;
+    ll_watch *watch;           /* polled between the BLAS calls (nullable) */
 } workspace;
 
 static void workspace_free(workspace *w) { free(w->memory); }
@@ -44,6 +43,7 @@ static ll_status workspace_init(workspace *w, size_t h)
     double *p;
     memset(w, 0, sizeof *w);
     w->h = h;
+    w->watch = NULL;
     /* 12 blocks + 2 x (gain, Z) + rhs = 17 h^2 doubles, plus pivots. */
     if (!ll_size_mul(h, h, &hh) || !ll_size_mul(hh, 17, &doubles) ||
         !ll_size_add(doubles, h, &doubles) || !ll_size_add(doubles, h, &doubles))
@@ -145,7 +145,8 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
                           int zRb_in, const double *Ta_through, int zTa_through,
                           const double *Tb_back, int zTb_back, const double *Tb_through,
                           int zTb_through, const double *Rb_out, int zRb_out, double *gain,
-                          lapack_int *piv, double *rhs, double *T_out, double *R_out)
+                          lapack_int *piv, double *rhs, double *T_out, double *R_out,
+                          ll_watch *watch)
 {
     size_t hh = h * h;
     int coupled = !zRa_in && !zRb_in; /* multiple reflections between the layers */
@@ -159,11 +160,17 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
         return LL_OK;
     }
     memcpy(Z, Tb_through, hh * sizeof(double));
+    /* Each BLAS/LAPACK call below is O(h^3): a cancel is seen between them
+     * (about 1 s apart at h = 1000 on one loaded core). */
     if (coupled) {
         s = factor_gain(h, Ra_in, Rb_in, gain, piv);
         if (s != LL_OK)
             return s;
+        if (ll_watch_poll(watch))
+            return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
         right_solve(h, gain, piv, Z);
+        if (ll_watch_poll(watch))
+            return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
     }
     /* T_out = Z Ta_through and R_out = Rb_out + Z (Ra_in Tb_back), the
      * products written straight into the output blocks. */
@@ -172,9 +179,13 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
     else
         gemm(h, h, 1.0, Z, Ta_through, 0.0, T_out);
     memcpy(R_out, Rb_out, hh * sizeof(double));
+    if (ll_watch_poll(watch))
+        return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
     (void)zRb_out; /* a zero block is stored zero-filled */
     if (reflect_back) {
         gemm(h, h, 1.0, Ra_in, Tb_back, 0.0, rhs);
+        if (ll_watch_poll(watch))
+            return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
         gemm(h, h, 1.0, Z, rhs, 1.0, R_out);
     }
     return LL_OK;
@@ -193,7 +204,7 @@ static ll_status add_dense(workspace *w, int homogeneous)
                  b->zero[LL_BLOCK_RT], t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB],
                  b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT], b->blk[LL_BLOCK_TTB],
                  b->zero[LL_BLOCK_TTB], b->blk[LL_BLOCK_RB], b->zero[LL_BLOCK_RB], w->gain_tb,
-                 w->piv_tb, w->rhs, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB]);
+                 w->piv_tb, w->rhs, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB], w->watch);
     if (s != LL_OK)
         return s;
     if (homogeneous) {
@@ -207,7 +218,7 @@ static ll_status add_dense(workspace *w, int homogeneous)
                      t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB], t->blk[LL_BLOCK_TBT],
                      t->zero[LL_BLOCK_TBT], t->blk[LL_BLOCK_RT], t->zero[LL_BLOCK_RT],
                      w->gain_bt, w->piv_bt, w->rhs, o->blk[LL_BLOCK_TBT],
-                     o->blk[LL_BLOCK_RT]);
+                     o->blk[LL_BLOCK_RT], w->watch);
         if (s != LL_OK)
             return s;
     }
@@ -231,11 +242,24 @@ typedef struct add_job {
     const ll_layer *top, *bottom;
     ll_order **result;
     int homogeneous;
+    ll_watch *watch;
 } add_job;
+
+static ll_status add_order(size_t k, add_job *job);
 
 static ll_status add_one_order(size_t k, void *ctx)
 {
     add_job *job = ctx;
+    ll_status s;
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "ll_layer_add: cancelled");
+    s = add_order(k, job);
+    ll_watch_advance(job->watch, 1);
+    return s;
+}
+
+static ll_status add_order(size_t k, add_job *job)
+{
     const ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
     size_t n = job->top->n;
     workspace w;
@@ -255,6 +279,7 @@ static ll_status add_one_order(size_t k, void *ctx)
     s = workspace_init(&w, n / 2);
     if (s != LL_OK)
         return s;
+    w.watch = job->watch;
     load_order(ot, n, &w.top);
     load_order(ob, n, &w.bottom);
     s = add_dense(&w, job->homogeneous);
@@ -264,25 +289,40 @@ static ll_status add_one_order(size_t k, void *ctx)
     return s;
 }
 
-ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
-                       int homogeneous)
+ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                          int homogeneous, const ll_monitor *monitor)
 {
+    static const char fn[] = "ll_layer_add";
     add_job job;
+    ll_watch watch;
     ll_status s;
 
-    s = ll_layer_check_compatible(top, bottom, "ll_layer_add");
+    s = ll_layer_check_compatible(top, bottom, fn);
     if (s == LL_OK)
         s = ll_layer_check_compatible(top, out, "ll_layer_add (output)");
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, fn);
     if (s != LL_OK)
         return s;
     job.top = top;
     job.bottom = bottom;
     job.homogeneous = homogeneous != 0;
+    job.watch = &watch;
     job.result = ll_calloc_array(top->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
-    s = ll_parallel_for(top->m, add_one_order, &job);
+    /* An order is one unit (they cost about the same). */
+    s = ll_watch_stage(&watch, "adding", 0.0, 1.0, top->m) ? ll_watch_check(&watch, fn) : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(top->m, add_one_order, &job, &watch);
+    s = ll_watch_finish(&watch, s, fn);
     return ll_layer_commit_orders(out, job.result, s);
+}
+
+ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                       int homogeneous)
+{
+    return ll_layer_add_ex(top, bottom, out, homogeneous, NULL);
 }
 
 ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top)
@@ -297,32 +337,14 @@ ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
 
 /* --------------------------------------------------------------- doubling */
 
+/* Progress: an order is doublings + 1 units (the steps, then storing). */
 typedef struct expand_job {
     const ll_layer *layer;
     double tau0;
     size_t doublings;
     ll_order **result;
-    const ll_expand_monitor *monitor;
-    size_t finished; /* orders done (atomic) */
+    ll_watch *watch;
 } expand_job;
-
-static int cancelled(const expand_job *job)
-{
-    return job->monitor && job->monitor->cancel && *job->monitor->cancel;
-}
-
-/* Count a finished order; the calling thread (OpenMP thread 0) reports. */
-static void order_finished(expand_job *job)
-{
-    size_t done = __atomic_add_fetch(&job->finished, 1, __ATOMIC_RELAXED);
-    if (!job->monitor || !job->monitor->progress)
-        return;
-#ifdef _OPENMP
-    if (omp_get_thread_num() != 0)
-        return;
-#endif
-    job->monitor->progress((double)done / (double)job->layer->m, job->monitor->user);
-}
 
 /* Is the block zero off its diagonal? */
 static int is_diagonal(const double *x, size_t h)
@@ -344,9 +366,12 @@ static ll_status expand_one_order(size_t k, void *ctx)
     double *R, *T;
     ll_status s;
 
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
     s = workspace_init(&w, h);
     if (s != LL_OK)
         return s;
+    w.watch = job->watch;
     /* The phase matrices of a medium are the same seen from either side, so
      * R^t and T^tb describe the slab. Initial thin slab (Grant and Hunt 1969,
      * first order in tau0): R = (tau0 / mu_o) P_R and T = I + (tau0 / mu_o)
@@ -370,9 +395,10 @@ static ll_status expand_one_order(size_t k, void *ctx)
                 T[c * h + c] *= T[c * h + c];
         memset(w.out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
         memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+        ll_watch_advance(job->watch, job->doublings);
     } else {
         for (d = 0; d < job->doublings; ++d) {
-            if (cancelled(job)) {
+            if (ll_watch_poll(job->watch)) {
                 s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
                 goto done;
             }
@@ -388,6 +414,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
                 goto done;
             memcpy(R, w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
             memcpy(T, w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+            ll_watch_advance(job->watch, 1);
         }
         memcpy(w.out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
         memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
@@ -398,8 +425,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
     w.out.zero[LL_BLOCK_TTB] = w.out.zero[LL_BLOCK_TBT] =
         all_zero(w.out.blk[LL_BLOCK_TTB], h * h);
     s = store_dense(&w.out, h, &job->result[k]);
-    if (s == LL_OK)
-        order_finished(job);
+    ll_watch_advance(job->watch, 1);
 done:
     workspace_free(&w);
     return s;
@@ -416,12 +442,13 @@ void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublin
     *tau0 = ldexp(tau, -(int)k);
 }
 
-ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
-                                    const ll_expand_monitor *monitor)
+/* Doubling on a begun watch: one code path for every entry point. */
+static ll_status expand_watched(ll_layer *layer, double tau, ll_watch *watch)
 {
+    static const char fn[] = "ll_layer_expand";
     expand_job job;
     double min_mu = 1.0;
-    size_t i;
+    size_t i, units;
     ll_status s;
 
     if (!layer)
@@ -432,24 +459,62 @@ ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
     if (tau > 1e12)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_layer_expand: optical thickness %g is beyond 1e12", tau);
-    if (tau == 0.0)
-        return ll_layer_clear(layer);
+    if (tau == 0.0) {
+        ll_watch_stage(watch, "doubling", 0.0, 1.0, 0);
+        s = ll_watch_finish(watch, LL_OK, fn);
+        return s == LL_OK ? ll_layer_clear(layer) : s;
+    }
 
     for (i = 0; i < layer->n; ++i)
         if (fabs(layer->nodes[i]) < min_mu)
             min_mu = fabs(layer->nodes[i]);
     job.layer = layer;
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
-    job.monitor = monitor;
-    job.finished = 0;
+    job.watch = watch;
+    if (!ll_size_mul(layer->m, job.doublings + 1, &units))
+        units = SIZE_MAX;
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
-    s = ll_parallel_for(layer->m, expand_one_order, &job);
+    s = ll_watch_stage(watch, "doubling", 0.0, 1.0, units) ? ll_watch_check(watch, fn) : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(layer->m, expand_one_order, &job, watch);
+    s = ll_watch_finish(watch, s, fn);
     return ll_layer_commit_orders(layer, job.result, s);
+}
+
+ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *monitor)
+{
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, monitor, "ll_layer_expand");
+    return s == LL_OK ? expand_watched(layer, tau, &watch) : s;
 }
 
 ll_status ll_layer_expand(ll_layer *layer, double tau)
 {
-    return ll_layer_expand_monitored(layer, tau, NULL);
+    return ll_layer_expand_ex(layer, tau, NULL);
+}
+
+/* The internal monitor's progress, called through the watch. */
+static int report_to_expand_monitor(void *user, double fraction, const char *stage)
+{
+    ll_expand_monitor *monitor = user;
+    (void)stage;
+    monitor->progress(fraction, monitor->user);
+    return 0;
+}
+
+ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
+                                    const ll_expand_monitor *monitor)
+{
+    ll_watch watch;
+    ll_expand_monitor copy;
+    if (monitor) {
+        copy = *monitor;
+        ll_watch_begin_raw(&watch, copy.progress ? report_to_expand_monitor : NULL, &copy,
+                           copy.cancel);
+    } else {
+        ll_watch_begin_raw(&watch, NULL, NULL, NULL);
+    }
+    return expand_watched(layer, tau, &watch);
 }

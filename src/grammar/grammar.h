@@ -15,9 +15,11 @@ typedef struct ll_expand_monitor {
     void *user;
 } ll_expand_monitor;
 
-/* ll_layer_expand with a monitor: progress reports the fraction of Fourier
- * orders finished, on the calling thread; a raised cancel flag stops the
- * doublings early with LL_ERROR_CANCELLED and leaves the layer unchanged. */
+/* ll_layer_expand with a monitor (kept for the material builder; a thin
+ * adapter over ll_layer_expand_ex's watch): progress reports the fraction of
+ * the doubling steps done, on the calling thread; a raised cancel flag is
+ * seen by every thread between BLAS calls and stops with LL_ERROR_CANCELLED,
+ * leaving the layer unchanged. */
 LL_INTERNAL ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
                                                 const ll_expand_monitor *monitor);
 

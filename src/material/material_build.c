@@ -10,7 +10,6 @@
  */
 #include "material/material.h"
 #include "layer/layer.h"
-#include "grammar/grammar.h"
 #include "words/merl.h"
 #include "layerlab/ll_quad.h"
 
@@ -33,21 +32,66 @@ typedef struct build {
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
     double total, done;          /* estimated seconds: all, finished  */
+    ll_monitor_fn monitor_fn;    /* the caller's ll_monitor (nullable) */
+    void *monitor_user;
+    int stopped;                 /* the caller's monitor asked to stop */
+    double shown;                /* the last fraction reported         */
+    ll_monitor call;             /* passed to every layer call         */
+    double call_start, call_cost;
+    const char *call_stage;
+    int call_ends_build;         /* its 1 is the build's 1 (the writing) */
 } build;
 
-static void report(const build *b, const char *stage)
+static int cancel_raised(const build *b)
 {
-    if (b->o.progress) {
-        double f = b->total > 0.0 ? b->done / b->total : 0.0;
-        b->o.progress(f < 1.0 ? f : 1.0, stage, b->o.progress_user);
-    }
+    return b->stopped || (b->o.cancel && *b->o.cancel);
+}
+
+/* The build's progress to opts->progress and the caller's monitor (whose
+ * non-zero return stops the build); fractions never go back. */
+static void report(build *b, const char *stage)
+{
+    double f = b->total > 0.0 ? b->done / b->total : 0.0;
+    f = f < 1.0 ? f : 1.0;
+    if (f < b->shown)
+        f = b->shown;
+    b->shown = f;
+    if (b->o.progress)
+        b->o.progress(f, stage, b->o.progress_user);
+    if (b->monitor_fn && b->monitor_fn(b->monitor_user, f, stage) != 0)
+        b->stopped = 1;
 }
 
 static ll_status check_cancel(const build *b)
 {
-    if (b->o.cancel && *b->o.cancel)
+    if (cancel_raised(b))
         return ll_fail(LL_ERROR_CANCELLED, "%s: the build was cancelled", b->m->source);
     return LL_OK;
+}
+
+/* The monitor of every layer call: its fraction is the share call_cost of
+ * the build from call_start on; it stops the call when the build's cancel
+ * flag (polled here on the calling thread, and so seen by the call's
+ * workers at their next poll) or the caller's monitor says so. */
+static int on_call_progress(void *user, double fraction, const char *stage)
+{
+    build *b = user;
+    double done = b->call_start + fraction * b->call_cost;
+    if (fraction >= 1.0 && b->call_ends_build)
+        done = b->total; /* exactly 1, without rounding */
+    if (done > b->done)
+        b->done = done;
+    report(b, b->call_stage ? b->call_stage : stage);
+    return cancel_raised(b);
+}
+
+/* Point the call monitor at the next layer call. */
+static const ll_monitor *next_call(build *b, const char *stage, double cost)
+{
+    b->call_start = b->done;
+    b->call_cost = cost;
+    b->call_stage = stage;
+    return &b->call;
 }
 
 /* The smallest c' <= c whose word parameters equal channel c's. */
@@ -99,79 +143,75 @@ static ll_status word_failed(const build *b, size_t w, ll_status s)
                    word->column, ll_word_kind_name(word->kind), detail);
 }
 
-/* Progress of a doubling: the share of the medium's estimated cost that
- * the finished Fourier orders represent. */
-typedef struct expand_progress {
-    build *b;
-    double start, cost;
-} expand_progress;
-
-static void report_expansion(double fraction, void *user)
-{
-    expand_progress *e = user;
-    e->b->done = e->start + fraction * e->cost;
-    report(e->b, "medium");
-}
-
-/* ll_layer_expand, reporting progress and honouring the cancel flag while
- * the orders are doubled. */
+/* ll_layer_expand_ex, its progress the share of the medium's estimated
+ * cost that the doubling steps represent. */
 static ll_status expand_medium(build *b, ll_layer *l, double tau)
 {
-    expand_progress e;
-    ll_expand_monitor monitor;
-    size_t k;
-    ll_status s;
-    double tau0;
+    double cost = (double)ll_doubling_count(tau, 1.0) *
+                  ll_cost_add(b->n, b->orders, ll_get_thread_count());
+    return ll_layer_expand_ex(l, tau, next_call(b, "medium", cost));
+}
 
-    ll_expand_schedule(tau, 1.0, &tau0, &k);
-    e.b = b;
-    e.start = b->done;
-    e.cost = (double)k * ll_cost_add(b->n, b->orders, ll_get_thread_count());
-    monitor.cancel = b->o.cancel;
-    monitor.progress = report_expansion;
-    monitor.user = &e;
-    s = ll_layer_expand_monitored(l, tau, &monitor);
-    b->done = e.start + e.cost;
+/* A MERL channel through the public call; the luminance mix of a mono
+ * build has none and goes through the internal setter (same monitor). */
+static ll_status set_measured(build *b, ll_layer *l, const char *path, const double weights[3],
+                              const ll_monitor *monitor)
+{
+    ll_merl *merl = NULL;
+    ll_status s;
+    int c;
+    (void)b;
+    for (c = 0; c < 3; ++c)
+        if (weights[c] == 1.0 && weights[(c + 1) % 3] == 0.0 && weights[(c + 2) % 3] == 0.0)
+            return ll_layer_set_matusik_ex(l, path, c, 0, monitor);
+    s = ll_merl_load(path, &merl);
+    if (s == LL_OK)
+        s = ll_merl_set_layer_ex(l, merl, weights, 0, monitor);
+    ll_merl_free(merl);
     return s;
 }
 
 static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
 {
     ll_layer *l = NULL;
-    ll_merl *merl = NULL;
     double done_before = b->done;
+    double cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    const char *stage = stage_of(p->kind);
     ll_status s;
 
     *out = NULL;
-    report(b, stage_of(p->kind));
+    report(b, stage);
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
     switch (p->kind) {
     case LL_WORD_DIFFUSE:
-        s = ll_layer_set_diffuse(l, p->albedo);
+        s = ll_layer_set_diffuse_ex(l, p->albedo, next_call(b, stage, cost));
         break;
     case LL_WORD_DIELECTRIC:
-        s = ll_layer_set_microfacet(l, p->eta_re, 0.0, p->alpha, 1, 0);
+        s = ll_layer_set_microfacet_ex(l, p->eta_re, 0.0, p->alpha, 1, 0,
+                                       next_call(b, stage, cost));
         break;
     case LL_WORD_CONDUCTOR:
-        s = ll_layer_set_microfacet(l, p->eta_re, p->eta_im, p->alpha, 1, 0);
+        s = ll_layer_set_microfacet_ex(l, p->eta_re, p->eta_im, p->alpha, 1, 0,
+                                       next_call(b, stage, cost));
         break;
     case LL_WORD_MEDIUM:
+        /* (The doublings below carry the medium's cost; the phase matrices
+         * show as their own stage, "phase function".) */
         if (p->phase == LL_PHASE_HG)
-            s = ll_layer_set_henyey_greenstein(l, p->albedo, p->shape);
+            s = ll_layer_set_henyey_greenstein_ex(l, p->albedo, p->shape,
+                                                  next_call(b, NULL, 0.0));
         else if (p->phase == LL_PHASE_VMF)
-            s = ll_layer_set_von_mises_fisher(l, p->albedo, p->shape);
+            s = ll_layer_set_von_mises_fisher_ex(l, p->albedo, p->shape,
+                                                 next_call(b, NULL, 0.0));
         else
-            s = ll_layer_set_isotropic(l, p->albedo);
+            s = ll_layer_set_isotropic_ex(l, p->albedo, next_call(b, NULL, 0.0));
         if (s == LL_OK)
             s = expand_medium(b, l, p->tau);
         break;
     case LL_WORD_MEASURED:
-        s = ll_merl_load(b->m->words[w].file, &merl);
-        if (s == LL_OK)
-            s = ll_merl_set_layer(l, merl, p->weights, 0, b->o.cancel);
-        ll_merl_free(merl);
+        s = set_measured(b, l, b->m->words[w].file, p->weights, next_call(b, stage, cost));
         break;
     }
     if (s != LL_OK) {
@@ -213,11 +253,13 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
         if (bottom) {
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
+            double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
             report(b, "adding");
-            s = ll_layer_add_to_top(acc[c], word[c]);
+            start = b->done;
+            s = ll_layer_add_ex(word[c], acc[c], acc[c], 0, next_call(b, "adding", cost));
             if (s != LL_OK)
                 s = word_failed(b, w, s);
-            b->done += ll_cost_add(b->n, b->orders, ll_get_thread_count());
+            b->done = start + cost;
             if (s == LL_OK)
                 s = check_cancel(b);
         }
@@ -258,17 +300,42 @@ static void build_free(build *b)
     free(b->params);
 }
 
-/* Resolution, quadrature and per-channel parameters. */
-static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
-                            const char *fn)
+/* The options and the monitors of a build. monitor: the caller's
+ * (nullable), read up to its struct_size. */
+static ll_status build_start(build *b, const ll_material *m, const ll_build_options *opts,
+                             const ll_monitor *monitor, const char *fn)
 {
-    size_t w, c;
-    ll_status s;
+    ll_monitor call = LL_MONITOR_INIT;
     memset(b, 0, sizeof *b);
     b->m = m;
+    call.progress = on_call_progress;
+    call.user = b;
+    b->call = call;
     if (!m)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: material is NULL", fn);
-    s = ll_build_options_read(opts, &b->o, fn);
+    if (monitor && monitor->struct_size < sizeof(size_t))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: monitor->struct_size is %zu; initialise the monitor with "
+                       "LL_MONITOR_INIT",
+                       fn, monitor->struct_size);
+#define COVERS(field) (monitor->struct_size >= offsetof(ll_monitor, field) + sizeof monitor->field)
+    if (monitor && COVERS(progress))
+        b->monitor_fn = monitor->progress;
+    if (monitor && COVERS(user))
+        b->monitor_user = monitor->user;
+#undef COVERS
+    return ll_build_options_read(opts, &b->o, fn);
+}
+
+/* Resolution, quadrature and per-channel parameters. silent: no progress
+ * reports (ll_material_estimate has none), though a cancel still works. */
+static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
+                            const ll_monitor *monitor, int silent, const char *fn)
+{
+    size_t w, c;
+    ll_status s = build_start(b, m, opts, monitor, fn);
+    if (silent)
+        b->o.progress = NULL;
     if (s == LL_OK)
         s = ll_material_plan(m, &b->o, &b->n, &b->orders, &b->nch);
     if (s != LL_OK)
@@ -283,8 +350,9 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     for (w = 0; w < m->count; ++w)
         for (c = 0; c < b->nch; ++c)
             ll_word_params_get(m, w, c, b->nch, &b->params[w][c]);
-    /* Gauss-Lobatto nodes, as the original recipes use. */
-    s = ll_quad_gauss_lobatto(b->n, b->nodes, b->weights);
+    /* Gauss-Lobatto nodes, as the original recipes use (O(n^2): seconds at
+     * n = 30000, so polled like every other stage). */
+    s = ll_quad_gauss_lobatto_ex(b->n, b->nodes, b->weights, next_call(b, "quadrature", 0.0));
     if (s != LL_OK)
         build_free(b);
     return s;
@@ -352,6 +420,14 @@ ll_status ll_material_build_layers(const ll_material *material, const ll_build_o
                                    ll_layer *layers[3], size_t *n_channels,
                                    ll_bsdf_write_options *header)
 {
+    return ll_material_build_layers_ex(material, opts, NULL, layers, n_channels, header);
+}
+
+ll_status ll_material_build_layers_ex(const ll_material *material,
+                                      const ll_build_options *opts, const ll_monitor *monitor,
+                                      ll_layer *layers[3], size_t *n_channels,
+                                      ll_bsdf_write_options *header)
+{
     build b;
     ll_status s;
     size_t c;
@@ -367,15 +443,26 @@ ll_status ll_material_build_layers(const ll_material *material, const ll_build_o
                        "ll_material_build_layers: header->struct_size is %zu; initialise the "
                        "header with LL_BSDF_WRITE_OPTIONS_INIT",
                        header->struct_size);
-    s = build_init(&b, material, opts, "ll_material_build_layers");
+    s = build_init(&b, material, opts, monitor, 0, "ll_material_build_layers");
     if (s != LL_OK)
         return s;
     s = run_build(&b, layers, 0.0);
     if (s == LL_OK) {
+        /* The last report comes before the layers are handed over: a cancel
+         * there still returns none. */
+        b.done = b.total;
+        report(&b, "done");
+        s = check_cancel(&b);
+    }
+    if (s == LL_OK) {
         *n_channels = b.nch;
         if (header)
             fill_header(b.m, &b.o, b.nch, header);
-        report(&b, "done");
+    } else {
+        for (c = 0; c < 3; ++c) {
+            ll_layer_destroy(layers[c]);
+            layers[c] = NULL;
+        }
     }
     build_free(&b);
     return s;
@@ -386,7 +473,8 @@ ll_status ll_material_build_layers(const ll_material *material, const ll_build_o
  * a unique name beside out_path, renamed over out_path only if the build
  * was not cancelled meanwhile. */
 static ll_status write_layers(const ll_material *m, const ll_build_options *o,
-                              ll_layer *const *layers, size_t n_channels, const char *out_path)
+                              ll_layer *const *layers, size_t n_channels, const char *out_path,
+                              const ll_monitor *monitor)
 {
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
     size_t len = strlen(out_path);
@@ -407,7 +495,7 @@ static ll_status write_layers(const ll_material *m, const ll_build_options *o,
         return s;
     }
     close(fd);
-    s = ll_bsdf_write(tmp, (const ll_layer *const *)layers, n_channels, &header);
+    s = ll_bsdf_write_ex(tmp, (const ll_layer *const *)layers, n_channels, &header, monitor);
     if (s == LL_OK && o->cancel && *o->cancel)
         s = ll_fail(LL_ERROR_CANCELLED, "%s: the build was cancelled", m->source);
     if (s == LL_OK && rename(tmp, out_path) != 0)
@@ -421,7 +509,7 @@ static ll_status write_layers(const ll_material *m, const ll_build_options *o,
 ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
                             ll_layer *const *layers, size_t n_channels, const char *out_path)
 {
-    ll_build_options o;
+    build b;
     size_t c;
     ll_status s;
     if (!material || !layers || !out_path || !*out_path)
@@ -434,14 +522,22 @@ ll_status ll_material_write(const ll_material *material, const ll_build_options 
         if (!layers[c])
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_write: layers[%zu] is NULL",
                            c);
-    s = ll_build_options_read(opts, &o, "ll_material_write");
+    s = build_start(&b, material, opts, NULL, "ll_material_write");
     if (s != LL_OK)
         return s;
-    return write_layers(material, &o, layers, n_channels, out_path);
+    b.o.progress = NULL; /* only error_goal and cancel are read */
+    return write_layers(material, &b.o, layers, n_channels, out_path,
+                        next_call(&b, "writing", 0.0));
 }
 
 ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
                             const char *out_path)
+{
+    return ll_material_build_ex(material, opts, NULL, out_path);
+}
+
+ll_status ll_material_build_ex(const ll_material *material, const ll_build_options *opts,
+                               const ll_monitor *monitor, const char *out_path)
 {
     build b;
     ll_layer *layers[3] = { NULL, NULL, NULL };
@@ -451,20 +547,23 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
 
     if (!out_path || !*out_path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_build: out_path is NULL or empty");
-    s = build_init(&b, material, opts, "ll_material_build");
+    s = build_init(&b, material, opts, monitor, 0, "ll_material_build");
     if (s != LL_OK)
         return s;
     /* The writing's share of the progress bar. */
     write_cost = ll_cost_write(b.n, b.orders, b.nch);
     s = run_build(&b, layers, write_cost);
     if (s == LL_OK) {
+        const ll_monitor *writing;
         report(&b, "writing");
-        s = write_layers(b.m, &b.o, layers, b.nch, out_path);
+        writing = next_call(&b, "writing", b.total - b.done);
+        b.call_ends_build = 1;
+        /* The writer's last report, before the file replaces out_path, is
+         * the build's last: the caller's monitor gets no "done" after it. */
+        s = write_layers(b.m, &b.o, layers, b.nch, out_path, writing);
     }
-    if (s == LL_OK) {
-        b.done = b.total;
-        report(&b, "done");
-    }
+    if (s == LL_OK && b.o.progress)
+        b.o.progress(1.0, "done", b.o.progress_user);
     for (c = 0; c < 3; ++c)
         ll_layer_destroy(layers[c]);
     build_free(&b);
@@ -486,7 +585,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_material_estimate: estimate is NULL or its struct_size is not "
                        "sizeof(ll_build_estimate)");
-    s = build_init(&b, material, opts, "ll_material_estimate");
+    s = build_init(&b, material, opts, NULL, 1, "ll_material_estimate");
     if (s != LL_OK)
         return s;
     saved = ll_get_thread_count();

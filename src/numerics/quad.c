@@ -17,10 +17,13 @@
  * layer code needs (it pairs mu with -mu).
  */
 #include "support/support.h"
+#include "support/watch.h"
 #include "layerlab/ll_quad.h"
 
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* Newton stops when a step is below this fraction of the root spacing pi/n:
  * with quadratic convergence the next error would be ~n * step^2, far below
@@ -162,14 +165,13 @@ static ll_status check_buffers(const char *fn, size_t n, size_t min_n, const dou
     return LL_OK;
 }
 
-ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights)
+/* The rules proper, into buffers checked by the caller; one unit of
+ * progress and one poll per root (each O(n): the rule is O(n^2)). */
+static ll_status legendre_rule(size_t n, double *nodes, double *weights, ll_watch *w)
 {
     static const char fn[] = "ll_quad_gauss_legendre";
     double theta = 0.0;
     size_t k;
-    ll_status s = check_buffers(fn, n, 1, nodes, weights);
-    if (s != LL_OK)
-        return s;
 
     /* Roots of P_n, k = 1 nearest x = 1, then x = 0 for odd n. The weight
      * 2 / ((1 - x^2) P_n'(x)^2) (A&S 25.4.29) is 2 / (dP_n/dtheta)^2 in
@@ -177,6 +179,8 @@ ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights)
     for (k = 1; k <= (n + 1) / 2; ++k) {
         double p, d, dp;
         int middle = 2 * k - 1 == n;
+        if (ll_watch_poll(w))
+            return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", fn);
         if (middle) {
             theta = 0.5 * LL_PI;
         } else {
@@ -190,18 +194,16 @@ ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights)
         legendre_at_angle(n, theta, &p, &d);
         dp = legendre_angle_derivative(n, theta, p, d);
         place_pair(nodes, weights, n, k - 1, middle ? 0.0 : cos(theta), 2.0 / (dp * dp));
+        ll_watch_advance(w, 1);
     }
     return LL_OK;
 }
 
-ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights)
+static ll_status lobatto_rule(size_t n, double *nodes, double *weights, ll_watch *w)
 {
     static const char fn[] = "ll_quad_gauss_lobatto";
     double theta = 0.0, scale;
     size_t k, m = n - 1;
-    ll_status s = check_buffers(fn, n, 2, nodes, weights);
-    if (s != LL_OK)
-        return s;
 
     /* End points, then the roots of P_m' (m = n - 1), k = 1 nearest x = 1,
      * then x = 0 for odd n. Every weight is 2 / (n (n - 1) P_m(x)^2)
@@ -211,6 +213,8 @@ ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights)
     for (k = 1; k <= (n - 1) / 2; ++k) {
         double p, d;
         int middle = 2 * k + 1 == n;
+        if (ll_watch_poll(w))
+            return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", fn);
         if (middle) {
             theta = 0.5 * LL_PI;
         } else {
@@ -223,8 +227,69 @@ ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights)
         }
         legendre_at_angle(m, theta, &p, &d);
         place_pair(nodes, weights, n, k, middle ? 0.0 : cos(theta), scale / (p * p));
+        ll_watch_advance(w, 1);
     }
     return LL_OK;
+}
+
+typedef ll_status (*rule_fn)(size_t n, double *nodes, double *weights, ll_watch *w);
+
+/* A Gauss rule with a monitor: without a callback straight into the
+ * caller's buffers, as always; with one into scratch, copied out only when
+ * the rule is complete and not cancelled, so that a cancel leaves the
+ * buffers as they were. */
+static ll_status watched_rule(const char *fn, rule_fn rule, size_t n, size_t min_n,
+                              double *nodes, double *weights, const ll_monitor *monitor)
+{
+    ll_watch w;
+    double *scratch = NULL, *x = nodes, *wt = weights;
+    ll_status s = check_buffers(fn, n, min_n, nodes, weights);
+    if (s == LL_OK)
+        s = ll_watch_begin(&w, monitor, fn);
+    if (s != LL_OK)
+        return s;
+    if (w.progress) {
+        scratch = ll_alloc_array(n, 2 * sizeof(double));
+        if (!scratch)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                           "%s: out of memory for the scratch copy of %zu nodes", fn, n);
+        x = scratch;
+        wt = scratch + n;
+    }
+    s = ll_watch_stage(&w, "quadrature", 0.0, 1.0, (n + 1) / 2) ? ll_watch_check(&w, fn)
+                                                                 : LL_OK;
+    if (s == LL_OK)
+        s = rule(n, x, wt, &w);
+    s = ll_watch_finish(&w, s, fn);
+    if (s == LL_OK && scratch) {
+        memcpy(nodes, x, n * sizeof(double));
+        memcpy(weights, wt, n * sizeof(double));
+    }
+    free(scratch);
+    return s;
+}
+
+ll_status ll_quad_gauss_legendre_ex(size_t n, double *nodes, double *weights,
+                                    const ll_monitor *monitor)
+{
+    return watched_rule("ll_quad_gauss_legendre", legendre_rule, n, 1, nodes, weights,
+                        monitor);
+}
+
+ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights)
+{
+    return ll_quad_gauss_legendre_ex(n, nodes, weights, NULL);
+}
+
+ll_status ll_quad_gauss_lobatto_ex(size_t n, double *nodes, double *weights,
+                                   const ll_monitor *monitor)
+{
+    return watched_rule("ll_quad_gauss_lobatto", lobatto_rule, n, 2, nodes, weights, monitor);
+}
+
+ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights)
+{
+    return ll_quad_gauss_lobatto_ex(n, nodes, weights, NULL);
 }
 
 /* Composite closed Newton-Cotes rule: n equidistant nodes split into panels

@@ -31,6 +31,7 @@
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
 #include "layer/layer.h"
+#include "support/watch.h"
 #include "layerlab/ll_bsdf.h"
 
 #include <float.h>
@@ -55,7 +56,13 @@ typedef struct write_job {
     float *cdf;                    /* [(i * nn + o) * n_bases + b]         */
     size_t max_order, n_coeffs;
     char *metadata;                /* default JSON, when opts has none     */
+    ll_watch *watch;               /* polled per column / node row        */
 } write_job;
+
+static ll_status write_cancelled(const write_job *job)
+{
+    return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
+}
 
 /* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */
 static size_t layer_index(size_t f, size_t h)
@@ -182,9 +189,12 @@ static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t
     ll_order_to_dense(l->orders[0], n, ref0);
     for (k = job->m; k-- > 0;) {
         const ll_order *o = l->orders[k];
+        ll_watch_advance(job->watch, 1);
         if (!o)
             continue;
-        for (col = 0; col < n; ++col)
+        for (col = 0; col < n; ++col) {
+            if (ll_watch_poll(job->watch))
+                return write_cancelled(job);
             for (half = 0; half < 2; ++half) {
                 size_t seg = 2 * col + (size_t)half;
                 for (j = 0; j < o->seg[seg].len; ++j) {
@@ -208,6 +218,7 @@ static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t
                         len[at] = (uint32_t)(k + 1);
                 }
             }
+        }
     }
     /* A pair whose tail never exceeded the goal keeps order 0 alone, and
      * one with M_0 = 0 nothing (the original's rule). */
@@ -231,15 +242,21 @@ static ll_status compute_lengths(write_job *job)
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
         goto done;
     }
+    ll_watch_stage(job->watch, "writing", 0.0, 0.3, count * job->m);
     for (k = 0; k < count && s == LL_OK; ++k) {
         s = layer_lengths(job, job->layers[k], len, tail, ref0);
-        for (i = 0; i < nn && s == LL_OK; ++i)
+        for (i = 0; i < nn && s == LL_OK; ++i) {
+            if (ll_watch_poll(job->watch)) {
+                s = write_cancelled(job);
+                break;
+            }
             for (o = 0; o < nn; ++o) {
                 size_t li = layer_index(i, job->h), lo = layer_index(o, job->h);
                 uint32_t *dst = &job->length[i * nn + o];
                 if (li != (size_t)-1 && lo != (size_t)-1 && len[li * n + lo] > *dst)
                     *dst = len[li * n + lo];
             }
+        }
     }
 done:
     free(len);
@@ -252,8 +269,14 @@ static ll_status compute_offsets(write_job *job)
 {
     size_t k, total = 0, block = job->n_bases * job->n_channels;
     job->max_order = 0;
+    ll_watch_stage(job->watch, "writing", 0.3, 0.05, job->nn);
     for (k = 0; k < job->nn * job->nn; ++k) {
         size_t size;
+        if (k % job->nn == 0) {
+            ll_watch_advance(job->watch, 1);
+            if (ll_watch_poll(job->watch))
+                return write_cancelled(job);
+        }
         job->offset[k] = (uint32_t)total;
         if (job->length[k] > job->max_order)
             job->max_order = job->length[k];
@@ -324,7 +347,13 @@ static ll_status compute_cdf(write_job *job)
     double *values = ll_alloc_array(nn, sizeof *values);
     if (!values)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
-    for (i = 0; i < nn; ++i)
+    ll_watch_stage(job->watch, "writing", 0.35, 0.1, nn);
+    for (i = 0; i < nn; ++i) {
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch)) {
+            free(values);
+            return write_cancelled(job);
+        }
         for (b = 0; b < nb; ++b) {
             for (o = 0; o < nn; ++o)
                 /* The value a reader will see: the stored float. */
@@ -333,6 +362,7 @@ static ll_status compute_cdf(write_job *job)
                                 : 0.0;
             integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
         }
+    }
     free(values);
     return LL_OK;
 }
@@ -426,10 +456,16 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
         !(stage = ll_calloc_array(count, per_layer * sizeof(double))))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory staging coefficients",
                        job->fn);
+    ll_watch_stage(job->watch, "writing", 0.55, 0.4, nn);
     for (i = 0; i < nn && s == LL_OK; ++i) {
         size_t li = layer_index(i, job->h), kmax = 0;
         const ll_layer *l0 = job->layers[0];
         double factor[2];
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch)) {
+            s = write_cancelled(job);
+            break;
+        }
         if (li == (size_t)-1)
             continue; /* the mu = 0 nodes hold no coefficients */
         for (o = 0; o < nn; ++o)
@@ -446,6 +482,10 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
             double mu_o;
             if (len == 0)
                 continue;
+            if (ll_watch_poll(job->watch)) {
+                s = write_cancelled(job);
+                break;
+            }
             mu_o = fabs(l0->nodes[lo]);
             for (c = 0; c < job->n_channels && s == LL_OK; ++c)
                 for (b = 0; b < job->n_bases && s == LL_OK; ++b) {
@@ -493,13 +533,29 @@ static ll_status put_file(const write_job *job, const char *path)
         ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
     for (k = 0; k < job->n_parameter_values; ++k)
         ll_bsdf_out_f32(out, (float)job->param_positions[k]);
-    for (k = 0; k < nn * nn * job->n_bases; ++k)
+    /* The tables, polled once per node row (nn^2 entries each). */
+    ll_watch_stage(job->watch, "writing", 0.45, 0.1, 2 * nn);
+    for (k = 0; k < nn * nn * job->n_bases && s == LL_OK; ++k) {
+        if (k % (nn * job->n_bases) == 0 && ll_watch_poll(job->watch))
+            s = write_cancelled(job);
         ll_bsdf_out_f32(out, job->cdf[k]);
-    for (k = 0; k < nn * nn; ++k) {
+        if (k % (nn * job->n_bases) == 0)
+            ll_watch_advance(job->watch, 1);
+    }
+    for (k = 0; k < nn * nn && s == LL_OK; ++k) {
+        if (k % nn == 0) {
+            ll_watch_advance(job->watch, 1);
+            if (ll_watch_poll(job->watch))
+                s = write_cancelled(job);
+        }
         ll_bsdf_out_u32(out, job->offset[k]);
         ll_bsdf_out_u32(out, job->length[k]);
     }
-    s = put_coefficients(out, job);
+    if (s == LL_OK)
+        s = put_coefficients(out, job);
+    /* The last report comes before the temporary file replaces the
+     * target: a cancel there still leaves no file. */
+    s = ll_watch_finish(job->watch, s, job->fn);
     if (s != LL_OK) {
         ll_bsdf_out_abort(out);
         return s;
@@ -537,12 +593,14 @@ static ll_status prepare(write_job *job)
 static ll_status write_general(const char *fn, const char *path, const ll_layer *const *layers,
                                size_t n_channels, size_t n_parameters,
                                const size_t *param_counts, const double *param_positions,
-                               const ll_bsdf_write_options *opts)
+                               const ll_bsdf_write_options *opts, const ll_monitor *monitor)
 {
     write_job job;
+    ll_watch watch;
     ll_status s;
     memset(&job, 0, sizeof job);
     job.fn = fn;
+    job.watch = &watch;
     job.layers = layers;
     job.n_channels = n_channels;
     job.n_parameters = n_parameters;
@@ -550,7 +608,8 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
     job.param_positions = param_positions;
     if (!path || !*path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn);
-    if ((s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
+    if ((s = ll_watch_begin(&watch, monitor, fn)) == LL_OK &&
+        (s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
         (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
         s = put_file(&job, path);
     free(job.nodes);
@@ -564,7 +623,14 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
 ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers, size_t n_channels,
                         const ll_bsdf_write_options *opts)
 {
-    return write_general("ll_bsdf_write", path, layers, n_channels, 0, NULL, NULL, opts);
+    return ll_bsdf_write_ex(path, layers, n_channels, opts, NULL);
+}
+
+ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers, size_t n_channels,
+                           const ll_bsdf_write_options *opts, const ll_monitor *monitor)
+{
+    return write_general("ll_bsdf_write", path, layers, n_channels, 0, NULL, NULL, opts,
+                         monitor);
 }
 
 ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
@@ -573,5 +639,5 @@ ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers
                                  const ll_bsdf_write_options *opts)
 {
     return write_general("ll_bsdf_write_textured", path, layers, n_channels, n_parameters,
-                         param_counts, param_positions, opts);
+                         param_counts, param_positions, opts, NULL);
 }

@@ -4,9 +4,11 @@
  * support/ that needs OpenMP; the reader library does without it.
  */
 #include "support/support.h"
+#include "support/watch.h"
 
 #include <stdint.h>
 #include <string.h>
+#include <time.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -66,8 +68,25 @@ static void restore_float_mode(unsigned saved)
 #endif
 }
 
+/* The owner's wait for the other threads' items: poll, then sleep 1 ms
+ * (so a loop ends at most 1 ms later than at the barrier). */
+static void wait_polling(ll_watch *w, const size_t *finished, size_t count)
+{
+    struct timespec pause = { 0, 1000000L };
+    while (__atomic_load_n(finished, __ATOMIC_ACQUIRE) < count) {
+        ll_watch_poll(w);
+        nanosleep(&pause, NULL);
+    }
+}
+
 ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
 {
+    return ll_parallel_for_watched(count, body, ctx, NULL);
+}
+
+ll_status ll_parallel_for_watched(size_t count, ll_parallel_body body, void *ctx, ll_watch *w)
+{
+    size_t finished = 0;
     ll_status first_status = LL_OK;
     size_t first_index = SIZE_MAX;
     char first_message[LL_MESSAGE_CAPACITY];
@@ -88,9 +107,10 @@ ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
     {
         unsigned saved_mode = flush_subnormals();
         omp_set_num_threads(1);
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(dynamic, 1) nowait
         for (i = 0; i < n; ++i) {
             ll_status s = body((size_t)i, ctx);
+            __atomic_add_fetch(&finished, 1, __ATOMIC_RELEASE);
             if (s != LL_OK) {
 #pragma omp critical(ll_parallel_error)
                 {
@@ -102,11 +122,17 @@ ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
                 }
             }
         }
+        /* Only a callback needs the owner; a flag is read by every thread. */
+        if (w && w->progress && omp_get_thread_num() == 0)
+            wait_polling(w, &finished, count);
         restore_float_mode(saved_mode);
     }
 #else
     unsigned saved_mode = flush_subnormals();
     (void)threads;
+    (void)finished;
+    (void)wait_polling;
+    (void)w;
     for (i = 0; i < n; ++i) {
         ll_status s = body((size_t)i, ctx);
         if (s != LL_OK) {

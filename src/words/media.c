@@ -25,6 +25,7 @@
  * exact (composite Simpson).
  */
 #include "layer/layer.h"
+#include "support/watch.h"
 
 #include <cblas.h>
 #include <math.h>
@@ -38,6 +39,8 @@ typedef struct medium_job {
     double forward;          /* albedo f: exactly forward scattering         */
     const long double *diag; /* [L x n] Y_l^l at every node                  */
     ll_order **result;
+    ll_watch *watch;         /* one unit per order; polled per node          */
+    const char *fn;
 } medium_job;
 
 /* Y_l^l(mu) for l < L at every node (long double: (1 - mu^2)^(l/2) would
@@ -60,9 +63,23 @@ static long double *sectoral_values(const ll_layer *l, size_t L)
     return diag;
 }
 
+static ll_status build_order(size_t order, const medium_job *job);
+
 static ll_status medium_order(size_t order, void *ctx)
 {
     medium_job *job = ctx;
+    ll_status s;
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
+    s = build_order(order, job);
+    ll_watch_advance(job->watch, 1);
+    return s;
+}
+
+/* The phase matrix of one order; polls once per node of the recurrence
+ * and around the O(n^2 K) product. */
+static ll_status build_order(size_t order, const medium_job *job)
+{
     const ll_layer *l = job->layer;
     size_t n = l->n, K = job->K, cols, j, c, r, k;
     double *Y = NULL, *Z = NULL, *P = NULL;
@@ -83,6 +100,8 @@ static ll_status medium_order(size_t order, void *ctx)
             long double mu = l->nodes[j];
             long double y_prev = 0.0L, y = job->diag[order * n + j];
             long double m = (long double)order;
+            if (ll_watch_poll(job->watch))
+                goto cancelled;
             Y[j] = (double)y;
             for (c = 1; c < cols; ++c) {
                 long double kk = m + c;
@@ -101,8 +120,12 @@ static ll_status medium_order(size_t order, void *ctx)
             for (j = 0; j < n; ++j)
                 Z[c * n + j] = Y[c * n + j] * job->moment[order + c];
         /* P = Z Y^T, then fold the medium weights into the columns. */
+        if (ll_watch_poll(job->watch))
+            goto cancelled;
         cblas_dgemm(CblasColMajor, CblasNoTrans, CblasTrans, (blasint)n, (blasint)n,
                     (blasint)cols, 1.0, Z, (blasint)n, Y, (blasint)n, 0.0, P, (blasint)n);
+        if (ll_watch_poll(job->watch))
+            goto cancelled;
         for (c = 0; c < n; ++c)
             for (r = 0; r < n; ++r)
                 P[c * n + r] *= l->weights[c];
@@ -131,12 +154,17 @@ oom:
     free(Z);
     free(P);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "medium: out of memory for order %zu", order);
+cancelled:
+    free(Y);
+    free(Z);
+    free(P);
+    return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
 }
 
 /* Build all orders from the Legendre moments chi[0..K] (chi[K] is the first
  * moment not kept, the delta-M forward fraction). */
 static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, size_t K,
-                            const char *fn)
+                            const char *fn, ll_watch *watch)
 {
     medium_job job;
     double *moment = NULL;
@@ -165,7 +193,13 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     job.moment = moment;
     job.forward = albedo * chi[K];
     job.diag = diag;
-    s = ll_parallel_for(layer->m, medium_order, &job);
+    job.watch = watch;
+    job.fn = fn;
+    s = ll_watch_stage(watch, "phase function", 0.0, 1.0, layer->m) ? ll_watch_check(watch, fn)
+                                                                    : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(layer->m, medium_order, &job, watch);
+    s = ll_watch_finish(watch, s, fn);
     s = ll_layer_commit_orders(layer, job.result, s);
     job.result = NULL;
 done:
@@ -187,11 +221,14 @@ static ll_status check_medium_args(const ll_layer *layer, double albedo, const c
 /* Moments kept: as many as the quadrature integrates exactly (n nodes). */
 static size_t kept_moments(const ll_layer *layer) { return layer->n; }
 
-ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
+ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
 {
     double *chi;
     size_t K;
+    ll_watch watch;
     ll_status s = check_medium_args(layer, albedo, "ll_layer_set_isotropic");
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, "ll_layer_set_isotropic");
     if (s != LL_OK)
         return s;
     K = kept_moments(layer);
@@ -199,16 +236,25 @@ ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
     if (!chi)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_isotropic: out of memory");
     chi[0] = 1.0;
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic");
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic", &watch);
     free(chi);
     return s;
 }
 
-ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g)
+ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
+{
+    return ll_layer_set_isotropic_ex(layer, albedo, NULL);
+}
+
+ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
+                                            const ll_monitor *monitor)
 {
     double *chi;
     size_t K, k;
+    ll_watch watch;
     ll_status s = check_medium_args(layer, albedo, "ll_layer_set_henyey_greenstein");
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, "ll_layer_set_henyey_greenstein");
     if (s != LL_OK)
         return s;
     if (!(g > -1.0 && g < 1.0))
@@ -222,17 +268,26 @@ ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double 
     chi[0] = 1.0;
     for (k = 1; k <= K; ++k)
         chi[k] = chi[k - 1] * g;
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein");
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", &watch);
     free(chi);
     return s;
 }
 
-ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa)
+ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g)
+{
+    return ll_layer_set_henyey_greenstein_ex(layer, albedo, g, NULL);
+}
+
+ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
+                                           const ll_monitor *monitor)
 {
     double *chi;
     size_t K, k, start;
     double ratio;
+    ll_watch watch;
     ll_status s = check_medium_args(layer, albedo, "ll_layer_set_von_mises_fisher");
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, "ll_layer_set_von_mises_fisher");
     if (s != LL_OK)
         return s;
     if (!(kappa >= 0.0) || !ll_is_finite(kappa) || kappa > 1e6)
@@ -265,7 +320,12 @@ ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double k
             chi[k] = chi[k - 1] * r[k];
         free(r);
     }
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher");
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher", &watch);
     free(chi);
     return s;
+}
+
+ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa)
+{
+    return ll_layer_set_von_mises_fisher_ex(layer, albedo, kappa, NULL);
 }

@@ -219,7 +219,7 @@ typedef struct merl_job {
     size_t samples;            /* azimuth samples on [0, pi], N          */
     const double *cos_table;   /* cos(pi t / (N - 1)), t < 2 (N - 1)     */
     ll_order_builder **builders;
-    const volatile int *cancel;
+    ll_watch *watch; /* one unit per column, polled per outgoing node */
 } merl_job;
 
 /* One incident column (internal index h + col_index, mu_i > 0): for every
@@ -235,7 +235,7 @@ static ll_status merl_column(size_t col_index, void *ctx)
     double wi[3], *f = NULL, *coeff = NULL, *column = NULL;
     ll_status s = LL_OK;
 
-    if (job->cancel && *job->cancel)
+    if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_matusik: cancelled");
     f = ll_alloc_array(N, sizeof(double));
     coeff = ll_alloc_array(h, m * sizeof(double));
@@ -252,6 +252,10 @@ static ll_status merl_column(size_t col_index, void *ctx)
          * direction of wi, as in the layer convention. */
         double mu_o = fabs(l->nodes[o]), sin_o = sqrt(fmax(0.0, 1.0 - mu_o * mu_o));
         double *a = coeff + o * m, ref, tail;
+        if (ll_watch_poll(job->watch)) {
+            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_matusik: cancelled");
+            goto done;
+        }
         for (j = 0; j < N; ++j) {
             double phi = LL_PI * (double)j / (double)(N - 1), wo[3];
             wo[0] = -sin_o * cos(phi);
@@ -293,6 +297,7 @@ static ll_status merl_column(size_t col_index, void *ctx)
             column[o] = coeff[o * m + k] * factor;
         s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
     }
+    ll_watch_advance(job->watch, 1);
 done:
     free(f);
     free(coeff);
@@ -303,6 +308,27 @@ done:
 ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl, const double weights[3],
                             size_t n_orders_internal, const volatile int *cancel)
 {
+    ll_watch watch;
+    ll_watch_begin_raw(&watch, NULL, NULL, cancel);
+    return ll_merl_set_layer_watched(layer, merl, weights, n_orders_internal, &watch);
+}
+
+ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl, const double weights[3],
+                               size_t n_orders_internal, const ll_monitor *monitor)
+{
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, monitor, "ll_layer_set_matusik");
+    if (s != LL_OK)
+        return s;
+    ll_watch_stage(&watch, "measured", 0.0, 0.0, 0);
+    return ll_merl_set_layer_watched(layer, merl, weights, n_orders_internal, &watch);
+}
+
+ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
+                                    const double weights[3], size_t n_orders_internal,
+                                    ll_watch *watch)
+{
+    static const char fn[] = "ll_layer_set_matusik";
     merl_job job;
     size_t k, m, orders, N, period, t;
     double *cos_table = NULL;
@@ -337,8 +363,14 @@ ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl, const double w
     job.samples = N;
     job.cos_table = cos_table;
     job.builders = builders;
-    job.cancel = cancel;
-    s = ll_parallel_for(layer->n / 2, merl_column, &job);
+    job.watch = watch;
+    /* (The file was read in the first tenth of the progress.) */
+    s = ll_watch_stage(watch, "measured", 0.1, 0.9, layer->n / 2) ? ll_watch_check(watch, fn)
+                                                                   : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(layer->n / 2, merl_column, &job, watch);
+    /* The last report comes before the layer changes. */
+    s = ll_watch_finish(watch, s, fn);
     if (s != LL_OK)
         goto fail;
     free(cos_table);
@@ -358,19 +390,31 @@ fail:
 ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
                                size_t n_orders_internal)
 {
+    return ll_layer_set_matusik_ex(layer, path, channel, n_orders_internal, NULL);
+}
+
+ll_status ll_layer_set_matusik_ex(ll_layer *layer, const char *path, int channel,
+                                  size_t n_orders_internal, const ll_monitor *monitor)
+{
     double weights[3] = { 0.0, 0.0, 0.0 };
     ll_merl *merl;
+    ll_watch watch;
     ll_status s;
     if (!layer || !path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_layer_set_matusik: layer or path is NULL");
     if (channel < 0 || channel > 2)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_layer_set_matusik: channel %d is not 0, 1 or 2 (R, G, B)", channel);
+    s = ll_watch_begin(&watch, monitor, "ll_layer_set_matusik");
+    if (s != LL_OK)
+        return s;
+    if (ll_watch_stage(&watch, "measured", 0.0, 0.1, 1))
+        return ll_watch_check(&watch, "ll_layer_set_matusik");
     s = ll_merl_load(path, &merl);
     if (s != LL_OK)
         return s;
     weights[channel] = 1.0;
-    s = ll_merl_set_layer(layer, merl, weights, n_orders_internal, NULL);
+    s = ll_merl_set_layer_watched(layer, merl, weights, n_orders_internal, &watch);
     ll_merl_free(merl);
     return s;
 }

@@ -13,6 +13,7 @@
 #define LL_MERL_H
 
 #include "layer/layer.h"
+#include "support/watch.h"
 
 /* MERL's own reader (BRDFRead.cpp: RED_SCALE, GREEN_SCALE, BLUE_SCALE) turns
  * the stored numbers into reflectance in 1/sr with these factors. The
@@ -51,5 +52,14 @@ LL_INTERNAL double ll_merl_eval(const ll_merl *merl, const double wi[3], const d
 LL_INTERNAL ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl,
                                         const double weights[3], size_t n_orders_internal,
                                         const volatile int *cancel);
+/* The same with a public monitor (stage "measured"; nullable), and with a
+ * begun watch (support/watch.h; nullable), the one code path of the three
+ * and of ll_layer_set_matusik_ex. A cancel leaves the layer unchanged. */
+LL_INTERNAL ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl,
+                                           const double weights[3], size_t n_orders_internal,
+                                           const ll_monitor *monitor);
+LL_INTERNAL ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
+                                                const double weights[3],
+                                                size_t n_orders_internal, ll_watch *watch);
 
 #endif /* LL_MERL_H */

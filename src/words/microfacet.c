@@ -53,6 +53,7 @@
  * (R + T = 1.06 for eta = 1.5, alpha = 0.3 at its 61 orders).
  */
 #include "words/microfacet.h"
+#include "support/watch.h"
 
 #include "numerics/filon.h"
 #include "words/fresnel.h"
@@ -658,6 +659,7 @@ oom:
 
 typedef struct prepare_job {
     ll_microfacet *mf;
+    ll_watch *watch;        /* nullable; one unit per entry     */
     size_t *grid;           /* the grid points to compute       */
     double x[GAUSS_NODES];  /* Gauss-Legendre rule on [-1, 1]   */
     double w[GAUSS_NODES];
@@ -667,10 +669,21 @@ static ll_status prepare_one(size_t index, void *ctx)
 {
     prepare_job *job = ctx;
     size_t k = job->grid[index];
-    return make_entry(job->mf, k, job->x, job->w, &job->mf->grid[k]);
+    ll_status s;
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+    s = make_entry(job->mf, k, job->x, job->w, &job->mf->grid[k]);
+    ll_watch_advance(job->watch, 1);
+    return s;
 }
 
 ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t count)
+{
+    return ll_microfacet_prepare_watched(mf, mu, count, NULL);
+}
+
+ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, size_t count,
+                                        ll_watch *watch)
 {
     /* Room for every B a double holds (4 points per octave: ~4100). */
     size_t a, b, k, n_grid = grid_index(DBL_MAX) + 1, n_items = 0;
@@ -693,8 +706,15 @@ ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t coun
         mf->n_grid = n_grid;
     }
     /* The missing entries that the pairs use: their (widened) lobes, and
-     * the true lobes of the widened ones (ll_microfacet_series). */
-    for (b = 0; b < count; ++b)
+     * the true lobes of the widened ones (ll_microfacet_series). O(count^2)
+     * plans: polled per column. */
+    ll_watch_stage(watch, "interface", 0.0, 0.05, count);
+    for (b = 0; b < count; ++b) {
+        if (ll_watch_poll(watch)) {
+            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+            goto done;
+        }
+        ll_watch_advance(watch, 1);
         for (a = 0; a < count; ++a) {
             if (!plan_pair(mf, mu[a], mu[b], HUGE_VAL, &p))
                 continue;
@@ -703,13 +723,20 @@ ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t coun
             if (p.b > mf->b_max && plan_pair(mf, mu[a], mu[b], mf->b_max, &p) && !p.filon)
                 need[p.grid] = 1;
         }
+    }
     for (k = 0; k < n_grid; ++k)
         if (need[k] && !mf->grid[k])
             job.grid[n_items++] = k;
     job.mf = mf;
+    job.watch = watch;
     s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w) : LL_OK;
     if (s == LL_OK)
-        s = ll_parallel_for(n_items, prepare_one, &job);
+        s = ll_watch_stage(watch, "interface", 0.05, 0.05, n_items)
+                ? ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled")
+                : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(n_items, prepare_one, &job, watch);
+done:
     free(need);
     free(job.grid);
     return s;
@@ -729,6 +756,7 @@ typedef struct layer_job {
     ll_order_builder **builders; /* [m]; order 0 goes through order0 */
     double *order0;              /* n x n column-major, unweighted     */
     double *ref0;                /* n x n or NULL (conductor compensation) */
+    ll_watch *watch;             /* one unit per column, polled per row */
 } layer_job;
 
 /* Doubles of scratch for one column: every row's series (m each; only the
@@ -762,9 +790,21 @@ static int longer_first(const void *a, const void *b)
  * order's column is filled from the rows whose series reach it (a prefix
  * of the rows sorted by length) and cleared again, instead of sweeping
  * n x m values. */
+static ll_status fill_column(size_t col, const layer_job *job);
+
 static ll_status layer_column(size_t col, void *ctx)
 {
     const layer_job *job = ctx;
+    ll_status s;
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+    s = fill_column(col, job);
+    ll_watch_advance(job->watch, 1);
+    return s;
+}
+
+static ll_status fill_column(size_t col, const layer_job *job)
+{
     const ll_layer *l = job->layer;
     size_t n = l->n, m = l->m, h = n / 2, row, k, j, count;
     double *pool, *scratch, *column, factor;
@@ -782,6 +822,10 @@ static ll_status layer_column(size_t col, void *ctx)
     for (row = 0; row < n && s == LL_OK; ++row) {
         /* The reference (F = 1) is only needed for R^t: up from above. */
         double *ref = job->ref0 && row < h && col >= h ? &job->ref0[col * n + row] : NULL;
+        if (ll_watch_poll(job->watch)) {
+            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+            break;
+        }
         /* Depth grows opposite to the normal: the series takes -mu. */
         rows[row].row = row;
         s = ll_microfacet_series(job->mf, -l->nodes[row], -l->nodes[col], m, pool + row * m,
@@ -945,16 +989,32 @@ static ll_status check_arguments(const ll_layer *layer, double eta_re, double et
 ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
                                   int conserve_energy, size_t n_orders_internal)
 {
+    return ll_layer_set_microfacet_ex(layer, eta_re, eta_im, alpha, conserve_energy,
+                                      n_orders_internal, NULL);
+}
+
+ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_im,
+                                     double alpha, int conserve_energy,
+                                     size_t n_orders_internal, const ll_monitor *monitor)
+{
+    static const char fn[] = "ll_layer_set_microfacet";
     size_t n, m, h, k, col;
     ll_microfacet *mf = NULL;
     ll_order_builder **builders = NULL;
     double *mu = NULL, *order0 = NULL, *ref0 = NULL, *w = NULL, *work = NULL;
     layer_job job;
+    ll_watch watch;
     ll_status s = check_arguments(layer, eta_re, eta_im, alpha);
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, fn);
     if (s != LL_OK)
         return s;
-    if (eta_im == 0.0 && eta_re == 1.0)
-        return ll_layer_clear(layer); /* index-matched: no interface */
+    if (eta_im == 0.0 && eta_re == 1.0) {
+        /* index-matched: no interface */
+        ll_watch_stage(&watch, "interface", 0.0, 1.0, 0);
+        s = ll_watch_finish(&watch, LL_OK, fn);
+        return s == LL_OK ? ll_layer_clear(layer) : s;
+    }
     n = layer->n;
     m = layer->m;
     h = n / 2;
@@ -979,7 +1039,7 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
         goto done;
     for (k = 0; k < n; ++k)
         mu[k] = -layer->nodes[k];
-    s = ll_microfacet_prepare(mf, mu, n);
+    s = ll_microfacet_prepare_watched(mf, mu, n, &watch);
     if (s != LL_OK)
         goto done;
 
@@ -991,7 +1051,12 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
     job.builders = builders;
     job.order0 = order0;
     job.ref0 = ref0;
-    s = ll_parallel_for(n, layer_column, &job);
+    job.watch = &watch;
+    s = ll_watch_stage(&watch, "interface", 0.1, 0.85, n) ? ll_watch_check(&watch, fn) : LL_OK;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(n, layer_column, &job, &watch);
+    if (s == LL_OK && ll_watch_stage(&watch, "interface", 0.95, 0.05, n))
+        s = ll_watch_check(&watch, fn);
     if (s != LL_OK)
         goto done;
 
@@ -1008,7 +1073,13 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
         for (row = 0; row < n; ++row)
             column[row] *= factor;
         s = ll_order_builder_set_column(builders[0], col, column, 0.0);
+        ll_watch_advance(&watch, 1);
+        if (s == LL_OK)
+            s = ll_watch_check(&watch, fn);
     }
+    /* The last report comes before the layer changes: a cancel there still
+     * leaves it as it was. */
+    s = ll_watch_finish(&watch, s, fn);
     if (s != LL_OK)
         goto done;
     s = ll_layer_set_from_builders(layer, builders); /* takes the builders */

@@ -15,6 +15,7 @@
 
 #include <stddef.h>
 #include "support/support.h"
+#include "support/watch.h"
 
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
@@ -35,6 +36,9 @@ LL_INTERNAL void ll_microfacet_destroy(ll_microfacet *mf);
  * a, b < count, will use (in parallel). Required before ll_microfacet_series
  * for those pairs. */
 LL_INTERNAL ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t count);
+/* The same, reporting to and polling a watch (nullable). */
+LL_INTERNAL ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu,
+                                                    size_t count, ll_watch *watch);
 
 /* Doubles of scratch that ll_microfacet_series needs for max_len terms. */
 LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);

@@ -26,8 +26,9 @@
 #define EXIT_IO 2
 #define EXIT_NUMERICAL 3
 
-/* Raised by SIGINT / SIGTERM; the library polls it (sig_atomic_t is int
- * here, the type the build options point to). */
+/* Raised by SIGINT / SIGTERM; the library polls it inside the long loops
+ * of every stage, on every thread (sig_atomic_t is int here, the type the
+ * build options point to), so a build ends within about a second. */
 static volatile sig_atomic_t cancel_flag;
 static volatile sig_atomic_t cancel_signal;
 
@@ -35,6 +36,20 @@ static void on_signal(int sig)
 {
     cancel_signal = sig;
     cancel_flag = 1;
+}
+
+/* From the start, so that no stage runs with the default action (which
+ * would leave a temporary file). SA_RESETHAND: a second signal while the
+ * build winds down ends the process at once. */
+static void catch_signals(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sa.sa_flags = SA_RESETHAND;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
 }
 
 static const char usage[] =
@@ -265,11 +280,14 @@ static void print_summary(const args *a, ll_layer *const *layers, size_t n_chann
     ll_bsdf_release(b);
 }
 
-/* Stop: no file was written. End by the signal so the shell sees it. */
+/* Stop: no file was written. End by the signal, so that the shell sees
+ * it ($? = 128 + 2 = 130 for SIGINT, 143 for SIGTERM) and a script that ran
+ * llbuild stops too; 128 + sig should raise return. */
 static int die_cancelled(void)
 {
     int sig = cancel_signal ? cancel_signal : SIGINT;
     fprintf(stderr, "llbuild: interrupted; no file written\n");
+    fflush(stderr);
     signal(sig, SIG_DFL);
     raise(sig);
     return 128 + sig;
@@ -283,11 +301,12 @@ int main(int argc, char **argv)
     ll_layer *layers[3] = { NULL, NULL, NULL };
     size_t n_channels = 0, c;
     ll_progress bar;
-    struct sigaction sa;
     double start = now_seconds();
     ll_status s;
-    int code = parse_args(argc, argv, &a);
+    int code;
 
+    catch_signals();
+    code = parse_args(argc, argv, &a);
     if (code >= 0)
         return code;
     if (a.ior_dir && setenv("LAYERLAB_IOR_DIR", a.ior_dir, 1) != 0)
@@ -303,17 +322,15 @@ int main(int argc, char **argv)
     o.threads = a.threads;
     o.error_goal = a.error;
     o.cancel = &cancel_flag;
+    if (cancel_flag) {
+        ll_material_destroy(m);
+        return die_cancelled();
+    }
     if (a.dry_run) {
         print_resolution(m, &o);
         ll_material_destroy(m);
-        return 0;
+        return cancel_flag ? die_cancelled() : 0;
     }
-
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
 
     ll_progress_init(&bar, stderr, a.quiet, start);
     o.progress = ll_progress_update;
@@ -325,6 +342,14 @@ int main(int argc, char **argv)
         bar.scale = 1.0;
         ll_progress_update(0.97, "writing", &bar);
         s = ll_material_write(m, &o, layers, n_channels, a.output);
+    }
+    if (s == LL_OK) {
+        /* The file is complete: from here on a signal just ends llbuild
+         * (reading the file back for the summary is not worth waiting for). */
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (cancel_flag)
+            raise(cancel_signal ? cancel_signal : SIGINT);
     }
     ll_progress_finish(&bar, s == LL_OK);
     if (s == LL_ERROR_CANCELLED) {
