@@ -22,7 +22,7 @@
 
 #include "ll_common.h"
 #include "ll_layer.h"
-#include "ll_bsdf.h"
+#include "ll_bsdf_write.h"
 
 #ifdef __cplusplus
 extern "C" {

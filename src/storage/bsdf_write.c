@@ -31,7 +31,7 @@
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
 #include "layer/layer.h"
-#include "layerlab/ll_bsdf.h"
+#include "layerlab/ll_bsdf_write.h"
 
 #include <float.h>
 #include <math.h>
