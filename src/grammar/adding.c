@@ -236,7 +236,7 @@ typedef struct add_job {
 static ll_status add_one_order(size_t k, void *ctx)
 {
     add_job *job = ctx;
-    const ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
+    ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
     size_t n = job->top->n;
     workspace w;
     ll_status s;
