@@ -85,11 +85,12 @@ fi
 
 # ------------------------------------------------------ (b) exported symbols
 if [ -f "$LIB" ]; then
-    # Symbol versions (name@@LAYERLAB_1) are stripped; the version node itself
-    # is listed as an absolute symbol LAYERLAB_<n>, which is not an export.
+    # Symbol versions (name@@LAYERLAB_1) are stripped; the version nodes
+    # themselves are listed as absolute symbols LAYERLAB_<n>[.<m>], which are
+    # not exports.
     if nm -D --defined-only "$LIB" > "$tmp/nm.txt" 2> "$tmp/nm.log"; then
         stray=$(awk '{ name = $NF; sub(/@.*/, "", name);
-                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+$/) next;
+                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+(\.[0-9]+)?$/) next;
                        if (name !~ /^ll_/) print name }' "$tmp/nm.txt" | sort -u)
         count=$(awk '{ name = $NF; sub(/@.*/, "", name); if (name ~ /^ll_/) n++ }
                      END { print n + 0 }' "$tmp/nm.txt")
