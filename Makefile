@@ -91,6 +91,10 @@ READER_LIBS := -lm
 # Everything else may use OpenMP.
 $(filter-out $(READER_OBJ),$(LIB_OBJ)): CFLAGS_OMP := -fopenmp
 
+# The reader's file list, for tests/layering.sh run by hand.
+print-reader-src:
+	@echo $(READER_SRC)
+
 # Tools: each directory tools/NAME/ holds the sources of one program NAME.
 TOOL_NAMES := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard tools/*/*.c)))))
 TOOLS    := $(TOOL_NAMES:%=$(BUILD)/bin/%)
@@ -108,7 +112,7 @@ TEST_CFLAGS := -std=c99 $(OPT) -g $(WARN) -Wno-unused-parameter -D_POSIX_C_SOURC
 TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz lib tools test test-c test-python \
-        test-tsan bench install uninstall clean fuzz demo abi-baseline
+        test-tsan bench install uninstall clean fuzz demo abi-baseline print-reader-src
 all: deps-tools lib tools
 
 # The Debian packages, by who needs them (scripts/deps.sh): `make lib`
