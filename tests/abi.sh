@@ -280,6 +280,16 @@ EOF
         fail "cc reader.c \$(pkg-config --cflags --libs layerlab-reader) does not build or run"
         show "$tmp/reader.log"
     fi
+    # The static archive needs nothing but libm either.
+    # shellcheck disable=SC2086
+    if $CC -std=c99 $SAN_FLAGS -I"$prefix/include" "$tmp/reader.c" -o "$tmp/reader_static" \
+            "$prefix/lib/liblayerlab_reader.a" -lm > "$tmp/static.log" 2>&1 &&
+        "$tmp/reader_static" > /dev/null 2>> "$tmp/static.log"; then
+        pass "the same program links with the installed liblayerlab_reader.a and -lm alone, and runs"
+    else
+        fail "the program does not link with liblayerlab_reader.a -lm alone (or does not run)"
+        show "$tmp/static.log"
+    fi
 else
     fail "make install did not install layerlab-reader.pc"
 fi
