@@ -91,10 +91,6 @@ READER_LIBS := -lm
 # Everything else may use OpenMP.
 $(filter-out $(READER_OBJ),$(LIB_OBJ)): CFLAGS_OMP := -fopenmp
 
-# The reader's file list, for tests/layering.sh run by hand.
-print-reader-src:
-	@echo $(READER_SRC)
-
 # Tools: each directory tools/NAME/ holds the sources of one program NAME.
 TOOL_NAMES := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard tools/*/*.c)))))
 TOOLS    := $(TOOL_NAMES:%=$(BUILD)/bin/%)
@@ -128,6 +124,10 @@ deps-test: deps-tools
 	@sh scripts/deps.sh test
 deps-fuzz: deps-lib
 	@sh scripts/deps.sh fuzz
+
+# The reader's file list, for tests/layering.sh run by hand.
+print-reader-src:
+	@echo $(READER_SRC)
 
 lib: $(SHARED) $(STATIC) $(BUILD)/lib/layerlab.pc \
      $(READER_SHARED) $(READER_STATIC) $(BUILD)/lib/layerlab-reader.pc
