@@ -163,6 +163,17 @@ $(READER_STATIC): $(READER_OBJ)
 	rm -f $@
 	ar rcs $@ $(READER_OBJ)
 
+# layerlab-reader.pc, written as layerlab.pc is (below): for the PREFIX in
+# effect, at build time and again by `make install`.
+write_reader_pc = printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INCDIR)' '' \
+	  'Name: layerlab-reader' 'Description: Reading, evaluating and sampling .bsdf files (layerlab without the layer builder)' \
+	  'Version: $(VERSION)' 'Cflags: -I$${includedir}' 'Libs: -L$${libdir} -Wl,-rpath,$${libdir} -llayerlab_reader' \
+	  'Libs.private: $(READER_LIBS)' > $(1)
+
+$(BUILD)/lib/layerlab-reader.pc: Makefile
+	@mkdir -p $(dir $@)
+	@$(call write_reader_pc,$@)
+
 # layerlab.pc names the install directories, so it is written for the
 # PREFIX/LIBDIR/INCDIR in effect: at build time for the default, and again
 # by `make install` for the ones given there.
@@ -174,15 +185,6 @@ write_pc = printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INC
 $(BUILD)/lib/layerlab.pc: Makefile
 	@mkdir -p $(dir $@)
 	@$(call write_pc,$@)
-
-write_reader_pc = printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INCDIR)' '' \
-	  'Name: layerlab-reader' 'Description: Reading, evaluating and sampling .bsdf files (layerlab without the layer builder)' \
-	  'Version: $(VERSION)' 'Cflags: -I$${includedir}' 'Libs: -L$${libdir} -Wl,-rpath,$${libdir} -llayerlab_reader' \
-	  'Libs.private: $(READER_LIBS)' > $(1)
-
-$(BUILD)/lib/layerlab-reader.pc: Makefile
-	@mkdir -p $(dir $@)
-	@$(call write_reader_pc,$@)
 
 tools: $(TOOLS)
 
