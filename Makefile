@@ -124,6 +124,7 @@ deps-test: deps-tools
 	@sh scripts/deps.sh test
 deps-fuzz: deps-lib
 	@sh scripts/deps.sh fuzz
+fuzz: deps-fuzz
 
 # The reader's file list, for tests/layering.sh run by hand.
 print-reader-src:
@@ -252,7 +253,7 @@ bench:
 	@$(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
 	@if [ -f bench/run.sh ]; then BUILD=build-bench sh bench/run.sh; fi
 
-fuzz: deps-fuzz
+fuzz:
 	@if [ -f tests/fuzz/run.sh ]; then sh tests/fuzz/run.sh $(FUZZ_SECONDS); fi
 
 demo: all
