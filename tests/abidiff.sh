@@ -40,7 +40,7 @@ LIBS="liblayerlab liblayerlab_reader"
 # abidw of one library, run in the source tree (the DWARF names the headers
 # relative to it).
 describe() {
-    (cd "$SRC" && abidw --no-corpus-path --no-comp-dir-path --no-show-locs \
+    (cd "$SRC" && abidw --no-corpus-path --no-comp-dir-path --no-show-locs --exported-interfaces-only \
         --headers-dir include/layerlab --drop-private-types --out-file "$2" "$1")
 }
 
