@@ -1,7 +1,11 @@
 # layerlab — build, test, install.
-#   make               library (shared + static) and tools
+#   make               libraries (liblayerlab, liblayerlab_reader; shared + static) and tools
+#   make lib           the libraries alone (installs no package the tools need)
 #   make test          cmocka suite (+ Python tests when numpy is importable)
 #   make test SANITIZE=1   the same under ASan + UBSan
+#   make test TSAN=1   the concurrent reader tests under ThreadSanitizer (build-tsan/)
+#   make abi-baseline  rewrite abi/*.abi from the libraries just built (see abi/README.md)
+#   DEV=1 (or CI=true) turns warnings into errors
 #   make bench         benchmarks (never part of `make test`)
 #   make install PREFIX=/usr/local
 #   make deps          install missing Debian packages (run by the others)
@@ -42,12 +46,28 @@ BLAS_LIBS := -llapacke -lopenblas
 endif
 
 OPT      ?= -O2
-WARN     := -Wall -Wextra -pedantic -Werror
-CFLAGS_LIB := -std=c99 $(OPT) -g $(WARN) -fPIC -fvisibility=hidden -fopenmp \
+# zstd's warning set, as far as it suits this C99 code. Left out:
+# -Wc++-compat (C99 converts void * implicitly), -Wfloat-equal (the numerics
+# test exact zeros on purpose), -Wswitch-enum (a default: is meant to cover
+# the rest), -Wstrict-aliasing=1 (its guesses flag the tests' deliberate
+# struct-size probes; -Wall's level 3 stays). Errors only in development and
+# CI builds (DEV=1, CI=true), so that a newer compiler's new warning does not
+# break a user's `make`.
+WARN     := -Wall -Wextra -pedantic -Wshadow -Wmissing-prototypes -Wstrict-prototypes -Wvla \
+            -Wcast-qual -Wcast-align -Wundef -Wpointer-arith -Wformat=2 \
+            -Wdeclaration-after-statement -Winit-self -Wwrite-strings -Wredundant-decls
+ifneq ($(filter 1,$(DEV))$(filter true,$(CI)),)
+WARN     += -Werror
+endif
+CFLAGS_LIB := -std=c99 $(OPT) -g $(WARN) -fPIC -fvisibility=hidden \
               -D_POSIX_C_SOURCE=200809L -DLL_BUILDING_LIBRARY -Iinclude -Isrc
 ifeq ($(SANITIZE),1)
 SAN      := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 BUILD    := build-san
+endif
+ifeq ($(TSAN),1)
+SAN      := -fsanitize=thread -fno-omit-frame-pointer
+BUILD    := build-tsan
 endif
 CFLAGS_LIB += $(SAN)
 LDLIBS_LIB := $(BLAS_LIBS) -fopenmp -lm -lpthread
@@ -57,6 +77,25 @@ LIB_OBJ  := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
 SONAME   := liblayerlab.so.$(ABI_VERSION)
 SHARED   := $(BUILD)/lib/liblayerlab.so.$(VERSION)
 STATIC   := $(BUILD)/lib/liblayerlab.a
+
+# The reader library: open, inspect, evaluate and sample .bsdf files, for
+# renderers. Its files are support/ without the threads (OpenMP), the
+# splines of numerics/, and storage/ without the writer; a new file in
+# storage/ is a reader file unless it is named like the writer's. They must
+# not include layer/, words/, grammar/ or material/ (tests/layering.sh).
+# Reader objects are compiled without -fopenmp (they have no OpenMP) and
+# shared with liblayerlab.
+READER_WRITER_SRC := $(wildcard src/storage/bsdf_write*.c src/storage/bsdf_file_out*.c)
+READER_SRC := $(sort $(filter-out src/support/threads.c,$(wildcard src/support/*.c)) \
+                src/numerics/spline.c \
+                $(filter-out $(READER_WRITER_SRC),$(wildcard src/storage/*.c)))
+READER_OBJ := $(READER_SRC:src/%.c=$(BUILD)/obj/%.o)
+READER_SONAME := liblayerlab_reader.so.$(ABI_VERSION)
+READER_SHARED := $(BUILD)/lib/liblayerlab_reader.so.$(VERSION)
+READER_STATIC := $(BUILD)/lib/liblayerlab_reader.a
+READER_LIBS := -lm
+# Everything else may use OpenMP.
+$(filter-out $(READER_OBJ),$(LIB_OBJ)): CFLAGS_OMP := -fopenmp
 
 # Tools: each directory tools/NAME/ holds the sources of one program NAME.
 TOOL_NAMES := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard tools/*/*.c)))))
@@ -74,17 +113,35 @@ TEST_CFLAGS := -std=c99 $(OPT) -g $(WARN) -Wno-unused-parameter -D_POSIX_C_SOURC
                -DLL_SOURCE_DIR='"$(CURDIR)"' -DLL_BUILD_DIR='"$(CURDIR)/$(BUILD)"'
 TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
-.PHONY: all deps lib tools test test-c test-python bench install uninstall clean fuzz demo
-all: deps lib tools
+.PHONY: all deps deps-lib deps-tools deps-test deps-fuzz lib tools test test-c test-python \
+        test-tsan bench install uninstall clean fuzz demo abi-baseline print-reader-src
+all: deps-tools lib tools
 
+# The Debian packages, by who needs them (scripts/deps.sh): `make lib`
+# installs only the library's, `make` the tools' too, `make test` the tests'
+# (which run the tools). Chained, so that `make -j` never runs two apt-gets.
 deps:
-	@sh scripts/deps.sh
+	@sh scripts/deps.sh lib tools test fuzz
+deps-lib:
+	@sh scripts/deps.sh lib
+deps-tools: deps-lib
+	@sh scripts/deps.sh tools
+deps-test: deps-tools
+	@sh scripts/deps.sh test
+deps-fuzz: deps-lib
+	@sh scripts/deps.sh fuzz
+fuzz: deps-fuzz
 
-lib: $(SHARED) $(STATIC) $(BUILD)/lib/layerlab.pc
+# The reader's file list, for tests/layering.sh run by hand.
+print-reader-src:
+	@echo $(READER_SRC)
 
-$(BUILD)/obj/%.o: src/%.c $(wildcard src/*/*.h) $(wildcard include/*.h include/layerlab/*.h) | deps
+lib: $(SHARED) $(STATIC) $(BUILD)/lib/layerlab.pc \
+     $(READER_SHARED) $(READER_STATIC) $(BUILD)/lib/layerlab-reader.pc
+
+$(BUILD)/obj/%.o: src/%.c $(wildcard src/*/*.h) $(wildcard include/*.h include/layerlab/*.h) | deps-lib
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_LIB) -c $< -o $@
+	$(CC) $(CFLAGS_LIB) $(CFLAGS_OMP) -c $< -o $@
 
 $(SHARED): $(LIB_OBJ) src/liblayerlab.map
 	@mkdir -p $(dir $@)
@@ -97,6 +154,32 @@ $(STATIC): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@
 	ar rcs $@ $(LIB_OBJ)
+
+# --as-needed: the reader's NEEDED list is what its objects use (libm, libc),
+# never OpenBLAS, LAPACKE or libgomp (tests/abi.sh checks).
+$(READER_SHARED): $(READER_OBJ) src/liblayerlab_reader.map
+	@mkdir -p $(dir $@)
+	$(CC) -shared -o $@ $(READER_OBJ) -Wl,-soname,$(READER_SONAME) \
+	    -Wl,--version-script=src/liblayerlab_reader.map -Wl,--no-undefined -Wl,--as-needed \
+	    $(SAN) $(READER_LIBS)
+	ln -sf liblayerlab_reader.so.$(VERSION) $(BUILD)/lib/$(READER_SONAME)
+	ln -sf $(READER_SONAME) $(BUILD)/lib/liblayerlab_reader.so
+
+$(READER_STATIC): $(READER_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@
+	ar rcs $@ $(READER_OBJ)
+
+# layerlab-reader.pc, written as layerlab.pc is (below): for the PREFIX in
+# effect, at build time and again by `make install`.
+write_reader_pc = printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$(INCDIR)' '' \
+	  'Name: layerlab-reader' 'Description: Reading, evaluating and sampling .bsdf files (layerlab without the layer builder)' \
+	  'Version: $(VERSION)' 'Cflags: -I$${includedir}' 'Libs: -L$${libdir} -Wl,-rpath,$${libdir} -llayerlab_reader' \
+	  'Libs.private: $(READER_LIBS)' > $(1)
+
+$(BUILD)/lib/layerlab-reader.pc: Makefile
+	@mkdir -p $(dir $@)
+	@$(call write_reader_pc,$@)
 
 # layerlab.pc names the install directories, so it is written for the
 # PREFIX/LIBDIR/INCDIR in effect: at build time for the default, and again
@@ -122,18 +205,35 @@ $(BUILD)/share/layerlab/ior/%.spd: $(IOR_SRC)/%.spd
 tools: $(TOOLS)
 
 .SECONDEXPANSION:
-$(BUILD)/bin/%: $$(wildcard tools/%/*.c) $$(wildcard tools/%/*.h) $(SHARED) | deps
+$(BUILD)/bin/%: $$(wildcard tools/%/*.c) $$(wildcard tools/%/*.h) $(SHARED) | deps-tools
 	@mkdir -p $(dir $@)
 	$(CC) $(TOOL_CFLAGS) -o $@ $(filter %.c,$^) -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' \
 	    -llayerlab $(TOOL_LIBS)
 
-$(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | deps
+$(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | deps-test
 	@mkdir -p $(dir $@)
 	$(CC) $(TEST_CFLAGS) -o $@ $< $(TEST_LIBS)
 
+# The concurrent reader tests, linked against the reader library (no OpenMP,
+# so ThreadSanitizer sees every synchronisation): `make test TSAN=1`.
+TSAN_TEST_SRC := tests/test_bsdf_threads.c
+TSAN_TESTS := $(TSAN_TEST_SRC:tests/%.c=$(BUILD)/tests/reader/%)
+$(BUILD)/tests/reader/%: tests/%.c $(wildcard tests/*.h) $(READER_SHARED) | deps-test
+	@mkdir -p $(dir $@)
+	$(CC) $(filter-out -fopenmp,$(TEST_CFLAGS)) -o $@ $< -L$(BUILD)/lib \
+	    -Wl,-rpath,'$$ORIGIN/../../lib' -llayerlab_reader -lcmocka -lm -lpthread
+
+test-tsan: $(TSAN_TESTS)
+	@set -e; failed=0; \
+	for t in $(TSAN_TESTS); do \
+	  echo "== $$t (ThreadSanitizer)"; \
+	  if ! TSAN_OPTIONS="halt_on_error=1 $$TSAN_OPTIONS" $$t; then failed=$$((failed+1)); fi; \
+	done; \
+	if [ $$failed -ne 0 ]; then echo "$$failed test program(s) failed under TSan"; exit 1; fi
+
 # The C suite: every cmocka program, then the shell checks of the tests/*.sh
 # scripts (ABI, headers, tools). Each prints its own summary lines.
-test-c: all $(TESTS)
+test-c: all deps-test $(TESTS)
 	@set -e; failed=0; \
 	for t in $(TESTS); do \
 	  echo "== $$t"; \
@@ -141,18 +241,28 @@ test-c: all $(TESTS)
 	done; \
 	for s in $(sort $(wildcard tests/*.sh)); do \
 	  echo "== $$s"; \
-	  if ! BUILD=$(BUILD) CC=$(CC) CXX=$(CXX) sh $$s; then failed=$$((failed+1)); fi; \
+	  if ! BUILD=$(BUILD) CC=$(CC) CXX=$(CXX) READER_SRC='$(READER_SRC)' sh $$s; then \
+	    failed=$$((failed+1)); fi; \
 	done; \
 	if [ $$failed -ne 0 ]; then echo "$$failed test program(s) failed"; exit 1; fi
 
 test-python: all
 	@if [ -f python/tests/run.sh ]; then BUILD=$(BUILD) sh python/tests/run.sh; fi
 
-ifeq ($(SANITIZE),1)
+ifeq ($(TSAN),1)
+test: test-tsan
+else ifeq ($(SANITIZE),1)
 test: test-c
 else
 test: test-c test-python
 endif
+
+# The ABI baselines that tests/abidiff.sh compares the libraries with. Run
+# after a deliberate, compatible change that abidiff reports (a field
+# appended to a size-tagged struct), and at each release; never to silence
+# a removal (see abi/README.md).
+abi-baseline: lib
+	@BUILD=$(BUILD) sh tests/abidiff.sh --write-baseline
 
 bench:
 	@$(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
@@ -173,6 +283,11 @@ install: all
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/liblayerlab.so
 	install -m 644 $(STATIC) $(DESTDIR)$(LIBDIR)/
 	$(call write_pc,$(DESTDIR)$(PKGDIR)/layerlab.pc)
+	install -m 755 $(READER_SHARED) $(DESTDIR)$(LIBDIR)/
+	ln -sf liblayerlab_reader.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(READER_SONAME)
+	ln -sf $(READER_SONAME) $(DESTDIR)$(LIBDIR)/liblayerlab_reader.so
+	install -m 644 $(READER_STATIC) $(DESTDIR)$(LIBDIR)/
+	$(call write_reader_pc,$(DESTDIR)$(PKGDIR)/layerlab-reader.pc)
 	@# the tools find the library through their RUNPATH $$ORIGIN/../lib
 	install -d $(DESTDIR)$(DATADIR)/ior
 	install -m 644 $(IOR_SRC)/*.spd $(IOR_SRC)/README.md $(DESTDIR)$(DATADIR)/ior/
@@ -180,8 +295,9 @@ install: all
 
 uninstall:
 	rm -f $(DESTDIR)$(LIBDIR)/liblayerlab.* $(DESTDIR)$(PKGDIR)/layerlab.pc $(DESTDIR)$(INCDIR)/layerlab.h
+	rm -f $(DESTDIR)$(LIBDIR)/liblayerlab_reader.* $(DESTDIR)$(PKGDIR)/layerlab-reader.pc
 	rm -rf $(DESTDIR)$(INCDIR)/layerlab $(DESTDIR)$(DATADIR)
 	for t in $(TOOL_NAMES); do rm -f $(DESTDIR)$(BINDIR)/$$t; done
 
 clean:
-	rm -rf build build-san build-bench
+	rm -rf build build-san build-tsan build-bench

@@ -6,7 +6,8 @@
  *   ll_common.h   versions, status codes, error messages, threads
  *   ll_quad.h     quadrature rules
  *   ll_layer.h    layers: words (diffuse, media, interfaces) and grammar (adding, doubling)
- *   ll_bsdf.h     .bsdf files: write, open, evaluate, sample
+ *   ll_bsdf.h     .bsdf files: open, evaluate, sample (the reader library)
+ *   ll_bsdf_write.h .bsdf files: write them from layers
  *   ll_material.h the material language and its compiler
  */
 #ifndef LAYERLAB_H
@@ -16,6 +17,7 @@
 #include "layerlab/ll_quad.h"
 #include "layerlab/ll_layer.h"
 #include "layerlab/ll_bsdf.h"
+#include "layerlab/ll_bsdf_write.h"
 #include "layerlab/ll_material.h"
 
 #endif /* LAYERLAB_H */

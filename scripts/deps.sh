@@ -1,15 +1,37 @@
 #!/bin/sh
 # Install the Debian packages layerlab needs, only those that are missing.
-# Run by `make deps` (and so by `make`, `make test` and the README's commands).
+#   sh scripts/deps.sh [lib] [tools] [test] [fuzz]     (no argument: all four)
+# Run by the Makefile for what each target builds: `make lib` installs the
+# library's needs only (no cairo, OpenEXR or clang), `make` the tools' too,
+# `make test` the tests', `make fuzz` the fuzzer's; `make deps` all of them.
 # Set LL_SKIP_DEPS=1 to skip the check (e.g. on a non-Debian system).
 set -eu
 [ "${LL_SKIP_DEPS:-0}" = 1 ] && exit 0
 
-packages="build-essential pkg-config libopenblas-openmp-dev liblapacke-dev libcmocka-dev
-libopenexr-dev libcairo2-dev clang"
+# The library: a C99 compiler, OpenBLAS (its OpenMP build) and LAPACKE.
+lib_packages="build-essential pkg-config libopenblas-openmp-dev liblapacke-dev"
+# The tools' pictures (llplot): cairo, the OpenEXR C API.
+tools_packages="libopenexr-dev libcairo2-dev"
+# The tests: cmocka, abidiff/abidw (tests/abidiff.sh), Python with pip for
+# the Python package and the cross-checks (they pip-install the rest).
+test_packages="libcmocka-dev abigail-tools python3 python3-pip"
+# The fuzzer: clang with its libFuzzer runtime.
+fuzz_packages="clang libclang-rt-14-dev"
+
+[ $# -eq 0 ] && set -- lib tools test fuzz
+packages=""
+for need in "$@"; do
+    case $need in
+        lib) packages="$packages $lib_packages" ;;
+        tools) packages="$packages $tools_packages" ;;
+        test) packages="$packages $test_packages" ;;
+        fuzz) packages="$packages $fuzz_packages" ;;
+        *) echo "deps: unknown need '$need' (lib, tools, test or fuzz)" >&2; exit 2 ;;
+    esac
+done
 
 command -v dpkg-query >/dev/null 2>&1 || {
-    echo "deps: not a Debian system; install OpenBLAS, LAPACKE, cmocka, OpenEXR, cairo yourself and set LL_SKIP_DEPS=1" >&2
+    echo "deps: not a Debian system; install OpenBLAS, LAPACKE (library), cairo, OpenEXR (tools), cmocka, abigail-tools (tests) yourself and set LL_SKIP_DEPS=1" >&2
     exit 0
 }
 

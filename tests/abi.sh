@@ -6,7 +6,13 @@
 #   (b) the shared library exports ll_* symbols only;
 #   (c) its soname is liblayerlab.so.<LL_ABI_VERSION>;
 #   (d) `make install PREFIX=<tmp>` works and a program built with
-#       `$(pkg-config --cflags --libs layerlab)` runs against the installed copy.
+#       `$(pkg-config --cflags --libs layerlab)` runs against the installed copy;
+#   (e) the reader library liblayerlab_reader.so.<LL_ABI_VERSION>: its soname,
+#       NEEDED without OpenBLAS, LAPACKE or OpenMP, exports ll_* only and no
+#       ll_layer_*, every function of ll_bsdf.h; ll_bsdf.h includes only
+#       ll_common.h; a program that includes only <layerlab/ll_bsdf.h> builds
+#       with `$(pkg-config --cflags --libs layerlab-reader)` after the install
+#       and runs against the installed reader alone.
 # Run by `make test` with BUILD, CC and CXX set; prints one line per check and
 # "N passed, N failed"; exits non-zero when a check fails.
 set -u
@@ -20,6 +26,7 @@ case $BUILD in
     *) BUILD_DIR=$SRC/$BUILD ;;
 esac
 LIB=$BUILD_DIR/lib/liblayerlab.so
+READER=$BUILD_DIR/lib/liblayerlab_reader.so
 HEADER_COMMON=$SRC/include/layerlab/ll_common.h
 
 passed=0
@@ -85,11 +92,12 @@ fi
 
 # ------------------------------------------------------ (b) exported symbols
 if [ -f "$LIB" ]; then
-    # Symbol versions (name@@LAYERLAB_1) are stripped; the version node itself
-    # is listed as an absolute symbol LAYERLAB_<n>, which is not an export.
+    # Symbol versions (name@@LAYERLAB_1) are stripped; the version nodes
+    # themselves are listed as absolute symbols LAYERLAB_<n>[.<m>], which are
+    # not exports.
     if nm -D --defined-only "$LIB" > "$tmp/nm.txt" 2> "$tmp/nm.log"; then
         stray=$(awk '{ name = $NF; sub(/@.*/, "", name);
-                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+$/) next;
+                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+(\.[0-9]+)?$/) next;
                        if (name !~ /^ll_/) print name }' "$tmp/nm.txt" | sort -u)
         count=$(awk '{ name = $NF; sub(/@.*/, "", name); if (name ~ /^ll_/) n++ }
                      END { print n + 0 }' "$tmp/nm.txt")
@@ -179,6 +187,111 @@ EOF
 else
     fail "make install PREFIX=<tmp> BUILD=$BUILD failed"
     show "$tmp/install.log"
+fi
+
+# ------------------------------------------------------ (e) the reader library
+if grep '^[[:space:]]*#[[:space:]]*include' "$SRC/include/layerlab/ll_bsdf.h" |
+        grep -v '"ll_common\.h"' > "$tmp/bsdf_includes.txt"; then
+    fail "layerlab/ll_bsdf.h includes more than ll_common.h: $(cat "$tmp/bsdf_includes.txt")"
+else
+    pass "layerlab/ll_bsdf.h includes only ll_common.h"
+fi
+if [ ! -f "$READER" ]; then
+    fail "no $READER (build the libraries first: make lib BUILD=$BUILD)"
+else
+    soname=$(readelf -d "$READER" 2>/dev/null | sed -n 's/.*(SONAME).*\[\(.*\)\].*/\1/p')
+    if [ "$soname" = "liblayerlab_reader.so.$abi" ] && [ -e "$BUILD_DIR/lib/$soname" ]; then
+        pass "the reader's soname is liblayerlab_reader.so.$abi and $BUILD/lib/$soname exists"
+    else
+        fail "the reader's soname is '$soname', expected liblayerlab_reader.so.$abi with a link in $BUILD/lib"
+    fi
+    needed=$(readelf -d "$READER" 2>/dev/null | sed -n 's/.*(NEEDED).*\[\(.*\)\].*/\1/p' | tr '\n' ' ')
+    if [ -z "$needed" ]; then
+        fail "readelf -d shows no NEEDED entry for the reader (not a shared library?)"
+    elif echo "$needed" | grep -q -i -e blas -e lapack -e gomp -e libomp -e libiomp; then
+        fail "the reader library needs OpenBLAS, LAPACKE or OpenMP: NEEDED $needed"
+    else
+        pass "the reader library needs no OpenBLAS, LAPACKE or OpenMP (NEEDED: $needed)"
+    fi
+    nm -D --defined-only "$READER" > "$tmp/reader_nm.txt" 2> "$tmp/reader_nm.log"
+    exported=$(awk '{ name = $NF; sub(/@.*/, "", name);
+                      if ($(NF-1) == "A" && name ~ /^LAYERLAB_/) next; print name }' \
+               "$tmp/reader_nm.txt" | sort -u)
+    stray=$(echo "$exported" | grep -v '^ll_' || true)
+    layer=$(echo "$exported" | grep '^ll_layer_' || true)
+    if [ -z "$exported" ]; then
+        fail "nm -D shows no export of the reader library"
+        show "$tmp/reader_nm.log"
+    elif [ -n "$stray" ] || [ -n "$layer" ]; then
+        fail "the reader library exports more than the reader's ll_* functions: $(echo $stray $layer)"
+    else
+        pass "the reader library exports only ll_* and no ll_layer_* ($(echo "$exported" | wc -l) functions)"
+    fi
+    # What a renderer needs: every function of ll_bsdf.h, and versions,
+    # status strings and the error message of ll_common.h.
+    wanted="$(grep -h '^LL_API ' "$SRC/include/layerlab/ll_bsdf.h" |
+              sed -n 's/^[^(]*[ *]\(ll_[a-z0-9_]*\)(.*/\1/p') ll_version_number
+              ll_version_string ll_status_string ll_last_error_message"
+    missing=""
+    for f in $wanted; do
+        echo "$exported" | grep -qx "$f" || missing="$missing $f"
+    done
+    if [ -n "$missing" ]; then
+        fail "the reader library does not export:$missing"
+    else
+        pass "the reader library exports every function of ll_bsdf.h and the versions, status strings and error message ($(echo $wanted | wc -w))"
+    fi
+fi
+if [ -f "$prefix/lib/pkgconfig/layerlab-reader.pc" ]; then
+    cat > "$tmp/reader.c" <<'EOF'
+#include <stdio.h>
+#include <string.h>
+#include <layerlab/ll_bsdf.h>
+/* A renderer's view: open (here a damaged file, from memory), report. */
+int main(void)
+{
+    static const char junk[] = "not a .bsdf file";
+    ll_bsdf *b = NULL;
+    ll_status s = ll_bsdf_open_memory(junk, sizeof junk, &b);
+    if (s != LL_ERROR_FORMAT || b != NULL || strlen(ll_last_error_message()) == 0 ||
+        ll_version_number() != LL_VERSION_NUMBER)
+        return 1;
+    ll_bsdf_release(b);
+    printf("%s: %s\n", ll_status_string(s), ll_last_error_message());
+    return 0;
+}
+EOF
+    rflags=$(PKG_CONFIG_PATH=$prefix/lib/pkgconfig pkg-config --cflags --libs layerlab-reader 2> "$tmp/rpc.log")
+    # shellcheck disable=SC2181,SC2086
+    if [ $? -ne 0 ]; then
+        fail "pkg-config does not find layerlab-reader.pc in the install prefix"
+        show "$tmp/rpc.log"
+    elif $CC -std=c99 -pedantic -Wall -Wextra $SAN_FLAGS "$tmp/reader.c" -o "$tmp/reader" $rflags \
+            > "$tmp/reader.log" 2>&1 && "$tmp/reader" > "$tmp/reader.out" 2>> "$tmp/reader.log"; then
+        loaded=$(LD_TRACE_LOADED_OBJECTS=1 "$tmp/reader" 2>/dev/null)
+        if ! echo "$loaded" | grep -q "liblayerlab_reader\.so\.$abi => $prefix/lib/"; then
+            fail "the reader program does not load the installed liblayerlab_reader.so.$abi"
+        elif echo "$loaded" | grep -q -e 'liblayerlab\.so' -e openblas -e lapacke -e gomp; then
+            fail "the reader program loads liblayerlab, OpenBLAS, LAPACKE or OpenMP: $(echo $loaded)"
+        else
+            pass "a program including only <layerlab/ll_bsdf.h> builds with \$(pkg-config --cflags --libs layerlab-reader) and runs on the installed reader alone ($(cat "$tmp/reader.out"))"
+        fi
+    else
+        fail "cc reader.c \$(pkg-config --cflags --libs layerlab-reader) does not build or run"
+        show "$tmp/reader.log"
+    fi
+    # The static archive needs nothing but libm either.
+    # shellcheck disable=SC2086
+    if $CC -std=c99 $SAN_FLAGS -I"$prefix/include" "$tmp/reader.c" -o "$tmp/reader_static" \
+            "$prefix/lib/liblayerlab_reader.a" -lm > "$tmp/static.log" 2>&1 &&
+        "$tmp/reader_static" > /dev/null 2>> "$tmp/static.log"; then
+        pass "the same program links with the installed liblayerlab_reader.a and -lm alone, and runs"
+    else
+        fail "the program does not link with liblayerlab_reader.a -lm alone (or does not run)"
+        show "$tmp/static.log"
+    fi
+else
+    fail "make install did not install layerlab-reader.pc"
 fi
 
 echo "$passed passed, $failed failed"

@@ -53,7 +53,8 @@ static unsigned char *copy_gold(void)
 /* Opening must fail with `status`, leave *out NULL, and say `needle`. */
 static void expect_status(const unsigned char *d, size_t n, ll_status status, const char *needle)
 {
-    ll_bsdf *b = (ll_bsdf *)(void *)d; /* must be overwritten with NULL */
+    static char sentinel;
+    ll_bsdf *b = (ll_bsdf *)(void *)&sentinel; /* must be overwritten with NULL */
     ll_status s = ll_bsdf_open_memory(d, n, &b);
     if (s != status)
         fail_msg("status %d (wanted %d): %s", (int)s, (int)status, ll_last_error_message());

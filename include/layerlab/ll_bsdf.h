@@ -1,7 +1,9 @@
 /*
  * layerlab — .bsdf files ("SCATFUN" version 1, the Fourier BSDF format of
- * Jakob et al. 2014 that pbrt-v3's "fourier" material reads): writing them
- * from layers, opening them safely, evaluating and sampling them.
+ * Jakob et al. 2014 that pbrt-v3's "fourier" material reads): opening them
+ * safely, evaluating and sampling them. Writing them from layers is in
+ * ll_bsdf_write.h; this header needs only ll_common.h, so a renderer that
+ * only reads files includes it alone and links liblayerlab_reader.
  *
  * An opened file (ll_bsdf) is immutable and reference counted: it may be
  * evaluated and sampled from any number of threads at once, and shared by
@@ -54,7 +56,6 @@
 #define LAYERLAB_LL_BSDF_H
 
 #include "ll_common.h"
-#include "ll_layer.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -63,70 +64,6 @@ extern "C" {
 typedef struct ll_bsdf ll_bsdf;
 
 typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_transport;
-
-/* ------------------------------------------------------------- writing */
-
-/* Options for writing. Set struct_size = sizeof(ll_bsdf_write_options) (the
- * INIT macro does); the library reads only the fields that struct_size
- * covers, so programs built against older headers keep working.
- * eta must lie in [1e-3, 1e3], alpha be finite and non-negative.
- * error_goal: a pair's series ends after the last order at which the sum of
- * |coefficient| over that order and all higher ones still exceeds
- * error_goal times the order-0 matrix entry (the original layerlab's rule;
- * that entry is twice the azimuthal mean a_0), the longest over channels
- * and bases; 0 keeps every non-zero order. */
-typedef struct ll_bsdf_write_options {
-    size_t struct_size;
-    double eta;          /* header eta: eta(bottom)/eta(top); 1 for opaque stacks */
-    double alpha[2];     /* header roughness of the top and bottom interface      */
-    const char *metadata;/* text stored in the file; NULL = a JSON description     */
-    double error_goal;   /* series truncation: relative tail sum, default 1e-3    */
-} ll_bsdf_write_options;
-
-#define LL_BSDF_WRITE_OPTIONS_INIT \
-    { sizeof(ll_bsdf_write_options), 1.0, { 0.0, 0.0 }, NULL, 1e-3 }
-
-/* Write layers[0 .. n_channels-1] (1 channel, or 3: R, G, B, stored as
- * Y, R, B) to path. All layers must share nodes and order count, and hold
- * surfaces or slabs (what the words and adding-doubling produce; a phase
- * function set on a layer but not yet expanded to a thickness is not a
- * BSDF). What is stored follows the original layerlab's BSDFStorage
- * (bsdf-format.md): the nodes with two mu = 0 nodes inserted, coefficients
- * f_k |mu_o| as float32, the CDF for sampling; the default metadata is a
- * JSON description (generator, nodes, orders, channels, eta, alpha, error
- * goal). opts may be NULL (defaults). Atomic: the file is written to a
- * temporary file in the same directory, flushed (fsync) and renamed over
- * path, created with mode 0644; on any failure path is untouched and no
- * temporary file remains. Returns LL_ERROR_IO (message names the path and
- * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
- * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
- * LL_ERROR_OUT_OF_MEMORY. */
-LL_API ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers,
-                               size_t n_channels, const ll_bsdf_write_options *opts);
-
-/* Textured file: n_parameters parameters, parameter p sampled at
- * param_counts[p] >= 1 positions (the param_positions array holds them
- * all, parameter 0's first; each parameter's strictly increasing).
- * n_bases = product of the counts; layers holds n_bases * n_channels
- * layers, basis-major (layers[basis * n_channels + ch]), with the basis
- * index running over parameter 0 fastest. Each basis gets its own CDF.
- * n_parameters = 0 writes an untextured file (as ll_bsdf_write). Same
- * statuses and atomicity as ll_bsdf_write. */
-LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
-                                        size_t n_channels, size_t n_parameters,
-                                        const size_t *param_counts,
-                                        const double *param_positions,
-                                        const ll_bsdf_write_options *opts);
-
-/* ll_bsdf_write with a monitor (ll_common.h; NULL = the plain call). Stage
- * "writing": series lengths, offsets, CDF, then the bytes. Progress runs on
- * the calling thread (the writer uses no other); the writer polls once per
- * column or node row of every pass, and LL_ERROR_CANCELLED (also at the
- * last report, which comes before the temporary file is renamed) leaves no
- * file and keeps an existing one. */
-LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers,
-                                  size_t n_channels, const ll_bsdf_write_options *opts,
-                                  const ll_monitor *monitor);
 
 /* ------------------------------------------------------------- reading */
 

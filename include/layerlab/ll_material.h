@@ -24,7 +24,7 @@
 
 #include "ll_common.h"
 #include "ll_layer.h"
-#include "ll_bsdf.h"
+#include "ll_bsdf_write.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -260,7 +260,7 @@ static ll_status add_one_order(size_t k, void *ctx)
 
 static ll_status add_order(size_t k, add_job *job)
 {
-    const ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
+    ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
     size_t n = job->top->n;
     workspace w;
     ll_status s;

@@ -228,7 +228,7 @@ double ll_order_get(const ll_order *o, size_t row, size_t col)
     return o->val[o->seg[s].off + (r - o->seg[s].lo)];
 }
 
-ll_status ll_order_keep_block(const ll_order *o, int block, ll_order **out)
+ll_status ll_order_keep_block(ll_order *o, int block, ll_order **out)
 {
     size_t n, h, col0, c, total = 0, s;
     int half, only_block = 1;
@@ -247,7 +247,7 @@ ll_status ll_order_keep_block(const ll_order *o, int block, ll_order **out)
     }
     if (only_block) {
         /* Nothing else is stored: share the order itself. */
-        *out = ll_order_retain((ll_order *)o);
+        *out = ll_order_retain(o);
         return LL_OK;
     }
     for (c = 0; c < h; ++c)

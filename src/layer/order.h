@@ -59,8 +59,8 @@ LL_INTERNAL int ll_order_block_is_zero(const ll_order *o, int block);
 /* Entry (row, col) of the full weighted matrix. */
 LL_INTERNAL double ll_order_get(const ll_order *o, size_t row, size_t col);
 /* The order with only one block kept (NULL if that block is zero); shares o
- * itself when nothing else is stored. */
-LL_INTERNAL ll_status ll_order_keep_block(const ll_order *o, int block, ll_order **out);
+ * itself when nothing else is stored (a new reference, so o is not const). */
+LL_INTERNAL ll_status ll_order_keep_block(ll_order *o, int block, ll_order **out);
 /* Number of stored values. */
 LL_INTERNAL size_t ll_order_stored(const ll_order *o);
 /* The order with its top and bottom swapped (reverse), or NULL for NULL. */

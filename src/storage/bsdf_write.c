@@ -28,6 +28,7 @@
  *    whose integral is negative (spline overshoot next to a zero) adds 0,
  *    keeping rows non-decreasing as readers require.
  */
+#include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
 #include "layer/layer.h"

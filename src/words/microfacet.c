@@ -839,9 +839,9 @@ static ll_status fill_column(size_t col, const layer_job *job)
         count = n;
         /* Orders past the column's longest series stay empty in the builders. */
         for (k = 1; k < rows[0].len && s == LL_OK; ++k) {
+            size_t lo = n, hi = 0;
             while (count > 0 && rows[count - 1].len <= k)
                 --count;
-            size_t lo = n, hi = 0;
             for (j = 0; j < count; ++j) {
                 column[rows[j].row] = pool[rows[j].row * m + k] * factor;
                 if (rows[j].row < lo)

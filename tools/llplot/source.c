@@ -88,9 +88,16 @@ static int open_compiled_file(const llplot_options *o, llplot_source *s,
 
 /* Compiling a glossy stack takes seconds: show how far it got when stderr
  * is a terminal (one line, rewritten in place). */
+/* What show_progress prints: the progress callback's user pointer is not
+ * const, the input name is, so it travels inside this. */
+typedef struct progress_label {
+    const char *input;
+} progress_label;
+
 static void show_progress(double fraction, const char *stage, void *user)
 {
-    fprintf(stderr, "\rllplot: compiling %s: %3.0f%% %-24s", (const char *)user,
+    const progress_label *label = user;
+    fprintf(stderr, "\rllplot: compiling %s: %3.0f%% %-24s", label->input,
             100.0 * fraction, stage ? stage : "");
     fflush(stderr);
 }
@@ -100,6 +107,7 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     ll_material *material = NULL;
     ll_build_options opts = LL_BUILD_OPTIONS_INIT;
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+    progress_label label;
     size_t n_nodes = 0, n_orders = 0, n_channels = 0;
     ll_status st = ll_material_parse_file(o->input, &material);
     int code = LLPLOT_EXIT_OK;
@@ -110,7 +118,8 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     opts.threads = o->threads;
     if (isatty(STDERR_FILENO)) {
         opts.progress = show_progress;
-        opts.progress_user = (void *)o->input;
+        label.input = o->input;
+        opts.progress_user = &label;
     }
     st = ll_material_resolution(material, &opts, &n_nodes, &n_orders, &n_channels);
     if (st != LL_OK) {

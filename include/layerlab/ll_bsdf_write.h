@@ -1,0 +1,83 @@
+/*
+ * layerlab — writing .bsdf files ("SCATFUN" version 1, see ll_bsdf.h) from
+ * layers. Split from ll_bsdf.h so that the reading half needs no layer
+ * declarations: a renderer includes ll_bsdf.h alone and links the reader
+ * library (liblayerlab_reader), a program that writes files includes this
+ * header (or the umbrella layerlab.h) and links liblayerlab.
+ */
+#ifndef LAYERLAB_LL_BSDF_WRITE_H
+#define LAYERLAB_LL_BSDF_WRITE_H
+
+#include "ll_bsdf.h"
+#include "ll_layer.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Options for writing. Set struct_size = sizeof(ll_bsdf_write_options) (the
+ * INIT macro does); the library reads only the fields that struct_size
+ * covers, so programs built against older headers keep working.
+ * eta must lie in [1e-3, 1e3], alpha be finite and non-negative.
+ * error_goal: a pair's series ends after the last order at which the sum of
+ * |coefficient| over that order and all higher ones still exceeds
+ * error_goal times the order-0 matrix entry (the original layerlab's rule;
+ * that entry is twice the azimuthal mean a_0), the longest over channels
+ * and bases; 0 keeps every non-zero order. */
+typedef struct ll_bsdf_write_options {
+    size_t struct_size;
+    double eta;          /* header eta: eta(bottom)/eta(top); 1 for opaque stacks */
+    double alpha[2];     /* header roughness of the top and bottom interface      */
+    const char *metadata;/* text stored in the file; NULL = a JSON description     */
+    double error_goal;   /* series truncation: relative tail sum, default 1e-3    */
+} ll_bsdf_write_options;
+
+#define LL_BSDF_WRITE_OPTIONS_INIT \
+    { sizeof(ll_bsdf_write_options), 1.0, { 0.0, 0.0 }, NULL, 1e-3 }
+
+/* Write layers[0 .. n_channels-1] (1 channel, or 3: R, G, B, stored as
+ * Y, R, B) to path. All layers must share nodes and order count, and hold
+ * surfaces or slabs (what the words and adding-doubling produce; a phase
+ * function set on a layer but not yet expanded to a thickness is not a
+ * BSDF). What is stored follows the original layerlab's BSDFStorage
+ * (bsdf-format.md): the nodes with two mu = 0 nodes inserted, coefficients
+ * f_k |mu_o| as float32, the CDF for sampling; the default metadata is a
+ * JSON description (generator, nodes, orders, channels, eta, alpha, error
+ * goal). opts may be NULL (defaults). Atomic: the file is written to a
+ * temporary file in the same directory, flushed (fsync) and renamed over
+ * path, created with mode 0644; on any failure path is untouched and no
+ * temporary file remains. Returns LL_ERROR_IO (message names the path and
+ * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
+ * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
+ * LL_ERROR_OUT_OF_MEMORY. */
+LL_API ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers,
+                               size_t n_channels, const ll_bsdf_write_options *opts);
+
+/* Textured file: n_parameters parameters, parameter p sampled at
+ * param_counts[p] >= 1 positions (the param_positions array holds them
+ * all, parameter 0's first; each parameter's strictly increasing).
+ * n_bases = product of the counts; layers holds n_bases * n_channels
+ * layers, basis-major (layers[basis * n_channels + ch]), with the basis
+ * index running over parameter 0 fastest. Each basis gets its own CDF.
+ * n_parameters = 0 writes an untextured file (as ll_bsdf_write). Same
+ * statuses and atomicity as ll_bsdf_write. */
+LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
+                                        size_t n_channels, size_t n_parameters,
+                                        const size_t *param_counts,
+                                        const double *param_positions,
+                                        const ll_bsdf_write_options *opts);
+
+/* ll_bsdf_write with a monitor (ll_common.h; NULL = the plain call). Stage
+ * "writing": series lengths, offsets, CDF, then the bytes. Progress runs on
+ * the calling thread (the writer uses no other); the writer polls once per
+ * column or node row of every pass, and LL_ERROR_CANCELLED (also at the
+ * last report, which comes before the temporary file is renamed) leaves no
+ * file and keeps an existing one. */
+LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers,
+                                  size_t n_channels, const ll_bsdf_write_options *opts,
+                                  const ll_monitor *monitor);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_BSDF_WRITE_H */
