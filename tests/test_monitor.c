@@ -411,13 +411,14 @@ static int flag_from_callback(void *user, double fraction, const char *stage)
 {
     (void)fraction;
     (void)stage;
-    return *(volatile int *)user;
+    return *(const int *)user;
 }
 
 static void deprecated_cancel_flag_and_bad_monitors(void **state)
 {
     ll_layer *l = ll_test_layer(N, M);
-    volatile int flag = 1;
+    volatile int flag = 1;  /* the deprecated flag is polled, hence volatile */
+    int answer = 1;         /* what the callback returns: cancel */
     ll_expand_monitor legacy = { &flag, NULL, NULL };
     ll_monitor m = LL_MONITOR_INIT, bad = LL_MONITOR_INIT, old = LL_MONITOR_INIT;
     snapshot before;
@@ -427,7 +428,7 @@ static void deprecated_cancel_flag_and_bad_monitors(void **state)
     assert_int_equal(ll_layer_expand_monitored(l, 3.0, &legacy), LL_ERROR_CANCELLED);
     assert_same(&before, l, "legacy flag");
     m.progress = flag_from_callback;
-    m.user = (void *)&flag;
+    m.user = &answer;
     assert_int_equal(ll_layer_expand_ex(l, 3.0, &m), LL_ERROR_CANCELLED);
     assert_same(&before, l, "monitor");
     /* struct_size 0 is an uninitialised monitor. */
@@ -439,7 +440,7 @@ static void deprecated_cancel_flag_and_bad_monitors(void **state)
     /* An older, smaller struct without progress: no callback, no cancel. */
     old.struct_size = sizeof(size_t);
     old.progress = flag_from_callback;
-    old.user = (void *)&flag;
+    old.user = &answer;
     assert_int_equal(ll_layer_expand_ex(l, 3.0, &old), LL_OK);
     flag = 0;
     free(before.values);
