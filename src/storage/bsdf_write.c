@@ -30,6 +30,7 @@
  */
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
+#include "support/parse_number.h"
 #include "layer/layer.h"
 #include "layerlab/ll_bsdf.h"
 
@@ -342,7 +343,7 @@ static ll_status compute_cdf(write_job *job)
 static ll_status default_metadata(write_job *job)
 {
     char text[1024];
-    int len = snprintf(
+    int len = ll_format_c(
         text, sizeof text,
         "{\n"
         "    \"generator\": \"layerlab %s\",\n"
