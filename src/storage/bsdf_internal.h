@@ -187,6 +187,17 @@ LL_INTERNAL int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double 
                                     const float *basis, double *mu_o, double *phi_d,
                                     double *pdf, double sums[3]);
 
+/* 1 / |mu_o|, which turns the stored f |mu_o| into f, with |mu_o| taken as
+ * at least LL_BSDF_MU_FLOOR; 0 at mu_o = 0 (pbrt-v3's convention). For a
+ * file with the format's pair of mu = 0 nodes the stored series vanishes
+ * linearly there and f has a finite limit anyway; for one without them (or
+ * with values at those nodes) f |mu_o| does not vanish and f would grow as
+ * 1 / |mu_o| to infinity (5e-324 gave +inf). The floor bounds f by 1e6
+ * times the stored series, so every result is finite for every file that
+ * opens; it changes nothing beyond 1e-6 of the horizon (5.7e-5 degrees). */
+#define LL_BSDF_MU_FLOOR 1e-6
+LL_INTERNAL double ll_bsdf_cosine_scale(double mu_o);
+
 /* Check the public arguments shared by the evaluation calls. */
 LL_INTERNAL ll_status ll_bsdf_check_basis(const ll_bsdf *b, const float *basis_coeffs,
                                           const char *fn, const float **basis);
