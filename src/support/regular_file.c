@@ -27,33 +27,24 @@ const char *ll_file_kind(mode_t mode)
 
 ll_status ll_open_regular(const char *path, const char *what, int *fd, struct stat *st)
 {
-    int flags, err;
+    const char *kind = NULL; /* set when the file is not a regular one */
+    int flags, err = 0;
     *fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-    if (*fd < 0) {
+    if (*fd < 0 || fstat(*fd, st) != 0)
         err = errno;
-        return ll_fail(LL_ERROR_IO, "%s \"%s\": cannot open: %s", what, path, strerror(err));
-    }
-    if (fstat(*fd, st) != 0) {
-        err = errno;
-        goto fail_errno;
-    }
-    if (!S_ISREG(st->st_mode) || st->st_size < 0) {
-        close(*fd);
-        *fd = -1;
-        return ll_fail(LL_ERROR_IO, "%s \"%s\" is a %s, not a regular file", what, path,
-                       ll_file_kind(st->st_mode));
-    }
+    else if (!S_ISREG(st->st_mode) || st->st_size < 0)
+        kind = ll_file_kind(st->st_mode);
     /* A regular file never blocks, but reads of it must not see EAGAIN
      * from a flag left set (some file systems, e.g. FUSE, honour it). */
-    flags = fcntl(*fd, F_GETFL);
-    if (flags < 0 || fcntl(*fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+    else if ((flags = fcntl(*fd, F_GETFL)) < 0 || fcntl(*fd, F_SETFL, flags & ~O_NONBLOCK) != 0)
         err = errno;
-        goto fail_errno;
-    }
-    return LL_OK;
-fail_errno:
-    close(*fd);
+    if (!err && !kind)
+        return LL_OK;
+    if (*fd >= 0)
+        close(*fd);
     *fd = -1;
+    if (kind)
+        return ll_fail(LL_ERROR_IO, "%s \"%s\" is a %s, not a regular file", what, path, kind);
     return ll_fail(LL_ERROR_IO, "%s \"%s\": cannot open: %s", what, path, strerror(err));
 }
 

@@ -64,9 +64,10 @@ static ll_status open_and_check(const char *path, FILE **file, size_t res[3], si
         return LL_ERROR_IO;
     f = fdopen(fd, "rb");
     if (!f) {
+        int err = errno;
         close(fd);
         return ll_fail(LL_ERROR_IO, "the MERL file \"%s\": cannot open: %s", path,
-                       strerror(errno));
+                       strerror(err));
     }
     if (fread(header, 1, sizeof header, f) != sizeof header) {
         s = ll_fail(LL_ERROR_FORMAT,
