@@ -1,6 +1,7 @@
 #!/bin/sh
 # Fuzz the .bsdf reader and the material language:
 #   make fuzz FUZZ_SECONDS=N [FUZZ_TARGET=bsdf|material|all]   (default 60 s each, all)
+#   (or sh tests/fuzz/run.sh SECONDS [TARGET])
 #
 # Builds with clang's libFuzzer, AddressSanitizer and
 # UndefinedBehaviorSanitizer:
@@ -45,7 +46,8 @@ if ! command -v "$CLANG" >/dev/null 2>&1 ||
         echo "fuzz: clang still cannot link -fsanitize=fuzzer (install $pkgs)" >&2; exit 1; }
 fi
 
-FLAGS="-std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
+# FUZZ_CFLAGS: extra flags, e.g. -DLL_FUZZ_ESTIMATE_MAX_NODES=2000 (material_fuzz_body.h)
+FLAGS="${FUZZ_CFLAGS:-} -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
     -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined"
 LIMITS="-timeout=5 -rss_limit_mb=2048 -print_final_stats=1"
 
