@@ -45,7 +45,9 @@ struct ll_bsdf {
     uint32_t *param_counts;     /* [n_parameters]                              */
     size_t *param_first;        /* [n_parameters] index of the first position  */
     float *param_positions;     /* [n_parameter_values]                        */
-    double *cdf;                /* [(i * n + o) * n_bases + b]                 */
+    double *cdf;                /* [(i * n + o) * n_bases + b]; the running
+                                   maximum of the stored row (rounding dips
+                                   flattened, bsdf_read.c)                     */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
     double *coeffs;             /* [n_coeffs + 4] as double (the inner loops

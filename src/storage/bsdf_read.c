@@ -414,8 +414,9 @@ static ll_status read_failure(const char *file)
 /* Coefficients whose magnitude exceeds this are not a reflectance: with
  * it, every spline-weighted sum of them, scaled by the caller's basis
  * weights, 1 / |mu_o| (bounded, bsdf_eval.c) and eta^2, stays far inside
- * the range of double, so evaluation and sampling stay finite. 2^100 is
- * beyond any BSDF value that float32 nodes could resolve. */
+ * the range of double, so evaluation and sampling stay finite. 2^100
+ * (1.3e30) is far beyond any reflectance a file can hold: even a mirror's
+ * peak, one node's quadrature weight wide, is below 1e8 at 10^4 nodes. */
 #define LL_BSDF_MAX_COEFF 1.2676506002282294e30
 
 /* The coefficients, converted to double in chunks of 1024 (4 KiB read at a
