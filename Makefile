@@ -269,7 +269,7 @@ bench:
 	@if [ -f bench/run.sh ]; then BUILD=build-bench sh bench/run.sh; fi
 
 fuzz:
-	@if [ -f tests/fuzz/run.sh ]; then sh tests/fuzz/run.sh $(FUZZ_SECONDS); fi
+	@if [ -f tests/fuzz/run.sh ]; then BUILD=$(BUILD) sh tests/fuzz/run.sh "$(FUZZ_SECONDS)" $(FUZZ_TARGET); fi
 
 demo: all
 	@sh scripts/demo.sh

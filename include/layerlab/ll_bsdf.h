@@ -72,20 +72,62 @@ typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_trans
  * layout, are refused by name), flags, every count against the real file
  * size with overflow-checked arithmetic (before anything sized by the
  * header is allocated), nodes finite and ascending (one value at most
- * twice), parameters, CDF rows (finite, from 0, non-decreasing), every
+ * twice), parameters, CDF rows (finite, from 0, non-decreasing up to
+ * rounding: a dip of at most 2^-20 of the row's total, as the original
+ * layerlab's float32 running sums have, is accepted and stored flat), every
  * offset-table entry inside the coefficients with length <= nMaxOrder (and
  * nMaxOrder the longest), the blocks adding up to nCoeffs, every
- * coefficient finite, eta in [1e-3, 1e3], alpha finite and >= 0. Every
- * problem yields LL_ERROR_FORMAT with a message naming the file ("<path>"
- * or <memory>) and the field; harmonic extrapolation (flags bit 1)
- * LL_ERROR_UNSUPPORTED; I/O problems (missing file, not a regular file)
- * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure. Memory:
- * about twice the file (coefficients are kept as double, which makes
- * evaluation faster) plus 16 bytes per node pair and basis. */
+ * coefficient finite and of magnitude <= 2^100, eta in [1e-3, 1e3], alpha
+ * finite and >= 0; then the default limits of ll_open_options (below).
+ * Every problem yields LL_ERROR_FORMAT with a message naming the file
+ * ("<path>" or <memory>) and the field; harmonic extrapolation (flags
+ * bit 1) or a file beyond a limit LL_ERROR_UNSUPPORTED; I/O problems
+ * (missing file; a FIFO, device or directory, refused without blocking and
+ * named) LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure.
+ * Memory: about twice the file (coefficients are kept as double, which
+ * makes evaluation faster) plus 16 bytes per node pair and basis; the
+ * file's bytes are not held beside them. A file that opens gives finite
+ * results for every direction (f is the stored f |mu_o| over |mu_o|, with
+ * |mu_o| taken as at least 1e-6). */
 LL_API ll_status ll_bsdf_open(const char *path, ll_bsdf **out);
 
 /* The same from memory (the bytes are copied; data may be freed after). */
 LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out);
+
+/* Limits on what ll_bsdf_open_ex / ll_bsdf_open_memory_ex accept from an
+ * untrusted file, checked on the header before anything it sizes is
+ * allocated or read (as OpenEXR's maximum image size and zstd's
+ * windowLogMax). Set struct_size = sizeof(ll_open_options) (the INIT macro
+ * does); the library reads only the fields struct_size covers. A field of
+ * 0 takes its default; SIZE_MAX means no limit.
+ *  max_bytes: largest file (default LL_OPEN_DEFAULT_MAX_BYTES, 512 MiB; an
+ *    opened file costs about twice its size in memory);
+ *  max_order: longest Fourier series (header nMaxOrder; default
+ *    LL_OPEN_DEFAULT_MAX_ORDER, 16384: evaluation costs up to 16 series of
+ *    this length per channel, so this bounds the time of one eval);
+ *  max_nodes: zenith-cosine nodes (default LL_OPEN_DEFAULT_MAX_NODES, 8192;
+ *    tables grow as its square).
+ * A file beyond a limit gives LL_ERROR_UNSUPPORTED with a message naming
+ * the field, its value and the limit. ll_bsdf_open and ll_bsdf_open_memory
+ * apply the defaults. */
+typedef struct ll_open_options {
+    size_t struct_size;
+    size_t max_bytes;
+    size_t max_order;
+    size_t max_nodes;
+} ll_open_options;
+
+#define LL_OPEN_DEFAULT_MAX_BYTES ((size_t)512 << 20)
+#define LL_OPEN_DEFAULT_MAX_ORDER ((size_t)16384)
+#define LL_OPEN_DEFAULT_MAX_NODES ((size_t)8192)
+#define LL_OPEN_OPTIONS_INIT { sizeof(ll_open_options), 0, 0, 0 }
+
+/* ll_bsdf_open / ll_bsdf_open_memory with limits; opts may be NULL (the
+ * defaults). LL_ERROR_INVALID_ARGUMENT for a struct_size smaller than
+ * the first field's end. */
+LL_API ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf **out);
+LL_API ll_status ll_bsdf_open_memory_ex(const void *data, size_t size,
+                                        const ll_open_options *opts, ll_bsdf **out);
 
 /* Add a reference; returns b. */
 LL_API ll_bsdf *ll_bsdf_retain(ll_bsdf *b);

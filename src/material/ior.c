@@ -6,6 +6,8 @@
 #define _GNU_SOURCE /* dladdr: where the library itself was loaded from */
 #include "material/ior.h"
 #include "numerics/spline.h"
+#include "support/parse_number.h"
+#include "support/regular_file.h"
 
 #include <dirent.h>
 #include <dlfcn.h>
@@ -58,11 +60,11 @@ static int parse_sample_line(const char *line, double *lambda, double *value)
         ++p;
     if (*p == '#' || *p == '\0' || *p == '\n' || *p == '\r')
         return 0;
-    *lambda = strtod(p, &end);
+    *lambda = ll_parse_double(p, &end);
     if (end == p)
         return -1;
     p = end;
-    *value = strtod(p, &end);
+    *value = ll_parse_double(p, &end);
     if (end == p)
         return -1;
     p = end;
@@ -81,9 +83,9 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
 
     out->count = 0;
     out->lambda = out->value = NULL;
-    f = fopen(path, "r");
+    f = ll_fopen_regular(path, "the spectrum");
     if (!f)
-        return ll_fail(LL_ERROR_IO, "cannot open the spectrum %s: %s", path, strerror(errno));
+        return LL_ERROR_IO;
     while (getline(&line, &line_cap, f) >= 0) {
         double lambda, value;
         int kind = parse_sample_line(line, &lambda, &value);

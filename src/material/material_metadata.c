@@ -5,6 +5,7 @@
  * indices, as the original tools stored "eta_cond" / "k_cond").
  */
 #include "material/material.h"
+#include "support/parse_number.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -26,7 +27,8 @@ static void append(text_buffer *b, const char *fmt, ...)
     if (b->failed)
         return;
     va_start(ap, fmt);
-    need = vsnprintf(b->data ? b->data + b->len : NULL, b->data ? b->cap - b->len : 0, fmt, ap);
+    need = ll_vformat_c(b->data ? b->data + b->len : NULL, b->data ? b->cap - b->len : 0, fmt,
+                        ap);
     va_end(ap);
     if (need < 0) {
         b->failed = 1;
@@ -42,7 +44,7 @@ static void append(text_buffer *b, const char *fmt, ...)
         b->data = grown;
         b->cap = cap;
         va_start(ap, fmt);
-        vsnprintf(b->data + b->len, b->cap - b->len, fmt, ap);
+        ll_vformat_c(b->data + b->len, b->cap - b->len, fmt, ap);
         va_end(ap);
     }
     b->len += (size_t)need;

@@ -9,6 +9,8 @@
  */
 #include "material/material.h"
 #include "words/merl.h"
+#include "support/parse_number.h"
+#include "support/regular_file.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -83,7 +85,7 @@ static int scan_real(const char *s, size_t len, double *out)
         return 0;
     memcpy(buf, s, len);
     buf[len] = '\0';
-    *out = strtod(buf, &end);
+    *out = ll_parse_double(buf, &end);
     return *end == '\0' && ll_is_finite(*out);
 }
 
@@ -734,9 +736,9 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
     *out = NULL;
     if (!path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_parse_file: path is NULL");
-    f = fopen(path, "rb");
+    f = ll_fopen_regular(path, "the material");
     if (!f)
-        return ll_fail(LL_ERROR_IO, "cannot open the material %s", path);
+        return LL_ERROR_IO;
     do {
         if (cap - len < 4096) {
             char *grown;

@@ -147,7 +147,7 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
     wi[0] /= len;
     wi[1] /= len;
     wi[2] /= len;
-    ll_bsdf_to_rgb(b, sums,
-                   mu_o != 0.0 ? transport_scale(b, mu_i, mu_o, mode) / fabs(mu_o) : 0.0, rgb);
+    ll_bsdf_to_rgb(b, sums, transport_scale(b, mu_i, mu_o, mode) * ll_bsdf_cosine_scale(mu_o),
+                   rgb);
     return LL_OK;
 }

@@ -110,6 +110,14 @@ void ll_bsdf_to_rgb(const ll_bsdf *b, const double sums[3], double scale, double
             rgb[c] = 0.0;
 }
 
+double ll_bsdf_cosine_scale(double mu_o)
+{
+    double a = fabs(mu_o);
+    if (a == 0.0)
+        return 0.0;
+    return 1.0 / (a > LL_BSDF_MU_FLOOR ? a : LL_BSDF_MU_FLOOR);
+}
+
 void ll_bsdf_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
                       const float *basis, double extra_scale, double rgb[3])
 {
@@ -121,7 +129,7 @@ void ll_bsdf_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi
     if (mu_o == 0.0 || !ll_bsdf_gather(b, mu_i, mu_o, basis, &s) || s.count == 0)
         return;
     ll_bsdf_series_eval(&s, b->n_channels, cos_phi, sums);
-    ll_bsdf_to_rgb(b, sums, extra_scale / fabs(mu_o), rgb);
+    ll_bsdf_to_rgb(b, sums, extra_scale * ll_bsdf_cosine_scale(mu_o), rgb);
 }
 
 double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
@@ -137,7 +145,12 @@ double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_ph
      * 2 pi it is the albedo that normalises the density f |mu_o| / albedo. */
     rho = 2.0 * LL_PI * ll_bsdf_row_value(b, b->cdf, off_i, w_i, b->n_nodes - 1, basis);
     ll_bsdf_series_eval(&s, 1, cos_phi, sums);
-    return (rho > 0.0 && sums[0] > 0.0) ? sums[0] / rho : 0.0;
+    if (!(rho > 0.0 && sums[0] > 0.0))
+        return 0.0;
+    /* A total that cancels to almost nothing under the spline weights
+     * could overflow the ratio; sampling then returns no direction either
+     * (ll_bsdf_sample_core), so the two stay consistent. */
+    return ll_is_finite(sums[0] / rho) ? sums[0] / rho : 0.0;
 }
 
 /* ---------------------------------------------------------- public calls */

@@ -1,8 +1,11 @@
 /*
  * Writing a file atomically, as a little-endian byte stream: the bytes go
- * to a temporary file created (mkstemp) in the target's directory, which is
- * flushed, fsync'ed and renamed over the target only when everything has
- * been written. On any failure the temporary file is removed and the target
+ * to a hidden temporary file (".NAME.XXXXXX.tmp") created in the target's
+ * directory (or, for a symbolic link, in the directory of the file it leads
+ * to), which is flushed, fsync'ed and renamed over the target only when
+ * everything has been written; the file keeps the mode of the target it
+ * replaces, or gets 0666 minus the umask. Stale temporaries of the same
+ * target are removed (bsdf_file_out.c says when one is stale). On any failure the temporary file is removed and the target
  * is untouched. Write errors are sticky: the put calls never fail, commit
  * reports the first error.
  */

@@ -45,7 +45,9 @@ struct ll_bsdf {
     uint32_t *param_counts;     /* [n_parameters]                              */
     size_t *param_first;        /* [n_parameters] index of the first position  */
     float *param_positions;     /* [n_parameter_values]                        */
-    double *cdf;                /* [(i * n + o) * n_bases + b]                 */
+    double *cdf;                /* [(i * n + o) * n_bases + b]; the running
+                                   maximum of the stored row (rounding dips
+                                   flattened, bsdf_read.c)                     */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
     double *coeffs;             /* [n_coeffs + 4] as double (the inner loops
@@ -186,6 +188,17 @@ LL_INTERNAL double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, d
 LL_INTERNAL int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2],
                                     const float *basis, double *mu_o, double *phi_d,
                                     double *pdf, double sums[3]);
+
+/* 1 / |mu_o|, which turns the stored f |mu_o| into f, with |mu_o| taken as
+ * at least LL_BSDF_MU_FLOOR; 0 at mu_o = 0 (pbrt-v3's convention). For a
+ * file with the format's pair of mu = 0 nodes the stored series vanishes
+ * linearly there and f has a finite limit anyway; for one without them (or
+ * with values at those nodes) f |mu_o| does not vanish and f would grow as
+ * 1 / |mu_o| to infinity (5e-324 gave +inf). The floor bounds f by 1e6
+ * times the stored series, so every result is finite for every file that
+ * opens; it changes nothing beyond 1e-6 of the horizon (5.7e-5 degrees). */
+#define LL_BSDF_MU_FLOOR 1e-6
+LL_INTERNAL double ll_bsdf_cosine_scale(double mu_o);
 
 /* Check the public arguments shared by the evaluation calls. */
 LL_INTERNAL ll_status ll_bsdf_check_basis(const ll_bsdf *b, const float *basis_coeffs,

@@ -12,11 +12,13 @@
  */
 #include "storage/bsdf_internal.h"
 #include "storage/bsdf_format.h"
+#include "support/regular_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,6 +37,19 @@ typedef struct bsdf_header {
 typedef struct bsdf_layout {
     size_t nodes, param_counts, param_positions, cdf, table, coeffs, metadata, end;
 } bsdf_layout;
+
+/* The limits in effect (ll_open_options with the defaults filled in). */
+typedef struct bsdf_limits {
+    size_t max_bytes, max_order, max_nodes;
+} bsdf_limits;
+
+/* Where the coefficients and the metadata are read from: the caller's
+ * memory, or the file itself (read in chunks, so that opening a file never
+ * holds its bytes and their conversion to double at the same time). */
+typedef struct bsdf_source {
+    const unsigned char *memory; /* the whole file, or NULL            */
+    int fd;                      /* else this descriptor (pread)       */
+} bsdf_source;
 
 /* LL_ERROR_FORMAT (or another status) with "ll_bsdf_open: <file>: <what>". */
 static ll_status file_error(ll_status status, const char *file, const char *fmt, ...)
@@ -110,7 +125,8 @@ static int compute_layout(const bsdf_header *h, bsdf_layout *l)
  * against the file's size; nothing sized by a header field is allocated
  * before this has passed. */
 static ll_status check_header(const unsigned char *p, size_t available, size_t size,
-                              const char *file, bsdf_header *h, bsdf_layout *l)
+                              const bsdf_limits *lim, const char *file, bsdf_header *h,
+                              bsdf_layout *l)
 {
     if (available < LL_BSDF_HEADER_SIZE)
         return file_error(LL_ERROR_FORMAT, file, "truncated header (%zu of %d bytes)",
@@ -186,6 +202,20 @@ static ll_status check_header(const unsigned char *p, size_t available, size_t s
                           (unsigned)h->n_nodes, (unsigned)h->n_bases,
                           (unsigned)h->n_parameters, (unsigned)h->n_parameter_values,
                           (unsigned)h->n_coeffs, (unsigned)h->n_metadata, l->end, size);
+    /* A consistent header, then the caller's limits, still before anything
+     * they bound is allocated or read. */
+    if (size > lim->max_bytes)
+        return file_error(LL_ERROR_UNSUPPORTED, file,
+                          "%zu bytes exceed the limit of %zu (ll_open_options.max_bytes)",
+                          size, lim->max_bytes);
+    if (h->n_nodes > lim->max_nodes)
+        return file_error(LL_ERROR_UNSUPPORTED, file,
+                          "nNodes = %u exceeds the limit of %zu (ll_open_options.max_nodes)",
+                          (unsigned)h->n_nodes, lim->max_nodes);
+    if (h->max_order > lim->max_order)
+        return file_error(LL_ERROR_UNSUPPORTED, file,
+                          "nMaxOrder = %u exceeds the limit of %zu (ll_open_options.max_order)",
+                          (unsigned)h->max_order, lim->max_order);
     return LL_OK;
 }
 
@@ -259,22 +289,49 @@ static ll_status read_parameters(ll_bsdf *b, const unsigned char *counts,
     return LL_OK;
 }
 
+/* The original layerlab's writer stores each CDF row as a running float32
+ * sum of spline integrals of a_0 (BSDFStorage), and an integral next to a
+ * zero of a_0 can be slightly negative (spline overshoot) or round below the
+ * sum: its coated-gold files carry dozens of entries a rounding error below
+ * the previous one (e.g. -2.58e-10 after 0), and pbrt-v3 renders them. A
+ * dip of at most this fraction of the row's total (2^-20, 8 float32 ulps of
+ * the total) is such rounding and is stored flat (the running maximum), so
+ * that sampling never selects a segment of negative probability; a larger
+ * dip, a negative total or a first entry that is not 0 is a broken file. */
+#define LL_BSDF_CDF_DIP_TOLERANCE (1.0 / 1048576.0)
+
 static ll_status read_cdf(ll_bsdf *b, const unsigned char *p, const char *file)
 {
     size_t n = b->n_nodes, nb = b->n_bases, i, o, k;
     for (i = 0; i < n; ++i)
-        for (k = 0; k < nb; ++k)
+        for (k = 0; k < nb; ++k) {
+            size_t first = i * n * nb + k;
+            double total = ll_le_get_f32(p + 4 * (first + (n - 1) * nb)), running = 0.0;
+            double allowed = LL_BSDF_CDF_DIP_TOLERANCE * total;
+            if (!isfinite(total) || !(total >= 0.0))
+                return file_error(LL_ERROR_FORMAT, file,
+                                  "CDF row %zu (basis %zu): the total %g (last entry) is not "
+                                  "finite and non-negative",
+                                  i, k, total);
             for (o = 0; o < n; ++o) {
-                size_t at = (i * n + o) * nb + k;
-                float v = ll_le_get_f32(p + 4 * at);
-                if (!isfinite(v) || (o == 0 && v != 0.0f) ||
-                    (o > 0 && !(v >= b->cdf[at - nb])))
+                size_t at = first + o * nb;
+                double v = ll_le_get_f32(p + 4 * at);
+                if (!isfinite(v) || (o == 0 && v != 0.0))
                     return file_error(LL_ERROR_FORMAT, file,
                                       "CDF row %zu (basis %zu) entry %zu = %g: rows must start "
-                                      "at 0, be finite and non-decreasing",
-                                      i, k, o, (double)v);
-                b->cdf[at] = v;
+                                      "at 0 and be finite",
+                                      i, k, o, v);
+                if (v < running - allowed)
+                    return file_error(LL_ERROR_FORMAT, file,
+                                      "CDF row %zu (basis %zu) entry %zu = %g falls %g below "
+                                      "the previous %g: more than the rounding tolerance (2^-20 "
+                                      "of the row's total %g); rows must be non-decreasing",
+                                      i, k, o, v, running - v, running, total);
+                if (v > running)
+                    running = v;
+                b->cdf[at] = running;
             }
+        }
     return LL_OK;
 }
 
@@ -323,15 +380,64 @@ static ll_status read_table(ll_bsdf *b, const unsigned char *p, const char *file
     return LL_OK;
 }
 
-static ll_status read_coeffs(ll_bsdf *b, const unsigned char *p, const char *file)
+/* Read n bytes at offset of the file into buf; 0 if the file ends first
+ * or a read fails (errno says which: 0 for the end). */
+static int source_read(const bsdf_source *src, size_t offset, void *buf, size_t n)
 {
-    size_t k;
-    for (k = 0; k < b->n_coeffs; ++k) {
-        float v = ll_le_get_f32(p + 4 * k);
-        if (!isfinite(v))
-            return file_error(LL_ERROR_FORMAT, file, "coefficient %zu is %g (not finite)", k,
-                              (double)v);
-        b->coeffs[k] = v;
+    unsigned char *to = buf;
+    size_t done = 0;
+    if (src->memory) {
+        memcpy(buf, src->memory + offset, n);
+        return 1;
+    }
+    while (done < n) {
+        ssize_t r = pread(src->fd, to + done, n - done, (off_t)(offset + done));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0) {
+            if (r == 0)
+                errno = 0;
+            return 0;
+        }
+        done += (size_t)r;
+    }
+    return 1;
+}
+
+static ll_status read_failure(const char *file)
+{
+    if (errno == 0)
+        return file_error(LL_ERROR_FORMAT, file, "truncated while reading (the file shrank)");
+    return file_error(LL_ERROR_IO, file, "read failed: %s", strerror(errno));
+}
+
+/* Coefficients whose magnitude exceeds this are not a reflectance: with
+ * it, every spline-weighted sum of them, scaled by the caller's basis
+ * weights, 1 / |mu_o| (bounded, bsdf_eval.c) and eta^2, stays far inside
+ * the range of double, so evaluation and sampling stay finite. 2^100
+ * (1.3e30) is far beyond any reflectance a file can hold: even a mirror's
+ * peak, one node's quadrature weight wide, is below 1e8 at 10^4 nodes. */
+#define LL_BSDF_MAX_COEFF 1.2676506002282294e30
+
+/* The coefficients, converted to double in chunks of 1024 (4 KiB read at a
+ * time, so no buffer sized by the file besides b->coeffs itself). */
+static ll_status read_coeffs(ll_bsdf *b, const bsdf_source *src, size_t at, const char *file)
+{
+    unsigned char chunk[4096];
+    size_t k, j, count;
+    for (k = 0; k < b->n_coeffs; k += count) {
+        count = b->n_coeffs - k < sizeof chunk / 4 ? b->n_coeffs - k : sizeof chunk / 4;
+        if (!source_read(src, at + 4 * k, chunk, 4 * count))
+            return read_failure(file);
+        for (j = 0; j < count; ++j) {
+            float v = ll_le_get_f32(chunk + 4 * j);
+            if (!isfinite(v) || !(fabs(v) <= LL_BSDF_MAX_COEFF))
+                return file_error(LL_ERROR_FORMAT, file,
+                                  "coefficient %zu is %g (not finite, or beyond the %g that "
+                                  "evaluation can scale without overflow)",
+                                  k + j, (double)v, LL_BSDF_MAX_COEFF);
+            b->coeffs[k + j] = v;
+        }
     }
     return LL_OK;
 }
@@ -379,9 +485,12 @@ static ll_status allocate(ll_bsdf *b, const char *file)
     return LL_OK;
 }
 
-/* Parse a whole file held in memory (header already checked). */
-static ll_status parse_body(const unsigned char *p, const bsdf_header *h, const bsdf_layout *l,
-                            const char *file, ll_bsdf **out)
+/* Parse a file whose header (checked) and every part before the
+ * coefficients are in front[0 .. l->coeffs); the coefficients and metadata
+ * come from src. */
+static ll_status parse_body(const unsigned char *front, const bsdf_header *h,
+                            const bsdf_layout *l, const bsdf_source *src, const char *file,
+                            ll_bsdf **out)
 {
     ll_status s;
     ll_bsdf *b = calloc(1, sizeof *b);
@@ -404,28 +513,56 @@ static ll_status parse_body(const unsigned char *p, const bsdf_header *h, const 
 
     s = allocate(b, file);
     if (s == LL_OK)
-        s = read_nodes(b, p + l->nodes, file);
+        s = read_nodes(b, front + l->nodes, file);
     if (s == LL_OK)
-        s = read_parameters(b, p + l->param_counts, p + l->param_positions, file);
+        s = read_parameters(b, front + l->param_counts, front + l->param_positions, file);
     if (s == LL_OK)
-        s = read_cdf(b, p + l->cdf, file);
+        s = read_cdf(b, front + l->cdf, file);
     if (s == LL_OK)
-        s = read_table(b, p + l->table, file);
+        s = read_table(b, front + l->table, file);
     if (s == LL_OK)
-        s = read_coeffs(b, p + l->coeffs, file);
+        s = read_coeffs(b, src, l->coeffs, file);
+    if (s == LL_OK && !source_read(src, l->metadata, b->metadata, b->metadata_size))
+        s = read_failure(file);
     if (s != LL_OK) {
         ll_bsdf_free(b);
         return s;
     }
     derive_tables(b);
-    memcpy(b->metadata, p + l->metadata, b->metadata_size);
     b->metadata[b->metadata_size] = '\0';
     *out = b;
     return LL_OK;
 }
 
-ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out)
+/* The limits of opts (NULL: the defaults; a field of 0: its default). */
+static ll_status resolve_limits(const ll_open_options *opts, const char *fn, bsdf_limits *lim)
 {
+    lim->max_bytes = LL_OPEN_DEFAULT_MAX_BYTES;
+    lim->max_order = LL_OPEN_DEFAULT_MAX_ORDER;
+    lim->max_nodes = LL_OPEN_DEFAULT_MAX_NODES;
+    if (!opts)
+        return LL_OK;
+    if (opts->struct_size < offsetof(ll_open_options, max_bytes) + sizeof opts->max_bytes)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: ll_open_options.struct_size = %zu is too small (set it to "
+                       "sizeof(ll_open_options) = %zu, or use LL_OPEN_OPTIONS_INIT)",
+                       fn, opts->struct_size, sizeof(ll_open_options));
+    if (opts->max_bytes)
+        lim->max_bytes = opts->max_bytes;
+    if (opts->struct_size >= offsetof(ll_open_options, max_order) + sizeof opts->max_order &&
+        opts->max_order)
+        lim->max_order = opts->max_order;
+    if (opts->struct_size >= offsetof(ll_open_options, max_nodes) + sizeof opts->max_nodes &&
+        opts->max_nodes)
+        lim->max_nodes = opts->max_nodes;
+    return LL_OK;
+}
+
+ll_status ll_bsdf_open_memory_ex(const void *data, size_t size, const ll_open_options *opts,
+                                 ll_bsdf **out)
+{
+    bsdf_source src = { NULL, -1 };
+    bsdf_limits lim;
     bsdf_header h;
     bsdf_layout l;
     ll_status s;
@@ -435,98 +572,89 @@ ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out)
     if (!data && size > 0)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_open_memory: data is NULL but size is %zu", size);
+    s = resolve_limits(opts, "ll_bsdf_open_memory", &lim);
+    if (s != LL_OK)
+        return s;
     if (!data)
         return file_error(LL_ERROR_FORMAT, "<memory>", "truncated header (0 of %d bytes)",
                           LL_BSDF_HEADER_SIZE);
-    s = check_header(data, size, size, "<memory>", &h, &l);
+    s = check_header(data, size, size, &lim, "<memory>", &h, &l);
     if (s != LL_OK)
         return s;
-    return parse_body(data, &h, &l, "<memory>", out);
+    src.memory = data;
+    return parse_body(data, &h, &l, &src, "<memory>", out);
+}
+
+ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out)
+{
+    return ll_bsdf_open_memory_ex(data, size, NULL, out);
 }
 
 /* ---------------------------------------------------------------- files */
 
-/* Read exactly size bytes (or up to EOF: *got says how many). */
-static int read_fully(int fd, unsigned char *buf, size_t size, size_t *got)
-{
-    *got = 0;
-    while (*got < size) {
-        ssize_t r = read(fd, buf + *got, size - *got);
-        if (r < 0 && errno == EINTR)
-            continue;
-        if (r < 0)
-            return 0;
-        if (r == 0)
-            break;
-        *got += (size_t)r;
-    }
-    return 1;
-}
-
-ll_status ll_bsdf_open(const char *path, ll_bsdf **out)
+ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf **out)
 {
     char file[600];
-    unsigned char head[LL_BSDF_HEADER_SIZE], *data = NULL;
+    unsigned char head[LL_BSDF_HEADER_SIZE], *front = NULL;
+    bsdf_source src = { NULL, -1 };
+    bsdf_limits lim;
     struct stat st;
     size_t size, got;
     bsdf_header h;
     bsdf_layout l;
     ll_status s;
-    int fd;
 
     if (!out)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_open: out is NULL");
     *out = NULL;
     if (!path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_open: path is NULL");
+    s = resolve_limits(opts, "ll_bsdf_open", &lim);
+    if (s != LL_OK)
+        return s;
     snprintf(file, sizeof file, "\"%s\"", path);
 
-    fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return file_error(LL_ERROR_IO, file, "cannot open: %s", strerror(errno));
-    if (fstat(fd, &st) != 0) {
-        s = file_error(LL_ERROR_IO, file, "cannot stat: %s", strerror(errno));
-        close(fd);
-        return s;
-    }
-    if (!S_ISREG(st.st_mode) || st.st_size < 0) {
-        close(fd);
-        return file_error(LL_ERROR_IO, file, "not a regular file");
-    }
+    /* Never blocks: a FIFO or device is refused before any read. */
+    if (ll_open_regular(path, "ll_bsdf_open:", &src.fd, &st) != LL_OK)
+        return LL_ERROR_IO;
     if ((uintmax_t)st.st_size > (uintmax_t)SIZE_MAX) {
-        close(fd);
-        return file_error(LL_ERROR_FORMAT, file, "too large for this machine's address space");
+        s = file_error(LL_ERROR_FORMAT, file, "too large for this machine's address space");
+        goto done;
     }
     size = (size_t)st.st_size;
 
     /* The header alone decides whether the file is worth reading. */
-    if (!read_fully(fd, head, size < sizeof head ? size : sizeof head, &got)) {
-        s = file_error(LL_ERROR_IO, file, "read failed: %s", strerror(errno));
+    got = size < sizeof head ? size : sizeof head;
+    if (!source_read(&src, 0, head, got)) {
+        s = read_failure(file);
         goto done;
     }
-    s = check_header(head, got, size, file, &h, &l);
+    s = check_header(head, got, size, &lim, file, &h, &l);
     if (s != LL_OK)
         goto done;
 
-    data = malloc(size);
-    if (!data) {
-        s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory reading %zu bytes", size);
+    /* Everything up to the coefficients (nodes, parameters, CDF, offset
+     * table) is parsed from memory; the coefficients are converted as they
+     * are read. */
+    front = malloc(l.coeffs);
+    if (!front) {
+        s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory reading %zu bytes",
+                       l.coeffs);
         goto done;
     }
-    memcpy(data, head, sizeof head);
-    if (!read_fully(fd, data + sizeof head, size - sizeof head, &got)) {
-        s = file_error(LL_ERROR_IO, file, "read failed: %s", strerror(errno));
+    memcpy(front, head, sizeof head);
+    if (!source_read(&src, sizeof head, front + sizeof head, l.coeffs - sizeof head)) {
+        s = read_failure(file);
         goto done;
     }
-    if (got != size - sizeof head) {
-        /* The file shrank after fstat: as good as truncated. */
-        s = file_error(LL_ERROR_FORMAT, file, "truncated while reading (%zu of %zu bytes)",
-                       got + sizeof head, size);
-        goto done;
-    }
-    s = parse_body(data, &h, &l, file, out);
+    s = parse_body(front, &h, &l, &src, file, out);
 done:
-    free(data);
-    close(fd);
+    free(front);
+    close(src.fd);
     return s;
+}
+
+ll_status ll_bsdf_open(const char *path, ll_bsdf **out)
+{
+    return ll_bsdf_open_ex(path, NULL, out);
 }

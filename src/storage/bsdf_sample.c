@@ -137,7 +137,11 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
     ll_bsdf_series_eval(&s, b->n_channels, cos(*phi_d), sums);
     a0 = ll_bsdf_series_mean(luminance);
     *pdf = pdf_mu * sums[0] / (2.0 * LL_PI * a0);
-    if (!(*pdf > 0.0) || !ll_is_finite(*pdf)) {
+    /* No direction where the density is not a positive number or where
+     * the weight f |mu_o| / pdf would overflow (a density that underflows
+     * next to a non-zero value: a file that cancels to nothing there). */
+    if (!(*pdf > 0.0) || !ll_is_finite(*pdf) || !ll_is_finite(sums[0] / *pdf) ||
+        !ll_is_finite(sums[1] / *pdf) || !ll_is_finite(sums[2] / *pdf)) {
         *pdf = 0.0;
         sums[0] = sums[1] = sums[2] = 0.0;
         return 0;

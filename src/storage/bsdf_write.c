@@ -31,6 +31,7 @@
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
+#include "support/parse_number.h"
 #include "layer/layer.h"
 #include "support/watch.h"
 #include "layerlab/ll_bsdf.h"
@@ -373,7 +374,7 @@ static ll_status compute_cdf(write_job *job)
 static ll_status default_metadata(write_job *job)
 {
     char text[1024];
-    int len = snprintf(
+    int len = ll_format_c(
         text, sizeof text,
         "{\n"
         "    \"generator\": \"layerlab %s\",\n"

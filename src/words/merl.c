@@ -5,19 +5,28 @@
  * with a direct DCT-I in place of FFTW).
  */
 #include "words/merl.h"
+#include "support/regular_file.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #define MERL_HEADER_BYTES 12
-/* Far beyond the database's 90 x 90 x 180; keeps a corrupt header from
- * asking for absurd allocations before the size check. */
-#define MERL_MAX_RESOLUTION 100000u
-/* Series truncation, as the original: drop the tail of each (mu_o, mu_i)
- * series once its absolute sum is below this fraction of |a_0|. */
+/* Sane maxima for a header that is not trusted: each resolution at most
+ * 8x the database's (90, 90, 180) and the samples at most 8x its 1,458,000
+ * (a 280 MB file, kept as 280 MB of doubles). A corrupt or sparse file
+ * cannot then ask for gigabytes; a finer table would add nothing that the
+ * layer's quadrature (a few hundred nodes) could resolve. */
+#define MERL_MAX_RESOLUTION_THETA 720u
+#define MERL_MAX_RESOLUTION_PHI 1440u
+#define MERL_MAX_SAMPLES ((size_t)8 * 90 * 90 * 180)
+/* The tables are read in chunks of this many float64 values (1 MiB), so a
+ * load peaks at the converted table, not the table plus the raw bytes. */
+#define MERL_CHUNK_VALUES 131072
 #define MERL_TAIL_GOAL 1e-3
 
 static uint32_t read_u32_le(const unsigned char *b)
@@ -36,55 +45,73 @@ static double read_f64_le(const unsigned char *b)
     return value;
 }
 
-/* Open path, read and validate the header against the file size. */
+/* Open path (a regular file, without blocking on a FIFO), read and
+ * validate the header against the sane maxima and the file's real size. */
 static ll_status open_and_check(const char *path, FILE **file, size_t res[3], size_t *count)
 {
-    unsigned char header[MERL_HEADER_BYTES];
-    FILE *f = fopen(path, "rb");
-    long size;
-    size_t expected, k;
     static const char *const names[3] = { "theta_half", "theta_diff", "phi_diff" };
+    static const uint32_t maxima[3] = { MERL_MAX_RESOLUTION_THETA, MERL_MAX_RESOLUTION_THETA,
+                                        MERL_MAX_RESOLUTION_PHI };
+    unsigned char header[MERL_HEADER_BYTES];
+    struct stat st;
+    size_t expected, k;
+    ll_status s = LL_OK;
+    FILE *f = NULL;
+    int fd;
 
     *file = NULL;
-    if (!f)
-        return ll_fail(LL_ERROR_IO, "cannot open the MERL file %s: %s", path, strerror(errno));
+    if (ll_open_regular(path, "the MERL file", &fd, &st) != LL_OK)
+        return LL_ERROR_IO;
+    f = fdopen(fd, "rb");
+    if (!f) {
+        int err = errno;
+        close(fd);
+        return ll_fail(LL_ERROR_IO, "the MERL file \"%s\": cannot open: %s", path,
+                       strerror(err));
+    }
     if (fread(header, 1, sizeof header, f) != sizeof header) {
-        fclose(f);
-        return ll_fail(LL_ERROR_FORMAT,
-                       "%s: shorter than the 12-byte MERL header (three int32 resolutions)",
-                       path);
+        s = ll_fail(LL_ERROR_FORMAT,
+                    "%s: shorter than the 12-byte MERL header (three int32 resolutions)", path);
+        goto fail;
     }
     for (k = 0; k < 3; ++k) {
         uint32_t r = read_u32_le(header + 4 * k);
-        if (r == 0 || r > MERL_MAX_RESOLUTION) {
-            fclose(f);
-            return ll_fail(LL_ERROR_FORMAT,
-                           "%s: the %s resolution %u is not in [1, %u]; not a MERL .binary "
-                           "file?",
-                           path, names[k], (unsigned)r, MERL_MAX_RESOLUTION);
+        if (r == 0 || r > maxima[k]) {
+            s = ll_fail(LL_ERROR_FORMAT,
+                        "%s: the %s resolution %u is not in [1, %u]; not a MERL .binary file?",
+                        path, names[k], (unsigned)r, (unsigned)maxima[k]);
+            goto fail;
         }
         res[k] = r;
     }
+    /* Cannot overflow: 720 * 720 * 1440 * 24 < 2^35 and size_t holds it on
+     * the 64-bit hosts the library supports; checked anyway. */
     if (!ll_size_mul(res[0], res[1], count) || !ll_size_mul(*count, res[2], count) ||
-        !ll_size_mul(*count, 3 * 8, &expected) ||
+        *count > MERL_MAX_SAMPLES) {
+        s = ll_fail(LL_ERROR_FORMAT,
+                    "%s: %zu x %zu x %zu samples exceed the supported maximum of %zu (8x the "
+                    "database's 90 x 90 x 180)",
+                    path, res[0], res[1], res[2], (size_t)MERL_MAX_SAMPLES);
+        goto fail;
+    }
+    if (!ll_size_mul(*count, 3 * 8, &expected) ||
         !ll_size_add(expected, MERL_HEADER_BYTES, &expected)) {
-        fclose(f);
-        return ll_fail(LL_ERROR_FORMAT, "%s: the resolutions %zu x %zu x %zu overflow", path,
-                       res[0], res[1], res[2]);
+        s = ll_fail(LL_ERROR_FORMAT, "%s: the resolutions %zu x %zu x %zu overflow", path,
+                    res[0], res[1], res[2]);
+        goto fail;
     }
-    if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0) {
-        fclose(f);
-        return ll_fail(LL_ERROR_IO, "cannot determine the size of %s", path);
-    }
-    if ((unsigned long)size != expected) {
-        fclose(f);
-        return ll_fail(LL_ERROR_FORMAT,
-                       "%s: %ld bytes, but a MERL file of %zu x %zu x %zu samples has %zu "
-                       "(12-byte header + 3 channels of float64)",
-                       path, size, res[0], res[1], res[2], expected);
+    if ((uintmax_t)st.st_size != (uintmax_t)expected) {
+        s = ll_fail(LL_ERROR_FORMAT,
+                    "%s: %jd bytes, but a MERL file of %zu x %zu x %zu samples has %zu "
+                    "(12-byte header + 3 channels of float64)",
+                    path, (intmax_t)st.st_size, res[0], res[1], res[2], expected);
+        goto fail;
     }
     *file = f;
     return LL_OK;
+fail:
+    fclose(f);
+    return s;
 }
 
 ll_status ll_merl_check(const char *path)
@@ -112,7 +139,7 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
 {
     static const double scale[3] = { LL_MERL_SCALE_R, LL_MERL_SCALE_G, LL_MERL_SCALE_B };
     FILE *f = NULL;
-    size_t res[3], count, total, c, i;
+    size_t res[3], count, total, c, i, chunk = 0;
     unsigned char *raw = NULL;
     ll_merl *m = NULL;
     ll_status s;
@@ -123,25 +150,30 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
         return s;
     total = 3 * count; /* no overflow: checked with the byte count */
     m = calloc(1, sizeof *m);
-    raw = ll_alloc_array(total, 8);
+    raw = ll_alloc_array(MERL_CHUNK_VALUES, 8);
     if (!m || !raw || !(m->values = ll_alloc_array(total, sizeof(double)))) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading the MERL file %s", path);
-        goto fail;
-    }
-    if (fseek(f, MERL_HEADER_BYTES, SEEK_SET) != 0 || fread(raw, 8, total, f) != total) {
-        s = ll_fail(LL_ERROR_IO, "error reading the tables of %s", path);
         goto fail;
     }
     m->res_theta_h = res[0];
     m->res_theta_d = res[1];
     m->res_phi_d = res[2];
-    for (c = 0; c < 3; ++c)
-        for (i = 0; i < count; ++i) {
-            double v = read_f64_le(raw + 8 * (c * count + i));
+    /* The header has been read: the tables follow, channel after channel. */
+    for (i = 0; i < total; i += chunk) {
+        size_t j;
+        chunk = total - i < MERL_CHUNK_VALUES ? total - i : MERL_CHUNK_VALUES;
+        if (fread(raw, 8, chunk, f) != chunk) {
+            s = ll_fail(LL_ERROR_IO, "error reading the tables of %s", path);
+            goto fail;
+        }
+        for (j = 0; j < chunk; ++j) {
+            double v = read_f64_le(raw + 8 * j);
+            c = (i + j) / count;
             /* The database marks unmeasured configurations with negative
              * values; they carry no light. */
-            m->values[c * count + i] = (v > 0.0 && ll_is_finite(v)) ? v * scale[c] : 0.0;
+            m->values[i + j] = (v > 0.0 && ll_is_finite(v)) ? v * scale[c] : 0.0;
         }
+    }
     free(raw);
     fclose(f);
     *out = m;

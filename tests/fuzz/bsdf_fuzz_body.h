@@ -1,7 +1,9 @@
 /*
  * One fuzz input for the .bsdf reader: open it from memory and, if it
- * opens, evaluate, take densities and sample at fixed directions through
- * both conventions. Shared by the libFuzzer harness (fuzz_bsdf.c) and the
+ * opens, evaluate, take densities and sample through both conventions at
+ * fixed directions, then at random ones (a generator seeded from the input,
+ * so a finding replays) that include the cosines next to 0 where f is the
+ * stored f |mu_o| divided by |mu_o| (5e-324, 1e-300, 1e-9). Shared by the libFuzzer harness (fuzz_bsdf.c) and the
  * corpus replay that CI runs (tests/test_bsdf_fuzz_replay.c).
  *
  * A file that opens is valid by definition, so everything it yields must
@@ -34,6 +36,79 @@ static void ll_fuzz_check_direction(const double w[3])
 {
     double len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
     ll_fuzz_require(fabs(len2 - 1.0) < 1e-9);
+}
+
+/* splitmix64: a small generator with no state outside the caller. */
+static uint64_t ll_fuzz_next(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Uniform in [0, 1]. */
+static double ll_fuzz_uniform(uint64_t *state)
+{
+    return (double)(ll_fuzz_next(state) >> 11) * (1.0 / 9007199254740991.0);
+}
+
+/* A cosine in [-1, 1]: mostly uniform, often one of the extremes next to 0
+ * or +-1, of either sign. */
+static double ll_fuzz_cosine(uint64_t *state)
+{
+    static const double special[] = { 5e-324, 1e-300, 1e-160, 1e-30, 1e-9, 1e-6, 0.0,
+                                      1.0, 1.0 - 1e-16 };
+    uint64_t r = ll_fuzz_next(state);
+    double sign = (r & 1) ? -1.0 : 1.0;
+    if ((r >> 1) % 3 == 0)
+        return sign * special[(r >> 8) % (sizeof special / sizeof special[0])];
+    return 2.0 * ll_fuzz_uniform(state) - 1.0;
+}
+
+/* A direction with z = mu, random azimuth, random length (not unit). */
+static void ll_fuzz_direction(uint64_t *state, double mu, double w[3])
+{
+    double phi = 6.283185307179586 * ll_fuzz_uniform(state), s = 1.0 - mu * mu;
+    double len = 0.25 + 4.0 * ll_fuzz_uniform(state);
+    s = s > 0.0 ? sqrt(s) : 0.0;
+    w[0] = len * s * cos(phi);
+    w[1] = len * s * sin(phi);
+    w[2] = len * mu;
+}
+
+static void ll_fuzz_bsdf_random(const ll_bsdf *b, const float *basis, const uint8_t *data,
+                                size_t size)
+{
+    uint64_t state = 0x243F6A8885A308D3ull;
+    size_t k;
+    for (k = 0; k < size; ++k)
+        state = (state ^ data[k]) * 0x100000001B3ull; /* FNV-1a of the input */
+    for (k = 0; k < 64; ++k) {
+        double mu_i = ll_fuzz_cosine(&state), mu_o = ll_fuzz_cosine(&state);
+        double phi = 6.283185307179586 * ll_fuzz_uniform(&state);
+        double u[2], rgb[3], weight[3], p, mu_s, phi_s, wo[3], wi[3];
+        u[0] = ll_fuzz_uniform(&state);
+        u[1] = ll_fuzz_uniform(&state);
+        ll_fuzz_require(ll_bsdf_eval(b, mu_i, mu_o, phi, basis, rgb) == LL_OK);
+        ll_fuzz_check_rgb(rgb);
+        p = ll_bsdf_pdf(b, mu_i, mu_o, phi, basis);
+        ll_fuzz_require(isfinite(p) && p >= 0.0);
+        ll_fuzz_require(ll_bsdf_sample(b, mu_i, u, basis, &mu_s, &phi_s, &p, weight) == LL_OK);
+        ll_fuzz_require(isfinite(p) && p >= 0.0);
+        ll_fuzz_check_rgb(weight);
+        ll_fuzz_direction(&state, mu_i, wo);
+        ll_fuzz_direction(&state, mu_o, wi);
+        ll_fuzz_require(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, basis, rgb) == LL_OK);
+        ll_fuzz_check_rgb(rgb);
+        p = ll_bsdf_pdf_dir(b, wo, wi, basis);
+        ll_fuzz_require(isfinite(p) && p >= 0.0);
+        ll_fuzz_require(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, basis, wi, &p,
+                                           rgb) == LL_OK);
+        ll_fuzz_require(isfinite(p) && p >= 0.0);
+        ll_fuzz_check_rgb(rgb);
+        ll_fuzz_check_direction(wi);
+    }
 }
 
 /* Returns 1 if the input opened. */
@@ -105,6 +180,7 @@ static int ll_fuzz_bsdf_one(const uint8_t *data, size_t size)
             ll_fuzz_check_direction(wi);
         }
     }
+    ll_fuzz_bsdf_random(b, basis, data, size);
     free(basis);
     ll_bsdf_release(b);
     return 1;

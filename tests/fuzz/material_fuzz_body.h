@@ -1,0 +1,79 @@
+/*
+ * One fuzz input for the material language: parse it as a material file,
+ * then ask for the resolution and the estimate of its build, as
+ * `llbuild --dry-run` does. Shared by the libFuzzer harness
+ * (fuzz_material.c) and the corpus replay that CI runs
+ * (tests/test_material_fuzz_replay.c).
+ *
+ * Whatever the text, parsing either fails with a message and no material or
+ * succeeds; a parsed material has a resolution (or a refusal with a
+ * message) and an estimate that is finite and non-negative. Any violation
+ * aborts, which the fuzzer reports as a finding; so do a crash, a
+ * sanitizer report, more than 5 s for one input or more than 2 GB of
+ * memory (tests/fuzz/run.sh).
+ */
+#ifndef LL_MATERIAL_FUZZ_BODY_H
+#define LL_MATERIAL_FUZZ_BODY_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <layerlab.h>
+
+static void ll_fuzz_material_require(int ok)
+{
+    if (!ok)
+        abort();
+}
+
+/* Returns 1 if the input parsed. */
+static int ll_fuzz_material_one(const uint8_t *data, size_t size)
+{
+    ll_build_options opts = LL_BUILD_OPTIONS_INIT;
+    ll_build_estimate est = LL_BUILD_ESTIMATE_INIT;
+    ll_material *m = (ll_material *)&opts; /* must be reset to NULL on failure */
+    size_t n_nodes = 0, n_orders = 0, n_channels = 0;
+    char *text = malloc(size + 1);
+    ll_status s;
+
+    ll_fuzz_material_require(text != NULL);
+    memcpy(text, data, size);
+    text[size] = '\0'; /* an embedded NUL ends the text, as for any C string */
+    s = ll_material_parse(text, "fuzz.layers", &m);
+    free(text);
+    if (s != LL_OK) {
+        ll_fuzz_material_require(m == NULL && ll_last_error_message()[0] != '\0');
+        return 0;
+    }
+    ll_fuzz_material_require(m != NULL && ll_material_word_count(m) >= 1);
+    opts.threads = 1;
+    s = ll_material_resolution(m, &opts, &n_nodes, &n_orders, &n_channels);
+    if (s == LL_OK)
+        ll_fuzz_material_require(n_nodes >= 2 && n_orders >= 1 &&
+                                 (n_channels == 1 || n_channels == 3));
+    else
+        ll_fuzz_material_require(ll_last_error_message()[0] != '\0');
+#ifdef LL_FUZZ_ESTIMATE_MAX_NODES
+    /* Optional (FUZZ_CFLAGS=-DLL_FUZZ_ESTIMATE_MAX_NODES=N): skip the
+     * estimate of resolutions above N nodes, whose cost (an O(n^2)
+     * quadrature before any check; tests/fuzz/material_pending) is a known
+     * finding, so that a run can look for others. */
+    if (s == LL_OK && n_nodes > LL_FUZZ_ESTIMATE_MAX_NODES) {
+        ll_material_destroy(m);
+        return 1;
+    }
+#endif
+    s = ll_material_estimate(m, &opts, &est);
+    if (s == LL_OK)
+        ll_fuzz_material_require(isfinite(est.peak_bytes) && est.peak_bytes >= 0.0 &&
+                                 isfinite(est.seconds) && est.seconds >= 0.0 &&
+                                 (est.n_channels == 1 || est.n_channels == 3));
+    else
+        ll_fuzz_material_require(ll_last_error_message()[0] != '\0');
+    ll_material_destroy(m);
+    return 1;
+}
+
+#endif /* LL_MATERIAL_FUZZ_BODY_H */
