@@ -44,9 +44,12 @@ typedef struct ll_bsdf_write_options {
  * f_k |mu_o| as float32, the CDF for sampling; the default metadata is a
  * JSON description (generator, nodes, orders, channels, eta, alpha, error
  * goal). opts may be NULL (defaults). Atomic: the file is written to a
- * temporary file in the same directory, flushed (fsync) and renamed over
- * path, created with mode 0644; on any failure path is untouched and no
- * temporary file remains. Returns LL_ERROR_IO (message names the path and
+ * hidden temporary file (.NAME.XXXXXX.tmp) in the same directory, flushed
+ * (fsync) and renamed over path; on any failure path is untouched and no
+ * temporary file remains (a stale temporary of an earlier, killed writer of
+ * the same target is removed after 15 minutes). A new file's mode is 0666
+ * less the umask, an existing target keeps its mode, and a symbolic link is
+ * written through: the file it points to is replaced, the link stays. Returns LL_ERROR_IO (message names the path and
  * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
  * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
  * LL_ERROR_OUT_OF_MEMORY. */
