@@ -11,6 +11,7 @@
 #include "support/parse_number.h"
 
 #include <locale.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -19,8 +20,10 @@ double ll_parse_double(const char *text, char **end)
     locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0), previous;
     double value;
     if (c_locale == (locale_t)0) {
+        /* Nothing parsed; strtod's interface hands back a non-const
+         * pointer into the caller's text, which stays the caller's. */
         if (end)
-            *end = (char *)text;
+            *end = (char *)(uintptr_t)text;
         return 0.0;
     }
     previous = uselocale(c_locale);
