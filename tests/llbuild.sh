@@ -73,7 +73,7 @@ rm -rf "$tmp/ior"
 
 # --- I/O: 2
 expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
-expect 2 "unwritable output" -- "$llbuild" --nodes 8 --orders 2 examples/frosted-glass.layers \
+expect 2 "unwritable output" -- "$llbuild" --nodes 10 --orders 2 examples/frosted-glass.layers \
     -o "$tmp/no/such/dir/x.bsdf"
 
 # --- out of memory: 3. A diffuse layer on 12000 nodes needs 576 MB for its

@@ -8,10 +8,9 @@
  * partial stack (a clone, whose Fourier orders are shared copy-on-write)
  * until a word differs. A grey stack built as RGB costs one channel.
  */
-#include "material/material.h"
+#include "material/word_table.h"
 #include "layer/layer.h"
 #include "grammar/grammar.h"
-#include "words/merl.h"
 #include "layerlab/ll_quad.h"
 
 #include <errno.h>
@@ -21,10 +20,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-
-/* Memory model of ll_material_estimate (fitted on the examples). */
-#define STORED_FRACTION 0.08
-#define PROCESS_BYTES (8.0 * 1048576.0)
 
 typedef struct build {
     const ll_material *m;
@@ -50,41 +45,14 @@ static ll_status check_cancel(const build *b)
     return LL_OK;
 }
 
-/* The smallest c' <= c whose word parameters equal channel c's. */
 static size_t same_word_as(const build *b, size_t w, size_t c)
 {
-    size_t d;
-    for (d = 0; d < c; ++d)
-        if (ll_word_params_equal(&b->params[w][d], &b->params[w][c]))
-            return d;
-    return c;
+    return ll_same_word_as((const ll_word_params(*)[3])b->params, w, c);
 }
 
-/* Stack owners at word w, given those of the level below (NULL at the
- * bottom): the smallest channel with the same parameters all the way down. */
 static void stack_owners(const build *b, size_t w, const size_t *below, size_t *owner)
 {
-    size_t c, d;
-    for (c = 0; c < b->nch; ++c) {
-        owner[c] = c;
-        for (d = 0; d < c; ++d)
-            if ((!below || below[d] == below[c]) &&
-                ll_word_params_equal(&b->params[w][d], &b->params[w][c])) {
-                owner[c] = d;
-                break;
-            }
-    }
-}
-
-static const char *stage_of(ll_word_kind kind)
-{
-    switch (kind) {
-    case LL_WORD_DIELECTRIC: return "dielectric interface";
-    case LL_WORD_CONDUCTOR: return "conductor interface";
-    case LL_WORD_MEDIUM: return "medium";
-    case LL_WORD_DIFFUSE: return "diffuse";
-    default: return "measured";
-    }
+    ll_stack_owners((const ll_word_params(*)[3])b->params, w, b->nch, below, owner);
 }
 
 /* Prefix the message of a failed word call with where the word is. */
@@ -96,7 +64,7 @@ static ll_status word_failed(const build *b, size_t w, ll_status s)
         return s;
     snprintf(detail, sizeof detail, "%s", ll_last_error_message());
     return ll_fail(s, "%s:%zu:%zu: building this %s failed: %s", b->m->source, word->line,
-                   word->column, ll_word_kind_name(word->kind), detail);
+                   word->column, ll_word_name(word), detail);
 }
 
 /* Progress of a doubling: the share of the medium's estimated cost that
@@ -114,9 +82,10 @@ static void report_expansion(double fraction, void *user)
 }
 
 /* ll_layer_expand, reporting progress and honouring the cancel flag while
- * the orders are doubled. */
-static ll_status expand_medium(build *b, ll_layer *l, double tau)
+ * the orders are doubled (a word builder's ctx->expand). */
+static ll_status expand_medium(void *user, ll_layer *l, double tau)
 {
+    build *b = user;
     expand_progress e;
     ll_expand_monitor monitor;
     size_t k;
@@ -138,42 +107,19 @@ static ll_status expand_medium(build *b, ll_layer *l, double tau)
 static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
 {
     ll_layer *l = NULL;
-    ll_merl *merl = NULL;
     double done_before = b->done;
+    ll_word_build_ctx ctx;
     ll_status s;
 
     *out = NULL;
-    report(b, stage_of(p->kind));
+    report(b, p->desc->stage);
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
-    switch (p->kind) {
-    case LL_WORD_DIFFUSE:
-        s = ll_layer_set_diffuse(l, p->albedo);
-        break;
-    case LL_WORD_DIELECTRIC:
-        s = ll_layer_set_microfacet(l, p->eta_re, 0.0, p->alpha, 1, 0);
-        break;
-    case LL_WORD_CONDUCTOR:
-        s = ll_layer_set_microfacet(l, p->eta_re, p->eta_im, p->alpha, 1, 0);
-        break;
-    case LL_WORD_MEDIUM:
-        if (p->phase == LL_PHASE_HG)
-            s = ll_layer_set_henyey_greenstein(l, p->albedo, p->shape);
-        else if (p->phase == LL_PHASE_VMF)
-            s = ll_layer_set_von_mises_fisher(l, p->albedo, p->shape);
-        else
-            s = ll_layer_set_isotropic(l, p->albedo);
-        if (s == LL_OK)
-            s = expand_medium(b, l, p->tau);
-        break;
-    case LL_WORD_MEASURED:
-        s = ll_merl_load(b->m->words[w].file, &merl);
-        if (s == LL_OK)
-            s = ll_merl_set_layer(l, merl, p->weights, 0, b->o.cancel);
-        ll_merl_free(merl);
-        break;
-    }
+    ctx.cancel = b->o.cancel;
+    ctx.expand = expand_medium;
+    ctx.user = b;
+    s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
         ll_layer_destroy(l);
         return word_failed(b, w, s);
@@ -263,6 +209,7 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
                             const char *fn)
 {
     size_t w, c;
+    ll_cost_plan cost;
     ll_status s;
     memset(b, 0, sizeof *b);
     b->m = m;
@@ -273,16 +220,27 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
         s = ll_material_plan(m, &b->o, &b->n, &b->orders, &b->nch);
     if (s != LL_OK)
         return s;
-    b->nodes = ll_alloc_array(b->n, sizeof(double));
-    b->weights = ll_alloc_array(b->n, sizeof(double));
+    /* The parameters (as many as the words), then the budget: nothing
+     * that grows with the resolution is allocated before it. */
     b->params = ll_calloc_array(m->count, sizeof *b->params);
-    if (!b->nodes || !b->weights || !b->params) {
-        build_free(b);
+    if (!b->params)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
-    }
     for (w = 0; w < m->count; ++w)
         for (c = 0; c < b->nch; ++c)
             ll_word_params_get(m, w, c, b->nch, &b->params[w][c]);
+    ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
+                     b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
+    s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);
+    if (s != LL_OK) {
+        build_free(b);
+        return s;
+    }
+    b->nodes = ll_alloc_array(b->n, sizeof(double));
+    b->weights = ll_alloc_array(b->n, sizeof(double));
+    if (!b->nodes || !b->weights) {
+        build_free(b);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    }
     /* Gauss-Lobatto nodes, as the original recipes use. */
     s = ll_quad_gauss_lobatto(b->n, b->nodes, b->weights);
     if (s != LL_OK)
@@ -469,78 +427,4 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
         ll_layer_destroy(layers[c]);
     build_free(&b);
     return s;
-}
-
-/* ------------------------------------------------------------ estimate */
-
-ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
-                               ll_build_estimate *e)
-{
-    build b;
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, threads, live_acc = 0;
-    double layer_bytes, peak = 0.0, seconds = 0.0, workspace;
-    size_t saved;
-    ll_status s;
-
-    if (!e || e->struct_size < sizeof *e)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_estimate: estimate is NULL or its struct_size is not "
-                       "sizeof(ll_build_estimate)");
-    s = build_init(&b, material, opts, "ll_material_estimate");
-    if (s != LL_OK)
-        return s;
-    saved = ll_get_thread_count();
-    if (b.o.threads)
-        ll_set_thread_count(b.o.threads);
-    threads = ll_get_thread_count();
-    if (b.o.threads)
-        ll_set_thread_count(saved);
-    e->n_nodes = b.n;
-    e->n_orders = b.orders;
-    e->n_channels = b.nch;
-    e->layers_built = e->additions = e->doublings = 0;
-    /* A layer stored densely: m orders of n x n doubles. The adding keeps
-     * about 12 h x h blocks per thread. */
-    layer_bytes = 8.0 * (double)b.n * (double)b.n * (double)b.orders;
-    workspace = 12.0 * 8.0 * (double)(b.n / 2) * (double)(b.n / 2) *
-                (double)(threads < b.orders ? threads : b.orders);
-    for (w = b.m->count; w-- > 0;) {
-        int bottom = w + 1 == b.m->count;
-        size_t words = 0;
-        stack_owners(&b, w, bottom ? NULL : below, owner);
-        live_acc = 0;
-        for (c = 0; c < b.nch; ++c) {
-            if (owner[c] != c)
-                continue;
-            ++live_acc;
-            if (same_word_as(&b, w, c) == c) {
-                const ll_word_params *p = &b.params[w][c];
-                ++words;
-                ++e->layers_built;
-                seconds += ll_cost_word(p, b.n, b.orders, threads);
-                if (p->kind == LL_WORD_MEDIUM && p->tau > 0.0)
-                    e->doublings += ll_doubling_count(p->tau, 1.0);
-            }
-            if (!bottom) {
-                ++e->additions;
-                seconds += ll_cost_add(b.n, b.orders, threads);
-            }
-        }
-        /* Live at once: the stacks so far, this level's word layers, the
-         * result of one addition (or expansion) in progress. */
-        if ((double)(live_acc + words + 1) * layer_bytes + workspace > peak)
-            peak = (double)(live_acc + words + 1) * layer_bytes + workspace;
-        memcpy(below, owner, sizeof below);
-    }
-    /* Writing: the finished layers and the file's float32 coefficients. */
-    if ((double)b.nch * layer_bytes * 1.5 > peak)
-        peak = (double)b.nch * layer_bytes * 1.5;
-    seconds += ll_cost_write(b.n, b.orders, b.nch);
-    /* The compact storage keeps only the non-zero runs of each column and
-     * no all-zero order: the six examples' builds peaked at 5% to 14% of
-     * the dense bound (more for tiny ones), plus the process's own 8 MiB. */
-    e->peak_bytes = STORED_FRACTION * peak + PROCESS_BYTES;
-    e->seconds = seconds;
-    build_free(&b);
-    return LL_OK;
 }
