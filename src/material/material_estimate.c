@@ -20,24 +20,29 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Adding (and each doubling): per Fourier order that holds anything, the
- * adding equations' products and solves of h x h blocks, about
- * ADD_FLOPS h^3 floating-point operations at RATE_FLOPS per thread. */
-#define ADD_FLOPS 14.0
-#define RATE_FLOPS 4e9
-/* Orders that hold nothing cost a pass over their storage. */
-#define RATE_ADD_EMPTY 4e8   /* (order, column) pairs per second */
-/* A rough interface: (mu_o, mu_i, order) triples per second, one thread,
- * over the orders its lobe fills. */
-#define RATE_INTERFACE 1.5e8
-/* Writing: coefficients per second (spline fits and float conversion). */
-#define RATE_WRITE 1e8
+/* A rough interface, measured at n = 40 to 300 and m = 20 to 600: the
+ * pairs (mu_o, mu_i) dominate (the Chebyshev samples, Filon's rule where a
+ * kink is), a dielectric's growing with its roughness, plus a little per
+ * order and pair. Its stored values come to about 14 + 1/alpha dense
+ * orders for a dielectric (24 at alpha = 0.1, 19 at 0.3) and 2 + 1.3/alpha
+ * for a conductor (15 at 0.1, 9 at 0.2), whatever n and m; each thread
+ * keeps a column of every order, 12 doubles deep. */
+#define COST_PAIR_DIELECTRIC 2.9e-6 /* s per pair at alpha = 0.1, n = 200;
+                                       about like alpha n^(1/3) */
+#define COST_PAIR_CONDUCTOR 9e-7
+#define COST_PAIR_ORDER 1.5e-9
 
-/* Memory: what a process of the library holds before any layer (code,
- * OpenBLAS's and OpenMP's buffers), per-order bookkeeping of a stored
- * order, and the adding's dense workspace per thread (h x h blocks). */
-#define PROCESS_BYTES (7.0 * 1048576.0)
+/* Writing: seconds per stored value (spline fits, float conversion). */
+#define COST_WRITE 3e-8
+/* A process: start, parse, the OpenBLAS set-up (CPU seconds; the wall
+ * time adds loading and thread start-up), and the resident memory of the
+ * library before any layer. */
+#define PROCESS_SECONDS 0.01
+#define PROCESS_WALL_SECONDS 0.03
+#define PROCESS_BYTES (7.5 * 1048576.0)
+/* Per stored order: its segment table. */
 #define ORDER_BYTES(n) (16.0 * (2.0 * (double)(n) + 1.0) + 64.0)
+/* The adding's dense h x h blocks per thread. */
 #define ADD_WORKSPACE_BLOCKS 12.0
 
 static double parallel(double seconds, size_t items, size_t threads)
@@ -57,30 +62,31 @@ size_t ll_doubling_count(double tau, double min_mu)
 void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, size_t m,
                        ll_word_cost *out)
 {
-    size_t hn, hm;
-    double used = (double)m;
-    /* The lobe fills about the orders its heuristic asks for; a build at
-     * more orders leaves the rest empty. */
-    if (ll_heuristic_microfacet(alpha, eta_re, eta_im, &hn, &hm) == LL_OK && hm < m)
-        used = (double)hm;
-    out->parallel_seconds = (double)n * (double)n * used / RATE_INTERFACE;
+    double pairs = (double)n * (double)n, a = alpha > 0.0 ? alpha : 1.0;
+    double per_pair = eta_im > 0.0 ? COST_PAIR_CONDUCTOR
+                                   : COST_PAIR_DIELECTRIC * pow((double)n / 200.0, 0.33) *
+                                         (a / 0.1);
+    (void)eta_re;
+    out->parallel_seconds = pairs * (per_pair + COST_PAIR_ORDER * (double)m);
     out->items = n;
-    out->orders_used = used;
-    out->fill = eta_im > 0.0 ? 0.25 : 1.0; /* a conductor reflects from above only */
+    out->orders_nonzero = (double)m;
+    out->dense_orders = eta_im > 0.0 ? 2.0 + 1.3 / a : 14.0 + 1.0 / a;
+    if (out->dense_orders > (double)m)
+        out->dense_orders = (double)m;
+    out->thread_bytes = 12.0 * 8.0 * (double)n * (double)m;
 }
 
-/* Seconds (CPU, one thread) of one adding step between layers that fill
- * `used` of the m orders. */
-static double add_cpu(size_t n, double used, size_t m)
+/* CPU seconds (one thread) of one adding step between layers holding
+ * a_orders and b_orders of the m orders. */
+static double add_cpu(size_t n, double a_orders, double b_orders, size_t m)
 {
-    double h = (double)(n / 2);
-    return used * ADD_FLOPS * h * h * h / RATE_FLOPS +
-           ((double)m - used) * (double)n / RATE_ADD_EMPTY;
+    double both = fmin(a_orders, b_orders), pairs = (double)n * (double)n;
+    return pairs * (both * LL_COST_ADD_ORDER + ((double)m - both) * LL_COST_ADD_EMPTY);
 }
 
 double ll_cost_add(size_t n, size_t m, size_t threads)
 {
-    return parallel(add_cpu(n, (double)m, m), m, threads);
+    return parallel(add_cpu(n, (double)m, (double)m, m), m, threads);
 }
 
 static void word_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *c)
@@ -88,22 +94,34 @@ static void word_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost 
     memset(c, 0, sizeof *c);
     c->items = 1;
     p->desc->cost(p, n, m, c);
-    if (c->orders_used > (double)m)
-        c->orders_used = (double)m;
+    if (c->orders_nonzero > (double)m)
+        c->orders_nonzero = (double)m;
+}
+
+/* CPU and wall seconds of one word's layer with its doublings. */
+static void word_seconds(const ll_word_cost *c, size_t n, size_t m, size_t threads,
+                         double *cpu, double *wall)
+{
+    double d = (double)c->doublings * add_cpu(n, c->orders_nonzero, c->orders_nonzero, m);
+    *cpu = c->parallel_seconds + c->serial_seconds + d;
+    *wall = parallel(c->parallel_seconds, c->items, threads) + c->serial_seconds +
+            parallel(d, (size_t)c->orders_nonzero, threads);
 }
 
 double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
 {
     ll_word_cost c;
+    double cpu, wall;
     word_cost(p, n, m, &c);
-    return parallel(c.parallel_seconds, c.items, threads) + c.serial_seconds +
-           (double)c.doublings * parallel(add_cpu(n, c.orders_used, m),
-                                          (size_t)c.orders_used, threads);
+    word_seconds(&c, n, m, threads, &cpu, &wall);
+    return wall;
 }
 
 double ll_cost_write(size_t n, size_t m, size_t n_channels)
 {
-    return (double)n * (double)n * (double)m * (double)n_channels / RATE_WRITE;
+    /* (Progress shares only: about 17 dense orders per channel.) */
+    double dense = 17.0 < (double)m ? 17.0 : (double)m;
+    return (double)n * (double)n * dense * (double)n_channels * COST_WRITE;
 }
 
 size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c)
@@ -130,87 +148,90 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
     }
 }
 
-/* Bytes a layer keeps: its filled orders' runs and every order's
- * bookkeeping. */
-static double layer_bytes(size_t n, size_t m, double used, double fill)
+/* Bytes a layer keeps: its stored values and every order's segments. */
+static double layer_bytes(size_t n, size_t m, double dense_orders)
 {
-    return 8.0 * (double)n * (double)n * used * fill + (double)m * ORDER_BYTES(n);
+    return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
 }
 
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
                       size_t m, size_t nch, size_t threads, ll_cost_plan *out)
 {
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c;
-    double acc_used[3] = { 0, 0, 0 }, acc_bytes[3] = { 0, 0, 0 }, peak = 0.0;
-    double h = (double)(n / 2), workspace;
+    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, t = threads < m ? threads : m;
+    double acc_nz[3] = { 0, 0, 0 }, acc_dense[3] = { 0, 0, 0 }, peak = 0.0;
+    double h = (double)(n / 2), stored = 0.0;
 
     memset(out, 0, sizeof *out);
     out->n = n;
     out->m = m;
     out->channels = nch;
     out->threads = threads;
-    workspace = ADD_WORKSPACE_BLOCKS * 8.0 * h * h * (double)(threads < m ? threads : m);
     for (w = mat->count; w-- > 0;) {
         int bottom = w + 1 == mat->count;
-        double word_bytes = 0.0, live = 0.0;
-        double new_used[3], new_bytes[3];
+        double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0;
+        double nz[3], dense[3];
         ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
+        for (c = 0; c < nch; ++c) {
+            nz[c] = dense[c] = 0.0;
+            if (!bottom && owner[c] == c)
+                before += layer_bytes(n, m, acc_dense[below[c]]);
+        }
         for (c = 0; c < nch; ++c) {
             ll_word_cost wc;
             const ll_word_params *p = &params[w][c];
-            double used;
-            new_used[c] = acc_used[c];
-            new_bytes[c] = 0.0;
             if (owner[c] != c)
                 continue;
             word_cost(p, n, m, &wc);
             if (ll_same_word_as(params, w, c) == c) {
-                double cpu = wc.parallel_seconds + wc.serial_seconds +
-                             (double)wc.doublings * add_cpu(n, wc.orders_used, m);
+                double cpu, wall;
+                word_seconds(&wc, n, m, threads, &cpu, &wall);
                 ++out->layers_built;
                 out->doublings += wc.doublings;
                 out->cpu_seconds += cpu;
-                out->seconds += ll_cost_word(p, n, m, threads);
-                word_bytes += layer_bytes(n, m, wc.orders_used, wc.doublings ? 1.0 : wc.fill);
+                out->seconds += wall;
+                words += layer_bytes(n, m, wc.dense_orders);
+                if (wc.thread_bytes > scratch)
+                    scratch = wc.thread_bytes;
             }
-            /* The stack below and this word together fill the larger of
-             * their orders; the stack's blocks are dense once added. */
-            used = bottom ? wc.orders_used
-                          : fmax(wc.orders_used, acc_used[below[c]]);
-            new_used[c] = used;
-            new_bytes[c] = bottom ? layer_bytes(n, m, used, wc.doublings ? 1.0 : wc.fill)
-                                  : layer_bytes(n, m, used, 1.0);
-            if (!bottom) {
-                double cpu = add_cpu(n, used, m);
+            if (bottom) {
+                nz[c] = wc.orders_nonzero;
+                dense[c] = wc.dense_orders;
+            } else {
+                double a = acc_nz[below[c]], cpu = add_cpu(n, a, wc.orders_nonzero, m);
                 ++out->additions;
                 out->cpu_seconds += cpu;
-                out->seconds += parallel(cpu, (size_t)used, threads);
+                out->seconds += parallel(cpu, m, threads);
+                /* The stack keeps about the mean of what the two hold. */
+                nz[c] = fmax(a, wc.orders_nonzero);
+                dense[c] = fmin(0.5 * (acc_dense[below[c]] + wc.dense_orders), nz[c]);
             }
+            /* (The bottom stack is a clone of the word: shared orders.) */
+            if (!bottom && layer_bytes(n, m, dense[c]) > result)
+                result = layer_bytes(n, m, dense[c]);
         }
-        /* Live at once: the stacks below, this level's word layers, the
-         * results being made and the workspace. */
-        for (c = 0; c < nch; ++c)
-            live += acc_bytes[c] + new_bytes[c];
-        if (live + word_bytes + workspace > peak)
-            peak = live + word_bytes + workspace;
+        /* Live at once: the stacks below, this level's word layers with
+         * their builders' scratch, the one stack being made (each channel's
+         * replaces its old one when done) and the adding's dense blocks, per
+         * thread. */
+        scratch = scratch > ADD_WORKSPACE_BLOCKS * 8.0 * h * h ? scratch
+                                                               : ADD_WORKSPACE_BLOCKS * 8.0 * h * h;
+        if (before + words + result + (double)t * scratch > peak)
+            peak = before + words + result + (double)t * scratch;
         for (c = 0; c < nch; ++c) {
-            acc_used[c] = new_used[c];
-            acc_bytes[c] = new_bytes[c];
+            acc_nz[c] = nz[c];
+            acc_dense[c] = dense[c];
         }
         memcpy(below, owner, sizeof below);
     }
-    /* Writing: the finished layers and the file's float32 coefficients. */
-    {
-        double kept = 0.0, file = 0.0;
-        for (c = 0; c < nch; ++c) {
-            kept += acc_bytes[below[c]];
-            file += 4.0 * (double)n * (double)n * acc_used[below[c]];
-        }
-        if (kept + file > peak)
-            peak = kept + file;
-        out->cpu_seconds += ll_cost_write(n, m, nch);
-        out->seconds += ll_cost_write(n, m, nch);
-    }
+    /* Writing: the finished layers and the file's float32 coefficients
+     * with their spline fits (about as large again). */
+    for (c = 0; c < nch; ++c)
+        if (below[c] == c)
+            stored += (double)n * (double)n * acc_dense[c];
+    if (16.0 * stored > peak)
+        peak = 16.0 * stored;
+    out->cpu_seconds += stored * COST_WRITE + PROCESS_SECONDS;
+    out->seconds += stored * COST_WRITE + PROCESS_WALL_SECONDS;
     out->peak_bytes = peak + PROCESS_BYTES;
 }
 

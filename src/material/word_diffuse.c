@@ -6,7 +6,7 @@
 #include "layerlab/ll_layer.h"
 
 /* Filling the single order 0: one entry per (mu_o, mu_i) pair. */
-#define RATE_DIFFUSE 1e8 /* entries/s */
+#define COST_DIFFUSE 1e-8 /* seconds per entry */
 
 static void diffuse_params(const ll_word *w, size_t c, size_t n_channels, double above,
                            ll_word_params *out)
@@ -29,9 +29,9 @@ static void diffuse_cost(const ll_word_params *p, size_t n, size_t m, ll_word_co
 {
     (void)p;
     (void)m;
-    out->serial_seconds = (double)n * (double)n / RATE_DIFFUSE;
-    out->orders_used = 1.0;
-    out->fill = 0.25; /* R^t only */
+    out->serial_seconds = (double)n * (double)n * COST_DIFFUSE;
+    out->orders_nonzero = 1.0;
+    out->dense_orders = 0.25; /* order 0's R^t block only */
 }
 
 static ll_status diffuse_build(const ll_word_build_ctx *ctx, const ll_word *w,

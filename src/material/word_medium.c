@@ -23,9 +23,9 @@
 /* The vMF concentration whose mean cosine coth(kappa) - 1/kappa is G_MAX. */
 #define KAPPA_MAX 100.0
 
-/* Phase-function entries per second (one thread): each order's n x n
+/* Seconds per phase-function entry (one thread): each order's n x n
  * matrix of the phase function's Fourier coefficients. */
-#define RATE_PHASE 5e7
+#define COST_PHASE 1e-9
 
 static ll_status medium_parse_phase(const ll_parser *p, ll_word *w, const ll_token *key,
                                     const ll_token *v)
@@ -111,25 +111,33 @@ static ll_status medium_resolution(const ll_word_params *p, size_t *n, size_t *m
         p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape), n, m);
 }
 
+/* Measured (docs/material-language.md, "Estimates"): an HG medium's
+ * orders hold values down to |g|^l ~ 1e-12 and beyond (the doubling fills
+ * them), about 2.7 * 27.6 / -ln|g| orders; its stored values are about
+ * 8 + 5 / (1 - |g|) dense orders (n = 100, m = 400, tau = 1: 14.7, 18.6,
+ * 23.9, 28, 60 at g = 0.3, 0.5, 0.7, 0.8, 0.9). A vMF lobe counts as the
+ * HG lobe of its mean cosine; an isotropic medium holds order 0. */
 static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
 {
-    size_t hn, hm = 1;
-    double used = 1.0;
+    double g = 0.0, nonzero = 1.0, dense = 1.0;
     if (p->choice != LL_PHASE_ISOTROPIC) {
-        /* The orders the lobe fills: its own heuristic's count (capped
-         * like it), at most the build's. */
         double shape = p->v[LL_MEDIUM_SHAPE];
-        double g = p->choice == LL_PHASE_HG ? fmin(fabs(shape), G_MAX)
-                                             : vmf_mean_cosine(fmin(shape, KAPPA_MAX));
-        if (ll_heuristic_henyey_greenstein(fmin(g, G_MAX), &hn, &hm) != LL_OK)
-            hm = m;
-        used = (double)(hm < m ? hm : m);
+        g = p->choice == LL_PHASE_HG ? fmin(fabs(shape), G_MAX)
+                                     : vmf_mean_cosine(fmin(shape, KAPPA_MAX));
+        if (g > 1e-6) {
+            nonzero = 2.7 * 27.6 / -log(g);
+            dense = 8.0 + 5.0 / (1.0 - g);
+        }
     }
-    out->parallel_seconds = (double)n * (double)n * used / RATE_PHASE;
-    out->items = (size_t)used;
+    if (nonzero > (double)m)
+        nonzero = (double)m;
+    if (dense > nonzero)
+        dense = nonzero;
+    out->parallel_seconds = (double)n * (double)n * nonzero * COST_PHASE;
+    out->items = (size_t)nonzero;
     out->doublings = p->v[TAU] > 0.0 ? ll_doubling_count(p->v[TAU], 1.0) : 0;
-    out->orders_used = used;
-    out->fill = 1.0;
+    out->orders_nonzero = nonzero;
+    out->dense_orders = dense;
 }
 
 static ll_status medium_build(const ll_word_build_ctx *ctx, const ll_word *w,

@@ -83,16 +83,20 @@ typedef struct ll_word_build_ctx {
 } ll_word_build_ctx;
 
 /* What one word's layer costs to build at n nodes and m orders, one
- * channel: CPU seconds of the parts that run in parallel over `items`
- * (columns or orders) and of the serial part, the doublings after it (each
- * an adding step), and the bytes its finished layer keeps. */
+ * channel, as measured (docs/material-language.md, "Estimates"): CPU
+ * seconds of the part that runs in parallel over `items` (columns or
+ * orders) and of the serial part, the doublings after it, the orders that
+ * hold anything (what an adding step with it works on), its stored values
+ * in units of n x n (dense_orders; what its layer keeps) and the scratch
+ * bytes of each thread while it is built. */
 typedef struct ll_word_cost {
     double parallel_seconds;
     size_t items;
     double serial_seconds;
     size_t doublings;
-    double orders_used;       /* Fourier orders that hold anything       */
-    double fill;              /* fraction of their n x n entries stored  */
+    double orders_nonzero;
+    double dense_orders;
+    double thread_bytes;
 } ll_word_cost;
 
 #define LL_WORD_MAX_PARAMS 8
@@ -158,6 +162,11 @@ LL_INTERNAL size_t ll_doubling_count(double tau, double min_mu);
 
 /* The cost of a rough interface (ll_layer_set_microfacet) of roughness
  * alpha and relative index eta_re + i eta_im (material_estimate.c). */
+/* Per-order CPU seconds of an adding or doubling step per n x n entry:
+ * orders where both layers hold something, and the others (a pass over
+ * the storage). */
+#define LL_COST_ADD_ORDER 4.5e-9
+#define LL_COST_ADD_EMPTY 3e-10
 LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n,
                                    size_t m, ll_word_cost *out);
 
