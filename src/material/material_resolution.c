@@ -20,6 +20,7 @@
 #include "material/word_table.h"
 
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -91,10 +92,13 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
                 size_t wn, wm;
                 ll_word_params_get(m, w, c, channels, &p);
                 s = p.desc->resolution(&p, &wn, &wm);
-                if (s != LL_OK)
+                if (s != LL_OK) {
+                    char detail[700]; /* (the message is rewritten below) */
+                    snprintf(detail, sizeof detail, "%s", ll_last_error_message());
                     return ll_fail(s, "%s:%zu:%zu: no resolution heuristic for this %s: %s",
                                    m->source, m->words[w].line, m->words[w].column,
-                                   p.desc->name, ll_last_error_message());
+                                   p.desc->name, detail);
+                }
                 if (wn > n)
                     n = wn;
                 if (wm > orders)
