@@ -28,6 +28,7 @@ typedef struct build {
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
     double total, done;          /* estimated seconds: all, finished  */
+    double word_cost;            /* estimated seconds of the word being built */
 } build;
 
 static void report(const build *b, const char *stage)
@@ -88,14 +89,12 @@ static ll_status expand_medium(void *user, ll_layer *l, double tau)
     build *b = user;
     expand_progress e;
     ll_expand_monitor monitor;
-    size_t k;
     ll_status s;
-    double tau0;
 
-    ll_expand_schedule(tau, 1.0, &tau0, &k);
     e.b = b;
     e.start = b->done;
-    e.cost = (double)k * ll_cost_add(b->n, b->orders, ll_get_thread_count());
+    /* The doublings are nearly all of a medium's cost (the model's). */
+    e.cost = b->word_cost;
     monitor.cancel = b->o.cancel;
     monitor.progress = report_expansion;
     monitor.user = &e;
@@ -119,13 +118,14 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     ctx.cancel = b->o.cancel;
     ctx.expand = expand_medium;
     ctx.user = b;
+    b->word_cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
     s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
         ll_layer_destroy(l);
         return word_failed(b, w, s);
     }
     /* (The doublings counted their share as they went.) */
-    b->done = done_before + ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    b->done = done_before + b->word_cost;
     *out = l;
     return check_cancel(b);
 }
