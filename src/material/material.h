@@ -38,6 +38,7 @@ typedef struct ll_word {
     char metal[64];
     ll_metal_ior metal_ior;   /* its indices, relative to vacuum          */
     char *file;               /* measured: the resolved path              */
+    double file_bytes;        /* measured: its size (for the estimate)    */
 } ll_word;
 
 struct ll_material {

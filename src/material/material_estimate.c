@@ -168,7 +168,7 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
     out->threads = threads;
     for (w = mat->count; w-- > 0;) {
         int bottom = w + 1 == mat->count;
-        double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0;
+        double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0, held = 0.0;
         double nz[3], dense[3];
         ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
         for (c = 0; c < nch; ++c) {
@@ -192,6 +192,8 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                 words += layer_bytes(n, m, wc.dense_orders);
                 if (wc.thread_bytes > scratch)
                     scratch = wc.thread_bytes;
+                if (wc.build_bytes > held)
+                    held = wc.build_bytes;
             }
             if (bottom) {
                 nz[c] = wc.orders_nonzero;
@@ -215,8 +217,8 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
          * thread. */
         scratch = scratch > ADD_WORKSPACE_BLOCKS * 8.0 * h * h ? scratch
                                                                : ADD_WORKSPACE_BLOCKS * 8.0 * h * h;
-        if (before + words + result + (double)t * scratch > peak)
-            peak = before + words + result + (double)t * scratch;
+        if (before + words + result + (double)t * scratch + held > peak)
+            peak = before + words + result + (double)t * scratch + held;
         for (c = 0; c < nch; ++c) {
             acc_nz[c] = nz[c];
             acc_dense[c] = dense[c];

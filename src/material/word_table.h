@@ -87,8 +87,9 @@ typedef struct ll_word_build_ctx {
  * seconds of the part that runs in parallel over `items` (columns or
  * orders) and of the serial part, the doublings after it, the orders that
  * hold anything (what an adding step with it works on), its stored values
- * in units of n x n (dense_orders; what its layer keeps) and the scratch
- * bytes of each thread while it is built. */
+ * in units of n x n (dense_orders; what its layer keeps), the scratch
+ * bytes of each thread while it is built and what it holds once while it
+ * is built (a measured table). */
 typedef struct ll_word_cost {
     double parallel_seconds;
     size_t items;
@@ -97,6 +98,7 @@ typedef struct ll_word_cost {
     double orders_nonzero;
     double dense_orders;
     double thread_bytes;
+    double build_bytes;       /* held once while it is built (a table)   */
 } ll_word_cost;
 
 #define LL_WORD_MAX_PARAMS 8
