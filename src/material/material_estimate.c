@@ -26,7 +26,9 @@
  * order and pair. Its stored values come to about 14 + 1/alpha dense
  * orders for a dielectric (24 at alpha = 0.1, 19 at 0.3) and 2 + 1.3/alpha
  * for a conductor (15 at 0.1, 9 at 0.2), whatever n and m; each thread
- * keeps a column of every order, 12 doubles deep. */
+ * keeps a column of every order, 12 doubles deep. About half of the time
+ * does not gain from more threads (coated-gold, mostly interfaces: 0.66 s
+ * on one thread, 0.50 s on two; plastic 0.16 s on both). */
 #define COST_PAIR_DIELECTRIC 2.9e-6 /* s per pair at alpha = 0.1, n = 200;
                                        about like alpha n^(1/3) */
 #define COST_PAIR_CONDUCTOR 9e-7
@@ -67,7 +69,8 @@ void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, siz
                                    : COST_PAIR_DIELECTRIC * pow((double)n / 200.0, 0.33) *
                                          (a / 0.1);
     (void)eta_re;
-    out->parallel_seconds = pairs * (per_pair + COST_PAIR_ORDER * (double)m);
+    out->parallel_seconds = 0.5 * pairs * (per_pair + COST_PAIR_ORDER * (double)m);
+    out->serial_seconds = out->parallel_seconds;
     out->items = n;
     out->orders_nonzero = (double)m;
     out->dense_orders = eta_im > 0.0 ? 2.0 + 1.3 / a : 14.0 + 1.0 / a;

@@ -114,7 +114,9 @@ static ll_status medium_resolution(const ll_word_params *p, size_t *n, size_t *m
 
 /* Measured (docs/material-language.md, "Estimates"): an HG medium's
  * orders hold values down to |g|^l ~ 1e-12 and beyond (the doubling fills
- * them), about 2.7 * 27.6 / -ln|g| orders; its stored values are about
+ * them), about 2.7 * 27.6 / -ln|g| orders but no more than about 1.7 n
+ * (the time of its doublings stops growing past g = 0.7 at n = 100, and
+ * at n = 56 it fills 96 orders at g = 0.6); its stored values are about
  * 8 + 5 / (1 - |g|) dense orders (n = 100, m = 400, tau = 1: 14.7, 18.6,
  * 23.9, 28, 60 at g = 0.3, 0.5, 0.7, 0.8, 0.9). A vMF lobe counts as the
  * HG lobe of its mean cosine; an isotropic medium holds order 0. */
@@ -130,6 +132,8 @@ static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cos
             dense = 8.0 + 5.0 / (1.0 - g);
         }
     }
+    if (nonzero > 1.7 * (double)n)
+        nonzero = 1.7 * (double)n;
     if (nonzero > (double)m)
         nonzero = (double)m;
     if (dense > nonzero)
