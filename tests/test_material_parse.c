@@ -85,6 +85,52 @@ static void every_word_parses(void **state)
     ll_material_destroy(m);
 }
 
+/* The table of words is complete: every descriptor has its hooks, unique
+ * keys, and its example line parses (as the messages quote it) and builds
+ * a resolution; only a measured BRDF needs a file that is not here. */
+static void word_table_is_complete(void **state)
+{
+    size_t i, j, k;
+    (void)state;
+    assert_true(ll_word_table_size >= 5);
+    for (i = 0; i < ll_word_table_size; ++i) {
+        const ll_word_desc *d = ll_word_table[i];
+        ll_material *m = NULL;
+        size_t n, o, c;
+        ll_status s;
+        assert_non_null(d->name);
+        assert_non_null(d->example);
+        assert_non_null(d->stage);
+        assert_non_null(d->channel);
+        assert_non_null(d->resolution);
+        assert_non_null(d->cost);
+        assert_non_null(d->build);
+        assert_non_null(d->metadata);
+        assert_int_equal(strncmp(d->example, d->name, strlen(d->name)), 0);
+        for (j = 0; j < i; ++j)
+            assert_string_not_equal(ll_word_table[j]->name, d->name);
+        for (j = 0; j < LL_WORD_MAX_PARAMS && d->params[j].key; ++j) {
+            const ll_param_desc *p = &d->params[j];
+            assert_true(p->parse || (p->slot >= 0 && p->slot < LL_WORD_MAX_NUMBERS));
+            assert_true(p->parse || p->why);
+            for (k = 0; k < j; ++k)
+                assert_string_not_equal(d->params[k].key, p->key);
+        }
+        s = ll_material_parse(d->example, "t", &m);
+        if (d == &ll_word_measured) {
+            assert_int_equal(s, LL_ERROR_PARSE);
+            assert_non_null(strstr(ll_last_error_message(), "file: "));
+            continue;
+        }
+        if (s != LL_OK)
+            fail_msg("%s: %s", d->example, ll_last_error_message());
+        assert_ptr_equal(m->words[0].desc, d);
+        assert_int_equal(ll_material_resolution(m, NULL, &n, &o, &c), LL_OK);
+        assert_true(n >= 10 && o >= 1);
+        ll_material_destroy(m);
+    }
+}
+
 /* Conductor indices: a name, complex numbers, or n with k. */
 static void conductor_index_forms(void **state)
 {
@@ -403,6 +449,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(every_word_parses),
+        cmocka_unit_test(word_table_is_complete),
         cmocka_unit_test(conductor_index_forms),
         cmocka_unit_test(mono_uses_luminance),
         cmocka_unit_test(layout_is_free),
