@@ -44,7 +44,7 @@ typedef struct ll_word {
 struct ll_material {
     char *source;             /* name used in messages                   */
     ll_word *words;           /* top to bottom                           */
-    size_t count;
+    size_t count, capacity;   /* words used, allocated                   */
     size_t nodes, orders, channels; /* settings; 0 = not set             */
     double error_goal;        /* 0 = not set                              */
     char *metadata;           /* JSON stored in written files             */
@@ -79,6 +79,17 @@ LL_INTERNAL double ll_number_channel(const ll_number *x, size_t c, size_t n_chan
                                      double fallback);
 LL_INTERNAL void ll_word_params_get(const ll_material *m, size_t word, size_t channel,
                                     size_t n_channels, ll_word_params *out);
+/* Every word's parameters in every channel, params[word][channel], in one
+ * pass down the stack (ll_word_params_get walks the words above). */
+LL_INTERNAL void ll_material_params(const ll_material *m, size_t n_channels,
+                                    ll_word_params (*params)[3]);
+/* One word's, given the absolute index above it in that channel; and the
+ * relative index it puts below itself (callers walking down the stack keep
+ * the product). */
+LL_INTERNAL void ll_word_params_above(const ll_material *m, size_t word, size_t channel,
+                                      size_t n_channels, double above, ll_word_params *out);
+LL_INTERNAL double ll_word_index_ratio(const ll_material *m, size_t word, size_t channel,
+                                       size_t n_channels);
 LL_INTERNAL int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b);
 /* The physical checks on the whole stack (opaque layers only at the
  * bottom, ...). LL_ERROR_PARSE with file:line:column. */

@@ -208,7 +208,6 @@ static void build_free(build *b)
 static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
                             const char *fn)
 {
-    size_t w, c;
     ll_cost_plan cost;
     ll_status s;
     memset(b, 0, sizeof *b);
@@ -225,9 +224,7 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     b->params = ll_calloc_array(m->count, sizeof *b->params);
     if (!b->params)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
-    for (w = 0; w < m->count; ++w)
-        for (c = 0; c < b->nch; ++c)
-            ll_word_params_get(m, w, c, b->nch, &b->params[w][c]);
+    ll_material_params(m, b->nch, b->params);
     ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
                      b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
     s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);

@@ -283,7 +283,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_word_params(*params)[3] = NULL;
     ll_cost_plan plan;
-    size_t n, m, nch, w, c, size;
+    size_t n, m, nch, size;
     ll_status s;
 
     /* An older, smaller struct ends at `seconds`: the fields past it are
@@ -304,9 +304,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     params = ll_calloc_array(material->count, sizeof *params);
     if (!params)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_material_estimate: out of memory");
-    for (w = 0; w < material->count; ++w)
-        for (c = 0; c < nch; ++c)
-            ll_word_params_get(material, w, c, nch, &params[w][c]);
+    ll_material_params(material, nch, params);
     ll_material_cost(material, (const ll_word_params(*)[3])params, n, m, nch,
                      build_threads(&o), &plan);
     free(params);

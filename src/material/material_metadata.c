@@ -49,24 +49,48 @@ void ll_text_append(ll_text *b, const char *fmt, ...)
     b->len += (size_t)need;
 }
 
-/* A JSON string literal of [s, s + len). */
+/* [s, s + len) as it is. */
+static void append_raw(ll_text *b, const char *s, size_t len)
+{
+    if (b->failed || len == 0)
+        return;
+    if (b->len + len + 1 > b->cap) {
+        size_t cap = 2 * (b->len + len + 1) + 256;
+        char *grown = realloc(b->data, cap);
+        if (!grown) {
+            b->failed = 1;
+            return;
+        }
+        b->data = grown;
+        b->cap = cap;
+    }
+    memcpy(b->data + b->len, s, len);
+    b->len += len;
+    b->data[b->len] = '\0';
+}
+
+/* A JSON string literal of [s, s + len); runs of plain characters are
+ * copied as they are. */
 static void append_string_n(ll_text *b, const char *s, size_t len)
 {
-    size_t i;
+    size_t i, run = 0;
     ll_text_append(b, "\"");
     for (i = 0; i < len; ++i) {
         unsigned char c = (unsigned char)s[i];
+        if (c >= 0x20 && c != '"' && c != '\\')
+            continue;
+        append_raw(b, s + run, i - run);
+        run = i + 1;
         if (c == '"' || c == '\\')
             ll_text_append(b, "\\%c", c);
         else if (c == '\n')
             ll_text_append(b, "\\n");
         else if (c == '\t')
             ll_text_append(b, "\\t");
-        else if (c < 0x20)
-            ll_text_append(b, "\\u%04x", c);
         else
-            ll_text_append(b, "%c", c);
+            ll_text_append(b, "\\u%04x", c);
     }
+    append_raw(b, s + run, len - run);
     ll_text_append(b, "\"");
 }
 
@@ -147,8 +171,14 @@ ll_status ll_material_make_metadata(ll_material *m, const char *text)
 {
     ll_text b = { NULL, 0, 0, 0 };
     char *stripped = strip_comments(text);
-    int level;
-    for (level = 0; stripped && level < 3; ++level) {
+    int level = 0;
+    /* Skip the levels that cannot fit: a text longer than the cap, or more
+     * layers than the cap holds at their shortest ({ "type": "x" }). */
+    if (stripped && strlen(stripped) > LL_METADATA_MAX_BYTES)
+        level = 1;
+    if (m->count > LL_METADATA_MAX_BYTES / 16)
+        level = 2;
+    for (; stripped && level < 3; ++level) {
         free(b.data);
         memset(&b, 0, sizeof b);
         describe(&b, m, stripped, level);

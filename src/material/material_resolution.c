@@ -86,11 +86,13 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
              : m->channels  ? m->channels
              : ll_material_is_rgb(m) ? 3 : 1;
     if (!(o->n_nodes || m->nodes) || !(o->n_orders || m->orders)) {
+        double above[3] = { 1.0, 1.0, 1.0 };
         for (w = 0; w < m->count; ++w)
             for (c = 0; c < channels; ++c) {
                 ll_word_params p;
                 size_t wn, wm;
-                ll_word_params_get(m, w, c, channels, &p);
+                ll_word_params_above(m, w, c, channels, above[c], &p);
+                above[c] *= ll_word_index_ratio(m, w, c, channels);
                 s = p.desc->resolution(&p, &wn, &wm);
                 if (s != LL_OK) {
                     char detail[700]; /* (the message is rewritten below) */

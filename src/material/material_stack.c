@@ -60,24 +60,46 @@ double ll_number_channel(const ll_number *x, size_t c, size_t n_channels, double
     return LL_LUMA_R * x->v[0] + LL_LUMA_G * x->v[1] + LL_LUMA_B * x->v[2];
 }
 
+double ll_word_index_ratio(const ll_material *m, size_t word, size_t c, size_t n_channels)
+{
+    const ll_word *w = &m->words[word];
+    return w->desc->index_ratio ? w->desc->index_ratio(w, c, n_channels) : 1.0;
+}
+
 /* Absolute index of the medium right above word `word` in a channel. */
 static double index_above(const ll_material *m, size_t word, size_t c, size_t n_channels)
 {
     double eta = 1.0;
     size_t i;
     for (i = 0; i < word; ++i)
-        if (m->words[i].desc->index_ratio)
-            eta *= m->words[i].desc->index_ratio(&m->words[i], c, n_channels);
+        eta *= ll_word_index_ratio(m, i, c, n_channels);
     return eta;
+}
+
+void ll_word_params_above(const ll_material *m, size_t word, size_t c, size_t n_channels,
+                          double above, ll_word_params *out)
+{
+    const ll_word *w = &m->words[word];
+    memset(out, 0, sizeof *out);
+    out->desc = w->desc;
+    w->desc->channel(w, c, n_channels, above, out);
 }
 
 void ll_word_params_get(const ll_material *m, size_t word, size_t c, size_t n_channels,
                         ll_word_params *out)
 {
-    const ll_word *w = &m->words[word];
-    memset(out, 0, sizeof *out);
-    out->desc = w->desc;
-    w->desc->channel(w, c, n_channels, index_above(m, word, c, n_channels), out);
+    ll_word_params_above(m, word, c, n_channels, index_above(m, word, c, n_channels), out);
+}
+
+void ll_material_params(const ll_material *m, size_t n_channels, ll_word_params (*params)[3])
+{
+    double above[3] = { 1.0, 1.0, 1.0 };
+    size_t w, c;
+    for (w = 0; w < m->count; ++w)
+        for (c = 0; c < n_channels; ++c) {
+            ll_word_params_above(m, w, c, n_channels, above[c], &params[w][c]);
+            above[c] *= ll_word_index_ratio(m, w, c, n_channels);
+        }
 }
 
 int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
