@@ -75,7 +75,10 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
  * leaves no file and does not touch an existing one). opts may be NULL.
  * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
- * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY, LL_ERROR_IO (writing). The
+ * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY (also when the estimated peak
+ * is above opts->max_memory_bytes: refused before anything is allocated,
+ * with the estimate and the budget in the message), LL_ERROR_IO
+ * (writing). The
  * worker-thread count of the calling thread (ll_set_thread_count) is
  * opts->threads during the build and restored after it. */
 LL_API ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
@@ -83,7 +86,8 @@ LL_API ll_status ll_material_build(const ll_material *material, const ll_build_o
 
 /* Build in memory: layers receives n_channels layers (caller frees each with
  * ll_layer_destroy); header (nullable) receives the eta and alpha that a
- * file of this stack carries. */
+ * file of this stack carries. The memory budget applies as to
+ * ll_material_build. */
 LL_API ll_status ll_material_build_layers(const ll_material *material,
                                           const ll_build_options *opts,
                                           ll_layer *layers[3], size_t *n_channels,
