@@ -11,6 +11,11 @@
  *     adding      ll_layer_add_to_top
  *     writing     ll_bsdf_write
  *
+ * and, beside the measurements, what ll_material_estimate (llbuild
+ * --dry-run) predicts for the same stack written in the material language
+ * (estimate.wall, estimate.cpu, estimate.peak_rss), so that the report
+ * shows the estimate against the measured process.
+ *
  * usage: recipe NAME OUT.bsdf THREADS     (THREADS 0 = all processors)
  * The driver runs each recipe in its own process and reads the whole
  * process's wall time, CPU time and peak memory from wait4().
@@ -157,6 +162,41 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
     free(weights);
 }
 
+/* The recipe as a material: the same layers at the same resolution (the
+ * estimate does not depend on the metal's index, which the material
+ * language takes relative to the coat). */
+static void report_estimate(const recipe *r)
+{
+    char text[1024];
+    int len;
+    ll_material *m = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    len = snprintf(text, sizeof text, "set nodes=%zu orders=%zu channels=3\n"
+                                      "dielectric eta=%.17g alpha=%.17g\n",
+                   r->n_nodes, r->n_orders, coat_eta, r->coat_alpha);
+    if (r->medium)
+        len += snprintf(text + len, sizeof text - (size_t)len,
+                        "medium albedo=%.17g,%.17g,%.17g g=%.17g tau=%.17g\n",
+                        medium_albedo[0], medium_albedo[1], medium_albedo[2], medium_g,
+                        medium_tau);
+    if (r->base == BASE_GOLD)
+        snprintf(text + len, sizeof text - (size_t)len,
+                 "conductor eta=%.17g+%.17gi,%.17g+%.17gi,%.17g+%.17gi alpha=%.17g\n",
+                 gold_eta[0], gold_k[0], gold_eta[1], gold_k[1], gold_eta[2], gold_k[2],
+                 gold_alpha);
+    else
+        snprintf(text + len, sizeof text - (size_t)len, "diffuse albedo=%.17g,%.17g,%.17g\n",
+                 diffuse_albedo[0], diffuse_albedo[1], diffuse_albedo[2]);
+    bench_check(ll_material_parse(text, r->name, &m), "ll_material_parse");
+    o.threads = ll_get_thread_count();
+    bench_check(ll_material_estimate(m, &o, &e), "ll_material_estimate");
+    bench_metric("estimate.wall", "s", e.seconds);
+    bench_metric("estimate.cpu", "s", e.cpu_seconds);
+    bench_metric("estimate.peak_rss", "MiB", e.peak_bytes / 1048576.0);
+    ll_material_destroy(m);
+}
+
 int main(int argc, char **argv)
 {
     const recipe *r = NULL;
@@ -191,5 +231,6 @@ int main(int argc, char **argv)
     bench_info("n_orders", id);
     snprintf(id, sizeof id, "%zu", ll_get_thread_count());
     bench_info("threads", id);
+    report_estimate(r);
     return 0;
 }

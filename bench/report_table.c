@@ -100,6 +100,18 @@ static void print_recipes(FILE *out, const bench_store *s)
             fprintf(out, " %s %s", bench_stages[k], a);
         }
         fputc('\n', out);
+        /* llbuild --dry-run's estimate of the same stack (one value). */
+        {
+            char id[160];
+            snprintf(id, sizeof id, "recipe.%s.estimate.wall", name);
+            format_value(a, sizeof a, bench_store_stats(s, id).median);
+            fprintf(out, "%-20s estimate: wall %s s", "", a);
+            snprintf(id, sizeof id, "recipe.%s.estimate.cpu", name);
+            format_value(a, sizeof a, bench_store_stats(s, id).median);
+            snprintf(id, sizeof id, "recipe.%s.estimate.peak_rss", name);
+            format_value(b, sizeof b, bench_store_stats(s, id).median);
+            fprintf(out, ", CPU %s s, peak %s MiB (measured: the line above)\n", a, b);
+        }
         if (ow.count) {
             bench_stats oc = stats_of(s, "original.%s.cpu", name);
             bench_stats ours_w = stats_of(s, "recipe.%s.wall", name);

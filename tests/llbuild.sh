@@ -73,7 +73,7 @@ rm -rf "$tmp/ior"
 
 # --- I/O: 2
 expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
-expect 2 "unwritable output" -- "$llbuild" --nodes 8 --orders 2 examples/frosted-glass.layers \
+expect 2 "unwritable output" -- "$llbuild" --nodes 10 --orders 2 examples/frosted-glass.layers \
     -o "$tmp/no/such/dir/x.bsdf"
 
 # --- out of memory: 3. A diffuse layer on 12000 nodes needs 576 MB for its
@@ -89,6 +89,34 @@ case "$BUILD" in
     [ ! -e "$tmp/big.bsdf" ] && ok || bad "a failed build left big.bsdf"
     ;;
 esac
+
+# --- the memory budget: an absurd resolution is refused before anything is
+# allocated (exit 1, no file); --max-memory sets the budget, in K/M/G/T or
+# bytes, and a bad size is an error naming the option.
+expect 1 "absurd resolution refused" -- "$llbuild" --nodes 100000 --orders 100000 \
+    examples/plastic.layers -o "$tmp/absurd.bsdf"
+contains "$tmp/err" "more than the memory budget" "refusal names the budget"
+contains "$tmp/err" "max-memory" "refusal says how to raise the budget"
+[ ! -e "$tmp/absurd.bsdf" ] && ok || bad "a refused build left a file"
+expect 1 "--dry-run over the budget" -- "$llbuild" --dry-run --nodes 100000 --orders 100000 \
+    examples/plastic.layers
+contains "$tmp/err" "would be refused" "--dry-run says the build would be refused"
+expect 1 "--max-memory 1M refuses plastic" -- "$llbuild" --max-memory 1M \
+    examples/plastic.layers -o "$tmp/small.bsdf"
+contains "$tmp/err" "budget of 1 MiB" "--max-memory 1M is the budget"
+[ ! -e "$tmp/small.bsdf" ] && ok || bad "a refused build left small.bsdf"
+expect 0 "--max-memory 1.5G" -- "$llbuild" --quiet --max-memory 1.5G --nodes 16 --orders 8 \
+    examples/plastic.layers -o "$tmp/budget.bsdf"
+expect 0 "--max-memory in bytes" -- "$llbuild" --dry-run --max-memory 500000000 \
+    examples/plastic.layers
+contains "$tmp/out" "budget 477 MiB" "--max-memory in bytes"
+expect 1 "--max-memory 12Q" -- "$llbuild" --max-memory 12Q examples/plastic.layers -o "$tmp/x.bsdf"
+contains "$tmp/err" "--max-memory" "a bad size names the option"
+expect 1 "--max-memory -1G" -- "$llbuild" --max-memory -1G examples/plastic.layers -o "$tmp/x.bsdf"
+expect 1 "--max-memory missing" -- "$llbuild" examples/plastic.layers -o "$tmp/x.bsdf" --max-memory
+# --- an unreadable material: the reason (strerror)
+expect 2 "missing material" -- "$llbuild" "$tmp/missing.layers" -o "$tmp/x.bsdf"
+contains "$tmp/err" "No such file or directory" "the material's open error says why"
 
 # --- dry run: resolution, memory, time; no file
 expect 0 "--dry-run" -- "$llbuild" --dry-run examples/coated-gold.layers -o "$tmp/dry.bsdf"

@@ -505,7 +505,7 @@ static void thread_count_is_restored(void **state)
     (void)state;
     assert_int_equal(ll_set_thread_count(1), LL_OK);
     o.threads = 2;
-    o.n_nodes = 8;
+    o.n_nodes = 10;
     o.n_orders = 1;
     assert_int_equal(ll_material_build_layers(m, &o, layers, &n, NULL), LL_OK);
     assert_int_equal(ll_get_thread_count(), 1);

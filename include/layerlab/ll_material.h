@@ -61,9 +61,14 @@ typedef struct ll_build_options {
     void *progress_user;
     const volatile int *cancel;/* nullable; nonzero stops with LL_ERROR_CANCELLED
                                   (deprecated: prefer an ll_monitor, *_ex below)  */
+    /* Memory budget (appended in 1.x; callers whose struct_size ends before
+     * it get the default). A build whose estimated peak (ll_material_estimate)
+     * is above it is refused before anything is allocated, with
+     * LL_ERROR_OUT_OF_MEMORY. 0: half of the physical memory. */
+    size_t max_memory_bytes;
 } ll_build_options;
 
-#define LL_BUILD_OPTIONS_INIT { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL }
+#define LL_BUILD_OPTIONS_INIT { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0 }
 
 /* The resolution and channel count a build with these options would use. */
 LL_API ll_status ll_material_resolution(const ll_material *material,
@@ -73,7 +78,10 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
  * leaves no file and does not touch an existing one). opts may be NULL.
  * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
- * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY, LL_ERROR_IO (writing). The
+ * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY (also when the estimated peak
+ * is above opts->max_memory_bytes: refused before anything is allocated,
+ * with the estimate and the budget in the message), LL_ERROR_IO
+ * (writing). The
  * worker-thread count of the calling thread (ll_set_thread_count) is
  * opts->threads during the build and restored after it. */
 LL_API ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
@@ -81,7 +89,8 @@ LL_API ll_status ll_material_build(const ll_material *material, const ll_build_o
 
 /* Build in memory: layers receives n_channels layers (caller frees each with
  * ll_layer_destroy); header (nullable) receives the eta and alpha that a
- * file of this stack carries. */
+ * file of this stack carries. The memory budget applies as to
+ * ll_material_build. */
 LL_API ll_status ll_material_build_layers(const ll_material *material,
                                           const ll_build_options *opts,
                                           ll_layer *layers[3], size_t *n_channels,
@@ -121,14 +130,16 @@ LL_API ll_status ll_material_write(const ll_material *material, const ll_build_o
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
 
-/* What a build with these options would take, estimated without building
- * (llbuild --dry-run). Memory: the layers alive at once (partial stacks,
- * one level's word layers, one result being combined) stored densely,
- * times the fraction of that the compact storage used in the examples'
- * builds, plus the process. Time: entry and operation counts times rates
- * measured on a 2-core x86-64 machine with OpenBLAS. Both were within a
- * factor of 2 of the measured builds of the examples
- * (docs/material-language.md, "Estimates"). */
+/* What a build with these options would take, estimated from counts
+ * alone (resolution, words, channels: no quadrature, no allocation that
+ * grows with the resolution), so it is instant for any input
+ * (llbuild --dry-run). Memory: the layers alive at once and the adding's
+ * workspace, as stored compactly; time: per-stage operation counts times
+ * rates measured on a 2-core x86-64 machine with OpenBLAS
+ * (docs/material-language.md, "Estimates", gives the model and its error
+ * on the examples). The estimate may have the struct_size of an older
+ * version of this struct (ending at `seconds`); the fields past it are
+ * then not written. */
 typedef struct ll_build_estimate {
     size_t struct_size;   /* set by the caller: sizeof(ll_build_estimate)       */
     size_t n_nodes;       /* resolution and channels the build would use         */
@@ -139,9 +150,14 @@ typedef struct ll_build_estimate {
     size_t doublings;     /* doubling steps of all media                         */
     double peak_bytes;    /* estimated peak memory of the build, bytes           */
     double seconds;       /* estimated wall time with opts->threads threads      */
+    /* Appended in 1.x (filled only when struct_size covers them): */
+    double cpu_seconds;   /* estimated CPU time, summed over the threads          */
+    size_t max_memory_bytes; /* the budget in effect (opts or half the RAM)      */
+    int over_budget;      /* nonzero: peak_bytes > max_memory_bytes, so a build
+                             with these options is refused                       */
 } ll_build_estimate;
 
-#define LL_BUILD_ESTIMATE_INIT { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0 }
+#define LL_BUILD_ESTIMATE_INIT { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0 }
 
 LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,

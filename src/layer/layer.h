@@ -17,6 +17,7 @@
 
 #include "support/support.h"
 #include "layer/order.h"
+#include "support/watch.h"
 #include "layerlab/ll_layer.h"
 
 struct ll_layer {
@@ -46,5 +47,19 @@ LL_INTERNAL double ll_layer_surface_factor(const ll_layer *l, size_t col, size_t
 /* Set every order from per-order builders (helper for the words):
  * builders[l] finished into order l; takes ownership of the builders. */
 LL_INTERNAL ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_builder **builders);
+/* Fill a layer column by column (columns.c): one builder per order is made
+ * and stored in *builders_slot (a field of ctx, where `column` finds it),
+ * column(i, ctx) runs for i in [0, n_columns) on the worker threads,
+ * finish(ctx) (nullable) once after them on the calling thread, then the
+ * layer is set from the builders; on failure the layer is unchanged.
+ * *builders_slot is NULL again on return. The columns run under watch
+ * (nullable; support/watch.h): they poll it, and its last report, which
+ * may still cancel, comes before the layer is set (fn names the call in the
+ * cancel message). */
+LL_INTERNAL ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
+                                                ll_status (*column)(size_t col, void *ctx),
+                                                ll_status (*finish)(void *ctx), void *ctx,
+                                                ll_order_builder ***builders_slot,
+                                                ll_watch *watch, const char *fn);
 
 #endif /* LL_LAYER_LAYER_H */

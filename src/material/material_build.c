@@ -8,22 +8,15 @@
  * partial stack (a clone, whose Fourier orders are shared copy-on-write)
  * until a word differs. A grey stack built as RGB costs one channel.
  */
-#include "material/material.h"
+#include "material/word_table.h"
 #include "layer/layer.h"
-#include "words/merl.h"
 #include "layerlab/ll_quad.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
-
-/* Memory model of ll_material_estimate (fitted on the examples). */
-#define STORED_FRACTION 0.08
-#define PROCESS_BYTES (8.0 * 1048576.0)
 
 typedef struct build {
     const ll_material *m;
@@ -32,6 +25,8 @@ typedef struct build {
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
     double total, done;          /* estimated seconds: all, finished  */
+    double word_cost;            /* estimated seconds of the word being built */
+    const char *word_stage;      /* its progress stage                  */
     ll_monitor_fn monitor_fn;    /* the caller's ll_monitor (nullable) */
     void *monitor_user;
     int stopped;                 /* the caller's monitor asked to stop */
@@ -94,41 +89,14 @@ static const ll_monitor *next_call(build *b, const char *stage, double cost)
     return &b->call;
 }
 
-/* The smallest c' <= c whose word parameters equal channel c's. */
 static size_t same_word_as(const build *b, size_t w, size_t c)
 {
-    size_t d;
-    for (d = 0; d < c; ++d)
-        if (ll_word_params_equal(&b->params[w][d], &b->params[w][c]))
-            return d;
-    return c;
+    return ll_same_word_as((const ll_word_params(*)[3])b->params, w, c);
 }
 
-/* Stack owners at word w, given those of the level below (NULL at the
- * bottom): the smallest channel with the same parameters all the way down. */
 static void stack_owners(const build *b, size_t w, const size_t *below, size_t *owner)
 {
-    size_t c, d;
-    for (c = 0; c < b->nch; ++c) {
-        owner[c] = c;
-        for (d = 0; d < c; ++d)
-            if ((!below || below[d] == below[c]) &&
-                ll_word_params_equal(&b->params[w][d], &b->params[w][c])) {
-                owner[c] = d;
-                break;
-            }
-    }
-}
-
-static const char *stage_of(ll_word_kind kind)
-{
-    switch (kind) {
-    case LL_WORD_DIELECTRIC: return "dielectric interface";
-    case LL_WORD_CONDUCTOR: return "conductor interface";
-    case LL_WORD_MEDIUM: return "medium";
-    case LL_WORD_DIFFUSE: return "diffuse";
-    default: return "measured";
-    }
+    ll_stack_owners((const ll_word_params(*)[3])b->params, w, b->nch, below, owner);
 }
 
 /* Prefix the message of a failed word call with where the word is. */
@@ -140,86 +108,51 @@ static ll_status word_failed(const build *b, size_t w, ll_status s)
         return s;
     snprintf(detail, sizeof detail, "%s", ll_last_error_message());
     return ll_fail(s, "%s:%zu:%zu: building this %s failed: %s", b->m->source, word->line,
-                   word->column, ll_word_kind_name(word->kind), detail);
+                   word->column, ll_word_name(word), detail);
 }
 
-/* ll_layer_expand_ex, its progress the share of the medium's estimated
- * cost that the doubling steps represent. */
-static ll_status expand_medium(build *b, ll_layer *l, double tau)
+/* The monitor of a word's next layer call, credited with share (0..1) of
+ * the word's modelled cost (a word builder's ctx->monitor). A call with no
+ * share of its own (the phase matrices before a medium's doublings) shows
+ * under its own stage name. */
+static const ll_monitor *word_monitor(void *user, double share)
 {
-    double cost = (double)ll_doubling_count(tau, 1.0) *
-                  ll_cost_add(b->n, b->orders, ll_get_thread_count());
-    return ll_layer_expand_ex(l, tau, next_call(b, "medium", cost));
+    build *b = user;
+    return next_call(b, share > 0.0 ? b->word_stage : NULL, share * b->word_cost);
 }
 
-/* A MERL channel through the public call; the luminance mix of a mono
- * build has none and goes through the internal setter (same monitor). */
-static ll_status set_measured(build *b, ll_layer *l, const char *path, const double weights[3],
-                              const ll_monitor *monitor)
+/* ll_layer_expand_ex for a medium (a word builder's ctx->expand): the
+ * doublings are nearly all of a medium's modelled cost. */
+static ll_status expand_medium(void *user, ll_layer *l, double tau)
 {
-    ll_merl *merl = NULL;
-    ll_status s;
-    int c;
-    (void)b;
-    for (c = 0; c < 3; ++c)
-        if (weights[c] == 1.0 && weights[(c + 1) % 3] == 0.0 && weights[(c + 2) % 3] == 0.0)
-            return ll_layer_set_matusik_ex(l, path, c, 0, monitor);
-    s = ll_merl_load(path, &merl);
-    if (s == LL_OK)
-        s = ll_merl_set_layer_ex(l, merl, weights, 0, monitor);
-    ll_merl_free(merl);
-    return s;
+    build *b = user;
+    return ll_layer_expand_ex(l, tau, next_call(b, "medium", b->word_cost));
 }
 
 static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
 {
     ll_layer *l = NULL;
     double done_before = b->done;
-    double cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
-    const char *stage = stage_of(p->kind);
+    ll_word_build_ctx ctx;
     ll_status s;
 
     *out = NULL;
-    report(b, stage);
+    report(b, p->desc->stage);
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
-    switch (p->kind) {
-    case LL_WORD_DIFFUSE:
-        s = ll_layer_set_diffuse_ex(l, p->albedo, next_call(b, stage, cost));
-        break;
-    case LL_WORD_DIELECTRIC:
-        s = ll_layer_set_microfacet_ex(l, p->eta_re, 0.0, p->alpha, 1, 0,
-                                       next_call(b, stage, cost));
-        break;
-    case LL_WORD_CONDUCTOR:
-        s = ll_layer_set_microfacet_ex(l, p->eta_re, p->eta_im, p->alpha, 1, 0,
-                                       next_call(b, stage, cost));
-        break;
-    case LL_WORD_MEDIUM:
-        /* (The doublings below carry the medium's cost; the phase matrices
-         * show as their own stage, "phase function".) */
-        if (p->phase == LL_PHASE_HG)
-            s = ll_layer_set_henyey_greenstein_ex(l, p->albedo, p->shape,
-                                                  next_call(b, NULL, 0.0));
-        else if (p->phase == LL_PHASE_VMF)
-            s = ll_layer_set_von_mises_fisher_ex(l, p->albedo, p->shape,
-                                                 next_call(b, NULL, 0.0));
-        else
-            s = ll_layer_set_isotropic_ex(l, p->albedo, next_call(b, NULL, 0.0));
-        if (s == LL_OK)
-            s = expand_medium(b, l, p->tau);
-        break;
-    case LL_WORD_MEASURED:
-        s = set_measured(b, l, b->m->words[w].file, p->weights, next_call(b, stage, cost));
-        break;
-    }
+    ctx.monitor = word_monitor;
+    ctx.expand = expand_medium;
+    ctx.user = b;
+    b->word_cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    b->word_stage = p->desc->stage;
+    s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
         ll_layer_destroy(l);
         return word_failed(b, w, s);
     }
-    /* (The doublings counted their share as they went.) */
-    b->done = done_before + ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    /* (The layer calls counted their share as they went.) */
+    b->done = done_before + b->word_cost;
     *out = l;
     return check_cancel(b);
 }
@@ -256,6 +189,7 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
             report(b, "adding");
             start = b->done;
+            /* word[c] on top of acc[c] (ll_layer_add_to_top, with a monitor) */
             s = ll_layer_add_ex(word[c], acc[c], acc[c], 0, next_call(b, "adding", cost));
             if (s != LL_OK)
                 s = word_failed(b, w, s);
@@ -327,29 +261,35 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
     return ll_build_options_read(opts, &b->o, fn);
 }
 
-/* Resolution, quadrature and per-channel parameters. silent: no progress
- * reports (ll_material_estimate has none), though a cancel still works. */
+/* Resolution, budget, quadrature and per-channel parameters. */
 static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
-                            const ll_monitor *monitor, int silent, const char *fn)
+                            const ll_monitor *monitor, const char *fn)
 {
-    size_t w, c;
+    ll_cost_plan cost;
     ll_status s = build_start(b, m, opts, monitor, fn);
-    if (silent)
-        b->o.progress = NULL;
     if (s == LL_OK)
         s = ll_material_plan(m, &b->o, &b->n, &b->orders, &b->nch);
     if (s != LL_OK)
         return s;
+    /* The parameters (as many as the words), then the budget: nothing
+     * that grows with the resolution is allocated before it. */
+    b->params = ll_calloc_array(m->count, sizeof *b->params);
+    if (!b->params)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    ll_material_params(m, b->nch, b->params);
+    ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
+                     b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
+    s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);
+    if (s != LL_OK) {
+        build_free(b);
+        return s;
+    }
     b->nodes = ll_alloc_array(b->n, sizeof(double));
     b->weights = ll_alloc_array(b->n, sizeof(double));
-    b->params = ll_calloc_array(m->count, sizeof *b->params);
-    if (!b->nodes || !b->weights || !b->params) {
+    if (!b->nodes || !b->weights) {
         build_free(b);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
     }
-    for (w = 0; w < m->count; ++w)
-        for (c = 0; c < b->nch; ++c)
-            ll_word_params_get(m, w, c, b->nch, &b->params[w][c]);
     /* Gauss-Lobatto nodes, as the original recipes use (O(n^2): seconds at
      * n = 30000, so polled like every other stage). */
     s = ll_quad_gauss_lobatto_ex(b->n, b->nodes, b->weights, next_call(b, "quadrature", 0.0));
@@ -443,7 +383,7 @@ ll_status ll_material_build_layers_ex(const ll_material *material,
                        "ll_material_build_layers: header->struct_size is %zu; initialise the "
                        "header with LL_BSDF_WRITE_OPTIONS_INIT",
                        header->struct_size);
-    s = build_init(&b, material, opts, monitor, 0, "ll_material_build_layers");
+    s = build_init(&b, material, opts, monitor, "ll_material_build_layers");
     if (s != LL_OK)
         return s;
     s = run_build(&b, layers, 0.0);
@@ -468,42 +408,18 @@ ll_status ll_material_build_layers_ex(const ll_material *material,
     return s;
 }
 
-/* Write atomically in two steps so that a cancel that arrives while the
- * writer runs still leaves no file: the writer's own atomic write goes to
- * a unique name beside out_path, renamed over out_path only if the build
- * was not cancelled meanwhile. */
+/* Write through the writer's own atomic write (a hidden temporary beside
+ * out_path, renamed over it). Its monitor answers the build's cancel flag
+ * and the caller's monitor, and its last report comes before the rename,
+ * so a cancel that arrives while the writer runs still leaves no file. */
 static ll_status write_layers(const ll_material *m, const ll_build_options *o,
                               ll_layer *const *layers, size_t n_channels, const char *out_path,
                               const ll_monitor *monitor)
 {
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
-    size_t len = strlen(out_path);
-    char *tmp = malloc(len + 8);
-    int fd;
-    ll_status s;
-
-    if (!tmp)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory writing %s", out_path);
     fill_header(m, o, n_channels, &header);
-    memcpy(tmp, out_path, len);
-    memcpy(tmp + len, ".XXXXXX", 8);
-    fd = mkstemp(tmp);
-    if (fd < 0) {
-        s = ll_fail(LL_ERROR_IO, "cannot create a file beside %s: %s", out_path,
-                    strerror(errno));
-        free(tmp);
-        return s;
-    }
-    close(fd);
-    s = ll_bsdf_write_ex(tmp, (const ll_layer *const *)layers, n_channels, &header, monitor);
-    if (s == LL_OK && o->cancel && *o->cancel)
-        s = ll_fail(LL_ERROR_CANCELLED, "%s: the build was cancelled", m->source);
-    if (s == LL_OK && rename(tmp, out_path) != 0)
-        s = ll_fail(LL_ERROR_IO, "cannot rename %s to %s: %s", tmp, out_path, strerror(errno));
-    if (s != LL_OK)
-        unlink(tmp);
-    free(tmp);
-    return s;
+    return ll_bsdf_write_ex(out_path, (const ll_layer *const *)layers, n_channels, &header,
+                            monitor);
 }
 
 ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
@@ -547,7 +463,7 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
 
     if (!out_path || !*out_path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_build: out_path is NULL or empty");
-    s = build_init(&b, material, opts, monitor, 0, "ll_material_build");
+    s = build_init(&b, material, opts, monitor, "ll_material_build");
     if (s != LL_OK)
         return s;
     /* The writing's share of the progress bar. */
@@ -568,78 +484,4 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         ll_layer_destroy(layers[c]);
     build_free(&b);
     return s;
-}
-
-/* ------------------------------------------------------------ estimate */
-
-ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
-                               ll_build_estimate *e)
-{
-    build b;
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, threads, live_acc = 0;
-    double layer_bytes, peak = 0.0, seconds = 0.0, workspace;
-    size_t saved;
-    ll_status s;
-
-    if (!e || e->struct_size < sizeof *e)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_estimate: estimate is NULL or its struct_size is not "
-                       "sizeof(ll_build_estimate)");
-    s = build_init(&b, material, opts, NULL, 1, "ll_material_estimate");
-    if (s != LL_OK)
-        return s;
-    saved = ll_get_thread_count();
-    if (b.o.threads)
-        ll_set_thread_count(b.o.threads);
-    threads = ll_get_thread_count();
-    if (b.o.threads)
-        ll_set_thread_count(saved);
-    e->n_nodes = b.n;
-    e->n_orders = b.orders;
-    e->n_channels = b.nch;
-    e->layers_built = e->additions = e->doublings = 0;
-    /* A layer stored densely: m orders of n x n doubles. The adding keeps
-     * about 12 h x h blocks per thread. */
-    layer_bytes = 8.0 * (double)b.n * (double)b.n * (double)b.orders;
-    workspace = 12.0 * 8.0 * (double)(b.n / 2) * (double)(b.n / 2) *
-                (double)(threads < b.orders ? threads : b.orders);
-    for (w = b.m->count; w-- > 0;) {
-        int bottom = w + 1 == b.m->count;
-        size_t words = 0;
-        stack_owners(&b, w, bottom ? NULL : below, owner);
-        live_acc = 0;
-        for (c = 0; c < b.nch; ++c) {
-            if (owner[c] != c)
-                continue;
-            ++live_acc;
-            if (same_word_as(&b, w, c) == c) {
-                const ll_word_params *p = &b.params[w][c];
-                ++words;
-                ++e->layers_built;
-                seconds += ll_cost_word(p, b.n, b.orders, threads);
-                if (p->kind == LL_WORD_MEDIUM && p->tau > 0.0)
-                    e->doublings += ll_doubling_count(p->tau, 1.0);
-            }
-            if (!bottom) {
-                ++e->additions;
-                seconds += ll_cost_add(b.n, b.orders, threads);
-            }
-        }
-        /* Live at once: the stacks so far, this level's word layers, the
-         * result of one addition (or expansion) in progress. */
-        if ((double)(live_acc + words + 1) * layer_bytes + workspace > peak)
-            peak = (double)(live_acc + words + 1) * layer_bytes + workspace;
-        memcpy(below, owner, sizeof below);
-    }
-    /* Writing: the finished layers and the file's float32 coefficients. */
-    if ((double)b.nch * layer_bytes * 1.5 > peak)
-        peak = (double)b.nch * layer_bytes * 1.5;
-    seconds += ll_cost_write(b.n, b.orders, b.nch);
-    /* The compact storage keeps only the non-zero runs of each column and
-     * no all-zero order: the six examples' builds peaked at 5% to 14% of
-     * the dense bound (more for tiny ones), plus the process's own 8 MiB. */
-    e->peak_bytes = STORED_FRACTION * peak + PROCESS_BYTES;
-    e->seconds = seconds;
-    build_free(&b);
-    return LL_OK;
 }

@@ -1,10 +1,17 @@
 /*
  * The JSON description that a built .bsdf file carries in its metadata
- * block: the generator, the material text, and each word with its
- * parameters as they were resolved (a named metal with its per-channel
- * indices, as the original tools stored "eta_cond" / "k_cond").
+ * block: the generator, the material text without its comments, and each
+ * word with its parameters as they were resolved (its descriptor's
+ * metadata writer: a named metal with its per-channel indices, as the
+ * original tools stored "eta_cond" / "k_cond").
+ *
+ * The description is capped at LL_METADATA_MAX_BYTES: a material is a few
+ * lines, and the metadata must not outgrow the file it describes (a 3 MB
+ * comment line once made a 7.6 MB file 10.7 MB). Past the cap the text is
+ * left out (its size is said instead), then the layers too (their count is
+ * said).
  */
-#include "material/material.h"
+#include "material/word_table.h"
 #include "support/parse_number.h"
 
 #include <stdarg.h>
@@ -12,15 +19,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct text_buffer {
-    char *data;
-    size_t len, cap;
-    int failed;
-} text_buffer;
+#define LL_METADATA_MAX_BYTES 65536
 
-static void append(text_buffer *b, const char *fmt, ...) LL_PRINTF(2, 3);
-
-static void append(text_buffer *b, const char *fmt, ...)
+void ll_text_append(ll_text *b, const char *fmt, ...)
 {
     va_list ap;
     int need;
@@ -50,76 +51,144 @@ static void append(text_buffer *b, const char *fmt, ...)
     b->len += (size_t)need;
 }
 
-/* A JSON string literal. */
-static void append_string(text_buffer *b, const char *s)
+/* [s, s + len) as it is. */
+static void append_raw(ll_text *b, const char *s, size_t len)
 {
-    append(b, "\"");
-    for (; *s; ++s) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            append(b, "\\%c", c);
-        else if (c == '\n')
-            append(b, "\\n");
-        else if (c == '\t')
-            append(b, "\\t");
-        else if (c < 0x20)
-            append(b, "\\u%04x", c);
-        else
-            append(b, "%c", c);
+    if (b->failed || len == 0)
+        return;
+    if (b->len + len + 1 > b->cap) {
+        size_t cap = 2 * (b->len + len + 1) + 256;
+        char *grown = realloc(b->data, cap);
+        if (!grown) {
+            b->failed = 1;
+            return;
+        }
+        b->data = grown;
+        b->cap = cap;
     }
-    append(b, "\"");
+    memcpy(b->data + b->len, s, len);
+    b->len += len;
+    b->data[b->len] = '\0';
 }
 
-static void append_number(text_buffer *b, const char *key, const ll_number *x)
+/* A JSON string literal of [s, s + len); runs of plain characters are
+ * copied as they are. */
+static void append_string_n(ll_text *b, const char *s, size_t len)
+{
+    size_t i, run = 0;
+    ll_text_append(b, "\"");
+    for (i = 0; i < len; ++i) {
+        unsigned char c = (unsigned char)s[i];
+        if (c >= 0x20 && c != '"' && c != '\\')
+            continue;
+        append_raw(b, s + run, i - run);
+        run = i + 1;
+        if (c == '"' || c == '\\')
+            ll_text_append(b, "\\%c", c);
+        else if (c == '\n')
+            ll_text_append(b, "\\n");
+        else if (c == '\t')
+            ll_text_append(b, "\\t");
+        else
+            ll_text_append(b, "\\u%04x", c);
+    }
+    append_raw(b, s + run, len - run);
+    ll_text_append(b, "\"");
+}
+
+void ll_text_string(ll_text *b, const char *s) { append_string_n(b, s, strlen(s)); }
+
+void ll_text_number(ll_text *b, const char *key, const ll_number *x)
 {
     if (x->count == 0)
         return;
     if (x->count == 1)
-        append(b, ", \"%s\": %.17g", key, x->v[0]);
+        ll_text_append(b, ", \"%s\": %.17g", key, x->v[0]);
     else
-        append(b, ", \"%s\": [%.17g, %.17g, %.17g]", key, x->v[0], x->v[1], x->v[2]);
+        ll_text_append(b, ", \"%s\": [%.17g, %.17g, %.17g]", key, x->v[0], x->v[1], x->v[2]);
 }
 
-static const char *phase_name(ll_phase p)
+/* The material text without comments, trailing blanks and the lines left
+ * empty, as the lexer reads it (a `#` inside double quotes is text). */
+static char *strip_comments(const char *text)
 {
-    return p == LL_PHASE_HG ? "hg" : p == LL_PHASE_VMF ? "vmf" : "isotropic";
+    size_t len = strlen(text), out = 0;
+    char *s = malloc(len + 2); /* a newline may be added to the last line */
+    const char *at = text;
+    if (!s)
+        return NULL;
+    while (*at) {
+        const char *end = strchr(at, '\n'), *p;
+        size_t start = out;
+        int quoted = 0;
+        if (!end)
+            end = at + strlen(at);
+        for (p = at; p < end; ++p) {
+            if (*p == '"')
+                quoted = !quoted;
+            else if (*p == '#' && !quoted)
+                break;
+            s[out++] = *p;
+        }
+        while (out > start && (s[out - 1] == ' ' || s[out - 1] == '\t' || s[out - 1] == '\r'))
+            --out;
+        if (out > start)
+            s[out++] = '\n';
+        at = *end ? end + 1 : end;
+    }
+    s[out] = '\0';
+    return s;
+}
+
+/* level 0: everything; 1: without the text; 2: without the layers too. */
+static void describe(ll_text *b, const ll_material *m, const char *stripped, int level)
+{
+    size_t i;
+    ll_text_append(b, "{\n  \"generator\": \"layerlab %s\",\n  \"source\": ",
+                   ll_version_string());
+    ll_text_string(b, m->source);
+    if (level == 0) {
+        ll_text_append(b, ",\n  \"material\": ");
+        ll_text_string(b, stripped);
+    } else {
+        ll_text_append(b, ",\n  \"material_omitted\": \"%zu bytes without comments, over the "
+                          "%d-byte cap of the metadata\"",
+                       strlen(stripped), LL_METADATA_MAX_BYTES);
+    }
+    if (level == 2) {
+        ll_text_append(b, ",\n  \"layer_count\": %zu\n}\n", m->count);
+        return;
+    }
+    ll_text_append(b, ",\n  \"layers\": [");
+    for (i = 0; i < m->count; ++i) {
+        const ll_word *w = &m->words[i];
+        ll_text_append(b, "%s\n    { \"type\": \"%s\"", i ? "," : "", w->desc->name);
+        w->desc->metadata(b, w);
+        ll_text_append(b, " }");
+    }
+    ll_text_append(b, "\n  ]\n}\n");
 }
 
 ll_status ll_material_make_metadata(ll_material *m, const char *text)
 {
-    text_buffer b = { NULL, 0, 0, 0 };
-    size_t i;
-    append(&b, "{\n  \"generator\": \"layerlab %s\",\n  \"source\": ", ll_version_string());
-    append_string(&b, m->source);
-    append(&b, ",\n  \"material\": ");
-    append_string(&b, text);
-    append(&b, ",\n  \"layers\": [");
-    for (i = 0; i < m->count; ++i) {
-        const ll_word *w = &m->words[i];
-        append(&b, "%s\n    { \"type\": \"%s\"", i ? "," : "", ll_word_kind_name(w->kind));
-        if (w->named_metal) {
-            append(&b, ", \"name\": ");
-            append_string(&b, w->metal);
-            append(&b, ", \"eta_luminance\": %.17g, \"k_luminance\": %.17g",
-                   w->metal_ior.eta_y, w->metal_ior.k_y);
-        }
-        append_number(&b, "albedo", &w->albedo);
-        append_number(&b, "eta", &w->eta);
-        append_number(&b, "k", &w->k);
-        append_number(&b, "alpha", &w->alpha);
-        append_number(&b, "tau", &w->tau);
-        if (w->kind == LL_WORD_MEDIUM)
-            append(&b, ", \"phase\": \"%s\"", phase_name(w->phase));
-        append_number(&b, "g", &w->g);
-        append_number(&b, "kappa", &w->kappa);
-        if (w->file) {
-            append(&b, ", \"file\": ");
-            append_string(&b, w->file);
-        }
-        append(&b, " }");
+    ll_text b = { NULL, 0, 0, 0 };
+    char *stripped = strip_comments(text);
+    int level = 0;
+    /* Skip the levels that cannot fit: a text longer than the cap, or more
+     * layers than the cap holds at their shortest ({ "type": "x" }). */
+    if (stripped && strlen(stripped) > LL_METADATA_MAX_BYTES)
+        level = 1;
+    if (m->count > LL_METADATA_MAX_BYTES / 16)
+        level = 2;
+    for (; stripped && level < 3; ++level) {
+        free(b.data);
+        memset(&b, 0, sizeof b);
+        describe(&b, m, stripped, level);
+        if (b.failed || b.len <= LL_METADATA_MAX_BYTES)
+            break;
     }
-    append(&b, "\n  ]\n}\n");
-    if (b.failed) {
+    free(stripped);
+    if (!stripped || b.failed) {
         free(b.data);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory describing %s", m->source);
     }

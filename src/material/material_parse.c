@@ -7,38 +7,33 @@
  * listed top to bottom. Every error names source:line:column and what was
  * expected there.
  */
-#include "material/material.h"
-#include "words/merl.h"
+#include "material/word_table.h"
 #include "support/parse_number.h"
 #include "support/regular_file.h"
 
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_TOKEN 4096
-
-typedef struct parser {
+struct ll_parser {
     const char *source;       /* for messages                          */
     const char *material_dir; /* for names and relative paths; nullable */
     const char *line_start;
     size_t line;
     ll_material *m;
-} parser;
-
-/* A token: text [begin, begin + len) of the current line. */
-typedef struct token {
-    const char *begin;
-    size_t len;
-} token;
+};
+typedef struct ll_parser parser;
+typedef ll_token token;
 
 static size_t column_of(const parser *p, const char *at) { return (size_t)(at - p->line_start) + 1; }
 
-static ll_status parse_error(const parser *p, const char *at, const char *fmt, ...)
-    LL_PRINTF(3, 4);
+size_t ll_parser_line(const ll_parser *p) { return p->line; }
+size_t ll_parser_column(const ll_parser *p, const char *at) { return column_of(p, at); }
+const char *ll_parser_dir(const ll_parser *p) { return p->material_dir; }
 
-static ll_status parse_error(const parser *p, const char *at, const char *fmt, ...)
+ll_status ll_parse_error(const parser *p, const char *at, const char *fmt, ...)
 {
     char what[900];
     va_list ap;
@@ -48,26 +43,16 @@ static ll_status parse_error(const parser *p, const char *at, const char *fmt, .
     return ll_fail(LL_ERROR_PARSE, "%s:%zu:%zu: %s", p->source, p->line, column_of(p, at), what);
 }
 
-static int token_is(const token *t, const char *s)
+int ll_token_is(const token *t, const char *s)
 {
     return strlen(s) == t->len && memcmp(t->begin, s, t->len) == 0;
-}
-
-/* Copy a token into a NUL-terminated buffer (values are short). */
-static int token_copy(const token *t, char *buf, size_t cap)
-{
-    if (t->len + 1 > cap)
-        return 0;
-    memcpy(buf, t->begin, t->len);
-    buf[t->len] = '\0';
-    return 1;
 }
 
 /* ------------------------------------------------------------ numbers */
 
 /* One real number, the whole of [s, s + len): digits with an optional sign,
  * point and exponent (no hex, inf or nan). */
-static int scan_real(const char *s, size_t len, double *out)
+int ll_scan_real(const char *s, size_t len, double *out)
 {
     char buf[64], *end;
     size_t i;
@@ -87,23 +72,6 @@ static int scan_real(const char *s, size_t len, double *out)
     buf[len] = '\0';
     *out = ll_parse_double(buf, &end);
     return *end == '\0' && ll_is_finite(*out);
-}
-
-/* A complex number n+ki or n-ki (the imaginary part ends in `i`). */
-static int scan_complex(const char *s, size_t len, double *re, double *im)
-{
-    size_t i;
-    if (len < 3 || s[len - 1] != 'i')
-        return 0;
-    /* The sign that starts the imaginary part: not the first character,
-     * not right after an exponent's e. */
-    for (i = len - 1; i-- > 1;) {
-        if ((s[i] == '+' || s[i] == '-') && s[i - 1] != 'e' && s[i - 1] != 'E')
-            break;
-    }
-    if (i == 0)
-        return 0;
-    return scan_real(s, i, re) && scan_real(s + i, len - 1 - i, im);
 }
 
 /* Split a value at commas: up to 3 parts. Returns the part count, or 0 for
@@ -127,19 +95,19 @@ static int split_commas(const token *v, token parts[3])
 }
 
 /* A number as one value or three. */
-static ll_status parse_number(const parser *p, const token *key, const token *v, ll_number *out)
+ll_status ll_parse_number(const parser *p, const token *key, const token *v, ll_number *out)
 {
     token parts[3];
     int count = split_commas(v, parts), k;
     if (count == 1 || count == 3) {
         for (k = 0; k < count; ++k)
-            if (!scan_real(parts[k].begin, parts[k].len, &out->v[k]))
-                return parse_error(p, parts[k].begin,
+            if (!ll_scan_real(parts[k].begin, parts[k].len, &out->v[k]))
+                return ll_parse_error(p, parts[k].begin,
                                    "%.*s: '%.*s' is not a number; expected a decimal number "
                                    "such as 0.5 or 1e-3",
                                    (int)key->len, key->begin, (int)parts[k].len, parts[k].begin);
     } else {
-        return parse_error(p, v->begin,
+        return ll_parse_error(p, v->begin,
                            "%.*s: expected one value or three comma-separated values (R,G,B), "
                            "got '%.*s'",
                            (int)key->len, key->begin, (int)v->len, v->begin);
@@ -154,16 +122,16 @@ static ll_status parse_number(const parser *p, const token *key, const token *v,
 
 /* Every channel value of x within [lo, hi] (bounds included when the
  * matching flag is set); else an error naming the value. */
-static ll_status check_range(const parser *p, const token *key, const token *v,
-                             const ll_number *x, double lo, int lo_closed, double hi,
-                             int hi_closed, const char *why)
+ll_status ll_parse_check_range(const parser *p, const token *key, const token *v,
+                               const ll_number *x, double lo, int lo_closed, double hi,
+                               int hi_closed, const char *why)
 {
     int k;
     for (k = 0; k < x->count; ++k) {
         double a = x->v[k];
         int ok = (lo_closed ? a >= lo : a > lo) && (hi_closed ? a <= hi : a < hi);
         if (!ok)
-            return parse_error(p, v->begin, "%.*s=%g is out of range: %s", (int)key->len,
+            return ll_parse_error(p, v->begin, "%.*s=%g is out of range: %s", (int)key->len,
                                key->begin, a, why);
     }
     return LL_OK;
@@ -183,7 +151,7 @@ static ll_status parse_count(const parser *p, const token *key, const token *v, 
     *out = value;
     return LL_OK;
 bad:
-    return parse_error(p, v->begin, "%.*s: expected a whole number, got '%.*s'", (int)key->len,
+    return ll_parse_error(p, v->begin, "%.*s: expected a whole number, got '%.*s'", (int)key->len,
                        key->begin, (int)v->len, v->begin);
 }
 
@@ -208,7 +176,7 @@ static ll_status next_token(const parser *p, const char **at, const char *line_e
         if (*s == '"') {
             const char *close = memchr(s + 1, '"', (size_t)(line_end - s - 1));
             if (!close)
-                return parse_error(p, s, "unterminated quote; expected a closing \"");
+                return ll_parse_error(p, s, "unterminated quote; expected a closing \"");
             s = close;
         }
         ++s;
@@ -225,14 +193,14 @@ static ll_status split_key_value(const parser *p, const token *t, token *key, to
     const char *eq = memchr(t->begin, '=', t->len);
     size_t i;
     if (!eq || eq == t->begin)
-        return parse_error(p, t->begin, "expected key=value, got '%.*s'", (int)t->len,
+        return ll_parse_error(p, t->begin, "expected key=value, got '%.*s'", (int)t->len,
                            t->begin);
     key->begin = t->begin;
     key->len = (size_t)(eq - t->begin);
     for (i = 0; i < key->len; ++i) {
         char c = key->begin[i];
         if (!((c >= 'a' && c <= 'z') || c == '_'))
-            return parse_error(p, t->begin, "'%.*s' is not a parameter name; expected key=value",
+            return ll_parse_error(p, t->begin, "'%.*s' is not a parameter name; expected key=value",
                                (int)key->len, key->begin);
     }
     value->begin = eq + 1;
@@ -242,292 +210,79 @@ static ll_status split_key_value(const parser *p, const token *t, token *key, to
         value->len -= 2;
     }
     if (value->len == 0)
-        return parse_error(p, eq + 1, "%.*s= has no value", (int)key->len, key->begin);
+        return ll_parse_error(p, eq + 1, "%.*s= has no value", (int)key->len, key->begin);
     return LL_OK;
 }
 
 /* --------------------------------------------------------------- words */
 
-typedef struct word_syntax {
-    const char *name;
-    ll_word_kind kind;
-    const char *keys;     /* allowed parameters, space separated           */
-    const char *required; /* required ones                                 */
-    const char *example;
-} word_syntax;
-
-static const word_syntax words[] = {
-    { "diffuse", LL_WORD_DIFFUSE, "albedo", "albedo", "diffuse albedo=0.5" },
-    { "dielectric", LL_WORD_DIELECTRIC, "eta alpha", "eta alpha",
-      "dielectric eta=1.5 alpha=0.1" },
-    { "conductor", LL_WORD_CONDUCTOR, "eta k alpha", "eta alpha",
-      "conductor eta=Au alpha=0.1" },
-    { "medium", LL_WORD_MEDIUM, "albedo tau g phase kappa", "albedo tau",
-      "medium albedo=0.9 tau=1 g=0.5" },
-    { "measured", LL_WORD_MEASURED, "file", "file", "measured file=gold-metallic-paint.binary" },
-};
-
-static int key_in_list(const token *key, const char *list)
+static const ll_param_desc *find_param(const ll_word_desc *d, const token *key)
 {
-    const char *s = list;
-    while (*s) {
-        size_t len = strcspn(s, " ");
-        if (len == key->len && memcmp(s, key->begin, len) == 0)
-            return 1;
-        s += len;
-        while (*s == ' ')
-            ++s;
-    }
-    return 0;
-}
-
-/* Where a parameter goes. */
-static ll_number *number_slot(ll_word *w, const token *key)
-{
-    if (token_is(key, "albedo")) return &w->albedo;
-    if (token_is(key, "eta")) return &w->eta;
-    if (token_is(key, "k")) return &w->k;
-    if (token_is(key, "alpha")) return &w->alpha;
-    if (token_is(key, "tau")) return &w->tau;
-    if (token_is(key, "g")) return &w->g;
-    if (token_is(key, "kappa")) return &w->kappa;
+    size_t i;
+    for (i = 0; i < LL_WORD_MAX_PARAMS && d->params[i].key; ++i)
+        if (ll_token_is(key, d->params[i].key))
+            return &d->params[i];
     return NULL;
 }
 
-/* path relative to the material's directory unless absolute. */
-static char *resolve_path(const char *dir, const char *path)
+/* "albedo tau g phase kappa": the keys of a word, for messages. */
+static void list_keys(const ll_word_desc *d, char *buf, size_t cap)
 {
-    size_t a, b;
-    char *out;
-    if (path[0] == '/' || !dir)
-        dir = NULL;
-    a = dir ? strlen(dir) + 1 : 0;
-    b = strlen(path);
-    out = malloc(a + b + 1);
-    if (!out)
-        return NULL;
-    if (dir)
-        snprintf(out, a + b + 1, "%s/%s", dir, path);
-    else
-        memcpy(out, path, b + 1);
-    return out;
+    size_t i, len = 0;
+    buf[0] = '\0';
+    for (i = 0; i < LL_WORD_MAX_PARAMS && d->params[i].key; ++i) {
+        int k = snprintf(buf + len, cap - len, "%s%s", i ? " " : "", d->params[i].key);
+        if (k < 0 || (size_t)k >= cap - len)
+            return;
+        len += (size_t)k;
+    }
 }
 
-/* Only characters of real numbers and commas (no `i` of a complex one). */
-static int is_real_list(const token *v)
-{
-    size_t i;
-    for (i = 0; i < v->len; ++i)
-        if (!strchr("0123456789+-.eE,", v->begin[i]))
-            return 0;
-    return 1;
-}
-
-/* conductor eta=NAME | n+ki[,n+ki,n+ki] | n[,n,n] (then k=...) */
-static ll_status parse_conductor_eta(parser *p, ll_word *w, const token *key, const token *v)
-{
-    token parts[3];
-    int count, k;
-    char name[sizeof w->metal];
-    ll_status s;
-    char c0 = v->begin[0];
-    int named = (c0 >= 'A' && c0 <= 'Z') || (c0 >= 'a' && c0 <= 'z');
-
-    if (w->k.count && (named || !is_real_list(v)))
-        return parse_error(p, v->begin, "eta: k= is given already; write eta=n with k=k, or "
-                                        "eta=n+ki or eta=NAME alone");
-    if (named) {
-        if (!token_copy(v, name, sizeof name))
-            return parse_error(p, v->begin, "eta: the metal name is too long");
-        s = ll_metal_ior_lookup(name, p->material_dir, &w->metal_ior);
-        if (s != LL_OK)
-            return parse_error(p, v->begin, "eta=%s: %s", name, ll_last_error_message());
-        memcpy(w->metal, name, sizeof name);
-        w->named_metal = 1;
-        w->eta.count = 3;
-        w->k.count = 3;
-        for (k = 0; k < 3; ++k) {
-            w->eta.v[k] = w->metal_ior.eta[k];
-            w->k.v[k] = w->metal_ior.k[k];
-        }
-        w->eta.line = w->k.line = p->line;
-        w->eta.column = w->k.column = column_of(p, v->begin);
-        return LL_OK;
-    }
-    if (is_real_list(v))
-        return parse_number(p, key, v, &w->eta);
-    count = split_commas(v, parts);
-    if (count != 1 && count != 3)
-        return parse_error(p, v->begin,
-                           "eta: expected a metal name, one complex index n+ki or three "
-                           "(R,G,B), got '%.*s'",
-                           (int)v->len, v->begin);
-    for (k = 0; k < count; ++k)
-        if (!scan_complex(parts[k].begin, parts[k].len, &w->eta.v[k], &w->k.v[k]))
-            return parse_error(p, parts[k].begin,
-                               "eta: '%.*s' is not a complex index; expected n+ki such as "
-                               "0.2+3.9i",
-                               (int)parts[k].len, parts[k].begin);
-    for (k = count; k < 3; ++k) {
-        w->eta.v[k] = w->eta.v[0];
-        w->k.v[k] = w->k.v[0];
-    }
-    w->eta.count = w->k.count = count;
-    w->eta.line = w->k.line = p->line;
-    w->eta.column = w->k.column = column_of(p, v->begin);
-    return LL_OK;
-}
-
-/* Range checks of one parameter of a word, right where it was written. */
-static ll_status check_parameter(const parser *p, const ll_word *w, const token *key,
-                                 const token *v, const ll_number *x)
-{
-    if (x == &w->albedo)
-        return check_range(p, key, v, x, 0.0, 1, 1.0, 1,
-                           "an albedo is a fraction of light, in [0, 1]");
-    if (x == &w->alpha) {
-        ll_status s = check_range(p, key, v, x, 0.0, 0, 1e300, 1,
-                                  "the roughness alpha must be > 0 (a perfectly smooth "
-                                  "interface cannot be stored as a series)");
-        if (s == LL_OK)
-            s = check_range(p, key, v, x, LL_MICROFACET_MIN_ALPHA, 1, 1e300, 1,
-                            "roughness below 0.001 needs more Fourier orders than a layer "
-                            "can hold; use alpha >= 0.001");
-        return s;
-    }
-    if (x == &w->tau)
-        return check_range(p, key, v, x, 0.0, 1, 1e12, 1,
-                           "the optical thickness tau must be in [0, 1e12]");
-    if (x == &w->g)
-        return check_range(p, key, v, x, -1.0, 0, 1.0, 0,
-                           "the Henyey-Greenstein asymmetry g must be in (-1, 1)");
-    if (x == &w->kappa)
-        return check_range(p, key, v, x, 0.0, 1, 1e4, 1,
-                           "the von Mises-Fisher concentration kappa must be in [0, 10000]");
-    if (x == &w->k)
-        return check_range(p, key, v, x, 0.0, 0, 1e300, 1,
-                           "a conductor absorbs: its extinction k must be > 0 (an interface "
-                           "with k = 0 is a dielectric)");
-    if (x == &w->eta && w->kind == LL_WORD_DIELECTRIC) {
-        int k;
-        ll_status s = check_range(p, key, v, x, 0.0, 0, 1e300, 1,
-                                  "an index of refraction must be > 0");
-        for (k = 0; s == LL_OK && k < x->count; ++k)
-            if (x->v[k] == 1.0)
-                s = parse_error(p, v->begin,
-                                "eta=1 is no interface (nothing reflects or refracts); "
-                                "remove the line or use another eta");
-        return s;
-    }
-    if (x == &w->eta)
-        return check_range(p, key, v, x, 0.0, 0, 1e300, 1,
-                           "the real part of a conductor's index must be > 0");
-    return LL_OK;
-}
-
-static ll_status parse_word_parameter(parser *p, ll_word *w, const word_syntax *syn,
-                                      const token *t)
+static ll_status parse_word_parameter(parser *p, ll_word *w, const token *t)
 {
     token key, v;
+    const ll_word_desc *d = w->desc;
+    const ll_param_desc *param;
     ll_number *slot;
     ll_status s = split_key_value(p, t, &key, &v);
     if (s != LL_OK)
         return s;
-    if (!key_in_list(&key, syn->keys))
-        return parse_error(p, key.begin, "%s has no parameter '%.*s'; expected one of: %s",
-                           syn->name, (int)key.len, key.begin, syn->keys);
-    if (token_is(&key, "phase")) {
-        if (w->phase_given)
-            return parse_error(p, key.begin, "phase is given twice");
-        if (token_is(&v, "isotropic"))
-            w->phase = LL_PHASE_ISOTROPIC;
-        else if (token_is(&v, "hg") || token_is(&v, "henyey-greenstein"))
-            w->phase = LL_PHASE_HG;
-        else if (token_is(&v, "vmf") || token_is(&v, "von-mises-fisher"))
-            w->phase = LL_PHASE_VMF;
-        else
-            return parse_error(p, v.begin,
-                               "phase: unknown phase function '%.*s'; expected isotropic, hg "
-                               "or vmf",
-                               (int)v.len, v.begin);
-        w->phase_given = 1;
-        return LL_OK;
+    param = find_param(d, &key);
+    if (!param) {
+        char keys[256];
+        list_keys(d, keys, sizeof keys);
+        return ll_parse_error(p, key.begin, "%s has no parameter '%.*s'; expected one of: %s",
+                              d->name, (int)key.len, key.begin, keys);
     }
-    if (token_is(&key, "file")) {
-        char path[MAX_TOKEN];
-        if (w->file)
-            return parse_error(p, key.begin, "file is given twice");
-        if (!token_copy(&v, path, sizeof path))
-            return parse_error(p, v.begin, "file: the path is too long");
-        w->file = resolve_path(p->material_dir, path);
-        if (!w->file)
-            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
-        s = ll_merl_check(w->file);
-        if (s != LL_OK)
-            return parse_error(p, v.begin, "file: %s", ll_last_error_message());
-        return LL_OK;
-    }
-    slot = number_slot(w, &key);
-    if (token_is(&key, "k") && w->named_metal)
-        return parse_error(p, key.begin, "k: eta=%s already gives the metal's k", w->metal);
-    if (token_is(&key, "k") && w->k.count)
-        return parse_error(p, key.begin, "k is given already (by k= or by eta=n+ki)");
+    if (param->parse)
+        return param->parse(p, w, &key, &v);
+    slot = &w->number[param->slot];
     if (slot->count != 0)
-        return parse_error(p, key.begin, "%.*s is given twice", (int)key.len, key.begin);
-    if (w->kind == LL_WORD_CONDUCTOR && token_is(&key, "eta"))
-        s = parse_conductor_eta(p, w, &key, &v);
-    else
-        s = parse_number(p, &key, &v, slot);
-    if (s != LL_OK)
-        return s;
-    /* A conductor's k may come with the complex eta already. */
-    if (w->kind == LL_WORD_CONDUCTOR && token_is(&key, "eta") && !w->named_metal &&
-        w->k.count)
-        s = check_range(p, &key, &v, &w->k, 0.0, 0, 1e300, 1,
-                        "a conductor absorbs: the imaginary part k must be > 0 (an "
-                        "interface with k = 0 is a dielectric)");
-    return s == LL_OK ? check_parameter(p, w, &key, &v, slot) : s;
+        return ll_parse_error(p, key.begin, "%.*s is given twice", (int)key.len, key.begin);
+    s = ll_parse_number(p, &key, &v, slot);
+    if (s == LL_OK)
+        s = ll_parse_check_range(p, &key, &v, slot, param->lo, param->lo_closed, param->hi,
+                                 param->hi_closed, param->why);
+    if (s == LL_OK && param->check)
+        s = param->check(p, w, &key, &v, slot);
+    return s;
 }
 
 /* What a word still needs once its line is read. */
-static ll_status finish_word(const parser *p, ll_word *w, const word_syntax *syn,
-                             const char *word_at)
+static ll_status finish_word(const parser *p, ll_word *w, const char *word_at)
 {
-    token key;
-    const char *s = syn->required;
-    while (*s) {
-        size_t len = strcspn(s, " ");
-        ll_number *slot;
-        key.begin = s;
-        key.len = len;
-        slot = number_slot(w, &key);
-        if ((slot && slot->count == 0) || (token_is(&key, "file") && !w->file))
-            return parse_error(p, word_at, "%s needs %.*s=...; for example: %s", syn->name,
-                               (int)len, s, syn->example);
-        s += len;
-        while (*s == ' ')
-            ++s;
+    const ll_word_desc *d = w->desc;
+    size_t i;
+    for (i = 0; i < LL_WORD_MAX_PARAMS && d->params[i].key; ++i) {
+        const ll_param_desc *param = &d->params[i];
+        if (param->required && param->slot >= 0 && w->number[param->slot].count == 0)
+            return ll_parse_error(p, word_at, "%s needs %s=...; for example: %s", d->name,
+                                  param->key, d->example);
     }
-    if (w->kind == LL_WORD_CONDUCTOR && !w->named_metal && w->k.count == 0)
-        return parse_error(p, word_at,
-                           "conductor needs an absorbing index: eta=NAME (e.g. Au), eta=n+ki "
-                           "or eta=n with k=k");
-    if (w->kind == LL_WORD_MEDIUM) {
-        if (w->g.count && w->phase_given && w->phase != LL_PHASE_HG)
-            return parse_error(p, word_at, "g= belongs to phase=hg, not to the phase given");
-        if (w->kappa.count && w->phase != LL_PHASE_VMF)
-            return parse_error(p, word_at, "kappa= needs phase=vmf");
-        if (w->phase == LL_PHASE_VMF && w->kappa.count == 0)
-            return parse_error(p, word_at, "phase=vmf needs kappa=... (concentration >= 0)");
-        if (w->phase == LL_PHASE_HG && w->g.count == 0)
-            return parse_error(p, word_at, "phase=hg needs g=... (asymmetry in (-1, 1))");
-        if (w->g.count && !w->phase_given)
-            w->phase = LL_PHASE_HG;
-    }
-    return LL_OK;
+    return d->finish ? d->finish(p, w, word_at) : LL_OK;
 }
 
-static ll_status parse_word(parser *p, const word_syntax *syn, const token *name,
+static ll_status parse_word(parser *p, const ll_word_desc *desc, const token *name,
                             const char *at, const char *line_end)
 {
     ll_word *w, *grown;
@@ -536,28 +291,47 @@ static ll_status parse_word(parser *p, const word_syntax *syn, const token *name
     ll_status s;
     size_t count = p->m->count;
 
-    grown = realloc(p->m->words, (count + 1) * sizeof *grown);
-    if (!grown)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
-    p->m->words = grown;
-    w = &grown[count];
+    if (count == p->m->capacity) {
+        /* Geometric growth: a text of millions of words parses in linear
+         * time. */
+        size_t capacity = count ? 2 * count : 8;
+        grown = capacity > SIZE_MAX / sizeof *grown ? NULL
+                                                    : realloc(p->m->words, capacity * sizeof *grown);
+        if (!grown)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
+        p->m->words = grown;
+        p->m->capacity = capacity;
+    }
+    w = &p->m->words[count];
     memset(w, 0, sizeof *w);
     p->m->count = count + 1;
-    w->kind = syn->kind;
+    w->desc = desc;
     w->line = p->line;
     w->column = column_of(p, name->begin);
-    w->phase = LL_PHASE_ISOTROPIC;
     while (1) {
         s = next_token(p, &at, line_end, &t, &found);
         if (s != LL_OK || !found)
             break;
-        s = parse_word_parameter(p, w, syn, &t);
+        s = parse_word_parameter(p, w, &t);
         if (s != LL_OK)
             return s;
     }
     if (s != LL_OK)
         return s;
-    return finish_word(p, w, syn, name->begin);
+    return finish_word(p, w, name->begin);
+}
+
+/* "diffuse, dielectric, conductor, medium, measured": the table's words. */
+static void list_words(char *buf, size_t cap)
+{
+    size_t i, len = 0;
+    buf[0] = '\0';
+    for (i = 0; i < ll_word_table_size; ++i) {
+        int k = snprintf(buf + len, cap - len, "%s%s", i ? ", " : "", ll_word_table[i]->name);
+        if (k < 0 || (size_t)k >= cap - len)
+            return;
+        len += (size_t)k;
+    }
 }
 
 /* set nodes=N orders=M channels=1|3 error=E */
@@ -574,42 +348,48 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
         s = split_key_value(p, &t, &key, &v);
         if (s != LL_OK)
             return s;
-        if (token_is(&key, "nodes")) {
+        if (ll_token_is(&key, "nodes")) {
             if (m->nodes)
-                return parse_error(p, key.begin, "nodes is set twice");
+                return ll_parse_error(p, key.begin, "nodes is set twice");
             s = parse_count(p, &key, &v, &m->nodes);
             if (s == LL_OK && (m->nodes < 2 || m->nodes % 2))
-                s = parse_error(p, v.begin, "nodes=%zu: expected an even count >= 2", m->nodes);
-        } else if (token_is(&key, "orders")) {
+                s = ll_parse_error(p, v.begin, "nodes=%zu: expected an even count >= 2", m->nodes);
+            else if (s == LL_OK && m->nodes > LL_MATERIAL_MAX_RESOLUTION)
+                s = ll_parse_error(p, v.begin, "nodes=%zu is beyond the %d supported", m->nodes,
+                                   LL_MATERIAL_MAX_RESOLUTION);
+        } else if (ll_token_is(&key, "orders")) {
             if (m->orders)
-                return parse_error(p, key.begin, "orders is set twice");
+                return ll_parse_error(p, key.begin, "orders is set twice");
             s = parse_count(p, &key, &v, &m->orders);
             if (s == LL_OK && m->orders < 1)
-                s = parse_error(p, v.begin, "orders=0: expected at least 1");
-        } else if (token_is(&key, "channels")) {
+                s = ll_parse_error(p, v.begin, "orders=0: expected at least 1");
+            else if (s == LL_OK && m->orders > LL_MATERIAL_MAX_RESOLUTION)
+                s = ll_parse_error(p, v.begin, "orders=%zu is beyond the %d supported",
+                                   m->orders, LL_MATERIAL_MAX_RESOLUTION);
+        } else if (ll_token_is(&key, "channels")) {
             if (m->channels)
-                return parse_error(p, key.begin, "channels is set twice");
-            if (token_is(&v, "1") || token_is(&v, "mono"))
+                return ll_parse_error(p, key.begin, "channels is set twice");
+            if (ll_token_is(&v, "1") || ll_token_is(&v, "mono"))
                 m->channels = 1;
-            else if (token_is(&v, "3") || token_is(&v, "rgb"))
+            else if (ll_token_is(&v, "3") || ll_token_is(&v, "rgb"))
                 m->channels = 3;
             else
-                s = parse_error(p, v.begin, "channels: expected 1 (mono) or 3 (rgb), got '%.*s'",
+                s = ll_parse_error(p, v.begin, "channels: expected 1 (mono) or 3 (rgb), got '%.*s'",
                                 (int)v.len, v.begin);
-        } else if (token_is(&key, "error")) {
+        } else if (ll_token_is(&key, "error")) {
             ll_number e;
             if (m->error_goal > 0.0)
-                return parse_error(p, key.begin, "error is set twice");
+                return ll_parse_error(p, key.begin, "error is set twice");
             memset(&e, 0, sizeof e);
-            s = parse_number(p, &key, &v, &e);
+            s = ll_parse_number(p, &key, &v, &e);
             if (s == LL_OK && (e.count != 1 || !(e.v[0] > 0.0 && e.v[0] < 1.0)))
-                s = parse_error(p, v.begin,
+                s = ll_parse_error(p, v.begin,
                                 "error: expected one relative truncation error in (0, 1), "
                                 "such as 1e-3");
             if (s == LL_OK)
                 m->error_goal = e.v[0];
         } else {
-            s = parse_error(p, key.begin,
+            s = ll_parse_error(p, key.begin,
                             "set has no setting '%.*s'; expected nodes, orders, channels or "
                             "error",
                             (int)key.len, key.begin);
@@ -624,21 +404,19 @@ static ll_status parse_line(parser *p, const char *at, const char *line_end)
     token name;
     int found;
     size_t k;
-    char shown[32];
+    char shown[32], names[512];
     ll_status s = next_token(p, &at, line_end, &name, &found);
     if (s != LL_OK || !found)
         return s;
-    if (token_is(&name, "set"))
+    if (ll_token_is(&name, "set"))
         return parse_settings(p, at, line_end);
-    for (k = 0; k < sizeof words / sizeof words[0]; ++k)
-        if (token_is(&name, words[k].name))
-            return parse_word(p, &words[k], &name, at, line_end);
+    for (k = 0; k < ll_word_table_size; ++k)
+        if (ll_token_is(&name, ll_word_table[k]->name))
+            return parse_word(p, ll_word_table[k], &name, at, line_end);
     snprintf(shown, sizeof shown, "%.*s%s", (int)(name.len > 24 ? 24 : name.len), name.begin,
              name.len > 24 ? "..." : "");
-    return parse_error(p, name.begin,
-                       "unknown word '%s'; expected diffuse, dielectric, conductor, medium, "
-                       "measured or set",
-                       shown);
+    list_words(names, sizeof names);
+    return ll_parse_error(p, name.begin, "unknown word '%s'; expected %s or set", shown, names);
 }
 
 /* ------------------------------------------------------------ the API */
@@ -649,7 +427,8 @@ void ll_material_destroy(ll_material *m)
     if (!m)
         return;
     for (k = 0; k < m->count; ++k)
-        free(m->words[k].file);
+        if (m->words[k].desc && m->words[k].desc->destroy)
+            m->words[k].desc->destroy(&m->words[k]);
     free(m->words);
     free(m->source);
     free(m->metadata);
@@ -692,15 +471,18 @@ static ll_status parse_text(const char *text, const char *source, const char *ma
         at = *end ? end + 1 : end;
     }
     if (s == LL_OK && m->count == 0) {
+        char names[512];
         /* Point after the last character: the start of the next line when
          * the text ends with a newline (or is empty). */
         if (at == text || at[-1] == '\n') {
             p.line++;
             p.line_start = at;
         }
-        s = parse_error(&p, at,
-                        "no layers; expected at least one word (diffuse, dielectric, "
-                        "conductor, medium, measured), top to bottom, one per line");
+        list_words(names, sizeof names);
+        s = ll_parse_error(&p, at,
+                           "no layers; expected at least one word (%s), top to bottom, one "
+                           "per line",
+                           names);
     }
     if (s == LL_OK)
         s = ll_material_check_stack(m);

@@ -1,52 +1,33 @@
 /*
  * What a parsed stack means: the physical checks on the whole stack, the
- * per-channel parameters of each word, and the header of its .bsdf file.
+ * per-channel parameters of each word (its descriptor's params), and the
+ * header of its .bsdf file.
  *
- * Indices: a dielectric's eta is relative to the medium right above it (the
- * issue's convention: `dielectric eta=1.5` is a coat in air). A conductor's
- * eta is the metal's own index, relative to vacuum, as tables and the
- * spectra of data/ior list it; the interface the light meets is the metal
- * against the dielectric above it, so the word's relative index is
- * eta_metal / (product of the dielectric etas above). (The original
- * recipes, e.g. recipes/coated-gold.py, pass the metal's vacuum index
- * unchanged under a coat of 1.5, which overstates the metal's contrast;
- * Fresnel's equations depend on the ratio only.)
+ * Indices: a word's index of refraction is relative to the medium right
+ * above it; the absolute index above a word is the product of the relative
+ * indices (the descriptors' index_ratio) of the words above it.
  */
-#include "material/material.h"
+#include "material/word_table.h"
 
 #include <string.h>
 
-const char *ll_word_kind_name(ll_word_kind kind)
-{
-    switch (kind) {
-    case LL_WORD_DIFFUSE: return "diffuse";
-    case LL_WORD_DIELECTRIC: return "dielectric";
-    case LL_WORD_CONDUCTOR: return "conductor";
-    case LL_WORD_MEDIUM: return "medium";
-    default: return "measured";
-    }
-}
-
-/* Opaque words let no light through: nothing can lie below them. */
-static int word_is_opaque(ll_word_kind kind)
-{
-    return kind == LL_WORD_DIFFUSE || kind == LL_WORD_CONDUCTOR || kind == LL_WORD_MEASURED;
-}
+const char *ll_word_name(const ll_word *w) { return w->desc->name; }
 
 int ll_material_is_opaque(const ll_material *m)
 {
-    return m->count > 0 && word_is_opaque(m->words[m->count - 1].kind);
+    return m->count > 0 && m->words[m->count - 1].desc->opaque;
 }
 
 int ll_material_is_rgb(const ll_material *m)
 {
-    size_t i;
+    size_t i, k;
     for (i = 0; i < m->count; ++i) {
         const ll_word *w = &m->words[i];
-        if (w->named_metal || w->kind == LL_WORD_MEASURED || w->albedo.count == 3 ||
-            w->eta.count == 3 || w->k.count == 3 || w->alpha.count == 3 || w->tau.count == 3 ||
-            w->g.count == 3 || w->kappa.count == 3)
+        if (w->desc->needs_colour && w->desc->needs_colour(w))
             return 1;
+        for (k = 0; k < LL_WORD_MAX_NUMBERS; ++k)
+            if (w->number[k].count == 3)
+                return 1;
     }
     return 0;
 }
@@ -56,13 +37,13 @@ ll_status ll_material_check_stack(const ll_material *m)
     size_t i;
     for (i = 0; i + 1 < m->count; ++i) {
         const ll_word *w = &m->words[i], *below = &m->words[i + 1];
-        if (word_is_opaque(w->kind))
+        if (w->desc->opaque)
             return ll_fail(LL_ERROR_PARSE,
                            "%s:%zu:%zu: %s is opaque (no light passes through it), so it must "
                            "be the bottom layer, but line %zu puts %s below it; expected "
                            "nothing below an opaque layer",
-                           m->source, w->line, w->column, ll_word_kind_name(w->kind),
-                           below->line, ll_word_kind_name(below->kind));
+                           m->source, w->line, w->column, ll_word_name(w), below->line,
+                           ll_word_name(below));
     }
     return LL_OK;
 }
@@ -79,75 +60,67 @@ double ll_number_channel(const ll_number *x, size_t c, size_t n_channels, double
     return LL_LUMA_R * x->v[0] + LL_LUMA_G * x->v[1] + LL_LUMA_B * x->v[2];
 }
 
-/* Absolute index of the medium right above word `word` in a channel: the
- * product of the relative indices of the dielectrics above. */
+double ll_word_index_ratio(const ll_material *m, size_t word, size_t c, size_t n_channels)
+{
+    const ll_word *w = &m->words[word];
+    return w->desc->index_ratio ? w->desc->index_ratio(w, c, n_channels) : 1.0;
+}
+
+/* Absolute index of the medium right above word `word` in a channel. */
 static double index_above(const ll_material *m, size_t word, size_t c, size_t n_channels)
 {
     double eta = 1.0;
     size_t i;
     for (i = 0; i < word; ++i)
-        if (m->words[i].kind == LL_WORD_DIELECTRIC)
-            eta *= ll_number_channel(&m->words[i].eta, c, n_channels, 1.0);
+        eta *= ll_word_index_ratio(m, i, c, n_channels);
     return eta;
+}
+
+void ll_word_params_above(const ll_material *m, size_t word, size_t c, size_t n_channels,
+                          double above, ll_word_params *out)
+{
+    const ll_word *w = &m->words[word];
+    memset(out, 0, sizeof *out);
+    out->desc = w->desc;
+    w->desc->channel(w, c, n_channels, above, out);
 }
 
 void ll_word_params_get(const ll_material *m, size_t word, size_t c, size_t n_channels,
                         ll_word_params *out)
 {
-    const ll_word *w = &m->words[word];
-    memset(out, 0, sizeof *out);
-    out->kind = w->kind;
-    out->phase = LL_PHASE_ISOTROPIC;
-    switch (w->kind) {
-    case LL_WORD_DIFFUSE:
-        out->albedo = ll_number_channel(&w->albedo, c, n_channels, 0.0);
-        break;
-    case LL_WORD_DIELECTRIC:
-        out->eta_re = ll_number_channel(&w->eta, c, n_channels, 1.0);
-        out->alpha = ll_number_channel(&w->alpha, c, n_channels, 0.0);
-        break;
-    case LL_WORD_CONDUCTOR: {
-        double above = index_above(m, word, c, n_channels), n, k;
-        if (w->named_metal && n_channels == 1) {
-            /* Monochrome: the luminance-weighted spectral averages. */
-            n = w->metal_ior.eta_y;
-            k = w->metal_ior.k_y;
-        } else {
-            n = ll_number_channel(&w->eta, c, n_channels, 1.0);
-            k = ll_number_channel(&w->k, c, n_channels, 0.0);
+    ll_word_params_above(m, word, c, n_channels, index_above(m, word, c, n_channels), out);
+}
+
+void ll_material_params(const ll_material *m, size_t n_channels, ll_word_params (*params)[3])
+{
+    double above[3] = { 1.0, 1.0, 1.0 };
+    size_t w, c;
+    for (w = 0; w < m->count; ++w)
+        for (c = 0; c < n_channels; ++c) {
+            ll_word_params_above(m, w, c, n_channels, above[c], &params[w][c]);
+            above[c] *= ll_word_index_ratio(m, w, c, n_channels);
         }
-        out->eta_re = n / above;
-        out->eta_im = k / above;
-        out->alpha = ll_number_channel(&w->alpha, c, n_channels, 0.0);
-        break;
-    }
-    case LL_WORD_MEDIUM:
-        out->albedo = ll_number_channel(&w->albedo, c, n_channels, 0.0);
-        out->tau = ll_number_channel(&w->tau, c, n_channels, 0.0);
-        out->phase = w->phase;
-        if (w->phase == LL_PHASE_HG)
-            out->shape = ll_number_channel(&w->g, c, n_channels, 0.0);
-        else if (w->phase == LL_PHASE_VMF)
-            out->shape = ll_number_channel(&w->kappa, c, n_channels, 0.0);
-        break;
-    case LL_WORD_MEASURED:
-        if (n_channels == 3) {
-            out->weights[c] = 1.0;
-        } else {
-            out->weights[0] = LL_LUMA_R;
-            out->weights[1] = LL_LUMA_G;
-            out->weights[2] = LL_LUMA_B;
-        }
-        break;
-    }
 }
 
 int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
 {
-    return a->kind == b->kind && a->phase == b->phase && a->albedo == b->albedo &&
-           a->eta_re == b->eta_re && a->eta_im == b->eta_im && a->alpha == b->alpha &&
-           a->tau == b->tau && a->shape == b->shape && a->weights[0] == b->weights[0] &&
-           a->weights[1] == b->weights[1] && a->weights[2] == b->weights[2];
+    size_t k;
+    if (a->desc != b->desc || a->choice != b->choice)
+        return 0;
+    for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
+        if (a->v[k] != b->v[k])
+            return 0;
+    return 1;
+}
+
+/* The roughness of an interface word in channel c: its "alpha" number. */
+static double word_alpha(const ll_word *w, size_t c, size_t n_channels)
+{
+    size_t i;
+    for (i = 0; i < LL_WORD_MAX_PARAMS && w->desc->params[i].key; ++i)
+        if (!strcmp(w->desc->params[i].key, "alpha") && w->desc->params[i].slot >= 0)
+            return ll_number_channel(&w->number[w->desc->params[i].slot], c, n_channels, 0.0);
+    return 0.0;
 }
 
 void ll_material_header(const ll_material *m, size_t n_channels, double *eta, double alpha[2])
@@ -160,9 +133,9 @@ void ll_material_header(const ll_material *m, size_t n_channels, double *eta, do
     alpha[0] = alpha[1] = 0.0;
     for (i = 0; i < m->count; ++i) {
         const ll_word *w = &m->words[i];
-        if (w->kind != LL_WORD_DIELECTRIC && w->kind != LL_WORD_CONDUCTOR)
+        if (!w->desc->interface)
             continue;
-        alpha[1] = ll_number_channel(&w->alpha, c, n_channels, 0.0);
+        alpha[1] = word_alpha(w, c, n_channels);
         if (!have_top) {
             alpha[0] = alpha[1];
             have_top = 1;

@@ -362,10 +362,9 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
 {
     static const char fn[] = "ll_layer_set_matusik";
     merl_job job;
-    size_t k, m, orders, N, period, t;
+    size_t m, orders, N, period, t;
     double *cos_table = NULL;
-    ll_order_builder **builders = NULL;
-    ll_status s = LL_OK;
+    ll_status s;
 
     if (!layer || !merl || !weights)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_merl_set_layer: a pointer is NULL");
@@ -378,43 +377,24 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
         N = 4;
     period = 2 * (N - 1);
     cos_table = ll_alloc_array(period, sizeof(double));
-    builders = ll_calloc_array(m, sizeof *builders);
-    if (!cos_table || !builders) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_matusik: out of memory");
-        goto fail;
-    }
+    if (!cos_table)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_matusik: out of memory");
     for (t = 0; t < period; ++t)
         cos_table[t] = cos(LL_PI * (double)t / (double)(N - 1));
-    for (k = 0; k < m && s == LL_OK; ++k)
-        s = ll_order_builder_create(layer->n, &builders[k]);
-    if (s != LL_OK)
-        goto fail;
     job.layer = layer;
     job.merl = merl;
     job.weights = weights;
     job.samples = N;
     job.cos_table = cos_table;
-    job.builders = builders;
+    job.builders = NULL;
     job.watch = watch;
-    /* (The file was read in the first tenth of the progress.) */
+    /* (The file was read in the first tenth of the progress.) Incident
+     * columns from above only: h + 0 .. h + h - 1. */
     s = ll_watch_stage(watch, "measured", 0.1, 0.9, layer->n / 2) ? ll_watch_check(watch, fn)
                                                                    : LL_OK;
     if (s == LL_OK)
-        s = ll_parallel_for_watched(layer->n / 2, merl_column, &job, watch);
-    /* The last report comes before the layer changes. */
-    s = ll_watch_finish(watch, s, fn);
-    if (s != LL_OK)
-        goto fail;
-    free(cos_table);
-    /* Takes the builders whatever happens. */
-    s = ll_layer_set_from_builders(layer, builders);
-    free(builders);
-    return s;
-fail:
-    if (builders)
-        for (k = 0; k < m; ++k)
-            ll_order_builder_destroy(builders[k]);
-    free(builders);
+        s = ll_layer_build_by_columns(layer, layer->n / 2, merl_column, NULL, &job,
+                                      &job.builders, watch, fn);
     free(cos_table);
     return s;
 }

@@ -757,6 +757,10 @@ typedef struct layer_job {
     double *order0;              /* n x n column-major, unweighted     */
     double *ref0;                /* n x n or NULL (conductor compensation) */
     ll_watch *watch;             /* one unit per column, polled per row */
+    const double *w;             /* [h] outgoing weights 2 pi w_j mu_j  */
+    double *work;                /* [6 h] compensation scratch          */
+    double eta_re, eta_im;
+    int conserve_energy;
 } layer_job;
 
 /* Doubles of scratch for one column: every row's series (m each; only the
@@ -986,6 +990,34 @@ static ll_status check_arguments(const ll_layer *layer, double eta_re, double et
     return LL_OK;
 }
 
+/* After the columns: energy compensation on the unweighted order 0, then
+ * the weights, and order 0 into its builder. */
+static ll_status finish_order0(void *ctx)
+{
+    const layer_job *job = ctx;
+    const ll_layer *layer = job->layer;
+    size_t n = layer->n, col;
+    ll_status s = LL_OK;
+    if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
+        return ll_watch_check(job->watch, "ll_layer_set_microfacet");
+    if (job->conserve_energy && job->eta_im == 0.0)
+        compensate_dielectric(job->order0, n, job->w, job->eta_re, job->work);
+    else if (job->conserve_energy)
+        compensate_conductor(job->order0, job->ref0, n, job->w, job->eta_re, job->eta_im,
+                             job->work);
+    for (col = 0; col < n && s == LL_OK; ++col) {
+        double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
+        size_t row;
+        for (row = 0; row < n; ++row)
+            column[row] *= factor;
+        s = ll_order_builder_set_column(job->builders[0], col, column, 0.0);
+        ll_watch_advance(job->watch, 1);
+        if (s == LL_OK)
+            s = ll_watch_check(job->watch, "ll_layer_set_microfacet");
+    }
+    return s;
+}
+
 ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
                                   int conserve_energy, size_t n_orders_internal)
 {
@@ -998,9 +1030,8 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
                                      size_t n_orders_internal, const ll_monitor *monitor)
 {
     static const char fn[] = "ll_layer_set_microfacet";
-    size_t n, m, h, k, col;
+    size_t n, m, h, k;
     ll_microfacet *mf = NULL;
-    ll_order_builder **builders = NULL;
     double *mu = NULL, *order0 = NULL, *ref0 = NULL, *w = NULL, *work = NULL;
     layer_job job;
     ll_watch watch;
@@ -1028,72 +1059,41 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
     w = ll_alloc_array(h, sizeof(double));
     work = ll_alloc_array(h, 6 * sizeof(double));
     order0 = ll_calloc_array(n, n * sizeof(double));
-    builders = ll_calloc_array(m, sizeof *builders);
     if (eta_im > 0.0 && conserve_energy)
         ref0 = ll_calloc_array(n, n * sizeof(double));
-    if (!mu || !w || !work || !order0 || !builders || (eta_im > 0.0 && conserve_energy && !ref0))
+    if (!mu || !w || !work || !order0 || (eta_im > 0.0 && conserve_energy && !ref0))
         goto oom;
-    for (k = 0; k < m && s == LL_OK; ++k)
-        s = ll_order_builder_create(n, &builders[k]);
-    if (s != LL_OK)
-        goto done;
     for (k = 0; k < n; ++k)
         mu[k] = -layer->nodes[k];
     s = ll_microfacet_prepare_watched(mf, mu, n, &watch);
     if (s != LL_OK)
         goto done;
+    for (k = 0; k < h; ++k)
+        w[k] = 2.0 * LL_PI * layer->weights[h + k] * layer->nodes[h + k];
 
     job.layer = layer;
     job.mf = mf;
     job.column_doubles = column_doubles(n, m);
     if (!job.column_doubles)
         goto oom;
-    job.builders = builders;
+    job.builders = NULL;
     job.order0 = order0;
     job.ref0 = ref0;
     job.watch = &watch;
+    job.w = w;
+    job.work = work;
+    job.eta_re = eta_re;
+    job.eta_im = eta_im;
+    job.conserve_energy = conserve_energy;
     s = ll_watch_stage(&watch, "interface", 0.1, 0.85, n) ? ll_watch_check(&watch, fn) : LL_OK;
     if (s == LL_OK)
-        s = ll_parallel_for_watched(n, layer_column, &job, &watch);
-    if (s == LL_OK && ll_watch_stage(&watch, "interface", 0.95, 0.05, n))
-        s = ll_watch_check(&watch, fn);
-    if (s != LL_OK)
-        goto done;
-
-    /* Energy compensation on the unweighted order 0, then the weights. */
-    for (k = 0; k < h; ++k)
-        w[k] = 2.0 * LL_PI * layer->weights[h + k] * layer->nodes[h + k];
-    if (conserve_energy && eta_im == 0.0)
-        compensate_dielectric(order0, n, w, eta_re, work);
-    else if (conserve_energy)
-        compensate_conductor(order0, ref0, n, w, eta_re, eta_im, work);
-    for (col = 0; col < n && s == LL_OK; ++col) {
-        double factor = ll_layer_surface_factor(layer, col, 0), *column = order0 + col * n;
-        size_t row;
-        for (row = 0; row < n; ++row)
-            column[row] *= factor;
-        s = ll_order_builder_set_column(builders[0], col, column, 0.0);
-        ll_watch_advance(&watch, 1);
-        if (s == LL_OK)
-            s = ll_watch_check(&watch, fn);
-    }
-    /* The last report comes before the layer changes: a cancel there still
-     * leaves it as it was. */
-    s = ll_watch_finish(&watch, s, fn);
-    if (s != LL_OK)
-        goto done;
-    s = ll_layer_set_from_builders(layer, builders); /* takes the builders */
-    free(builders);
-    builders = NULL;
+        s = ll_layer_build_by_columns(layer, n, layer_column, finish_order0, &job,
+                                      &job.builders, &watch, fn);
     goto done;
 oom:
     s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory for %zu nodes",
                 n);
 done:
-    if (builders)
-        for (k = 0; k < m; ++k)
-            ll_order_builder_destroy(builders[k]);
-    free(builders);
     ll_microfacet_destroy(mf);
     free(mu);
     free(w);

@@ -67,6 +67,9 @@ static const char usage[] =
     "                     has three values or a metal is named, else mono)\n"
     "  --error E          series truncation error of the file (default 1e-3)\n"
     "  --threads N        worker threads (default: all processors)\n"
+    "  --max-memory SIZE  memory budget: a build estimated to need more is refused\n"
+    "                     before it starts (8G, 500M, 1.5G, 64K or bytes; default:\n"
+    "                     half of the physical memory)\n"
     "  --ior-dir DIR      where NAME.eta.spd / NAME.k.spd spectra are (sets\n"
     "                     LAYERLAB_IOR_DIR; searched first)\n"
     "  --dry-run          print the resolution, estimated memory and time; build nothing\n"
@@ -92,13 +95,14 @@ static const char usage[] =
     "  medium      albedo=0.25,0.0,0.95 g=0.5 tau=0.5\n"
     "  conductor   eta=Au alpha=0.1\n"
     "\n"
-    "exit codes: 0 done, 1 bad input, 2 I/O error, 3 numerical failure or out of\n"
-    "memory; Ctrl-C stops the build, leaves no output file and ends by the signal.\n"
+    "exit codes: 0 done, 1 bad input (also a build over the memory budget), 2 I/O\n"
+    "error, 3 numerical failure or out of memory; Ctrl-C stops the build, leaves no\n"
+    "output file and ends by the signal.\n"
     "See docs/material-language.md for the whole language.\n";
 
 typedef struct args {
     const char *input, *output, *ior_dir;
-    size_t nodes, orders, channels, threads;
+    size_t nodes, orders, channels, threads, max_memory;
     double error;
     int dry_run, quiet;
 } args;
@@ -134,6 +138,34 @@ static int parse_size(const char *text, size_t *out)
     errno = 0;
     v = strtoul(text, &end, 10);
     if (*end || errno)
+        return 0;
+    *out = (size_t)v;
+    return 1;
+}
+
+/* A memory size: a number (fractions allowed) with an optional K, M, G or
+ * T suffix (powers of 1024), e.g. 8G, 500M, 1.5G, 1048576. */
+static int parse_memory(const char *text, size_t *out)
+{
+    char *end;
+    double v, scale = 1.0;
+    if (!text || !*text || *text == '-' || *text == '+')
+        return 0;
+    errno = 0;
+    v = strtod(text, &end);
+    if (end == text || errno)
+        return 0;
+    switch (*end) {
+    case 'k': case 'K': scale = 1024.0; ++end; break;
+    case 'm': case 'M': scale = 1048576.0; ++end; break;
+    case 'g': case 'G': scale = 1073741824.0; ++end; break;
+    case 't': case 'T': scale = 1099511627776.0; ++end; break;
+    default: break;
+    }
+    if (*end == 'B' || *end == 'b')
+        ++end;
+    v *= scale;
+    if (*end || !(v >= 1.0) || v >= 18446744073709551615.0 || v > (double)(size_t)-1)
         return 0;
     *out = (size_t)v;
     return 1;
@@ -177,6 +209,12 @@ static int parse_args(int argc, char **argv, args *a)
             if (*end || !(a->error > 0.0 && a->error < 1.0))
                 return bad_usage("--error: expected a number in (0, 1)", next);
             ++i;
+        } else if (!strcmp(o, "--max-memory")) {
+            if (!parse_memory(next, &a->max_memory))
+                return bad_usage("--max-memory: expected a size such as 8G, 500M, 1.5G or "
+                                 "a byte count",
+                                 next ? next : "(missing)");
+            ++i;
         } else if (!strcmp(o, "--ior-dir")) {
             if (!next)
                 return bad_usage("--ior-dir needs a directory", NULL);
@@ -214,23 +252,41 @@ static double now_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static void print_resolution(const ll_material *m, const ll_build_options *o)
+/* --dry-run: the estimate; exit 1 when a build would be refused. */
+static int print_resolution(const ll_material *m, const ll_build_options *o)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    if (ll_material_estimate(m, o, &e) != LL_OK) {
+    ll_status s = ll_material_estimate(m, o, &e);
+    if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
-        return;
+        return exit_code_for(s);
     }
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n", e.n_nodes,
            e.n_orders, e.n_channels, e.n_channels == 1 ? "" : "s");
     printf("work         %zu layer%s built, %zu addition%s, %zu doubling%s\n", e.layers_built,
            e.layers_built == 1 ? "" : "s", e.additions, e.additions == 1 ? "" : "s",
            e.doublings, e.doublings == 1 ? "" : "s");
-    printf("memory       about %.0f MiB at its peak\n", e.peak_bytes / 1048576.0);
-    printf("time         about %.1f s on %zu thread%s (rates of a 2-core x86-64 with "
-           "OpenBLAS)\n",
+    printf("memory       about %.0f MiB at its peak (budget %.0f MiB)\n",
+           e.peak_bytes / 1048576.0, (double)e.max_memory_bytes / 1048576.0);
+    printf("time         about %.2f s on %zu thread%s, %.2f s of CPU (rates of a 2-core "
+           "x86-64 with OpenBLAS)\n",
            e.seconds, o->threads ? o->threads : ll_get_thread_count(),
-           (o->threads ? o->threads : ll_get_thread_count()) == 1 ? "" : "s");
+           (o->threads ? o->threads : ll_get_thread_count()) == 1 ? "" : "s", e.cpu_seconds);
+    if (e.over_budget) {
+        fprintf(stderr,
+                "llbuild: a build would be refused: it needs more than the memory budget "
+                "(raise it with --max-memory SIZE, or lower the resolution)\n");
+        return EXIT_BAD_INPUT;
+    }
+    return 0;
+}
+
+/* A build refused by the memory budget before it started is a request
+ * beyond what the options allow (bad input), not a failure to allocate. */
+static int refused_by_budget(const ll_material *m, const ll_build_options *o)
+{
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    return ll_material_estimate(m, o, &e) == LL_OK && e.over_budget;
 }
 
 /* Directional albedo of the built layers at a few incident angles. */
@@ -322,14 +378,15 @@ int main(int argc, char **argv)
     o.threads = a.threads;
     o.error_goal = a.error;
     o.cancel = &cancel_flag;
+    o.max_memory_bytes = a.max_memory;
     if (cancel_flag) {
         ll_material_destroy(m);
         return die_cancelled();
     }
     if (a.dry_run) {
-        print_resolution(m, &o);
+        code = print_resolution(m, &o);
         ll_material_destroy(m);
-        return cancel_flag ? die_cancelled() : 0;
+        return cancel_flag ? die_cancelled() : code;
     }
 
     ll_progress_init(&bar, stderr, a.quiet, start);
@@ -358,7 +415,8 @@ int main(int argc, char **argv)
         code = -1;
     } else if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
-        code = exit_code_for(s);
+        code = s == LL_ERROR_OUT_OF_MEMORY && refused_by_budget(m, &o) ? EXIT_BAD_INPUT
+                                                                         : exit_code_for(s);
     } else {
         if (!a.quiet)
             print_summary(&a, layers, n_channels, now_seconds() - start);

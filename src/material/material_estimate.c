@@ -1,0 +1,326 @@
+/*
+ * The cost of a build, from counts alone: the resolution, the words and
+ * the channels, with no quadrature and no allocation that grows with the
+ * resolution, so that an estimate is instant for any input and the memory
+ * budget can refuse a build before it allocates anything.
+ *
+ * The model follows the build of material_build.c step by step (the same
+ * sharing between channels): each word's layer (its descriptor's cost),
+ * each adding step, each doubling of a medium, the writing. The rates
+ * below were measured stage by stage on the development machine (x86-64,
+ * 2 cores, OpenBLAS; docs/material-language.md, "Estimates", has the
+ * measurements and the model's error on every example).
+ */
+#include "material/word_table.h"
+#include "grammar/grammar.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A rough interface, measured at n = 40 to 300 and m = 20 to 600: the
+ * pairs (mu_o, mu_i) dominate (the Chebyshev samples, Filon's rule where a
+ * kink is), a dielectric's growing with its roughness, plus a little per
+ * order and pair (less per pair at more nodes: 1.5e-9 (200 / n) s; the
+ * coated-diffuse recipe's 1098 x 2103 coat took 2.1 s). Its stored values
+ * come to about 12 + 5.7 ln(1/alpha) dense orders for a dielectric (measured
+ * 34, 31, 24, 19 at alpha = 0.02, 0.05, 0.1, 0.3) and 8.6 ln(1/alpha) - 4.8
+ * for a conductor (25, 23, 15, 9, 6 at 0.02, 0.05, 0.1, 0.2, 0.3), whatever
+ * n and m; each thread
+ * keeps a column of every order, 12 doubles deep. About half of the time
+ * does not gain from more threads (coated-gold, mostly interfaces: 0.66 s
+ * on one thread, 0.50 s on two; plastic 0.16 s on both). */
+#define COST_PAIR_DIELECTRIC 2.9e-6 /* s per pair at alpha = 0.1, n = 200;
+                                       about like alpha n^(1/3) */
+#define COST_PAIR_CONDUCTOR 9e-7
+#define COST_PAIR_ORDER 1.5e-9
+
+/* Writing: seconds per stored value (spline fits, float conversion). */
+#define COST_WRITE 3e-8
+/* A process: start, parse, the OpenBLAS set-up (CPU seconds; the wall
+ * time adds loading and thread start-up), and the resident memory of the
+ * library before any layer. */
+#define PROCESS_SECONDS 0.01
+#define PROCESS_WALL_SECONDS 0.03
+#define PROCESS_BYTES (7.5 * 1048576.0)
+/* Per stored order: its segment table. */
+#define ORDER_BYTES(n) (16.0 * (2.0 * (double)(n) + 1.0) + 64.0)
+/* The adding's dense h x h blocks per thread. */
+#define ADD_WORKSPACE_BLOCKS 12.0
+
+static double parallel(double seconds, size_t items, size_t threads)
+{
+    size_t t = threads < items ? threads : items;
+    return seconds / (double)(t ? t : 1);
+}
+
+size_t ll_doubling_count(double tau, double min_mu)
+{
+    double tau0;
+    size_t k;
+    ll_expand_schedule(tau, min_mu, &tau0, &k);
+    return k;
+}
+
+void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, size_t m,
+                       ll_word_cost *out)
+{
+    double pairs = (double)n * (double)n, a = alpha > 0.0 ? alpha : 1.0;
+    double per_pair = eta_im > 0.0 ? COST_PAIR_CONDUCTOR
+                                   : COST_PAIR_DIELECTRIC * pow((double)n / 200.0, 0.33) *
+                                         (a / 0.1);
+    (void)eta_re;
+    out->parallel_seconds =
+        0.5 * pairs * (per_pair + COST_PAIR_ORDER * (200.0 / (double)n) * (double)m);
+    out->serial_seconds = out->parallel_seconds;
+    out->items = n;
+    out->orders_nonzero = (double)m;
+    out->dense_orders = eta_im > 0.0 ? fmax(2.0, 8.6 * log(1.0 / a) - 4.8)
+                                     : 12.0 + 5.7 * log(1.0 / fmin(a, 1.0));
+    if (out->dense_orders > (double)m)
+        out->dense_orders = (double)m;
+    out->thread_bytes = 12.0 * 8.0 * (double)n * (double)m;
+}
+
+/* CPU seconds (one thread) of one adding step between layers holding
+ * a_orders and b_orders of the m orders. */
+static double add_cpu(size_t n, double a_orders, double b_orders, size_t m)
+{
+    double both = fmin(a_orders, b_orders), pairs = (double)n * (double)n;
+    return pairs * (both * LL_COST_ADD_ORDER + ((double)m - both) * LL_COST_ADD_EMPTY);
+}
+
+double ll_cost_add(size_t n, size_t m, size_t threads)
+{
+    return parallel(add_cpu(n, (double)m, (double)m, m), m, threads);
+}
+
+static void word_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *c)
+{
+    memset(c, 0, sizeof *c);
+    c->items = 1;
+    p->desc->cost(p, n, m, c);
+    if (c->orders_nonzero > (double)m)
+        c->orders_nonzero = (double)m;
+}
+
+/* CPU and wall seconds of one word's layer with its doublings. */
+static void word_seconds(const ll_word_cost *c, size_t n, size_t m, size_t threads,
+                         double *cpu, double *wall)
+{
+    double d = (double)c->doublings * add_cpu(n, c->orders_nonzero, c->orders_nonzero, m);
+    *cpu = c->parallel_seconds + c->serial_seconds + d;
+    *wall = parallel(c->parallel_seconds, c->items, threads) + c->serial_seconds +
+            parallel(d, (size_t)c->orders_nonzero, threads);
+}
+
+double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
+{
+    ll_word_cost c;
+    double cpu, wall;
+    word_cost(p, n, m, &c);
+    word_seconds(&c, n, m, threads, &cpu, &wall);
+    return wall;
+}
+
+double ll_cost_write(size_t n, size_t m, size_t n_channels)
+{
+    /* (Progress shares only: about 17 dense orders per channel.) */
+    double dense = 17.0 < (double)m ? 17.0 : (double)m;
+    return (double)n * (double)n * dense * (double)n_channels * COST_WRITE;
+}
+
+size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c)
+{
+    size_t d;
+    for (d = 0; d < c; ++d)
+        if (ll_word_params_equal(&params[w][d], &params[w][c]))
+            return d;
+    return c;
+}
+
+void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
+                     const size_t *below, size_t *owner)
+{
+    size_t c, d;
+    for (c = 0; c < nch; ++c) {
+        owner[c] = c;
+        for (d = 0; d < c; ++d)
+            if ((!below || below[d] == below[c]) &&
+                ll_word_params_equal(&params[w][d], &params[w][c])) {
+                owner[c] = d;
+                break;
+            }
+    }
+}
+
+/* Bytes a layer keeps: its stored values and every order's segments. */
+static double layer_bytes(size_t n, size_t m, double dense_orders)
+{
+    return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
+}
+
+void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
+                      size_t m, size_t nch, size_t threads, ll_cost_plan *out)
+{
+    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, t = threads < m ? threads : m;
+    double acc_nz[3] = { 0, 0, 0 }, acc_dense[3] = { 0, 0, 0 }, peak = 0.0;
+    double h = (double)(n / 2), stored = 0.0;
+
+    memset(out, 0, sizeof *out);
+    out->n = n;
+    out->m = m;
+    out->channels = nch;
+    out->threads = threads;
+    for (w = mat->count; w-- > 0;) {
+        int bottom = w + 1 == mat->count;
+        double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0, held = 0.0;
+        double nz[3], dense[3];
+        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
+        for (c = 0; c < nch; ++c) {
+            nz[c] = dense[c] = 0.0;
+            if (!bottom && owner[c] == c)
+                before += layer_bytes(n, m, acc_dense[below[c]]);
+        }
+        for (c = 0; c < nch; ++c) {
+            ll_word_cost wc;
+            const ll_word_params *p = &params[w][c];
+            if (owner[c] != c)
+                continue;
+            word_cost(p, n, m, &wc);
+            if (ll_same_word_as(params, w, c) == c) {
+                double cpu, wall;
+                word_seconds(&wc, n, m, threads, &cpu, &wall);
+                ++out->layers_built;
+                out->doublings += wc.doublings;
+                out->cpu_seconds += cpu;
+                out->seconds += wall;
+                words += layer_bytes(n, m, wc.dense_orders);
+                if (wc.thread_bytes > scratch)
+                    scratch = wc.thread_bytes;
+                if (wc.build_bytes > held)
+                    held = wc.build_bytes;
+            }
+            if (bottom) {
+                nz[c] = wc.orders_nonzero;
+                dense[c] = wc.dense_orders;
+            } else {
+                double a = acc_nz[below[c]], cpu = add_cpu(n, a, wc.orders_nonzero, m);
+                ++out->additions;
+                out->cpu_seconds += cpu;
+                out->seconds += parallel(cpu, m, threads);
+                /* The stack keeps about the mean of what the two hold. */
+                nz[c] = fmax(a, wc.orders_nonzero);
+                dense[c] = fmin(0.5 * (acc_dense[below[c]] + wc.dense_orders), nz[c]);
+            }
+            /* (The bottom stack is a clone of the word: shared orders.) */
+            if (!bottom && layer_bytes(n, m, dense[c]) > result)
+                result = layer_bytes(n, m, dense[c]);
+        }
+        /* Live at once: the stacks below, this level's word layers with
+         * their builders' scratch, the one stack being made (each channel's
+         * replaces its old one when done) and the adding's dense blocks, per
+         * thread. */
+        scratch = scratch > ADD_WORKSPACE_BLOCKS * 8.0 * h * h ? scratch
+                                                               : ADD_WORKSPACE_BLOCKS * 8.0 * h * h;
+        if (before + words + result + (double)t * scratch + held > peak)
+            peak = before + words + result + (double)t * scratch + held;
+        for (c = 0; c < nch; ++c) {
+            acc_nz[c] = nz[c];
+            acc_dense[c] = dense[c];
+        }
+        memcpy(below, owner, sizeof below);
+    }
+    /* Writing: the finished layers and the file's float32 coefficients
+     * with their spline fits (about as large again). */
+    for (c = 0; c < nch; ++c)
+        if (below[c] == c)
+            stored += (double)n * (double)n * acc_dense[c];
+    if (16.0 * stored > peak)
+        peak = 16.0 * stored;
+    out->cpu_seconds += stored * COST_WRITE + PROCESS_SECONDS;
+    out->seconds += stored * COST_WRITE + PROCESS_WALL_SECONDS;
+    out->peak_bytes = peak + PROCESS_BYTES;
+}
+
+static void format_bytes(double bytes, char *buf, size_t cap)
+{
+    if (bytes >= 1024.0 * 1048576.0)
+        snprintf(buf, cap, "%.3g GiB", bytes / (1024.0 * 1048576.0));
+    else
+        snprintf(buf, cap, "%.3g MiB", bytes / 1048576.0);
+}
+
+ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan, size_t budget,
+                          const char *fn)
+{
+    char need[32], have[32];
+    if (plan->peak_bytes <= (double)budget)
+        return LL_OK;
+    format_bytes(plan->peak_bytes, need, sizeof need);
+    format_bytes((double)budget, have, sizeof have);
+    return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                   "%s: %s: this build (%zu nodes x %zu orders, %zu channel%s) needs about %s "
+                   "at its peak, more than the memory budget of %s; raise the budget "
+                   "(llbuild --max-memory SIZE, ll_build_options.max_memory_bytes; the "
+                   "default is half of the physical memory) or lower the resolution",
+                   fn, mat->source, plan->n, plan->m, plan->channels,
+                   plan->channels == 1 ? "" : "s", need, have);
+}
+
+/* The worker threads a build with these options would run on. */
+static size_t build_threads(const ll_build_options *o)
+{
+    return o->threads ? o->threads : ll_get_thread_count();
+}
+
+ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
+                               ll_build_estimate *estimate)
+{
+    ll_build_options o;
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    ll_word_params(*params)[3] = NULL;
+    ll_cost_plan plan;
+    size_t n, m, nch, size;
+    ll_status s;
+
+    /* An older, smaller struct ends at `seconds`: the fields past it are
+     * then not written. */
+    if (!estimate || estimate->struct_size < offsetof(ll_build_estimate, seconds) +
+                                                 sizeof estimate->seconds)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_material_estimate: estimate is NULL or its struct_size is smaller "
+                       "than the first version of ll_build_estimate (LL_BUILD_ESTIMATE_INIT "
+                       "sets it)");
+    if (!material)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
+    s = ll_build_options_read(opts, &o, "ll_material_estimate");
+    if (s == LL_OK)
+        s = ll_material_plan(material, &o, &n, &m, &nch);
+    if (s != LL_OK)
+        return s;
+    params = ll_calloc_array(material->count, sizeof *params);
+    if (!params)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_material_estimate: out of memory");
+    ll_material_params(material, nch, params);
+    ll_material_cost(material, (const ll_word_params(*)[3])params, n, m, nch,
+                     build_threads(&o), &plan);
+    free(params);
+    e.n_nodes = n;
+    e.n_orders = m;
+    e.n_channels = nch;
+    e.layers_built = plan.layers_built;
+    e.additions = plan.additions;
+    e.doublings = plan.doublings;
+    e.peak_bytes = plan.peak_bytes;
+    e.seconds = plan.seconds;
+    e.cpu_seconds = plan.cpu_seconds;
+    e.max_memory_bytes = o.max_memory_bytes;
+    e.over_budget = plan.peak_bytes > (double)o.max_memory_bytes;
+    size = estimate->struct_size < sizeof e ? estimate->struct_size : sizeof e;
+    e.struct_size = estimate->struct_size;
+    memcpy(estimate, &e, size);
+    return LL_OK;
+}

@@ -1,0 +1,187 @@
+/*
+ * The table of words of the material language: one descriptor per word
+ * (diffuse, dielectric, conductor, medium, measured), which the parser, the
+ * stack checks, the resolution, the cost model, the build and the metadata
+ * iterate over. A word is one file, src/material/word_NAME.c, holding its
+ * descriptor (its functions static inside), plus one entry in the table of
+ * word_table.c; nothing else names a word.
+ */
+#ifndef LL_MATERIAL_WORD_TABLE_H
+#define LL_MATERIAL_WORD_TABLE_H
+
+#include "material/material.h"
+
+/* ------------------------------------------------ parsing, for the words */
+
+/* A token: text [begin, begin + len) of the current line. */
+typedef struct ll_token {
+    const char *begin;
+    size_t len;
+} ll_token;
+
+typedef struct ll_parser ll_parser; /* material_parse.c */
+
+LL_INTERNAL int ll_token_is(const ll_token *t, const char *s);
+/* source:line:column: what (LL_ERROR_PARSE). */
+LL_INTERNAL ll_status ll_parse_error(const ll_parser *p, const char *at, const char *fmt, ...)
+    LL_PRINTF(3, 4);
+/* One value or three comma-separated ones (R,G,B). */
+LL_INTERNAL ll_status ll_parse_number(const ll_parser *p, const ll_token *key,
+                                      const ll_token *v, ll_number *out);
+/* Every value of x within [lo, hi] (each bound closed when its flag is set),
+ * else "key=value is out of range: why". */
+LL_INTERNAL ll_status ll_parse_check_range(const ll_parser *p, const ll_token *key,
+                                           const ll_token *v, const ll_number *x, double lo,
+                                           int lo_closed, double hi, int hi_closed,
+                                           const char *why);
+/* One real number, the whole of [s, s + len): digits with an optional
+ * sign, point and exponent (no hex, inf or nan). 1 if it is one. */
+LL_INTERNAL int ll_scan_real(const char *s, size_t len, double *out);
+LL_INTERNAL size_t ll_parser_line(const ll_parser *p);
+LL_INTERNAL size_t ll_parser_column(const ll_parser *p, const char *at);
+/* The material file's directory (names and relative paths), or NULL. */
+LL_INTERNAL const char *ll_parser_dir(const ll_parser *p);
+
+/* --------------------------------------------- metadata, for the words */
+
+typedef struct ll_text {
+    char *data;
+    size_t len, cap;
+    int failed;
+} ll_text;
+
+LL_INTERNAL void ll_text_append(ll_text *b, const char *fmt, ...) LL_PRINTF(2, 3);
+LL_INTERNAL void ll_text_string(ll_text *b, const char *s); /* a JSON string */
+/* , "key": v or , "key": [r, g, b]; nothing when x is absent. */
+LL_INTERNAL void ll_text_number(ll_text *b, const char *key, const ll_number *x);
+
+/* ------------------------------------------------------- the descriptors */
+
+/* One parameter of a word. A number (parse == NULL) is stored in
+ * ll_word.number[slot], may be one value or three (R, G, B) and must lie
+ * in [lo, hi]; `check` (nullable) adds what a range cannot say. Other
+ * parameters (a name, a path, a choice) parse themselves. */
+typedef struct ll_param_desc {
+    const char *key;
+    int required;
+    int slot;                 /* index into ll_word.number, or -1       */
+    double lo, hi;
+    int lo_closed, hi_closed;
+    const char *why;          /* the range's reason, in the message     */
+    ll_status (*parse)(const ll_parser *p, ll_word *w, const ll_token *key,
+                       const ll_token *v);
+    ll_status (*check)(const ll_parser *p, const ll_word *w, const ll_token *key,
+                       const ll_token *v, const ll_number *x);
+} ll_param_desc;
+
+/* The context a word's builder gets: the monitor to pass to its next
+ * public layer call (credited with `share` of the word's modelled cost; it
+ * carries the build's progress and cancellation; share 0 shows the call
+ * under its own stage name, e.g. "phase function"), and the doubling of a
+ * medium with the build's progress (ll_layer_expand_ex). The builder uses
+ * only public calls (ll_layer.h). */
+typedef struct ll_word_build_ctx {
+    const ll_monitor *(*monitor)(void *user, double share);
+    ll_status (*expand)(void *user, ll_layer *layer, double tau);
+    void *user;
+} ll_word_build_ctx;
+
+/* What one word's layer costs to build at n nodes and m orders, one
+ * channel, as measured (docs/material-language.md, "Estimates"): CPU
+ * seconds of the part that runs in parallel over `items` (columns or
+ * orders) and of the serial part, the doublings after it, the orders that
+ * hold anything (what an adding step with it works on), its stored values
+ * in units of n x n (dense_orders; what its layer keeps), the scratch
+ * bytes of each thread while it is built and what it holds once while it
+ * is built (a measured table). */
+typedef struct ll_word_cost {
+    double parallel_seconds;
+    size_t items;
+    double serial_seconds;
+    size_t doublings;
+    double orders_nonzero;
+    double dense_orders;
+    double thread_bytes;
+    double build_bytes;       /* held once while it is built (a table)   */
+} ll_word_cost;
+
+#define LL_WORD_MAX_PARAMS 8
+
+struct ll_word_desc {
+    const char *name;
+    const char *example;      /* a whole line, for messages              */
+    const char *stage;        /* progress stage name                     */
+    int opaque;               /* no light through: only at the bottom    */
+    int interface;            /* its alpha is the header's roughness      */
+    ll_param_desc params[LL_WORD_MAX_PARAMS]; /* up to the first key NULL */
+    /* Checks once the whole line is read (nullable). */
+    ll_status (*finish)(const ll_parser *p, ll_word *w, const char *word_at);
+    /* Colour even without a three-valued number (nullable). */
+    int (*needs_colour)(const ll_word *w);
+    /* The relative index of refraction it puts below itself in channel c
+     * (nullable: 1, index-matched). */
+    double (*index_ratio)(const ll_word *w, size_t c, size_t n_channels);
+    /* Plain numbers of channel c; `above` is the absolute index of the
+     * medium right above the word. out is zeroed, out->desc set. */
+    void (*channel)(const ll_word *w, size_t c, size_t n_channels, double above,
+                   ll_word_params *out);
+    /* Nodes and orders it needs (the resolution heuristic); may fail with
+     * a message naming the largest supported parameter. */
+    ll_status (*resolution)(const ll_word_params *p, size_t *n_nodes, size_t *n_orders);
+    void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);
+    /* Fill a created layer (any content) for one channel. */
+    ll_status (*build)(const ll_word_build_ctx *ctx, const ll_word *w, const ll_word_params *p,
+                       ll_layer *layer);
+    /* Its fields of the JSON description: , "key": value ... */
+    void (*metadata)(ll_text *b, const ll_word *w);
+    /* Release what parse allocated in w (nullable). */
+    void (*destroy)(ll_word *w);
+};
+
+/* The words, in the order messages list them. */
+LL_INTERNAL extern const ll_word_desc *const ll_word_table[];
+LL_INTERNAL extern const size_t ll_word_table_size;
+
+/* The descriptors, one per word_NAME.c. */
+LL_INTERNAL extern const ll_word_desc ll_word_diffuse;
+LL_INTERNAL extern const ll_word_desc ll_word_dielectric;
+LL_INTERNAL extern const ll_word_desc ll_word_conductor;
+LL_INTERNAL extern const ll_word_desc ll_word_medium;
+LL_INTERNAL extern const ll_word_desc ll_word_measured;
+
+/* Where each word keeps its numbers (ll_word.number) and its per-channel
+ * values (ll_word_params.v): the words' own files and the tests use these. */
+enum { LL_DIFFUSE_ALBEDO = 0 };
+enum { LL_DIELECTRIC_ETA = 0, LL_DIELECTRIC_ALPHA = 1 };           /* values: eta, alpha */
+enum { LL_CONDUCTOR_ETA = 0, LL_CONDUCTOR_K = 1, LL_CONDUCTOR_ALPHA = 2 }; /* likewise,
+                                                        relative to the medium above */
+enum { LL_MEDIUM_ALBEDO = 0, LL_MEDIUM_TAU = 1, LL_MEDIUM_G = 2, LL_MEDIUM_KAPPA = 3,
+       LL_MEDIUM_SHAPE = 2 /* value: g (HG) or kappa (vMF) */ };
+typedef enum { LL_PHASE_ISOTROPIC, LL_PHASE_HG, LL_PHASE_VMF } ll_phase; /* medium's choice */
+enum { LL_MEASURED_WEIGHT_R = 0 }; /* values: the weights of the MERL channels R, G, B */
+
+/* --------------------------------------- shared by the words' cost models */
+
+/* Doublings that ll_layer_expand performs for tau on nodes whose smallest
+ * |mu| is min_mu. */
+LL_INTERNAL size_t ll_doubling_count(double tau, double min_mu);
+
+/* The cost of a rough interface (ll_layer_set_microfacet) of roughness
+ * alpha and relative index eta_re + i eta_im (material_estimate.c). */
+/* Per-order CPU seconds of an adding or doubling step per n x n entry:
+ * orders where both layers hold something, and the others (a pass over
+ * the storage). */
+#define LL_COST_ADD_ORDER 4.5e-9
+#define LL_COST_ADD_EMPTY 3e-10
+LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n,
+                                   size_t m, ll_word_cost *out);
+
+/* The roughness parameter of interfaces: its lower limit is the one of
+ * ll_layer_set_microfacet. */
+#define LL_PARAM_ALPHA(slot_)                                                               \
+    { "alpha", 1, (slot_), LL_MICROFACET_MIN_ALPHA, 1e300, 1, 1,                            \
+      "the roughness alpha must be >= 0.001 (LL_MICROFACET_MIN_ALPHA: smoother "            \
+      "interfaces need more Fourier orders than a layer can hold)",                       \
+      NULL, NULL }
+
+#endif /* LL_MATERIAL_WORD_TABLE_H */
