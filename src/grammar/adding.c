@@ -36,7 +36,7 @@ typedef struct workspace {
     void *memory;
 } workspace;
 
-static void workspace_free(workspace *w) { free(w->memory); }
+static void workspace_free(workspace *w) { ll_free(w->memory); }
 
 static ll_status workspace_init(workspace *w, size_t h)
 {

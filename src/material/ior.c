@@ -21,8 +21,8 @@ void ll_spectrum_free(ll_spectrum *s)
 {
     if (!s)
         return;
-    free(s->lambda);
-    free(s->value);
+    ll_free(s->lambda);
+    ll_free(s->value);
     s->lambda = s->value = NULL;
     s->count = 0;
 }
@@ -32,12 +32,12 @@ static int spectrum_push(ll_spectrum *s, size_t *capacity, double lambda, double
 {
     if (s->count == *capacity) {
         size_t cap = *capacity ? 2 * *capacity : 64;
-        double *l = realloc(s->lambda, cap * sizeof *l);
+        double *l = ll_realloc(s->lambda, cap * sizeof *l);
         double *v;
         if (!l)
             return 0;
         s->lambda = l;
-        v = realloc(s->value, cap * sizeof *v);
+        v = ll_realloc(s->value, cap * sizeof *v);
         if (!v)
             return 0;
         s->value = v;
@@ -84,7 +84,7 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
     f = fopen(path, "r");
     if (!f)
         return ll_fail(LL_ERROR_IO, "cannot open the spectrum %s: %s", path, strerror(errno));
-    while (getline(&line, &line_cap, f) >= 0) {
+    while (ll_getline(&line, &line_cap, f) >= 0) {
         double lambda, value;
         int kind = parse_sample_line(line, &lambda, &value);
         ++line_no;
@@ -117,12 +117,12 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
                          path, s.count);
         goto fail;
     }
-    free(line);
+    ll_free(line);
     fclose(f);
     *out = s;
     return LL_OK;
 fail:
-    free(line);
+    ll_free(line);
     fclose(f);
     ll_spectrum_free(&s);
     return status;
@@ -186,7 +186,7 @@ static char *join_path(const char *dir, const char *name, const char *suffix)
     char *p;
     if (!ll_size_add(a, b, &total) || !ll_size_add(total, c + 2, &total))
         return NULL;
-    p = malloc(total);
+    p = ll_malloc(total);
     if (p)
         snprintf(p, total, "%s/%s%s", dir, name, suffix);
     return p;
@@ -219,8 +219,8 @@ ll_status ll_metal_ior_from_dir(const char *dir, const char *name, ll_metal_ior 
 done:
     ll_spectrum_free(&n);
     ll_spectrum_free(&k);
-    free(eta_path);
-    free(k_path);
+    ll_free(eta_path);
+    ll_free(k_path);
     return s;
 }
 
@@ -240,7 +240,7 @@ static void list_add(dir_list *l, const char *a, const char *b)
         return;
     if (l->len + add > l->cap) {
         size_t cap = 2 * (l->len + add) + 256;
-        char *t = realloc(l->text, cap);
+        char *t = ll_realloc(l->text, cap);
         if (!t) {
             l->failed = 1;
             return;
@@ -330,7 +330,7 @@ ll_status ll_ior_search_dirs(const char *material_dir, char **out)
     if (have_lib)
         add_source_tree(&l, lib);
     if (l.failed) {
-        free(l.text);
+        ll_free(l.text);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory listing the ior directories");
     }
     if (!l.text)
@@ -344,8 +344,8 @@ static int has_metal(const char *dir, const char *name)
 {
     char *a = join_path(dir, name, ".eta.spd"), *b = join_path(dir, name, ".k.spd");
     int ok = a && b && access(a, R_OK) == 0 && access(b, R_OK) == 0;
-    free(a);
-    free(b);
+    ll_free(a);
+    ll_free(b);
     return ok;
 }
 
@@ -367,7 +367,7 @@ static void append_names(char *msg, size_t cap, const char *dir)
     while ((e = readdir(d)) != NULL && count < sizeof names / sizeof names[0]) {
         size_t n = strlen(e->d_name);
         if (n > sl && strcmp(e->d_name + n - sl, suffix) == 0) {
-            names[count] = malloc(n - sl + 1);
+            names[count] = ll_malloc(n - sl + 1);
             if (!names[count])
                 break;
             memcpy(names[count], e->d_name, n - sl);
@@ -379,7 +379,7 @@ static void append_names(char *msg, size_t cap, const char *dir)
     for (i = 0; i < count; ++i) {
         if (len + strlen(names[i]) + 3 < cap)
             len += (size_t)snprintf(msg + len, cap - len, "%s%s", len ? ", " : "", names[i]);
-        free(names[i]);
+        ll_free(names[i]);
     }
 }
 
@@ -407,7 +407,7 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
         *nl = '\0';
         if (has_metal(p, name)) {
             s = ll_metal_ior_from_dir(p, name, out);
-            free(dirs);
+            ll_free(dirs);
             return s;
         }
         if (!first_existing && access(p, X_OK) == 0)
@@ -422,6 +422,6 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
                 "(%s%s%s%s)",
                 name, name, name, first_existing ? "known in " : "no ior folder found",
                 first_existing ? first_existing : "", first_existing ? ": " : "", names);
-    free(dirs);
+    ll_free(dirs);
     return s;
 }

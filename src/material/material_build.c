@@ -253,9 +253,9 @@ static double total_cost(const build *b)
 
 static void build_free(build *b)
 {
-    free(b->nodes);
-    free(b->weights);
-    free(b->params);
+    ll_free(b->nodes);
+    ll_free(b->weights);
+    ll_free(b->params);
 }
 
 /* Resolution, quadrature and per-channel parameters. */
@@ -390,7 +390,7 @@ static ll_status write_layers(const ll_material *m, const ll_build_options *o,
 {
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
     size_t len = strlen(out_path);
-    char *tmp = malloc(len + 8);
+    char *tmp = ll_malloc(len + 8);
     int fd;
     ll_status s;
 
@@ -403,7 +403,7 @@ static ll_status write_layers(const ll_material *m, const ll_build_options *o,
     if (fd < 0) {
         s = ll_fail(LL_ERROR_IO, "cannot create a file beside %s: %s", out_path,
                     strerror(errno));
-        free(tmp);
+        ll_free(tmp);
         return s;
     }
     close(fd);
@@ -414,7 +414,7 @@ static ll_status write_layers(const ll_material *m, const ll_build_options *o,
         s = ll_fail(LL_ERROR_IO, "cannot rename %s to %s: %s", tmp, out_path, strerror(errno));
     if (s != LL_OK)
         unlink(tmp);
-    free(tmp);
+    ll_free(tmp);
     return s;
 }
 

@@ -34,7 +34,7 @@ static void append(text_buffer *b, const char *fmt, ...)
     }
     if (b->len + (size_t)need + 1 > b->cap) {
         size_t cap = 2 * (b->len + (size_t)need + 1) + 256;
-        char *grown = realloc(b->data, cap);
+        char *grown = ll_realloc(b->data, cap);
         if (!grown) {
             b->failed = 1;
             return;
@@ -118,7 +118,7 @@ ll_status ll_material_make_metadata(ll_material *m, const char *text)
     }
     append(&b, "\n  ]\n}\n");
     if (b.failed) {
-        free(b.data);
+        ll_free(b.data);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory describing %s", m->source);
     }
     m->metadata = b.data;

@@ -301,7 +301,7 @@ static char *resolve_path(const char *dir, const char *path)
         dir = NULL;
     a = dir ? strlen(dir) + 1 : 0;
     b = strlen(path);
-    out = malloc(a + b + 1);
+    out = ll_malloc(a + b + 1);
     if (!out)
         return NULL;
     if (dir)
@@ -534,7 +534,7 @@ static ll_status parse_word(parser *p, const word_syntax *syn, const token *name
     ll_status s;
     size_t count = p->m->count;
 
-    grown = realloc(p->m->words, (count + 1) * sizeof *grown);
+    grown = ll_realloc(p->m->words, (count + 1) * sizeof *grown);
     if (!grown)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
     p->m->words = grown;
@@ -647,17 +647,17 @@ void ll_material_destroy(ll_material *m)
     if (!m)
         return;
     for (k = 0; k < m->count; ++k)
-        free(m->words[k].file);
-    free(m->words);
-    free(m->source);
-    free(m->metadata);
-    free(m);
+        ll_free(m->words[k].file);
+    ll_free(m->words);
+    ll_free(m->source);
+    ll_free(m->metadata);
+    ll_free(m);
 }
 
 static char *copy_string(const char *s)
 {
     size_t len = strlen(s) + 1;
-    char *c = malloc(len);
+    char *c = ll_malloc(len);
     if (c)
         memcpy(c, s, len);
     return c;
@@ -670,7 +670,7 @@ static ll_status parse_text(const char *text, const char *source, const char *ma
     parser p;
     const char *at = text;
     ll_status s = LL_OK;
-    ll_material *m = calloc(1, sizeof *m);
+    ll_material *m = ll_calloc(1, sizeof *m);
 
     if (!m || !(m->source = copy_string(source))) {
         ll_material_destroy(m);
@@ -742,14 +742,14 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
             char *grown;
             if (cap > ((size_t)64 << 20)) {
                 fclose(f);
-                free(text);
+                ll_free(text);
                 return ll_fail(LL_ERROR_PARSE, "%s: larger than 64 MiB; not a material", path);
             }
             cap = cap ? 2 * cap : 8192;
-            grown = realloc(text, cap + 1);
+            grown = ll_realloc(text, cap + 1);
             if (!grown) {
                 fclose(f);
-                free(text);
+                ll_free(text);
                 return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
             }
             text = grown;
@@ -759,18 +759,18 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
     } while (got > 0);
     if (ferror(f)) {
         fclose(f);
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_IO, "error reading the material %s", path);
     }
     fclose(f);
     text[len] = '\0';
     if (strlen(text) != len) {
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_PARSE, "%s: contains a NUL byte; not a text file", path);
     }
     dir = copy_string(path);
     if (!dir) {
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
     }
     slash = strrchr(dir, '/');
@@ -781,8 +781,8 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
     else
         strcpy(dir, ".");
     s = parse_text(text, path, dir, out);
-    free(dir);
-    free(text);
+    ll_free(dir);
+    ll_free(text);
     return s;
 }
 

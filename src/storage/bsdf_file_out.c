@@ -29,9 +29,9 @@ struct ll_bsdf_out {
 
 static void out_free(ll_bsdf_out *o)
 {
-    free(o->path);
-    free(o->temp);
-    free(o);
+    ll_free(o->path);
+    ll_free(o->temp);
+    ll_free(o);
 }
 
 /* The directory part of path with a trailing slash ("" for none). */
@@ -50,11 +50,11 @@ ll_status ll_bsdf_out_begin(const char *path, const char *fn, ll_bsdf_out **out)
     *out = NULL;
     if (dir == len)
         return ll_fail(LL_ERROR_IO, "%s: \"%s\" names a directory, not a file", fn, path);
-    o = calloc(1, sizeof *o);
+    o = ll_calloc(1, sizeof *o);
     /* "<dir>/.<name>.XXXXXX": hidden, in the same directory (so rename is
      * atomic: same file system). */
     temp_size = len + 1 + 7 + 1;
-    if (!o || !(o->path = malloc(len + 1)) || !(o->temp = malloc(temp_size))) {
+    if (!o || !(o->path = ll_malloc(len + 1)) || !(o->temp = ll_malloc(temp_size))) {
         if (o)
             out_free(o);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
@@ -138,7 +138,7 @@ void ll_bsdf_out_abort(ll_bsdf_out *o)
 static void sync_directory(const ll_bsdf_out *o)
 {
     size_t dir = directory_length(o->path);
-    char *name = malloc(dir + 2);
+    char *name = ll_malloc(dir + 2);
     int fd;
     if (!name)
         return;
@@ -153,7 +153,7 @@ static void sync_directory(const ll_bsdf_out *o)
         (void)fsync(fd);
         close(fd);
     }
-    free(name);
+    ll_free(name);
 }
 
 ll_status ll_bsdf_out_commit(ll_bsdf_out *o)

@@ -14,20 +14,20 @@ void ll_bsdf_free(ll_bsdf *b)
 {
     if (!b)
         return;
-    free(b->nodes_f);
-    free(b->nodes);
-    free(b->param_counts);
-    free(b->param_first);
-    free(b->param_positions);
-    free(b->cdf);
-    free(b->a0);
-    free(b->pairs);
-    free(b->coeffs);
-    free(b->recip);
-    free(b->bucket_first);
-    free(b->intervals);
-    free(b->metadata);
-    free(b);
+    ll_free(b->nodes_f);
+    ll_free(b->nodes);
+    ll_free(b->param_counts);
+    ll_free(b->param_first);
+    ll_free(b->param_positions);
+    ll_free(b->cdf);
+    ll_free(b->a0);
+    ll_free(b->pairs);
+    ll_free(b->coeffs);
+    ll_free(b->recip);
+    ll_free(b->bucket_first);
+    ll_free(b->intervals);
+    ll_free(b->metadata);
+    ll_free(b);
 }
 
 ll_bsdf *ll_bsdf_retain(ll_bsdf *b)

@@ -367,7 +367,7 @@ static ll_status allocate(ll_bsdf *b, const char *file)
     b->coeffs = ll_calloc_array(b->n_coeffs + 4, sizeof *b->coeffs);
     /* Padded so that vector loops over whole groups of 4 stay inside. */
     b->recip = ll_alloc_array(b->max_order + 4, sizeof *b->recip);
-    b->metadata = malloc(b->metadata_size + 1);
+    b->metadata = ll_malloc(b->metadata_size + 1);
     b->n_buckets = 4 * b->n_nodes; /* n_nodes^2 table entries fit the file */
     b->bucket_first = ll_alloc_array(b->n_buckets, sizeof *b->bucket_first);
     b->intervals = ll_alloc_array(b->n_nodes - 1, sizeof *b->intervals);
@@ -384,7 +384,7 @@ static ll_status parse_body(const unsigned char *p, const bsdf_header *h, const 
                             const char *file, ll_bsdf **out)
 {
     ll_status s;
-    ll_bsdf *b = calloc(1, sizeof *b);
+    ll_bsdf *b = ll_calloc(1, sizeof *b);
     if (!b)
         return file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory");
     b->refcount = 1;
@@ -508,7 +508,7 @@ ll_status ll_bsdf_open(const char *path, ll_bsdf **out)
     if (s != LL_OK)
         goto done;
 
-    data = malloc(size);
+    data = ll_malloc(size);
     if (!data) {
         s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory reading %zu bytes", size);
         goto done;
@@ -526,7 +526,7 @@ ll_status ll_bsdf_open(const char *path, ll_bsdf **out)
     }
     s = parse_body(data, &h, &l, file, out);
 done:
-    free(data);
+    ll_free(data);
     close(fd);
     return s;
 }

@@ -242,9 +242,9 @@ static ll_status compute_lengths(write_job *job)
             }
     }
 done:
-    free(len);
-    free(tail);
-    free(ref0);
+    ll_free(len);
+    ll_free(tail);
+    ll_free(ref0);
     return s;
 }
 
@@ -333,7 +333,7 @@ static ll_status compute_cdf(write_job *job)
                                 : 0.0;
             integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
         }
-    free(values);
+    ll_free(values);
     return LL_OK;
 }
 
@@ -363,7 +363,7 @@ static ll_status default_metadata(write_job *job)
         job->opts.error_goal);
     if (len < 0 || (size_t)len >= sizeof text)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the metadata does not fit", job->fn);
-    job->metadata = malloc((size_t)len + 1);
+    job->metadata = ll_malloc((size_t)len + 1);
     if (!job->metadata)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
     memcpy(job->metadata, text, (size_t)len + 1);
@@ -474,7 +474,7 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
         for (L = 0; L < count; ++L)
             stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
     }
-    free(stage);
+    ll_free(stage);
     return s;
 }
 
@@ -553,11 +553,11 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
     if ((s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
         (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
         s = put_file(&job, path);
-    free(job.nodes);
-    free(job.length);
-    free(job.offset);
-    free(job.cdf);
-    free(job.metadata);
+    ll_free(job.nodes);
+    ll_free(job.length);
+    ll_free(job.offset);
+    ll_free(job.cdf);
+    ll_free(job.metadata);
     return s;
 }
 

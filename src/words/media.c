@@ -122,14 +122,14 @@ static ll_status medium_order(size_t order, void *ctx)
         }
     }
     s = ll_order_from_dense(P, n, 0.0, &job->result[order]);
-    free(Y);
-    free(Z);
-    free(P);
+    ll_free(Y);
+    ll_free(Z);
+    ll_free(P);
     return s;
 oom:
-    free(Y);
-    free(Z);
-    free(P);
+    ll_free(Y);
+    ll_free(Z);
+    ll_free(P);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "medium: out of memory for order %zu", order);
 }
 
@@ -169,9 +169,9 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     s = ll_layer_commit_orders(layer, job.result, s);
     job.result = NULL;
 done:
-    free(job.result);
-    free(moment);
-    free(diag);
+    ll_free(job.result);
+    ll_free(moment);
+    ll_free(diag);
     return s;
 }
 
@@ -200,7 +200,7 @@ ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_isotropic: out of memory");
     chi[0] = 1.0;
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic");
-    free(chi);
+    ll_free(chi);
     return s;
 }
 
@@ -223,7 +223,7 @@ ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double 
     for (k = 1; k <= K; ++k)
         chi[k] = chi[k - 1] * g;
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein");
-    free(chi);
+    ll_free(chi);
     return s;
 }
 
@@ -250,7 +250,7 @@ ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double k
     if (kappa > 0.0) {
         double *r = ll_alloc_array(K + 1, sizeof(double));
         if (!r) {
-            free(chi);
+            ll_free(chi);
             return ll_fail(LL_ERROR_OUT_OF_MEMORY,
                            "ll_layer_set_von_mises_fisher: out of memory");
         }
@@ -263,9 +263,9 @@ ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double k
         }
         for (k = 1; k <= K; ++k)
             chi[k] = chi[k - 1] * r[k];
-        free(r);
+        ll_free(r);
     }
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher");
-    free(chi);
+    ll_free(chi);
     return s;
 }

@@ -104,8 +104,8 @@ void ll_merl_free(ll_merl *merl)
 {
     if (!merl)
         return;
-    free(merl->values);
-    free(merl);
+    ll_free(merl->values);
+    ll_free(merl);
 }
 
 ll_status ll_merl_load(const char *path, ll_merl **out)
@@ -122,7 +122,7 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
     if (s != LL_OK)
         return s;
     total = 3 * count; /* no overflow: checked with the byte count */
-    m = calloc(1, sizeof *m);
+    m = ll_calloc(1, sizeof *m);
     raw = ll_alloc_array(total, 8);
     if (!m || !raw || !(m->values = ll_alloc_array(total, sizeof(double)))) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading the MERL file %s", path);
@@ -142,12 +142,12 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
              * values; they carry no light. */
             m->values[c * count + i] = (v > 0.0 && ll_is_finite(v)) ? v * scale[c] : 0.0;
         }
-    free(raw);
+    ll_free(raw);
     fclose(f);
     *out = m;
     return LL_OK;
 fail:
-    free(raw);
+    ll_free(raw);
     ll_merl_free(m);
     fclose(f);
     return s;
@@ -294,9 +294,9 @@ static ll_status merl_column(size_t col_index, void *ctx)
         s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
     }
 done:
-    free(f);
-    free(coeff);
-    free(column);
+    ll_free(f);
+    ll_free(coeff);
+    ll_free(column);
     return s;
 }
 
@@ -341,17 +341,17 @@ ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl, const double w
     s = ll_parallel_for(layer->n / 2, merl_column, &job);
     if (s != LL_OK)
         goto fail;
-    free(cos_table);
+    ll_free(cos_table);
     /* Takes the builders whatever happens. */
     s = ll_layer_set_from_builders(layer, builders);
-    free(builders);
+    ll_free(builders);
     return s;
 fail:
     if (builders)
         for (k = 0; k < m; ++k)
             ll_order_builder_destroy(builders[k]);
-    free(builders);
-    free(cos_table);
+    ll_free(builders);
+    ll_free(cos_table);
     return s;
 }
 
