@@ -76,6 +76,7 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
     FILE *f;
     char *line = NULL;
     size_t line_cap = 0, capacity = 0, line_no = 0;
+    long got;
     ll_status status = LL_OK;
     ll_spectrum s = { 0, NULL, NULL };
 
@@ -84,7 +85,7 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
     f = fopen(path, "r");
     if (!f)
         return ll_fail(LL_ERROR_IO, "cannot open the spectrum %s: %s", path, strerror(errno));
-    while (ll_getline(&line, &line_cap, f) >= 0) {
+    while ((got = ll_getline(&line, &line_cap, f)) >= 0) {
         double lambda, value;
         int kind = parse_sample_line(line, &lambda, &value);
         ++line_no;
@@ -107,6 +108,10 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
             status = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
             goto fail;
         }
+    }
+    if (got == -2) {
+        status = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
+        goto fail;
     }
     if (ferror(f)) {
         status = ll_fail(LL_ERROR_IO, "error reading the spectrum %s", path);
