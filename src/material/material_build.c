@@ -295,24 +295,15 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
 static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
                         ll_bsdf_write_options *header)
 {
-    double eta, alpha[2];
-    size_t size = header->struct_size;
-    ll_material_header(m, n_channels, &eta, alpha);
-#define COVERS(field) \
-    (size >= offsetof(ll_bsdf_write_options, field) + sizeof header->field)
-    if (COVERS(eta))
-        header->eta = eta;
-    if (COVERS(alpha)) {
-        header->alpha[0] = alpha[0];
-        header->alpha[1] = alpha[1];
-    }
-    if (COVERS(metadata))
-        header->metadata = m->metadata;
-    if (COVERS(error_goal))
-        header->error_goal = o->error_goal > 0.0   ? o->error_goal
-                             : m->error_goal > 0.0 ? m->error_goal
-                                                   : 1e-3;
-#undef COVERS
+    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_material_header(m, n_channels, &full.eta, full.alpha);
+    full.metadata = m->metadata;
+    full.error_goal = o->error_goal > 0.0   ? o->error_goal
+                      : m->error_goal > 0.0 ? m->error_goal
+                                            : 1e-3;
+    /* Checked before the build: cannot fail. */
+    (void)ll_struct_write(header, &full, sizeof full, "ll_material_build_layers",
+                          "ll_bsdf_write_options");
 }
 
 /* The build proper, on an initialised state; restores the thread count. */
@@ -362,11 +353,11 @@ ll_status ll_material_build_layers(const ll_material *material, const ll_build_o
     for (c = 0; c < 3; ++c)
         layers[c] = NULL;
     *n_channels = 0;
-    if (header && header->struct_size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_build_layers: header->struct_size is %zu; initialise the "
-                       "header with LL_BSDF_WRITE_OPTIONS_INIT",
-                       header->struct_size);
+    if (header) {
+        s = ll_struct_check(header, "ll_material_build_layers", "ll_bsdf_write_options");
+        if (s != LL_OK)
+            return s;
+    }
     s = build_init(&b, material, opts, "ll_material_build_layers");
     if (s != LL_OK)
         return s;
@@ -474,18 +465,19 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
 /* ------------------------------------------------------------ estimate */
 
 ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
-                               ll_build_estimate *e)
+                               ll_build_estimate *estimate)
 {
+    /* Computed in full here, then written up to the caller's struct_size. */
+    ll_build_estimate full = LL_BUILD_ESTIMATE_INIT, *e = &full;
     build b;
     size_t below[3] = { 0, 0, 0 }, owner[3], w, c, threads, live_acc = 0;
     double layer_bytes, peak = 0.0, seconds = 0.0, workspace;
     size_t saved;
     ll_status s;
 
-    if (!e || e->struct_size < sizeof *e)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_estimate: estimate is NULL or its struct_size is not "
-                       "sizeof(ll_build_estimate)");
+    s = ll_struct_check(estimate, "ll_material_estimate", "ll_build_estimate");
+    if (s != LL_OK)
+        return s;
     s = build_init(&b, material, opts, "ll_material_estimate");
     if (s != LL_OK)
         return s;
@@ -542,5 +534,5 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     e->peak_bytes = STORED_FRACTION * peak + PROCESS_BYTES;
     e->seconds = seconds;
     build_free(&b);
-    return LL_OK;
+    return ll_struct_write(estimate, e, sizeof *e, "ll_material_estimate", "ll_build_estimate");
 }

@@ -48,17 +48,10 @@ void ll_bsdf_release(ll_bsdf *b)
 ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
 {
     ll_bsdf_info full;
-    size_t size;
     if (!b || !info)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_get_info: bsdf or info is NULL");
-    size = info->struct_size;
-    if (size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_bsdf_get_info: info->struct_size = %zu is too small (set it to "
-                       "sizeof(ll_bsdf_info) or use LL_BSDF_INFO_INIT)",
-                       size);
     memset(&full, 0, sizeof full);
-    full.struct_size = size;
+    full.struct_size = sizeof full;
     full.n_nodes = b->n_nodes;
     full.max_order = b->max_order;
     full.n_channels = b->n_channels;
@@ -73,8 +66,7 @@ ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
     full.file_size = b->file_size;
     full.flags = b->flags;
     /* Write only the fields the caller's (possibly older, smaller) struct has. */
-    memcpy(info, &full, size < sizeof full ? size : sizeof full);
-    return LL_OK;
+    return ll_struct_write(info, &full, sizeof full, "ll_bsdf_get_info", "ll_bsdf_info");
 }
 
 ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,

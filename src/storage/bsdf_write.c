@@ -73,16 +73,13 @@ static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
 {
     ll_bsdf_write_options defaults = LL_BSDF_WRITE_OPTIONS_INIT;
     job->opts = defaults;
+    /* Read only what the caller's struct has; newer fields keep their
+     * defaults. */
     if (opts) {
-        size_t size = opts->struct_size;
-        if (size < sizeof(size_t))
-            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                           "%s: opts->struct_size = %zu (use LL_BSDF_WRITE_OPTIONS_INIT)",
-                           job->fn, size);
-        /* Read only what the caller's struct has; newer fields keep their
-         * defaults. */
-        memcpy(&job->opts, opts, size < sizeof *opts ? size : sizeof *opts);
-        job->opts.struct_size = sizeof *opts;
+        ll_status s = ll_struct_read(&job->opts, sizeof job->opts, opts, job->fn,
+                                     "ll_bsdf_write_options");
+        if (s != LL_OK)
+            return s;
     }
     if (!(job->opts.eta >= LL_BSDF_ETA_MIN && job->opts.eta <= LL_BSDF_ETA_MAX))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,

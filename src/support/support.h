@@ -65,6 +65,23 @@ LL_INTERNAL void ll_alloc_hook_off(void);
 LL_INTERNAL size_t ll_alloc_count(void);
 LL_INTERNAL long long ll_alloc_live(void);
 
+/* Size-tagged public structs (support/struct_prefix.c): the caller's
+ * struct_size says how much of the struct it has; at least the struct_size
+ * field itself, else LL_ERROR_INVALID_ARGUMENT naming fn and type.
+ * ll_struct_read: dst (dst_size bytes, the library's struct) holds the
+ * defaults; the caller's src is copied over them up to its struct_size and
+ * dst's struct_size becomes dst_size. NULL src is an error (callers that
+ * allow NULL keep the defaults themselves).
+ * ll_struct_write: copy the library's src (src_size bytes) into the
+ * caller's dst up to dst's struct_size, leaving struct_size and anything
+ * beyond it untouched.
+ * ll_struct_check: only the checks, for a struct to be written later. */
+LL_INTERNAL ll_status ll_struct_read(void *dst, size_t dst_size, const void *src,
+                                     const char *fn, const char *type);
+LL_INTERNAL ll_status ll_struct_write(void *dst, const void *src, size_t src_size,
+                                      const char *fn, const char *type);
+LL_INTERNAL ll_status ll_struct_check(const void *caller, const char *fn, const char *type);
+
 /* Run body(i, ctx) for i in [0, count) on up to ll_get_thread_count() threads
  * (dynamic schedule). Inside body, BLAS/LAPACK run single-threaded, so every
  * item is computed by exactly the same sequence of operations whatever the
