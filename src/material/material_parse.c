@@ -338,6 +338,10 @@ static ll_status parse_conductor_eta(parser *p, ll_word *w, const token *key, co
         if (!token_copy(v, name, sizeof name))
             return parse_error(p, v->begin, "eta: the metal name is too long");
         s = ll_metal_ior_lookup(name, p->material_dir, &w->metal_ior);
+        /* Out of memory is no mistake in the text: its status and message
+         * stay as they are. */
+        if (s == LL_ERROR_OUT_OF_MEMORY)
+            return s;
         if (s != LL_OK)
             return parse_error(p, v->begin, "eta=%s: %s", name, ll_last_error_message());
         memcpy(w->metal, name, sizeof name);
