@@ -344,11 +344,11 @@ ll_status ll_ior_search_dirs(const char *material_dir, char **out)
     return l.failed ? ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory") : LL_OK;
 }
 
-/* Does dir hold both spectra of name? */
+/* Does dir hold both spectra of name? 1 yes, 0 no, -1 out of memory. */
 static int has_metal(const char *dir, const char *name)
 {
     char *a = join_path(dir, name, ".eta.spd"), *b = join_path(dir, name, ".k.spd");
-    int ok = a && b && access(a, R_OK) == 0 && access(b, R_OK) == 0;
+    int ok = !a || !b ? -1 : access(a, R_OK) == 0 && access(b, R_OK) == 0;
     ll_free(a);
     ll_free(b);
     return ok;
@@ -394,6 +394,7 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
     const char *first_existing = NULL;
     ll_status s;
     size_t k;
+    int found;
 
     for (k = 0; name[k]; ++k) {
         char c = name[k];
@@ -410,8 +411,11 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
     for (p = dirs; *p;) {
         char *nl = strchr(p, '\n');
         *nl = '\0';
-        if (has_metal(p, name)) {
-            s = ll_metal_ior_from_dir(p, name, out);
+        found = has_metal(p, name);
+        if (found != 0) {
+            s = found > 0 ? ll_metal_ior_from_dir(p, name, out)
+                          : ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory looking up the metal %s",
+                                    name);
             ll_free(dirs);
             return s;
         }
