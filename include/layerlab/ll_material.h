@@ -159,6 +159,11 @@ typedef struct ll_build_estimate {
 
 #define LL_BUILD_ESTIMATE_INIT { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0 }
 
+/* estimate->struct_size may be the sizeof of an older, smaller
+ * ll_build_estimate: only the fields it covers are written (the least
+ * accepted is sizeof(size_t), the struct_size field itself, as for every
+ * size-tagged struct). */
+
 LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,
                                       ll_build_estimate *estimate);

@@ -35,7 +35,7 @@ typedef struct workspace {
     ll_watch *watch;           /* polled between the BLAS calls (nullable) */
 } workspace;
 
-static void workspace_free(workspace *w) { free(w->memory); }
+static void workspace_free(workspace *w) { ll_free(w->memory); }
 
 static ll_status workspace_init(workspace *w, size_t h)
 {

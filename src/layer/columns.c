@@ -39,6 +39,6 @@ ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
         for (k = 0; k < m; ++k)
             ll_order_builder_destroy(builders[k]);
     }
-    free(builders);
+    ll_free(builders);
     return s;
 }

@@ -19,10 +19,10 @@ static void layer_free(ll_layer *l)
     if (l->orders)
         for (k = 0; k < l->m; ++k)
             ll_order_release(l->orders[k]);
-    free(l->orders);
-    free(l->nodes);
-    free(l->weights);
-    free(l);
+    ll_free(l->orders);
+    ll_free(l->nodes);
+    ll_free(l->weights);
+    ll_free(l);
 }
 
 void ll_layer_destroy(ll_layer *layer) { layer_free(layer); }
@@ -81,7 +81,7 @@ ll_status ll_layer_create(const double *nodes, const double *weights, size_t n_n
     }
     ascending = nodes[0] < nodes[1];
 
-    l = calloc(1, sizeof *l);
+    l = ll_calloc(1, sizeof *l);
     if (!l)
         goto oom;
     l->n = n_nodes;
@@ -134,7 +134,7 @@ ll_status ll_layer_clone(const ll_layer *src, ll_layer **out)
     *out = NULL;
     if (!src)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_layer_clone: layer is NULL");
-    l = calloc(1, sizeof *l);
+    l = ll_calloc(1, sizeof *l);
     if (!l)
         goto oom;
     l->n = src->n;
@@ -204,7 +204,7 @@ ll_status ll_layer_commit_orders(ll_layer *layer, ll_order **new_orders, ll_stat
         for (k = 0; k < layer->m; ++k)
             ll_order_release(new_orders[k]);
     }
-    free(new_orders);
+    ll_free(new_orders);
     return status;
 }
 
@@ -262,7 +262,7 @@ ll_status ll_layer_clear(ll_layer *layer)
     s = fill_clear(orders, layer->n, layer->m);
     if (s == LL_OK)
         ll_layer_replace_orders(layer, orders);
-    free(orders);
+    ll_free(orders);
     return s;
 }
 

@@ -19,15 +19,15 @@ void ll_order_release(ll_order *o)
 {
     if (!o || __atomic_sub_fetch(&o->refcount, 1, __ATOMIC_ACQ_REL) != 0)
         return;
-    free(o->seg);
-    free(o->val);
-    free(o);
+    ll_free(o->seg);
+    ll_free(o->val);
+    ll_free(o);
 }
 
 /* Allocate an order of size n with room for `stored` values. */
 static ll_order *order_alloc(size_t n, size_t stored)
 {
-    ll_order *o = calloc(1, sizeof *o);
+    ll_order *o = ll_calloc(1, sizeof *o);
     size_t segs;
     if (!o || !ll_size_mul(n, 2, &segs))
         goto fail;
@@ -40,9 +40,9 @@ static ll_order *order_alloc(size_t n, size_t stored)
     return o;
 fail:
     if (o) {
-        free(o->seg);
-        free(o->val);
-        free(o);
+        ll_free(o->seg);
+        ll_free(o->val);
+        ll_free(o);
     }
     return NULL;
 }
@@ -83,8 +83,8 @@ ll_status ll_order_from_blocks(const double *const blocks[4], size_t h, double d
 
     *out = NULL;
     if (!lo || !len) {
-        free(lo);
-        free(len);
+        ll_free(lo);
+        ll_free(len);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory storing a %zu x %zu order", n, n);
     }
     for (col = 0; col < n; ++col) {
@@ -99,14 +99,14 @@ ll_status ll_order_from_blocks(const double *const blocks[4], size_t h, double d
         }
     }
     if (total == 0) {
-        free(lo);
-        free(len);
+        ll_free(lo);
+        ll_free(len);
         return LL_OK;
     }
     o = order_alloc(n, total);
     if (!o) {
-        free(lo);
-        free(len);
+        ll_free(lo);
+        ll_free(len);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory storing a %zu x %zu order", n, n);
     }
     total = 0;
@@ -123,8 +123,8 @@ ll_status ll_order_from_blocks(const double *const blocks[4], size_t h, double d
         }
     }
     o->seg[2 * n].off = total;
-    free(lo);
-    free(len);
+    ll_free(lo);
+    ll_free(len);
     *out = o;
     return LL_OK;
 }
@@ -150,7 +150,7 @@ ll_status ll_order_from_dense(const double *dense, size_t n, double drop, ll_ord
     blocks[2] = tmp + 2 * h * h;
     blocks[3] = tmp + 3 * h * h;
     s = ll_order_from_blocks(blocks, h, drop, out);
-    free(tmp);
+    ll_free(tmp);
     return s;
 }
 
@@ -348,7 +348,7 @@ struct ll_order_builder {
 
 ll_status ll_order_builder_create(size_t n, ll_order_builder **out)
 {
-    ll_order_builder *b = calloc(1, sizeof *b);
+    ll_order_builder *b = ll_calloc(1, sizeof *b);
     *out = NULL;
     if (!b)
         goto fail;
@@ -372,11 +372,11 @@ void ll_order_builder_destroy(ll_order_builder *b)
         return;
     if (b->seg)
         for (s = 0; s < 2 * b->n; ++s)
-            free(b->seg[s]);
-    free(b->seg);
-    free(b->lo);
-    free(b->len);
-    free(b);
+            ll_free(b->seg[s]);
+    ll_free(b->seg);
+    ll_free(b->lo);
+    ll_free(b->len);
+    ll_free(b);
 }
 
 ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
@@ -395,12 +395,12 @@ ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
             find_run(column + first + a, e - a, drop, &lo, &len);
             lo += a;
         }
-        free(b->seg[s]);
+        ll_free(b->seg[s]);
         b->seg[s] = NULL;
         b->lo[s] = (uint32_t)lo;
         b->len[s] = 0;
         if (len) {
-            b->seg[s] = malloc(len * sizeof(double));
+            b->seg[s] = ll_malloc(len * sizeof(double));
             if (!b->seg[s])
                 return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory building an order");
             memcpy(b->seg[s], column + first + lo, len * sizeof(double));

@@ -23,8 +23,8 @@ void ll_spectrum_free(ll_spectrum *s)
 {
     if (!s)
         return;
-    free(s->lambda);
-    free(s->value);
+    ll_free(s->lambda);
+    ll_free(s->value);
     s->lambda = s->value = NULL;
     s->count = 0;
 }
@@ -34,12 +34,12 @@ static int spectrum_push(ll_spectrum *s, size_t *capacity, double lambda, double
 {
     if (s->count == *capacity) {
         size_t cap = *capacity ? 2 * *capacity : 64;
-        double *l = realloc(s->lambda, cap * sizeof *l);
+        double *l = ll_realloc(s->lambda, cap * sizeof *l);
         double *v;
         if (!l)
             return 0;
         s->lambda = l;
-        v = realloc(s->value, cap * sizeof *v);
+        v = ll_realloc(s->value, cap * sizeof *v);
         if (!v)
             return 0;
         s->value = v;
@@ -78,6 +78,7 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
     FILE *f;
     char *line = NULL;
     size_t line_cap = 0, capacity = 0, line_no = 0;
+    long got;
     ll_status status = LL_OK;
     ll_spectrum s = { 0, NULL, NULL };
 
@@ -86,7 +87,7 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
     f = ll_fopen_regular(path, "the spectrum");
     if (!f)
         return LL_ERROR_IO;
-    while (getline(&line, &line_cap, f) >= 0) {
+    while ((got = ll_getline(&line, &line_cap, f)) >= 0) {
         double lambda, value;
         int kind = parse_sample_line(line, &lambda, &value);
         ++line_no;
@@ -110,6 +111,12 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
             goto fail;
         }
     }
+    /* getline's -1 for ENOMEM would look like the end of the file and
+     * silently truncate the spectrum: ll_getline says -2. */
+    if (got == -2) {
+        status = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
+        goto fail;
+    }
     if (ferror(f)) {
         status = ll_fail(LL_ERROR_IO, "error reading the spectrum %s", path);
         goto fail;
@@ -119,12 +126,12 @@ ll_status ll_spectrum_read(const char *path, ll_spectrum *out)
                          path, s.count);
         goto fail;
     }
-    free(line);
+    ll_free(line);
     fclose(f);
     *out = s;
     return LL_OK;
 fail:
-    free(line);
+    ll_free(line);
     fclose(f);
     ll_spectrum_free(&s);
     return status;
@@ -188,7 +195,7 @@ static char *join_path(const char *dir, const char *name, const char *suffix)
     char *p;
     if (!ll_size_add(a, b, &total) || !ll_size_add(total, c + 2, &total))
         return NULL;
-    p = malloc(total);
+    p = ll_malloc(total);
     if (p)
         snprintf(p, total, "%s/%s%s", dir, name, suffix);
     return p;
@@ -221,8 +228,8 @@ ll_status ll_metal_ior_from_dir(const char *dir, const char *name, ll_metal_ior 
 done:
     ll_spectrum_free(&n);
     ll_spectrum_free(&k);
-    free(eta_path);
-    free(k_path);
+    ll_free(eta_path);
+    ll_free(k_path);
     return s;
 }
 
@@ -242,7 +249,7 @@ static void list_add(dir_list *l, const char *a, const char *b)
         return;
     if (l->len + add > l->cap) {
         size_t cap = 2 * (l->len + add) + 256;
-        char *t = realloc(l->text, cap);
+        char *t = ll_realloc(l->text, cap);
         if (!t) {
             l->failed = 1;
             return;
@@ -273,7 +280,7 @@ static int library_dir(char *buf, size_t size)
      * requires the two to have the same representation; ISO C has no cast). */
     memcpy(&address, &self, sizeof address < sizeof self ? sizeof address : sizeof self);
     if (dladdr(address, &info) && info.dli_fname && info.dli_fname[0])
-        real = realpath(info.dli_fname, NULL);
+        real = ll_realpath(info.dli_fname);
     if (real && strlen(real) < size) {
         strcpy(buf, real);
         n = (ssize_t)strlen(buf);
@@ -282,7 +289,7 @@ static int library_dir(char *buf, size_t size)
         if (n > 0)
             buf[n] = '\0';
     }
-    free(real);
+    ll_free(real);
     if (n <= 0)
         return 0;
     slash = strrchr(buf, '/');
@@ -331,7 +338,7 @@ ll_status ll_ior_search_dirs(const char *material_dir, char **out)
     if (have_lib)
         list_add(&l, lib, "/../share/layerlab/ior");
     if (l.failed) {
-        free(l.text);
+        ll_free(l.text);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory listing the ior directories");
     }
     if (!l.text)
@@ -340,13 +347,14 @@ ll_status ll_ior_search_dirs(const char *material_dir, char **out)
     return l.failed ? ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory") : LL_OK;
 }
 
-/* Does dir hold both spectra of name? */
+/* Does dir hold both spectra of name? 1 yes, 0 no, -1 out of memory (not
+ * "no": the search would go on and end in "unknown metal"). */
 static int has_metal(const char *dir, const char *name)
 {
     char *a = join_path(dir, name, ".eta.spd"), *b = join_path(dir, name, ".k.spd");
-    int ok = a && b && access(a, R_OK) == 0 && access(b, R_OK) == 0;
-    free(a);
-    free(b);
+    int ok = !a || !b ? -1 : access(a, R_OK) == 0 && access(b, R_OK) == 0;
+    ll_free(a);
+    ll_free(b);
     return ok;
 }
 
@@ -368,7 +376,7 @@ static void append_names(char *msg, size_t cap, const char *dir)
     while ((e = readdir(d)) != NULL && count < sizeof names / sizeof names[0]) {
         size_t n = strlen(e->d_name);
         if (n > sl && strcmp(e->d_name + n - sl, suffix) == 0) {
-            names[count] = malloc(n - sl + 1);
+            names[count] = ll_malloc(n - sl + 1);
             if (!names[count])
                 break;
             memcpy(names[count], e->d_name, n - sl);
@@ -380,7 +388,7 @@ static void append_names(char *msg, size_t cap, const char *dir)
     for (i = 0; i < count; ++i) {
         if (len + strlen(names[i]) + 3 < cap)
             len += (size_t)snprintf(msg + len, cap - len, "%s%s", len ? ", " : "", names[i]);
-        free(names[i]);
+        ll_free(names[i]);
     }
 }
 
@@ -390,6 +398,7 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
     const char *first_existing = NULL;
     ll_status s;
     size_t k;
+    int found;
 
     for (k = 0; name[k]; ++k) {
         char c = name[k];
@@ -406,9 +415,12 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
     for (p = dirs; *p;) {
         char *nl = strchr(p, '\n');
         *nl = '\0';
-        if (has_metal(p, name)) {
-            s = ll_metal_ior_from_dir(p, name, out);
-            free(dirs);
+        found = has_metal(p, name);
+        if (found != 0) {
+            s = found > 0 ? ll_metal_ior_from_dir(p, name, out)
+                          : ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory looking up the metal %s",
+                                    name);
+            ll_free(dirs);
             return s;
         }
         if (!first_existing && access(p, X_OK) == 0)
@@ -423,6 +435,6 @@ ll_status ll_metal_ior_lookup(const char *name, const char *material_dir, ll_met
                 "(%s%s%s%s)",
                 name, name, name, first_existing ? "known in " : "no ior folder found",
                 first_existing ? first_existing : "", first_existing ? ": " : "", names);
-    free(dirs);
+    ll_free(dirs);
     return s;
 }

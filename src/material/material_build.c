@@ -229,9 +229,9 @@ static double total_cost(const build *b)
 
 static void build_free(build *b)
 {
-    free(b->nodes);
-    free(b->weights);
-    free(b->params);
+    ll_free(b->nodes);
+    ll_free(b->weights);
+    ll_free(b->params);
 }
 
 /* The options and the monitors of a build. monitor: the caller's
@@ -247,17 +247,14 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
     b->call = call;
     if (!m)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: material is NULL", fn);
-    if (monitor && monitor->struct_size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: monitor->struct_size is %zu; initialise the monitor with "
-                       "LL_MONITOR_INIT",
-                       fn, monitor->struct_size);
-#define COVERS(field) (monitor->struct_size >= offsetof(ll_monitor, field) + sizeof monitor->field)
-    if (monitor && COVERS(progress))
-        b->monitor_fn = monitor->progress;
-    if (monitor && COVERS(user))
-        b->monitor_user = monitor->user;
-#undef COVERS
+    if (monitor) {
+        ll_monitor caller = LL_MONITOR_INIT;
+        ll_status s = ll_struct_read(&caller, sizeof caller, monitor, fn, "ll_monitor");
+        if (s != LL_OK)
+            return s;
+        b->monitor_fn = caller.progress;
+        b->monitor_user = caller.user;
+    }
     return ll_build_options_read(opts, &b->o, fn);
 }
 
@@ -303,24 +300,15 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
 static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
                         ll_bsdf_write_options *header)
 {
-    double eta, alpha[2];
-    size_t size = header->struct_size;
-    ll_material_header(m, n_channels, &eta, alpha);
-#define COVERS(field) \
-    (size >= offsetof(ll_bsdf_write_options, field) + sizeof header->field)
-    if (COVERS(eta))
-        header->eta = eta;
-    if (COVERS(alpha)) {
-        header->alpha[0] = alpha[0];
-        header->alpha[1] = alpha[1];
-    }
-    if (COVERS(metadata))
-        header->metadata = m->metadata;
-    if (COVERS(error_goal))
-        header->error_goal = o->error_goal > 0.0   ? o->error_goal
-                             : m->error_goal > 0.0 ? m->error_goal
-                                                   : 1e-3;
-#undef COVERS
+    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_material_header(m, n_channels, &full.eta, full.alpha);
+    full.metadata = m->metadata;
+    full.error_goal = o->error_goal > 0.0   ? o->error_goal
+                      : m->error_goal > 0.0 ? m->error_goal
+                                            : 1e-3;
+    /* Checked before the build: cannot fail. */
+    (void)ll_struct_write(header, &full, sizeof full, "ll_material_build_layers",
+                          "ll_bsdf_write_options");
 }
 
 /* The build proper, on an initialised state; restores the thread count. */
@@ -378,11 +366,11 @@ ll_status ll_material_build_layers_ex(const ll_material *material,
     for (c = 0; c < 3; ++c)
         layers[c] = NULL;
     *n_channels = 0;
-    if (header && header->struct_size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_build_layers: header->struct_size is %zu; initialise the "
-                       "header with LL_BSDF_WRITE_OPTIONS_INIT",
-                       header->struct_size);
+    if (header) {
+        s = ll_struct_check(header, "ll_material_build_layers", "ll_bsdf_write_options");
+        if (s != LL_OK)
+            return s;
+    }
     s = build_init(&b, material, opts, monitor, "ll_material_build_layers");
     if (s != LL_OK)
         return s;

@@ -283,17 +283,14 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_word_params(*params)[3] = NULL;
     ll_cost_plan plan;
-    size_t n, m, nch, size;
+    size_t n, m, nch;
     ll_status s;
 
-    /* An older, smaller struct ends at `seconds`: the fields past it are
-     * then not written. */
-    if (!estimate || estimate->struct_size < offsetof(ll_build_estimate, seconds) +
-                                                 sizeof estimate->seconds)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_material_estimate: estimate is NULL or its struct_size is smaller "
-                       "than the first version of ll_build_estimate (LL_BUILD_ESTIMATE_INIT "
-                       "sets it)");
+    /* Computed in full here, then written up to the caller's struct_size:
+     * an older, smaller struct gets the fields it has. */
+    s = ll_struct_check(estimate, "ll_material_estimate", "ll_build_estimate");
+    if (s != LL_OK)
+        return s;
     if (!material)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
     s = ll_build_options_read(opts, &o, "ll_material_estimate");
@@ -307,7 +304,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     ll_material_params(material, nch, params);
     ll_material_cost(material, (const ll_word_params(*)[3])params, n, m, nch,
                      build_threads(&o), &plan);
-    free(params);
+    ll_free(params);
     e.n_nodes = n;
     e.n_orders = m;
     e.n_channels = nch;
@@ -319,8 +316,5 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     e.cpu_seconds = plan.cpu_seconds;
     e.max_memory_bytes = o.max_memory_bytes;
     e.over_budget = plan.peak_bytes > (double)o.max_memory_bytes;
-    size = estimate->struct_size < sizeof e ? estimate->struct_size : sizeof e;
-    e.struct_size = estimate->struct_size;
-    memcpy(estimate, &e, size);
-    return LL_OK;
+    return ll_struct_write(estimate, &e, sizeof e, "ll_material_estimate", "ll_build_estimate");
 }

@@ -37,7 +37,7 @@ void ll_text_append(ll_text *b, const char *fmt, ...)
     }
     if (b->len + (size_t)need + 1 > b->cap) {
         size_t cap = 2 * (b->len + (size_t)need + 1) + 256;
-        char *grown = realloc(b->data, cap);
+        char *grown = ll_realloc(b->data, cap);
         if (!grown) {
             b->failed = 1;
             return;
@@ -58,7 +58,7 @@ static void append_raw(ll_text *b, const char *s, size_t len)
         return;
     if (b->len + len + 1 > b->cap) {
         size_t cap = 2 * (b->len + len + 1) + 256;
-        char *grown = realloc(b->data, cap);
+        char *grown = ll_realloc(b->data, cap);
         if (!grown) {
             b->failed = 1;
             return;
@@ -113,7 +113,7 @@ void ll_text_number(ll_text *b, const char *key, const ll_number *x)
 static char *strip_comments(const char *text)
 {
     size_t len = strlen(text), out = 0;
-    char *s = malloc(len + 2); /* a newline may be added to the last line */
+    char *s = ll_malloc(len + 2); /* a newline may be added to the last line */
     const char *at = text;
     if (!s)
         return NULL;
@@ -181,15 +181,15 @@ ll_status ll_material_make_metadata(ll_material *m, const char *text)
     if (m->count > LL_METADATA_MAX_BYTES / 16)
         level = 2;
     for (; stripped && level < 3; ++level) {
-        free(b.data);
+        ll_free(b.data);
         memset(&b, 0, sizeof b);
         describe(&b, m, stripped, level);
         if (b.failed || b.len <= LL_METADATA_MAX_BYTES)
             break;
     }
-    free(stripped);
+    ll_free(stripped);
     if (!stripped || b.failed) {
-        free(b.data);
+        ll_free(b.data);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory describing %s", m->source);
     }
     m->metadata = b.data;

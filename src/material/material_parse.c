@@ -296,7 +296,7 @@ static ll_status parse_word(parser *p, const ll_word_desc *desc, const token *na
          * time. */
         size_t capacity = count ? 2 * count : 8;
         grown = capacity > SIZE_MAX / sizeof *grown ? NULL
-                                                    : realloc(p->m->words, capacity * sizeof *grown);
+                                                    : ll_realloc(p->m->words, capacity * sizeof *grown);
         if (!grown)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
         p->m->words = grown;
@@ -429,16 +429,16 @@ void ll_material_destroy(ll_material *m)
     for (k = 0; k < m->count; ++k)
         if (m->words[k].desc && m->words[k].desc->destroy)
             m->words[k].desc->destroy(&m->words[k]);
-    free(m->words);
-    free(m->source);
-    free(m->metadata);
-    free(m);
+    ll_free(m->words);
+    ll_free(m->source);
+    ll_free(m->metadata);
+    ll_free(m);
 }
 
 static char *copy_string(const char *s)
 {
     size_t len = strlen(s) + 1;
-    char *c = malloc(len);
+    char *c = ll_malloc(len);
     if (c)
         memcpy(c, s, len);
     return c;
@@ -451,7 +451,7 @@ static ll_status parse_text(const char *text, const char *source, const char *ma
     parser p;
     const char *at = text;
     ll_status s = LL_OK;
-    ll_material *m = calloc(1, sizeof *m);
+    ll_material *m = ll_calloc(1, sizeof *m);
 
     if (!m || !(m->source = copy_string(source))) {
         ll_material_destroy(m);
@@ -526,14 +526,14 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
             char *grown;
             if (cap > ((size_t)64 << 20)) {
                 fclose(f);
-                free(text);
+                ll_free(text);
                 return ll_fail(LL_ERROR_PARSE, "%s: larger than 64 MiB; not a material", path);
             }
             cap = cap ? 2 * cap : 8192;
-            grown = realloc(text, cap + 1);
+            grown = ll_realloc(text, cap + 1);
             if (!grown) {
                 fclose(f);
-                free(text);
+                ll_free(text);
                 return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
             }
             text = grown;
@@ -543,18 +543,18 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
     } while (got > 0);
     if (ferror(f)) {
         fclose(f);
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_IO, "error reading the material %s", path);
     }
     fclose(f);
     text[len] = '\0';
     if (strlen(text) != len) {
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_PARSE, "%s: contains a NUL byte; not a text file", path);
     }
     dir = copy_string(path);
     if (!dir) {
-        free(text);
+        ll_free(text);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading %s", path);
     }
     slash = strrchr(dir, '/');
@@ -565,8 +565,8 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
     else
         strcpy(dir, ".");
     s = parse_text(text, path, dir, out);
-    free(dir);
-    free(text);
+    ll_free(dir);
+    ll_free(text);
     return s;
 }
 

@@ -41,17 +41,14 @@ ll_status ll_build_options_read(const ll_build_options *in, ll_build_options *ou
                                 const char *fn)
 {
     ll_build_options defaults = LL_BUILD_OPTIONS_INIT;
+    ll_status s;
     *out = defaults;
     out->max_memory_bytes = default_budget();
     if (!in)
         return LL_OK;
-    if (in->struct_size < offsetof(ll_build_options, n_nodes))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: options.struct_size = %zu is too small; set it to "
-                       "sizeof(ll_build_options) (LL_BUILD_OPTIONS_INIT does)",
-                       fn, in->struct_size);
-    memcpy(out, in, in->struct_size < sizeof *out ? in->struct_size : sizeof *out);
-    out->struct_size = sizeof *out;
+    s = ll_struct_read(out, sizeof *out, in, fn, "ll_build_options");
+    if (s != LL_OK)
+        return s;
     if (out->max_memory_bytes == 0)
         out->max_memory_bytes = default_budget();
     if (out->n_nodes != 0 && (out->n_nodes < 2 || out->n_nodes % 2 != 0))

@@ -97,6 +97,10 @@ static ll_status conductor_parse_eta(const ll_parser *p, ll_word *w, const ll_to
         memcpy(name, v->begin, v->len);
         name[v->len] = '\0';
         s = ll_metal_ior_lookup(name, ll_parser_dir(p), &w->metal_ior);
+        /* Out of memory is no mistake in the text: its status and message
+         * stay as they are. */
+        if (s == LL_ERROR_OUT_OF_MEMORY)
+            return s;
         if (s != LL_OK)
             return ll_parse_error(p, v->begin, "eta=%s: %s", name, ll_last_error_message());
         memcpy(w->metal, name, sizeof name);

@@ -38,7 +38,7 @@ static char *resolve_path(const char *dir, const char *path)
         dir = NULL;
     a = dir ? strlen(dir) + 1 : 0;
     b = strlen(path);
-    out = malloc(a + b + 1);
+    out = ll_malloc(a + b + 1);
     if (!out)
         return NULL;
     if (dir)
@@ -150,7 +150,7 @@ static void measured_metadata(ll_text *b, const ll_word *w)
 
 static void measured_destroy(ll_word *w)
 {
-    free(w->file);
+    ll_free(w->file);
     w->file = NULL;
 }
 

@@ -265,7 +265,7 @@ static ll_status watched_rule(const char *fn, rule_fn rule, size_t n, size_t min
         memcpy(nodes, x, n * sizeof(double));
         memcpy(weights, wt, n * sizeof(double));
     }
-    free(scratch);
+    ll_free(scratch);
     return s;
 }
 

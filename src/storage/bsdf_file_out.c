@@ -57,15 +57,15 @@ struct ll_bsdf_out {
 
 static void out_free(ll_bsdf_out *o)
 {
-    free(o->path);
-    free(o->real);
-    free(o->temp);
-    free(o);
+    ll_free(o->path);
+    ll_free(o->real);
+    ll_free(o->temp);
+    ll_free(o);
 }
 
 static char *copy_string(const char *s, size_t len)
 {
-    char *c = malloc(len + 1);
+    char *c = ll_malloc(len + 1);
     if (c) {
         memcpy(c, s, len);
         c[len] = '\0';
@@ -102,27 +102,33 @@ static int resolve_links(const char *path, char **real)
         }
         /* st_size is the link's length (0 on some pseudo file systems). */
         size = st.st_size > 0 ? (size_t)st.st_size + 1 : PATH_MAX;
-        target = malloc(size);
-        len = target ? readlink(cur, target, size) : -1;
+        target = ll_malloc(size);
+        if (!target) {
+            errno = ENOMEM; /* (the allocator's failure sets no errno) */
+            break;
+        }
+        len = readlink(cur, target, size);
         if (len < 0 || (size_t)len >= size) {
             if (len >= 0)
                 errno = ENAMETOOLONG;
-            free(target);
+            ll_free(target);
             break;
         }
         target[len] = '\0';
         /* A relative link is relative to the link's own directory. */
         dir = target[0] == '/' ? 0 : directory_length(cur);
-        joined = malloc(dir + (size_t)len + 1);
+        joined = ll_malloc(dir + (size_t)len + 1);
         if (joined) {
             memcpy(joined, cur, dir);
             memcpy(joined + dir, target, (size_t)len + 1);
         }
-        free(target);
-        free(cur);
+        ll_free(target);
+        ll_free(cur);
         cur = joined;
     }
-    free(cur);
+    if (!cur)
+        errno = ENOMEM; /* the first copy or a joined path could not be made */
+    ll_free(cur);
     return 0;
 }
 
@@ -134,7 +140,7 @@ static size_t kept_name_length(const char *real, size_t dir, size_t name_len)
     char *dir_name = dir ? copy_string(real, dir) : copy_string(".", 1);
     errno = 0;
     name_max = dir_name ? pathconf(dir_name, _PC_NAME_MAX) : -1;
-    free(dir_name);
+    ll_free(dir_name);
     if (name_max <= 0)
         name_max = NAME_MAX;
     if (name_max <= LL_BSDF_TEMP_EXTRA + 1)
@@ -165,7 +171,7 @@ static int is_our_temporary(const char *entry, const char *prefix, size_t prefix
 static void remove_stale(const char *temp, size_t dir, size_t prefix_len)
 {
     char *dir_name = dir ? copy_string(temp, dir) : copy_string(".", 1);
-    char *path = malloc(dir + prefix_len + LL_BSDF_TEMP_EXTRA + 1);
+    char *path = ll_malloc(dir + prefix_len + LL_BSDF_TEMP_EXTRA + 1);
     time_t now = time(NULL);
     DIR *d = dir_name ? opendir(dir_name) : NULL;
     struct dirent *e;
@@ -181,8 +187,8 @@ static void remove_stale(const char *temp, size_t dir, size_t prefix_len)
     }
     if (d)
         closedir(d);
-    free(path);
-    free(dir_name);
+    ll_free(path);
+    ll_free(dir_name);
 }
 
 /* Create the temporary: XXXXXX from the clock, the process and the attempt
@@ -225,7 +231,7 @@ ll_status ll_bsdf_out_begin(const char *path, const char *fn, ll_bsdf_out **out)
     *out = NULL;
     if (len == 0 || directory_length(path) == len)
         return ll_fail(LL_ERROR_IO, "%s: \"%s\" names a directory, not a file", fn, path);
-    o = calloc(1, sizeof *o);
+    o = ll_calloc(1, sizeof *o);
     if (!o || !(o->path = copy_string(path, len)))
         goto fail_memory;
     o->fd = -1;
@@ -256,7 +262,7 @@ ll_status ll_bsdf_out_begin(const char *path, const char *fn, ll_bsdf_out **out)
         keep_mode = 1;
     }
     kept = kept_name_length(o->real, dir, name_len);
-    o->temp = malloc(dir + kept + LL_BSDF_TEMP_EXTRA + 1);
+    o->temp = ll_malloc(dir + kept + LL_BSDF_TEMP_EXTRA + 1);
     if (!o->temp)
         goto fail_memory;
     memcpy(o->temp, o->real, dir);
@@ -350,7 +356,7 @@ static void sync_directory(const ll_bsdf_out *o)
         (void)fsync(fd);
         close(fd);
     }
-    free(name);
+    ll_free(name);
 }
 
 ll_status ll_bsdf_out_commit(ll_bsdf_out *o)

@@ -14,20 +14,20 @@ void ll_bsdf_free(ll_bsdf *b)
 {
     if (!b)
         return;
-    free(b->nodes_f);
-    free(b->nodes);
-    free(b->param_counts);
-    free(b->param_first);
-    free(b->param_positions);
-    free(b->cdf);
-    free(b->a0);
-    free(b->pairs);
-    free(b->coeffs);
-    free(b->recip);
-    free(b->bucket_first);
-    free(b->intervals);
-    free(b->metadata);
-    free(b);
+    ll_free(b->nodes_f);
+    ll_free(b->nodes);
+    ll_free(b->param_counts);
+    ll_free(b->param_first);
+    ll_free(b->param_positions);
+    ll_free(b->cdf);
+    ll_free(b->a0);
+    ll_free(b->pairs);
+    ll_free(b->coeffs);
+    ll_free(b->recip);
+    ll_free(b->bucket_first);
+    ll_free(b->intervals);
+    ll_free(b->metadata);
+    ll_free(b);
 }
 
 ll_bsdf *ll_bsdf_retain(ll_bsdf *b)
@@ -48,17 +48,10 @@ void ll_bsdf_release(ll_bsdf *b)
 ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
 {
     ll_bsdf_info full;
-    size_t size;
     if (!b || !info)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_get_info: bsdf or info is NULL");
-    size = info->struct_size;
-    if (size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_bsdf_get_info: info->struct_size = %zu is too small (set it to "
-                       "sizeof(ll_bsdf_info) or use LL_BSDF_INFO_INIT)",
-                       size);
     memset(&full, 0, sizeof full);
-    full.struct_size = size;
+    full.struct_size = sizeof full;
     full.n_nodes = b->n_nodes;
     full.max_order = b->max_order;
     full.n_channels = b->n_channels;
@@ -73,8 +66,7 @@ ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
     full.file_size = b->file_size;
     full.flags = b->flags;
     /* Write only the fields the caller's (possibly older, smaller) struct has. */
-    memcpy(info, &full, size < sizeof full ? size : sizeof full);
-    return LL_OK;
+    return ll_struct_write(info, &full, sizeof full, "ll_bsdf_get_info", "ll_bsdf_info");
 }
 
 ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,

@@ -473,7 +473,7 @@ static ll_status allocate(ll_bsdf *b, const char *file)
     b->coeffs = ll_calloc_array(b->n_coeffs + 4, sizeof *b->coeffs);
     /* Padded so that vector loops over whole groups of 4 stay inside. */
     b->recip = ll_alloc_array(b->max_order + 4, sizeof *b->recip);
-    b->metadata = malloc(b->metadata_size + 1);
+    b->metadata = ll_malloc(b->metadata_size + 1);
     b->n_buckets = 4 * b->n_nodes; /* n_nodes^2 table entries fit the file */
     b->bucket_first = ll_alloc_array(b->n_buckets, sizeof *b->bucket_first);
     b->intervals = ll_alloc_array(b->n_nodes - 1, sizeof *b->intervals);
@@ -493,7 +493,7 @@ static ll_status parse_body(const unsigned char *front, const bsdf_header *h,
                             ll_bsdf **out)
 {
     ll_status s;
-    ll_bsdf *b = calloc(1, sizeof *b);
+    ll_bsdf *b = ll_calloc(1, sizeof *b);
     if (!b)
         return file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory");
     b->refcount = 1;
@@ -537,24 +537,16 @@ static ll_status parse_body(const unsigned char *front, const bsdf_header *h,
 /* The limits of opts (NULL: the defaults; a field of 0: its default). */
 static ll_status resolve_limits(const ll_open_options *opts, const char *fn, bsdf_limits *lim)
 {
-    lim->max_bytes = LL_OPEN_DEFAULT_MAX_BYTES;
-    lim->max_order = LL_OPEN_DEFAULT_MAX_ORDER;
-    lim->max_nodes = LL_OPEN_DEFAULT_MAX_NODES;
-    if (!opts)
-        return LL_OK;
-    if (opts->struct_size < offsetof(ll_open_options, max_bytes) + sizeof opts->max_bytes)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: ll_open_options.struct_size = %zu is too small (set it to "
-                       "sizeof(ll_open_options) = %zu, or use LL_OPEN_OPTIONS_INIT)",
-                       fn, opts->struct_size, sizeof(ll_open_options));
-    if (opts->max_bytes)
-        lim->max_bytes = opts->max_bytes;
-    if (opts->struct_size >= offsetof(ll_open_options, max_order) + sizeof opts->max_order &&
-        opts->max_order)
-        lim->max_order = opts->max_order;
-    if (opts->struct_size >= offsetof(ll_open_options, max_nodes) + sizeof opts->max_nodes &&
-        opts->max_nodes)
-        lim->max_nodes = opts->max_nodes;
+    ll_open_options caller = LL_OPEN_OPTIONS_INIT;
+    if (opts) {
+        /* Read up to the caller's struct_size; later fields stay 0. */
+        ll_status s = ll_struct_read(&caller, sizeof caller, opts, fn, "ll_open_options");
+        if (s != LL_OK)
+            return s;
+    }
+    lim->max_bytes = caller.max_bytes ? caller.max_bytes : LL_OPEN_DEFAULT_MAX_BYTES;
+    lim->max_order = caller.max_order ? caller.max_order : LL_OPEN_DEFAULT_MAX_ORDER;
+    lim->max_nodes = caller.max_nodes ? caller.max_nodes : LL_OPEN_DEFAULT_MAX_NODES;
     return LL_OK;
 }
 
@@ -636,7 +628,7 @@ ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf
     /* Everything up to the coefficients (nodes, parameters, CDF, offset
      * table) is parsed from memory; the coefficients are converted as they
      * are read. */
-    front = malloc(l.coeffs);
+    front = ll_malloc(l.coeffs);
     if (!front) {
         s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory reading %zu bytes",
                        l.coeffs);
@@ -649,7 +641,7 @@ ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf
     }
     s = parse_body(front, &h, &l, &src, file, out);
 done:
-    free(front);
+    ll_free(front);
     close(src.fd);
     return s;
 }

@@ -82,16 +82,13 @@ static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
 {
     ll_bsdf_write_options defaults = LL_BSDF_WRITE_OPTIONS_INIT;
     job->opts = defaults;
+    /* Read only what the caller's struct has; newer fields keep their
+     * defaults. */
     if (opts) {
-        size_t size = opts->struct_size;
-        if (size < sizeof(size_t))
-            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                           "%s: opts->struct_size = %zu (use LL_BSDF_WRITE_OPTIONS_INIT)",
-                           job->fn, size);
-        /* Read only what the caller's struct has; newer fields keep their
-         * defaults. */
-        memcpy(&job->opts, opts, size < sizeof *opts ? size : sizeof *opts);
-        job->opts.struct_size = sizeof *opts;
+        ll_status s = ll_struct_read(&job->opts, sizeof job->opts, opts, job->fn,
+                                     "ll_bsdf_write_options");
+        if (s != LL_OK)
+            return s;
     }
     if (!(job->opts.eta >= LL_BSDF_ETA_MIN && job->opts.eta <= LL_BSDF_ETA_MAX))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
@@ -261,9 +258,9 @@ static ll_status compute_lengths(write_job *job)
         }
     }
 done:
-    free(len);
-    free(tail);
-    free(ref0);
+    ll_free(len);
+    ll_free(tail);
+    ll_free(ref0);
     return s;
 }
 
@@ -353,7 +350,7 @@ static ll_status compute_cdf(write_job *job)
     for (i = 0; i < nn; ++i) {
         ll_watch_advance(job->watch, 1);
         if (ll_watch_poll(job->watch)) {
-            free(values);
+            ll_free(values);
             return write_cancelled(job);
         }
         for (b = 0; b < nb; ++b) {
@@ -365,7 +362,7 @@ static ll_status compute_cdf(write_job *job)
             integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
         }
     }
-    free(values);
+    ll_free(values);
     return LL_OK;
 }
 
@@ -395,7 +392,7 @@ static ll_status default_metadata(write_job *job)
         job->opts.error_goal);
     if (len < 0 || (size_t)len >= sizeof text)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the metadata does not fit", job->fn);
-    job->metadata = malloc((size_t)len + 1);
+    job->metadata = ll_malloc((size_t)len + 1);
     if (!job->metadata)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
     memcpy(job->metadata, text, (size_t)len + 1);
@@ -516,7 +513,7 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
         for (L = 0; L < count; ++L)
             stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
     }
-    free(stage);
+    ll_free(stage);
     return s;
 }
 
@@ -614,11 +611,11 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
         (s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
         (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
         s = put_file(&job, path);
-    free(job.nodes);
-    free(job.length);
-    free(job.offset);
-    free(job.cdf);
-    free(job.metadata);
+    ll_free(job.nodes);
+    ll_free(job.length);
+    ll_free(job.offset);
+    ll_free(job.cdf);
+    ll_free(job.metadata);
     return s;
 }
 

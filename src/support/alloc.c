@@ -1,10 +1,27 @@
 /*
- * Overflow-checked size arithmetic and allocation.
+ * Overflow-checked size arithmetic, and the one allocator of the library:
+ * every allocation in src/ comes through here (tests/alloc_check.sh keeps it
+ * so), which lets the tests fail any chosen allocation.
+ *
+ * Failure injection (tests only; the functions are hidden, not in any public
+ * header): ll_alloc_fail_after(k) arms a counter of allocations shared by
+ * all threads, and the k-th allocation after it returns NULL. The counter is
+ * global and atomic rather than per thread because the parallel loops
+ * allocate in OpenMP worker threads, and a per-thread count would never see
+ * those; the k-th allocation is then one deterministic call when the test
+ * runs with ll_set_thread_count(1) (every item of ll_parallel_for on one
+ * thread, in index order). While armed, the hook also counts the blocks
+ * allocated minus the blocks freed, so a test sees a leak without a leak
+ * checker. Unarmed, each allocation costs one relaxed atomic load of the
+ * flag: this is the only mutable global of the library, and it is written
+ * only by tests.
  */
+#define _XOPEN_SOURCE 700 /* realpath (ll_realpath) */
 #include "support/support.h"
 
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 int ll_size_mul(size_t a, size_t b, size_t *out)
 {
@@ -22,18 +39,178 @@ int ll_size_add(size_t a, size_t b, size_t *out)
     return 1;
 }
 
+/* ------------------------------------------------------ failure injection */
+
+#if defined(__GNUC__)
+#  define LOAD(x) __atomic_load_n(&(x), __ATOMIC_RELAXED)
+#  define STORE(x, v) __atomic_store_n(&(x), (v), __ATOMIC_SEQ_CST)
+#  define FETCH_ADD(x, v) __atomic_fetch_add(&(x), (v), __ATOMIC_RELAXED)
+#else
+/* Without atomics the hook is only exact single-threaded, as the tests run. */
+#  define LOAD(x) (x)
+#  define STORE(x, v) ((x) = (v))
+#  define FETCH_ADD(x, v) (((x) += (v)) - (v))
+#endif
+
+static struct {
+    int armed;          /* read by every allocation: relaxed load only */
+    size_t fail_at;     /* 1-based index of the allocation to fail; 0 = none */
+    size_t count;       /* allocations since arming */
+    long long live;     /* blocks allocated minus blocks freed since arming */
+} hook;
+
+void ll_alloc_fail_after(size_t k)
+{
+    STORE(hook.armed, 0);
+    STORE(hook.fail_at, k);
+    STORE(hook.count, 0);
+    STORE(hook.live, 0);
+    STORE(hook.armed, 1);
+}
+
+void ll_alloc_hook_off(void)
+{
+    STORE(hook.armed, 0);
+}
+
+size_t ll_alloc_count(void)
+{
+    return LOAD(hook.count);
+}
+
+long long ll_alloc_live(void)
+{
+    return LOAD(hook.live);
+}
+
+/* 1 when this allocation is to fail; counts it. */
+static int injected_failure(void)
+{
+    size_t index;
+    if (!LOAD(hook.armed))
+        return 0;
+    index = FETCH_ADD(hook.count, 1) + 1;
+    return index == LOAD(hook.fail_at);
+}
+
+static void note_block(long long delta)
+{
+    if (LOAD(hook.armed))
+        FETCH_ADD(hook.live, delta);
+}
+
+/* ------------------------------------------------------------- allocation */
+
+void *ll_malloc(size_t bytes)
+{
+    void *p;
+    if (injected_failure())
+        return NULL;
+    p = malloc(bytes ? bytes : 1);
+    if (p)
+        note_block(1);
+    return p;
+}
+
+void *ll_calloc(size_t count, size_t size)
+{
+    size_t bytes;
+    void *p;
+    if (!ll_size_mul(count, size, &bytes))
+        return NULL;
+    if (injected_failure())
+        return NULL;
+    p = bytes ? calloc(count, size) : calloc(1, 1);
+    if (p)
+        note_block(1);
+    return p;
+}
+
+void *ll_realloc(void *block, size_t bytes)
+{
+    void *p;
+    if (injected_failure())
+        return NULL;
+    p = realloc(block, bytes ? bytes : 1);
+    if (p && !block)
+        note_block(1);
+    return p;
+}
+
+void ll_free(void *block)
+{
+    if (block) {
+        note_block(-1);
+        free(block);
+    }
+}
+
 void *ll_alloc_array(size_t count, size_t size)
 {
     size_t bytes;
     if (!ll_size_mul(count, size, &bytes))
         return NULL;
-    return malloc(bytes ? bytes : 1);
+    return ll_malloc(bytes);
 }
 
 void *ll_calloc_array(size_t count, size_t size)
 {
+    return ll_calloc(count, size);
+}
+
+void *ll_realloc_array(void *block, size_t count, size_t size)
+{
     size_t bytes;
     if (!ll_size_mul(count, size, &bytes))
         return NULL;
-    return calloc(bytes ? count : 1, bytes ? size : 1);
+    return ll_realloc(block, bytes);
+}
+
+char *ll_strdup(const char *s)
+{
+    size_t len = strlen(s);
+    char *copy = ll_malloc(len + 1);
+    if (copy)
+        memcpy(copy, s, len + 1);
+    return copy;
+}
+
+char *ll_realpath(const char *path)
+{
+    /* realpath allocates with the C library's malloc: copy the answer into
+     * a block of ours so that every block of the library is one kind. */
+    char *resolved = realpath(path, NULL), *copy;
+    if (!resolved)
+        return NULL;
+    copy = ll_strdup(resolved);
+    free(resolved);
+    return copy;
+}
+
+long ll_getline(char **line, size_t *capacity, FILE *f)
+{
+    size_t len = 0;
+    int c;
+    if (!*line || *capacity == 0) {
+        char *fresh = ll_realloc(*line, 128);
+        if (!fresh)
+            return -2;
+        *line = fresh;
+        *capacity = 128;
+    }
+    while ((c = getc(f)) != EOF) {
+        if (len + 2 > *capacity) {
+            size_t grown;
+            char *bigger;
+            if (!ll_size_mul(*capacity, 2, &grown) || !(bigger = ll_realloc(*line, grown)))
+                return -2;
+            *line = bigger;
+            *capacity = grown;
+        }
+        (*line)[len++] = (char)c;
+        if (c == '\n')
+            break;
+    }
+    (*line)[len] = '\0';
+    return len == 0 && c == EOF ? -1 : (long)len;
 }

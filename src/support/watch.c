@@ -34,22 +34,17 @@ void ll_watch_begin_raw(ll_watch *w, ll_monitor_fn progress, void *user,
 
 ll_status ll_watch_begin(ll_watch *w, const ll_monitor *monitor, const char *fn)
 {
-    size_t size;
+    ll_monitor caller = LL_MONITOR_INIT;
+    ll_status s;
     ll_watch_begin_raw(w, NULL, NULL, NULL);
     if (!monitor)
         return LL_OK;
-    size = monitor->struct_size;
-    if (size < sizeof(size_t))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: monitor->struct_size is %zu; initialise the monitor with "
-                       "LL_MONITOR_INIT",
-                       fn, size);
-#define COVERS(field) (size >= offsetof(ll_monitor, field) + sizeof monitor->field)
-    if (COVERS(progress))
-        w->progress = monitor->progress;
-    if (COVERS(user))
-        w->user = monitor->user;
-#undef COVERS
+    /* An older, smaller struct lacks the later fields: they stay NULL. */
+    s = ll_struct_read(&caller, sizeof caller, monitor, fn, "ll_monitor");
+    if (s != LL_OK)
+        return s;
+    w->progress = caller.progress;
+    w->user = caller.user;
     return LL_OK;
 }
 

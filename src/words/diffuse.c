@@ -35,8 +35,8 @@ ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo, const ll_monit
     column = ll_calloc_array(n, sizeof(double));
     orders = ll_calloc_array(layer->m, sizeof *orders);
     if (!column || !orders) {
-        free(column);
-        free(orders);
+        ll_free(column);
+        ll_free(orders);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_diffuse: out of memory");
     }
     s = ll_order_builder_create(n, &b);
@@ -61,13 +61,13 @@ ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo, const ll_monit
         s = ll_order_builder_finish(b, &o);
     else
         ll_order_builder_destroy(b);
-    free(column);
+    ll_free(column);
     if (s != LL_OK) {
-        free(orders);
+        ll_free(orders);
         return s;
     }
     orders[0] = o;
     ll_layer_replace_orders(layer, orders);
-    free(orders);
+    ll_free(orders);
     return LL_OK;
 }

@@ -145,19 +145,19 @@ static ll_status build_order(size_t order, const medium_job *job)
         }
     }
     s = ll_order_from_dense(P, n, 0.0, &job->result[order]);
-    free(Y);
-    free(Z);
-    free(P);
+    ll_free(Y);
+    ll_free(Z);
+    ll_free(P);
     return s;
 oom:
-    free(Y);
-    free(Z);
-    free(P);
+    ll_free(Y);
+    ll_free(Z);
+    ll_free(P);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "medium: out of memory for order %zu", order);
 cancelled:
-    free(Y);
-    free(Z);
-    free(P);
+    ll_free(Y);
+    ll_free(Z);
+    ll_free(P);
     return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
 }
 
@@ -203,9 +203,9 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     s = ll_layer_commit_orders(layer, job.result, s);
     job.result = NULL;
 done:
-    free(job.result);
-    free(moment);
-    free(diag);
+    ll_free(job.result);
+    ll_free(moment);
+    ll_free(diag);
     return s;
 }
 
@@ -237,7 +237,7 @@ ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_mon
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_isotropic: out of memory");
     chi[0] = 1.0;
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic", &watch);
-    free(chi);
+    ll_free(chi);
     return s;
 }
 
@@ -269,7 +269,7 @@ ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, doub
     for (k = 1; k <= K; ++k)
         chi[k] = chi[k - 1] * g;
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", &watch);
-    free(chi);
+    ll_free(chi);
     return s;
 }
 
@@ -305,7 +305,7 @@ ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, doubl
     if (kappa > 0.0) {
         double *r = ll_alloc_array(K + 1, sizeof(double));
         if (!r) {
-            free(chi);
+            ll_free(chi);
             return ll_fail(LL_ERROR_OUT_OF_MEMORY,
                            "ll_layer_set_von_mises_fisher: out of memory");
         }
@@ -318,10 +318,10 @@ ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, doubl
         }
         for (k = 1; k <= K; ++k)
             chi[k] = chi[k - 1] * r[k];
-        free(r);
+        ll_free(r);
     }
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher", &watch);
-    free(chi);
+    ll_free(chi);
     return s;
 }
 

@@ -131,8 +131,8 @@ void ll_merl_free(ll_merl *merl)
 {
     if (!merl)
         return;
-    free(merl->values);
-    free(merl);
+    ll_free(merl->values);
+    ll_free(merl);
 }
 
 ll_status ll_merl_load(const char *path, ll_merl **out)
@@ -149,7 +149,7 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
     if (s != LL_OK)
         return s;
     total = 3 * count; /* no overflow: checked with the byte count */
-    m = calloc(1, sizeof *m);
+    m = ll_calloc(1, sizeof *m);
     raw = ll_alloc_array(MERL_CHUNK_VALUES, 8);
     if (!m || !raw || !(m->values = ll_alloc_array(total, sizeof(double)))) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading the MERL file %s", path);
@@ -174,12 +174,12 @@ ll_status ll_merl_load(const char *path, ll_merl **out)
             m->values[i + j] = (v > 0.0 && ll_is_finite(v)) ? v * scale[c] : 0.0;
         }
     }
-    free(raw);
+    ll_free(raw);
     fclose(f);
     *out = m;
     return LL_OK;
 fail:
-    free(raw);
+    ll_free(raw);
     ll_merl_free(m);
     fclose(f);
     return s;
@@ -331,9 +331,9 @@ static ll_status merl_column(size_t col_index, void *ctx)
     }
     ll_watch_advance(job->watch, 1);
 done:
-    free(f);
-    free(coeff);
-    free(column);
+    ll_free(f);
+    ll_free(coeff);
+    ll_free(column);
     return s;
 }
 
@@ -395,7 +395,7 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
     if (s == LL_OK)
         s = ll_layer_build_by_columns(layer, layer->n / 2, merl_column, NULL, &job,
                                       &job.builders, watch, fn);
-    free(cos_table);
+    ll_free(cos_table);
     return s;
 }
 

@@ -528,7 +528,7 @@ ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o, double mu_i
 ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_t n_orders,
                                size_t max_len, ll_microfacet **out)
 {
-    ll_microfacet *mf = calloc(1, sizeof *mf);
+    ll_microfacet *mf = ll_calloc(1, sizeof *mf);
     *out = NULL;
     if (!mf)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory");
@@ -545,8 +545,8 @@ ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_
 static void grid_entry_free(grid_entry *e)
 {
     if (e)
-        free(e->matrix);
-    free(e);
+        ll_free(e->matrix);
+    ll_free(e);
 }
 
 void ll_microfacet_destroy(ll_microfacet *mf)
@@ -556,8 +556,8 @@ void ll_microfacet_destroy(ll_microfacet *mf)
         return;
     for (k = 0; k < mf->n_grid; ++k)
         grid_entry_free(mf->grid[k]);
-    free(mf->grid);
-    free(mf);
+    ll_free(mf->grid);
+    ll_free(mf);
 }
 
 /* T_j(y) for j < CHEB by T_(j+1) = 2 y T_j - T_(j-1). */
@@ -582,7 +582,7 @@ static void chebyshev_values(double y, double *t)
 static ll_status make_entry(const ll_microfacet *mf, size_t k, const double *x,
                             const double *w, grid_entry **out)
 {
-    grid_entry *e = calloc(1, sizeof *e);
+    grid_entry *e = ll_calloc(1, sizeof *e);
     double *basis = NULL, *cosines = NULL, *series = NULL;
     double phi_end;
     size_t i, j, l, q, n = GAUSS_NODES, len;
@@ -643,15 +643,15 @@ static ll_status make_entry(const ll_microfacet *mf, size_t k, const double *x,
                 e->matrix[i * len + l] += coef * series[j * len + l];
         }
     }
-    free(basis);
-    free(cosines);
-    free(series);
+    ll_free(basis);
+    ll_free(cosines);
+    ll_free(series);
     *out = e;
     return LL_OK;
 oom:
-    free(basis);
-    free(cosines);
-    free(series);
+    ll_free(basis);
+    ll_free(cosines);
+    ll_free(series);
     grid_entry_free(e);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory for a %zu-order map",
                    mf->max_len);
@@ -697,7 +697,7 @@ ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, siz
     if (!need || !job.grid)
         goto oom;
     if (n_grid > mf->n_grid) {
-        grid_entry **grid = realloc(mf->grid, n_grid * sizeof *grid);
+        grid_entry **grid = ll_realloc(mf->grid, n_grid * sizeof *grid);
         if (!grid)
             goto oom;
         for (k = mf->n_grid; k < n_grid; ++k)
@@ -737,12 +737,12 @@ ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, siz
     if (s == LL_OK)
         s = ll_parallel_for_watched(n_items, prepare_one, &job, watch);
 done:
-    free(need);
-    free(job.grid);
+    ll_free(need);
+    ll_free(job.grid);
     return s;
 oom:
-    free(need);
-    free(job.grid);
+    ll_free(need);
+    ll_free(job.grid);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory preparing %zu cosines",
                    count);
 }
@@ -816,8 +816,8 @@ static ll_status fill_column(size_t col, const layer_job *job)
     double *memory = ll_alloc_array(job->column_doubles, sizeof(double));
     ll_status s = LL_OK;
     if (!memory || !rows) {
-        free(memory);
-        free(rows);
+        ll_free(memory);
+        ll_free(rows);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
     }
     pool = memory;                                   /* row r's series at r m */
@@ -858,8 +858,8 @@ static ll_status fill_column(size_t col, const layer_job *job)
                 column[rows[j].row] = 0.0;
         }
     }
-    free(memory);
-    free(rows);
+    ll_free(memory);
+    ll_free(rows);
     return s;
 }
 
@@ -1095,10 +1095,10 @@ oom:
                 n);
 done:
     ll_microfacet_destroy(mf);
-    free(mu);
-    free(w);
-    free(work);
-    free(order0);
-    free(ref0);
+    ll_free(mu);
+    ll_free(w);
+    ll_free(work);
+    ll_free(order0);
+    ll_free(ref0);
     return s;
 }

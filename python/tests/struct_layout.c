@@ -1,0 +1,78 @@
+/*
+ * The layout of every public size-tagged struct as the C compiler sees it,
+ * for test_struct_layout.py to compare with the ctypes Structures of
+ * layerlab/_native.py. Prints, per struct:
+ *     struct NAME SIZEOF INIT_BYTES_IN_HEX
+ *     field NAME FIELD OFFSET SIZE
+ */
+#include <stddef.h>
+#include <stdio.h>
+
+#include <layerlab.h>
+
+static void print_struct(const char *name, size_t size, const void *init)
+{
+    const unsigned char *bytes = init;
+    size_t i;
+    printf("struct %s %zu ", name, size);
+    for (i = 0; i < size; ++i)
+        printf("%02x", bytes[i]);
+    printf("\n");
+}
+
+#define STRUCT(type, init)                          \
+    do {                                            \
+        static const type value = init;             \
+        print_struct(#type, sizeof(type), &value);  \
+    } while (0)
+#define FIELD(type, field)                                                        \
+    printf("field %s %s %zu %zu\n", #type, #field, offsetof(type, field),        \
+           sizeof(((type *)0)->field))
+
+int main(void)
+{
+    STRUCT(ll_bsdf_write_options, LL_BSDF_WRITE_OPTIONS_INIT);
+    FIELD(ll_bsdf_write_options, struct_size);
+    FIELD(ll_bsdf_write_options, eta);
+    FIELD(ll_bsdf_write_options, alpha);
+    FIELD(ll_bsdf_write_options, metadata);
+    FIELD(ll_bsdf_write_options, error_goal);
+
+    STRUCT(ll_bsdf_info, LL_BSDF_INFO_INIT);
+    FIELD(ll_bsdf_info, struct_size);
+    FIELD(ll_bsdf_info, n_nodes);
+    FIELD(ll_bsdf_info, max_order);
+    FIELD(ll_bsdf_info, n_channels);
+    FIELD(ll_bsdf_info, n_bases);
+    FIELD(ll_bsdf_info, n_parameters);
+    FIELD(ll_bsdf_info, n_coeffs);
+    FIELD(ll_bsdf_info, eta);
+    FIELD(ll_bsdf_info, alpha);
+    FIELD(ll_bsdf_info, metadata);
+    FIELD(ll_bsdf_info, metadata_size);
+    FIELD(ll_bsdf_info, file_size);
+    FIELD(ll_bsdf_info, flags);
+
+    STRUCT(ll_build_options, LL_BUILD_OPTIONS_INIT);
+    FIELD(ll_build_options, struct_size);
+    FIELD(ll_build_options, n_nodes);
+    FIELD(ll_build_options, n_orders);
+    FIELD(ll_build_options, n_channels);
+    FIELD(ll_build_options, threads);
+    FIELD(ll_build_options, error_goal);
+    FIELD(ll_build_options, progress);
+    FIELD(ll_build_options, progress_user);
+    FIELD(ll_build_options, cancel);
+
+    STRUCT(ll_build_estimate, LL_BUILD_ESTIMATE_INIT);
+    FIELD(ll_build_estimate, struct_size);
+    FIELD(ll_build_estimate, n_nodes);
+    FIELD(ll_build_estimate, n_orders);
+    FIELD(ll_build_estimate, n_channels);
+    FIELD(ll_build_estimate, layers_built);
+    FIELD(ll_build_estimate, additions);
+    FIELD(ll_build_estimate, doublings);
+    FIELD(ll_build_estimate, peak_bytes);
+    FIELD(ll_build_estimate, seconds);
+    return 0;
+}

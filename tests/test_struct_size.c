@@ -1,0 +1,525 @@
+/*
+ * Size-tagged public structs at every field boundary: a caller whose
+ * struct_size is offsetof(some field) (an older header's struct) gets the
+ * fields before it read or written, and the bytes from struct_size on are
+ * neither read nor written. The bytes beyond are filled with a canary
+ * (0xA5: as a size, more than any limit; as a double, negative; as a
+ * pointer, not a valid one), so reading them makes the call fail or crash,
+ * and writing them shows in the canary check.
+ *  - Read structs (ll_bsdf_write_options into ll_bsdf_write,
+ *    ll_build_options into the material calls): a truncated struct behaves
+ *    exactly like the full struct with the defaults beyond struct_size, and
+ *    each field changes the outcome (so the comparison can fail).
+ *  - Written structs (ll_bsdf_info, ll_build_estimate, the header of
+ *    ll_material_build_layers): the bytes before struct_size are what a
+ *    full-size caller gets, the rest keep the canary, and struct_size stays.
+ */
+#include "test_util.h"
+
+#define CANARY 0xA5
+#define SLACK 32
+
+static const size_t write_options_ends[] = {
+    sizeof(size_t), offsetof(ll_bsdf_write_options, alpha),
+    offsetof(ll_bsdf_write_options, metadata), offsetof(ll_bsdf_write_options, error_goal),
+    sizeof(ll_bsdf_write_options),
+};
+static const size_t info_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_bsdf_info, max_order),
+    offsetof(ll_bsdf_info, n_channels),
+    offsetof(ll_bsdf_info, n_bases),
+    offsetof(ll_bsdf_info, n_parameters),
+    offsetof(ll_bsdf_info, n_coeffs),
+    offsetof(ll_bsdf_info, eta),
+    offsetof(ll_bsdf_info, alpha),
+    offsetof(ll_bsdf_info, metadata),
+    offsetof(ll_bsdf_info, metadata_size),
+    offsetof(ll_bsdf_info, file_size),
+    offsetof(ll_bsdf_info, flags),
+    sizeof(ll_bsdf_info),
+};
+static const size_t build_options_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_build_options, n_orders),
+    offsetof(ll_build_options, n_channels),
+    offsetof(ll_build_options, threads),
+    offsetof(ll_build_options, error_goal),
+    offsetof(ll_build_options, progress),
+    offsetof(ll_build_options, progress_user),
+    offsetof(ll_build_options, cancel),
+    offsetof(ll_build_options, max_memory_bytes),
+    sizeof(ll_build_options),
+};
+static const size_t estimate_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_build_estimate, n_orders),
+    offsetof(ll_build_estimate, n_channels),
+    offsetof(ll_build_estimate, layers_built),
+    offsetof(ll_build_estimate, additions),
+    offsetof(ll_build_estimate, doublings),
+    offsetof(ll_build_estimate, peak_bytes),
+    offsetof(ll_build_estimate, seconds),
+    offsetof(ll_build_estimate, cpu_seconds),
+    offsetof(ll_build_estimate, max_memory_bytes),
+    offsetof(ll_build_estimate, over_budget),
+    sizeof(ll_build_estimate),
+};
+static const size_t monitor_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_monitor, user),
+    sizeof(ll_monitor),
+};
+static const size_t open_options_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_open_options, max_order),
+    offsetof(ll_open_options, max_nodes),
+    sizeof(ll_open_options),
+};
+#define COUNT(a) (sizeof a / sizeof a[0])
+
+/* A caller's struct of `size` bytes (struct_size = size) in a buffer with
+ * the canary after it (and in it, before the fields are set). */
+typedef struct caller {
+    unsigned char bytes[256];
+} caller;
+
+static void *caller_init(caller *c, size_t size)
+{
+    assert_true(size + SLACK <= sizeof c->bytes);
+    memset(c->bytes, CANARY, sizeof c->bytes);
+    memcpy(c->bytes, &size, sizeof size);
+    return c->bytes;
+}
+
+/* Copy the fields of full that lie before `size` into the caller's struct. */
+static void caller_take(caller *c, const void *full, size_t size)
+{
+    memcpy(c->bytes + sizeof(size_t), (const unsigned char *)full + sizeof(size_t),
+           size - sizeof(size_t));
+}
+
+static void assert_canary_from(const caller *c, size_t from, const char *what)
+{
+    size_t i;
+    for (i = from; i < sizeof c->bytes; ++i)
+        if (c->bytes[i] != CANARY)
+            fail_msg("%s: byte %zu (struct_size %zu) was written", what, i, from);
+}
+
+/* The default (INIT) value of bytes beyond size, the given ones before:
+ * what a full-size caller passes to mean the same as a truncated one. */
+static void merge(void *out, const void *defaults, const void *given, size_t size, size_t full)
+{
+    memcpy(out, defaults, full);
+    memcpy((unsigned char *)out + sizeof(size_t), (const unsigned char *)given + sizeof(size_t),
+           size - sizeof(size_t));
+}
+
+static ll_layer *coated(double albedo)
+{
+    ll_layer *l = ll_test_layer(8, 4), *c = ll_test_layer(8, 4);
+    assert_int_equal(ll_layer_set_diffuse(l, albedo), LL_OK);
+    assert_int_equal(ll_layer_set_microfacet(c, 1.5, 0.0, 0.3, 1, 0), LL_OK);
+    assert_int_equal(ll_layer_add_to_top(l, c), LL_OK);
+    ll_layer_destroy(c);
+    return l;
+}
+
+/* -------------------------------------------------- ll_bsdf_write_options */
+
+static unsigned char *write_and_read(const ll_layer *l, const ll_bsdf_write_options *o,
+                                     size_t *size)
+{
+    char path[700];
+    const ll_layer *one[1];
+    unsigned char *data;
+    one[0] = l;
+    snprintf(path, sizeof path, "%s/w.bsdf", ll_test_dir());
+    assert_int_equal(ll_bsdf_write(path, one, 1, o), LL_OK);
+    data = ll_test_read_file(path, size);
+    unlink(path);
+    return data;
+}
+
+static void write_options_read_to_struct_size(void **state)
+{
+    ll_bsdf_write_options defaults = LL_BSDF_WRITE_OPTIONS_INIT, given = LL_BSDF_WRITE_OPTIONS_INIT,
+                          full;
+    ll_layer *l = coated(0.5);
+    unsigned char *previous = NULL;
+    size_t previous_size = 0, i;
+    caller c;
+    (void)state;
+    given.eta = 1.33;
+    given.alpha[0] = 0.2;
+    given.alpha[1] = 0.3;
+    given.metadata = "given metadata";
+    given.error_goal = 0.3;
+    for (i = 0; i < COUNT(write_options_ends); ++i) {
+        size_t b = write_options_ends[i], got_size, want_size;
+        ll_bsdf_write_options *opts = caller_init(&c, b);
+        unsigned char *got, *want;
+        caller_take(&c, &given, b);
+        got = write_and_read(l, opts, &got_size);
+        assert_canary_from(&c, b, "ll_bsdf_write");
+        merge(&full, &defaults, &given, b, sizeof full);
+        want = write_and_read(l, &full, &want_size);
+        if (got_size != want_size || memcmp(got, want, got_size) != 0)
+            fail_msg("ll_bsdf_write: struct_size %zu wrote another file than the full struct "
+                     "with defaults beyond it", b);
+        /* Each field read shows in the file. */
+        if (previous && previous_size == got_size && memcmp(previous, got, got_size) == 0)
+            fail_msg("ll_bsdf_write: the field ending at %zu made no difference", b);
+        free(previous);
+        free(want);
+        previous = got;
+        previous_size = got_size;
+    }
+    free(previous);
+    ll_layer_destroy(l);
+}
+
+static void write_options_below_struct_size_field(void **state)
+{
+    ll_layer *l = coated(0.5);
+    const ll_layer *one[1];
+    char path[700];
+    caller c;
+    size_t b;
+    (void)state;
+    one[0] = l;
+    snprintf(path, sizeof path, "%s/never.bsdf", ll_test_dir());
+    for (b = 0; b < sizeof(size_t); b += 4) {
+        ll_bsdf_write_options *opts = caller_init(&c, b);
+        assert_int_equal(ll_bsdf_write(path, one, 1, opts), LL_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(ll_last_error_message(), "struct_size"));
+        assert_int_equal(access(path, F_OK), -1);
+    }
+    ll_layer_destroy(l);
+}
+
+/* ----------------------------------------------------------- ll_bsdf_info */
+
+static void info_written_to_struct_size(void **state)
+{
+    char path[700];
+    ll_layer *l = coated(0.5);
+    const ll_layer *one[1];
+    ll_bsdf *f = NULL;
+    caller full_c, c;
+    size_t i;
+    (void)state;
+    one[0] = l;
+    snprintf(path, sizeof path, "%s/info.bsdf", ll_test_dir());
+    assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, &f), LL_OK);
+    assert_int_equal(ll_bsdf_get_info(f, caller_init(&full_c, sizeof(ll_bsdf_info))), LL_OK);
+    assert_canary_from(&full_c, sizeof(ll_bsdf_info), "ll_bsdf_get_info");
+    for (i = 0; i < COUNT(info_ends); ++i) {
+        size_t b = info_ends[i];
+        assert_int_equal(ll_bsdf_get_info(f, caller_init(&c, b)), LL_OK);
+        assert_memory_equal(c.bytes, &b, sizeof b);
+        assert_memory_equal(c.bytes + sizeof b, full_c.bytes + sizeof b, b - sizeof b);
+        assert_canary_from(&c, b, "ll_bsdf_get_info");
+    }
+    for (i = 0; i < sizeof(size_t); i += 4) {
+        assert_int_equal(ll_bsdf_get_info(f, caller_init(&c, i)), LL_ERROR_INVALID_ARGUMENT);
+        assert_canary_from(&c, sizeof(size_t), "ll_bsdf_get_info");
+    }
+    ll_bsdf_release(f);
+    unlink(path);
+    ll_layer_destroy(l);
+}
+
+/* ------------------------------------------------------- ll_build_options */
+
+static const char material_text[] = "set nodes=10 orders=4\n"
+                                    "dielectric eta=1.5 alpha=0.3\n"
+                                    "medium albedo=0.9 g=0.5 tau=0.5\n"
+                                    "diffuse albedo=0.5\n";
+
+/* What the progress callback saw (whether it was called, not how often:
+ * with several threads that depends on which thread finishes which order). */
+typedef struct seen {
+    size_t called;
+    size_t threads;
+    void *user;
+} seen;
+static seen progress_seen;
+
+static void on_progress(double fraction, const char *stage, void *user)
+{
+    (void)fraction;
+    (void)stage;
+    progress_seen.called = 1;
+    progress_seen.threads = ll_get_thread_count();
+    progress_seen.user = user;
+}
+
+/* Everything the options change, in one comparable record. */
+typedef struct outcome {
+    ll_status resolution_status, estimate_status, build_status;
+    size_t n_nodes, n_orders, n_channels;
+    ll_build_estimate estimate;
+    size_t built_channels, built_nodes, built_orders;
+    double error_goal;
+    seen progress;
+} outcome;
+
+static void run_material(const ll_material *m, const ll_build_options *o, outcome *out)
+{
+    ll_layer *layers[3] = { NULL, NULL, NULL };
+    ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+    size_t c;
+    memset(out, 0, sizeof *out);
+    out->estimate.struct_size = sizeof out->estimate;
+    out->resolution_status =
+        ll_material_resolution(m, o, &out->n_nodes, &out->n_orders, &out->n_channels);
+    out->estimate_status = ll_material_estimate(m, o, &out->estimate);
+    memset(&progress_seen, 0, sizeof progress_seen);
+    out->build_status = ll_material_build_layers(m, o, layers, &out->built_channels, &header);
+    out->progress = progress_seen;
+    if (out->build_status == LL_OK) {
+        out->built_nodes = ll_layer_node_count(layers[0]);
+        out->built_orders = ll_layer_order_count(layers[0]);
+        out->error_goal = header.error_goal;
+    }
+    for (c = 0; c < 3; ++c)
+        ll_layer_destroy(layers[c]);
+}
+
+static void build_options_read_to_struct_size(void **state)
+{
+    static const volatile int raised = 1;
+    static int tag;
+    ll_build_options defaults = LL_BUILD_OPTIONS_INIT, given = LL_BUILD_OPTIONS_INIT, full;
+    ll_material *m = NULL;
+    outcome got, want, previous;
+    caller c;
+    size_t i;
+    (void)state;
+    assert_int_equal(ll_material_parse(material_text, "sizes.layers", &m), LL_OK);
+    /* Every given value differs from the material's settings and the
+     * defaults; the calling thread runs one worker, the options ask 3. */
+    assert_int_equal(ll_set_thread_count(1), LL_OK);
+    given.n_nodes = 12;
+    given.n_orders = 3;
+    given.n_channels = 3;
+    given.threads = 3;
+    given.error_goal = 0.25;
+    given.progress = on_progress;
+    given.progress_user = &tag;
+    given.cancel = &raised;
+    /* A budget that the build fits in, unlike no other: the estimate
+     * reports it. */
+    given.max_memory_bytes = (size_t)1 << 40;
+    for (i = 0; i < COUNT(build_options_ends); ++i) {
+        size_t b = build_options_ends[i];
+        ll_build_options *opts = caller_init(&c, b);
+        caller_take(&c, &given, b);
+        run_material(m, opts, &got);
+        assert_canary_from(&c, b, "the material calls");
+        merge(&full, &defaults, &given, b, sizeof full);
+        run_material(m, &full, &want);
+        if (memcmp(&got, &want, sizeof got) != 0)
+            fail_msg("build options: struct_size %zu changed the outcome against the full "
+                     "struct with defaults beyond it", b);
+        assert_int_equal(got.resolution_status, LL_OK);
+        assert_int_equal(got.estimate_status, LL_OK);
+        assert_int_equal(got.build_status, b > offsetof(ll_build_options, cancel)
+                                               ? LL_ERROR_CANCELLED
+                                               : LL_OK);
+        if (i > 0 && memcmp(&got, &previous, sizeof got) == 0)
+            fail_msg("build options: the field ending at %zu made no difference", b);
+        previous = got;
+    }
+    assert_int_equal(ll_get_thread_count(), 1);
+    for (i = 0; i < sizeof(size_t); i += 4) {
+        size_t n, o, ch;
+        assert_int_equal(ll_material_resolution(m, caller_init(&c, i), &n, &o, &ch),
+                         LL_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(ll_last_error_message(), "struct_size"));
+    }
+    assert_int_equal(ll_set_thread_count(0), LL_OK);
+    ll_material_destroy(m);
+}
+
+/* ------------------------------- ll_build_estimate and the build header */
+
+static void estimate_and_header_written_to_struct_size(void **state)
+{
+    ll_material *m = NULL;
+    ll_layer *layers[3];
+    caller full_c, c;
+    size_t i, n, k;
+    (void)state;
+    assert_int_equal(ll_material_parse(material_text, "sizes.layers", &m), LL_OK);
+    /* ll_build_estimate: every older, smaller struct is accepted. */
+    assert_int_equal(ll_material_estimate(m, NULL, caller_init(&full_c, sizeof(ll_build_estimate))),
+                     LL_OK);
+    for (i = 0; i < COUNT(estimate_ends); ++i) {
+        size_t b = estimate_ends[i];
+        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, b)), LL_OK);
+        assert_memory_equal(c.bytes, &b, sizeof b);
+        assert_memory_equal(c.bytes + sizeof b, full_c.bytes + sizeof b, b - sizeof b);
+        assert_canary_from(&c, b, "ll_material_estimate");
+    }
+    for (i = 0; i < sizeof(size_t); i += 4) {
+        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, i)),
+                         LL_ERROR_INVALID_ARGUMENT);
+        assert_canary_from(&c, sizeof(size_t), "ll_material_estimate");
+    }
+    /* The header of ll_material_build_layers. */
+    assert_int_equal(ll_material_build_layers(m, NULL, layers, &n,
+                                              caller_init(&full_c, sizeof(ll_bsdf_write_options))),
+                     LL_OK);
+    for (k = 0; k < n; ++k)
+        ll_layer_destroy(layers[k]);
+    for (i = 0; i < COUNT(write_options_ends); ++i) {
+        size_t b = write_options_ends[i];
+        assert_int_equal(ll_material_build_layers(m, NULL, layers, &n, caller_init(&c, b)), LL_OK);
+        for (k = 0; k < n; ++k)
+            ll_layer_destroy(layers[k]);
+        assert_memory_equal(c.bytes, &b, sizeof b);
+        assert_memory_equal(c.bytes + sizeof b, full_c.bytes + sizeof b, b - sizeof b);
+        assert_canary_from(&c, b, "ll_material_build_layers header");
+    }
+    assert_int_equal(ll_material_build_layers(m, NULL, layers, &n, caller_init(&c, 4)),
+                     LL_ERROR_INVALID_ARGUMENT);
+    ll_material_destroy(m);
+}
+
+/* The boundaries listed here are all the fields: they end where the next
+ * begins, and the last at sizeof (a field added to a struct without a line
+ * here fails this). */
+static void every_field_is_listed(void **state)
+{
+    (void)state;
+    assert_int_equal(COUNT(write_options_ends), 5);
+    assert_int_equal(COUNT(info_ends), 13);
+    assert_int_equal(COUNT(build_options_ends), 10);
+    assert_int_equal(COUNT(estimate_ends), 12);
+    assert_int_equal(COUNT(monitor_ends), 3);
+    assert_int_equal(COUNT(open_options_ends), 4);
+    assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
+                     sizeof(ll_bsdf_write_options));
+    assert_int_equal(offsetof(ll_build_options, max_memory_bytes) + sizeof(size_t),
+                     sizeof(ll_build_options));
+    assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <= sizeof(ll_build_estimate) &&
+                offsetof(ll_build_estimate, over_budget) + 8 >= sizeof(ll_build_estimate));
+    assert_int_equal(offsetof(ll_monitor, user) + sizeof(void *), sizeof(ll_monitor));
+    assert_int_equal(offsetof(ll_open_options, max_nodes) + sizeof(size_t),
+                     sizeof(ll_open_options));
+    assert_true(offsetof(ll_bsdf_info, flags) + sizeof(uint32_t) <= sizeof(ll_bsdf_info) &&
+                offsetof(ll_bsdf_info, flags) + 8 >= sizeof(ll_bsdf_info));
+}
+
+/* ---------------------------------------------------------- ll_monitor */
+
+static size_t calls_without_user;
+
+static int count_call(void *user, double fraction, const char *stage)
+{
+    (void)fraction;
+    (void)stage;
+    if (user)
+        ++*(size_t *)user;
+    else
+        ++calls_without_user;
+    return 0;
+}
+
+/* The monitor is read up to its struct_size: without `progress` no call,
+ * without `user` the calls get NULL; the canary past it would be a wild
+ * pointer if it were read. */
+static void monitor_read_to_struct_size(void **state)
+{
+    ll_monitor given = LL_MONITOR_INIT;
+    size_t calls = 0, i;
+    caller c;
+    (void)state;
+    given.progress = count_call;
+    given.user = &calls;
+    for (i = 0; i < COUNT(monitor_ends); ++i) {
+        size_t b = monitor_ends[i];
+        ll_layer *l = ll_test_layer(8, 4);
+        ll_monitor *m = caller_init(&c, b);
+        caller_take(&c, &given, b);
+        calls = calls_without_user = 0;
+        assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.5), LL_OK);
+        assert_int_equal(ll_layer_expand_ex(l, 1.0, m), LL_OK);
+        assert_canary_from(&c, b, "ll_layer_expand_ex monitor");
+        if (b < offsetof(ll_monitor, user)) {
+            assert_int_equal(calls + calls_without_user, 0);
+        } else if (b < sizeof(ll_monitor)) {
+            assert_int_equal(calls, 0);
+            assert_true(calls_without_user > 0);
+        } else {
+            assert_true(calls > 0);
+            assert_int_equal(calls_without_user, 0);
+        }
+        ll_layer_destroy(l);
+    }
+    {
+        ll_layer *l = ll_test_layer(8, 4);
+        assert_int_equal(ll_layer_expand_ex(l, 1.0, caller_init(&c, 4)), LL_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(ll_last_error_message(), "LL_MONITOR_INIT"));
+        ll_layer_destroy(l);
+    }
+}
+
+/* ---------------------------------------------------- ll_open_options */
+
+/* Each limit applies exactly when struct_size covers it (the golden file
+ * is 207 KB, holds 71 nodes and series up to 36 terms). */
+static void open_options_read_to_struct_size(void **state)
+{
+    ll_open_options given = LL_OPEN_OPTIONS_INIT;
+    size_t i;
+    caller c;
+    (void)state;
+    for (i = 0; i < COUNT(open_options_ends); ++i) {
+        size_t b = open_options_ends[i], field;
+        for (field = 0; field < 3; ++field) {
+            size_t end = offsetof(ll_open_options, max_bytes) + (field + 1) * sizeof(size_t);
+            ll_bsdf *f = NULL;
+            ll_status s;
+            given.max_bytes = field == 0 ? 1000 : 0;
+            given.max_order = field == 1 ? 2 : 0;
+            given.max_nodes = field == 2 ? 4 : 0;
+            caller_init(&c, b);
+            caller_take(&c, &given, b);
+            s = ll_bsdf_open_ex(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
+                                (const ll_open_options *)(const void *)c.bytes, &f);
+            assert_canary_from(&c, b, "ll_bsdf_open_ex options");
+            if (b >= end) {
+                assert_int_equal(s, LL_ERROR_UNSUPPORTED);
+                assert_null(f);
+            } else {
+                assert_int_equal(s, LL_OK);
+                ll_bsdf_release(f);
+            }
+        }
+    }
+    assert_int_equal(ll_bsdf_open_ex(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
+                                     (const ll_open_options *)(const void *)caller_init(&c, 0),
+                                     &(ll_bsdf *){ NULL }),
+                     LL_ERROR_INVALID_ARGUMENT);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(every_field_is_listed),
+        cmocka_unit_test(write_options_read_to_struct_size),
+        cmocka_unit_test(write_options_below_struct_size_field),
+        cmocka_unit_test(info_written_to_struct_size),
+        cmocka_unit_test(build_options_read_to_struct_size),
+        cmocka_unit_test(estimate_and_header_written_to_struct_size),
+        cmocka_unit_test(monitor_read_to_struct_size),
+        cmocka_unit_test(open_options_read_to_struct_size),
+    };
+    return cmocka_run_group_tests_name("struct_size", tests, ll_test_dir_setup,
+                                       ll_test_dir_teardown);
+}
