@@ -92,7 +92,12 @@ static void options(void **state)
     o.max_nodes = 1;
     expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
+    /* The struct_size field alone is the oldest struct (every limit its
+     * default); less than that is not a struct at all. */
     o.struct_size = sizeof o.struct_size;
+    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    ll_bsdf_release(b);
+    o.struct_size = sizeof o.struct_size - 1;
     expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_ERROR_INVALID_ARGUMENT,
            "struct_size");
     /* The same through a file, with the path in the message. */

@@ -100,7 +100,8 @@ class BuildOptions(ctypes.Structure):
                 ("error_goal", ctypes.c_double),
                 ("progress", progress_fn),
                 ("progress_user", ctypes.c_void_p),
-                ("cancel", ctypes.POINTER(ctypes.c_int))]
+                ("cancel", ctypes.POINTER(ctypes.c_int)),
+                ("max_memory_bytes", ctypes.c_size_t)]
 
     def __init__(self):
         super().__init__()
@@ -118,7 +119,10 @@ class BuildEstimate(ctypes.Structure):
                 ("additions", ctypes.c_size_t),
                 ("doublings", ctypes.c_size_t),
                 ("peak_bytes", ctypes.c_double),
-                ("seconds", ctypes.c_double)]
+                ("seconds", ctypes.c_double),
+                ("cpu_seconds", ctypes.c_double),
+                ("max_memory_bytes", ctypes.c_size_t),
+                ("over_budget", ctypes.c_int)]
 
     def __init__(self):
         super().__init__()

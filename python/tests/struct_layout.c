@@ -63,6 +63,7 @@ int main(void)
     FIELD(ll_build_options, progress);
     FIELD(ll_build_options, progress_user);
     FIELD(ll_build_options, cancel);
+    FIELD(ll_build_options, max_memory_bytes);
 
     STRUCT(ll_build_estimate, LL_BUILD_ESTIMATE_INIT);
     FIELD(ll_build_estimate, struct_size);
@@ -74,5 +75,8 @@ int main(void)
     FIELD(ll_build_estimate, doublings);
     FIELD(ll_build_estimate, peak_bytes);
     FIELD(ll_build_estimate, seconds);
+    FIELD(ll_build_estimate, cpu_seconds);
+    FIELD(ll_build_estimate, max_memory_bytes);
+    FIELD(ll_build_estimate, over_budget);
     return 0;
 }
