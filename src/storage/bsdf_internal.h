@@ -103,8 +103,7 @@ LL_INTERNAL int ll_bsdf_gather(const ll_bsdf *b, double mu_i, double mu_o, const
 LL_INTERNAL int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                                         double mu_o, const float *basis, ll_bsdf_series *s);
 
-/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi);
- * s must not be a densified series. */
+/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi). */
 LL_INTERNAL void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels,
                                      double cos_phi, double out[3]);
 
@@ -135,6 +134,12 @@ LL_INTERNAL double ll_bsdf_series_mean(const ll_bsdf_series *s);
  * reads one series, not 16). */
 LL_INTERNAL void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense,
                                         ll_bsdf_series *d);
+/* The same for channels 0 .. n_channels-1, each zero-padded to
+ * stride = max_length rounded up to 4: dense has n_channels * stride
+ * values, channel c at dense + c * stride. d is then also an ordinary
+ * series of one entry (ll_bsdf_series_eval reads all its channels). */
+LL_INTERNAL void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
+                                                 double *dense, ll_bsdf_series *d);
 
 /* Sample phi in [0, 2 pi) from the luminance series (channel 0) with u in
  * [0, 1], as pbrt-v3's SampleFourier: u < 1/2 picks [0, pi], else the
@@ -153,6 +158,9 @@ LL_INTERNAL int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *rec
  *   over k < n4 (a multiple of 4; a and recip have n4 values), the
  *   harmonics hc (cosines) and hs (sines) started at k = 0. */
 LL_INTERNAL int ll_bsdf_kernels_vector(void);
+/* Ask for the first cache lines of each series' channels, so that the 16
+ * memory latencies of a call overlap instead of coming one per series. */
+LL_INTERNAL void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels);
 LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels,
                                    size_t k0, size_t count, const double *h, double out[3]);
 LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w,

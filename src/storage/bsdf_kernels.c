@@ -300,6 +300,24 @@ static int have_avx2(void) { return 0; }
 
 /* ----------------------------------------------------------- dispatch */
 
+#if defined(__GNUC__) || defined(__clang__)
+#define LL_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+#else
+#define LL_PREFETCH(p) ((void)(p))
+#endif
+
+void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels)
+{
+    size_t p, c, nb = s->n_bases;
+    for (p = 0; p < s->count; ++p)
+        for (c = 0; c < n_channels * nb; ++c) {
+            const double *a = s->coeff[p] + c * s->length[p];
+            LL_PREFETCH(a);
+            if (s->length[p] > 8)
+                LL_PREFETCH(a + 8);
+        }
+}
+
 int ll_bsdf_kernels_vector(void) { return have_avx2(); }
 
 void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels, size_t k0,
