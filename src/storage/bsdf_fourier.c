@@ -105,9 +105,31 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
     ll_bsdf_prefetch_series(s, n_channels);
     for (k = 0; k < n_channels * stride; ++k)
         dense[k] = 0.0;
-    /* Series by series, channels in storage order: one sequential read of
-     * each stored block. */
-    for (p = 0; p < s->count; ++p)
+    /* Four series at a time (a row of the 4 x 4 stencil, whose blocks are
+     * adjacent in the file) over their common length, then each one's
+     * rest; channels in storage order. */
+    p = 0;
+    if (nb == 1)
+        for (; p + 4 <= s->count; p += 4) {
+            size_t m = s->length[p], q;
+            double w[4];
+            for (q = 1; q < 4; ++q)
+                if (s->length[p + q] < m)
+                    m = s->length[p + q];
+            for (q = 0; q < 4; ++q)
+                w[q] = s->weight[p + q] * (double)s->basis[0];
+            for (c = 0; c < n_channels; ++c) {
+                const double *a[4];
+                for (q = 0; q < 4; ++q)
+                    a[q] = s->coeff[p + q] + c * s->length[p + q];
+                ll_bsdf_add_scaled4(vector, dense + c * stride, a, w, m);
+                for (q = 0; q < 4; ++q)
+                    if (s->length[p + q] > m && w[q] != 0.0)
+                        ll_bsdf_add_scaled(vector, dense + c * stride + m, a[q] + m, w[q],
+                                           s->length[p + q] - m);
+            }
+        }
+    for (; p < s->count; ++p)
         for (c = 0; c < n_channels; ++c)
             for (basis = 0; basis < nb; ++basis) {
                 double w = s->weight[p] * (double)s->basis[basis];

@@ -165,6 +165,9 @@ LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n
                                    size_t k0, size_t count, const double *h, double out[3]);
 LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w,
                                     size_t m);
+/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass). */
+LL_INTERNAL void ll_bsdf_add_scaled4(int vector, double *acc, const double *const a[4],
+                                     const double w[4], size_t m);
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,
                                         const ll_harmonics *hs, double *F, double *f);

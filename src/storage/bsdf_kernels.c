@@ -95,6 +95,14 @@ static void add_scaled_portable(double *acc, const double *a, double w, size_t m
         acc[j] += w * a[j];
 }
 
+static void add_scaled4_portable(double *acc, const double *const a[4], const double w[4],
+                                 size_t m)
+{
+    size_t j;
+    for (j = 0; j < m; ++j)
+        acc[j] += (w[0] * a[0][j] + w[1] * a[1][j]) + (w[2] * a[2][j] + w[3] * a[3][j]);
+}
+
 static void integral_portable(const double *a, const double *recip, size_t n4,
                               const ll_harmonics *hc, const ll_harmonics *hs, double *F,
                               double *f)
@@ -262,6 +270,26 @@ LL_AVX2 static void add_scaled_avx2(double *acc, const double *a, double w, size
         acc[j] += w * a[j];
 }
 
+/* Four series at once: the sum is loaded and stored once for four inputs
+ * (a pass per series would move it 16 times per call). */
+LL_AVX2 static void add_scaled4_avx2(double *acc, const double *const a[4], const double w[4],
+                                     size_t m)
+{
+    __m256d w0 = _mm256_set1_pd(w[0]), w1 = _mm256_set1_pd(w[1]);
+    __m256d w2 = _mm256_set1_pd(w[2]), w3 = _mm256_set1_pd(w[3]);
+    const double *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
+    size_t j = 0;
+    for (; j + 4 <= m; j += 4) {
+        __m256d s = _mm256_fmadd_pd(load4(a0 + j), w0, _mm256_loadu_pd(acc + j));
+        __m256d r = _mm256_mul_pd(load4(a2 + j), w2);
+        s = _mm256_fmadd_pd(load4(a1 + j), w1, s);
+        r = _mm256_fmadd_pd(load4(a3 + j), w3, r);
+        _mm256_storeu_pd(acc + j, _mm256_add_pd(s, r));
+    }
+    for (; j < m; ++j)
+        acc[j] += (w[0] * a0[j] + w[1] * a1[j]) + (w[2] * a2[j] + w[3] * a3[j]);
+}
+
 /* The four harmonic chains of ll_harmonics are the four lanes of a vector:
  * one fused multiply-subtract advances all of them. */
 LL_AVX2 static void integral_avx2(const double *a, const double *recip, size_t n4,
@@ -343,6 +371,19 @@ void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w, size
 #endif
     (void)vector;
     add_scaled_portable(acc, a, w, m);
+}
+
+void ll_bsdf_add_scaled4(int vector, double *acc, const double *const a[4], const double w[4],
+                         size_t m)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        add_scaled4_avx2(acc, a, w, m);
+        return;
+    }
+#endif
+    (void)vector;
+    add_scaled4_portable(acc, a, w, m);
 }
 
 void ll_bsdf_integral_dense(int vector, const double *a, const double *recip, size_t n4,
