@@ -159,7 +159,8 @@ LL_INTERNAL int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *rec
  *   harmonics hc (cosines) and hs (sines) started at k = 0. */
 LL_INTERNAL int ll_bsdf_kernels_vector(void);
 /* Ask for the first cache lines of each series' channels, so that the 16
- * memory latencies of a call overlap instead of coming one per series. */
+ * memory latencies of a call overlap instead of coming one per series
+ * (series of 64 orders and more; shorter ones need no help). */
 LL_INTERNAL void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels);
 LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels,
                                    size_t k0, size_t count, const double *h, double out[3]);

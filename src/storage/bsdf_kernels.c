@@ -337,6 +337,10 @@ static int have_avx2(void) { return 0; }
 void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels)
 {
     size_t p, c, nb = s->n_bases;
+    /* Short series: the out-of-order core overlaps their few misses by
+     * itself, and the prefetches would only add instructions. */
+    if (s->max_length < 64)
+        return;
     for (p = 0; p < s->count; ++p)
         for (c = 0; c < n_channels * nb; ++c) {
             const double *a = s->coeff[p] + c * s->length[p];

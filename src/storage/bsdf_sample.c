@@ -18,6 +18,11 @@
  * are evaluated chunk by chunk from the stored series, which needs no
  * buffer sized by the file at all. */
 #define LL_BSDF_DENSE_VALUES 6528
+/* Below this many orders the stored series are in cache after the
+ * luminance sum, and one dot product per series for the value at the
+ * sample costs less than summing the other channels first (measured on
+ * roughgold, whose series are shorter). */
+#define LL_BSDF_ALL_CHANNELS_FROM 128
 #define LL_BSDF_MU_ITERATIONS 64
 
 /* pbrt-v3's FindInterval over the interpolated CDF row: the largest index
@@ -129,7 +134,7 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
         !ll_bsdf_gather_weighted(b, off_i, w_i, *mu_o, basis, &s) || s.count == 0)
         return 0;
     stride = (s.max_length + 3) & ~(size_t)3;
-    if (b->n_channels * stride <= LL_BSDF_DENSE_VALUES) {
+    if (stride >= LL_BSDF_ALL_CHANNELS_FROM && b->n_channels * stride <= LL_BSDF_DENSE_VALUES) {
         ll_bsdf_series_densify_channels(&s, b->n_channels, dense, &d);
         luminance = value = &d;
     } else if (stride <= LL_BSDF_DENSE_VALUES) {
