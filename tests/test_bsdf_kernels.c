@@ -179,7 +179,7 @@ static void densify_agrees(void **state)
         memset(v4, 0, sizeof v4);
         memset(one, 0, sizeof one);
         {
-            const double *a[4];
+            const float *a[4];
             double w[4];
             for (j = 0; j < 4; ++j) {
                 a[j] = s.coeff[j];

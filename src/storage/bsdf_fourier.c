@@ -54,6 +54,16 @@ void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels, double cos_
     size_t k0;
     out[0] = out[1] = out[2] = 0.0;
     ll_bsdf_harmonics_start(&h, cos_phi, 0.0, 0); /* the sine is not needed for cosines */
+    if (s->dense && n_channels <= s->dense_channels &&
+        s->dense_stride <= LL_BSDF_WHOLE_ORDERS) {
+        /* Summed already (sampling): one dot product per channel. */
+        size_t c;
+        ll_bsdf_harmonics_next(vector, &h, s->dense_stride, cosines);
+        for (c = 0; c < n_channels; ++c)
+            out[c] = ll_bsdf_dot_dense(vector, s->dense + c * s->dense_stride, cosines,
+                                       s->dense_stride);
+        return;
+    }
     if (group_of_four(s->max_length) <= LL_BSDF_WHOLE_ORDERS) {
         /* All cosines first, then each stored series in one pass: each
          * series is then one sequential stream (its channels are adjacent),
@@ -119,7 +129,7 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
             for (q = 0; q < 4; ++q)
                 w[q] = s->weight[p + q] * (double)s->basis[0];
             for (c = 0; c < n_channels; ++c) {
-                const double *a[4];
+                const float *a[4];
                 for (q = 0; q < 4; ++q)
                     a[q] = s->coeff[p + q] + c * s->length[p + q];
                 ll_bsdf_add_scaled4(vector, dense + c * stride, a, w, m);
@@ -138,16 +148,10 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
                                        s->coeff[p] + (c * nb + basis) * s->length[p], w,
                                        s->length[p]);
             }
-    /* The result is laid out like one stored, untextured series of length
-     * `stride` (zero-padded), so the chunked evaluation reads it too. */
     *d = *s;
-    d->count = 1;
-    d->coeff[0] = dense;
-    d->length[0] = (uint32_t)stride;
-    d->weight[0] = 1.0;
-    d->n_bases = 1;
-    d->basis = ll_bsdf_unit_basis;
     d->dense = dense;
+    d->dense_channels = n_channels;
+    d->dense_stride = stride;
 }
 
 /* The luminance series and its integral at phi in [0, pi]:
