@@ -80,8 +80,9 @@ typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_trans
  * or <memory>) and the field; harmonic extrapolation (flags bit 1)
  * LL_ERROR_UNSUPPORTED; I/O problems (missing file, not a regular file)
  * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure. Memory:
- * about twice the file (coefficients are kept as double, which makes
- * evaluation faster) plus 16 bytes per node pair and basis. */
+ * about the file's size (coefficients are kept as the file's floats, which
+ * halves what evaluation reads; it computes in double) plus 16 bytes per
+ * node pair and basis. */
 LL_API ll_status ll_bsdf_open(const char *path, ll_bsdf **out);
 
 /* The same from memory (the bytes are copied; data may be freed after). */
