@@ -9,7 +9,9 @@
  * evaluated and sampled from any number of threads at once, and shared by
  * every object that uses the same file (ll_bsdf_retain / ll_bsdf_release;
  * retain and release are thread-safe too). Evaluation and sampling allocate
- * nothing; their stack use is bounded independently of the file.
+ * nothing; their stack use is bounded independently of the file (at most
+ * about 72 KiB, in ll_bsdf_sample*: a series summed once for the Newton
+ * steps; evaluation about 20 KiB).
  *
  * Two conventions:
  *  - Layer convention (ll_bsdf_eval, ll_bsdf_pdf, ll_bsdf_sample), the
