@@ -197,6 +197,26 @@ static void densify_agrees(void **state)
         ll_bsdf_series_eval(&s, 3, cos_phi, ref);
         ll_bsdf_series_densify_channels(&s, 3, dense, &d);
         ll_bsdf_series_eval(&d, 3, cos_phi, got);
+        {
+            /* the summed series' dot product, portable against vector */
+            ll_harmonics h;
+            static double cosines[1024];
+            ll_bsdf_harmonics_start(&h, cos_phi, 0.0, 0);
+            ll_bsdf_harmonics_next(0, &h, d.dense_stride, cosines);
+            for (c = 0; c < 3; ++c) {
+                double a = ll_bsdf_dot_dense(0, d.dense + c * d.dense_stride, cosines,
+                                             d.dense_stride);
+                double v = ll_bsdf_dot_dense(vector, d.dense + c * d.dense_stride, cosines,
+                                             d.dense_stride);
+                double size = 0.0;
+                for (j = 0; j < d.dense_stride; ++j)
+                    size += fabs(d.dense[c * d.dense_stride + j]);
+                /* rounding of a sum of dense_stride terms: against their size */
+                if (fabs(a - v) > 1e-14 * size || fabs(a - ref[c]) > 1e-13 * size)
+                    fail_msg("channel %zu: dot %.17g portable, %.17g vector, %.17g series (size %g)",
+                             c, a, v, ref[c], size);
+            }
+        }
         for (c = 0; c < 3; ++c)
             if (!ll_test_close(got[c], ref[c], 1e-12, 1e-15))
                 fail_msg("channel %zu: %.17g summed first, %.17g series by series", c, got[c],
