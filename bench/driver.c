@@ -263,20 +263,23 @@ static void run_adding(const config *cfg, bench_store *store)
         child_failed(store, "adding", &res);
 }
 
-/* 3. Evaluation on the golden file and on our coated-diffuse output. */
+/* 3. Evaluation on the golden file and on our coated-gold and
+ * coated-diffuse outputs (issue 18 quotes figures for both). */
 static void run_eval(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024], diffuse[1024];
-    const char *files[2], *labels[2] = { "roughgold", "coated-diffuse" };
+    char bin[1024], runs[32], golden[1024], gold[1024], diffuse[1024];
+    const char *files[3], *labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
     size_t i;
     path_join(bin, sizeof bin, cfg->bin_dir, "eval");
     path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
+    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
     path_join(diffuse, sizeof diffuse, cfg->work_dir, "coated-diffuse.bsdf");
     files[0] = golden;
-    files[1] = diffuse;
+    files[1] = gold;
+    files[2] = diffuse;
     snprintf(runs, sizeof runs, "%zu", cfg->runs);
     record_load(store, "eval");
-    for (i = 0; i < 2; ++i) {
+    for (i = 0; i < 3; ++i) {
         char *argv[5];
         bench_child_result res;
         char what[64];

@@ -169,9 +169,23 @@ static void print_adding(FILE *out, const bench_store *s)
         }
 }
 
+/* The figures before issue 18's kernel work, printed under each file's
+ * row: bench/results.json at f61ccd6 (median of 3, load ~3 on 2 cores) for
+ * roughgold and coated-diffuse; issue 18's text for coated-gold, which
+ * that run did not measure (no pdf figure: 0 prints as "-"). Order:
+ * eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
+static const struct {
+    const char *label, *source;
+    double ns[3];
+} previous_eval[3] = {
+    { "roughgold", "f61ccd6", { 521.2, 389.7, 1945.9 } },
+    { "coated-gold", "issue 18", { 2300.0, 0.0, 6200.0 } },
+    { "coated-diffuse", "f61ccd6", { 11839.3, 5218.5, 47432.9 } },
+};
+
 static void print_eval(FILE *out, const bench_store *s)
 {
-    const char *labels[2] = { "roughgold", "coated-diffuse" };
+    const char *labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
     size_t i, f;
     char a[128];
     fprintf(out, "\n3. Evaluation, ns per call (1 thread, 10^6 random directions, fixed seed)\n");
@@ -179,12 +193,22 @@ static void print_eval(FILE *out, const bench_store *s)
     for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f)
         fprintf(out, " ll_bsdf_%-16s", bench_eval_functions[f].function);
     fputc('\n', out);
-    for (i = 0; i < 2; ++i) {
+    for (i = 0; i < 3; ++i) {
+        char before[48];
         fprintf(out, "%-20s", labels[i]);
         for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f) {
             char id[96];
             snprintf(id, sizeof id, "eval.%s.%s", labels[i], bench_eval_functions[f].function);
             fprintf(out, " %-24s", format_stats(a, sizeof a, bench_store_stats(s, id)));
+        }
+        fputc('\n', out);
+        snprintf(before, sizeof before, "  before (%s)", previous_eval[i].source);
+        fprintf(out, "%-20s", before);
+        for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT && f < 3; ++f) {
+            if (previous_eval[i].ns[f] > 0.0)
+                fprintf(out, " %-24.0f", previous_eval[i].ns[f]);
+            else
+                fprintf(out, " %-24s", "-");
         }
         fputc('\n', out);
     }

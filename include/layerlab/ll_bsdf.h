@@ -9,7 +9,9 @@
  * evaluated and sampled from any number of threads at once, and shared by
  * every object that uses the same file (ll_bsdf_retain / ll_bsdf_release;
  * retain and release are thread-safe too). Evaluation and sampling allocate
- * nothing; their stack use is bounded independently of the file.
+ * nothing; their stack use is bounded independently of the file (at most
+ * about 72 KiB, in ll_bsdf_sample*: a series summed once for the Newton
+ * steps; evaluation about 20 KiB).
  *
  * Two conventions:
  *  - Layer convention (ll_bsdf_eval, ll_bsdf_pdf, ll_bsdf_sample), the
@@ -84,9 +86,10 @@ typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_trans
  * bit 1) or a file beyond a limit LL_ERROR_UNSUPPORTED; I/O problems
  * (missing file; a FIFO, device or directory, refused without blocking and
  * named) LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure.
- * Memory: about twice the file (coefficients are kept as double, which
- * makes evaluation faster) plus 16 bytes per node pair and basis; the
- * file's bytes are not held beside them. A file that opens gives finite
+ * Memory: about the file's size (coefficients are kept as the file's
+ * floats, which halves what evaluation reads; it computes in double) plus
+ * 16 bytes per node pair and basis; the file's bytes are not held beside
+ * them. A file that opens gives finite
  * results for every direction (f is the stored f |mu_o| over |mu_o|, with
  * |mu_o| taken as at least 1e-6). */
 LL_API ll_status ll_bsdf_open(const char *path, ll_bsdf **out);

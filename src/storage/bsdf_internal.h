@@ -50,11 +50,13 @@ struct ll_bsdf {
                                    flattened, bsdf_read.c)                     */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
-    double *coeffs;             /* [n_coeffs + 4] as double (the inner loops
-                                   then need no conversions; twice the file's
-                                   bytes), then 4 zeros, so that vector loads
-                                   of a series' last group (up to 3 values past
-                                   its end) stay inside the array             */
+    float *coeffs;              /* [n_coeffs + 4] as stored (float: the calls
+                                   wait on memory, so half the bytes of double
+                                   is what counts; every sum is in double, so
+                                   the results are those of double storage),
+                                   then 4 zeros, so that vector loads of a
+                                   series' last group (up to 3 values past its
+                                   end) stay inside the array                 */
     double *recip;              /* [max_order + 4] 1 / k, with 0 at k = 0 and
                                    from max_order on (vector loops read whole
                                    groups of 4)                                */
@@ -74,14 +76,18 @@ struct ll_bsdf {
 #define LL_BSDF_SERIES_MAX 16
 typedef struct ll_bsdf_series {
     size_t count;
-    const double *coeff[LL_BSDF_SERIES_MAX];
+    const float *coeff[LL_BSDF_SERIES_MAX];
     uint32_t length[LL_BSDF_SERIES_MAX];
     double weight[LL_BSDF_SERIES_MAX];
     uint32_t max_length;
     size_t n_bases;
     const float *basis;         /* n_bases weights (never NULL)                */
-    const double *dense;        /* if set: the luminance series already summed
-                                   (max_length values); the rest is unused     */
+    const double *dense;        /* if set: the series already summed, channel
+                                   c at dense + c * dense_stride, c <
+                                   dense_channels (ll_bsdf_series_densify*;
+                                   read only when dense is set);
+                                   the stored references stay valid            */
+    size_t dense_channels, dense_stride;
 } ll_bsdf_series;
 
 /* Free every part of a (possibly half-built) bsdf; NULL is fine. */
@@ -105,8 +111,7 @@ LL_INTERNAL int ll_bsdf_gather(const ll_bsdf *b, double mu_i, double mu_o, const
 LL_INTERNAL int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                                         double mu_o, const float *basis, ll_bsdf_series *s);
 
-/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi);
- * s must not be a densified series. */
+/* sum_k a_k cos(k phi) of channels 0 .. n_channels-1 (<= 3) at cos(phi). */
 LL_INTERNAL void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels,
                                      double cos_phi, double out[3]);
 
@@ -137,6 +142,12 @@ LL_INTERNAL double ll_bsdf_series_mean(const ll_bsdf_series *s);
  * reads one series, not 16). */
 LL_INTERNAL void ll_bsdf_series_densify(const ll_bsdf_series *s, double *dense,
                                         ll_bsdf_series *d);
+/* The same for channels 0 .. n_channels-1, each zero-padded to
+ * stride = max_length rounded up to 4: dense has n_channels * stride
+ * values, channel c at dense + c * stride. ll_bsdf_series_eval then reads
+ * the sum for up to n_channels channels. */
+LL_INTERNAL void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
+                                                 double *dense, ll_bsdf_series *d);
 
 /* Sample phi in [0, 2 pi) from the luminance series (channel 0) with u in
  * [0, 1], as pbrt-v3's SampleFourier: u < 1/2 picks [0, pi], else the
@@ -155,10 +166,19 @@ LL_INTERNAL int ll_bsdf_series_sample(const ll_bsdf_series *s, const double *rec
  *   over k < n4 (a multiple of 4; a and recip have n4 values), the
  *   harmonics hc (cosines) and hs (sines) started at k = 0. */
 LL_INTERNAL int ll_bsdf_kernels_vector(void);
+/* Ask for the first cache lines of each series' channels, so that the 16
+ * memory latencies of a call overlap instead of coming one per series
+ * (series of 64 orders and more; shorter ones need no help). */
+LL_INTERNAL void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels);
 LL_INTERNAL void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels,
                                    size_t k0, size_t count, const double *h, double out[3]);
-LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w,
+LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w,
                                     size_t m);
+/* sum_j a[j] h[j], j < m (a summed series against harmonics). */
+LL_INTERNAL double ll_bsdf_dot_dense(int vector, const double *a, const double *h, size_t m);
+/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass). */
+LL_INTERNAL void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4],
+                                     const double w[4], size_t m);
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,
                                         const ll_harmonics *hs, double *F, double *f);

@@ -6,8 +6,8 @@
  *
  * Every x86-64 processor runs the portable versions; processors with AVX2
  * and FMA run vector versions chosen at run time (style.md: no mandatory
- * ISA extension). Both compute in double; they differ only in the order of
- * the additions.
+ * ISA extension). Both read the stored floats, widen them (exactly) and
+ * compute in double; they differ only in the order of the additions.
  */
 #include "storage/bsdf_internal.h"
 
@@ -20,8 +20,24 @@
 
 /* ------------------------------------------------------------- portable */
 
-/* Four partial sums: one accumulator would be a chain of dependent adds. */
-static double dot_portable(const double *a, const double *h, size_t m)
+/* Four partial sums: one accumulator would be a chain of dependent adds.
+ * Stored coefficients are floats, summed series doubles. */
+static double dot_portable(const float *a, const double *h, size_t m)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t j = 0;
+    for (; j + 4 <= m; j += 4) {
+        s0 += (double)a[j] * h[j];
+        s1 += (double)a[j + 1] * h[j + 1];
+        s2 += (double)a[j + 2] * h[j + 2];
+        s3 += (double)a[j + 3] * h[j + 3];
+    }
+    for (; j < m; ++j)
+        s0 += (double)a[j] * h[j];
+    return (s0 + s1) + (s2 + s3);
+}
+
+static double dot_dense_portable(const double *a, const double *h, size_t m)
 {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
     size_t j = 0;
@@ -88,11 +104,20 @@ static void harmonics_next_portable(ll_harmonics *h, size_t count, double *restr
     h->prev[3] = p3;
 }
 
-static void add_scaled_portable(double *acc, const double *a, double w, size_t m)
+static void add_scaled_portable(double *acc, const float *a, double w, size_t m)
 {
     size_t j;
     for (j = 0; j < m; ++j)
-        acc[j] += w * a[j];
+        acc[j] += w * (double)a[j];
+}
+
+static void add_scaled4_portable(double *acc, const float *const a[4], const double w[4],
+                                 size_t m)
+{
+    size_t j;
+    for (j = 0; j < m; ++j)
+        acc[j] += (w[0] * (double)a[0][j] + w[1] * (double)a[1][j]) +
+                  (w[2] * (double)a[2][j] + w[3] * (double)a[3][j]);
 }
 
 static void integral_portable(const double *a, const double *recip, size_t n4,
@@ -135,7 +160,8 @@ LL_AVX2 static double hsum(__m256d v)
     return _mm_cvtsd_f64(_mm_add_sd(lo, _mm_unpackhi_pd(lo, lo)));
 }
 
-LL_AVX2 static __m256d load4(const double *a) { return _mm256_loadu_pd(a); }
+/* Four stored floats widened to double (exact). */
+LL_AVX2 static __m256d load4(const float *a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
 
 /* Lane masks keeping the first r values of a group of 4 (r = 0: all). */
 static const uint64_t ll_group_masks[4][4] = {
@@ -148,7 +174,7 @@ static const uint64_t ll_group_masks[4][4] = {
 /* The last group of a series: 4 values loaded, those past its end
  * cleared. The load may read up to 3 values past the series, which stay
  * inside the coefficient array (padded by 4, bsdf_internal.h). */
-LL_AVX2 static __m256d load_last(const double *a, const __m256d mask)
+LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
 {
     return _mm256_and_pd(load4(a), mask);
 }
@@ -156,7 +182,7 @@ LL_AVX2 static __m256d load_last(const double *a, const __m256d mask)
 /* Weighted dot products of one stored series (channels `stride` apart)
  * with h over m >= 1 values, added to the channel accumulators. */
 LL_AVX2 __attribute__((always_inline)) static inline void
-series_dot_avx2(const double *a, size_t stride, size_t n_channels,
+series_dot_avx2(const float *a, size_t stride, size_t n_channels,
                                     const double *h, size_t m, double w, __m256d *acc0,
                                     __m256d *acc1, __m256d *acc2)
 {
@@ -165,7 +191,7 @@ series_dot_avx2(const double *a, size_t stride, size_t n_channels,
         _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
     __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
     if (n_channels == 3) {
-        const double *r = a + stride, *b = a + 2 * stride;
+        const float *r = a + stride, *b = a + 2 * stride;
         __m256d s2 = _mm256_setzero_pd(), hv;
         for (; j < last; j += 4) {
             hv = _mm256_loadu_pd(h + j);
@@ -252,14 +278,49 @@ LL_AVX2 static void harmonics_next_avx2(ll_harmonics *hm, size_t count, double *
     _mm256_storeu_pd(hm->prev, cp);
 }
 
-LL_AVX2 static void add_scaled_avx2(double *acc, const double *a, double w, size_t m)
+LL_AVX2 static void add_scaled_avx2(double *acc, const float *a, double w, size_t m)
 {
     __m256d wv = _mm256_set1_pd(w);
     size_t j = 0;
     for (; j + 4 <= m; j += 4)
         _mm256_storeu_pd(acc + j, _mm256_fmadd_pd(load4(a + j), wv, _mm256_loadu_pd(acc + j)));
     for (; j < m; ++j)
-        acc[j] += w * a[j];
+        acc[j] += w * (double)a[j];
+}
+
+/* m a multiple of 4 (a summed series is zero-padded to one). */
+LL_AVX2 static double dot_dense_avx2(const double *a, const double *h, size_t m)
+{
+    __m256d s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
+    size_t j = 0;
+    for (; j + 8 <= m; j += 8) {
+        s0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + j), _mm256_loadu_pd(h + j), s0);
+        s1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
+    }
+    if (j < m)
+        s0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + j), _mm256_loadu_pd(h + j), s0);
+    return hsum(_mm256_add_pd(s0, s1));
+}
+
+/* Four series at once: the sum is loaded and stored once for four inputs
+ * (a pass per series would move it 16 times per call). */
+LL_AVX2 static void add_scaled4_avx2(double *acc, const float *const a[4], const double w[4],
+                                     size_t m)
+{
+    __m256d w0 = _mm256_set1_pd(w[0]), w1 = _mm256_set1_pd(w[1]);
+    __m256d w2 = _mm256_set1_pd(w[2]), w3 = _mm256_set1_pd(w[3]);
+    const float *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
+    size_t j = 0;
+    for (; j + 4 <= m; j += 4) {
+        __m256d s = _mm256_fmadd_pd(load4(a0 + j), w0, _mm256_loadu_pd(acc + j));
+        __m256d r = _mm256_mul_pd(load4(a2 + j), w2);
+        s = _mm256_fmadd_pd(load4(a1 + j), w1, s);
+        r = _mm256_fmadd_pd(load4(a3 + j), w3, r);
+        _mm256_storeu_pd(acc + j, _mm256_add_pd(s, r));
+    }
+    for (; j < m; ++j)
+        acc[j] += (w[0] * (double)a0[j] + w[1] * (double)a1[j]) +
+                  (w[2] * (double)a2[j] + w[3] * (double)a3[j]);
 }
 
 /* The four harmonic chains of ll_harmonics are the four lanes of a vector:
@@ -300,6 +361,28 @@ static int have_avx2(void) { return 0; }
 
 /* ----------------------------------------------------------- dispatch */
 
+#if defined(__GNUC__) || defined(__clang__)
+#define LL_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+#else
+#define LL_PREFETCH(p) ((void)(p))
+#endif
+
+void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels)
+{
+    size_t p, c, nb = s->n_bases;
+    /* Short series: the out-of-order core overlaps their few misses by
+     * itself, and the prefetches would only add instructions. */
+    if (s->max_length < 64)
+        return;
+    for (p = 0; p < s->count; ++p)
+        for (c = 0; c < n_channels * nb; ++c) {
+            const float *a = s->coeff[p] + c * s->length[p];
+            LL_PREFETCH(a);
+            if (s->length[p] > 16)
+                LL_PREFETCH(a + 16);
+        }
+}
+
 int ll_bsdf_kernels_vector(void) { return have_avx2(); }
 
 void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels, size_t k0,
@@ -315,7 +398,17 @@ void ll_bsdf_dot_chunk(int vector, const ll_bsdf_series *s, size_t n_channels, s
     dot_chunk_portable(s, n_channels, k0, count, h, out);
 }
 
-void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w, size_t m)
+double ll_bsdf_dot_dense(int vector, const double *a, const double *h, size_t m)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector && m % 4 == 0)
+        return dot_dense_avx2(a, h, m);
+#endif
+    (void)vector;
+    return dot_dense_portable(a, h, m);
+}
+
+void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w, size_t m)
 {
 #if LL_BSDF_HAVE_AVX2_PATH
     if (vector) {
@@ -325,6 +418,19 @@ void ll_bsdf_add_scaled(int vector, double *acc, const double *a, double w, size
 #endif
     (void)vector;
     add_scaled_portable(acc, a, w, m);
+}
+
+void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4], const double w[4],
+                         size_t m)
+{
+#if LL_BSDF_HAVE_AVX2_PATH
+    if (vector) {
+        add_scaled4_avx2(acc, a, w, m);
+        return;
+    }
+#endif
+    (void)vector;
+    add_scaled4_portable(acc, a, w, m);
 }
 
 void ll_bsdf_integral_dense(int vector, const double *a, const double *recip, size_t n4,

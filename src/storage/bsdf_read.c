@@ -419,7 +419,7 @@ static ll_status read_failure(const char *file)
  * peak, one node's quadrature weight wide, is below 1e8 at 10^4 nodes. */
 #define LL_BSDF_MAX_COEFF 1.2676506002282294e30
 
-/* The coefficients, converted to double in chunks of 1024 (4 KiB read at a
+/* The coefficients, checked in chunks of 1024 (4 KiB read at a
  * time, so no buffer sized by the file besides b->coeffs itself). */
 static ll_status read_coeffs(ll_bsdf *b, const bsdf_source *src, size_t at, const char *file)
 {

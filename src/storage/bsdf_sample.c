@@ -10,11 +10,19 @@
 
 #include <math.h>
 
-/* The luminance series is summed into a stack buffer of this many doubles
- * (8 KiB) when it fits, so that each Newton step reads one series instead
- * of up to 16; longer ones are evaluated chunk by chunk from the stored
- * series, which needs no buffer sized by the file at all. */
-#define LL_BSDF_DENSE_ORDERS 1024
+/* The series is summed into a stack buffer of this many doubles (51 KiB)
+ * when it fits, so that each Newton step reads one series instead of up to
+ * 16: all channels when they fit (3 x 2176 orders; our longest file,
+ * coated diffuse, has 2103), so that the value at the sample is read from
+ * the sum too, else the luminance alone (up to 6528 orders). Longer ones
+ * are evaluated chunk by chunk from the stored series, which needs no
+ * buffer sized by the file at all. */
+#define LL_BSDF_DENSE_VALUES 6528
+/* Below this many orders the stored series are in cache after the
+ * luminance sum, and one dot product per series for the value at the
+ * sample costs less than summing the other channels first (measured on
+ * roughgold, whose series are shorter). */
+#define LL_BSDF_ALL_CHANNELS_FROM 128
 #define LL_BSDF_MU_ITERATIONS 64
 
 /* pbrt-v3's FindInterval over the interpolated CDF row: the largest index
@@ -110,11 +118,12 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
 int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const float *basis,
                         double *mu_o, double *phi_d, double *pdf, double sums[3])
 {
-    double dense[LL_BSDF_DENSE_ORDERS];
+    double dense[LL_BSDF_DENSE_VALUES];
     ll_bsdf_series s, d;
-    const ll_bsdf_series *luminance = &s;
+    const ll_bsdf_series *luminance = &s, *value = &s;
     ptrdiff_t off_i;
     double w_i[4], pdf_mu = 0.0, a0;
+    size_t stride;
 
     *mu_o = 0.0;
     *phi_d = 0.0;
@@ -124,7 +133,11 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
         !sample_mu(b, off_i, w_i, basis, u[1], mu_o, &pdf_mu) ||
         !ll_bsdf_gather_weighted(b, off_i, w_i, *mu_o, basis, &s) || s.count == 0)
         return 0;
-    if (s.max_length <= LL_BSDF_DENSE_ORDERS) {
+    stride = (s.max_length + 3) & ~(size_t)3;
+    if (stride >= LL_BSDF_ALL_CHANNELS_FROM && b->n_channels * stride <= LL_BSDF_DENSE_VALUES) {
+        ll_bsdf_series_densify_channels(&s, b->n_channels, dense, &d);
+        luminance = value = &d;
+    } else if (stride <= LL_BSDF_DENSE_VALUES) {
         ll_bsdf_series_densify(&s, dense, &d);
         luminance = &d;
     }
@@ -134,7 +147,7 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
      * the Newton iterate's last evaluation), so that they equal what eval
      * and pdf compute for the returned direction: pdf_phi = f / (2 pi a_0)
      * (pbrt-v3's SampleFourier). */
-    ll_bsdf_series_eval(&s, b->n_channels, cos(*phi_d), sums);
+    ll_bsdf_series_eval(value, b->n_channels, cos(*phi_d), sums);
     a0 = ll_bsdf_series_mean(luminance);
     *pdf = pdf_mu * sums[0] / (2.0 * LL_PI * a0);
     /* No direction where the density is not a positive number or where
