@@ -48,6 +48,19 @@ for tool in cmake make python3 timeout; do
 done
 now() { date +%s.%N; }
 elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", b - a }'; }
+# cpu_mark sets $cpu to the CPU seconds (user + system) of this shell's
+# finished children: the second line of the `times` builtin, "XmY.Zs XmY.Zs",
+# run in this shell (not in a $(...) subshell, which has children of its own).
+# Render times are compared in CPU seconds because the wall time of a shared
+# machine varies with its load.
+cpu_mark() {
+    times > "$work/times.txt"
+    cpu=$(awk 'NR == 2 {
+        t = 0
+        for (k = 1; k <= 2; k++) { split($k, p, "m"); t += 60 * p[1] + p[2] }
+        printf "%.2f", t
+    }' "$work/times.txt")
+}
 
 # ---------------------------------------------------------------- 1. builds
 # A copy is made again only when PBRT_SRC names another tree; the scripts
@@ -86,7 +99,7 @@ linked=$(ldd "$work/build-shim/pbrt" 2>/dev/null | grep -o 'liblayerlab[a-z_]*\.
 if ldd "$work/build-stock/pbrt" | grep -q liblayerlab; then
     fail "the stock pbrt links liblayerlab"
 fi
-echo "pbrt-check: build wall time (s): stock $built_stock, shim $built_shim (0 when up to date); the shim links $linked"
+echo "pbrt-check: build wall time (s): stock $built_stock, shim $built_shim; the shim links $linked"
 
 # ---------------------------------------------------------------- 2. scenes
 scenes=$work/scenes
@@ -137,11 +150,17 @@ fourier() { scene "$1" "Material \"fourier\" \"string bsdffile\" [ \"$1.bsdf\" ]
 # render BUILD NAME: out/BUILD-NAME.{pfm,log,rc,time}
 render() {
     rm -f "$out/$1-$2.pfm"
-    start=$(now)
-    (cd "$scenes" && timeout "$limit" "$work/build-$1/pbrt" --nthreads "$threads" --quiet \
-        "$2.pbrt" --outfile "$out/$1-$2.pfm" > "$out/$1-$2.log" 2>&1)
+    cpu_mark
+    start=$cpu
+    # An inner shell waits for pbrt, so that its "Aborted" or "Segmentation
+    # fault" notice goes to /dev/null (the table says what happened); it
+    # exits with pbrt's status (128 + signal after a crash).
+    (cd "$scenes" && sh -c 'timeout "$1" "$2" --nthreads "$3" --quiet "$4.pbrt" \
+        --outfile "$5.pfm" > "$5.log" 2>&1; exit $?' sh "$limit" "$work/build-$1/pbrt" \
+        "$threads" "$2" "$out/$1-$2" 2> /dev/null)
     echo $? > "$out/$1-$2.rc"
-    elapsed "$start" "$(now)" > "$out/$1-$2.time"
+    cpu_mark
+    elapsed "$start" "$cpu" > "$out/$1-$2.time"
 }
 
 scene black 'Material "matte" "rgb Kd" [ 0 0 0 ]'
@@ -169,7 +188,7 @@ done
 echo
 echo "Intact files, stock pbrt-v3 against the shim (whole RGB image, 320 x 240, 64 spp):"
 echo
-echo "| file | mean (stock) | mean abs diff | RMSE | RMSE/mean | bit-identical pixels | render wall s, stock / shim |"
+echo "| file | mean (stock) | mean abs diff | RMSE | RMSE/mean | bit-identical pixels | render CPU s, stock / shim |"
 echo "|---|---|---|---|---|---|---|"
 for name in golden coated-gold; do
     set -- $(diffs "stock-$name" "shim-$name")
@@ -179,39 +198,50 @@ for name in golden coated-gold; do
         problem "$name: RMSE/mean $5 is not below $tolerance"
 done
 
+# look BUILD CASE: what the image shows (black sphere, as intact, wrong)
+look() {
+    set -- $(diffs "$1-black" "$1-$2") "$1" "$2"
+    if [ "$4" = 0 ] && [ "$6" = 1.000 ]; then
+        echo "black sphere"
+        return
+    fi
+    set -- $(diffs "$7-golden" "$7-$8")
+    if [ "$4" = 0 ]; then
+        echo "image identical to the intact file's"
+    else
+        echo "renders wrongly: RMSE/mean $5 against the intact file"
+    fi
+}
+
 # what BUILD CASE: one table cell
 what() {
     rc=$(cat "$out/$1-$2.rc")
     log=$out/$1-$2.log
-    errors=$(grep -c 'Error:' "$log")
     if [ "$rc" = 124 ]; then
         echo "still running after $limit s (stopped)"
         return
     fi
+    errors=$(grep -c 'Error:' "$log")
+    case $errors in 0) said="no message" ;; 1) said="one error" ;; *) said="$errors errors" ;; esac
+    image=
+    [ -f "$out/$1-$2.pfm" ] && image=$(look "$1" "$2")
     if [ "$rc" -gt 128 ]; then
         message=$(grep -m 1 -E 'free\(\)|double free|corrupted|malloc|Assertion|Check failed|terminate|stack smashing' "$log")
-        echo "crash, SIG$(kill -l $((rc - 128)))${message:+: \`$message\`}"
-        return
-    fi
-    if [ "$rc" != 0 ] || [ ! -f "$out/$1-$2.pfm" ]; then
-        echo "exit status $rc, no image: \`$(grep -m 1 . "$log")\`"
-        return
-    fi
-    case $errors in 0) said="no message" ;; 1) said="one error" ;; *) said="$errors errors" ;; esac
-    set -- $(diffs "$1-black" "$1-$2") "$1" "$2"
-    if [ "$4" = 0 ] && [ "$6" = 1.000 ]; then
-        look="black sphere"
-    else
-        set -- $(diffs "$7-golden" "$7-$8") "$7" "$8"
-        if [ "$4" = 0 ]; then
-            look="image identical to the intact file's"
+        crash="crash, SIG$(kill -l $((rc - 128)))${message:+: \`$message\`}"
+        if [ -n "$image" ]; then
+            echo "$said, $image, then $crash"
         else
-            look="renders wrongly: RMSE/mean $5 against the intact file"
+            echo "$said, no image: $crash"
         fi
+        return
     fi
-    ratio=$(awk -v a="$(cat "$out/$7-$8.time")" -v b="$(cat "$out/$7-golden.time")" \
-        'BEGIN { if (a > 1.5 * b) printf ", %.0f x the intact file'"'"'s time", a / b }')
-    echo "$said, $look$ratio"
+    if [ "$rc" != 0 ] || [ -z "$image" ]; then
+        echo "$said, exit status $rc, no image"
+        return
+    fi
+    ratio=$(awk -v a="$(cat "$out/$1-$2.time")" -v b="$(cat "$out/$1-golden.time")" \
+        'BEGIN { if (a > 1.5 * b) printf ", %.1f x the intact file'"'"'s CPU time", a / b }')
+    echo "$said, $image$ratio"
 }
 
 echo
