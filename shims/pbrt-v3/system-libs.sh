@@ -16,11 +16,16 @@ for f in "$cmake" "$ptex" "$pbrt/src/textures/ptex.h"; do
     [ -f "$f" ] || { echo "system-libs.sh: $f not found: is $pbrt a pbrt-v3 checkout?" >&2; exit 1; }
 done
 
-cmp -s "$here/system-libs/ptex-unavailable.cpp" "$ptex" ||
-    cp "$here/system-libs/ptex-unavailable.cpp" "$ptex"
+# src/textures/ptex.cpp is replaced after CMakeLists.txt is known to be
+# pbrt-v3's (copied only when it differs, so that a second run rebuilds nothing).
+replace_ptex() {
+    cmp -s "$here/system-libs/ptex-unavailable.cpp" "$ptex" ||
+        cp "$here/system-libs/ptex-unavailable.cpp" "$ptex"
+}
 
 marker='# layerlab system-libs:'
 if grep -q "^$marker" "$cmake"; then
+    replace_ptex
     echo "system-libs.sh: $cmake already edited"
     exit 0
 fi
@@ -89,4 +94,5 @@ awk -v marker="$marker" '
     exit 1
 }
 mv "$cmake.layerlab-tmp" "$cmake"
+replace_ptex
 echo "system-libs.sh: $pbrt now builds against the system's OpenEXR, Imath, glog and zlib"
