@@ -173,16 +173,18 @@ for name in $names; do
     for v in stock shim; do render $v "$name"; done
 done
 
-status=0
-problem() { echo "pbrt-check: FAIL: $*"; status=1; }
 diffs() { python3 "$here/imgdiff.py" "$out/$1.pfm" "$out/$2.pfm"; }
 for name in golden coated-gold black; do
     for v in stock shim; do
         [ "$(cat "$out/$v-$name.rc")" = 0 ] && [ -f "$out/$v-$name.pfm" ] ||
-            { problem "$v pbrt did not render $name.pbrt:"; tail -n 5 "$out/$v-$name.log"; }
+            { tail -n 5 "$out/$v-$name.log" >&2; fail "$v pbrt did not render $name.pbrt"; }
     done
 done
-[ $status = 0 ] || exit 1
+# Failures are listed after the tables, which stay whole.
+status=0
+problems=$work/problems.txt
+: > "$problems"
+problem() { echo "pbrt-check: FAIL: $*" >> "$problems"; status=1; }
 
 # ------------------------------------------------- 3. the two builds compared
 echo
@@ -226,7 +228,9 @@ what() {
     image=
     [ -f "$out/$1-$2.pfm" ] && image=$(look "$1" "$2")
     if [ "$rc" -gt 128 ]; then
-        message=$(grep -m 1 -E 'free\(\)|double free|corrupted|malloc|Assertion|Check failed|terminate|stack smashing' "$log")
+        # (glog's "F<date> <time> <thread> " prefix of a failed CHECK left out)
+        message=$(grep -m 1 -E 'free\(\)|double free|corrupted|malloc|Assertion|Check failed|terminate|stack smashing' "$log" |
+            sed 's/^F[0-9]\{8\} [0-9:.]* *[0-9]* //; s/ *$//')
         crash="crash, SIG$(kill -l $((rc - 128)))${message:+: \`$message\`}"
         if [ -n "$image" ]; then
             echo "$said, $image, then $crash"
@@ -262,6 +266,7 @@ while IFS="$(printf '\t')" read -r name damage; do
 done < "$work/cases.txt"
 
 echo
+cat "$problems"
 if [ $status = 0 ]; then
     echo "pbrt-check: passed (images and logs in $out)"
 else
