@@ -274,6 +274,18 @@ fuzz:
 demo: all
 	@sh scripts/demo.sh
 
+# pbrt-v3 built stock and with the shim against the system's libraries,
+# rendered on intact and damaged files (shims/pbrt-v3/check/check.sh; not
+# part of `make test`). Needs PBRT_SRC=<a plain pbrt-v3 source tree>.
+PBRT_WORK   ?= $(BUILD)/pbrt-check
+PBRT_GOLDEN ?= tests/data/roughgold_alpha_0.2.bsdf
+.PHONY: pbrt-check
+pbrt-check: all
+	@test -n "$(PBRT_SRC)" || { echo "make pbrt-check needs PBRT_SRC=/path/to/pbrt-v3"; exit 1; }
+	@$(MAKE) --no-print-directory install PREFIX=$(abspath $(PBRT_WORK))/layerlab > /dev/null
+	@sh shims/pbrt-v3/check/check.sh "$(PBRT_SRC)" "$(PBRT_WORK)" "$(PBRT_GOLDEN)" \
+	    "$(abspath $(PBRT_WORK))/layerlab"
+
 install: all
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/layerlab $(DESTDIR)$(BINDIR) $(DESTDIR)$(PKGDIR)
 	install -m 644 include/layerlab.h $(DESTDIR)$(INCDIR)/

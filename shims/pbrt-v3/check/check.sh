@@ -1,0 +1,275 @@
+#!/bin/sh
+# `make pbrt-check`: pbrt-v3 with and without the shim, against the system's
+# libraries, on the scene of shims/pbrt-v3/README.md.
+#
+#  1. copies the pbrt-v3 source tree PBRT_SRC twice into WORK (its .git left
+#     out), applies system-libs.sh to one ("stock") and `apply.sh
+#     --system-libs` to the other ("shim"), builds pbrt_exe in each;
+#  2. renders the scene with both on the golden file and on coated gold as
+#     `llbuild` makes it from examples/coated-gold.layers, and prints their
+#     image difference;
+#  3. renders it with both on eight damaged copies of the golden file
+#     (damage.py) and prints what each build does with each.
+#
+# It passes when both builds build and render the intact files, the two
+# builds' images of each intact file agree to RMSE/mean < PBRT_TOLERANCE, and
+# the shim meets every damaged file with exactly one error and a black sphere
+# (an image bit-identical to the scene with a black sphere). What stock
+# pbrt-v3 does is reported, not judged. A second run reuses the builds.
+#
+# usage: sh check.sh PBRT_SRC WORK GOLDEN.bsdf LAYERLAB_PREFIX
+# environment: PBRT_JOBS (make -j, 2), PBRT_THREADS (pbrt --nthreads, 2),
+#   PBRT_TIMEOUT (seconds per render, 900), PBRT_TOLERANCE (2e-3)
+set -u
+here=$(cd "$(dirname "$0")" && pwd)
+shim_dir=$(dirname "$here")
+top=$(dirname "$(dirname "$shim_dir")")
+jobs=${PBRT_JOBS:-2}
+threads=${PBRT_THREADS:-2}
+limit=${PBRT_TIMEOUT:-900}
+tolerance=${PBRT_TOLERANCE:-2e-3}
+
+fail() { echo "pbrt-check: $*" >&2; exit 1; }
+[ $# -eq 4 ] || fail "usage: sh check.sh PBRT_SRC WORK GOLDEN.bsdf LAYERLAB_PREFIX"
+[ -n "$1" ] || fail "give PBRT_SRC=/path/to/pbrt-v3 (a plain pbrt-v3 checkout)"
+for f in CMakeLists.txt src/core/api.cpp src/materials/fourier.h; do
+    [ -f "$1/$f" ] || fail "$1/$f not found: PBRT_SRC must be a pbrt-v3 source tree"
+done
+[ -f "$3" ] || fail "golden file $3 not found (PBRT_GOLDEN=...)"
+src=$(cd "$1" && pwd)
+mkdir -p "$2" || exit 1
+work=$(cd "$2" && pwd)
+golden=$(cd "$(dirname "$3")" && pwd)/$(basename "$3")
+prefix=$4
+[ -f "$prefix/lib/pkgconfig/layerlab.pc" ] && [ -x "$prefix/bin/llbuild" ] ||
+    fail "no installed layerlab in $prefix (make pbrt-check installs it there)"
+for tool in cmake make python3 timeout; do
+    command -v $tool > /dev/null || fail "$tool is needed"
+done
+now() { date +%s.%N; }
+elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", b - a }'; }
+# cpu_mark sets $cpu to the CPU seconds (user + system) of this shell's
+# finished children: the second line of the `times` builtin, "XmY.Zs XmY.Zs",
+# run in this shell (not in a $(...) subshell, which has children of its own).
+# Render times are compared in CPU seconds because the wall time of a shared
+# machine varies with its load.
+cpu_mark() {
+    times > "$work/times.txt"
+    cpu=$(awk 'NR == 2 {
+        t = 0
+        for (k = 1; k <= 2; k++) { split($k, p, "m"); t += 60 * p[1] + p[2] }
+        printf "%.2f", t
+    }' "$work/times.txt")
+}
+
+# ---------------------------------------------------------------- 1. builds
+# A copy is made again only when PBRT_SRC names another tree; the scripts
+# are idempotent and copy files only when they differ, so a rerun rebuilds
+# only what changed.
+for v in stock shim; do
+    tree=$work/src-$v
+    if [ "$(cat "$tree/.layerlab-pbrt-src" 2>/dev/null)" != "$src" ]; then
+        rm -rf "$tree" "$work/build-$v"
+        mkdir -p "$tree" &&
+        (cd "$src" && tar --exclude=./.git -cf - .) | (cd "$tree" && tar -xf -) ||
+            fail "cannot copy $src to $tree"
+        echo "$src" > "$tree/.layerlab-pbrt-src"
+    fi
+    if [ $v = stock ]; then
+        sh "$shim_dir/system-libs.sh" "$tree" > "$work/apply-$v.log" 2>&1
+    else
+        sh "$shim_dir/apply.sh" --system-libs "$tree" > "$work/apply-$v.log" 2>&1
+    fi || { cat "$work/apply-$v.log" >&2; fail "applying to the $v tree failed"; }
+done
+
+for v in stock shim; do
+    b=$work/build-$v
+    mkdir -p "$b"
+    start=$(now)
+    echo "pbrt-check: building $v pbrt-v3 in $b (make -j$jobs pbrt_exe; logs there)"
+    (cd "$b" && PKG_CONFIG_PATH=$prefix/lib/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH} \
+        cmake -DCMAKE_BUILD_TYPE=Release "$work/src-$v" > cmake.log 2>&1) ||
+        { tail -n 20 "$b/cmake.log" >&2; fail "cmake of the $v tree failed"; }
+    (cd "$b" && make -j"$jobs" pbrt_exe > make.log 2>&1) ||
+        { grep -m 20 -B 2 -A 6 'error' "$b/make.log" >&2; fail "building the $v tree failed"; }
+    eval "built_$v=\$(elapsed $start \$(now))"
+done
+linked=$(ldd "$work/build-shim/pbrt" 2>/dev/null | grep -o 'liblayerlab[a-z_]*\.so[.0-9]*' | head -n 1)
+[ -n "$linked" ] || fail "the shimmed pbrt links no liblayerlab"
+if ldd "$work/build-stock/pbrt" | grep -q liblayerlab; then
+    fail "the stock pbrt links liblayerlab"
+fi
+echo "pbrt-check: build wall time (s): stock $built_stock, shim $built_shim; the shim links $linked"
+
+# ---------------------------------------------------------------- 2. scenes
+scenes=$work/scenes
+out=$work/out
+rm -rf "$scenes" "$out"
+mkdir -p "$scenes" "$out" || exit 1
+cp "$golden" "$scenes/golden.bsdf"
+"$prefix/bin/llbuild" "$top/examples/coated-gold.layers" -o "$scenes/coated-gold.bsdf" \
+    > "$work/llbuild.log" 2>&1 || { cat "$work/llbuild.log" >&2; fail "llbuild of coated gold failed"; }
+coated=$(python3 -c '
+import struct, sys
+h = struct.unpack_from("<7sB9I", open(sys.argv[1], "rb").read(48))
+print("file header: %d nodes, nMaxOrder %d, %d coefficients" % (h[3], h[5], h[4]))
+' "$scenes/coated-gold.bsdf")
+echo "pbrt-check: coated gold from llbuild: $(sed -n 's/^resolution *//p' "$work/llbuild.log"); $coated"
+python3 "$here/damage.py" "$golden" "$scenes" > "$work/cases.txt" || fail "damage.py failed"
+
+# The scene of README.md ("Try it"), with the sphere's material as $2.
+scene() {
+    cat > "$scenes/$1.pbrt" <<EOF
+LookAt 0 -6 2.2   0 0 0.8   0 0 1
+Camera "perspective" "float fov" [ 28 ]
+Film "image" "integer xresolution" [ 320 ] "integer yresolution" [ 240 ]
+     "string filename" [ "$1.pfm" ]
+Sampler "halton" "integer pixelsamples" [ 64 ]
+Integrator "path" "integer maxdepth" [ 5 ]
+WorldBegin
+LightSource "infinite" "rgb L" [ 0.35 0.42 0.55 ]
+LightSource "distant" "point from" [ -3 -4 6 ] "point to" [ 0 0 0 ] "rgb L" [ 2.5 2.4 2.2 ]
+AttributeBegin
+  $2
+  Translate 0 0 1
+  Shape "sphere" "float radius" [ 1 ]
+AttributeEnd
+AttributeBegin
+  Texture "checks" "spectrum" "checkerboard" "float uscale" [ 10 ] "float vscale" [ 10 ]
+          "rgb tex1" [ 0.08 0.08 0.08 ] "rgb tex2" [ 0.7 0.7 0.7 ]
+  Material "matte" "texture Kd" "checks"
+  Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ]
+        "point P" [ -8 -8 0  8 -8 0  8 8 0  -8 8 0 ]
+        "float uv" [ 0 0 1 0 1 1 0 1 ]
+AttributeEnd
+WorldEnd
+EOF
+}
+fourier() { scene "$1" "Material \"fourier\" \"string bsdffile\" [ \"$1.bsdf\" ]"; }
+
+# render BUILD NAME: out/BUILD-NAME.{pfm,log,rc,time}
+render() {
+    rm -f "$out/$1-$2.pfm"
+    cpu_mark
+    start=$cpu
+    # An inner shell waits for pbrt, so that its "Aborted" or "Segmentation
+    # fault" notice goes to /dev/null (the table says what happened); it
+    # exits with pbrt's status (128 + signal after a crash).
+    (cd "$scenes" && sh -c 'timeout "$1" "$2" --nthreads "$3" --quiet "$4.pbrt" \
+        --outfile "$5.pfm" > "$5.log" 2>&1; exit $?' sh "$limit" "$work/build-$1/pbrt" \
+        "$threads" "$2" "$out/$1-$2" 2> /dev/null)
+    echo $? > "$out/$1-$2.rc"
+    cpu_mark
+    elapsed "$start" "$cpu" > "$out/$1-$2.time"
+}
+
+scene black 'Material "matte" "rgb Kd" [ 0 0 0 ]'
+fourier golden
+fourier coated-gold
+cut -f 1 "$work/cases.txt" | while read -r name; do fourier "$name"; done
+names="golden coated-gold black $(cut -f 1 "$work/cases.txt" | tr '\n' ' ')"
+echo "pbrt-check: rendering $(echo $names | wc -w) scenes with each build (320 x 240, 64 spp, --nthreads $threads)"
+for name in $names; do
+    for v in stock shim; do render $v "$name"; done
+done
+
+diffs() { python3 "$here/imgdiff.py" "$out/$1.pfm" "$out/$2.pfm"; }
+for name in golden coated-gold black; do
+    for v in stock shim; do
+        [ "$(cat "$out/$v-$name.rc")" = 0 ] && [ -f "$out/$v-$name.pfm" ] ||
+            { tail -n 5 "$out/$v-$name.log" >&2; fail "$v pbrt did not render $name.pbrt"; }
+    done
+done
+# Failures are listed after the tables, which stay whole.
+status=0
+problems=$work/problems.txt
+: > "$problems"
+problem() { echo "pbrt-check: FAIL: $*" >> "$problems"; status=1; }
+
+# ------------------------------------------------- 3. the two builds compared
+echo
+echo "Intact files, stock pbrt-v3 against the shim (whole RGB image, 320 x 240, 64 spp):"
+echo
+echo "| file | mean (stock) | mean abs diff | RMSE | RMSE/mean | bit-identical pixels | render CPU s, stock / shim |"
+echo "|---|---|---|---|---|---|---|"
+for name in golden coated-gold; do
+    set -- $(diffs "stock-$name" "shim-$name")
+    pct=$(awk -v f="$6" 'BEGIN { printf "%.0f %%", 100 * f }')
+    echo "| $name | $1 | $3 | $4 | $5 | $pct | $(cat "$out/stock-$name.time") / $(cat "$out/shim-$name.time") |"
+    awk -v r="$5" -v t="$tolerance" 'BEGIN { exit !(r < t) }' ||
+        problem "$name: RMSE/mean $5 is not below $tolerance"
+done
+
+# look BUILD CASE: what the image shows (black sphere, as intact, wrong)
+look() {
+    set -- $(diffs "$1-black" "$1-$2") "$1" "$2"
+    if [ "$4" = 0 ] && [ "$6" = 1.000 ]; then
+        echo "black sphere"
+        return
+    fi
+    set -- $(diffs "$7-golden" "$7-$8")
+    if [ "$4" = 0 ]; then
+        echo "image identical to the intact file's"
+    else
+        echo "renders wrongly: RMSE/mean $5 against the intact file"
+    fi
+}
+
+# what BUILD CASE: one table cell
+what() {
+    rc=$(cat "$out/$1-$2.rc")
+    log=$out/$1-$2.log
+    if [ "$rc" = 124 ]; then
+        echo "still running after $limit s (stopped)"
+        return
+    fi
+    errors=$(grep -c 'Error:' "$log")
+    case $errors in 0) said="no message" ;; 1) said="one error" ;; *) said="$errors errors" ;; esac
+    image=
+    [ -f "$out/$1-$2.pfm" ] && image=$(look "$1" "$2")
+    if [ "$rc" -gt 128 ]; then
+        # (glog's "F<date> <time> <thread> " prefix of a failed CHECK left out)
+        message=$(grep -m 1 -E 'free\(\)|double free|corrupted|malloc|Assertion|Check failed|terminate|stack smashing' "$log" |
+            sed 's/^F[0-9]\{8\} [0-9:.]* *[0-9]* //; s/ *$//')
+        crash="crash, SIG$(kill -l $((rc - 128)))${message:+: \`$message\`}"
+        if [ -n "$image" ]; then
+            echo "$said, $image, then $crash"
+        else
+            echo "$said, no image: $crash"
+        fi
+        return
+    fi
+    if [ "$rc" != 0 ] || [ -z "$image" ]; then
+        echo "$said, exit status $rc, no image"
+        return
+    fi
+    ratio=$(awk -v a="$(cat "$out/$1-$2.time")" -v b="$(cat "$out/$1-golden.time")" \
+        'BEGIN { if (a > 1.5 * b) printf ", %.1f x the intact file'"'"'s CPU time", a / b }')
+    echo "$said, $image$ratio"
+}
+
+echo
+echo "Damaged copies of the golden file:"
+echo
+echo "| file | damage | stock pbrt-v3 | shim |"
+echo "|---|---|---|---|"
+while IFS="$(printf '\t')" read -r name damage; do
+    echo "| \`$name.bsdf\` | $damage | $(what stock "$name") | $(what shim "$name") |"
+    [ "$(what shim "$name" | cut -d , -f 1-2)" = "one error, black sphere" ] ||
+        problem "the shim on $name.bsdf: $(what shim "$name")"
+done < "$work/cases.txt"
+
+echo
+echo "The shim's messages:"
+while IFS="$(printf '\t')" read -r name damage; do
+    grep -m 1 'Error:' "$out/shim-$name.log" | sed 's/^/    /'
+done < "$work/cases.txt"
+
+echo
+cat "$problems"
+if [ $status = 0 ]; then
+    echo "pbrt-check: passed (images and logs in $out)"
+else
+    echo "pbrt-check: FAILED (images and logs in $out)"
+fi
+exit $status
