@@ -55,16 +55,6 @@ static int ll_fuzz_material_one(const uint8_t *data, size_t size)
                                  (n_channels == 1 || n_channels == 3));
     else
         ll_fuzz_material_require(ll_last_error_message()[0] != '\0');
-#ifdef LL_FUZZ_ESTIMATE_MAX_NODES
-    /* Optional (FUZZ_CFLAGS=-DLL_FUZZ_ESTIMATE_MAX_NODES=N): skip the
-     * estimate of resolutions above N nodes, whose cost (an O(n^2)
-     * quadrature before any check; tests/fuzz/material_pending) is a known
-     * finding, so that a run can look for others. */
-    if (s == LL_OK && n_nodes > LL_FUZZ_ESTIMATE_MAX_NODES) {
-        ll_material_destroy(m);
-        return 1;
-    }
-#endif
     s = ll_material_estimate(m, &opts, &est);
     if (s == LL_OK)
         ll_fuzz_material_require(isfinite(est.peak_bytes) && est.peak_bytes >= 0.0 &&
