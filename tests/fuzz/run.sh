@@ -46,7 +46,7 @@ if ! command -v "$CLANG" >/dev/null 2>&1 ||
         echo "fuzz: clang still cannot link -fsanitize=fuzzer (install $pkgs)" >&2; exit 1; }
 fi
 
-# FUZZ_CFLAGS: extra flags, e.g. -DLL_FUZZ_ESTIMATE_MAX_NODES=2000 (material_fuzz_body.h)
+# FUZZ_CFLAGS: extra compiler flags for both fuzzers (e.g. -O2)
 FLAGS="${FUZZ_CFLAGS:-} -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
     -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined"
 LIMITS="-timeout=5 -rss_limit_mb=2048 -print_final_stats=1"
