@@ -50,7 +50,7 @@ interrupt() {
         kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null; kill $dog 2>/dev/null
         return
     fi
-    sleep 0.3
+    sleep 0.1
     if ! kill -0 $pid 2>/dev/null; then
         bad "$name: the build ended before the signal (make the input slower)"
         wait $pid 2>/dev/null; kill $dog 2>/dev/null
@@ -83,7 +83,7 @@ interrupt quadrature INT quadrature 'set nodes=16000 orders=1\ndiffuse albedo=0.
 interrupt diffuse TERM diffuse 'set nodes=12000 orders=1\ndiffuse albedo=0.5\n'
 # A rough dielectric resolved on many orders: seconds of series per column.
 interrupt interface TERM "dielectric interface" \
-    'set nodes=600 orders=150\ndielectric eta=1.5 alpha=0.05\n'
+    'set nodes=800 orders=250\ndielectric eta=1.5 alpha=0.05\n'
 # A strongly forward-scattering medium: n x n x K products for 40 orders.
 interrupt phase INT "phase function" 'set nodes=800 orders=40\nmedium albedo=0.9 g=0.99 tau=1\n'
 # A very thick medium: 45 doublings of every order.
