@@ -29,6 +29,9 @@ if [ -n "$missing" ]; then
   "$PYTHON" -m pip install -q --disable-pip-version-check $missing
 fi
 
+# pip install ./python in a fresh virtual environment (no LAYERLAB_LIBRARY).
+sh "$here/pip_install.sh"
+
 # Test the source tree, not some installed copy; PNGs go to out/python/.
 PYTHONPATH=$root/python${PYTHONPATH:+:$PYTHONPATH}
 export PYTHONPATH
