@@ -193,6 +193,13 @@ PROTOTYPES = {
     "ll_bsdf_pdf_dir": (_D, [bsdf_p, _P3, _P3, c_float_p]),
     "ll_bsdf_sample_dir": (_S, [bsdf_p, _P3, ctypes.c_double * 2, _I, c_float_p, _P3,
                                 c_double_p, _P3]),
+    # batch calls of the renderer convention (arrays of packed 3- and 2-vectors)
+    "ll_bsdf_eval_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, _I, c_float_p, _Z,
+                                    c_double_p]),
+    "ll_bsdf_pdf_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, c_float_p, _Z,
+                                   c_double_p]),
+    "ll_bsdf_sample_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, _I, c_float_p, _Z,
+                                      c_double_p, c_double_p, c_double_p]),
     # ll_material.h
     "ll_material_parse": (_S, [ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(material_p)]),
     "ll_material_parse_file": (_S, [ctypes.c_char_p, ctypes.POINTER(material_p)]),
