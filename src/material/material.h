@@ -34,6 +34,7 @@ typedef struct ll_word {
     ll_word_kind kind;
     size_t line, column;
     ll_number albedo, eta, k, alpha, tau, g, kappa;
+    ll_number compensate;     /* dielectric, conductor: 0 = no energy compensation */
     ll_phase phase;
     int phase_given;
     int named_metal;          /* conductor eta=NAME                      */
@@ -60,6 +61,7 @@ typedef struct ll_word_params {
     double albedo;
     double eta_re, eta_im;    /* relative to the medium right above        */
     double alpha;
+    int uncompensated;        /* compensate=0: single scattering only      */
     double tau;
     double shape;             /* g (HG) or kappa (vMF), else 0             */
     double weights[3];        /* measured: weight of each MERL channel     */

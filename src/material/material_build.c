@@ -189,11 +189,11 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
         s = ll_layer_set_diffuse_ex(l, p->albedo, next_call(b, stage, cost));
         break;
     case LL_WORD_DIELECTRIC:
-        s = ll_layer_set_microfacet_ex(l, p->eta_re, 0.0, p->alpha, 1, 0,
+        s = ll_layer_set_microfacet_ex(l, p->eta_re, 0.0, p->alpha, !p->uncompensated, 0,
                                        next_call(b, stage, cost));
         break;
     case LL_WORD_CONDUCTOR:
-        s = ll_layer_set_microfacet_ex(l, p->eta_re, p->eta_im, p->alpha, 1, 0,
+        s = ll_layer_set_microfacet_ex(l, p->eta_re, p->eta_im, p->alpha, !p->uncompensated, 0,
                                        next_call(b, stage, cost));
         break;
     case LL_WORD_MEDIUM:

@@ -105,6 +105,7 @@ ll_status ll_material_make_metadata(ll_material *m, const char *text)
         append_number(&b, "eta", &w->eta);
         append_number(&b, "k", &w->k);
         append_number(&b, "alpha", &w->alpha);
+        append_number(&b, "compensate", &w->compensate);
         append_number(&b, "tau", &w->tau);
         if (w->kind == LL_WORD_MEDIUM)
             append(&b, ", \"phase\": \"%s\"", phase_name(w->phase));

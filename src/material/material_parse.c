@@ -256,9 +256,9 @@ typedef struct word_syntax {
 
 static const word_syntax words[] = {
     { "diffuse", LL_WORD_DIFFUSE, "albedo", "albedo", "diffuse albedo=0.5" },
-    { "dielectric", LL_WORD_DIELECTRIC, "eta alpha", "eta alpha",
+    { "dielectric", LL_WORD_DIELECTRIC, "eta alpha compensate", "eta alpha",
       "dielectric eta=1.5 alpha=0.1" },
-    { "conductor", LL_WORD_CONDUCTOR, "eta k alpha", "eta alpha",
+    { "conductor", LL_WORD_CONDUCTOR, "eta k alpha compensate", "eta alpha",
       "conductor eta=Au alpha=0.1" },
     { "medium", LL_WORD_MEDIUM, "albedo tau g phase kappa", "albedo tau",
       "medium albedo=0.9 tau=1 g=0.5" },
@@ -289,6 +289,7 @@ static ll_number *number_slot(ll_word *w, const token *key)
     if (token_is(key, "tau")) return &w->tau;
     if (token_is(key, "g")) return &w->g;
     if (token_is(key, "kappa")) return &w->kappa;
+    if (token_is(key, "compensate")) return &w->compensate;
     return NULL;
 }
 
@@ -393,6 +394,9 @@ static ll_status check_parameter(const parser *p, const ll_word *w, const token 
                             "can hold; use alpha >= 0.001");
         return s;
     }
+    if (x == &w->compensate && (x->count != 1 || (x->v[0] != 0.0 && x->v[0] != 1.0)))
+        return parse_error(p, v->begin, "compensate is 1 (energy compensation, the default) "
+                           "or 0 (single scattering only, as renderers' microfacet BSDFs)");
     if (x == &w->tau)
         return check_range(p, key, v, x, 0.0, 1, 1e12, 1,
                            "the optical thickness tau must be in [0, 1e12]");

@@ -105,6 +105,7 @@ void ll_word_params_get(const ll_material *m, size_t word, size_t c, size_t n_ch
     case LL_WORD_DIELECTRIC:
         out->eta_re = ll_number_channel(&w->eta, c, n_channels, 1.0);
         out->alpha = ll_number_channel(&w->alpha, c, n_channels, 0.0);
+        out->uncompensated = w->compensate.count && w->compensate.v[0] == 0.0;
         break;
     case LL_WORD_CONDUCTOR: {
         double above = index_above(m, word, c, n_channels), n, k;
@@ -119,6 +120,7 @@ void ll_word_params_get(const ll_material *m, size_t word, size_t c, size_t n_ch
         out->eta_re = n / above;
         out->eta_im = k / above;
         out->alpha = ll_number_channel(&w->alpha, c, n_channels, 0.0);
+        out->uncompensated = w->compensate.count && w->compensate.v[0] == 0.0;
         break;
     }
     case LL_WORD_MEDIUM:
@@ -146,6 +148,7 @@ int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
 {
     return a->kind == b->kind && a->phase == b->phase && a->albedo == b->albedo &&
            a->eta_re == b->eta_re && a->eta_im == b->eta_im && a->alpha == b->alpha &&
+           a->uncompensated == b->uncompensated &&
            a->tau == b->tau && a->shape == b->shape && a->weights[0] == b->weights[0] &&
            a->weights[1] == b->weights[1] && a->weights[2] == b->weights[2];
 }
