@@ -3,8 +3,9 @@ and the full-size measurements of docs/mitsuba.md (python/tests/mitsuba_compare.
 
 A unit sphere seen from the front under a small generated environment map, with
 Mitsuba's native roughconductor / roughdielectric (Beckmann) or with the
-layerlab plugin on a .bsdf of the same interface built without energy
-compensation (Mitsuba's microfacet BSDFs are single-scattering).
+layerlab plugin on a .bsdf of the same interface built from the material
+language with compensate=0, i.e. without energy compensation (Mitsuba's
+microfacet BSDFs are single-scattering).
 """
 
 import os
@@ -22,27 +23,31 @@ DIELECTRIC_ETA = 1.5
 DIELECTRIC_ALPHA = 0.3
 
 
-def _layer(eta, alpha):
-    nodes, orders = ll.parameterHeuristicMicrofacet(alpha=alpha, eta=eta)
-    mu, w = ll.quad.gaussLobatto(nodes)
-    layer = ll.Layer(mu, w, orders)
-    layer.setMicrofacet(eta=eta, alpha=alpha, conserveEnergy=False)
-    return layer
+def conductor_text(alpha=CONDUCTOR_ALPHA):
+    """Rough gold in the material language, single scattering
+    (compensate=0), with the per-channel eta and k of the native BSDF."""
+    return "conductor eta=%s k=%s alpha=%g compensate=0" % (
+        ",".join("%g" % v for v in GOLD_ETA), ",".join("%g" % v for v in GOLD_K), alpha)
 
 
-def build_conductor(path):
-    """Rough gold, one layer per RGB channel (eta + i k of that channel)."""
+def dielectric_text():
+    return "dielectric eta=%g alpha=%g compensate=0" % (DIELECTRIC_ETA, DIELECTRIC_ALPHA)
+
+
+def build(text, path):
+    """What `llbuild` does with the text (ll_material_build), at the
+    material's own resolution."""
     if not os.path.exists(path):
-        layers = [_layer(complex(e, k), CONDUCTOR_ALPHA) for e, k in zip(GOLD_ETA, GOLD_K)]
-        ll.BSDFStorage.fromLayerRGB(path, *layers, alpha=CONDUCTOR_ALPHA)
+        ll.Material.parse(text).build(path)
     return path
+
+
+def build_conductor(path, alpha=CONDUCTOR_ALPHA):
+    return build(conductor_text(alpha), path)
 
 
 def build_dielectric(path):
-    if not os.path.exists(path):
-        layer = _layer(DIELECTRIC_ETA, DIELECTRIC_ALPHA)
-        ll.BSDFStorage.fromLayer(path, layer, eta=DIELECTRIC_ETA, alpha=DIELECTRIC_ALPHA)
-    return path
+    return build(dielectric_text(), path)
 
 
 def native_bsdf(kind):

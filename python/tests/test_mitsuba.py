@@ -34,18 +34,9 @@ def _use(variant):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("mitsuba")
-    wrong = str(d / "gold-alpha0.4.bsdf")
-    layers = []
-    for e, k in zip(S.GOLD_ETA, S.GOLD_K):
-        nodes, orders = ll.parameterHeuristicMicrofacet(alpha=0.4, eta=complex(e, k))
-        mu, w = ll.quad.gaussLobatto(nodes)
-        layer = ll.Layer(mu, w, orders)
-        layer.setMicrofacet(eta=complex(e, k), alpha=0.4, conserveEnergy=False)
-        layers.append(layer)
-    ll.BSDFStorage.fromLayerRGB(wrong, *layers, alpha=0.4)
     return {"conductor": S.build_conductor(str(d / "gold.bsdf")),
             "dielectric": S.build_dielectric(str(d / "glass.bsdf")),
-            "wrong": wrong}
+            "wrong": S.build_conductor(str(d / "gold-alpha0.4.bsdf"), alpha=0.4)}
 
 
 def _directions(n, seed):
