@@ -302,6 +302,29 @@ static void run_eval(const config *cfg, bench_store *store)
     }
 }
 
+/* 3b. The batch calls on the golden file (per element, 1 and all threads). */
+static void run_batch(const config *cfg, bench_store *store)
+{
+    char bin[1024], runs[32], golden[1024];
+    char *argv[5];
+    bench_child_result res;
+    path_join(bin, sizeof bin, cfg->bin_dir, "batch");
+    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    if (access(golden, R_OK) != 0) {
+        bench_store_error(store, "batch roughgold: no file (tests/data missing)");
+        return;
+    }
+    argv[0] = bin;
+    argv[1] = golden;
+    argv[2] = (char *)"roughgold";
+    argv[3] = runs;
+    argv[4] = NULL;
+    fprintf(stderr, "bench: batch calls on roughgold\n");
+    if (!bench_run_child(argv, NULL, "", store, &res))
+        child_failed(store, "batch roughgold", &res);
+}
+
 static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
 {
     int a;
@@ -357,6 +380,7 @@ int main(int argc, char **argv)
     run_scaling(&cfg, &store);
     run_adding(&cfg, &store);
     run_eval(&cfg, &store);
+    run_batch(&cfg, &store);
 
     record_load(&store, "end");
     bench_report_table(stdout, &store);

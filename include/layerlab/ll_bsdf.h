@@ -219,6 +219,43 @@ LL_API ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const 
                                     ll_transport mode, const float *basis_coeffs,
                                     double wi[3], double *pdf, double rgb[3]);
 
+/* ------------------------------------------- renderer convention, batches */
+
+/* The _dir calls over arrays, for wavefront renderers (one call per
+ * wavefront). wo, wi, wi_out and rgb_out hold count packed 3-vectors
+ * (element k at [3k, 3k + 3)), u count packed 2-vectors, pdf_out count
+ * doubles. basis_coeffs: NULL (untextured file), or coeff_stride floats
+ * per element (element k's weights at basis_coeffs + k * coeff_stride), or
+ * coeff_stride 0 for one set of weights shared by all elements.
+ *
+ * Element k's outputs are bit-identical to the scalar call on element k
+ * (ll_bsdf_eval_dir, ll_bsdf_pdf_dir, ll_bsdf_sample_dir), whatever the
+ * thread count. An invalid element gets what the scalar call gives it
+ * (zeros; wi_out the normal); the other elements are still computed, and
+ * the batch then returns the status of the invalid element with the lowest
+ * index, with that element's message in ll_last_error_message. The pdf
+ * batch's elements cannot fail (invalid ones give 0, as ll_bsdf_pdf_dir).
+ * Before any element: LL_ERROR_INVALID_ARGUMENT for a NULL b, a NULL array
+ * with count > 0, or sizes that overflow (nothing is written then).
+ * count 0 is LL_OK. The calls allocate nothing on the heap.
+ *
+ * Threads: a batch of count >= 2048 is split into contiguous ranges of at
+ * least 1024 elements over up to one POSIX thread per online processor
+ * (the calling thread takes one range), or LAYERLAB_BATCH_THREADS (1..64)
+ * threads if that environment variable is set. The calls are safe from any
+ * number of threads at once, like the scalar calls. */
+LL_API ll_status ll_bsdf_eval_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                        const double *wi, ll_transport mode,
+                                        const float *basis_coeffs, size_t coeff_stride,
+                                        double *rgb_out);
+LL_API ll_status ll_bsdf_pdf_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                       const double *wi, const float *basis_coeffs,
+                                       size_t coeff_stride, double *pdf_out);
+LL_API ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                          const double *u, ll_transport mode,
+                                          const float *basis_coeffs, size_t coeff_stride,
+                                          double *wi_out, double *pdf_out, double *rgb_out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -8,8 +8,12 @@ failing ``ll_status`` into a Python exception carrying the library's message.
 
 Search order (the first that loads wins):
   1. the path in the environment variable ``LAYERLAB_LIBRARY``;
-  2. an installed prefix: ``$(pkg-config --variable=libdir layerlab)``;
-  3. the system's library path (``ctypes.util.find_library`` and the soname).
+  2. an installed prefix named by ``PKG_CONFIG_PATH`` (set: an explicit choice):
+     ``$(pkg-config --variable=libdir layerlab)``;
+  3. the copy bundled in the package by ``pip install`` (``_lib/liblayerlab.so.1``,
+     with the metals' spectra in ``share/layerlab/ior`` beside it; see setup.py);
+  4. pkg-config's default search, then the system's library path
+     (``ctypes.util.find_library`` and the soname).
 """
 
 import ctypes
@@ -193,6 +197,13 @@ PROTOTYPES = {
     "ll_bsdf_pdf_dir": (_D, [bsdf_p, _P3, _P3, c_float_p]),
     "ll_bsdf_sample_dir": (_S, [bsdf_p, _P3, ctypes.c_double * 2, _I, c_float_p, _P3,
                                 c_double_p, _P3]),
+    # batch calls of the renderer convention (arrays of packed 3- and 2-vectors)
+    "ll_bsdf_eval_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, _I, c_float_p, _Z,
+                                    c_double_p]),
+    "ll_bsdf_pdf_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, c_float_p, _Z,
+                                   c_double_p]),
+    "ll_bsdf_sample_dir_batch": (_S, [bsdf_p, _Z, c_double_p, c_double_p, _I, c_float_p, _Z,
+                                      c_double_p, c_double_p, c_double_p]),
     # ll_material.h
     "ll_material_parse": (_S, [ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(material_p)]),
     "ll_material_parse_file": (_S, [ctypes.c_char_p, ctypes.POINTER(material_p)]),
@@ -245,6 +256,10 @@ def _candidates():
     """(description, path or name) pairs in search order; LAYERLAB_LIBRARY is
     handled by the caller because a wrong explicit path must not fall through."""
     found = []
+    bundled = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lib",
+                           "liblayerlab.so.%d" % ABI_VERSION)
+    if os.path.exists(bundled) and not os.environ.get("PKG_CONFIG_PATH"):
+        found.append(("the package's bundled copy", bundled))
     try:
         libdir = subprocess.run(["pkg-config", "--variable=libdir", "layerlab"],
                                 capture_output=True, text=True, timeout=30)
@@ -255,6 +270,8 @@ def _candidates():
             found.append(("pkg-config", None))
     except (OSError, subprocess.SubprocessError):
         found.append(("pkg-config (not installed)", None))
+    if os.path.exists(bundled) and os.environ.get("PKG_CONFIG_PATH"):
+        found.append(("the package's bundled copy", bundled))
     name = ctypes.util.find_library("layerlab")
     if name:
         found.append(("ctypes.util.find_library('layerlab')", name))

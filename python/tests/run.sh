@@ -1,7 +1,7 @@
 #!/bin/sh
 # The Python package's tests, run by `make test` (target test-python) with
 # BUILD=<build dir>. Tests the package in python/ against $BUILD's library;
-# installs numpy, matplotlib and pytest quietly when they are missing.
+# installs numpy, matplotlib, pytest and mitsuba quietly when they are missing.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -28,6 +28,16 @@ if [ -n "$missing" ]; then
   echo "python/tests/run.sh: installing$missing"
   "$PYTHON" -m pip install -q --disable-pip-version-check $missing
 fi
+
+# Mitsuba 3 for the plugin's tests (test_mitsuba.py); its LLVM variants need
+# LLVM 19 (scripts/deps.sh test installs libllvm19).
+if ! "$PYTHON" -c "import mitsuba" 2>/dev/null; then
+  echo "python/tests/run.sh: installing mitsuba==3.9.1"
+  "$PYTHON" -m pip install -q --disable-pip-version-check "mitsuba==3.9.1"
+fi
+
+# pip install ./python in a fresh virtual environment (no LAYERLAB_LIBRARY).
+sh "$here/pip_install.sh"
 
 # Test the source tree, not some installed copy; PNGs go to out/python/.
 PYTHONPATH=$root/python${PYTHONPATH:+:$PYTHONPATH}

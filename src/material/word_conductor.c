@@ -190,6 +190,7 @@ static void conductor_params(const ll_word *w, size_t c, size_t n_channels, doub
     out->v[ETA] = n / above;
     out->v[K] = k / above;
     out->v[ALPHA] = ll_number_channel(&w->number[ALPHA], c, n_channels, 0.0);
+    out->v[LL_CONDUCTOR_COMPENSATE] = ll_compensate_value(&w->number[LL_CONDUCTOR_COMPENSATE]);
 }
 
 static ll_status conductor_resolution(const ll_word_params *p, size_t *n, size_t *m)
@@ -206,7 +207,8 @@ static ll_status conductor_build(const ll_word_build_ctx *ctx, const ll_word *w,
                                  const ll_word_params *p, ll_layer *layer)
 {
     (void)w;
-    return ll_layer_set_microfacet_ex(layer, p->v[ETA], p->v[K], p->v[ALPHA], 1, 0,
+    return ll_layer_set_microfacet_ex(layer, p->v[ETA], p->v[K], p->v[ALPHA],
+                                      p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, 0,
                                       ctx->monitor(ctx->user, 1.0));
 }
 
@@ -221,13 +223,14 @@ static void conductor_metadata(ll_text *b, const ll_word *w)
     ll_text_number(b, "eta", &w->number[ETA]);
     ll_text_number(b, "k", &w->number[K]);
     ll_text_number(b, "alpha", &w->number[ALPHA]);
+    ll_text_number(b, "compensate", &w->number[LL_CONDUCTOR_COMPENSATE]);
 }
 
 const ll_word_desc ll_word_conductor = {
     "conductor", "conductor eta=Au alpha=0.1", "conductor interface", 1, 1,
     { { "eta", 1, ETA, 0, 0, 0, 0, NULL, conductor_parse_eta, NULL },
       { "k", 0, K, 0, 0, 0, 0, NULL, conductor_parse_k, NULL },
-      LL_PARAM_ALPHA(ALPHA) },
+      LL_PARAM_ALPHA(ALPHA), LL_PARAM_COMPENSATE(LL_CONDUCTOR_COMPENSATE) },
     conductor_finish, conductor_needs_colour, NULL, conductor_params, conductor_resolution,
     conductor_cost, conductor_build, conductor_metadata, NULL
 };

@@ -152,9 +152,10 @@ LL_INTERNAL extern const ll_word_desc ll_word_measured;
 /* Where each word keeps its numbers (ll_word.number) and its per-channel
  * values (ll_word_params.v): the words' own files and the tests use these. */
 enum { LL_DIFFUSE_ALBEDO = 0 };
-enum { LL_DIELECTRIC_ETA = 0, LL_DIELECTRIC_ALPHA = 1 };           /* values: eta, alpha */
-enum { LL_CONDUCTOR_ETA = 0, LL_CONDUCTOR_K = 1, LL_CONDUCTOR_ALPHA = 2 }; /* likewise,
-                                                        relative to the medium above */
+enum { LL_DIELECTRIC_ETA = 0, LL_DIELECTRIC_ALPHA = 1, LL_DIELECTRIC_COMPENSATE = 2 };
+                                              /* values: eta, alpha, compensate */
+enum { LL_CONDUCTOR_ETA = 0, LL_CONDUCTOR_K = 1, LL_CONDUCTOR_ALPHA = 2,
+       LL_CONDUCTOR_COMPENSATE = 3 };         /* likewise, relative to the medium above */
 enum { LL_MEDIUM_ALBEDO = 0, LL_MEDIUM_TAU = 1, LL_MEDIUM_G = 2, LL_MEDIUM_KAPPA = 3,
        LL_MEDIUM_SHAPE = 2 /* value: g (HG) or kappa (vMF) */ };
 typedef enum { LL_PHASE_ISOTROPIC, LL_PHASE_HG, LL_PHASE_VMF } ll_phase; /* medium's choice */
@@ -183,5 +184,20 @@ LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, s
       "the roughness alpha must be >= 0.001 (LL_MICROFACET_MIN_ALPHA: smoother "            \
       "interfaces need more Fourier orders than a layer can hold)",                       \
       NULL, NULL }
+
+/* compensate=0|1 of the interfaces: whether the paper's energy
+ * compensation term is added (ll_layer_set_microfacet's conserve_energy;
+ * default 1). 0 gives the single-scattering interface that renderers'
+ * microfacet BSDFs are, for comparisons with them. */
+LL_INTERNAL ll_status ll_check_compensate(const ll_parser *p, const ll_word *w,
+                                          const ll_token *key, const ll_token *v,
+                                          const ll_number *x);
+#define LL_PARAM_COMPENSATE_WHY                                                             \
+    "compensate is 1 (energy compensation, the default) or 0 (single scattering only)"
+#define LL_PARAM_COMPENSATE(slot_)                                                          \
+    { "compensate", 0, (slot_), 0.0, 1.0, 1, 1, LL_PARAM_COMPENSATE_WHY, NULL,               \
+      ll_check_compensate }
+/* The value of a word's compensate in its parameters: 1 unless given. */
+LL_INTERNAL double ll_compensate_value(const ll_number *x);
 
 #endif /* LL_MATERIAL_WORD_TABLE_H */

@@ -1,0 +1,109 @@
+"""Scenes and materials shared by the Mitsuba cross-checks (test_mitsuba.py)
+and the full-size measurements of docs/mitsuba.md (python/tests/mitsuba_compare.py).
+
+A unit sphere seen from the front under a small generated environment map, with
+Mitsuba's native roughconductor / roughdielectric (Beckmann) or with the
+layerlab plugin on a .bsdf of the same interface built from the material
+language with compensate=0, i.e. without energy compensation (Mitsuba's
+microfacet BSDFs are single-scattering).
+"""
+
+import os
+
+import numpy as np
+
+import layerlab as ll
+
+# Gold at the sRGB primaries' wavelengths (about 650, 550, 450 nm): the same
+# per-channel values in both BSDFs.
+GOLD_ETA = (0.143, 0.374, 1.442)
+GOLD_K = (3.983, 2.385, 1.603)
+CONDUCTOR_ALPHA = 0.2
+DIELECTRIC_ETA = 1.5
+DIELECTRIC_ALPHA = 0.3
+
+
+def conductor_text(alpha=CONDUCTOR_ALPHA):
+    """Rough gold in the material language, single scattering
+    (compensate=0), with the per-channel eta and k of the native BSDF."""
+    return "conductor eta=%s k=%s alpha=%g compensate=0" % (
+        ",".join("%g" % v for v in GOLD_ETA), ",".join("%g" % v for v in GOLD_K), alpha)
+
+
+def dielectric_text():
+    return "dielectric eta=%g alpha=%g compensate=0" % (DIELECTRIC_ETA, DIELECTRIC_ALPHA)
+
+
+def build(text, path):
+    """What `llbuild` does with the text (ll_material_build), at the
+    material's own resolution."""
+    if not os.path.exists(path):
+        ll.Material.parse(text).build(path)
+    return path
+
+
+def build_conductor(path, alpha=CONDUCTOR_ALPHA):
+    return build(conductor_text(alpha), path)
+
+
+def build_dielectric(path):
+    return build(dielectric_text(), path)
+
+
+def native_bsdf(kind):
+    if kind == "conductor":
+        return {"type": "roughconductor", "distribution": "beckmann",
+                "alpha": CONDUCTOR_ALPHA,
+                "eta": {"type": "rgb", "value": list(GOLD_ETA)},
+                "k": {"type": "rgb", "value": list(GOLD_K)}}
+    return {"type": "roughdielectric", "distribution": "beckmann", "alpha": DIELECTRIC_ALPHA,
+            "int_ior": DIELECTRIC_ETA, "ext_ior": 1.0}
+
+
+def scene(mi, bsdf, size, spp, seed=0, max_depth=8):
+    """The unit sphere under the generated environment map."""
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth},
+        "sensor": {
+            "type": "perspective", "fov": 30,
+            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 1.5, 5], target=[0, 0, 0],
+                                                       up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": size, "height": size,
+                     "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+        },
+        "sphere": {"type": "sphere", "bsdf": bsdf},
+        "light": environment(mi),
+    })
+
+
+def environment_array(width=64, height=32):
+    """A small generated environment (equirectangular, linear RGB): a sky
+    from blue at the zenith to white at the horizon, a brown ground and a
+    broad warm patch (no small sun, whose fireflies would dominate the
+    noise). Varied enough that a wrong lobe shape shows."""
+    theta = (np.arange(height) + 0.5) / height * np.pi          # from the zenith
+    phi = (np.arange(width) + 0.5) / width * 2.0 * np.pi
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    up = np.cos(t)
+    sky = np.stack([0.4 + 0.6 * (1 - up), 0.6 + 0.4 * (1 - up), np.ones_like(up)], axis=-1)
+    ground = np.broadcast_to(np.array([0.35, 0.25, 0.15]), sky.shape)
+    img = np.where((up > 0)[..., None], sky, ground)
+    # The warm patch: a smooth bump 40 degrees above the horizon.
+    d = np.sin(t) * np.cos(p - 1.0) * np.sin(np.radians(50)) + up * np.cos(np.radians(50))
+    img = img + np.exp((d - 1.0) / 0.15)[..., None] * np.array([2.0, 1.5, 0.75])
+    return np.ascontiguousarray(img, dtype=np.float32)
+
+
+def environment(mi):
+    return {"type": "envmap", "bitmap": mi.Bitmap(environment_array())}
+
+
+def render(mi, scn, spp=0, seed=0):
+    return np.array(mi.render(scn, spp=spp, seed=seed), dtype=np.float64)
+
+
+def relative_rmse(a, b):
+    """RMSE of a - b over the RMS of b (all pixels and channels)."""
+    return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b ** 2)))

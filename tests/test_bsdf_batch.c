@@ -1,0 +1,250 @@
+/*
+ * The batch calls (ll_bsdf_*_dir_batch) give, element for element and bit
+ * for bit, what the scalar _dir calls give: for random directions over the
+ * whole sphere (reflection and transmission, some invalid elements), for
+ * the golden untextured file and a textured file with per-element or shared
+ * weights, with one thread and with several (LAYERLAB_BATCH_THREADS), and
+ * the status of the first invalid element.
+ */
+#include "test_bsdf_util.h"
+
+#include <string.h>
+
+enum { N_ELEMENTS = 5000, N_BASES = 4 };
+
+typedef struct batch_data {
+    double wo[3 * N_ELEMENTS], wi[3 * N_ELEMENTS], u[2 * N_ELEMENTS];
+    float weights[N_BASES * N_ELEMENTS];
+} batch_data;
+
+static void random_direction(uint64_t *rng, double w[3])
+{
+    double z = 2.0 * ll_test_uniform(rng) - 1.0, r = sqrt(fmax(0.0, 1.0 - z * z));
+    double phi = 2.0 * LL_TEST_PI * ll_test_uniform(rng);
+    /* Some not normalised, as the calls allow. */
+    double len = ll_test_uniform(rng) < 0.2 ? 0.5 + 2.0 * ll_test_uniform(rng) : 1.0;
+    w[0] = len * r * cos(phi);
+    w[1] = len * r * sin(phi);
+    w[2] = len * z;
+}
+
+static batch_data *make_data(uint64_t seed)
+{
+    batch_data *d = malloc(sizeof *d);
+    uint64_t rng = seed;
+    size_t k;
+    assert_non_null(d);
+    for (k = 0; k < N_ELEMENTS; ++k) {
+        random_direction(&rng, d->wo + 3 * k);
+        random_direction(&rng, d->wi + 3 * k);
+        d->u[2 * k] = ll_test_uniform(&rng);
+        d->u[2 * k + 1] = ll_test_uniform(&rng);
+    }
+    for (k = 0; k < N_BASES * N_ELEMENTS; ++k)
+        d->weights[k] = (float)ll_test_uniform(&rng);
+    return d;
+}
+
+static void set_threads(const char *n)
+{
+    assert_int_equal(setenv("LAYERLAB_BATCH_THREADS", n, 1), 0);
+}
+
+/* Bitwise equality, so that -0.0 vs 0.0 or a different rounding fails. */
+static void assert_same_bits(const double *a, const double *b, size_t n, const char *what,
+                             size_t element)
+{
+    if (memcmp(a, b, n * sizeof *a) != 0)
+        fail_msg("%s of element %zu: batch %.17g differs from scalar %.17g", what, element,
+                 a[0], b[0]);
+}
+
+/* Compare every batch call against the scalar calls for one file and one
+ * weight layout; stride 0 shares the first set of weights. */
+static void check_against_scalar(const ll_bsdf *b, const batch_data *d, const float *weights,
+                                 size_t stride, ll_transport mode)
+{
+    double *rgb = malloc(3 * N_ELEMENTS * sizeof *rgb), *pdf = malloc(N_ELEMENTS * sizeof *pdf);
+    double *wi = malloc(3 * N_ELEMENTS * sizeof *wi), *srgb = malloc(3 * N_ELEMENTS * sizeof *srgb);
+    double *spdf = malloc(N_ELEMENTS * sizeof *spdf);
+    size_t k;
+    assert_non_null(rgb && pdf && wi && srgb && spdf);
+    assert_int_equal(ll_bsdf_eval_dir_batch(b, N_ELEMENTS, d->wo, d->wi, mode, weights, stride,
+                                            rgb),
+                     LL_OK);
+    assert_int_equal(ll_bsdf_pdf_dir_batch(b, N_ELEMENTS, d->wo, d->wi, weights, stride, pdf),
+                     LL_OK);
+    assert_int_equal(ll_bsdf_sample_dir_batch(b, N_ELEMENTS, d->wo, d->u, mode, weights, stride,
+                                              wi, spdf, srgb),
+                     LL_OK);
+    for (k = 0; k < N_ELEMENTS; ++k) {
+        const float *w = weights ? weights + k * stride : NULL;
+        double e[3], p, swi[3], sp, sf[3];
+        assert_int_equal(ll_bsdf_eval_dir(b, d->wo + 3 * k, d->wi + 3 * k, mode, w, e), LL_OK);
+        p = ll_bsdf_pdf_dir(b, d->wo + 3 * k, d->wi + 3 * k, w);
+        assert_int_equal(ll_bsdf_sample_dir(b, d->wo + 3 * k, d->u + 2 * k, mode, w, swi, &sp,
+                                            sf),
+                         LL_OK);
+        assert_same_bits(rgb + 3 * k, e, 3, "eval", k);
+        assert_same_bits(pdf + k, &p, 1, "pdf", k);
+        assert_same_bits(wi + 3 * k, swi, 3, "sampled wi", k);
+        assert_same_bits(spdf + k, &sp, 1, "sampled pdf", k);
+        assert_same_bits(srgb + 3 * k, sf, 3, "sampled f", k);
+    }
+    free(rgb);
+    free(pdf);
+    free(wi);
+    free(srgb);
+    free(spdf);
+}
+
+static ll_bsdf *open_golden(void)
+{
+    ll_bsdf *b = NULL;
+    if (ll_bsdf_open(LL_TEST_GOLDEN, &b) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    return b;
+}
+
+/* A textured file of N_BASES bases (one parameter at N_BASES positions),
+ * transmissive (eta 1.5), one channel. */
+static ll_bsdf *open_textured(void)
+{
+    const size_t counts[1] = { N_BASES };
+    const double positions[N_BASES] = { 0.0, 0.3, 0.6, 1.0 };
+    ll_layer *l[N_BASES];
+    const ll_layer *layers[N_BASES];
+    ll_test_smooth p[N_BASES];
+    ll_bsdf_write_options opts = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_bsdf *b = NULL;
+    char path[600];
+    size_t k;
+    for (k = 0; k < N_BASES; ++k) {
+        p[k].scale[0] = 0.2 + 0.1 * (double)k;
+        p[k].scale[1] = 0.1 + 0.05 * (double)k;
+        p[k].scale[2] = 0.5 - 0.05 * (double)k;
+        p[k].scale[3] = 0.15;
+        p[k].decay = 0.1 + 0.1 * (double)k;
+        l[k] = ll_test_layer(14, 4);
+        ll_test_fill(l[k], ll_test_smooth_fn, &p[k]);
+        layers[k] = l[k];
+    }
+    opts.eta = 1.5;
+    snprintf(path, sizeof path, "%s/textured.bsdf", ll_test_dir());
+    if (ll_bsdf_write_textured(path, layers, 1, 1, counts, positions, &opts) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    for (k = 0; k < N_BASES; ++k)
+        ll_layer_destroy(l[k]);
+    if (ll_bsdf_open(path, &b) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    return b;
+}
+
+static void untextured_equals_scalar(void **state)
+{
+    ll_bsdf *b = open_golden();
+    batch_data *d = make_data(17);
+    float one = 0.75f;
+    (void)state;
+    set_threads("1");
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_RADIANCE);
+    set_threads("3");
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_IMPORTANCE);
+    /* An untextured file takes one weight: shared, or one per element. */
+    check_against_scalar(b, d, &one, 0, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, d->weights, 1, LL_TRANSPORT_RADIANCE);
+    unsetenv("LAYERLAB_BATCH_THREADS");
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_RADIANCE);
+    free(d);
+    ll_bsdf_release(b);
+}
+
+static void textured_equals_scalar(void **state)
+{
+    ll_bsdf *b = open_textured();
+    batch_data *d = make_data(23);
+    (void)state;
+    set_threads("1");
+    check_against_scalar(b, d, d->weights, N_BASES, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, d->weights, 0, LL_TRANSPORT_IMPORTANCE);
+    set_threads("4");
+    check_against_scalar(b, d, d->weights, N_BASES, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, d->weights, N_BASES, LL_TRANSPORT_IMPORTANCE);
+    check_against_scalar(b, d, d->weights, 0, LL_TRANSPORT_RADIANCE);
+    unsetenv("LAYERLAB_BATCH_THREADS");
+    free(d);
+    ll_bsdf_release(b);
+}
+
+/* Invalid elements: zeros as the scalar call, the rest computed, and the
+ * status and message of the lowest invalid index -- also when that element
+ * is handled by a worker thread. */
+static void invalid_elements(void **state)
+{
+    ll_bsdf *b = open_golden();
+    batch_data *d = make_data(5);
+    double *rgb = malloc(3 * N_ELEMENTS * sizeof *rgb), *pdf = malloc(N_ELEMENTS * sizeof *pdf);
+    double *wi = malloc(3 * N_ELEMENTS * sizeof *wi), e[3];
+    const char *threads[2] = { "1", "4" };
+    size_t t, bad1 = 4321, bad2 = 4400;
+    (void)state;
+    assert_non_null(rgb && pdf && wi);
+    d->wo[3 * bad1] = d->wo[3 * bad1 + 1] = d->wo[3 * bad1 + 2] = 0.0; /* zero wo */
+    d->u[2 * bad2] = 1.5;                                             /* u out of range */
+    d->wi[3 * bad2 + 2] = NAN;
+    for (t = 0; t < 2; ++t) {
+        set_threads(threads[t]);
+        memset(rgb, 0xff, 3 * N_ELEMENTS * sizeof *rgb);
+        assert_int_equal(ll_bsdf_eval_dir_batch(b, N_ELEMENTS, d->wo, d->wi,
+                                                LL_TRANSPORT_RADIANCE, NULL, 0, rgb),
+                         LL_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(ll_last_error_message(), "ll_bsdf_eval_dir"));
+        assert_true(rgb[3 * bad1] == 0.0 && rgb[3 * bad2 + 2] == 0.0);
+        assert_int_equal(ll_bsdf_eval_dir(b, d->wo + 3 * (N_ELEMENTS - 1),
+                                          d->wi + 3 * (N_ELEMENTS - 1), LL_TRANSPORT_RADIANCE,
+                                          NULL, e),
+                         LL_OK);
+        assert_same_bits(rgb + 3 * (N_ELEMENTS - 1), e, 3, "eval after the invalid ones",
+                         N_ELEMENTS - 1);
+        assert_int_equal(ll_bsdf_pdf_dir_batch(b, N_ELEMENTS, d->wo, d->wi, NULL, 0, pdf),
+                         LL_OK);
+        assert_true(pdf[bad1] == 0.0 && pdf[bad2] == 0.0);
+        assert_int_equal(ll_bsdf_sample_dir_batch(b, N_ELEMENTS, d->wo, d->u,
+                                                  LL_TRANSPORT_RADIANCE, NULL, 0, wi, pdf, rgb),
+                         LL_ERROR_INVALID_ARGUMENT);
+        /* The message of element bad1 (zero wo), the lower of the two. */
+        assert_non_null(strstr(ll_last_error_message(), "wo must be"));
+        assert_null(strstr(ll_last_error_message(), "(1.5"));
+        assert_true(pdf[bad1] == 0.0 && wi[3 * bad1 + 2] == 1.0 && pdf[bad2] == 0.0);
+    }
+    unsetenv("LAYERLAB_BATCH_THREADS");
+    /* Batch-level errors write nothing; count 0 is fine. */
+    assert_int_equal(ll_bsdf_eval_dir_batch(NULL, 1, d->wo, d->wi, LL_TRANSPORT_RADIANCE, NULL,
+                                            0, rgb),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_pdf_dir_batch(b, 1, d->wo, NULL, NULL, 0, pdf),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_sample_dir_batch(b, 0, NULL, NULL, LL_TRANSPORT_RADIANCE, NULL, 0,
+                                              NULL, NULL, NULL),
+                     LL_OK);
+    assert_int_equal(ll_bsdf_eval_dir_batch(b, (size_t)-1 / 2, d->wo, d->wi,
+                                            LL_TRANSPORT_RADIANCE, NULL, 0, rgb),
+                     LL_ERROR_INVALID_ARGUMENT);
+    free(rgb);
+    free(pdf);
+    free(wi);
+    free(d);
+    ll_bsdf_release(b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(untextured_equals_scalar),
+        cmocka_unit_test(textured_equals_scalar),
+        cmocka_unit_test(invalid_elements),
+    };
+    return cmocka_run_group_tests_name("bsdf_batch", tests, ll_test_dir_setup,
+                                       ll_test_dir_teardown);
+}
