@@ -74,9 +74,7 @@ int ll_scan_real(const char *s, size_t len, double *out)
     return *end == '\0' && ll_is_finite(*out);
 }
 
-/* Split a value at commas: up to 3 parts. Returns the part count, or 0 for
- * more than 3 or an empty part. */
-static int split_commas(const token *v, token parts[3])
+int ll_split_commas(const token *v, token parts[3])
 {
     int count = 0;
     const char *p = v->begin, *end = v->begin + v->len;
@@ -98,7 +96,7 @@ static int split_commas(const token *v, token parts[3])
 ll_status ll_parse_number(const parser *p, const token *key, const token *v, ll_number *out)
 {
     token parts[3];
-    int count = split_commas(v, parts), k;
+    int count = ll_split_commas(v, parts), k;
     if (count == 1 || count == 3) {
         for (k = 0; k < count; ++k)
             if (!ll_scan_real(parts[k].begin, parts[k].len, &out->v[k]))

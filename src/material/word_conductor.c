@@ -21,25 +21,6 @@
 #define K LL_CONDUCTOR_K
 #define ALPHA LL_CONDUCTOR_ALPHA
 
-/* Splits as material_parse.c's numbers do: up to 3 comma-separated parts. */
-static int split_commas(const ll_token *v, ll_token parts[3])
-{
-    int count = 0;
-    const char *p = v->begin, *end = v->begin + v->len;
-    while (1) {
-        const char *comma = memchr(p, ',', (size_t)(end - p));
-        const char *stop = comma ? comma : end;
-        if (count == 3 || stop == p)
-            return 0;
-        parts[count].begin = p;
-        parts[count].len = (size_t)(stop - p);
-        ++count;
-        if (!comma)
-            return count;
-        p = comma + 1;
-    }
-}
-
 /* Only characters of real numbers and commas (no `i` of a complex one). */
 static int is_real_list(const ll_token *v)
 {
@@ -120,7 +101,7 @@ static ll_status conductor_parse_eta(const ll_parser *p, ll_word *w, const ll_to
                                      "the real part of a conductor's index must be > 0");
         return s;
     }
-    count = split_commas(v, parts);
+    count = ll_split_commas(v, parts);
     if (count != 1 && count != 3)
         return ll_parse_error(p, v->begin,
                               "eta: expected a metal name, one complex index n+ki or three "

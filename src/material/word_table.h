@@ -22,6 +22,9 @@ typedef struct ll_token {
 typedef struct ll_parser ll_parser; /* material_parse.c */
 
 LL_INTERNAL int ll_token_is(const ll_token *t, const char *s);
+/* Split a value at commas (R,G,B): up to 3 parts. Returns the part count,
+ * or 0 for more than 3 or an empty part. */
+LL_INTERNAL int ll_split_commas(const ll_token *v, ll_token parts[3]);
 /* source:line:column: what (LL_ERROR_PARSE). */
 LL_INTERNAL ll_status ll_parse_error(const ll_parser *p, const char *at, const char *fmt, ...)
     LL_PRINTF(3, 4);
