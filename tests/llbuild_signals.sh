@@ -29,6 +29,9 @@ fi
 now_ms() { echo $(($(date +%s%N) / 1000000)); }
 
 # interrupt NAME SIGNAL STAGE MATERIAL: build MATERIAL, signal it 0.3 s into STAGE.
+# Does the latest progress line of file $1 name stage $2?
+in_stage() { case $(grep '%' "$1" 2>/dev/null | tail -1) in *"% $2"*) return 0 ;; esac; return 1; }
+
 interrupt() {
     name=$1 sig=$2 stage=$3 text=$4
     case $sig in INT) want=130 ;; TERM) want=143 ;; esac
@@ -41,11 +44,13 @@ interrupt() {
     ( sleep 60; kill -9 $pid 2>/dev/null ) &
     dog=$!
     i=0
-    while [ $i -lt 1200 ] && ! grep -q "% $stage" "$dir/err" 2>/dev/null &&
-          kill -0 $pid 2>/dev/null; do
+    # Wait until the latest progress line names the stage (a stage's name
+    # can show before a sub-stage of it, e.g. "medium" before its "phase
+    # function": the signal must come while the stage itself runs).
+    while [ $i -lt 1200 ] && ! in_stage "$dir/err" "$stage" && kill -0 $pid 2>/dev/null; do
         sleep 0.05; i=$((i + 1))
     done
-    if ! grep -q "% $stage" "$dir/err"; then
+    if ! in_stage "$dir/err" "$stage"; then
         bad "$name: llbuild never reached '$stage'"; sed 's/^/  | /' "$dir/err" | tail -5
         kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null; kill $dog 2>/dev/null
         return
