@@ -162,6 +162,12 @@ LL_API ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info);
 LL_API ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,
                                        const float **positions);
 
+/* Weights of the file's bases for one point of parameter space: params holds one value per
+ * textured parameter, in the file's order; coeffs receives info.n_bases floats, to be passed as
+ * basis_coeffs to ll_bsdf_eval / _pdf / _sample and their _dir forms. Values outside a parameter's
+ * sampled range are clamped to it. NULL params is valid only for an untextured file. */
+LL_API ll_status ll_bsdf_basis_coefficients(const ll_bsdf *b, const double *params, float *coeffs);
+
 /* The file's nodes (n_nodes floats, ascending, owned by b). */
 LL_API const float *ll_bsdf_nodes(const ll_bsdf *b);
 
