@@ -9,6 +9,23 @@
 
 #include <math.h>
 
+/* The bases with non-zero weight (bsdf_internal.h, LL_BSDF_ACTIVE_MAX). */
+static void list_active_bases(ll_bsdf_series *s, size_t nb, const float *basis)
+{
+    size_t k;
+    s->n_active = 0;
+    s->all_bases = 0;
+    for (k = 0; k < nb; ++k)
+        if (basis[k] != 0.0f) {
+            if (s->n_active == LL_BSDF_ACTIVE_MAX || nb == 1) {
+                s->n_active = nb;
+                s->all_bases = 1;
+                return;
+            }
+            s->active[s->n_active++] = (uint32_t)k;
+        }
+}
+
 int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                             double mu_o, const float *basis, ll_bsdf_series *s)
 {
@@ -22,6 +39,7 @@ int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[
     s->n_bases = b->n_bases;
     s->basis = basis;
     s->dense = NULL;
+    list_active_bases(s, b->n_bases, basis);
     if (!ll_bsdf_weights(b, mu_o, &off_o, w_o))
         return 0;
     /* Nodes outside the table have weight exactly 0 (spline.h), so every
