@@ -7,11 +7,14 @@
  * the weighted sum of the stored BSDFs. The weights are the tensor product
  * of 1-D piecewise-linear ("hat") weights over each parameter's sample
  * positions. Linear and not Catmull-Rom (the node spline of the cosines,
- * numerics/spline.c), chosen by measured error (bench/basis_interp.c, in
- * docs/bsdf-format.md): Catmull-Rom was not more accurate on the rough
- * conductor and dielectric grids measured, and its negative weights could
- * make f negative between samples, where linear weights, all >= 0 and
- * summing to 1, keep f a convex combination of non-negative BSDFs.
+ * numerics/spline.c), after measuring both (bench/basis_interp.c, numbers
+ * in docs/bsdf-format.md): on a rough conductor and a dielectric textured
+ * over alpha, Catmull-Rom's mean error is 25-50% lower but its maximum is
+ * higher in 2 of 8 cases and, above all, its negative weights can make f
+ * and the combined CDF rows negative or decreasing between samples, which
+ * the sampler does not handle; linear weights, all >= 0 and summing to 1,
+ * keep f a convex combination of non-negative BSDFs that the per-basis
+ * CDFs sample exactly.
  * At most two weights per parameter are non-zero, so evaluation touches at
  * most 2^P bases (bsdf_eval.c skips the zero ones).
  */
