@@ -9,7 +9,7 @@
  * exceeds 1% of its peak (max and mean over the directions). A benchmark
  * driver (never part of `make test`): build with
  *   cc -std=c99 -O2 -Iinclude -Isrc bench/basis_interp.c build/lib/liblayerlab.a \
- *      -fopenmp -lm -lpthread -o build/basis_interp
+ *      -llapacke -lopenblas -fopenmp -lm -lpthread -o build/basis_interp && build/basis_interp /tmp
  */
 #include "layerlab/ll_bsdf.h"
 #include "layerlab/ll_bsdf_write.h"
