@@ -12,7 +12,7 @@ static const double g_alphas[N_ALPHA] = { 0.05, 0.1, 0.2, 0.3, 0.4 };
 
 /* A rough conductor (eta 0.2 + 3i) textured over alpha at g_alphas, at the
  * resolution of its sharpest sample (the measurement of bsdf-format.md,
- * "Textured files"), and its layers for direct builds. */
+ * "Weights for a point of parameter space"), and its layers for direct builds. */
 static ll_layer *g_layers[N_ALPHA];
 static ll_bsdf *g_conductor;
 static size_t g_n, g_orders;

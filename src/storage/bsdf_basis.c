@@ -1,6 +1,7 @@
 /*
  * The basis weights of a textured .bsdf file for one point of parameter
- * space (ll_bsdf_basis_coefficients; bsdf-format.md, "Textured files").
+ * space (ll_bsdf_basis_coefficients; bsdf-format.md, "Weights for a point
+ * of parameter space").
  *
  * A textured file stores one BSDF per point of a grid over its parameters
  * (basis index over parameter 0 fastest); a point between grid points is
