@@ -1,5 +1,6 @@
 /*
- * What a textured file costs per call: ns per ll_bsdf_eval_dir on a file of
+ * What a textured file costs per call: ns per ll_bsdf_eval_dir (and
+ * ll_bsdf_sample_dir) on a file of
  * 64 bases (two parameters sampled 8 x 8, weights from
  * ll_bsdf_basis_coefficients at an interior point: 4 non-zero) against the
  * untextured file of one of its layers, same directions. A benchmark driver
@@ -34,6 +35,37 @@ static double now(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ns per sample_dir over CALLS pseudo-random (wo, u), best of 3 runs. */
+static double time_sample(const ll_bsdf *b, const float *coeffs, double *checksum)
+{
+    double best = 1e30;
+    int run;
+    for (run = 0; run < 3; ++run) {
+        unsigned long long rng = 777;
+        double t0 = now(), sum = 0.0, t;
+        int k;
+        for (k = 0; k < CALLS / 4; ++k) {
+            double u[4], wo[3], wi[3], rgb[3], pdf;
+            int j;
+            for (j = 0; j < 4; ++j) {
+                rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+                u[j] = (double)(rng >> 11) / 9007199254740992.0;
+            }
+            wo[2] = 0.05 + 0.95 * u[0];
+            wo[0] = sqrt(1 - wo[2] * wo[2]) * cos(6.283185307 * u[1]);
+            wo[1] = sqrt(1 - wo[2] * wo[2]) * sin(6.283185307 * u[1]);
+            check(ll_bsdf_sample_dir(b, wo, u + 2, LL_TRANSPORT_RADIANCE, coeffs, wi, &pdf, rgb),
+                  "sample");
+            sum += pdf;
+        }
+        t = (now() - t0) / (CALLS / 4) * 1e9;
+        if (t < best)
+            best = t;
+        *checksum = sum;
+    }
+    return best;
 }
 
 /* ns per eval_dir over CALLS pseudo-random direction pairs (same seed for
@@ -109,6 +141,9 @@ int main(int argc, char **argv)
     printf("1 basis:   %.0f ns per eval_dir\n", time_eval(b1, NULL, &sum1));
     printf("64 bases:  %.0f ns per eval_dir\n", time_eval(b64, coeffs, &sum64));
     printf("checksums %.6g %.6g\n", sum1, sum64);
+    printf("1 basis:   %.0f ns per sample_dir\n", time_sample(b1, NULL, &sum1));
+    printf("64 bases:  %.0f ns per sample_dir\n", time_sample(b64, coeffs, &sum64));
+    printf("checksums %.9g %.9g\n", sum1, sum64);
     ll_bsdf_release(b1);
     ll_bsdf_release(b64);
     for (k = 0; k < SIDE; ++k)

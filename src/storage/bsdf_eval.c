@@ -95,15 +95,33 @@ double ll_bsdf_row_value(const ll_bsdf *b, const double *table, ptrdiff_t off_i,
                 value += w_i[a] * table[(size_t)(off_i + a) * n + o];
         return value;
     }
-    for (a = 0; a < 4; ++a) {
-        const double *entry;
-        double sum = 0.0;
-        if (w_i[a] == 0.0)
-            continue;
-        entry = table + ((size_t)(off_i + a) * n + o) * nb;
-        for (k = 0; k < nb; ++k)
-            sum += (double)basis[k] * entry[k];
-        value += w_i[a] * sum;
+    /* Textured: the bases of non-zero weight only, listed once for the
+     * four rows (skipping a zero term leaves the sum unchanged: the entries
+     * are finite), so the few weighted bases of a large file are what the
+     * sampler's CDF search reads; more than LL_BSDF_ACTIVE_MAX: all. */
+    {
+        uint32_t active[LL_BSDF_ACTIVE_MAX];
+        size_t n_active = 0, q;
+        for (k = 0; k < nb && n_active <= LL_BSDF_ACTIVE_MAX; ++k)
+            if (basis[k] != 0.0f) {
+                if (n_active < LL_BSDF_ACTIVE_MAX)
+                    active[n_active] = (uint32_t)k;
+                n_active++;
+            }
+        for (a = 0; a < 4; ++a) {
+            const double *entry;
+            double sum = 0.0;
+            if (w_i[a] == 0.0)
+                continue;
+            entry = table + ((size_t)(off_i + a) * n + o) * nb;
+            if (n_active <= LL_BSDF_ACTIVE_MAX)
+                for (q = 0; q < n_active; ++q)
+                    sum += (double)basis[active[q]] * entry[active[q]];
+            else
+                for (k = 0; k < nb; ++k)
+                    sum += (double)basis[k] * entry[k];
+            value += w_i[a] * sum;
+        }
     }
     return value;
 }
