@@ -9,6 +9,23 @@
 
 #include <math.h>
 
+/* The bases with non-zero weight (bsdf_internal.h, LL_BSDF_ACTIVE_MAX). */
+static void list_active_bases(ll_bsdf_series *s, size_t nb, const float *basis)
+{
+    size_t k;
+    s->n_active = 0;
+    s->all_bases = 0;
+    for (k = 0; k < nb; ++k)
+        if (basis[k] != 0.0f) {
+            if (s->n_active == LL_BSDF_ACTIVE_MAX || nb == 1) {
+                s->n_active = nb;
+                s->all_bases = 1;
+                return;
+            }
+            s->active[s->n_active++] = (uint32_t)k;
+        }
+}
+
 int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                             double mu_o, const float *basis, ll_bsdf_series *s)
 {
@@ -22,6 +39,7 @@ int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[
     s->n_bases = b->n_bases;
     s->basis = basis;
     s->dense = NULL;
+    list_active_bases(s, b->n_bases, basis);
     if (!ll_bsdf_weights(b, mu_o, &off_o, w_o))
         return 0;
     /* Nodes outside the table have weight exactly 0 (spline.h), so every
@@ -77,15 +95,33 @@ double ll_bsdf_row_value(const ll_bsdf *b, const double *table, ptrdiff_t off_i,
                 value += w_i[a] * table[(size_t)(off_i + a) * n + o];
         return value;
     }
-    for (a = 0; a < 4; ++a) {
-        const double *entry;
-        double sum = 0.0;
-        if (w_i[a] == 0.0)
-            continue;
-        entry = table + ((size_t)(off_i + a) * n + o) * nb;
-        for (k = 0; k < nb; ++k)
-            sum += (double)basis[k] * entry[k];
-        value += w_i[a] * sum;
+    /* Textured: the bases of non-zero weight only, listed once for the
+     * four rows (skipping a zero term leaves the sum unchanged: the entries
+     * are finite), so the few weighted bases of a large file are what the
+     * sampler's CDF search reads; more than LL_BSDF_ACTIVE_MAX: all. */
+    {
+        uint32_t active[LL_BSDF_ACTIVE_MAX];
+        size_t n_active = 0, q;
+        for (k = 0; k < nb && n_active <= LL_BSDF_ACTIVE_MAX; ++k)
+            if (basis[k] != 0.0f) {
+                if (n_active < LL_BSDF_ACTIVE_MAX)
+                    active[n_active] = (uint32_t)k;
+                n_active++;
+            }
+        for (a = 0; a < 4; ++a) {
+            const double *entry;
+            double sum = 0.0;
+            if (w_i[a] == 0.0)
+                continue;
+            entry = table + ((size_t)(off_i + a) * n + o) * nb;
+            if (n_active <= LL_BSDF_ACTIVE_MAX)
+                for (q = 0; q < n_active; ++q)
+                    sum += (double)basis[active[q]] * entry[active[q]];
+            else
+                for (k = 0; k < nb; ++k)
+                    sum += (double)basis[k] * entry[k];
+            value += w_i[a] * sum;
+        }
     }
     return value;
 }

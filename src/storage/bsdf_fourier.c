@@ -86,7 +86,7 @@ void ll_bsdf_series_eval(const ll_bsdf_series *s, size_t n_channels, double cos_
 /* Coefficient k of the luminance series. */
 static double series_coefficient(const ll_bsdf_series *s, size_t k)
 {
-    size_t p, basis, nb = s->n_bases;
+    size_t p, q, basis;
     double sum = 0.0;
     if (k >= s->max_length)
         return 0.0;
@@ -94,9 +94,11 @@ static double series_coefficient(const ll_bsdf_series *s, size_t k)
         return s->dense[k];
     for (p = 0; p < s->count; ++p)
         if (k < s->length[p])
-            for (basis = 0; basis < nb; ++basis)
+            for (q = 0; q < s->n_active; ++q) {
+                basis = ll_bsdf_active_basis(s, q);
                 sum += s->weight[p] * (double)s->basis[basis] *
                        (double)s->coeff[p][basis * s->length[p] + k];
+            }
     return sum;
 }
 
@@ -111,7 +113,7 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
                                      ll_bsdf_series *d)
 {
     int vector = ll_bsdf_kernels_vector();
-    size_t p, basis, c, k, nb = s->n_bases, stride = group_of_four(s->max_length);
+    size_t p, j, basis, c, k, nb = s->n_bases, stride = group_of_four(s->max_length);
     ll_bsdf_prefetch_series(s, n_channels);
     for (k = 0; k < n_channels * stride; ++k)
         dense[k] = 0.0;
@@ -141,8 +143,10 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
         }
     for (; p < s->count; ++p)
         for (c = 0; c < n_channels; ++c)
-            for (basis = 0; basis < nb; ++basis) {
-                double w = s->weight[p] * (double)s->basis[basis];
+            for (j = 0; j < s->n_active; ++j) {
+                double w;
+                basis = ll_bsdf_active_basis(s, j);
+                w = s->weight[p] * (double)s->basis[basis];
                 if (w != 0.0)
                     ll_bsdf_add_scaled(vector, dense + c * stride,
                                        s->coeff[p] + (c * nb + basis) * s->length[p], w,

@@ -74,6 +74,12 @@ struct ll_bsdf {
  * evaluating it needs no buffer sized by the file. Channel c, basis b of
  * entry p starts at coeff[p] + (c * n_bases + b) * length[p]. */
 #define LL_BSDF_SERIES_MAX 16
+/* A textured file's weights have few non-zero entries (linear weights: at
+ * most 2 per parameter, ll_bsdf_basis_coefficients), so the series lists
+ * the non-zero bases and the sums visit only those: a 64-basis file then
+ * costs what its few weighted bases cost. More non-zero weights than this
+ * visit every basis (zeros skipped one by one). */
+#define LL_BSDF_ACTIVE_MAX 16
 typedef struct ll_bsdf_series {
     size_t count;
     const float *coeff[LL_BSDF_SERIES_MAX];
@@ -82,6 +88,9 @@ typedef struct ll_bsdf_series {
     uint32_t max_length;
     size_t n_bases;
     const float *basis;         /* n_bases weights (never NULL)                */
+    size_t n_active;            /* bases to visit: active[0 .. n_active) ...   */
+    int all_bases;              /* ... or, if set, every one of 0 .. n_bases   */
+    uint32_t active[LL_BSDF_ACTIVE_MAX];
     const double *dense;        /* if set: the series already summed, channel
                                    c at dense + c * dense_stride, c <
                                    dense_channels (ll_bsdf_series_densify*;
@@ -89,6 +98,12 @@ typedef struct ll_bsdf_series {
                                    the stored references stay valid            */
     size_t dense_channels, dense_stride;
 } ll_bsdf_series;
+
+/* Basis q of the series' visiting order, q < s->n_active. */
+static inline size_t ll_bsdf_active_basis(const ll_bsdf_series *s, size_t q)
+{
+    return s->all_bases ? q : s->active[q];
+}
 
 /* Free every part of a (possibly half-built) bsdf; NULL is fine. */
 LL_INTERNAL void ll_bsdf_free(ll_bsdf *b);

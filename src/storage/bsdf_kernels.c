@@ -55,14 +55,16 @@ static double dot_dense_portable(const double *a, const double *h, size_t m)
 static void dot_chunk_portable(const ll_bsdf_series *s, size_t n_channels, size_t k0,
                                size_t count, const double *h, double out[3])
 {
-    size_t p, basis, c, nb = s->n_bases;
+    size_t p, q, basis, c, nb = s->n_bases;
     for (p = 0; p < s->count; ++p) {
         size_t len = s->length[p], m;
         if (len <= k0)
             continue;
         m = len - k0 < count ? len - k0 : count;
-        for (basis = 0; basis < nb; ++basis) {
-            double w = s->weight[p] * (double)s->basis[basis];
+        for (q = 0; q < s->n_active; ++q) {
+            double w;
+            basis = ll_bsdf_active_basis(s, q);
+            w = s->weight[p] * (double)s->basis[basis];
             if (w == 0.0)
                 continue;
             for (c = 0; c < n_channels; ++c)
@@ -227,7 +229,7 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
                                    size_t count, const double *h, double out[3])
 {
     __m256d acc0 = _mm256_setzero_pd(), acc1 = _mm256_setzero_pd(), acc2 = _mm256_setzero_pd();
-    size_t p, basis, nb = s->n_bases;
+    size_t p, q, basis, nb = s->n_bases;
     for (p = 0; p < s->count; ++p) {
         size_t len = s->length[p], m;
         if (len <= k0)
@@ -238,8 +240,10 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
                             s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
             continue;
         }
-        for (basis = 0; basis < nb; ++basis) {
-            double w = s->weight[p] * (double)s->basis[basis];
+        for (q = 0; q < s->n_active; ++q) {
+            double w;
+            basis = ll_bsdf_active_basis(s, q);
+            w = s->weight[p] * (double)s->basis[basis];
             if (w != 0.0)
                 series_dot_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h, m, w,
                                 &acc0, &acc1, &acc2);
@@ -369,18 +373,21 @@ static int have_avx2(void) { return 0; }
 
 void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels)
 {
-    size_t p, c, nb = s->n_bases;
+    size_t p, c, q, nb = s->n_bases;
     /* Short series: the out-of-order core overlaps their few misses by
-     * itself, and the prefetches would only add instructions. */
+     * itself, and the prefetches would only add instructions. Only the
+     * bases that are visited (channel c, basis k at (c * nb + k) * len). */
     if (s->max_length < 64)
         return;
     for (p = 0; p < s->count; ++p)
-        for (c = 0; c < n_channels * nb; ++c) {
-            const float *a = s->coeff[p] + c * s->length[p];
-            LL_PREFETCH(a);
-            if (s->length[p] > 16)
-                LL_PREFETCH(a + 16);
-        }
+        for (c = 0; c < n_channels; ++c)
+            for (q = 0; q < s->n_active; ++q) {
+                const float *a =
+                    s->coeff[p] + (c * nb + ll_bsdf_active_basis(s, q)) * s->length[p];
+                LL_PREFETCH(a);
+                if (s->length[p] > 16)
+                    LL_PREFETCH(a + 16);
+            }
 }
 
 int ll_bsdf_kernels_vector(void) { return have_avx2(); }

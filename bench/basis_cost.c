@@ -1,0 +1,152 @@
+/*
+ * What a textured file costs per call: ns per ll_bsdf_eval_dir (and
+ * ll_bsdf_sample_dir) on a file of
+ * 64 bases (two parameters sampled 8 x 8, weights from
+ * ll_bsdf_basis_coefficients at an interior point: 4 non-zero) against the
+ * untextured file of one of its layers, same directions. A benchmark driver
+ * (never part of `make test`; the numbers are for the report):
+ *   cc -std=c99 -O2 -Iinclude bench/basis_cost.c -Lbuild/lib -Wl,-rpath,$PWD/build/lib \
+ *      -llayerlab -lm -o build/basis_cost && build/basis_cost /tmp
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "layerlab/ll_bsdf.h"
+#include "layerlab/ll_bsdf_write.h"
+#include "layerlab/ll_layer.h"
+#include "layerlab/ll_quad.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#define SIDE 8
+#define CALLS 200000
+
+static void check(ll_status s, const char *what)
+{
+    if (s != LL_OK) {
+        fprintf(stderr, "%s: %s\n", what, ll_last_error_message());
+        exit(1);
+    }
+}
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ns per sample_dir over CALLS pseudo-random (wo, u), best of 3 runs. */
+static double time_sample(const ll_bsdf *b, const float *coeffs, double *checksum)
+{
+    double best = 1e30;
+    int run;
+    for (run = 0; run < 3; ++run) {
+        unsigned long long rng = 777;
+        double t0 = now(), sum = 0.0, t;
+        int k;
+        for (k = 0; k < CALLS / 4; ++k) {
+            double u[4], wo[3], wi[3], rgb[3], pdf;
+            int j;
+            for (j = 0; j < 4; ++j) {
+                rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+                u[j] = (double)(rng >> 11) / 9007199254740992.0;
+            }
+            wo[2] = 0.05 + 0.95 * u[0];
+            wo[0] = sqrt(1 - wo[2] * wo[2]) * cos(6.283185307 * u[1]);
+            wo[1] = sqrt(1 - wo[2] * wo[2]) * sin(6.283185307 * u[1]);
+            check(ll_bsdf_sample_dir(b, wo, u + 2, LL_TRANSPORT_RADIANCE, coeffs, wi, &pdf, rgb),
+                  "sample");
+            sum += pdf;
+        }
+        t = (now() - t0) / (CALLS / 4) * 1e9;
+        if (t < best)
+            best = t;
+        *checksum = sum;
+    }
+    return best;
+}
+
+/* ns per eval_dir over CALLS pseudo-random direction pairs (same seed for
+ * every file), best of 3 runs. */
+static double time_eval(const ll_bsdf *b, const float *coeffs, double *checksum)
+{
+    double best = 1e30;
+    int run;
+    for (run = 0; run < 3; ++run) {
+        unsigned long long rng = 12345;
+        double t0 = now(), sum = 0.0, t;
+        int k;
+        for (k = 0; k < CALLS; ++k) {
+            double u[4], wo[3], wi[3], rgb[3];
+            int j;
+            for (j = 0; j < 4; ++j) {
+                rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+                u[j] = (double)(rng >> 11) / 9007199254740992.0;
+            }
+            wo[2] = 0.05 + 0.95 * u[0];
+            wo[0] = sqrt(1 - wo[2] * wo[2]) * cos(6.283185307 * u[1]);
+            wo[1] = sqrt(1 - wo[2] * wo[2]) * sin(6.283185307 * u[1]);
+            wi[2] = 0.05 + 0.95 * u[2];
+            wi[0] = sqrt(1 - wi[2] * wi[2]) * cos(6.283185307 * u[3]);
+            wi[1] = sqrt(1 - wi[2] * wi[2]) * sin(6.283185307 * u[3]);
+            check(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, coeffs, rgb), "eval");
+            sum += rgb[0];
+        }
+        t = (now() - t0) / CALLS * 1e9;
+        if (t < best)
+            best = t;
+        *checksum = sum;
+    }
+    return best;
+}
+
+int main(int argc, char **argv)
+{
+    const char *dir = argc > 1 ? argv[1] : "/tmp";
+    ll_layer *l[SIDE];
+    const ll_layer *layers[SIDE * SIDE];
+    size_t counts[2] = { SIDE, SIDE }, n = 0, orders = 0, k;
+    double positions[2 * SIDE], x[64], w[64], params[2] = { 0.33, 0.5 }, sum1, sum64;
+    float coeffs[SIDE * SIDE], *nonzero = coeffs;
+    char path[512];
+    ll_bsdf *b64 = NULL, *b1 = NULL;
+    size_t active = 0;
+    check(ll_heuristic_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
+    if (n > 64)
+        n = 64;
+    check(ll_quad_gauss_lobatto(n, x, w), "nodes");
+    for (k = 0; k < SIDE; ++k) {
+        check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
+        check(ll_layer_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0), "fill");
+        positions[k] = 0.2 + 0.05 * (double)k;
+        positions[SIDE + k] = (double)k / (SIDE - 1);
+    }
+    /* Parameter 1 repeats the row of parameter 0 (the cost does not depend
+     * on what the bases hold). */
+    for (k = 0; k < SIDE * SIDE; ++k)
+        layers[k] = l[k % SIDE];
+    snprintf(path, sizeof path, "%s/basis64.bsdf", dir);
+    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL), "write");
+    check(ll_bsdf_open(path, &b64), "open");
+    snprintf(path, sizeof path, "%s/basis1.bsdf", dir);
+    check(ll_bsdf_write(path, layers, 1, NULL), "write");
+    check(ll_bsdf_open(path, &b1), "open");
+    check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
+    for (k = 0; k < SIDE * SIDE; ++k)
+        active += coeffs[k] != 0.0f;
+    (void)nonzero;
+    printf("%zu nodes, %zu orders; 64-basis file: %zu non-zero weights\n", n, orders, active);
+    printf("1 basis:   %.0f ns per eval_dir\n", time_eval(b1, NULL, &sum1));
+    printf("64 bases:  %.0f ns per eval_dir\n", time_eval(b64, coeffs, &sum64));
+    printf("checksums %.6g %.6g\n", sum1, sum64);
+    printf("1 basis:   %.0f ns per sample_dir\n", time_sample(b1, NULL, &sum1));
+    printf("64 bases:  %.0f ns per sample_dir\n", time_sample(b64, coeffs, &sum64));
+    printf("checksums %.9g %.9g\n", sum1, sum64);
+    ll_bsdf_release(b1);
+    ll_bsdf_release(b64);
+    for (k = 0; k < SIDE; ++k)
+        ll_layer_destroy(l[k]);
+    return 0;
+}
