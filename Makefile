@@ -246,7 +246,7 @@ test-c: all deps-test $(TESTS)
 	done; \
 	if [ $$failed -ne 0 ]; then echo "$$failed test program(s) failed"; exit 1; fi
 
-test-python: all
+test-python: all deps-test
 	@if [ -f python/tests/run.sh ]; then BUILD=$(BUILD) sh python/tests/run.sh; fi
 
 ifeq ($(TSAN),1)
