@@ -142,11 +142,12 @@ expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orde
 contains "$tmp/out" "16 nodes x 8 Fourier orders, 1 channel" "--mono"
 
 # --- interrupted builds leave no file. A thick forward-scattering medium
-# on many nodes doubles for several seconds; signal it once it runs.
+# on 400 nodes doubles for about 2 s on an idle machine (120 nodes took
+# 0.1 s, and the build could end before the signal); signal it once it runs.
 printf 'medium albedo=0.99 g=0.9 tau=1e9\n' >"$tmp/slow.layers"
 for sig in INT TERM; do
     rm -f "$tmp/slow.bsdf" "$tmp/slow.err"
-    "$llbuild" --nodes 120 --orders 40 "$tmp/slow.layers" -o "$tmp/slow.bsdf" \
+    "$llbuild" --nodes 400 --orders 40 "$tmp/slow.layers" -o "$tmp/slow.bsdf" \
         >/dev/null 2>"$tmp/slow.err" &
     pid=$!
     i=0
