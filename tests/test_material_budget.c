@@ -23,22 +23,6 @@
 #include "material/material.h"
 #include "test_util.h"
 
-static char tmpdir[64];
-
-static int make_tmpdir(void **state)
-{
-    (void)state;
-    ll_test_mkdtemp(tmpdir, sizeof tmpdir);
-    return 0;
-}
-
-static int remove_tmpdir(void **state)
-{
-    (void)state;
-    ll_test_rmdir(tmpdir);
-    return 0;
-}
-
 static ll_material *parse(const char *text)
 {
     ll_material *m = NULL;
@@ -72,10 +56,10 @@ static void budget_refuses_before_building(void **state)
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_layer *layers[3] = { NULL, NULL, NULL };
     size_t n = 7, c;
-    char path[128];
+    char path[600];
     const char *msg;
     (void)state;
-    snprintf(path, sizeof path, "%s/refused.bsdf", tmpdir);
+    snprintf(path, sizeof path, "%s/refused.bsdf", ll_test_dir());
     o.n_nodes = 40;
     o.n_orders = 20;
     o.max_memory_bytes = 1 << 20;
@@ -130,9 +114,9 @@ static void absurd_builds_are_estimated_and_refused(void **state)
     ll_material *m = parse("set nodes=100000 orders=100000\ndielectric eta=1.5 alpha=0.15\n"
                            "diffuse albedo=0.8,0.1,0.1");
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    char path[128];
+    char path[600];
     (void)state;
-    snprintf(path, sizeof path, "%s/absurd.bsdf", tmpdir);
+    snprintf(path, sizeof path, "%s/absurd.bsdf", ll_test_dir());
     assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
     assert_int_equal(e.n_nodes, 100000);
     assert_true(e.over_budget);
@@ -315,5 +299,5 @@ int main(void)
         cmocka_unit_test(estimate_accepts_an_older_struct),
         cmocka_unit_test(unreadable_material_says_why),
     };
-    return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
+    return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
 }
