@@ -337,14 +337,6 @@ done:
     return s;
 }
 
-ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl, const double weights[3],
-                            size_t n_orders_internal, const volatile int *cancel)
-{
-    ll_watch watch;
-    ll_watch_begin_raw(&watch, NULL, NULL, cancel);
-    return ll_merl_set_layer_watched(layer, merl, weights, n_orders_internal, &watch);
-}
-
 ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl, const double weights[3],
                                size_t n_orders_internal, const ll_monitor *monitor)
 {
