@@ -1,6 +1,7 @@
 /*
  * measured file=PATH: a MERL measured BRDF as an opaque base
- * (ll_layer_set_matusik_ex, or ll_merl_set_layer_ex for a mix of channels; the file format in docs/material-language.md).
+ * (ll_layer_set_matusik_ex, or ll_merl_set_layer_ex for a mix of channels;
+ * the file format in docs/material-language.md).
  */
 #include "material/word_table.h"
 #include "words/merl.h"
