@@ -41,8 +41,9 @@
 #include <string.h>
 #include <unistd.h>
 
-/* Floats read back at once at commit (4 MiB). */
-#define LL_WRITER_CHUNK ((size_t)1 << 20)
+/* Floats read back at once at commit (256 KiB: big enough that the reads
+ * are few, small beside a layer). */
+#define LL_WRITER_CHUNK ((size_t)1 << 16)
 /* Spill bytes buffered before a write. */
 #define LL_WRITER_SPILL_BUFFER ((size_t)1 << 20)
 
@@ -328,7 +329,8 @@ static void basis_extents(ll_bsdf_writer *w, const ll_layer *const *layers)
                     const ll_segment *sg = &o->seg[2 * col + (size_t)half];
                     for (j = 0; j < sg->len; ++j) {
                         size_t row = (size_t)half * h + sg->lo + j;
-                        w->len[col * n + row] = (uint32_t)(k + 1);
+                        if (w->len[col * n + row] < k + 1)
+                            w->len[col * n + row] = (uint32_t)(k + 1);
                     }
                 }
         }
