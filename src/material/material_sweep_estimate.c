@@ -103,7 +103,11 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
         out->doublings += one.doublings;
         out->seconds += one.seconds - (b > 0 ? proc_wall : 0.0);
         out->cpu_seconds += one.cpu_seconds - (b > 0 ? proc_cpu : 0.0);
-        stored += one.stored_values;
+        /* Every basis's series are as long as the longest over the bases
+         * (the writer's rule): the file holds about bases x the basis that
+         * holds the most. */
+        if (one.stored_values > stored)
+            stored = one.stored_values;
         /* The words the cache gives: as the build visits them, bottom-up. */
         for (w = m->count; w-- > 0;) {
             int bottom = w + 1 == m->count;
@@ -144,6 +148,7 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
     out->m = orders;
     out->channels = nch;
     out->threads = threads;
+    stored *= (double)bases;
     out->stored_values = stored;
     out->peak_bytes = peak + WRITER_BUFFER_BYTES + WRITER_PAIR_BYTES * nn * nn +
                       WRITER_LAYER_PAIR_BYTES * (double)n * (double)n +
