@@ -365,6 +365,51 @@ static void no_file_after_abort_or_cancel(void **state)
     ll_material_destroy(m);
 }
 
+/* Progress per basis: stages "basis k/4: ..." for k = 1..4 in order, then
+ * the writing; fractions never go back and end at 1. */
+typedef struct progress_log {
+    size_t last_basis, writing;
+    double last;
+    int back;
+} progress_log;
+
+static int log_progress(void *user, double fraction, const char *stage)
+{
+    progress_log *log = user;
+    size_t k, total;
+    if (fraction < log->last)
+        log->back = 1;
+    log->last = fraction;
+    if (sscanf(stage, "basis %zu/%zu:", &k, &total) == 2) {
+        assert_int_equal(total, 4);
+        assert_true(k == log->last_basis || k == log->last_basis + 1);
+        assert_int_equal(log->writing, 0);
+        log->last_basis = k;
+    } else if (!strcmp(stage, "writing")) {
+        assert_int_equal(log->last_basis, 4);
+        log->writing++;
+    }
+    return 0;
+}
+
+static void progress_per_basis(void **state)
+{
+    char path[600];
+    ll_material *m = parse_ok(grid_text(2, 2, 12, ""));
+    ll_monitor monitor = LL_MONITOR_INIT;
+    progress_log log = { 0, 0, 0.0, 0 };
+    (void)state;
+    monitor.progress = log_progress;
+    monitor.user = &log;
+    path_in_dir(path, sizeof path, "progress.bsdf");
+    assert_int_equal(ll_material_build_ex(m, NULL, &monitor, path), LL_OK);
+    assert_int_equal(log.last_basis, 4);
+    assert_true(log.writing > 0);
+    assert_false(log.back);
+    assert_true(log.last == 1.0);
+    ll_material_destroy(m);
+}
+
 /* ------------------------------------------- evaluation by parameter value */
 
 #define N_MU 8
@@ -699,6 +744,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(words_shared_between_bases),
         cmocka_unit_test(streaming_writer_same_bytes),
         cmocka_unit_test(no_file_after_abort_or_cancel),
+        cmocka_unit_test(progress_per_basis),
         cmocka_unit_test(sample_points_match_untextured),
         cmocka_unit_test(between_samples_within_documented_error),
         cmocka_unit_test(sampling_at_interpolated_point),
