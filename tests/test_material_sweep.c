@@ -165,6 +165,14 @@ static void words_shared_between_bases(void **state)
     assert_int_equal(e.n_bases, 64);
     assert_int_equal(e.layers_built, 16);
     assert_int_equal(e.additions, 64);
+    {
+        /* the budget applies to the whole textured build, before anything grows */
+        ll_build_options small = LL_BUILD_OPTIONS_INIT;
+        small.max_memory_bytes = 1;
+        assert_int_equal(ll_material_builder_create(m, &small, NULL, &builder),
+                         LL_ERROR_OUT_OF_MEMORY);
+        assert_null(builder);
+    }
     assert_int_equal(ll_material_builder_create(m, NULL, NULL, &builder), LL_OK);
     for (k = 0; k < 64; ++k) {
         ll_layer *layers[3];

@@ -314,6 +314,15 @@ ll_status ll_material_builder_create(const ll_material *m, const ll_build_option
     }
     if ((s = check_headers(b)) != LL_OK)
         goto fail;
+    if (m->n_axes > 0) {
+        /* The budget, on the estimate of the whole textured build (a few
+         * word layers and one basis at a time), before anything grows. */
+        ll_cost_plan plan;
+        size_t threads = b->o.threads ? b->o.threads : ll_get_thread_count();
+        if ((s = ll_material_cost_bases(m, b->n, b->orders, b->nch, threads, &plan)) != LL_OK ||
+            (s = ll_check_budget(m, &plan, b->o.max_memory_bytes, fn)) != LL_OK)
+            goto fail;
+    }
     b->header.metadata = m->metadata;
     b->header.error_goal = b->o.error_goal > 0.0 ? b->o.error_goal
                            : m->error_goal > 0.0 ? m->error_goal
