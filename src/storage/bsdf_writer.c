@@ -23,8 +23,8 @@
  *
  * Memory: the tables of nn * nn entries (as the in-memory writer), one
  * basis's staging while it is added, the chunk, and per basis its spill
- * offset and one column's extents (4 nn + 16 bytes): never a layer per
- * basis. The spill lives beside the output (same file system, and the
+ * offset, one column's extents and room in the chunk for one row of its
+ * longest series (4 nn + 12 m + 16 bytes): never a layer per basis. The spill lives beside the output (same file system, and the
  * output's size is the spill's bound) and is unlinked as soon as it is
  * created, so no path ever names it: whatever happens to the process, the
  * space returns when the descriptor closes. The output itself is the
@@ -64,6 +64,7 @@ struct ll_bsdf_writer {
     unsigned long long spill_end;
     unsigned char *buffer;       /* LL_WRITER_SPILL_BUFFER                 */
     size_t buffered;
+    size_t chunk_floats;         /* commit's read-back chunk               */
     /* one basis's scratch, n * n unless said */
     uint32_t *len, *ext;
     double *tail, *ref0, *stage, *values;
@@ -453,7 +454,7 @@ fail:
 static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
 {
     write_job *job = &w->job;
-    size_t nb = job->n_bases, pairs = job->nn * job->nn, per = LL_WRITER_CHUNK / nb, at, b, k;
+    size_t nb = job->n_bases, pairs = job->nn * job->nn, per = w->chunk_floats / nb, at, b, k;
     ll_status s = LL_OK;
     if (per == 0)
         per = 1;
@@ -484,9 +485,10 @@ static ll_status put_value(ll_bsdf_out *out, float v, size_t k, size_t o, size_t
 }
 
 /* Column i of the coefficient block: rows [o0, o1) at a time, as many as
- * fit in the chunk. ext: [n_bases * nn] this column's extents; cursor:
- * [n_bases] where each basis's data of the next row starts in the spill;
- * pos: [n_bases] scratch. */
+ * fit in the chunk of w->chunk_floats (one row always does). ext:
+ * [n_bases * nn] this column's extents; cursor: [n_bases] where each
+ * basis's data of the next row starts in the spill; pos: [n_bases]
+ * scratch. */
 static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const uint32_t *ext,
                             unsigned long long *cursor, float *chunk, size_t *pos)
 {
@@ -499,26 +501,9 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             size_t row = 0;
             for (b = 0; b < nb; ++b)
                 row += ext[b * nn + o1] * nch;
-            if (o1 > o0 && used + row > LL_WRITER_CHUNK)
+            if (o1 > o0 && used + row > w->chunk_floats)
                 break;
             used += row;
-        }
-        if (used > LL_WRITER_CHUNK) {
-            /* One row of all bases exceeds the chunk (long series times
-             * many bases): each (channel, basis) series read by itself. */
-            size_t L = job->length[i * nn + o0];
-            for (c = 0; c < nch && s == LL_OK; ++c)
-                for (b = 0; b < nb && s == LL_OK; ++b) {
-                    size_t e = ext[b * nn + o0], got = e < L ? e : L;
-                    s = spill_read(w, cursor[b] + c * e * sizeof(float), chunk,
-                                   got * sizeof(float));
-                    for (k = 0; k < L && s == LL_OK; ++k)
-                        s = put_value(out, k < got ? chunk[k] : 0.0f, k, o0, i);
-                }
-            for (b = 0; b < nb; ++b)
-                cursor[b] += ext[b * nn + o0] * nch * sizeof(float);
-            o0 = o1;
-            continue;
         }
         for (b = 0; b < nb && s == LL_OK; ++b) {
             size_t floats = 0;
@@ -609,7 +594,13 @@ static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
         return s;
     metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
     metadata_size = strlen(metadata);
-    chunk = ll_alloc_array(LL_WRITER_CHUNK, sizeof *chunk);
+    /* The chunk: LL_WRITER_CHUNK floats, or one row of every basis's
+     * longest series if that is more (12 m bytes a basis). */
+    if (!ll_size_mul(job->n_bases * job->n_channels, job->m, &w->chunk_floats))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    if (w->chunk_floats < LL_WRITER_CHUNK)
+        w->chunk_floats = LL_WRITER_CHUNK;
+    chunk = ll_alloc_array(w->chunk_floats, sizeof *chunk);
     if (!chunk)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
     if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
