@@ -101,7 +101,10 @@ static void time_calls(const ll_bsdf *b, int textured, double *eval_ns, double *
             }
             sum += f[0];
         }
-        *(pass == 0 ? eval_ns : sample_ns) = (bench_wall_seconds() - t0) / CALLS * 1e9;
+        if (pass == 0)
+            *eval_ns = (bench_wall_seconds() - t0) / CALLS * 1e9;
+        else
+            *sample_ns = (bench_wall_seconds() - t0) / CALLS * 1e9;
     }
     if (sum < 0.0)
         printf("(never)\n");
@@ -115,7 +118,8 @@ int main(int argc, char **argv)
     size_t runs = SIDE * SIDE, k, done = 0;
     bench_child_result grid, one;
     double sep_wall = 0.0, sep_cpu = 0.0, sep_rss = 0.0, sep_mib = 0.0, grid_mib, scale;
-    double ev_grid, sa_grid, ev_one, sa_one, ev_smooth, sa_smooth;
+    double ev_grid = 0.0, sa_grid = 0.0, ev_one = 0.0, sa_one = 0.0, ev_smooth = 0.0,
+           sa_smooth = 0.0;
     ll_bsdf *b;
     ll_open_options open_opts = LL_OPEN_OPTIONS_INIT;
 
