@@ -257,7 +257,23 @@ static void put_material(blob *b, const ll_material *m)
     put_size(b, c);
     assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
     put(b, &e, sizeof e);
-    assert_int_equal(ll_material_build_layers(m, NULL, layers, &nch, &header), LL_OK);
+    if (ll_material_axis_count(m) > 0) {
+        /* a swept material: its axes, and its first basis */
+        ll_material_builder *builder = NULL;
+        size_t a;
+        for (a = 0; a < ll_material_axis_count(m); ++a) {
+            ll_material_axis axis = LL_MATERIAL_AXIS_INIT;
+            assert_int_equal(ll_material_get_axis(m, a, &axis), LL_OK);
+            put_text(b, axis.name);
+            put(b, axis.positions, axis.n_values * sizeof *axis.positions);
+        }
+        assert_int_equal(ll_material_builder_create(m, NULL, NULL, &builder), LL_OK);
+        assert_int_equal(ll_material_builder_build_basis(builder, 0, layers, &nch, &header),
+                         LL_OK);
+        ll_material_builder_destroy(builder);
+    } else {
+        assert_int_equal(ll_material_build_layers(m, NULL, layers, &nch, &header), LL_OK);
+    }
     put_text(b, header.metadata);
     header.metadata = NULL;
     put(b, &header, sizeof header);
