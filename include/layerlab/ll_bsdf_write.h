@@ -83,10 +83,14 @@ LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layer
 /* A streaming writer of textured files: the bases are added one at a time,
  * in order 0 .. n_bases - 1, and the writer never holds more than one
  * basis's layers (it keeps none of the caller's layers after add_basis
- * returns): each basis's coefficients go to a hidden spill file beside
- * path (".NAME.XXXXXX.tmp", as the atomic writer's temporary), and commit
- * writes the file from it, so memory does not grow with n_bases beyond a
- * few bytes per basis and node. The file is byte for byte what
+ * returns): each basis's coefficients go to a spill file created beside
+ * path (".NAME.spill.XXXXXX", unlinked right after it is created, so it has
+ * no name while the writer works and its space returns when the process
+ * ends, however it ends; it needs room on that
+ * file system too: 0.55 of the output's size, measured on an 8 x 8 grid),
+ * and commit writes the file from it, so memory does
+ * not grow with n_bases beyond a few bytes per basis, node and order
+ * (4 nn + 12 m + 16). The file is byte for byte what
  * ll_bsdf_write_textured writes for the same layers (series truncated by
  * the same rule, the longest over channels and bases), and as atomic: it
  * appears only when commit succeeds; abort, a failure or a cancel leaves no
