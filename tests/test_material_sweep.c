@@ -242,7 +242,7 @@ static void stream_equals_in_memory(size_t channels, size_t nodes, size_t orders
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
     const size_t counts[2] = { 3, 2 };
     const double positions[5] = { 0.1, 0.2, 0.3, 0.1, 0.3 };
-    size_t k, c, n_ch, size_a, size_b;
+    size_t k, n_ch, size_a, size_b;
     unsigned char *a, *b;
     snprintf(text, sizeof text,
              "set nodes=%zu orders=%zu channels=%zu\n"
@@ -291,7 +291,6 @@ static void stream_equals_in_memory(size_t channels, size_t nodes, size_t orders
     free(b);
     for (k = 0; k < 6 * channels; ++k)
         ll_layer_destroy(all[k]);
-    (void)c;
     ll_material_builder_destroy(builder);
     ll_material_destroy(m);
 }
