@@ -35,6 +35,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The thin slab doubling starts from (first order in dtau). */
+#ifndef DO_SLAB_DTAU
+#define DO_SLAB_DTAU 0x1.0p-26
+#endif
+
 /* Gauss-Legendre nodes and weights on [a, b] (n of them): Newton's method on
  * P_n from Chebyshev-like first guesses (A&S 25.4.29). */
 static void do_gauss(size_t n, double a, double b, double *x, double *w)
@@ -199,7 +204,7 @@ static int do_slab_albedo(double a, double g, double tau, double eta, size_t nod
         beam_in = (1.0 - do_fresnel(mu0_out, eta)) / mu0;
     }
     dtau = tau;
-    while (dtau > 0x1.0p-26) {
+    while (dtau > DO_SLAB_DTAU) {
         dtau *= 0.5;
         ++doublings;
     }

@@ -265,6 +265,41 @@ leave_top:
     out->r2 += w * w;
 }
 
+/* R(mu) and T(mu) with their standard errors from paths (rounded up to
+ * whole chunks) traced from seed; stream numbers one run among several. */
+static void mc_albedo(const stack *st, double mu, double paths, uint64_t seed, uint64_t stream,
+                      double *R, double *se_R, double *T, double *se_T)
+{
+    long long chunks = (long long)ceil(paths / CHUNK), c;
+    tally *part = calloc((size_t)chunks, sizeof *part);
+    tally sum = { 0, 0, 0, 0 };
+    double n = (double)chunks * CHUNK;
+    *R = *se_R = *T = *se_T = NAN;
+    if (!part)
+        return;
+#pragma omp parallel for schedule(dynamic)
+    for (c = 0; c < chunks; ++c) {
+        rng r;
+        long long p;
+        rng_seed(&r, seed * 0x100000001b3ULL + stream * 1000003ULL +
+                         (uint64_t)c * 0x9e3779b97f4a7c15ULL);
+        for (p = 0; p < CHUNK; ++p)
+            trace(st, &r, mu, &part[c]);
+    }
+    for (c = 0; c < chunks; ++c) {
+        sum.r += part[c].r;
+        sum.r2 += part[c].r2;
+        sum.t += part[c].t;
+        sum.t2 += part[c].t2;
+    }
+    free(part);
+    *R = sum.r / n;
+    *T = sum.t / n;
+    *se_R = sqrt(fmax(0.0, sum.r2 / n - *R * *R) / n);
+    *se_T = sqrt(fmax(0.0, sum.t2 / n - *T * *T) / n);
+}
+
+#ifndef MC_STACK_NO_MAIN
 static int parse_list(const char *s, double *v, int count)
 {
     int k;
@@ -345,37 +380,15 @@ int main(int argc, char **argv)
         usage();
     first_mu = a;
     for (a = first_mu; a < argc; ++a) {
-        double mu = strtod(argv[a], NULL);
-        long long chunks = (long long)ceil(paths / CHUNK), c;
-        tally *part;
-        tally sum = { 0, 0, 0, 0 };
-        double n;
+        double mu = strtod(argv[a], NULL), R, se_R, T, se_T;
         if (!(mu > 0.0 && mu <= 1.0))
             usage();
-        part = calloc((size_t)chunks, sizeof *part);
-        if (!part)
+        mc_albedo(&st, mu, paths, (uint64_t)seed, (uint64_t)(a - first_mu), &R, &se_R, &T, &se_T);
+        if (R != R)
             return 1;
-#pragma omp parallel for schedule(dynamic)
-        for (c = 0; c < chunks; ++c) {
-            rng r;
-            long long p;
-            rng_seed(&r, (uint64_t)seed * 0x100000001b3ULL + (uint64_t)(a - first_mu) * 1000003ULL +
-                             (uint64_t)c * 0x9e3779b97f4a7c15ULL);
-            for (p = 0; p < CHUNK; ++p)
-                trace(&st, &r, mu, &part[c]);
-        }
-        for (c = 0; c < chunks; ++c) {
-            sum.r += part[c].r;
-            sum.r2 += part[c].r2;
-            sum.t += part[c].t;
-            sum.t2 += part[c].t2;
-        }
-        free(part);
-        n = (double)chunks * CHUNK;
-        printf("%.6f %.7f %.7f %.7f %.7f\n", mu, sum.r / n,
-               sqrt(fmax(0.0, sum.r2 / n - (sum.r / n) * (sum.r / n)) / n), sum.t / n,
-               sqrt(fmax(0.0, sum.t2 / n - (sum.t / n) * (sum.t / n)) / n));
+        printf("%.6f %.7f %.7f %.7f %.7f\n", mu, R, se_R, T, se_T);
         fflush(stdout);
     }
     return 0;
 }
+#endif
