@@ -8,7 +8,8 @@
  * checks the discretisation (nodes, splines, Fourier orders, doubling) of
  * the layer code, not the model.
  *
- * The model is the one layerlab's words define (docs/method.md, "Words"):
+ * The model is the one layerlab's words define, as described in
+ * docs/method.md, "Words: what fills one layer":
  *  - interfaces: Beckmann D, separable Smith shadowing G1(wi) G1(wo) with
  *    Walter's rational approximation of G1 (Walter et al. 2007, eq. 27),
  *    unpolarised Fresnel reflectance at the microfacet, Walter's BTDF
