@@ -62,6 +62,20 @@ static void rng_seed(rng *r, uint64_t seed)
         r->s[k] = splitmix(&seed);
 }
 
+/* The generator of one chunk: (seed, stream, chunk) hashed through three
+ * splitmix steps before seeding. Seeds that differ by multiples of the
+ * splitmix increment would give generators whose states are shifted copies
+ * of each other (correlated chunks, standard errors that understate the
+ * scatter), so the three numbers are never simply added. */
+static void rng_seed_chunk(rng *r, uint64_t seed, uint64_t stream, uint64_t chunk)
+{
+    uint64_t h = seed, a = splitmix(&h);
+    h = a ^ stream;
+    a = splitmix(&h);
+    h = a ^ chunk;
+    rng_seed(r, splitmix(&h));
+}
+
 static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
 /* Uniform in [0, 1). */
@@ -282,8 +296,7 @@ static void mc_albedo(const stack *st, double mu, double paths, uint64_t seed, u
     for (c = 0; c < chunks; ++c) {
         rng r;
         long long p;
-        rng_seed(&r, seed * 0x100000001b3ULL + stream * 1000003ULL +
-                         (uint64_t)c * 0x9e3779b97f4a7c15ULL);
+        rng_seed_chunk(&r, seed, stream, (uint64_t)c);
         for (p = 0; p < CHUNK; ++p)
             trace(st, &r, mu, &part[c]);
     }
