@@ -286,6 +286,45 @@ LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_
 LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im,
                                          size_t *n_nodes, size_t *n_orders);
 
+/* Resolution chosen by a stated tolerance (docs/method.md, "Resolution").
+ * The _ex heuristics return the smallest (n, m) found whose layer agrees
+ * with the same layer at (2n, 2m) within `tolerance` (relative) wherever
+ * the BSDF there is above 1% of the peak of its lobe (one incident
+ * direction and one block: reflection or transmission), measured with
+ * ll_layer_eval's interpolation on fixed probe directions with |mu| >=
+ * mu_min: the grazing cosines mu_min, 1.5 mu_min, 2 mu_min, mirror and
+ * refracted directions and offsets around them, azimuths 0 .. pi, and
+ * pseudo-random ones. tolerance 0 means LL_DEFAULT_TOLERANCE, otherwise it
+ * lies in [LL_MIN_TOLERANCE, 1); mu_min 0 means LL_DEFAULT_MU_MIN,
+ * otherwise it lies in (0, 1]. error (nullable) receives the difference
+ * measured at the answer (<= tolerance). Deterministic; the same answer
+ * for any thread count. Costs milliseconds to a second (alpha 0.02): the
+ * series are evaluated at the probes' spline stencils only. Fails with
+ * LL_ERROR_INVALID_ARGUMENT (and the error reached) when the tolerance is
+ * not met within 100000 nodes or orders. */
+#define LL_DEFAULT_TOLERANCE 0.01
+#define LL_DEFAULT_MU_MIN 0.1
+#define LL_MIN_TOLERANCE 1e-3
+
+/* Rough interface (arguments as ll_heuristic_microfacet). The fit above is
+ * the first guess of n only; m starts at what the probes' own azimuthal
+ * series need (the most grazing pair that matters sets it), then both are
+ * grown until the comparison with (2n, 2m) passes and shrunk while it
+ * still does. The energy compensation term is smooth and left out of the
+ * comparison. */
+/* Henyey-Greenstein medium, g in (-1, 1): the convergence of the phase
+ * function's own layer (ll_layer_set_henyey_greenstein, the single-
+ * scattering lobe; a slab's multiple scattering is smoother), the fit
+ * above the first guess of both n and m. */
+LL_API ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
+                                                   size_t *n_nodes, size_t *n_orders,
+                                                   double *error);
+
+LL_API ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
+                                            double tolerance, double mu_min,
+                                            size_t *n_nodes, size_t *n_orders,
+                                            double *error);
+
 /* ------------------------------------------------------------- Fresnel
  * These return a reflectance, so an invalid argument (NaN, out of range)
  * gives NaN and a message for ll_last_error_message(). Thread-safe. */

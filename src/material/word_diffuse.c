@@ -16,11 +16,16 @@ static void diffuse_params(const ll_word *w, size_t c, size_t n_channels, double
 }
 
 /* No heuristic of its own: enough nodes for the multiple scattering
- * between it and the layers above (the HG fit at g = 0) and one order. */
-static ll_status diffuse_resolution(const ll_word_params *p, size_t *n, size_t *m)
+ * between it and the layers above (an isotropic medium's) and one order.
+ * A Lambertian layer is exact at any resolution, so the tolerance does not
+ * change this. */
+static ll_status diffuse_resolution(const ll_word_params *p, double tolerance, double mu_min,
+                                    size_t *n, size_t *m)
 {
     ll_status s = ll_heuristic_henyey_greenstein(0.0, n, m);
     (void)p;
+    (void)tolerance;
+    (void)mu_min;
     *m = 1;
     return s;
 }

@@ -85,12 +85,13 @@ static double vmf_mean_cosine(double kappa)
     return 1.0 / tanh(kappa) - 1.0 / kappa;
 }
 
-static ll_status medium_resolution(const ll_word_params *p, size_t *n, size_t *m)
+static ll_status medium_resolution(const ll_word_params *p, double tolerance, double mu_min,
+                                   size_t *n, size_t *m)
 {
     double shape = p->v[LL_MEDIUM_SHAPE];
     ll_status s;
     if (p->choice == LL_PHASE_ISOTROPIC) {
-        s = ll_heuristic_henyey_greenstein(0.0, n, m);
+        s = ll_heuristic_henyey_greenstein_ex(0.0, tolerance, mu_min, n, m, NULL);
         *m = 1;
         return s;
     }
@@ -108,8 +109,9 @@ static ll_status medium_resolution(const ll_word_params *p, size_t *n, size_t *m
                        "the resolution yourself (set nodes=N orders=M, or llbuild --nodes "
                        "--orders)",
                        shape, KAPPA_MAX, G_MAX);
-    return ll_heuristic_henyey_greenstein(
-        p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape), n, m);
+    return ll_heuristic_henyey_greenstein_ex(
+        p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape), tolerance, mu_min, n, m,
+        NULL);
 }
 
 /* Measured (docs/material-language.md, "Estimates"): an HG medium's
