@@ -296,8 +296,9 @@ LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta
  * refracted directions and offsets around them, azimuths 0 .. pi, and
  * pseudo-random ones. tolerance 0 means LL_DEFAULT_TOLERANCE, otherwise it
  * lies in [LL_MIN_TOLERANCE, 1); mu_min 0 means LL_DEFAULT_MU_MIN,
- * otherwise it lies in (0, 1]. error (nullable) receives the difference
- * measured at the answer (<= tolerance). Deterministic; the same answer
+ * otherwise it lies in (0, 1]. The probes accept at 0.6 of the tolerance,
+ * a margin for the directions between them. error (nullable) receives the
+ * difference measured at the answer (<= 0.6 tolerance). Deterministic; the same answer
  * for any thread count. Costs milliseconds to a second (alpha 0.02): the
  * series are evaluated at the probes' spline stencils only. Fails with
  * LL_ERROR_INVALID_ARGUMENT (and the error reached) when the tolerance is
@@ -315,7 +316,9 @@ LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta
 /* Henyey-Greenstein medium, g in (-1, 1): the convergence of the phase
  * function's own layer (ll_layer_set_henyey_greenstein, the single-
  * scattering lobe; a slab's multiple scattering is smoother), the fit
- * above the first guess of both n and m. */
+ * above the first guess of both n and m. Beyond |g| = 0.95 the fit is
+ * returned unverified (*error = HUGE_VAL): the probes would cost tens of
+ * seconds there. */
 LL_API ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
                                                    size_t *n_nodes, size_t *n_orders,
                                                    double *error);

@@ -40,7 +40,7 @@ typedef struct ll_probe_set {
  * 2 mu_min (the grazing ones, where the azimuthal lobe is narrowest),
  * 0.35, 0.6, 0.85, 1 and three pseudo-random ones in [mu_min, 1], from
  * above and (dielectric) from below; outgoing: the mirror and the
- * refracted direction, offsets of 0.01 .. 0.25 in mu around them and two
+ * refracted direction, 14 offsets of 0.01 .. 0.25 in mu around them and two
  * pseudo-random ones; azimuths 0 .. pi, dense near 0. Deterministic. */
 LL_INTERNAL ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min,
                                          ll_probe_set *out);
@@ -77,7 +77,8 @@ LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolera
 typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, double *values);
 
 /* The smallest resolution found, starting from (n, m), whose probe values
- * are within tolerance of those at (2n, 2m): grow n and/or m (by 1.25 to
+ * are within 0.6 of the tolerance of those at (2n, 2m) (a margin for the
+ * directions between the probes): grow n and/or m (by 1.25 to
  * 2, from the error) while the comparison fails, as the comparisons at
  * (2n, m) and (n, 2m) say, then shrink each (by 0.85, up to 3 times)
  * while it still holds. n stays even and
@@ -87,5 +88,12 @@ LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn 
                                       void *ctx, double tolerance, size_t min_nodes,
                                       size_t limit, const char *what, size_t *n_nodes,
                                       size_t *n_orders, double *error);
+
+/* The fits of the original layerlab (heuristics.c), the first guess of the
+ * search: what ll_heuristic_microfacet and ll_heuristic_henyey_greenstein
+ * returned before the tolerance (their argument checks and messages). */
+LL_INTERNAL ll_status ll_fit_microfacet(double alpha, double eta_re, double eta_im,
+                                        size_t *n_nodes, size_t *n_orders);
+LL_INTERNAL ll_status ll_fit_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
 #endif /* LL_WORDS_PROBE_H */

@@ -11,8 +11,10 @@
 #include <math.h>
 #include <string.h>
 
-static const double azimuths[] = { 0.0, 0.01, 0.03, 0.1, 0.3, 0.6, 1.0, 1.6, 2.4, LL_PI };
-static const double offsets[] = { 0.0, -0.01, 0.01, -0.03, 0.03, -0.1, 0.1, -0.25, 0.25 };
+static const double azimuths[] = { 0.0,  0.01, 0.03, 0.06, 0.1, 0.2,
+                                    0.3,  0.6,  1.0,  1.6,  2.4, LL_PI };
+static const double offsets[] = { 0.0,   -0.01, 0.01,  -0.02, 0.02, -0.03, 0.03, -0.05,
+                                   0.05,  -0.1,  0.1,   -0.15, 0.15, -0.25, 0.25 };
 static const double middle[] = { 0.35, 0.6, 0.85, 1.0 };
 
 #define RANDOM_INCIDENT 3
@@ -102,13 +104,14 @@ ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min, ll_pro
         for (k = 0; k < count && s == LL_OK; ++k) {
             double mu_i = sign * incident[k], sin_t;
             /* Reflection: the mirror direction travels the other way. Not
-             * from below: R^b of an interface is seen only through the
-             * adding integrals of a stack (the light it reflects goes back
-             * down), and it holds the internal reflection's Fresnel edge at
-             * the critical angle, a square-root step that no spline in mu
-             * resolves to 1% (eta 1.5, alpha 0.5: still 0.35% off at 1920
-             * nodes). */
-            if (side == 0)
+             * on the dense side of a dielectric (the relative index ahead
+             * below 1): there the reflection holds the Fresnel edge of
+             * total internal reflection, a square-root step along the
+             * critical angle that no spline in mu resolves to 1% (eta 1.5,
+             * alpha 0.5, from below: 31% off at 60 nodes, 13% at 240,
+             * still 0.35% at 1920). Inside a stack (R^b of a coat) that
+             * light is seen only through the adding integrals. */
+            if (eta_im > 0.0 || eta > 1.0)
                 s = add_group(out, incident[k], -sign, mu_i, mu_min, &state);
             if (s != LL_OK || eta_im > 0.0 || eta == 1.0)
                 continue;
