@@ -49,6 +49,8 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, progress_user),
     offsetof(ll_build_options, cancel),
     offsetof(ll_build_options, max_memory_bytes),
+    offsetof(ll_build_options, tolerance),
+    offsetof(ll_build_options, mu_min),
     sizeof(ll_build_options),
 };
 static const size_t estimate_ends[] = {

@@ -147,8 +147,9 @@ LL_API ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo
  * than the node spacing (alpha too small for n, or a refracted lobe of
  * width ~ alpha |eta - 1| / eta for eta within a few % of 1) is not
  * resolved, and directional albedos can then exceed 1 by any amount, most
- * at the nodes mu = +-1 (as in the original). At the resolution of
- * ll_heuristic_microfacet a non-absorbing dielectric with conserve_energy
+ * at the nodes mu = +-1 (as in the original). At the resolution of the
+ * original's fits (what ll_heuristic_microfacet returned before it chose
+ * by a tolerance; coarser than its answer now) a non-absorbing dielectric with conserve_energy
  * keeps R + T = 1 to 1e-15 for eta = 1.5 (measured for alpha 0.05 .. 10;
  * also for eta = 0.95 and 1.05 at alpha 0.3 .. 10), and within 2e-3 for
  * eta = 0.5 and 10.
@@ -262,12 +263,17 @@ LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *ref
 /* ---------------------------------------------------------- heuristics */
 
 /* The resolution (even node count n, Fourier orders m) that a Henyey-
- * Greenstein medium with asymmetry g in (-1, 1) needs (the original
- * layerlab's parameterHeuristicHG). */
+ * Greenstein medium with asymmetry g in (-1, 1) needs: since 1.x (issue 14)
+ * ll_heuristic_henyey_greenstein_ex at the default tolerance (below). Its
+ * first guess, and the answer before, is the original layerlab's
+ * parameterHeuristicHG: n = 8.6 / (1 - |g|) - 0.2, m = 5.4 / (1 - |g|) -
+ * 1.3. */
 LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
 /* The resolution (even node count n, Fourier orders m) that a rough
- * interface needs: the paper's fits (the original's
+ * interface needs: since 1.x (issue 14) ll_heuristic_microfacet_ex at the
+ * default tolerance (below). Its first guess of n, and the answer before,
+ * is the paper's fits (the original's
  * parameterHeuristicMicrofacet), n or m = max(A + B ln(alpha)^4 alpha,
  * C + D alpha^-1.2), alpha clamped to 1, extended to every eta:
  *  - conductors (eta_im > 0) use the generic conductor fit;
