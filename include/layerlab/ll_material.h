@@ -153,8 +153,10 @@ LL_API size_t ll_material_word_count(const ll_material *material);
 
 /* What a build with these options would take, estimated from counts
  * alone (resolution, words, channels: no quadrature, no allocation that
- * grows with the resolution), so it is instant for any input
- * (llbuild --dry-run). Memory: the layers alive at once and the adding's
+ * grows with the resolution), so it is instant for any input once the
+ * resolution is given (llbuild --dry-run); choosing it by the tolerance
+ * probes each distinct word first (ll_material_resolution: about a second
+ * each). Memory: the layers alive at once and the adding's
  * workspace, as stored compactly; time: per-stage operation counts times
  * rates measured on a 2-core x86-64 machine with OpenBLAS
  * (docs/material-language.md, "Estimates", gives the model and its error
