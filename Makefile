@@ -267,6 +267,11 @@ abi-baseline: lib
 bench:
 	@$(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
 	@if [ -f bench/run.sh ]; then BUILD=build-bench sh bench/run.sh; fi
+	@# The whole convergence grid of issue 14 (CI runs a subset); LL_BENCH_CONVERGENCE=0 skips it.
+	@if [ "$${LL_BENCH_CONVERGENCE:-1}" != 0 ]; then \
+	  $(MAKE) --no-print-directory BUILD=build-bench OPT='-O3 -march=x86-64-v2' \
+	    build-bench/tests/test_convergence && \
+	  LL_CONVERGENCE_FULL=1 LL_CONVERGENCE_VERBOSE=1 build-bench/tests/test_convergence; fi
 
 fuzz:
 	@if [ -f tests/fuzz/run.sh ]; then BUILD=$(BUILD) sh tests/fuzz/run.sh "$(FUZZ_SECONDS)" $(FUZZ_TARGET); fi

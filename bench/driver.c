@@ -325,6 +325,71 @@ static void run_batch(const config *cfg, bench_store *store)
         child_failed(store, "batch roughgold", &res);
 }
 
+/* 6. The cost of the tolerance (issue 14): each recipe built with the
+ * resolution its tolerance chooses, once per tolerance (they take minutes),
+ * finest first; then the others against the finest. LL_BENCH_TOLERANCE=0
+ * skips it; LL_BENCH_TOLERANCE_RECIPES="coated-gold ..." picks recipes. */
+static void run_tolerance(const config *cfg, bench_store *store)
+{
+    const char *skip = getenv("LL_BENCH_TOLERANCE"), *only = getenv("LL_BENCH_TOLERANCE_RECIPES");
+    char bin[1024], out[BENCH_TOLERANCE_COUNT][1024], name[160], prefix[160], tol[32], thr[32];
+    size_t r, t;
+    if (skip && strcmp(skip, "0") == 0)
+        return;
+    path_join(bin, sizeof bin, cfg->bin_dir, "tolerance");
+    snprintf(thr, sizeof thr, "%zu", cfg->cores);
+    record_load(store, "tolerance");
+    for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
+        const char *recipe = bench_recipes[r].name;
+        int built[BENCH_TOLERANCE_COUNT] = { 0 };
+        if (only && !strstr(only, recipe))
+            continue;
+        for (t = BENCH_TOLERANCE_COUNT; t-- > 0;) {
+            char *argv[7];
+            bench_child_result res;
+            char id[200];
+            snprintf(tol, sizeof tol, "%g", bench_tolerances[t]);
+            snprintf(name, sizeof name, "tolerance-%s-%s.bsdf", recipe, tol);
+            path_join(out[t], sizeof out[t], cfg->work_dir, name);
+            argv[0] = bin;
+            argv[1] = (char *)"build";
+            argv[2] = (char *)recipe;
+            argv[3] = tol;
+            argv[4] = out[t];
+            argv[5] = thr;
+            argv[6] = NULL;
+            fprintf(stderr, "bench: %s at tolerance %s\n", recipe, tol);
+            snprintf(prefix, sizeof prefix, "tolerance.%s.%s.", recipe, tol);
+            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
+                child_failed(store, prefix, &res);
+                continue;
+            }
+            built[t] = 1;
+            snprintf(id, sizeof id, "tolerance.%s.%s.wall", recipe, tol);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "tolerance.%s.%s.cpu", recipe, tol);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "tolerance.%s.%s.peak_rss", recipe, tol);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+        }
+        for (t = 0; t + 1 < BENCH_TOLERANCE_COUNT; ++t) {
+            char *argv[5];
+            bench_child_result res;
+            if (!built[t] || !built[BENCH_TOLERANCE_COUNT - 1])
+                continue;
+            snprintf(tol, sizeof tol, "%g", bench_tolerances[t]);
+            argv[0] = bin;
+            argv[1] = (char *)"compare";
+            argv[2] = out[BENCH_TOLERANCE_COUNT - 1];
+            argv[3] = out[t];
+            argv[4] = NULL;
+            snprintf(prefix, sizeof prefix, "tolerance.%s.%s.", recipe, tol);
+            if (!bench_run_child(argv, NULL, prefix, store, &res))
+                child_failed(store, prefix, &res);
+        }
+    }
+}
+
 static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
 {
     int a;
@@ -381,6 +446,7 @@ int main(int argc, char **argv)
     run_adding(&cfg, &store);
     run_eval(&cfg, &store);
     run_batch(&cfg, &store);
+    run_tolerance(&cfg, &store);
 
     record_load(&store, "end");
     bench_report_table(stdout, &store);

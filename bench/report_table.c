@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* A figure with about three significant digits, without exponents. */
 static void format_value(char *out, size_t size, double x)
@@ -257,6 +258,38 @@ static void print_targets(FILE *out, const bench_store *s)
         fprintf(out, "  error: %s\n", s->errors[i]);
 }
 
+static void print_tolerance(FILE *out, const bench_store *s)
+{
+    size_t r, t;
+    char a[64], b[64], c[64], d[64], e[64];
+    fprintf(out, "\n6. The tolerance's cost: the recipes at the resolution it chooses "
+                 "(one run each; error: worst relative difference from the %g build where "
+                 "it is above 1%% of its peak, reflection at mu 0.1 .. 1)\n",
+            bench_tolerances[BENCH_TOLERANCE_COUNT - 1]);
+    fprintf(out, "%-20s %-9s %-14s %-9s %-9s %-9s %-9s %-9s\n", "recipe", "tolerance",
+            "nodes x orders", "choose s", "wall s", "peak MiB", "file MB", "error");
+    for (r = 0; r < BENCH_RECIPE_COUNT; ++r)
+        for (t = 0; t < BENCH_TOLERANCE_COUNT; ++t) {
+            const char *name = bench_recipes[r].name;
+            char key[160], res[64];
+            double tol = bench_tolerances[t];
+            bench_stats wall = stats_of(s, "tolerance.%s.%g.wall", name, tol);
+            if (wall.count == 0)
+                continue;
+            snprintf(key, sizeof key, "tolerance.%s.%g.n_nodes", name, tol);
+            snprintf(res, sizeof res, "%s x ", info_or(s, key, "?"));
+            snprintf(key, sizeof key, "tolerance.%s.%g.n_orders", name, tol);
+            snprintf(res + strlen(res), sizeof res - strlen(res), "%s", info_or(s, key, "?"));
+            format_value(a, sizeof a, stats_of(s, "tolerance.%s.%g.choose", name, tol).median);
+            format_value(b, sizeof b, wall.median);
+            format_value(c, sizeof c, stats_of(s, "tolerance.%s.%g.peak_rss", name, tol).median);
+            format_value(d, sizeof d, stats_of(s, "tolerance.%s.%g.file", name, tol).median);
+            format_value(e, sizeof e, stats_of(s, "tolerance.%s.%g.error", name, tol).median);
+            fprintf(out, "%-20s %-9g %-14s %-9s %-9s %-9s %-9s %-9s\n", name, tol, res, a, b,
+                    c, d, e);
+        }
+}
+
 void bench_report_table(FILE *out, const bench_store *store)
 {
     print_header(out, store);
@@ -264,5 +297,6 @@ void bench_report_table(FILE *out, const bench_store *store)
     print_adding(out, store);
     print_eval(out, store);
     print_scaling(out, store);
+    print_tolerance(out, store);
     print_targets(out, store);
 }

@@ -60,6 +60,7 @@ build recipe bench/recipe.c bench/bench_util.c
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
 build eval bench/eval.c bench/bench_util.c
 build batch bench/batch.c bench/bench_util.c
+build tolerance bench/tolerance.c bench/bench_util.c
 build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
     bench/report_table.c bench/report_json.c bench/bench_util.c
 

@@ -6,6 +6,7 @@
  * non-negative f and consistent sampling there.
  */
 #include "test_bsdf_util.h"
+#include "words/probe.h" /* ll_fit_microfacet: the original's resolution */
 
 #define N_ALPHA 5
 static const double g_alphas[N_ALPHA] = { 0.05, 0.1, 0.2, 0.3, 0.4 };
@@ -62,7 +63,7 @@ static int setup(void **state)
     ll_layer *synthetic[12];
     ll_test_smooth p[12];
     ll_test_dir_setup(state);
-    assert_int_equal(ll_heuristic_microfacet(g_alphas[0], 0.2, 3.0, &g_n, &g_orders), LL_OK);
+    assert_int_equal(ll_fit_microfacet(g_alphas[0], 0.2, 3.0, &g_n, &g_orders), LL_OK);
     for (k = 0; k < N_ALPHA; ++k) {
         g_layers[k] = conductor_layer(g_alphas[k]);
         layers[k] = g_layers[k];

@@ -5,6 +5,7 @@
  * the eta^2 factor of radiance transport.
  */
 #include "test_bsdf_util.h"
+#include "words/probe.h" /* ll_fit_microfacet: the original's resolution */
 #include "storage/bsdf_format.h"
 
 static void path_in_dir(char *path, size_t size, const char *name)
@@ -477,9 +478,9 @@ static void medium_over_diffuse_round_trip(void **state)
 
 /* Rough gold as the original tools made tests/data/roughgold_alpha_0.2
  * (Beckmann alpha 0.2, the metadata's per-channel complex index, 56
- * Gauss-Lobatto nodes, the heuristic's orders): the file written here must
- * be the layer at its nodes, and must agree with the original's file for
- * top reflection away from grazing angles. The second check runs the whole
+ * Gauss-Lobatto nodes, the orders of the original's fit, ll_fit_microfacet):
+ * the file written here must be the layer at its nodes, and must agree
+ * with the original's file for top reflection away from grazing angles. The second check runs the whole
  * chain - the microfacet word, the writer's node order, signs, scaling,
  * channel order - against an independent writer; its tolerance (5% of the
  * value plus 0.05% of the lobe's peak; the largest difference seen is 2.2%
@@ -500,7 +501,7 @@ static void rough_gold_matches_original(void **state)
     uint64_t rng = 56;
     (void)state;
     for (c = 0; c < 3; ++c) {
-        assert_int_equal(ll_heuristic_microfacet(0.2, eta[c], k[c], &nn, &mm), LL_OK);
+        assert_int_equal(ll_fit_microfacet(0.2, eta[c], k[c], &nn, &mm), LL_OK);
         m = mm > m ? mm : m;
     }
     for (c = 0; c < 3; ++c) {

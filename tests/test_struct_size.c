@@ -49,6 +49,8 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, progress_user),
     offsetof(ll_build_options, cancel),
     offsetof(ll_build_options, max_memory_bytes),
+    offsetof(ll_build_options, tolerance),
+    offsetof(ll_build_options, mu_min),
     sizeof(ll_build_options),
 };
 static const size_t estimate_ends[] = {
@@ -267,6 +269,9 @@ typedef struct outcome {
     size_t built_channels, built_nodes, built_orders;
     double error_goal;
     seen progress;
+    ll_status goal_status;     /* ll_material_goal: the resolution's goal */
+    double tolerance, mu_min;
+    int chosen;
 } outcome;
 
 static void run_material(const ll_material *m, const ll_build_options *o, outcome *out)
@@ -279,6 +284,7 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
     out->resolution_status =
         ll_material_resolution(m, o, &out->n_nodes, &out->n_orders, &out->n_channels);
     out->estimate_status = ll_material_estimate(m, o, &out->estimate);
+    out->goal_status = ll_material_goal(m, o, &out->tolerance, &out->mu_min, &out->chosen);
     memset(&progress_seen, 0, sizeof progress_seen);
     out->build_status = ll_material_build_layers(m, o, layers, &out->built_channels, &header);
     out->progress = progress_seen;
@@ -316,6 +322,10 @@ static void build_options_read_to_struct_size(void **state)
     /* A budget that the build fits in, unlike no other: the estimate
      * reports it. */
     given.max_memory_bytes = (size_t)1 << 40;
+    /* The resolution's goal (ignored by the build, whose resolution is
+     * given, but reported by ll_material_goal). */
+    given.tolerance = 0.05;
+    given.mu_min = 0.2;
     for (i = 0; i < COUNT(build_options_ends); ++i) {
         size_t b = build_options_ends[i];
         ll_build_options *opts = caller_init(&c, b);
@@ -400,13 +410,13 @@ static void every_field_is_listed(void **state)
     (void)state;
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 13);
-    assert_int_equal(COUNT(build_options_ends), 10);
+    assert_int_equal(COUNT(build_options_ends), 12);
     assert_int_equal(COUNT(estimate_ends), 14);
     assert_int_equal(COUNT(monitor_ends), 3);
     assert_int_equal(COUNT(open_options_ends), 4);
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
                      sizeof(ll_bsdf_write_options));
-    assert_int_equal(offsetof(ll_build_options, max_memory_bytes) + sizeof(size_t),
+    assert_int_equal(offsetof(ll_build_options, mu_min) + sizeof(double),
                      sizeof(ll_build_options));
     assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
                     offsetof(ll_build_estimate, n_bases) &&

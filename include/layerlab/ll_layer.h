@@ -147,8 +147,9 @@ LL_API ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo
  * than the node spacing (alpha too small for n, or a refracted lobe of
  * width ~ alpha |eta - 1| / eta for eta within a few % of 1) is not
  * resolved, and directional albedos can then exceed 1 by any amount, most
- * at the nodes mu = +-1 (as in the original). At the resolution of
- * ll_heuristic_microfacet a non-absorbing dielectric with conserve_energy
+ * at the nodes mu = +-1 (as in the original). At the resolution of the
+ * original's fits (what ll_heuristic_microfacet returned before it chose
+ * by a tolerance; coarser than its answer now) a non-absorbing dielectric with conserve_energy
  * keeps R + T = 1 to 1e-15 for eta = 1.5 (measured for alpha 0.05 .. 10;
  * also for eta = 0.95 and 1.05 at alpha 0.3 .. 10), and within 2e-3 for
  * eta = 0.5 and 10.
@@ -262,12 +263,17 @@ LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *ref
 /* ---------------------------------------------------------- heuristics */
 
 /* The resolution (even node count n, Fourier orders m) that a Henyey-
- * Greenstein medium with asymmetry g in (-1, 1) needs (the original
- * layerlab's parameterHeuristicHG). */
+ * Greenstein medium with asymmetry g in (-1, 1) needs: since 1.x (issue 14)
+ * ll_heuristic_henyey_greenstein_ex at the default tolerance (below). Its
+ * first guess, and the answer before, is the original layerlab's
+ * parameterHeuristicHG: n = 8.6 / (1 - |g|) - 0.2, m = 5.4 / (1 - |g|) -
+ * 1.3. */
 LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
 /* The resolution (even node count n, Fourier orders m) that a rough
- * interface needs: the paper's fits (the original's
+ * interface needs: since 1.x (issue 14) ll_heuristic_microfacet_ex at the
+ * default tolerance (below). Its first guess of n, and the answer before,
+ * is the paper's fits (the original's
  * parameterHeuristicMicrofacet), n or m = max(A + B ln(alpha)^4 alpha,
  * C + D alpha^-1.2), alpha clamped to 1, extended to every eta:
  *  - conductors (eta_im > 0) use the generic conductor fit;
@@ -285,6 +291,50 @@ LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_
  * result would exceed what a layer can hold. */
 LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im,
                                          size_t *n_nodes, size_t *n_orders);
+
+/* Resolution chosen by a stated tolerance (docs/method.md, "Resolution").
+ * The _ex heuristics return the smallest (n, m) found whose layer agrees
+ * with the same layer at (2n, 2m) within `tolerance` (relative) wherever
+ * the BSDF there is above 1% of the peak of its lobe (one incident
+ * direction and one block: reflection or transmission), measured with
+ * ll_layer_eval's interpolation on fixed probe directions with |mu| >=
+ * mu_min: the grazing cosines mu_min, 1.5 mu_min, 2 mu_min, mirror and
+ * refracted directions and offsets around them, azimuths 0 .. pi, and
+ * pseudo-random ones. tolerance 0 means LL_DEFAULT_TOLERANCE, otherwise it
+ * lies in [LL_MIN_TOLERANCE, 1); mu_min 0 means LL_DEFAULT_MU_MIN,
+ * otherwise it lies in (0, 1]. The probes accept at 0.6 of the tolerance,
+ * a margin for the directions between them. error (nullable) receives the
+ * difference measured at the answer (<= 0.6 tolerance). Deterministic; the same answer
+ * for any thread count. Costs milliseconds to a second (alpha 0.02): the
+ * series are evaluated at the probes' spline stencils only. Fails with
+ * LL_ERROR_INVALID_ARGUMENT (and the error reached) when the tolerance is
+ * not met within 100000 nodes or orders. */
+#define LL_DEFAULT_TOLERANCE 0.01
+#define LL_DEFAULT_MU_MIN 0.1
+#define LL_MIN_TOLERANCE 1e-3
+
+/* Rough interface (arguments as ll_heuristic_microfacet). The fit above is
+ * the first guess of n only; m starts at what the probes' own azimuthal
+ * series need (the most grazing pair that matters sets it), then both are
+ * grown until the comparison with (2n, 2m) passes and shrunk while it
+ * still does. The energy compensation term is smooth and left out of the
+ * comparison. Where the fit asks for more than 8000 nodes (alpha below
+ * about 0.02 for eta 1.1, 0.007 for eta 1.5, 0.002 for conductors) the fit
+ * is returned unverified (*error = HUGE_VAL): probing would take minutes. */
+/* Henyey-Greenstein medium, g in (-1, 1): the convergence of the phase
+ * function's own layer (ll_layer_set_henyey_greenstein, the single-
+ * scattering lobe; a slab's multiple scattering is smoother), the fit
+ * above the first guess of both n and m. Beyond |g| = 0.95 the fit is
+ * returned unverified (*error = HUGE_VAL): the probes would cost tens of
+ * seconds there. */
+LL_API ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
+                                                   size_t *n_nodes, size_t *n_orders,
+                                                   double *error);
+
+LL_API ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
+                                            double tolerance, double mu_min,
+                                            size_t *n_nodes, size_t *n_orders,
+                                            double *error);
 
 /* ------------------------------------------------------------- Fresnel
  * These return a reflectance, so an invalid argument (NaN, out of range)

@@ -66,11 +66,32 @@ typedef struct ll_build_options {
      * is above it is refused before anything is allocated, with
      * LL_ERROR_OUT_OF_MEMORY. 0: half of the physical memory. */
     size_t max_memory_bytes;
+    /* The resolution's goal (appended in 1.x, issue 14; callers whose
+     * struct_size ends before them get the defaults): the resolution that
+     * the heuristics choose is within `tolerance` (relative) of the
+     * converged layers where the BSDF is above 1% of its peak, at every
+     * |mu| >= mu_min (ll_heuristic_microfacet_ex, ll_layer.h).
+     * 0: the material's `set tolerance= mu_min=`, else LL_DEFAULT_TOLERANCE
+     * (0.01) and LL_DEFAULT_MU_MIN (0.1). Ignored where the resolution is
+     * given (n_nodes and n_orders, or the material's set nodes= orders=). */
+    double tolerance;
+    double mu_min;
 } ll_build_options;
 
-#define LL_BUILD_OPTIONS_INIT { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0 }
+#define LL_BUILD_OPTIONS_INIT                                                               \
+    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0 }
 
-/* The resolution and channel count a build with these options would use. */
+/* The resolution's goal of a build with these options: the tolerance and
+ * mu_min in effect (opts, else the material's set, else the defaults) and
+ * whether the heuristics choose the resolution by them (*chosen = 0 when
+ * both nodes and orders are given by opts or the material). Instant. Any
+ * output may be NULL. */
+LL_API ll_status ll_material_goal(const ll_material *material, const ll_build_options *opts,
+                                  double *tolerance, double *mu_min, int *chosen);
+
+/* The resolution and channel count a build with these options would use.
+ * Choosing it by the tolerance probes every interface and medium (about a
+ * second for the examples; ll_heuristic_microfacet_ex). */
 LL_API ll_status ll_material_resolution(const ll_material *material,
                                         const ll_build_options *opts, size_t *n_nodes,
                                         size_t *n_orders, size_t *n_channels);
@@ -132,8 +153,10 @@ LL_API size_t ll_material_word_count(const ll_material *material);
 
 /* What a build with these options would take, estimated from counts
  * alone (resolution, words, channels: no quadrature, no allocation that
- * grows with the resolution), so it is instant for any input
- * (llbuild --dry-run). Memory: the layers alive at once and the adding's
+ * grows with the resolution), so it is instant for any input once the
+ * resolution is given (llbuild --dry-run); choosing it by the tolerance
+ * probes each distinct word first (ll_material_resolution: about a second
+ * each). Memory: the layers alive at once and the adding's
  * workspace, as stored compactly; time: per-stage operation counts times
  * rates measured on a 2-core x86-64 machine with OpenBLAS
  * (docs/material-language.md, "Estimates", gives the model and its error

@@ -105,7 +105,9 @@ class BuildOptions(ctypes.Structure):
                 ("progress", progress_fn),
                 ("progress_user", ctypes.c_void_p),
                 ("cancel", ctypes.POINTER(ctypes.c_int)),
-                ("max_memory_bytes", ctypes.c_size_t)]
+                ("max_memory_bytes", ctypes.c_size_t),
+                ("tolerance", ctypes.c_double),
+                ("mu_min", ctypes.c_double)]
 
     def __init__(self):
         super().__init__()

@@ -38,8 +38,11 @@ class _Build:
     """The ll_build_options of one build, with the Python callback kept
     alive and any exception it raised kept for re-raising."""
 
-    def __init__(self, nodes, orders, channels, threads, error_goal, progress, cancel):
+    def __init__(self, nodes, orders, channels, threads, error_goal, progress, cancel,
+                 tolerance=0.0, mu_min=0.0):
         self.opts = BuildOptions()
+        self.opts.tolerance = real_argument(tolerance, "tolerance")
+        self.opts.mu_min = real_argument(mu_min, "mu_min")
         self.opts.n_nodes = count_argument(nodes, "nodes")
         self.opts.n_orders = count_argument(orders, "orders")
         self.opts.n_channels = count_argument(channels, "channels")
@@ -87,7 +90,10 @@ class Material:
     The build keywords, shared by :meth:`build`, :meth:`build_layers` and
     :meth:`resolution` (0 means "the material's setting, else the
     default"): ``nodes``, ``orders`` (resolution), ``channels`` (1 or 3),
-    ``threads`` (0: all processors), ``error_goal`` (series truncation);
+    ``threads`` (0: all processors), ``error_goal`` (series truncation),
+    ``tolerance`` and ``mu_min`` (the relative error the chosen resolution
+    is within where the BSDF is above 1% of its peak, at |mu| >= mu_min;
+    defaults 0.01 and 0.1);
     :meth:`build` and :meth:`build_layers` also take ``progress``, a
     callable ``progress(fraction, stage)``, and ``cancel``, a
     :class:`CancelFlag`.
@@ -126,19 +132,22 @@ class Material:
         """The number of words (layers) in the stack"""
         return lib.ll_material_word_count(self._handle)
 
-    def resolution(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0):
+    def resolution(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
+                   tolerance=0.0, mu_min=0.0):
         """resolution(...) -> (nodes, orders, channels)
 
         The node count, Fourier order count and channel count that a build
         with these keywords would use.
         """
-        build = _Build(nodes, orders, channels, threads, error_goal, None, None)
+        build = _Build(nodes, orders, channels, threads, error_goal, None, None,
+                       tolerance, mu_min)
         n, m, c = ctypes.c_size_t(), ctypes.c_size_t(), ctypes.c_size_t()
         build.run(lambda opts: lib.ll_material_resolution(self._handle, opts, ctypes.byref(n),
                                                           ctypes.byref(m), ctypes.byref(c)))
         return n.value, m.value, c.value
 
-    def estimate(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0):
+    def estimate(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
+                 tolerance=0.0, mu_min=0.0):
         """estimate(...) -> dict
 
         What a build with these keywords would take, estimated without
@@ -147,7 +156,8 @@ class Material:
         ``peak_bytes`` (an upper bound) and ``seconds`` (wall time; within a
         factor of about 2 on machines like the one it was calibrated on).
         """
-        build = _Build(nodes, orders, channels, threads, error_goal, None, None)
+        build = _Build(nodes, orders, channels, threads, error_goal, None, None,
+                       tolerance, mu_min)
         est = BuildEstimate()
         build.run(lambda opts: lib.ll_material_estimate(self._handle, opts, ctypes.byref(est)))
         return {"nodes": est.n_nodes, "orders": est.n_orders, "channels": est.n_channels,
@@ -156,20 +166,21 @@ class Material:
                 "seconds": est.seconds}
 
     def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-              progress=None, cancel=None):
+              progress=None, cancel=None, tolerance=0.0, mu_min=0.0):
         """build(path, ...) -> BSDFStorage
 
         Build the material and write it to ``path`` as a ``.bsdf`` file
         (atomically: a failed or cancelled build leaves no file and does not
         touch an existing one); returns the opened file.
         """
-        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel)
+        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel,
+                       tolerance, mu_min)
         target = fspath(path)
         build.run(lambda opts: lib.ll_material_build(self._handle, opts, target))
         return BSDFStorage(path)
 
     def build_layers(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-                     progress=None, cancel=None):
+                     progress=None, cancel=None, tolerance=0.0, mu_min=0.0):
         """build_layers(...) -> (layers, header)
 
         Build the material in memory: a list of one Layer (monochrome) or
@@ -177,7 +188,8 @@ class Material:
         with ``eta`` and ``alpha`` (top, bottom) -- the keyword arguments
         :meth:`BSDFStorage.fromLayer` takes.
         """
-        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel)
+        build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel,
+                       tolerance, mu_min)
         handles = (layer_p * 3)()
         count = ctypes.c_size_t()
         header = BsdfWriteOptions()

@@ -64,6 +64,8 @@ int main(void)
     FIELD(ll_build_options, progress_user);
     FIELD(ll_build_options, cancel);
     FIELD(ll_build_options, max_memory_bytes);
+    FIELD(ll_build_options, tolerance);
+    FIELD(ll_build_options, mu_min);
 
     STRUCT(ll_build_estimate, LL_BUILD_ESTIMATE_INIT);
     FIELD(ll_build_estimate, struct_size);

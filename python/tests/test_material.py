@@ -21,6 +21,12 @@ def test_parse_and_build_layers_in_memory():
     assert repr(material) == "Material[words=2]"
     n, m, channels = material.resolution(nodes=40, orders=20)
     assert (n, m, channels) == (40, 20, 1)
+    # Chosen by a tolerance: a looser one never needs more nodes here
+    # (docs/method.md, "Resolution"); a tolerance below 0.001 is refused.
+    loose, tight = material.resolution(tolerance=0.05), material.resolution(tolerance=0.01)
+    assert loose[0] <= tight[0] and loose[2] == tight[2] == 1
+    with pytest.raises(ll.InvalidArgumentError):
+        material.resolution(tolerance=1e-4)
     est = material.estimate(nodes=40, orders=20)
     assert (est["nodes"], est["orders"], est["channels"]) == (40, 20, 1)
     assert est["layers_built"] == 2 and est["additions"] == 1 and est["doublings"] == 0

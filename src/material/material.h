@@ -66,6 +66,7 @@ struct ll_material {
     size_t count, capacity;   /* words used, allocated                   */
     size_t nodes, orders, channels; /* settings; 0 = not set             */
     double error_goal;        /* 0 = not set                              */
+    double tolerance, mu_min; /* the resolution's goal; 0 = not set       */
     char *metadata;           /* JSON stored in written files             */
     ll_sweep axes[LL_MATERIAL_MAX_AXES]; /* in order of appearance       */
     size_t n_axes;

@@ -342,7 +342,28 @@ static void list_words(char *buf, size_t cap)
     }
 }
 
-/* set nodes=N orders=M channels=1|3 error=E */
+/* set tolerance=T or mu_min=C: one number in [lo, hi) or (lo, hi] (the
+ * open end as named by `range`), stored once in *slot. */
+static ll_status parse_goal(parser *p, const token *key, const token *v, double *slot,
+                            double lo, int lo_closed, double hi, int hi_closed,
+                            const char *range)
+{
+    ll_number x;
+    ll_status s;
+    if (*slot > 0.0)
+        return ll_parse_error(p, key->begin, "%.*s is set twice", (int)key->len, key->begin);
+    memset(&x, 0, sizeof x);
+    s = ll_parse_number(p, key, v, &x);
+    if (s == LL_OK && (x.count != 1 || !(lo_closed ? x.v[0] >= lo : x.v[0] > lo) ||
+                       !(hi_closed ? x.v[0] <= hi : x.v[0] < hi)))
+        s = ll_parse_error(p, v->begin, "%.*s: expected one value in %s", (int)key->len,
+                           key->begin, range);
+    if (s == LL_OK)
+        *slot = x.v[0];
+    return s;
+}
+
+/* set nodes=N orders=M channels=1|3 error=E tolerance=T mu_min=C */
 static ll_status parse_settings(parser *p, const char *at, const char *line_end)
 {
     token t, key, v;
@@ -396,10 +417,17 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
                                 "such as 1e-3");
             if (s == LL_OK)
                 m->error_goal = e.v[0];
+        } else if (ll_token_is(&key, "tolerance")) {
+            s = parse_goal(p, &key, &v, &m->tolerance, LL_MIN_TOLERANCE, 1, 1.0, 0,
+                           "[0.001, 1): the relative error the resolution is chosen for, "
+                           "such as 0.01");
+        } else if (ll_token_is(&key, "mu_min")) {
+            s = parse_goal(p, &key, &v, &m->mu_min, 0.0, 0, 1.0, 1,
+                           "(0, 1]: the smallest cosine the tolerance holds at, such as 0.1");
         } else {
             s = ll_parse_error(p, key.begin,
-                            "set has no setting '%.*s'; expected nodes, orders, channels or "
-                            "error",
+                            "set has no setting '%.*s'; expected nodes, orders, channels, "
+                            "error, tolerance or mu_min",
                             (int)key.len, key.begin);
         }
         if (s != LL_OK)

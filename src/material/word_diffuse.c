@@ -15,14 +15,19 @@ static void diffuse_params(const ll_word *w, size_t c, size_t n_channels, double
     out->v[0] = ll_number_channel(&w->number[LL_DIFFUSE_ALBEDO], c, n_channels, 0.0);
 }
 
-/* No heuristic of its own: enough nodes for the multiple scattering
- * between it and the layers above (the HG fit at g = 0) and one order. */
-static ll_status diffuse_resolution(const ll_word_params *p, size_t *n, size_t *m)
+/* No heuristic of its own: a Lambertian layer is exact at any resolution
+ * (constant in mu, order 0 only), so the tolerance does not change it: the
+ * smallest meaningful quadrature (LL_MATERIAL_MIN_NODES, what the HG fit
+ * gives at g = 0) and one order. */
+static ll_status diffuse_resolution(const ll_word_params *p, double tolerance, double mu_min,
+                                    size_t *n, size_t *m)
 {
-    ll_status s = ll_heuristic_henyey_greenstein(0.0, n, m);
     (void)p;
+    (void)tolerance;
+    (void)mu_min;
+    *n = LL_MATERIAL_MIN_NODES;
     *m = 1;
-    return s;
+    return LL_OK;
 }
 
 static void diffuse_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)

@@ -101,9 +101,14 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
     }
 }
 
-static ll_status measured_resolution(const ll_word_params *p, size_t *n, size_t *m)
+/* The measured BRDF's fixed resolution: no tolerance-driven choice yet
+ * (issue 14 asks for the convergence of its projected lobe; not built). */
+static ll_status measured_resolution(const ll_word_params *p, double tolerance, double mu_min,
+                                     size_t *n, size_t *m)
 {
     (void)p;
+    (void)tolerance;
+    (void)mu_min;
     *n = MEASURED_NODES;
     *m = MEASURED_ORDERS;
     return LL_OK;

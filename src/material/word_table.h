@@ -138,9 +138,12 @@ struct ll_word_desc {
      * medium right above the word. out is zeroed, out->desc set. */
     void (*channel)(const ll_word *w, size_t c, size_t n_channels, double above,
                    ll_word_params *out);
-    /* Nodes and orders it needs (the resolution heuristic); may fail with
-     * a message naming the largest supported parameter. */
-    ll_status (*resolution)(const ll_word_params *p, size_t *n_nodes, size_t *n_orders);
+    /* Nodes and orders it needs to be within `tolerance` (relative) of the
+     * converged layer at |mu| >= mu_min (the ll_heuristic_*_ex of
+     * ll_layer.h); may fail with a message naming the largest supported
+     * parameter. */
+    ll_status (*resolution)(const ll_word_params *p, double tolerance, double mu_min,
+                            size_t *n_nodes, size_t *n_orders);
     void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);
     /* Fill a created layer (any content) for one channel. */
     ll_status (*build)(const ll_word_build_ctx *ctx, const ll_word *w, const ll_word_params *p,

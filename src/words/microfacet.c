@@ -103,7 +103,10 @@ typedef struct grid_entry {
 struct ll_microfacet {
     double eta_re, eta_im, alpha;
     int conductor;
-    double b_max;
+    double b_max;        /* lobes sharper than this are widened            */
+    double map_b_max;    /* the maps hold every order up to this B (the
+                          * b_max of creation; ll_microfacet_set_orders
+                          * may lower b_max, never this)                   */
     size_t max_len;      /* orders wanted                                  */
     size_t n_grid;
     grid_entry **grid;   /* [n_grid] NULL until prepared                   */
@@ -537,9 +540,15 @@ ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_
     mf->alpha = alpha;
     mf->conductor = eta_im != 0.0;
     mf->b_max = max_b(n_orders);
+    mf->map_b_max = mf->b_max;
     mf->max_len = max_len;
     *out = mf;
     return LL_OK;
+}
+
+void ll_microfacet_set_orders(ll_microfacet *mf, size_t n_orders)
+{
+    mf->b_max = fmin(max_b(n_orders), mf->map_b_max);
 }
 
 static void grid_entry_free(grid_entry *e)
@@ -596,7 +605,7 @@ static ll_status make_entry(const ll_microfacet *mf, size_t k, const double *x,
     /* Orders: exp(-B v)'s series down to TAIL_GOAL, widened by the degree
      * CHEB - 1 (in cos phi) of the interpolant. Beyond B_max only the
      * energy (order 0) of true lobes is asked for. */
-    len = e->b > mf->b_max ? 1 : ll_expcos_length(e->b, TAIL_GOAL) + CHEB;
+    len = e->b > mf->map_b_max ? 1 : ll_expcos_length(e->b, TAIL_GOAL) + CHEB;
     e->len = len < mf->max_len ? len : mf->max_len;
     len = e->len;
     for (i = 0; i < CHEB; ++i) {
@@ -682,48 +691,53 @@ ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t coun
     return ll_microfacet_prepare_watched(mf, mu, count, NULL);
 }
 
-ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, size_t count,
-                                        ll_watch *watch)
+/* Room for every B a double holds (4 points per octave: ~4100), in
+ * mf->grid; and the bytes of a "needed" mark per grid point. */
+static ll_status grow_grid(ll_microfacet *mf, size_t *n_grid, unsigned char **need)
 {
-    /* Room for every B a double holds (4 points per octave: ~4100). */
-    size_t a, b, k, n_grid = grid_index(DBL_MAX) + 1, n_items = 0;
-    unsigned char *need = NULL;
-    prepare_job job;
-    ll_status s;
-    pair_plan p;
-
-    job.grid = ll_alloc_array(n_grid, sizeof(size_t));
-    need = ll_calloc_array(n_grid, 1);
-    if (!need || !job.grid)
-        goto oom;
-    if (n_grid > mf->n_grid) {
-        grid_entry **grid = ll_realloc(mf->grid, n_grid * sizeof *grid);
-        if (!grid)
-            goto oom;
-        for (k = mf->n_grid; k < n_grid; ++k)
+    size_t k;
+    *n_grid = grid_index(DBL_MAX) + 1;
+    *need = ll_calloc_array(*n_grid, 1);
+    if (!*need)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory for the maps");
+    if (*n_grid > mf->n_grid) {
+        grid_entry **grid = ll_realloc(mf->grid, *n_grid * sizeof *grid);
+        if (!grid) {
+            ll_free(*need);
+            *need = NULL;
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory for the maps");
+        }
+        for (k = mf->n_grid; k < *n_grid; ++k)
             grid[k] = NULL;
         mf->grid = grid;
-        mf->n_grid = n_grid;
+        mf->n_grid = *n_grid;
     }
-    /* The missing entries that the pairs use: their (widened) lobes, and
-     * the true lobes of the widened ones (ll_microfacet_series). O(count^2)
-     * plans: polled per column. */
-    ll_watch_stage(watch, "interface", 0.0, 0.05, count);
-    for (b = 0; b < count; ++b) {
-        if (ll_watch_poll(watch)) {
-            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
-            goto done;
-        }
-        ll_watch_advance(watch, 1);
-        for (a = 0; a < count; ++a) {
-            if (!plan_pair(mf, mu[a], mu[b], HUGE_VAL, &p))
-                continue;
-            if (!p.filon)
-                need[p.grid] = 1;
-            if (p.b > mf->b_max && plan_pair(mf, mu[a], mu[b], mf->b_max, &p) && !p.filon)
-                need[p.grid] = 1;
-        }
-    }
+    return LL_OK;
+}
+
+/* Mark the grid points that the pair uses: its (widened) lobe, and the
+ * true lobe of a widened one (ll_microfacet_series). */
+static void mark_pair(const ll_microfacet *mf, double mu_o, double mu_i, unsigned char *need)
+{
+    pair_plan p;
+    if (!plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p))
+        return;
+    if (!p.filon)
+        need[p.grid] = 1;
+    if (p.b > mf->b_max && plan_pair(mf, mu_o, mu_i, mf->b_max, &p) && !p.filon)
+        need[p.grid] = 1;
+}
+
+/* Compute the marked maps that are missing (in parallel). */
+static ll_status make_marked(ll_microfacet *mf, const unsigned char *need, size_t n_grid,
+                             ll_watch *watch)
+{
+    size_t k, n_items = 0;
+    prepare_job job;
+    ll_status s;
+    job.grid = ll_alloc_array(n_grid, sizeof(size_t));
+    if (!job.grid)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory for the maps");
     for (k = 0; k < n_grid; ++k)
         if (need[k] && !mf->grid[k])
             job.grid[n_items++] = k;
@@ -734,17 +748,51 @@ ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, siz
         s = ll_watch_stage(watch, "interface", 0.05, 0.05, n_items)
                 ? ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled")
                 : LL_OK;
-    if (s == LL_OK)
+    if (s == LL_OK && n_items)
         s = ll_parallel_for_watched(n_items, prepare_one, &job, watch);
-done:
-    ll_free(need);
     ll_free(job.grid);
     return s;
-oom:
+}
+
+ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, size_t count,
+                                        ll_watch *watch)
+{
+    size_t a, b, n_grid;
+    unsigned char *need = NULL;
+    ll_status s = grow_grid(mf, &n_grid, &need);
+    if (s != LL_OK)
+        return s;
+    /* The missing entries that the pairs use. O(count^2) plans: polled per
+     * column. */
+    ll_watch_stage(watch, "interface", 0.0, 0.05, count);
+    for (b = 0; b < count; ++b) {
+        if (ll_watch_poll(watch)) {
+            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+            goto done;
+        }
+        ll_watch_advance(watch, 1);
+        for (a = 0; a < count; ++a)
+            mark_pair(mf, mu[a], mu[b], need);
+    }
+    s = make_marked(mf, need, n_grid, watch);
+done:
     ll_free(need);
-    ll_free(job.grid);
-    return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory preparing %zu cosines",
-                   count);
+    return s;
+}
+
+ll_status ll_microfacet_prepare_pairs(ll_microfacet *mf, const double *mu_o,
+                                      const double *mu_i, size_t count)
+{
+    size_t k, n_grid;
+    unsigned char *need = NULL;
+    ll_status s = grow_grid(mf, &n_grid, &need);
+    if (s != LL_OK)
+        return s;
+    for (k = 0; k < count; ++k)
+        mark_pair(mf, mu_o[k], mu_i[k], need);
+    s = make_marked(mf, need, n_grid, NULL);
+    ll_free(need);
+    return s;
 }
 
 /* ------------------------------------------------------------- layer */

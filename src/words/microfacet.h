@@ -32,6 +32,13 @@ LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double 
                                            ll_microfacet **out);
 LL_INTERNAL void ll_microfacet_destroy(ll_microfacet *mf);
 
+/* Resolve the lobes with n_orders (at most the n_orders of creation) from
+ * now on: the series are then those of a model created with n_orders,
+ * while the maps already prepared stay valid (they hold the orders of the
+ * creation's). The resolution search (words/probe.h) so shares one model,
+ * and its maps, between the order counts it tries. Not thread-safe. */
+LL_INTERNAL void ll_microfacet_set_orders(ll_microfacet *mf, size_t n_orders);
+
 /* Precompute the least-squares fits that the pairs (mu[a], mu[b]),
  * a, b < count, will use (in parallel). Required before ll_microfacet_series
  * for those pairs. */
@@ -39,6 +46,10 @@ LL_INTERNAL ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu,
 /* The same, reporting to and polling a watch (nullable). */
 LL_INTERNAL ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu,
                                                     size_t count, ll_watch *watch);
+
+/* The same for the pairs (mu_o[k], mu_i[k]), k < count, alone. */
+LL_INTERNAL ll_status ll_microfacet_prepare_pairs(ll_microfacet *mf, const double *mu_o,
+                                                  const double *mu_i, size_t count);
 
 /* Doubles of scratch that ll_microfacet_series needs for max_len terms. */
 LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);

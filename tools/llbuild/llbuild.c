@@ -66,6 +66,9 @@ static const char usage[] =
     "  --mono, --rgb      force 1 or 3 colour channels (default: RGB if any number\n"
     "                     has three values or a metal is named, else mono)\n"
     "  --error E          series truncation error of the file (default 1e-3)\n"
+    "  --tolerance T      relative error the chosen resolution is within, where the\n"
+    "                     BSDF is above 1% of its peak (default 0.01; >= 0.001)\n"
+    "  --mu-min C         smallest |cosine| the tolerance holds at (default 0.1)\n"
     "  --threads N        worker threads (default: all processors)\n"
     "  --max-memory SIZE  memory budget: a build estimated to need more is refused\n"
     "                     before it starts (8G, 500M, 1.5G, 64K or bytes; default:\n"
@@ -87,7 +90,7 @@ static const char usage[] =
     "  medium albedo=R tau=T [g=G | phase=isotropic | phase=vmf kappa=K]\n"
     "                                scattering slab of optical thickness tau\n"
     "  measured file=PATH            a MERL .binary BRDF (paths relative to the file)\n"
-    "  set nodes=N orders=M channels=1|3 error=E   build settings\n"
+    "  set nodes=N orders=M channels=1|3 error=E tolerance=T mu_min=C   settings\n"
     "Any number may be one value or three (R,G,B). alpha is the Beckmann roughness\n"
     "(>= 0.001). Opaque words (conductor, diffuse, measured) must be the bottom.\n"
     "Any number may be a sweep, alpha=[0.02 0.05 0.1] or alpha=[0.05..0.4:8]\n"
@@ -107,7 +110,7 @@ static const char usage[] =
 typedef struct args {
     const char *input, *output, *ior_dir;
     size_t nodes, orders, channels, threads, max_memory;
-    double error;
+    double error, tolerance, mu_min;
     int dry_run, quiet;
 } args;
 
@@ -213,6 +216,22 @@ static int parse_args(int argc, char **argv, args *a)
             if (*end || !(a->error > 0.0 && a->error < 1.0))
                 return bad_usage("--error: expected a number in (0, 1)", next);
             ++i;
+        } else if (!strcmp(o, "--tolerance") || !strcmp(o, "--mu-min")) {
+            char *end;
+            double v;
+            int tolerance = !strcmp(o, "--tolerance");
+            if (!next)
+                return bad_usage(o, "needs a value");
+            v = strtod(next, &end);
+            if (*end || (tolerance ? !(v >= LL_MIN_TOLERANCE && v < 1.0) : !(v > 0.0 && v <= 1.0)))
+                return bad_usage(tolerance ? "--tolerance: expected a number in [0.001, 1)"
+                                           : "--mu-min: expected a cosine in (0, 1]",
+                                 next);
+            if (tolerance)
+                a->tolerance = v;
+            else
+                a->mu_min = v;
+            ++i;
         } else if (!strcmp(o, "--max-memory")) {
             if (!parse_memory(next, &a->max_memory))
                 return bad_usage("--max-memory: expected a size such as 8G, 500M, 1.5G or "
@@ -269,10 +288,33 @@ static void print_axes(const ll_material *m)
     }
 }
 
+/* The goal the resolution met: the tolerance, or that it was given. */
+static void print_goal(const ll_material *m, const ll_build_options *o, size_t n, size_t orders,
+                       double choose_seconds)
+{
+    double tolerance = 0.0, mu_min = 0.0;
+    int chosen = 0;
+    if (ll_material_goal(m, o, &tolerance, &mu_min, &chosen) != LL_OK)
+        return;
+    if (!chosen)
+        printf("tolerance    not checked: the resolution is given (set nodes= orders=, or "
+               "--nodes --orders)\n");
+    else if (choose_seconds >= 0.0)
+        printf("tolerance    %g (relative, where the BSDF is above 1%% of its peak, |mu| >= "
+               "%g): met by %zu nodes x %zu orders, chosen by probing every word's lobes "
+               "(%.2f s)\n",
+               tolerance, mu_min, n, orders, choose_seconds);
+    else
+        printf("tolerance    %g (relative, where the BSDF is above 1%% of its peak, |mu| >= "
+               "%g): met by %zu nodes x %zu orders\n",
+               tolerance, mu_min, n, orders);
+}
+
 /* --dry-run: the estimate; exit 1 when a build would be refused. */
 static int print_resolution(const ll_material *m, const ll_build_options *o)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    double start = now_seconds();
     ll_status s = ll_material_estimate(m, o, &e);
     if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
@@ -280,6 +322,7 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
     }
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n", e.n_nodes,
            e.n_orders, e.n_channels, e.n_channels == 1 ? "" : "s");
+    print_goal(m, o, e.n_nodes, e.n_orders, now_seconds() - start);
     if (ll_material_axis_count(m) > 0) {
         print_axes(m);
         printf("bases        %zu (one textured file)\n", e.n_bases);
@@ -334,8 +377,8 @@ static void print_albedo(ll_layer *const *layers, size_t n_channels, int transmi
     }
 }
 
-static void print_summary(const args *a, ll_layer *const *layers, size_t n_channels,
-                          double seconds)
+static void print_summary(const args *a, const ll_material *m, const ll_build_options *o,
+                          ll_layer *const *layers, size_t n_channels, double seconds)
 {
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
@@ -349,6 +392,7 @@ static void print_summary(const args *a, ll_layer *const *layers, size_t n_chann
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n",
            ll_layer_node_count(layers[0]), ll_layer_order_count(layers[0]), n_channels,
            n_channels == 1 ? "" : "s");
+    print_goal(m, o, ll_layer_node_count(layers[0]), ll_layer_order_count(layers[0]), -1.0);
     printf("orders kept  %zu (longest series in the file)\n", info.max_order);
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("header       eta %g, alpha %g (top) %g (bottom)\n", info.eta, info.alpha[0],
@@ -358,8 +402,10 @@ static void print_summary(const args *a, ll_layer *const *layers, size_t n_chann
     ll_bsdf_release(b);
 }
 
-static void print_textured_summary(const args *a, const ll_material *m, double seconds)
+static void print_textured_summary(const args *a, const ll_material *m,
+                                   const ll_build_options *o, double seconds)
 {
+    size_t n = 0, orders = 0;
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     if (ll_bsdf_open(a->output, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
@@ -374,6 +420,8 @@ static void print_textured_summary(const args *a, const ll_material *m, double s
            info.n_parameters, info.n_parameters == 1 ? "" : "s");
     printf("resolution   %zu file nodes, %zu channel%s\n", info.n_nodes, info.n_channels,
            info.n_channels == 1 ? "" : "s");
+    if (ll_material_resolution(m, o, &n, &orders, NULL) == LL_OK)
+        print_goal(m, o, n, orders, -1.0);
     printf("orders kept  %zu (longest series in the file)\n", info.max_order);
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("wall time    %.2f s\n", seconds);
@@ -423,6 +471,8 @@ int main(int argc, char **argv)
     o.error_goal = a.error;
     o.cancel = &cancel_flag;
     o.max_memory_bytes = a.max_memory;
+    o.tolerance = a.tolerance;
+    o.mu_min = a.mu_min;
     if (cancel_flag) {
         ll_material_destroy(m);
         return die_cancelled();
@@ -470,9 +520,9 @@ int main(int argc, char **argv)
                                                                          : exit_code_for(s);
     } else {
         if (!a.quiet && ll_material_axis_count(m) > 0)
-            print_textured_summary(&a, m, now_seconds() - start);
+            print_textured_summary(&a, m, &o, now_seconds() - start);
         else if (!a.quiet)
-            print_summary(&a, layers, n_channels, now_seconds() - start);
+            print_summary(&a, m, &o, layers, n_channels, now_seconds() - start);
         code = 0;
     }
     for (c = 0; c < 3; ++c)

@@ -1,0 +1,251 @@
+/*
+ * A rough interface at the probes (words/probe.h), without building it.
+ *
+ * ll_layer_eval of an interface layer is, per Fourier order, a Catmull-Rom
+ * spline over the nodes of the half each direction lies in (4 x 4 node
+ * pairs around (mu_o, mu_i)), summed with cos(l phi) (layer/layer.c
+ * eval_point), and ll_layer_set_microfacet fills those node pairs with
+ * ll_microfacet_series(-mu_o, -mu_i) on m orders (the layer's). So the
+ * layer's value at a probe needs only the 16 series of its stencil:
+ * O(probes x m) instead of O(n^2 m) for the whole interface, which is what
+ * makes the convergence search (twice the resolution, repeatedly)
+ * affordable even for the n ~ 1000, m ~ 2000 of alpha = 0.02.
+ *
+ * Left out: the energy compensation (conserve_energy), a rank-one term of
+ * order 0 only, constant in phi and smooth in mu (Jakob et al. 2014, sec.
+ * 6.2). It is added to the lobe, so the relative error of the lobe alone
+ * bounds that of the sum; tests/test_convergence.c checks the built layers
+ * with it.
+ */
+#include "words/probe.h"
+#include "words/microfacet.h"
+#include "numerics/spline.h"
+
+#include "layerlab/ll_quad.h"
+
+#include <math.h>
+#include <string.h>
+
+/* No widening: the orders a "true" series may have (more than any layer
+ * holds: LL_MATERIAL_MAX_RESOLUTION is 100000). */
+#define TRUE_ORDERS ((size_t)1 << 20)
+#define TRUE_MAX_LEN ((size_t)100000)
+
+/* The stencil of one direction on the positive half of the nodes:
+ * signed node cosines and weights; count of the non-zero ones. */
+static size_t stencil(const double *half, size_t h, double mu, double node[4], double w[4])
+{
+    ptrdiff_t offset = 0;
+    double wk[4];
+    size_t count = 0;
+    int k;
+    ll_spline_weights(half, h, fabs(mu), &offset, wk, 1);
+    for (k = 0; k < 4; ++k) {
+        ptrdiff_t i = offset + k;
+        if (wk[k] == 0.0 || i < 0 || i >= (ptrdiff_t)h)
+            continue;
+        node[count] = mu < 0.0 ? -half[i] : half[i];
+        w[count] = wk[k];
+        ++count;
+    }
+    return count;
+}
+
+/* acc[k] += weight * sum_l c[l] cos(l phi[k]) */
+static void add_series(const double *c, size_t len, const double *phi, size_t n_phi,
+                       double weight, double *acc)
+{
+    size_t k, l;
+    for (k = 0; k < n_phi; ++k) {
+        double c1 = cos(phi[k]), prev = c1, cur = 1.0, sum = 0.0;
+        for (l = 0; l < len; ++l) {
+            double next = 2.0 * c1 * cur - prev;
+            sum += c[l] * cur;
+            prev = cur;
+            cur = next;
+        }
+        acc[k] += weight * sum;
+    }
+}
+
+ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
+                                   ll_microfacet **out)
+{
+    return ll_microfacet_create(eta_re, eta_im, alpha, TRUE_ORDERS, TRUE_MAX_LEN, out);
+}
+
+/* One probe pair's 4 x 4 stencil (signed node cosines and weights). */
+typedef struct pair_stencil {
+    double no[4], wo[4], ni[4], wi[4];
+    size_t co, ci;
+} pair_stencil;
+
+typedef struct eval_job {
+    const ll_microfacet *mf;
+    const ll_probe_set *set;
+    const pair_stencil *stencils;
+    size_t m;
+    double *values;
+} eval_job;
+
+/* The values of probe pair p (on a worker thread: the model is only read). */
+static ll_status eval_pair(size_t p, void *ctx)
+{
+    const eval_job *job = ctx;
+    const pair_stencil *st = job->stencils + p;
+    double *series = ll_alloc_array(job->m, sizeof(double));
+    double *scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
+    double *acc = job->values + p * job->set->n_phi;
+    size_t a, b, k, len;
+    ll_status s = LL_OK;
+    if (!series || !scratch)
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu orders",
+                    job->m);
+    memset(acc, 0, job->set->n_phi * sizeof(double));
+    for (a = 0; a < st->co && s == LL_OK; ++a)
+        for (b = 0; b < st->ci && s == LL_OK; ++b) {
+            /* Depth grows opposite to the normal: the series takes -mu. */
+            s = ll_microfacet_series(job->mf, -st->no[a], -st->ni[b], job->m, series, &len, NULL,
+                                     scratch);
+            if (s == LL_OK)
+                add_series(series, len, job->set->phi, job->set->n_phi, st->wo[a] * st->wi[b],
+                           acc);
+        }
+    for (k = 0; k < job->set->n_phi; ++k)
+        acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
+    ll_free(series);
+    ll_free(scratch);
+    return s;
+}
+
+ll_status ll_probe_interface_eval(ll_microfacet *mf, size_t n, size_t m,
+                                  const ll_probe_set *set, double *values)
+{
+    double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
+    pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
+    double *mu_o = ll_alloc_array(16 * set->n_pairs + 1, sizeof(double));
+    double *mu_i = ll_alloc_array(16 * set->n_pairs + 1, sizeof(double));
+    size_t h = n / 2, p, a, b, count = 0;
+    eval_job job;
+    ll_status s;
+    if (!nodes || !weights || !stencils || !mu_o || !mu_i) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
+        goto done;
+    }
+    /* The widening of a layer of m orders (ll_layer_set_microfacet). */
+    ll_microfacet_set_orders(mf, m);
+    s = ll_quad_gauss_lobatto(n, nodes, weights);
+    for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
+        pair_stencil *st = stencils + p;
+        st->co = stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo);
+        st->ci = stencil(nodes + h, h, set->pairs[p].mu_i, st->ni, st->wi);
+        for (a = 0; a < st->co; ++a)
+            for (b = 0; b < st->ci; ++b) {
+                mu_o[count] = -st->no[a];
+                mu_i[count] = -st->ni[b];
+                ++count;
+            }
+    }
+    /* The maps first (they change the model), then the pairs in parallel. */
+    if (s == LL_OK)
+        s = ll_microfacet_prepare_pairs(mf, mu_o, mu_i, count);
+    job.mf = mf;
+    job.set = set;
+    job.stencils = stencils;
+    job.m = m;
+    job.values = values;
+    if (s == LL_OK)
+        s = ll_parallel_for(set->n_pairs, eval_pair, &job);
+done:
+    ll_free(nodes);
+    ll_free(weights);
+    ll_free(stencils);
+    ll_free(mu_o);
+    ll_free(mu_i);
+    return s;
+}
+
+/* The true series of a pair into c (*len terms). */
+static ll_status true_series(ll_microfacet *mf, const ll_probe_pair *pair, double *c,
+                             size_t *len, double *scratch)
+{
+    double mu[2];
+    ll_status s;
+    mu[0] = -pair->mu_o;
+    mu[1] = -pair->mu_i;
+    s = ll_microfacet_prepare_pairs(mf, mu, mu + 1, 1);
+    return s == LL_OK ? ll_microfacet_series(mf, mu[0], mu[1], TRUE_MAX_LEN, c, len, NULL,
+                                             scratch)
+                      : s;
+}
+
+/* The shortest truncation of c within tolerance of the whole series where
+ * it is above floor. */
+static size_t needed_length(const double *c, size_t len, const double *phi, size_t n_phi,
+                            const double *full, double floor, double tolerance)
+{
+    double c1[12], prev[12], cur[12], sum[12];
+    size_t k, l, needed = 1;
+    for (k = 0; k < n_phi; ++k) {
+        c1[k] = cos(phi[k]);
+        prev[k] = c1[k];
+        cur[k] = 1.0;
+        sum[k] = 0.0;
+    }
+    for (l = 0; l < len; ++l)
+        for (k = 0; k < n_phi; ++k) {
+            double next = 2.0 * c1[k] * cur[k] - prev[k];
+            sum[k] += c[l] * cur[k];
+            prev[k] = cur[k];
+            cur[k] = next;
+            /* l + 1 terms are not enough here: at least l + 2 are needed. */
+            if (full[k] > floor && full[k] > 0.0 &&
+                fabs(sum[k] - full[k]) > tolerance * full[k])
+                needed = l + 2;
+        }
+    return needed < len ? needed : len;
+}
+
+ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
+                                    const ll_probe_set *set, size_t *n_orders)
+{
+    double *c = ll_alloc_array(TRUE_MAX_LEN, sizeof(double));
+    double *scratch = ll_alloc_array(ll_microfacet_scratch_size(TRUE_MAX_LEN), sizeof(double));
+    double *full = ll_calloc_array(LL_PROBE_VALUES(set) + 1, sizeof(double));
+    double *peak = ll_calloc_array(set->n_groups + 1, sizeof(double));
+    size_t p, k, len, m = 1, nphi = set->n_phi;
+    ll_status s;
+    if (!c || !scratch || !full || !peak) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+        goto done;
+    }
+    ll_microfacet_set_orders(mf, TRUE_ORDERS);
+    s = LL_OK;
+    /* The whole series' values, for the peaks of the groups. */
+    for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
+        s = true_series(mf, &set->pairs[p], c, &len, scratch);
+        if (s != LL_OK)
+            break;
+        add_series(c, len, set->phi, nphi, 1.0, full + p * nphi);
+        for (k = 0; k < nphi; ++k)
+            peak[set->pairs[p].group] = fmax(peak[set->pairs[p].group], full[p * nphi + k]);
+    }
+    for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
+        size_t need;
+        s = true_series(mf, &set->pairs[p], c, &len, scratch);
+        if (s != LL_OK || len == 0)
+            continue;
+        need = needed_length(c, len, set->phi, nphi, full + p * nphi,
+                             LL_PROBE_FLOOR * peak[set->pairs[p].group], 0.5 * tolerance);
+        if (need > m)
+            m = need;
+    }
+    if (s == LL_OK)
+        *n_orders = m;
+done:
+    ll_free(c);
+    ll_free(scratch);
+    ll_free(full);
+    ll_free(peak);
+    return s;
+}

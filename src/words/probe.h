@@ -1,0 +1,99 @@
+/*
+ * Choosing a resolution by a stated tolerance (issue 14): a fixed set of
+ * probe directions, what a layer of n nodes and m Fourier orders gives
+ * there, and the search for the smallest (n, m) that agrees with twice the
+ * resolution within the tolerance where the BSDF is above 1% of its peak.
+ * The fits of heuristics.c are the search's first guess only.
+ */
+#ifndef LL_WORDS_PROBE_H
+#define LL_WORDS_PROBE_H
+
+#include <stddef.h>
+#include "support/support.h"
+#include "words/microfacet.h"
+
+/* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
+ * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
+ * A group is one incident direction and one block (reflection or
+ * transmission): the "1% of its peak" is the peak of its group. */
+typedef struct ll_probe_pair {
+    double mu_o, mu_i;
+    size_t group;
+} ll_probe_pair;
+
+typedef struct ll_probe_set {
+    ll_probe_pair *pairs;
+    size_t n_pairs, cap_pairs;
+    double phi[12];
+    size_t n_phi;
+    size_t n_groups;
+} ll_probe_set;
+
+/* Values of a probe set: n_pairs x n_phi, pair-major. */
+#define LL_PROBE_VALUES(set) ((set)->n_pairs * (set)->n_phi)
+
+/* The fraction of a group's peak above which the tolerance applies. */
+#define LL_PROBE_FLOOR 0.01
+
+/* The probes of a rough interface of relative index eta_re + i eta_im
+ * (conductor when eta_im > 0): incident cosines mu_min, 1.5 mu_min,
+ * 2 mu_min (the grazing ones, where the azimuthal lobe is narrowest),
+ * 0.35, 0.6, 0.85, 1 and three pseudo-random ones in [mu_min, 1], from
+ * above and (dielectric) from below; outgoing: the mirror and the
+ * refracted direction, 14 offsets of 0.01 .. 0.25 in mu around them and two
+ * pseudo-random ones; azimuths 0 .. pi, dense near 0. Deterministic. */
+LL_INTERNAL ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min,
+                                         ll_probe_set *out);
+/* The probes of a medium's phase function: the same incident cosines,
+ * outgoing cosines spread over both hemispheres (the forward peak at
+ * mu_o = mu_i included). */
+LL_INTERNAL ll_status ll_probe_medium(double mu_min, ll_probe_set *out);
+LL_INTERNAL void ll_probe_free(ll_probe_set *set);
+
+/* The worst relative difference |v - ref| / ref over the values whose ref
+ * is above LL_PROBE_FLOOR of the peak of its group. */
+LL_INTERNAL double ll_probe_error(const ll_probe_set *set, const double *v, const double *ref);
+
+/* The interface model that the evaluations of one search share (with
+ * the maps of its series): every order, no widening (words/microfacet.h). */
+LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
+                                               ll_microfacet **out);
+
+/* What ll_layer_set_microfacet(compensate 0) on the Gauss-Lobatto nodes of
+ * n and m orders followed by ll_layer_eval gives at the probes, from the
+ * series at the spline stencils of the probes alone (no layer is built:
+ * 16 series per pair). values holds LL_PROBE_VALUES(set). */
+LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf, size_t n, size_t m,
+                                              const ll_probe_set *set, double *values);
+
+/* The Fourier orders the lobes themselves need: at every probe pair, the
+ * true series (no widening) truncated after L terms is within tolerance / 2
+ * of the whole series at every azimuth where it is above LL_PROBE_FLOOR of
+ * its group's peak; the largest such L over the pairs. */
+LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
+                                                const ll_probe_set *set, size_t *n_orders);
+
+/* What the layer of a word gives at the probes at n nodes and m orders. */
+typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, double *values);
+
+/* The smallest resolution found, starting from (n, m), whose probe values
+ * are within 0.6 of the tolerance of those at (2n, 2m) (a margin for the
+ * directions between the probes): grow n and/or m (by 1.25 to
+ * 2, from the error) while the comparison fails, as the comparisons at
+ * (2n, m) and (n, 2m) say, then shrink each (by 0.85, up to 3 times)
+ * while it still holds. n stays even and
+ * >= min_nodes; either beyond `limit` fails, naming the error reached.
+ * *error receives the difference at the answer (nullable). */
+LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval,
+                                      void *ctx, double tolerance, size_t min_nodes,
+                                      size_t limit, const char *what, size_t *n_nodes,
+                                      size_t *n_orders, double *error);
+
+/* The fits of the original layerlab (heuristics.c), the first guess of the
+ * search: what ll_heuristic_microfacet and ll_heuristic_henyey_greenstein
+ * returned before the tolerance (their argument checks and messages). */
+LL_INTERNAL ll_status ll_fit_microfacet(double alpha, double eta_re, double eta_im,
+                                        size_t *n_nodes, size_t *n_orders);
+LL_INTERNAL ll_status ll_fit_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
+
+#endif /* LL_WORDS_PROBE_H */

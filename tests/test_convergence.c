@@ -1,0 +1,371 @@
+/*
+ * The resolution chosen by a tolerance (issue 14): a layer built at the
+ * resolution that ll_material_resolution chooses agrees with the same
+ * layer at twice its nodes and twice its orders within the tolerance, at
+ * grazing (mu 0.1, 0.15, 0.2) and pseudo-random directions, mirror and
+ * off-mirror azimuths, reflection and transmission, wherever the BSDF is
+ * above 1% of the peak of its lobe. The layers are built with the public
+ * API alone (the material language, energy compensation on), at points
+ * other than the search's own probes (words/probe_set.c), so the test
+ * checks the method and not the probes against themselves.
+ *
+ * The grid of the issue (dielectrics eta 1.1, 1.33, 1.5, 2.0, 1/1.5 and
+ * gold, aluminium, copper at alpha 0.02 .. 0.8) takes minutes at 2n, 2m
+ * for the small roughnesses (n ~ 1000, m ~ 2000); CI runs the subset
+ * below (and HG g = 0.8 alone), LL_CONVERGENCE_FULL=1 (make bench) the
+ * whole grid and g = 0.5, 0.8, 0.95, -0.9.
+ * LL_CONVERGENCE_VERBOSE=1 prints every case.
+ */
+#include "test_util.h"
+
+#include "words/probe.h"
+
+#define MAX_POINTS 4096
+
+typedef struct point {
+    double mu_o, mu_i, phi;
+    size_t group;
+} point;
+
+typedef struct point_set {
+    point p[MAX_POINTS];
+    size_t count, groups;
+} point_set;
+
+static double next_uniform(uint64_t *state)
+{
+    *state = *state * 2862933555777941757ULL + 3037000493ULL;
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static int verbose(void)
+{
+    const char *v = getenv("LL_CONVERGENCE_VERBOSE");
+    return v && *v && strcmp(v, "0") != 0;
+}
+
+static int full_grid(void)
+{
+    const char *v = getenv("LL_CONVERGENCE_FULL");
+    return v && *v && strcmp(v, "0") != 0;
+}
+
+/* One lobe (group): around outgoing cosine `centre` (signed), incident
+ * mu_i; mirror and off-mirror azimuths. */
+static void add_lobe(point_set *s, double mu_i, double centre, uint64_t *rng)
+{
+    static const double offsets[] = { 0.0, -0.02, 0.02, -0.05, 0.05, -0.15, 0.15 };
+    static const double phis[] = { 0.0, 0.02, 0.07, 0.2, 0.5, 1.2, 2.0, 3.14159265358979 };
+    double sign = centre < 0.0 ? -1.0 : 1.0, c = fabs(centre);
+    size_t k, j;
+    for (k = 0; k < sizeof offsets / sizeof offsets[0] + 2; ++k) {
+        double mu = k < sizeof offsets / sizeof offsets[0] ? c + offsets[k]
+                                                           : 0.1 + 0.9 * next_uniform(rng);
+        if (mu < 0.1 || mu > 1.0)
+            continue;
+        for (j = 0; j < sizeof phis / sizeof phis[0] + 1 && s->count < MAX_POINTS; ++j) {
+            point *p = &s->p[s->count++];
+            p->mu_o = sign * mu;
+            p->mu_i = mu_i;
+            p->phi = j < sizeof phis / sizeof phis[0] ? phis[j] : 3.14159 * next_uniform(rng);
+            p->group = s->groups;
+        }
+    }
+    ++s->groups;
+}
+
+/* Interface points: incident 0.1, 0.15, 0.2 and four random cosines, from
+ * above and (dielectric) from below: reflection and transmission. */
+static void interface_points(point_set *s, double eta, int conductor)
+{
+    uint64_t rng = 2014;
+    double incident[7] = { 0.1, 0.15, 0.2, 0, 0, 0, 0 };
+    size_t k;
+    int side;
+    s->count = s->groups = 0;
+    for (k = 3; k < 7; ++k)
+        incident[k] = 0.1 + 0.9 * next_uniform(&rng);
+    for (side = 0; side < (conductor ? 1 : 2); ++side)
+        for (k = 0; k < 7; ++k) {
+            double sign = side ? -1.0 : 1.0, e = side ? 1.0 / eta : eta, mu = incident[k];
+            double sin_t = sqrt(1.0 - mu * mu) / e;
+            /* Reflection where the index ahead is above 1 (the dense side
+             * holds the Fresnel edge of total internal reflection, outside
+             * the tolerance: words/probe_set.c). */
+            if (conductor || e > 1.0)
+                add_lobe(s, sign * mu, -sign * mu, &rng);
+            if (!conductor && sin_t < 1.0)
+                add_lobe(s, sign * mu, sign * sqrt(1.0 - sin_t * sin_t), &rng);
+        }
+}
+
+/* The worst relative difference of a against b where b is above 1% of
+ * its group's peak; *where the point. */
+static double worst_difference(const point_set *s, const ll_layer *a, const ll_layer *b,
+                               size_t *where)
+{
+    double peak[256] = { 0 }, *va = malloc(s->count * sizeof *va),
+           *vb = malloc(s->count * sizeof *vb), worst = 0.0;
+    size_t k;
+    assert_true(s->groups <= 256);
+    assert_non_null(va);
+    assert_non_null(vb);
+    for (k = 0; k < s->count; ++k) {
+        va[k] = ll_layer_eval(a, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
+        vb[k] = ll_layer_eval(b, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
+        peak[s->p[k].group] = fmax(peak[s->p[k].group], vb[k]);
+    }
+    *where = 0;
+    for (k = 0; k < s->count; ++k)
+        if (vb[k] > 0.01 * peak[s->p[k].group] && vb[k] > 0.0) {
+            double d = fabs(va[k] - vb[k]) / vb[k];
+            if (d > worst) {
+                worst = d;
+                *where = k;
+            }
+        }
+    free(va);
+    free(vb);
+    return worst;
+}
+
+static ll_layer *build_one(const ll_material *mat, size_t n, size_t m)
+{
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_layer *layers[3] = { NULL, NULL, NULL };
+    size_t channels = 0;
+    o.n_nodes = n;
+    o.n_orders = m;
+    o.n_channels = 1;
+    assert_int_equal(ll_material_build_layers(mat, &o, layers, &channels, NULL), LL_OK);
+    assert_int_equal(channels, 1);
+    return layers[0];
+}
+
+/* The interface word `text` (one line), monochrome, at tolerance t. */
+static void check_interface(const char *text, double eta, int conductor, double tolerance)
+{
+    ll_material *mat = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_layer *a, *b;
+    point_set *s = malloc(sizeof *s);
+    size_t n, m, where;
+    double e;
+    assert_non_null(s);
+    assert_int_equal(ll_material_parse(text, "convergence", &mat), LL_OK);
+    o.n_channels = 1;
+    o.tolerance = tolerance;
+    assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
+    a = build_one(mat, n, m);
+    b = build_one(mat, 2 * n, 2 * m);
+    interface_points(s, eta, conductor);
+    e = worst_difference(s, a, b, &where);
+    if (verbose() || e > tolerance)
+        printf("  %-40s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n", text,
+               n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+    assert_true(e <= tolerance);
+    ll_layer_destroy(a);
+    ll_layer_destroy(b);
+    ll_material_destroy(mat);
+    free(s);
+}
+
+typedef struct interface_case {
+    const char *name; /* the word's parameters before alpha=            */
+    double eta;       /* relative index (dielectrics)                    */
+    int conductor;
+} interface_case;
+
+static const interface_case cases[] = {
+    { "dielectric eta=1.1", 1.1, 0 },       { "dielectric eta=1.33", 1.33, 0 },
+    { "dielectric eta=1.5", 1.5, 0 },       { "dielectric eta=2.0", 2.0, 0 },
+    { "dielectric eta=0.6666666666666666", 1.0 / 1.5, 0 },
+    { "conductor eta=Au", 0.0, 1 },        { "conductor eta=Al", 0.0, 1 },
+    { "conductor eta=Cu", 0.0, 1 },
+};
+static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.5, 0.8 };
+
+/* The subset CI runs (index into cases, alpha): the issue's own failure
+ * (eta 1.5, alpha 0.5), a dielectric below 1, and two metals, whose layers
+ * at twice the chosen resolution stay small (n <= 600): 17 s of CPU with
+ * eta 2, alpha 0.5 too, which the full grid keeps. */
+static const struct {
+    size_t c;
+    double alpha;
+} ci_subset[] = { { 2, 0.5 }, { 4, 0.8 }, { 5, 0.3 }, { 7, 0.5 } };
+
+static void interfaces_meet_the_tolerance(void **state)
+{
+    char text[128];
+    size_t c, a;
+    (void)state;
+    if (full_grid()) {
+        for (c = 0; c < sizeof cases / sizeof cases[0]; ++c)
+            for (a = 0; a < sizeof alphas / sizeof alphas[0]; ++a) {
+                snprintf(text, sizeof text, "%s alpha=%g\n", cases[c].name, alphas[a]);
+                check_interface(text, cases[c].eta, cases[c].conductor, 0.01);
+            }
+        return;
+    }
+    for (c = 0; c < sizeof ci_subset / sizeof ci_subset[0]; ++c) {
+        const interface_case *ic = &cases[ci_subset[c].c];
+        snprintf(text, sizeof text, "%s alpha=%g\n", ic->name, ci_subset[c].alpha);
+        check_interface(text, ic->eta, ic->conductor, 0.01);
+    }
+}
+
+/* The issue's failure itself: eta 1.5, alpha 0.5 at mu_i 0.1 in the
+ * mirror direction was 2.5 at the fit's 78 x 37 against 4.76 converged. */
+static void grazing_mirror_of_the_issue_is_fixed(void **state)
+{
+    size_t n, m, fn, fm;
+    ll_layer *chosen, *fit;
+    double e;
+    (void)state;
+    assert_int_equal(ll_fit_microfacet(0.5, 1.5, 0.0, &fn, &fm), LL_OK);
+    assert_int_equal(fn, 78);
+    assert_int_equal(fm, 37);
+    assert_int_equal(ll_heuristic_microfacet_ex(0.5, 1.5, 0.0, 0.0, 0.0, &n, &m, &e), LL_OK);
+    assert_true(e <= 0.01);
+    chosen = ll_test_layer(n, m);
+    fit = ll_test_layer(fn, fm);
+    assert_int_equal(ll_layer_set_microfacet(chosen, 1.5, 0.0, 0.5, 1, 0), LL_OK);
+    assert_int_equal(ll_layer_set_microfacet(fit, 1.5, 0.0, 0.5, 1, 0), LL_OK);
+    {
+        /* Converged: 4.7689 (256 nodes with 118 to 472 orders, and 512 x
+         * 118, all agree to 1e-4; the issue: 4.76). The comparison with
+         * twice the chosen resolution is interfaces_meet_the_tolerance's. */
+        const double converged = 4.7689;
+        double vc = ll_layer_eval(chosen, -0.1, 0.1, 0.0), vf = ll_layer_eval(fit, -0.1, 0.1, 0.0);
+        if (verbose())
+            printf("  mirror at mu 0.1: fit %zu x %zu %.4f, chosen %zu x %zu %.4f\n", fn, fm, vf,
+                   n, m, vc);
+        assert_true(fabs(vf - converged) > 0.3 * converged); /* the fit's failure */
+        assert_true(fabs(vc - converged) <= 0.01 * converged);
+    }
+    ll_layer_destroy(chosen);
+    ll_layer_destroy(fit);
+}
+
+/* The probe of an interface reproduces what ll_layer_eval of the built
+ * layer (no compensation) gives: the search measures the layer the build
+ * makes. */
+static void probes_are_the_layer(void **state)
+{
+    ll_probe_set set;
+    ll_microfacet *mf = NULL;
+    ll_layer *l = ll_test_layer(64, 40);
+    double *v;
+    size_t p, k;
+    (void)state;
+    assert_int_equal(ll_probe_interface(1.5, 0.0, 0.1, &set), LL_OK);
+    assert_true(set.n_pairs > 100);
+    v = malloc(LL_PROBE_VALUES(&set) * sizeof *v);
+    assert_non_null(v);
+    assert_int_equal(ll_probe_interface_model(1.5, 0.0, 0.4, &mf), LL_OK);
+    assert_int_equal(ll_probe_interface_eval(mf, 64, 40, &set, v), LL_OK);
+    assert_int_equal(ll_layer_set_microfacet(l, 1.5, 0.0, 0.4, 0, 0), LL_OK);
+    for (p = 0; p < set.n_pairs; ++p)
+        for (k = 0; k < set.n_phi; ++k) {
+            double e = ll_layer_eval(l, set.pairs[p].mu_o, set.pairs[p].mu_i, set.phi[k]);
+            assert_true(fabs(e - v[p * set.n_phi + k]) <= 1e-9 * fmax(fabs(e), 1e-3));
+        }
+    free(v);
+    ll_microfacet_destroy(mf);
+    ll_probe_free(&set);
+    ll_layer_destroy(l);
+}
+
+/* Media: the phase function's layer at the chosen resolution against
+ * twice it, for HG up to g = 0.95 (forward and backward lobes). */
+static void media_meet_the_tolerance(void **state)
+{
+    static const double gs[] = { 0.5, 0.8, 0.95, -0.9 };
+    point_set *s = malloc(sizeof *s);
+    size_t gi, k, n, m, where;
+    uint64_t rng = 7;
+    (void)state;
+    assert_non_null(s);
+    s->count = s->groups = 0;
+    for (k = 0; k < 6; ++k) {
+        double mu = k < 3 ? 0.1 + 0.05 * (double)k : 0.1 + 0.9 * next_uniform(&rng);
+        add_lobe(s, mu, mu, &rng);  /* forward */
+        add_lobe(s, mu, -mu, &rng); /* backward */
+    }
+    for (gi = 0; gi < sizeof gs / sizeof gs[0]; ++gi) {
+        ll_layer *a, *b;
+        double e;
+        if (!full_grid() && gi != 1)
+            continue; /* CI: g = 0.8 alone (0.95 builds 688 x 362 phase matrices: 6 s) */
+        assert_int_equal(ll_heuristic_henyey_greenstein_ex(gs[gi], 0.0, 0.0, &n, &m, NULL),
+                         LL_OK);
+        a = ll_test_layer(n, m);
+        b = ll_test_layer(2 * n, 2 * m);
+        assert_int_equal(ll_layer_set_henyey_greenstein(a, 1.0, gs[gi]), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(b, 1.0, gs[gi]), LL_OK);
+        e = worst_difference(s, a, b, &where);
+        if (verbose() || e > 0.01)
+            printf("  hg g=%g n %zu m %zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n",
+                   gs[gi], n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+        assert_true(e <= 0.01);
+        ll_layer_destroy(a);
+        ll_layer_destroy(b);
+    }
+    free(s);
+}
+
+/* The goal's arguments and where it comes from. */
+static void goal_is_checked_and_reported(void **state)
+{
+    ll_material *mat = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    double t, mu;
+    int chosen;
+    size_t n, m;
+    (void)state;
+    assert_int_equal(ll_heuristic_microfacet_ex(0.3, 1.5, 0.0, 1e-4, 0.0, &n, &m, NULL),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "tolerance"));
+    assert_int_equal(ll_heuristic_microfacet_ex(0.3, 1.5, 0.0, 0.0, 1.5, &n, &m, NULL),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "mu_min"));
+    assert_int_equal(ll_heuristic_henyey_greenstein_ex(0.5, 0.0, 0.0, NULL, &m, NULL),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_parse("set tolerance=0.05 mu_min=0.2\n"
+                                       "dielectric eta=1.5 alpha=0.3\n",
+                                       "goal", &mat),
+                     LL_OK);
+    assert_int_equal(ll_material_goal(mat, NULL, &t, &mu, &chosen), LL_OK);
+    assert_true(t == 0.05 && mu == 0.2 && chosen == 1);
+    o.tolerance = 0.02;
+    assert_int_equal(ll_material_goal(mat, &o, &t, &mu, &chosen), LL_OK);
+    assert_true(t == 0.02 && mu == 0.2);
+    o.n_nodes = 100;
+    o.n_orders = 50;
+    assert_int_equal(ll_material_goal(mat, &o, &t, &mu, &chosen), LL_OK);
+    assert_int_equal(chosen, 0);
+    o = (ll_build_options)LL_BUILD_OPTIONS_INIT;
+    o.tolerance = 2.0;
+    assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_ERROR_INVALID_ARGUMENT);
+    ll_material_destroy(mat);
+    mat = NULL;
+    assert_int_equal(ll_material_parse("set tolerance=0.0001\ndielectric eta=1.5 alpha=0.3\n",
+                                       "goal", &mat),
+                     LL_ERROR_PARSE);
+    assert_non_null(strstr(ll_last_error_message(), "goal:1:"));
+    assert_int_equal(ll_material_parse("set mu_min=0.1 mu_min=0.2\n", "goal", &mat),
+                     LL_ERROR_PARSE);
+    assert_non_null(strstr(ll_last_error_message(), "twice"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(probes_are_the_layer),
+        cmocka_unit_test(goal_is_checked_and_reported),
+        cmocka_unit_test(grazing_mirror_of_the_issue_is_fixed),
+        cmocka_unit_test(interfaces_meet_the_tolerance),
+        cmocka_unit_test(media_meet_the_tolerance),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
