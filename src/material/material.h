@@ -131,6 +131,19 @@ LL_INTERNAL ll_status ll_build_options_read(const ll_build_options *in, ll_build
  * checked against the smallest meaningful resolution. */
 LL_INTERNAL ll_status ll_material_plan(const ll_material *m, const ll_build_options *o,
                                        size_t *n_nodes, size_t *n_orders, size_t *n_channels);
+/* The words' answers so far, so that a word probed once (in one channel,
+ * one basis) is not probed again: ll_material_plan_memo over the bases of
+ * a swept material shares one memo. */
+typedef struct ll_resolution_memo {
+    ll_word_params *key;
+    size_t (*answer)[2];
+    size_t count, capacity;
+} ll_resolution_memo;
+#define LL_RESOLUTION_MEMO_INIT { NULL, NULL, 0, 0 }
+LL_INTERNAL ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
+                                            ll_resolution_memo *memo, size_t *n_nodes,
+                                            size_t *n_orders, size_t *n_channels);
+LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 /* The smallest node count whose quadrature is meaningful
  * (docs/material-language.md, "Settings"), and the largest node or order
  * count a build accepts. */

@@ -91,36 +91,75 @@ static void goal_of(const ll_material *m, const ll_build_options *o, double *tol
     *mu_min = o->mu_min > 0.0 ? o->mu_min : m->mu_min > 0.0 ? m->mu_min : LL_DEFAULT_MU_MIN;
 }
 
-/* One word's resolution, or that of an equal word (another channel's)
- * already probed: done[0 .. *count) with their answers. */
+/* Do two words ask for the same resolution? The same word and choice, and
+ * equal values where the resolution hook reads them (resolution_reads: a
+ * medium's heuristic reads only its phase function's shape, so media that
+ * differ in albedo or tau share one search). */
+static int same_resolution_key(const ll_word_params *a, const ll_word_params *b)
+{
+    unsigned reads = a->desc->resolution_reads;
+    size_t k;
+    if (a->desc != b->desc || a->choice != b->choice)
+        return 0;
+    if (reads == 0)
+        return ll_word_params_equal(a, b);
+    for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
+        if ((reads >> k & 1u) && a->v[k] != b->v[k])
+            return 0;
+    return 1;
+}
+
+void ll_resolution_memo_free(ll_resolution_memo *memo)
+{
+    ll_free(memo->key);
+    ll_free(memo->answer);
+    memo->key = NULL;
+    memo->answer = NULL;
+    memo->count = memo->capacity = 0;
+}
+
+/* One word's resolution, or that of a word already probed with the same
+ * key (another channel's, another basis's): the resolution search probes
+ * layers (a second or more per word), the look-up is a comparison. */
 static ll_status word_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                 ll_word_params *done, size_t (*answer)[2], size_t *count,
-                                 size_t *n, size_t *m)
+                                 ll_resolution_memo *memo, size_t *n, size_t *m)
 {
     size_t k;
     ll_status s;
-    for (k = 0; k < *count; ++k)
-        if (ll_word_params_equal(&done[k], p)) {
-            *n = answer[k][0];
-            *m = answer[k][1];
+    for (k = 0; k < memo->count; ++k)
+        if (same_resolution_key(&memo->key[k], p)) {
+            *n = memo->answer[k][0];
+            *m = memo->answer[k][1];
             return LL_OK;
         }
     s = p->desc->resolution(p, tolerance, mu_min, n, m);
-    if (s == LL_OK) {
-        done[*count] = *p;
-        answer[*count][0] = *n;
-        answer[*count][1] = *m;
-        ++*count;
+    if (s != LL_OK)
+        return s;
+    if (memo->count == memo->capacity) {
+        size_t capacity = memo->capacity ? 2 * memo->capacity : 8;
+        ll_word_params *key = ll_realloc_array(memo->key, capacity, sizeof *key);
+        size_t(*answer)[2];
+        if (!key)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution: out of memory");
+        memo->key = key;
+        answer = ll_realloc_array(memo->answer, capacity, sizeof *answer);
+        if (!answer)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution: out of memory");
+        memo->answer = answer;
+        memo->capacity = capacity;
     }
-    return s;
+    memo->key[memo->count] = *p;
+    memo->answer[memo->count][0] = *n;
+    memo->answer[memo->count][1] = *m;
+    ++memo->count;
+    return LL_OK;
 }
 
-ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size_t *n_nodes,
-                           size_t *n_orders, size_t *n_channels)
+ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
+                                ll_resolution_memo *memo, size_t *n_nodes, size_t *n_orders,
+                                size_t *n_channels)
 {
-    size_t channels, n = 0, orders = 0, w, c, n_done = 0;
-    ll_word_params *done = NULL;
-    size_t (*answer)[2] = NULL;
+    size_t channels, n = 0, orders = 0, w, c;
     double tolerance, mu_min;
     ll_status s;
 
@@ -130,25 +169,16 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
     goal_of(m, o, &tolerance, &mu_min);
     if (!(o->n_nodes || m->nodes) || !(o->n_orders || m->orders)) {
         double above[3] = { 1.0, 1.0, 1.0 };
-        done = ll_calloc_array(m->count * channels + 1, sizeof *done);
-        answer = ll_calloc_array(m->count * channels + 1, sizeof *answer);
-        if (!done || !answer) {
-            ll_free(done);
-            ll_free(answer);
-            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", m->source);
-        }
         for (w = 0; w < m->count; ++w)
             for (c = 0; c < channels; ++c) {
                 ll_word_params p;
                 size_t wn, wm;
                 ll_word_params_above(m, w, c, channels, above[c], &p);
                 above[c] *= ll_word_index_ratio(m, w, c, channels);
-                s = word_resolution(&p, tolerance, mu_min, done, answer, &n_done, &wn, &wm);
+                s = word_resolution(&p, tolerance, mu_min, memo, &wn, &wm);
                 if (s != LL_OK) {
                     char detail[700]; /* (the message is rewritten below) */
                     snprintf(detail, sizeof detail, "%s", ll_last_error_message());
-                    ll_free(done);
-                    ll_free(answer);
                     return ll_fail(s, "%s:%zu:%zu: no resolution heuristic for this %s: %s",
                                    m->source, m->words[w].line, m->words[w].column,
                                    p.desc->name, detail);
@@ -158,8 +188,6 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
                 if (wm > orders)
                     orders = wm;
             }
-        ll_free(done);
-        ll_free(answer);
     }
     if (n % 2)
         ++n;
@@ -182,6 +210,15 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
     *n_orders = orders;
     *n_channels = channels;
     return LL_OK;
+}
+
+ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size_t *n_nodes,
+                           size_t *n_orders, size_t *n_channels)
+{
+    ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
+    ll_status s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels);
+    ll_resolution_memo_free(&memo);
+    return s;
 }
 
 ll_status ll_material_resolution(const ll_material *material, const ll_build_options *opts,

@@ -332,6 +332,7 @@ ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o
                                  size_t *n_nodes, size_t *n_orders, size_t *n_channels)
 {
     size_t bases = ll_material_basis_count(m), b, n = 0, orders = 0, nch = 0;
+    ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
     ll_word *words;
     ll_status s = LL_OK;
     if (m->n_axes == 0)
@@ -345,7 +346,7 @@ ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o
         ll_material view;
         size_t bn, bm, bc;
         ll_material_basis_view(m, b, words, &view);
-        s = ll_material_plan(&view, o, &bn, &bm, &bc);
+        s = ll_material_plan_memo(&view, o, &memo, &bn, &bm, &bc);
         if (s == LL_OK) {
             n = bn > n ? bn : n;
             orders = bm > orders ? bm : orders;
@@ -353,6 +354,7 @@ ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o
         }
     }
     ll_free(words);
+    ll_resolution_memo_free(&memo);
     if (s == LL_OK) {
         *n_nodes = n;
         *n_orders = orders;

@@ -215,5 +215,5 @@ const ll_word_desc ll_word_conductor = {
       { "k", 0, K, 0, 0, 0, 0, NULL, conductor_parse_k, NULL },
       LL_PARAM_ALPHA(ALPHA), LL_PARAM_COMPENSATE(LL_CONDUCTOR_COMPENSATE) },
     conductor_finish, conductor_needs_colour, NULL, conductor_params, conductor_resolution,
-    conductor_cost, conductor_build, conductor_metadata, NULL
+    conductor_cost, conductor_build, conductor_metadata, NULL, 0
 };

@@ -69,5 +69,5 @@ const ll_word_desc ll_word_dielectric = {
         NULL, dielectric_check_eta },
       LL_PARAM_ALPHA(LL_DIELECTRIC_ALPHA), LL_PARAM_COMPENSATE(LL_DIELECTRIC_COMPENSATE) },
     NULL, NULL, dielectric_index_ratio, dielectric_params, dielectric_resolution,
-    dielectric_cost, dielectric_build, dielectric_metadata, NULL
+    dielectric_cost, dielectric_build, dielectric_metadata, NULL, 0
 };

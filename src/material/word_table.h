@@ -152,6 +152,9 @@ struct ll_word_desc {
     void (*metadata)(ll_text *b, const ll_word *w);
     /* Release what parse allocated in w (nullable). */
     void (*destroy)(ll_word *w);
+    /* Bit k set: the resolution hook reads v[k] (words whose read values
+     * are equal share one resolution search); 0: it may read them all. */
+    unsigned resolution_reads;
 };
 
 /* The words, in the order messages list them. */
