@@ -9,6 +9,7 @@
  * BLAS-3 (gemm), then compressed back.
  */
 #include "grammar/grammar.h"
+#include "grammar/slab.h"
 #include "support/watch.h"
 
 #include <cblas.h>
@@ -342,6 +343,8 @@ typedef struct expand_job {
     const ll_layer *layer;
     double tau0;
     size_t doublings;
+    int slab;       /* the closed form of slab.c instead of doubling */
+    double tau;
     ll_order **result;
     ll_watch *watch;
 } expand_job;
@@ -357,6 +360,40 @@ static int is_diagonal(const double *x, size_t h)
     return 1;
 }
 
+/*
+ * One order by the closed form (slab.c) into w->out's R^t and T^tb; the
+ * phase blocks are w->top's. An order whose only content is the diagonal
+ * of T (no sideways scattering: beyond the kept moments of the phase
+ * function only the unscattered and truncated-forward light) is the
+ * exponential of its extinction, exactly.
+ */
+static ll_status slab_order(const expand_job *job, workspace *w, int *solved)
+{
+    const ll_layer *l = job->layer;
+    size_t h = l->n / 2, c;
+    const double *PT = w->top.blk[LL_BLOCK_TTB], *PR = w->top.blk[LL_BLOCK_RT];
+    double *R = w->out.blk[LL_BLOCK_RT], *T = w->out.blk[LL_BLOCK_TTB], *scratch;
+    size_t doubles;
+
+    *solved = 0;
+    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(PT, h)) {
+        memset(R, 0, h * h * sizeof(double));
+        memset(T, 0, h * h * sizeof(double));
+        for (c = 0; c < h; ++c)
+            T[c * h + c] = exp(-job->tau * (1.0 - PT[c * h + c]) / l->nodes[h + c]);
+        *solved = 1;
+        return LL_OK;
+    }
+    doubles = ll_slab_scratch_doubles(h);
+    scratch = doubles ? ll_alloc_array(doubles, sizeof(double)) : NULL;
+    if (!scratch)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                       "ll_layer_expand: out of memory for the slab of %zu nodes", l->n);
+    *solved = ll_slab_solve(h, PT, PR, l->nodes + h, l->weights + h, job->tau, scratch, R, T);
+    ll_free(scratch);
+    return LL_OK;
+}
+
 static ll_status expand_one_order(size_t k, void *ctx)
 {
     expand_job *job = ctx;
@@ -364,6 +401,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
     size_t n = l->n, h = n / 2, r, c, d;
     workspace w;
     double *R, *T;
+    int solved = 0;
     ll_status s;
 
     if (ll_watch_poll(job->watch))
@@ -380,6 +418,17 @@ static ll_status expand_one_order(size_t k, void *ctx)
     load_order(l->orders[k], n, &w.top);
     R = w.top.blk[LL_BLOCK_RT];
     T = w.top.blk[LL_BLOCK_TTB];
+    if (job->slab) {
+        /* An order the closed form does not take (not reciprocal) is
+         * doubled instead. */
+        s = slab_order(job, &w, &solved);
+        if (s != LL_OK)
+            goto done;
+        if (solved) {
+            ll_watch_advance(job->watch, job->doublings);
+            goto store;
+        }
+    }
     for (c = 0; c < h; ++c)
         for (r = 0; r < h; ++r) {
             double scale = job->tau0 / l->nodes[h + r];
@@ -419,6 +468,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
         memcpy(w.out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
         memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
     }
+store:
     memcpy(w.out.blk[LL_BLOCK_RB], w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
     memcpy(w.out.blk[LL_BLOCK_TBT], w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
     w.out.zero[LL_BLOCK_RT] = w.out.zero[LL_BLOCK_RB] = all_zero(w.out.blk[LL_BLOCK_RT], h * h);
@@ -443,7 +493,8 @@ void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublin
 }
 
 /* Doubling on a begun watch: one code path for every entry point. */
-static ll_status expand_watched(ll_layer *layer, double tau, ll_watch *watch)
+static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method method,
+                                ll_watch *watch)
 {
     static const char fn[] = "ll_layer_expand";
     expand_job job;
@@ -470,6 +521,10 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_watch *watch)
             min_mu = fabs(layer->nodes[i]);
     job.layer = layer;
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
+    job.tau = tau;
+    job.slab = method == LL_EXPAND_SLAB ||
+               (method == LL_EXPAND_CHEAPEST &&
+                ll_slab_order_cost(layer->n / 2) < ll_doubling_order_cost(layer->n / 2, job.doublings));
     job.watch = watch;
     if (!ll_size_mul(layer->m, job.doublings + 1, &units))
         units = SIZE_MAX;
@@ -487,7 +542,7 @@ ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *moni
 {
     ll_watch watch;
     ll_status s = ll_watch_begin(&watch, monitor, "ll_layer_expand");
-    return s == LL_OK ? expand_watched(layer, tau, &watch) : s;
+    return s == LL_OK ? expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch) : s;
 }
 
 ll_status ll_layer_expand(ll_layer *layer, double tau)
@@ -516,5 +571,12 @@ ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
     } else {
         ll_watch_begin_raw(&watch, NULL, NULL, NULL);
     }
-    return expand_watched(layer, tau, &watch);
+    return expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch);
+}
+
+ll_status ll_layer_expand_by(ll_layer *layer, double tau, ll_expand_method method)
+{
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, NULL, "ll_layer_expand");
+    return s == LL_OK ? expand_watched(layer, tau, method, &watch) : s;
 }

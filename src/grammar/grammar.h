@@ -27,4 +27,12 @@ LL_INTERNAL ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
  * min_mu: the initial thickness tau0 and the count k with tau0 2^k = tau. */
 LL_INTERNAL void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings);
 
+/* How ll_layer_expand gives a medium its thickness: by doubling (the
+ * reference), by the closed form of one eigendecomposition per order
+ * (slab.c; an order it does not take is doubled), or by whichever the cost
+ * model of slab.c says is cheaper for the node count and the doublings (the
+ * default of ll_layer_expand: it depends on neither data nor threads). */
+typedef enum { LL_EXPAND_CHEAPEST, LL_EXPAND_DOUBLING, LL_EXPAND_SLAB } ll_expand_method;
+LL_INTERNAL ll_status ll_layer_expand_by(ll_layer *layer, double tau, ll_expand_method method);
+
 #endif /* LL_GRAMMAR_GRAMMAR_H */
