@@ -259,6 +259,58 @@ static ll_status add_one_order(size_t k, void *ctx)
     return s;
 }
 
+/*
+ * One side only transmits straight through (R = 0, diagonal T: a medium's
+ * order beyond its phase function's moments, where only the unscattered
+ * light is left): then nothing reflects between the two, and the sum is
+ * the other side's matrix scaled by those diagonals,
+ *     top straight:    R^t = Du R^t_b Dd, T^tb = T^tb_b Dd, T^bt = Du T^bt_b, R^b = R^b_b,
+ *     bottom straight: R^b = Dd R^b_t Du, T^tb = Dd T^tb_t, T^bt = T^bt_t Du, R^t = R^t_t
+ * (Dd, Du: the diagonals of T^tb, T^bt), on the compact runs, with the
+ * products in the order of the dense path (the same bits, without its
+ * O(h^3) work). *done = 0 if neither side is such an order.
+ */
+static ll_status add_straight_through(const ll_order *ot, const ll_order *ob, size_t n,
+                                      ll_order **out, int *done)
+{
+    size_t h = n / 2, i;
+    double *buf = ll_alloc_array(n, 3 * sizeof(double));
+    double *down, *up, *left, *right;
+    const ll_order *other = NULL;
+    ll_status s = LL_OK;
+
+    *done = 0;
+    if (!buf)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
+    down = buf;
+    up = down + h;
+    left = up + h;
+    right = left + n;
+    if (ll_order_diagonal(ot, down, up)) {
+        for (i = 0; i < h; ++i) {
+            left[i] = up[i];
+            left[h + i] = 1.0;
+            right[i] = 1.0;
+            right[h + i] = down[i];
+        }
+        other = ob;
+    } else if (ll_order_diagonal(ob, down, up)) {
+        for (i = 0; i < h; ++i) {
+            left[i] = 1.0;
+            left[h + i] = down[i];
+            right[i] = up[i];
+            right[h + i] = 1.0;
+        }
+        other = ot;
+    }
+    if (other) {
+        s = ll_order_scaled(other, left, right, LL_DROP_THRESHOLD, out);
+        *done = 1;
+    }
+    ll_free(buf);
+    return s;
+}
+
 static ll_status add_order(size_t k, add_job *job)
 {
     ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
@@ -277,6 +329,12 @@ static ll_status add_order(size_t k, add_job *job)
         return ll_order_keep_block(ot, LL_BLOCK_RT, &job->result[k]);
     if (!ot)
         return ll_order_keep_block(ob, LL_BLOCK_RB, &job->result[k]);
+    {
+        int done;
+        s = add_straight_through(ot, ob, n, &job->result[k], &done);
+        if (s != LL_OK || done)
+            return s;
+    }
     s = workspace_init(&w, n / 2);
     if (s != LL_OK)
         return s;
@@ -394,6 +452,49 @@ static ll_status slab_order(const expand_job *job, workspace *w, int *solved)
     return LL_OK;
 }
 
+/*
+ * An order of the medium that only transmits straight through (no sideways
+ * scattering: beyond the kept moments of the phase function only the
+ * unscattered and the truncated-forward light) stays one, built from its
+ * diagonal without dense work: doubling squares the thin layer's diagonal
+ * once per doubling, the slab takes the exponential of the extinction.
+ * *done = 0 for any other order.
+ */
+static ll_status expand_straight_through(const expand_job *job, size_t k, int *done)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, h = n / 2, c, d;
+    double *down = ll_alloc_array(n, sizeof(double)), *up = down ? down + h : NULL;
+    ll_status s = LL_OK;
+
+    *done = 0;
+    if (!down)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
+    if (!l->orders[k])
+        memset(down, 0, n * sizeof(double)); /* a pure absorber */
+    else if (!ll_order_diagonal(l->orders[k], down, up))
+        goto done;
+    /* The slab is the same from both sides: T^tb (the phase matrix's
+     * down-from-down diagonal) on both, as the dense path does. */
+    for (c = 0; c < h; ++c) {
+        double x = l->nodes[h + c];
+        if (job->slab) {
+            down[c] = exp(-job->tau * (1.0 - down[c]) / x);
+        } else {
+            double t = 1.0 + (job->tau0 / x) * (down[c] - 1.0);
+            for (d = 0; d < job->doublings; ++d)
+                t *= t;
+            down[c] = t;
+        }
+    }
+    s = ll_order_from_diagonals(n, down, down, LL_DROP_THRESHOLD, &job->result[k]);
+    ll_watch_advance(job->watch, job->doublings + 1);
+    *done = 1;
+done:
+    ll_free(down);
+    return s;
+}
+
 static ll_status expand_one_order(size_t k, void *ctx)
 {
     expand_job *job = ctx;
@@ -406,6 +507,9 @@ static ll_status expand_one_order(size_t k, void *ctx)
 
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
+    s = expand_straight_through(job, k, &solved);
+    if (s != LL_OK || solved)
+        return s;
     s = workspace_init(&w, h);
     if (s != LL_OK)
         return s;

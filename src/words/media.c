@@ -38,6 +38,7 @@ typedef struct medium_job {
     const double *moment;    /* [K] albedo (chi_k - f)                       */
     double forward;          /* albedo f: exactly forward scattering         */
     const long double *diag; /* [L x n] Y_l^l at every node                  */
+    ll_order *straight;      /* every order >= K: forward * I (shared)       */
     ll_order **result;
     ll_watch *watch;         /* one unit per order; polled per node          */
     const char *fn;
@@ -71,7 +72,15 @@ static ll_status medium_order(size_t order, void *ctx)
     ll_status s;
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
-    s = build_order(order, job);
+    /* Beyond the kept moments an order is the forward term alone, the same
+     * for all of them: one shared order, no n x n matrix (order 0 always
+     * has a moment, K >= 1). */
+    if (order >= job->K) {
+        job->result[order] = ll_order_retain(job->straight);
+        s = LL_OK;
+    } else {
+        s = build_order(order, job);
+    }
     ll_watch_advance(job->watch, 1);
     return s;
 }
@@ -167,12 +176,14 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
                             const char *fn, ll_watch *watch)
 {
     medium_job job;
-    double *moment = NULL;
+    double *moment = NULL, *forward;
     long double *diag = NULL;
     size_t k, L = layer->m < K ? layer->m : K;
     ll_status s;
 
-    moment = ll_alloc_array(K, sizeof(double));
+    job.straight = NULL;
+    moment = ll_alloc_array(K + layer->n, sizeof(double));
+    forward = moment ? moment + K : NULL;
     diag = sectoral_values(layer, L);
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
     if (!moment || !diag || !job.result) {
@@ -195,6 +206,11 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     job.diag = diag;
     job.watch = watch;
     job.fn = fn;
+    for (k = 0; k < layer->n; ++k)
+        forward[k] = job.forward;
+    s = ll_order_from_diagonals(layer->n, forward, forward, 0.0, &job.straight);
+    if (s != LL_OK)
+        goto done;
     s = ll_watch_stage(watch, "phase function", 0.0, 1.0, layer->m) ? ll_watch_check(watch, fn)
                                                                     : LL_OK;
     if (s == LL_OK)
@@ -203,6 +219,7 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     s = ll_layer_commit_orders(layer, job.result, s);
     job.result = NULL;
 done:
+    ll_order_release(job.straight);
     ll_free(job.result);
     ll_free(moment);
     ll_free(diag);
