@@ -33,10 +33,15 @@ typedef struct workspace {
     double *rhs;               /* h x h: Ra Tb                          */
     lapack_int *piv_tb, *piv_bt;
     void *memory;
+    double *slab;              /* slab.c's scratch, made when first needed */
     ll_watch *watch;           /* polled between the BLAS calls (nullable) */
 } workspace;
 
-static void workspace_free(workspace *w) { ll_free(w->memory); }
+static void workspace_free(workspace *w)
+{
+    ll_free(w->memory);
+    ll_free(w->slab);
+}
 
 static ll_status workspace_init(workspace *w, size_t h)
 {
@@ -64,6 +69,54 @@ static ll_status workspace_init(workspace *w, size_t h)
     w->rhs = p; p += hh;
     w->piv_tb = (lapack_int *)p; p += h;
     w->piv_bt = (lapack_int *)p;
+    return LL_OK;
+}
+
+/*
+ * One workspace per thread, made by the first order a thread runs and
+ * reused by its next ones: the work matrices of h = 550 are 40 MB, and
+ * fresh ones per order cost a page fault per 4 KiB (the system time of
+ * long builds). Orders write every entry they read, so what a slot held
+ * before changes nothing: results stay the same for any thread count.
+ */
+typedef struct workspace_pool {
+    size_t count;
+    workspace *slot;
+} workspace_pool;
+
+static ll_status pool_create(workspace_pool *p, const char *fn)
+{
+    p->count = ll_get_thread_count();
+    p->slot = ll_calloc_array(p->count, sizeof *p->slot);
+    return p->slot ? LL_OK : ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+}
+
+static void pool_destroy(workspace_pool *p)
+{
+    size_t i;
+    for (i = 0; p->slot && i < p->count; ++i)
+        workspace_free(&p->slot[i]);
+    ll_free(p->slot);
+    p->slot = NULL;
+}
+
+/* The calling thread's workspace for h, made on first use. */
+static ll_status pool_get(workspace_pool *p, size_t h, ll_watch *watch, workspace **out)
+{
+    size_t i = ll_parallel_slot();
+    workspace *w;
+    ll_status s;
+    if (i >= p->count)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "adding: thread %zu of a loop sized for %zu threads", i, p->count);
+    w = &p->slot[i];
+    if (!w->memory) {
+        s = workspace_init(w, h);
+        if (s != LL_OK)
+            return s;
+    }
+    w->watch = watch;
+    *out = w;
     return LL_OK;
 }
 
@@ -244,6 +297,7 @@ typedef struct add_job {
     ll_order **result;
     int homogeneous;
     ll_watch *watch;
+    workspace_pool pool;
 } add_job;
 
 static ll_status add_order(size_t k, add_job *job);
@@ -315,7 +369,7 @@ static ll_status add_order(size_t k, add_job *job)
 {
     ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
     size_t n = job->top->n;
-    workspace w;
+    workspace *w;
     ll_status s;
 
     if (!ot && !ob)
@@ -335,16 +389,14 @@ static ll_status add_order(size_t k, add_job *job)
         if (s != LL_OK || done)
             return s;
     }
-    s = workspace_init(&w, n / 2);
+    s = pool_get(&job->pool, n / 2, job->watch, &w);
     if (s != LL_OK)
         return s;
-    w.watch = job->watch;
-    load_order(ot, n, &w.top);
-    load_order(ob, n, &w.bottom);
-    s = add_dense(&w, job->homogeneous);
+    load_order(ot, n, &w->top);
+    load_order(ob, n, &w->bottom);
+    s = add_dense(w, job->homogeneous);
     if (s == LL_OK)
-        s = store_dense(&w.out, n / 2, &job->result[k]);
-    workspace_free(&w);
+        s = store_dense(&w->out, n / 2, &job->result[k]);
     return s;
 }
 
@@ -370,10 +422,16 @@ ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer 
     job.result = ll_calloc_array(top->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
+    s = pool_create(&job.pool, fn);
+    if (s != LL_OK) {
+        ll_free(job.result);
+        return s;
+    }
     /* An order is one unit (they cost about the same). */
     s = ll_watch_stage(&watch, "adding", 0.0, 1.0, top->m) ? ll_watch_check(&watch, fn) : LL_OK;
     if (s == LL_OK)
         s = ll_parallel_for_watched(top->m, add_one_order, &job, &watch);
+    pool_destroy(&job.pool);
     s = ll_watch_finish(&watch, s, fn);
     return ll_layer_commit_orders(out, job.result, s);
 }
@@ -405,6 +463,7 @@ typedef struct expand_job {
     double tau;
     ll_order **result;
     ll_watch *watch;
+    workspace_pool pool;
 } expand_job;
 
 /* Is the block zero off its diagonal? */
@@ -442,13 +501,15 @@ static ll_status slab_order(const expand_job *job, workspace *w, int *solved)
         *solved = 1;
         return LL_OK;
     }
-    doubles = ll_slab_scratch_doubles(h);
-    scratch = doubles ? ll_alloc_array(doubles, sizeof(double)) : NULL;
-    if (!scratch)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY,
-                       "ll_layer_expand: out of memory for the slab of %zu nodes", l->n);
+    if (!w->slab) {
+        doubles = ll_slab_scratch_doubles(h);
+        w->slab = doubles ? ll_alloc_array(doubles, sizeof(double)) : NULL;
+        if (!w->slab)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                           "ll_layer_expand: out of memory for the slab of %zu nodes", l->n);
+    }
+    scratch = w->slab;
     *solved = ll_slab_solve(h, PT, PR, l->nodes + h, l->weights + h, job->tau, scratch, R, T);
-    ll_free(scratch);
     return LL_OK;
 }
 
@@ -500,7 +561,8 @@ static ll_status expand_one_order(size_t k, void *ctx)
     expand_job *job = ctx;
     const ll_layer *l = job->layer;
     size_t n = l->n, h = n / 2, r, c, d;
-    workspace w;
+    workspace *w;
+    dense_order own_bottom; /* the doubling points the bottom at the top */
     double *R, *T;
     int solved = 0;
     ll_status s;
@@ -510,22 +572,22 @@ static ll_status expand_one_order(size_t k, void *ctx)
     s = expand_straight_through(job, k, &solved);
     if (s != LL_OK || solved)
         return s;
-    s = workspace_init(&w, h);
+    s = pool_get(&job->pool, h, job->watch, &w);
     if (s != LL_OK)
         return s;
-    w.watch = job->watch;
+    own_bottom = w->bottom;
     /* The phase matrices of a medium are the same seen from either side, so
      * R^t and T^tb describe the slab. Initial thin slab (Grant and Hunt 1969,
      * first order in tau0): R = (tau0 / mu_o) P_R and T = I + (tau0 / mu_o)
      * (P_T - I). With phase matrices that conserve energy exactly this
      * conserves energy exactly too, and adding preserves it. */
-    load_order(l->orders[k], n, &w.top);
-    R = w.top.blk[LL_BLOCK_RT];
-    T = w.top.blk[LL_BLOCK_TTB];
+    load_order(l->orders[k], n, &w->top);
+    R = w->top.blk[LL_BLOCK_RT];
+    T = w->top.blk[LL_BLOCK_TTB];
     if (job->slab) {
         /* An order the closed form does not take (not reciprocal) is
          * doubled instead. */
-        s = slab_order(job, &w, &solved);
+        s = slab_order(job, w, &solved);
         if (s != LL_OK)
             goto done;
         if (solved) {
@@ -540,14 +602,14 @@ static ll_status expand_one_order(size_t k, void *ctx)
             T[c * h + r] = (r == c ? 1.0 : 0.0) + scale * (T[c * h + r] - (r == c ? 1.0 : 0.0));
         }
 
-    if (w.top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
+    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
         /* Nothing scatters sideways in this order (only the unscattered and
          * exactly-forward part): each doubling squares the diagonal. */
         for (c = 0; c < h; ++c)
             for (d = 0; d < job->doublings; ++d)
                 T[c * h + c] *= T[c * h + c];
-        memset(w.out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
-        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+        memset(w->out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
         ll_watch_advance(job->watch, job->doublings);
     } else {
         for (d = 0; d < job->doublings; ++d) {
@@ -556,32 +618,32 @@ static ll_status expand_one_order(size_t k, void *ctx)
                 goto done;
             }
             /* The slab added to itself: its top is the bottom's copy. */
-            memcpy(w.top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
-            memcpy(w.top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
-            w.top.zero[LL_BLOCK_RT] = w.top.zero[LL_BLOCK_RB] = all_zero(R, h * h);
-            w.top.zero[LL_BLOCK_TTB] = w.top.zero[LL_BLOCK_TBT] = 0;
-            memcpy(w.bottom.blk, w.top.blk, sizeof w.top.blk);
-            memcpy(w.bottom.zero, w.top.zero, sizeof w.top.zero);
-            s = add_dense(&w, 1);
+            memcpy(w->top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
+            memcpy(w->top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
+            w->top.zero[LL_BLOCK_RT] = w->top.zero[LL_BLOCK_RB] = all_zero(R, h * h);
+            w->top.zero[LL_BLOCK_TTB] = w->top.zero[LL_BLOCK_TBT] = 0;
+            memcpy(w->bottom.blk, w->top.blk, sizeof w->top.blk);
+            memcpy(w->bottom.zero, w->top.zero, sizeof w->top.zero);
+            s = add_dense(w, 1);
             if (s != LL_OK)
                 goto done;
-            memcpy(R, w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
-            memcpy(T, w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+            memcpy(R, w->out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+            memcpy(T, w->out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
             ll_watch_advance(job->watch, 1);
         }
-        memcpy(w.out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
-        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
     }
 store:
-    memcpy(w.out.blk[LL_BLOCK_RB], w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
-    memcpy(w.out.blk[LL_BLOCK_TBT], w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
-    w.out.zero[LL_BLOCK_RT] = w.out.zero[LL_BLOCK_RB] = all_zero(w.out.blk[LL_BLOCK_RT], h * h);
-    w.out.zero[LL_BLOCK_TTB] = w.out.zero[LL_BLOCK_TBT] =
-        all_zero(w.out.blk[LL_BLOCK_TTB], h * h);
-    s = store_dense(&w.out, h, &job->result[k]);
+    memcpy(w->out.blk[LL_BLOCK_RB], w->out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+    memcpy(w->out.blk[LL_BLOCK_TBT], w->out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+    w->out.zero[LL_BLOCK_RT] = w->out.zero[LL_BLOCK_RB] = all_zero(w->out.blk[LL_BLOCK_RT], h * h);
+    w->out.zero[LL_BLOCK_TTB] = w->out.zero[LL_BLOCK_TBT] =
+        all_zero(w->out.blk[LL_BLOCK_TTB], h * h);
+    s = store_dense(&w->out, h, &job->result[k]);
     ll_watch_advance(job->watch, 1);
 done:
-    workspace_free(&w);
+    w->bottom = own_bottom;
     return s;
 }
 
@@ -635,9 +697,15 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method me
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
+    s = pool_create(&job.pool, fn);
+    if (s != LL_OK) {
+        ll_free(job.result);
+        return s;
+    }
     s = ll_watch_stage(watch, "doubling", 0.0, 1.0, units) ? ll_watch_check(watch, fn) : LL_OK;
     if (s == LL_OK)
         s = ll_parallel_for_watched(layer->m, expand_one_order, &job, watch);
+    pool_destroy(&job.pool);
     s = ll_watch_finish(watch, s, fn);
     return ll_layer_commit_orders(layer, job.result, s);
 }

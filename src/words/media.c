@@ -39,6 +39,8 @@ typedef struct medium_job {
     double forward;          /* albedo f: exactly forward scattering         */
     const long double *diag; /* [L x n] Y_l^l at every node                  */
     ll_order *straight;      /* every order >= K: forward * I (shared)       */
+    double **scratch;        /* [threads] P, Y, Z of one order, per thread   */
+    size_t slots;
     ll_order **result;
     ll_watch *watch;         /* one unit per order; polled per node          */
     const char *fn;
@@ -90,19 +92,24 @@ static ll_status medium_order(size_t order, void *ctx)
 static ll_status build_order(size_t order, const medium_job *job)
 {
     const ll_layer *l = job->layer;
-    size_t n = l->n, K = job->K, cols, j, c, r, k;
+    size_t n = l->n, K = job->K, cols, j, c, r, k, slot = ll_parallel_slot();
     double *Y = NULL, *Z = NULL, *P = NULL;
     ll_status s = LL_OK;
 
     cols = order < K ? K - order : 0;
-    P = ll_calloc_array(n, n * sizeof(double));
-    if (!P)
+    /* The thread's scratch, made by its first order and reused (fresh
+     * n x n matrices per order cost a page fault per 4 KiB): n^2 + 2 n K. */
+    if (slot >= job->slots)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "medium: thread %zu of %zu", slot, job->slots);
+    if (!job->scratch[slot])
+        job->scratch[slot] = ll_alloc_array(n, (n + 2 * K) * sizeof(double));
+    if (!job->scratch[slot])
         goto oom;
+    P = job->scratch[slot];
+    memset(P, 0, n * n * sizeof(double));
     if (cols > 0) {
-        Y = ll_alloc_array(n, cols * sizeof(double));
-        Z = ll_alloc_array(n, cols * sizeof(double));
-        if (!Y || !Z)
-            goto oom;
+        Y = P + n * n;
+        Z = Y + n * cols;
         /* Y[:, c] = Y_{order + c}^{order}(mu_j) by the three-term recurrence in
          * the degree (stable upward for fixed order). */
         for (j = 0; j < n; ++j) {
@@ -154,19 +161,10 @@ static ll_status build_order(size_t order, const medium_job *job)
         }
     }
     s = ll_order_from_dense(P, n, 0.0, &job->result[order]);
-    ll_free(Y);
-    ll_free(Z);
-    ll_free(P);
     return s;
 oom:
-    ll_free(Y);
-    ll_free(Z);
-    ll_free(P);
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "medium: out of memory for order %zu", order);
 cancelled:
-    ll_free(Y);
-    ll_free(Z);
-    ll_free(P);
     return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
 }
 
@@ -182,11 +180,13 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     ll_status s;
 
     job.straight = NULL;
+    job.slots = ll_get_thread_count();
+    job.scratch = ll_calloc_array(job.slots, sizeof(double *));
     moment = ll_alloc_array(K + layer->n, sizeof(double));
     forward = moment ? moment + K : NULL;
     diag = sectoral_values(layer, L);
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
-    if (!moment || !diag || !job.result) {
+    if (!moment || !diag || !job.result || !job.scratch) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
         goto done;
     }
@@ -219,6 +219,9 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     s = ll_layer_commit_orders(layer, job.result, s);
     job.result = NULL;
 done:
+    for (k = 0; job.scratch && k < job.slots; ++k)
+        ll_free(job.scratch[k]);
+    ll_free(job.scratch);
     ll_order_release(job.straight);
     ll_free(job.result);
     ll_free(moment);
