@@ -688,9 +688,11 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method me
     job.layer = layer;
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
     job.tau = tau;
+    /* The cost model depends on n and the doublings alone: the same pick
+     * for any data and any thread count. */
     job.slab = method == LL_EXPAND_SLAB ||
                (method == LL_EXPAND_CHEAPEST &&
-                ll_slab_order_cost(layer->n / 2) < ll_doubling_order_cost(layer->n / 2, job.doublings));
+                ll_slab_order_steps(layer->n / 2) < (double)job.doublings);
     job.watch = watch;
     if (!ll_size_mul(layer->m, job.doublings + 1, &units))
         units = SIZE_MAX;

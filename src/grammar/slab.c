@@ -199,20 +199,27 @@ int ll_slab_solve(size_t h, const double *PT, const double *PR, const double *x,
     return 1;
 }
 
-/* Measured on this machine (bench/slab.c, one thread, OpenBLAS): seconds
- * per order divided by h^3. An adding step of the doubling costs about
- * DOUBLING_STEP h^3, the slab SLAB_ORDER h^3 (dsyevr dominates). */
-#define DOUBLING_STEP 1.0
-#define SLAB_ORDER 3.0
-
-double ll_doubling_order_cost(size_t h, size_t doublings)
+/*
+ * The cost model, measured with bench/slab.c (one thread, OpenBLAS 0.3.21,
+ * the 2-core development machine under load; HG g = 0.9, tau = 4, 17
+ * doublings): one order by the slab costs as much as this many adding
+ * steps of doubling,
+ *     h      8    20    50   100   200   549
+ *     steps  11   8.5   8.5  6.5   3.5   2.75
+ * (dsyevr and the two LU solves against the gemm-bound adding step; small
+ * h pays LAPACK's per-call overhead), fitted by max(2.5, 12 - 1.5 ln h).
+ * Doubling needs one adding step per doubling (k = log2(tau / tau0), 15 or
+ * more for tau >= 1 with tau0 <= 2^-15), so the slab is cheaper for every
+ * slab but the thinnest.
+ */
+double ll_slab_order_steps(size_t h)
 {
-    double hd = (double)h;
-    return DOUBLING_STEP * (double)doublings * hd * hd * hd;
+    double steps = 12.0 - 1.5 * log((double)(h ? h : 1));
+    return steps > 2.5 ? steps : 2.5;
 }
 
-double ll_slab_order_cost(size_t h)
+double ll_expand_order_steps(size_t h, size_t doublings)
 {
-    double hd = (double)h;
-    return SLAB_ORDER * hd * hd * hd;
+    double slab = ll_slab_order_steps(h);
+    return slab < (double)doublings ? slab : (double)doublings;
 }

@@ -34,9 +34,11 @@ LL_INTERNAL int ll_slab_solve(size_t h, const double *PT, const double *PR, cons
                               const double *w, double tau, double *scratch, double *R,
                               double *T);
 
-/* The cost of one order, in units of h^3 double-precision multiply-adds
- * (measured; bench/slab.c): doubling with k doublings, and the slab. */
-LL_INTERNAL double ll_doubling_order_cost(size_t h, size_t doublings);
-LL_INTERNAL double ll_slab_order_cost(size_t h);
+/* The cost of one order by the slab, in adding steps of doubling (one
+ * step per doubling; measured, slab.c), and of expanding one order by the
+ * cheaper of the two: what ll_layer_expand picks (the slab exactly when
+ * ll_slab_order_steps(h) < doublings) and what the build estimate counts. */
+LL_INTERNAL double ll_slab_order_steps(size_t h);
+LL_INTERNAL double ll_expand_order_steps(size_t h, size_t doublings);
 
 #endif /* LL_GRAMMAR_SLAB_H */
