@@ -43,6 +43,28 @@ static const bench_eval_ref bench_eval_functions[BENCH_EVAL_FUNCTION_COUNT] = {
     { "sample_dir", "Sample_f", 1200.0, 1800.0 },
 };
 
+/* Issue 18: the seed's dust on gold (bench/recipe.c), at a reduced
+ * resolution in every run and at its own (1098, 4194) on request
+ * (LL_BENCH_DUST_FULL=1: minutes), with the figures before the slab solver,
+ * the straight-through orders and the reused workspaces (0: not measured). */
+#define BENCH_DUST_COUNT 2
+typedef struct bench_dust_ref {
+    const char *name;
+    int opt_in;               /* only with LL_BENCH_DUST_FULL=1             */
+    double before_wall_s, before_cpu_s, before_rss_mib;
+    const char *before_source;
+} bench_dust_ref;
+
+static const bench_dust_ref bench_dust[BENCH_DUST_COUNT] = {
+    { "dust-on-gold-400", 0, 0.0, 0.0, 0.0, "" },
+    { "dust-on-gold", 1, 429.0, 732.0 + 78.0, 4.8 * 1024.0, "issue 18" },
+};
+/* Per-order cost of the slab against doubling (bench/slab.c), these n. */
+#define BENCH_SLAB_SIZE_COUNT 3
+static const size_t bench_slab_sizes[BENCH_SLAB_SIZE_COUNT] = { 100, 400, 1098 };
+#define BENCH_TARGET_DUST_WALL 60.0          /* s, dust-on-gold (1098, 4194)  */
+#define BENCH_TARGET_DUST_RSS (2.0 * 1024.0) /* MiB                           */
+
 /* Targets of issue 7. */
 #define BENCH_TARGET_SPEEDUP 5.0       /* recipes: at least 5x faster than the original   */
 #define BENCH_TARGET_MEMORY_RATIO 0.5  /* ... with at most half its peak memory           */

@@ -12,6 +12,8 @@
 #   LL_BENCH_JSON       output file (default bench/results.json)
 #   LL_BENCH_ORIGINAL   optional directory of executables named after the
 #                       recipes, timed side by side (docs/benchmarks.md)
+#   LL_BENCH_DUST_FULL  1: also the dust on gold at (1098, 4194), one run
+#                       (minutes; issue 18), besides the reduced (400, 800)
 set -eu
 
 cd "$(dirname "$0")/.."
@@ -20,6 +22,7 @@ CC=${CC:-cc}
 RUNS=${LL_BENCH_RUNS:-3}
 JSON=${LL_BENCH_JSON:-bench/results.json}
 ORIGINAL=${LL_BENCH_ORIGINAL:-}
+DUST_FULL=${LL_BENCH_DUST_FULL:-0}
 
 if [ ! -f "$BUILD/lib/liblayerlab.so" ]; then
     echo "bench: $BUILD/lib/liblayerlab.so is missing; run 'make bench'" >&2
@@ -58,6 +61,10 @@ build() { # name, sources and extra flags
 build recipe bench/recipe.c bench/bench_util.c
 # shellcheck disable=SC2086
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
+# The slab against doubling needs the internal method choice: the static
+# library (the same objects).
+# shellcheck disable=SC2086
+build slab bench/slab.c bench/bench_util.c -Isrc "$BUILD/lib/liblayerlab.a" -fopenmp $BLAS_LIBS
 build eval bench/eval.c bench/bench_util.c
 build batch bench/batch.c bench/bench_util.c
 build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
@@ -72,5 +79,5 @@ fi
 COMPILER=$($CC --version 2>/dev/null | head -n 1)
 
 exec "$BIN/driver" --bin "$BIN" --work "$WORK" --testdata tests/data --json "$JSON" \
-    --runs "$RUNS" --original "$ORIGINAL" --commit "$COMMIT" \
+    --runs "$RUNS" --original "$ORIGINAL" --dust-full "$DUST_FULL" --commit "$COMMIT" \
     --compiler "$COMPILER -O3 -march=x86-64-v2"
