@@ -225,6 +225,38 @@ static void expand_uses_the_cheaper_method(void **state)
     ll_layer_destroy(b);
 }
 
+/* The one-pass medium (phase matrix straight into the slab, slab_medium.c)
+ * is the two-step one with the slab, bit for bit, for each phase function;
+ * where the cost model keeps doubling it declines and leaves the layer. */
+static void one_pass_medium_is_the_two_steps(void **state)
+{
+    static const struct { ll_medium_kind kind; double shape; } phases[] = {
+        { LL_MEDIUM_HG, 0.85 }, { LL_MEDIUM_VMF, 12.0 }, { LL_MEDIUM_ISOTROPIC, 0.0 } };
+    size_t i;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        ll_layer *one = ll_test_layer(48, 64), *two = ll_test_layer(48, 64);
+        int done = 0;
+        assert_int_equal(ll_layer_set_medium_slab(one, phases[i].kind, 0.97, phases[i].shape,
+                                                  2.5, NULL, &done), LL_OK);
+        assert_true(done);
+        assert_int_equal(ll_layer_set_medium_finished(two, phases[i].kind, 0.97,
+                                                      phases[i].shape, NULL, NULL), LL_OK);
+        assert_int_equal(ll_layer_expand_by(two, 2.5, LL_EXPAND_SLAB), LL_OK);
+        assert_true(largest_difference(one, two) == 0.0);
+        ll_layer_destroy(one);
+        ll_layer_destroy(two);
+    }
+    {
+        ll_layer *l = ll_test_layer(16, 2);
+        int done = 1;
+        assert_int_equal(ll_layer_set_medium_slab(l, LL_MEDIUM_HG, 0.9, 0.5, 1e-4, NULL, &done),
+                         LL_OK);
+        assert_false(done);
+        ll_layer_destroy(l);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -233,6 +265,7 @@ int main(void)
         cmocka_unit_test(conservative_slabs_keep_energy),
         cmocka_unit_test(slab_does_not_depend_on_thread_count),
         cmocka_unit_test(expand_uses_the_cheaper_method),
+        cmocka_unit_test(one_pass_medium_is_the_two_steps),
     };
     return cmocka_run_group_tests_name("slab", tests, NULL, NULL);
 }

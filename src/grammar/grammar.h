@@ -7,6 +7,7 @@
 #define LL_GRAMMAR_GRAMMAR_H
 
 #include "layer/layer.h"
+#include "words/media.h"
 
 /* ---- doubling with progress and cancellation (for long builds) */
 typedef struct ll_expand_monitor {
@@ -34,5 +35,17 @@ LL_INTERNAL void ll_expand_schedule(double tau, double min_mu, double *tau0, siz
  * default of ll_layer_expand: it depends on neither data nor threads). */
 typedef enum { LL_EXPAND_CHEAPEST, LL_EXPAND_DOUBLING, LL_EXPAND_SLAB } ll_expand_method;
 LL_INTERNAL ll_status ll_layer_expand_by(ll_layer *layer, double tau, ll_expand_method method);
+
+/* A medium with its thickness in one pass (slab_medium.c): the phase
+ * matrix of each order goes straight into the closed-form slab and only
+ * the slab is stored, the same bits as ll_layer_set_* then ll_layer_expand
+ * by the slab, with half the memory. Only where ll_layer_expand would take
+ * the slab (ll_medium_slab_applies: tau > 0 and the cost model); otherwise,
+ * or if an order is not one the slab solves, *done = 0 and the layer is
+ * unchanged (the caller takes the two steps). */
+LL_INTERNAL int ll_medium_slab_applies(const ll_layer *layer, double tau);
+LL_INTERNAL ll_status ll_layer_set_medium_slab(ll_layer *layer, ll_medium_kind kind,
+                                               double albedo, double shape, double tau,
+                                               const ll_monitor *monitor, int *done);
 
 #endif /* LL_GRAMMAR_GRAMMAR_H */

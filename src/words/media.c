@@ -24,7 +24,7 @@
  * diagonal correction makes this hold for quadrature rules that are not
  * exact (composite Simpson).
  */
-#include "layer/layer.h"
+#include "words/media.h"
 #include "support/watch.h"
 
 #include <cblas.h>
@@ -40,6 +40,7 @@ typedef struct medium_job {
     const long double *diag; /* [L x n] Y_l^l at every node                  */
     ll_order *straight;      /* every order >= K: forward * I (shared)       */
     double **scratch;        /* [threads] P, Y, Z of one order, per thread   */
+    const ll_medium_finish *finish; /* nullable: each order's last step      */
     size_t slots;
     ll_order **result;
     ll_watch *watch;         /* one unit per order; polled per node          */
@@ -77,7 +78,10 @@ static ll_status medium_order(size_t order, void *ctx)
     /* Beyond the kept moments an order is the forward term alone, the same
      * for all of them: one shared order, no n x n matrix (order 0 always
      * has a moment, K >= 1). */
-    if (order >= job->K) {
+    if (order >= job->K && job->finish) {
+        s = job->finish->order(job->finish->user, order, NULL, job->forward,
+                               &job->result[order]);
+    } else if (order >= job->K) {
         job->result[order] = ll_order_retain(job->straight);
         s = LL_OK;
     } else {
@@ -160,7 +164,10 @@ static ll_status build_order(size_t order, const medium_job *job)
             P[c * n + c] += (albedo * l->weights[c] - sum) / l->weights[c];
         }
     }
-    s = ll_order_from_dense(P, n, 0.0, &job->result[order]);
+    if (job->finish)
+        s = job->finish->order(job->finish->user, order, P, job->forward, &job->result[order]);
+    else
+        s = ll_order_from_dense(P, n, 0.0, &job->result[order]);
     return s;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "medium: out of memory for order %zu", order);
@@ -171,7 +178,7 @@ cancelled:
 /* Build all orders from the Legendre moments chi[0..K] (chi[K] is the first
  * moment not kept, the delta-M forward fraction). */
 static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, size_t K,
-                            const char *fn, ll_watch *watch)
+                            const char *fn, const ll_medium_finish *finish, ll_watch *watch)
 {
     medium_job job;
     double *moment = NULL, *forward;
@@ -180,6 +187,7 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     ll_status s;
 
     job.straight = NULL;
+    job.finish = finish;
     job.slots = ll_get_thread_count();
     job.scratch = ll_calloc_array(job.slots, sizeof(double *));
     moment = ll_alloc_array(K + layer->n, sizeof(double));
@@ -241,7 +249,8 @@ static ll_status check_medium_args(const ll_layer *layer, double albedo, const c
 /* Moments kept: as many as the quadrature integrates exactly (n nodes). */
 static size_t kept_moments(const ll_layer *layer) { return layer->n; }
 
-ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
+static ll_status isotropic(ll_layer *layer, double albedo, const ll_medium_finish *finish,
+                           const ll_monitor *monitor)
 {
     double *chi;
     size_t K;
@@ -256,7 +265,7 @@ ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_mon
     if (!chi)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_isotropic: out of memory");
     chi[0] = 1.0;
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic", &watch);
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_isotropic", finish, &watch);
     ll_free(chi);
     return s;
 }
@@ -266,8 +275,8 @@ ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
     return ll_layer_set_isotropic_ex(layer, albedo, NULL);
 }
 
-ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
-                                            const ll_monitor *monitor)
+static ll_status henyey_greenstein(ll_layer *layer, double albedo, double g,
+                                   const ll_medium_finish *finish, const ll_monitor *monitor)
 {
     double *chi;
     size_t K, k;
@@ -288,7 +297,7 @@ ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, doub
     chi[0] = 1.0;
     for (k = 1; k <= K; ++k)
         chi[k] = chi[k - 1] * g;
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", &watch);
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", finish, &watch);
     ll_free(chi);
     return s;
 }
@@ -298,8 +307,8 @@ ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double 
     return ll_layer_set_henyey_greenstein_ex(layer, albedo, g, NULL);
 }
 
-ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
-                                           const ll_monitor *monitor)
+static ll_status von_mises_fisher(ll_layer *layer, double albedo, double kappa,
+                                  const ll_medium_finish *finish, const ll_monitor *monitor)
 {
     double *chi;
     size_t K, k, start;
@@ -340,7 +349,7 @@ ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, doubl
             chi[k] = chi[k - 1] * r[k];
         ll_free(r);
     }
-    s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher", &watch);
+    s = set_medium(layer, albedo, chi, K, "ll_layer_set_von_mises_fisher", finish, &watch);
     ll_free(chi);
     return s;
 }
@@ -348,4 +357,32 @@ ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, doubl
 ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa)
 {
     return ll_layer_set_von_mises_fisher_ex(layer, albedo, kappa, NULL);
+}
+
+ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
+{
+    return isotropic(layer, albedo, NULL, monitor);
+}
+
+ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
+                                            const ll_monitor *monitor)
+{
+    return henyey_greenstein(layer, albedo, g, NULL, monitor);
+}
+
+ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
+                                           const ll_monitor *monitor)
+{
+    return von_mises_fisher(layer, albedo, kappa, NULL, monitor);
+}
+
+ll_status ll_layer_set_medium_finished(ll_layer *layer, ll_medium_kind kind, double albedo,
+                                       double shape, const ll_medium_finish *finish,
+                                       const ll_monitor *monitor)
+{
+    switch (kind) {
+    case LL_MEDIUM_HG: return henyey_greenstein(layer, albedo, shape, finish, monitor);
+    case LL_MEDIUM_VMF: return von_mises_fisher(layer, albedo, shape, finish, monitor);
+    default: return isotropic(layer, albedo, finish, monitor);
+    }
 }
