@@ -33,6 +33,7 @@ typedef struct config {
     const char *bin_dir, *work_dir, *testdata_dir, *json_path, *original_dir;
     size_t runs, cores;
     int dust_full;       /* also the dust on gold at (1098, 4194)          */
+    const char *llbuild; /* tools/llbuild, for the dust as a material      */
     size_t threads[8];   /* scaling: 1, 2, 4, ... and the core count */
     size_t thread_count;
 } config;
@@ -159,7 +160,7 @@ static void run_dust(const config *cfg, bench_store *store)
     char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128], prefix[128];
     char id[160], sizes[BENCH_SLAB_SIZE_COUNT][16];
     size_t run, r, i;
-    char *argv[BENCH_SLAB_SIZE_COUNT + 2];
+    char *argv[BENCH_SLAB_SIZE_COUNT + 6];
     bench_child_result res;
 
     path_join(recipe_bin, sizeof recipe_bin, cfg->bin_dir, "recipe");
@@ -188,6 +189,31 @@ static void run_dust(const config *cfg, bench_store *store)
             snprintf(id, sizeof id, "dust.%s.cpu", name);
             bench_store_add(store, id, "s", res.cpu);
             snprintf(id, sizeof id, "dust.%s.peak_rss", name);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+        }
+        /* The same stack as a material (WORK/NAME.layers, from run.sh). */
+        for (run = 0; cfg->llbuild && run < runs; ++run) {
+            char layers[1024];
+            snprintf(out_name, sizeof out_name, "%s.layers", name);
+            path_join(layers, sizeof layers, cfg->work_dir, out_name);
+            snprintf(out_name, sizeof out_name, "%s.llbuild.bsdf", name);
+            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
+            argv[0] = (char *)cfg->llbuild;
+            argv[1] = "--quiet";
+            argv[2] = layers;
+            argv[3] = "-o";
+            argv[4] = out_path;
+            argv[5] = NULL;
+            fprintf(stderr, "bench: llbuild %s, run %zu of %zu\n", name, run + 1, runs);
+            if (!bench_run_child(argv, NULL, NULL, store, &res)) {
+                child_failed(store, layers, &res);
+                break;
+            }
+            snprintf(id, sizeof id, "dust.%s.llbuild.wall", name);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "dust.%s.llbuild.cpu", name);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "dust.%s.llbuild.peak_rss", name);
             bench_store_add(store, id, "MiB", res.peak_rss_mib);
         }
     }
@@ -401,6 +427,8 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
             cfg->json_path = value;
         else if (strcmp(key, "--original") == 0)
             cfg->original_dir = value[0] ? value : NULL;
+        else if (strcmp(key, "--llbuild") == 0)
+            cfg->llbuild = value[0] ? value : NULL;
         else if (strcmp(key, "--dust-full") == 0)
             cfg->dust_full = strcmp(value, "1") == 0;
         else if (strcmp(key, "--runs") == 0)
@@ -414,7 +442,7 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
     }
     if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->testdata_dir || !cfg->json_path)
         bench_die("usage: %s --bin DIR --work DIR --testdata DIR --json PATH [--runs N] "
-                  "[--original DIR] [--dust-full 0|1] [--commit TEXT] [--compiler TEXT]", argv[0]);
+                  "[--original DIR] [--dust-full 0|1] [--llbuild PATH] [--commit TEXT] [--compiler TEXT]", argv[0]);
     if (cfg->runs < 3)
         bench_die("driver: --runs %zu: every figure is a median of at least 3 runs", cfg->runs);
     cfg->cores = cores > 0 ? (size_t)cores : 1;

@@ -168,6 +168,14 @@ static void print_dust(FILE *out, const bench_store *s)
             fprintf(out, " %s %s", bench_stages[k], a);
         }
         fputc('\n', out);
+        if (stats_of(s, "dust.%s.llbuild.wall", name).count) {
+            fprintf(out, "%-20s llbuild, the same stack as a material: wall %s", "",
+                    format_stats(a, sizeof a, stats_of(s, "dust.%s.llbuild.wall", name)));
+            fprintf(out, "  CPU %s",
+                    format_stats(b, sizeof b, stats_of(s, "dust.%s.llbuild.cpu", name)));
+            fprintf(out, "  peak MiB %s\n",
+                    format_stats(c, sizeof c, stats_of(s, "dust.%s.llbuild.peak_rss", name)));
+        }
         if (bench_dust[r].before_wall_s > 0.0) {
             format_value(a, sizeof a, bench_dust[r].before_wall_s);
             format_value(b, sizeof b, bench_dust[r].before_cpu_s);

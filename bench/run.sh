@@ -72,6 +72,18 @@ build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
 
 [ -x "$BIN/driver" ] || exit 1
 
+# The dust on gold as a material, built by llbuild (the path users take:
+# the medium gets its thickness in one pass with its phase matrices), with
+# bench/recipe.c's gold indices so that no IOR folder is needed.
+GOLD="0.14317534881908534+3.9826674681176435i,0.37309576813050427+2.3874442318808597i"
+GOLD="$GOLD,1.4438276243071315+1.6024561077023662i"
+for dust in "dust-on-gold-400 400 800" "dust-on-gold 1098 4194"; do
+    # shellcheck disable=SC2086
+    set -- $dust
+    printf 'set nodes=%s orders=%s channels=3\nmedium albedo=0.9 g=0.9 tau=4\nconductor eta=%s alpha=0.02\n' \
+        "$2" "$3" "$GOLD" > "$WORK/$1.layers"
+done
+
 COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ "$COMMIT" != unknown ] && [ -n "$(git status --porcelain -- src include 2>/dev/null)" ]; then
     COMMIT="$COMMIT+local-changes"
@@ -79,5 +91,6 @@ fi
 COMPILER=$($CC --version 2>/dev/null | head -n 1)
 
 exec "$BIN/driver" --bin "$BIN" --work "$WORK" --testdata tests/data --json "$JSON" \
-    --runs "$RUNS" --original "$ORIGINAL" --dust-full "$DUST_FULL" --commit "$COMMIT" \
+    --runs "$RUNS" --original "$ORIGINAL" --dust-full "$DUST_FULL" \
+    --llbuild "$BUILD/bin/llbuild" --commit "$COMMIT" \
     --compiler "$COMPILER -O3 -march=x86-64-v2"
