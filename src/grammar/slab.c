@@ -2,7 +2,7 @@
  * A homogeneous slab from one symmetric eigendecomposition per order
  * (Stamnes & Swanson 1981; Stamnes et al. 1988): the closed-form solution of
  * the discrete-ordinate equations that doubling approximates by 2^k thin
- * layers (method.md, "Thickness").
+ * layers (method.md, "Thickening a medium: the slab or doubling").
  *
  * The equations. With u the radiance going down (nodes +x), v the radiance
  * going up (nodes -x), X = diag(x) and the medium's weighted phase blocks

@@ -48,9 +48,9 @@
 #define PROCESS_BYTES (7.5 * 1048576.0)
 /* Per stored order: its segment table. */
 #define ORDER_BYTES(n) (16.0 * (2.0 * (double)(n) + 1.0) + 64.0)
-/* The dense h x h blocks per thread: the adding's 17 (12 blocks, the gain
- * matrices, the right-hand sides) and, expanding a medium, the slab's 7. */
-#define ADD_WORKSPACE_BLOCKS 24.0
+/* The adding's dense h x h blocks per thread (a medium's slab scratch is
+ * the medium word's thread_bytes). */
+#define ADD_WORKSPACE_BLOCKS 12.0
 
 static double parallel(double seconds, size_t items, size_t threads)
 {

@@ -144,6 +144,11 @@ static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cos
     out->doublings = p->v[TAU] > 0.0 ? ll_doubling_count(p->v[TAU], 1.0) : 0;
     out->orders_nonzero = nonzero;
     out->dense_orders = dense;
+    /* Per thread, where the slab gives the thickness in one pass: an order's
+     * phase matrix with its Legendre values (n^2 + 2 n K, at most 3 n^2)
+     * and the slab's 11 h x h matrices (grammar/slab_medium.c). */
+    if (p->v[TAU] > 0.0)
+        out->thread_bytes = 8.0 * (double)n * (double)n * (3.0 + 11.0 / 4.0);
 }
 
 static ll_status medium_build(const ll_word_build_ctx *ctx, const ll_word *w,
