@@ -1,7 +1,8 @@
 /*
  * The grammar of layers: adding (Grant and Hunt 1969; Jakob et al. 2014,
- * section 5) and doubling (section 5.2). This is the only code that
- * combines layers.
+ * section 5) and doubling (section 5.2), with the closed-form slab of
+ * slab.c as the other way to give a medium its thickness. This is the only
+ * code that combines layers.
  *
  * Each Fourier order is independent, so orders run in parallel
  * (ll_parallel_for); inside an order the blocks are expanded to dense

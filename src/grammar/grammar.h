@@ -1,6 +1,6 @@
 /*
- * The grammar of layers: adding (Grant and Hunt 1969) and doubling, the only
- * code that combines layers. Public entry points are in layerlab/ll_layer.h;
+ * The grammar of layers: adding (Grant and Hunt 1969), doubling and the
+ * closed-form slab (slab.h), the only code that combines layers. Public entry points are in layerlab/ll_layer.h;
  * these are the internal extras that the material builder uses.
  */
 #ifndef LL_GRAMMAR_GRAMMAR_H
