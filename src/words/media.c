@@ -200,12 +200,16 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     }
     for (k = 0; k < K; ++k)
         moment[k] = albedo * (chi[k] - chi[K]);
-    /* Moments below 1e-15 of the first change no digit of the result; the
-     * orders beyond the last one kept then hold only the forward term, a
-     * diagonal that doubling squares without BLAS (HG g = 0.5 keeps 50 of
-     * 196 moments: the medium recipe builds 2.3 times faster, the same bits
-     * in its .bsdf). */
-    while (K > 1 && !(fabs(moment[K - 1]) > 1e-15 * fabs(moment[0])))
+    /* Moments below 1e-12 of the first are not kept: the orders beyond the
+     * last one kept hold only the forward term, a diagonal that needs no
+     * dense work (the slab takes its exponential, doubling squares it).
+     * At 1e-12, the storage's own drop threshold (LL_DROP_THRESHOLD), the
+     * slab of HG g = 0.9, tau = 4 at n = 400 moves by at most 1.0e-8 in
+     * BSDF units (values up to 465; 4.3e-8 relative where |f| > 1e-3)
+     * against a cutoff of 1e-15, with 263 dense orders instead of 328: a
+     * fifth less of the slab, the adding and the stored stack. (HG g = 0.5
+     * keeps 40 of 196 moments.) */
+    while (K > 1 && !(fabs(moment[K - 1]) > 1e-12 * fabs(moment[0])))
         --K;
     job.layer = layer;
     job.K = K;
