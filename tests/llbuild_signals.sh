@@ -96,10 +96,11 @@ interrupt phase INT "phase function" 'set nodes=800 orders=40\nmedium albedo=0.9
 # A very thick medium: the slab of every order (one eigendecomposition of
 # h = 400 each) in one pass with its phase matrices.
 interrupt doubling TERM medium 'set nodes=800 orders=60\nmedium albedo=0.99 g=0.9 tau=1e9\n'
-# Two isotropic media: their doublings are quick (orders > 0 are diagonal),
-# adding them is dense work for every order.
+# Two thin forward-scattering media: quick to double (two doublings each),
+# adding them is dense work for every order (isotropic media would not do:
+# their orders > 0 only transmit straight through, added without dense work).
 interrupt adding INT adding \
-    'set nodes=800 orders=80\nmedium albedo=0.5 phase=isotropic tau=0.001\nmedium albedo=0.9 phase=isotropic tau=0.002\n'
+    'set nodes=800 orders=80\nmedium albedo=0.5 g=0.9 tau=0.0001\nmedium albedo=0.9 g=0.9 tau=0.0002\n'
 # Writing: 3000 nodes make a 125 MB file.
 interrupt writing TERM writing 'set nodes=3000 orders=1\ndiffuse albedo=0.5\n'
 
