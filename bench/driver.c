@@ -32,6 +32,8 @@
 typedef struct config {
     const char *bin_dir, *work_dir, *testdata_dir, *json_path, *original_dir;
     size_t runs, cores;
+    int dust_full;       /* also the dust on gold at (1098, 4194)          */
+    const char *llbuild; /* tools/llbuild, for the dust as a material      */
     size_t threads[8];   /* scaling: 1, 2, 4, ... and the core count */
     size_t thread_count;
 } config;
@@ -148,6 +150,87 @@ static void run_recipes(const config *cfg, bench_store *store)
                 bench_store_add(store, id, "MB", (double)st.st_size * 1e-6);
             }
         }
+}
+
+/* 1b. The dust on gold (issue 18), stage by stage, and the per-order cost
+ * of the slab against doubling. The full resolution takes minutes: one
+ * run, and only with --dust-full 1. */
+static void run_dust(const config *cfg, bench_store *store)
+{
+    char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128], prefix[128];
+    char id[160], sizes[BENCH_SLAB_SIZE_COUNT][16];
+    size_t run, r, i;
+    char *argv[BENCH_SLAB_SIZE_COUNT + 6];
+    bench_child_result res;
+
+    path_join(recipe_bin, sizeof recipe_bin, cfg->bin_dir, "recipe");
+    path_join(slab_bin, sizeof slab_bin, cfg->bin_dir, "slab");
+    for (r = 0; r < BENCH_DUST_COUNT; ++r) {
+        const char *name = bench_dust[r].name;
+        size_t runs = bench_dust[r].opt_in ? 1 : cfg->runs;
+        if (bench_dust[r].opt_in && !cfg->dust_full)
+            continue;
+        for (run = 0; run < runs; ++run) {
+            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
+            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
+            argv[0] = recipe_bin;
+            argv[1] = (char *)name;
+            argv[2] = out_path;
+            argv[3] = "0";
+            argv[4] = NULL;
+            fprintf(stderr, "bench: %s, run %zu of %zu\n", name, run + 1, runs);
+            snprintf(prefix, sizeof prefix, "dust.%s.", name);
+            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
+                child_failed(store, name, &res);
+                break;
+            }
+            snprintf(id, sizeof id, "dust.%s.wall", name);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "dust.%s.cpu", name);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "dust.%s.peak_rss", name);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+        }
+        /* The same stack as a material (WORK/NAME.layers, from run.sh). */
+        for (run = 0; cfg->llbuild && run < runs; ++run) {
+            char layers[1024];
+            snprintf(out_name, sizeof out_name, "%s.layers", name);
+            path_join(layers, sizeof layers, cfg->work_dir, out_name);
+            snprintf(out_name, sizeof out_name, "%s.llbuild.bsdf", name);
+            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
+            argv[0] = (char *)cfg->llbuild;
+            argv[1] = "--quiet";
+            argv[2] = layers;
+            argv[3] = "-o";
+            argv[4] = out_path;
+            argv[5] = NULL;
+            fprintf(stderr, "bench: llbuild %s, run %zu of %zu\n", name, run + 1, runs);
+            if (!bench_run_child(argv, NULL, NULL, store, &res)) {
+                child_failed(store, layers, &res);
+                break;
+            }
+            snprintf(id, sizeof id, "dust.%s.llbuild.wall", name);
+            bench_store_add(store, id, "s", res.wall);
+            snprintf(id, sizeof id, "dust.%s.llbuild.cpu", name);
+            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "dust.%s.llbuild.peak_rss", name);
+            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+        }
+    }
+    argv[0] = slab_bin;
+    for (i = 0; i < BENCH_SLAB_SIZE_COUNT; ++i) {
+        snprintf(sizes[i], sizeof sizes[i], "%zu", bench_slab_sizes[i]);
+        argv[i + 1] = sizes[i];
+    }
+    argv[BENCH_SLAB_SIZE_COUNT + 1] = NULL;
+    for (run = 0; run < cfg->runs; ++run) {
+        fprintf(stderr, "bench: slab vs doubling per order, run %zu of %zu\n", run + 1,
+                cfg->runs);
+        if (!bench_run_child(argv, NULL, "", store, &res)) {
+            child_failed(store, "slab", &res);
+            break;
+        }
+    }
 }
 
 /* One timed run of an executable of the --original directory, if present:
@@ -409,6 +492,10 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
             cfg->json_path = value;
         else if (strcmp(key, "--original") == 0)
             cfg->original_dir = value[0] ? value : NULL;
+        else if (strcmp(key, "--llbuild") == 0)
+            cfg->llbuild = value[0] ? value : NULL;
+        else if (strcmp(key, "--dust-full") == 0)
+            cfg->dust_full = strcmp(value, "1") == 0;
         else if (strcmp(key, "--runs") == 0)
             cfg->runs = bench_parse_size(value, "--runs");
         else if (strcmp(key, "--commit") == 0)
@@ -420,7 +507,7 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
     }
     if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->testdata_dir || !cfg->json_path)
         bench_die("usage: %s --bin DIR --work DIR --testdata DIR --json PATH [--runs N] "
-                  "[--original DIR] [--commit TEXT] [--compiler TEXT]", argv[0]);
+                  "[--original DIR] [--dust-full 0|1] [--llbuild PATH] [--commit TEXT] [--compiler TEXT]", argv[0]);
     if (cfg->runs < 3)
         bench_die("driver: --runs %zu: every figure is a median of at least 3 runs", cfg->runs);
     cfg->cores = cores > 0 ? (size_t)cores : 1;
@@ -441,6 +528,7 @@ int main(int argc, char **argv)
     record_load(&store, "start");
 
     run_recipes(&cfg, &store);
+    run_dust(&cfg, &store);
     run_original(&cfg, &store);
     run_scaling(&cfg, &store);
     run_adding(&cfg, &store);

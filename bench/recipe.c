@@ -41,20 +41,34 @@ static const char *const stage_names[STAGE_COUNT] = { "setup",     "interfaces",
 
 typedef enum { BASE_GOLD, BASE_DIFFUSE } base_kind;
 
+/* An HG medium: albedo per channel, asymmetry, optical thickness. */
+typedef struct medium_recipe {
+    double albedo[3], g, tau;
+} medium_recipe;
+
 typedef struct recipe {
     const char *name;
     size_t n_nodes, n_orders; /* the original's parameterHeuristicMicrofacet results */
-    double coat_alpha;        /* Beckmann roughness of the eta = 1.5 coating       */
+    double coat_alpha;        /* Beckmann roughness of the eta = 1.5 coating; 0: none */
     base_kind base;
-    int medium;               /* HG medium between coating and base                */
+    const medium_recipe *medium; /* HG medium between coating and base (nullable)   */
+    double base_alpha;           /* the gold's roughness                            */
 } recipe;
 
+static const medium_recipe original_medium = { { 0.25, 0.0, 0.95 }, 0.5, 0.5 };
+/* The seed's dust on gold (issue 18): an index-matched HG medium, so no
+ * coating above it, over smooth gold. */
+static const medium_recipe dust = { { 0.9, 0.9, 0.9 }, 0.9, 4.0 };
+
 /* Resolutions as the original recipes compute them (n = max over the two
- * interfaces, m = the coating's), quoted in issue 7. */
+ * interfaces, m = the coating's), quoted in issue 7; the dust on gold at
+ * the seed's own resolution (1098, 4194) and at a reduced one. */
 static const recipe recipes[] = {
-    { "coated-gold", 196, 267, 0.1, BASE_GOLD, 0 },
-    { "coated-gold-medium", 196, 267, 0.1, BASE_GOLD, 1 },
-    { "coated-diffuse", 1098, 2103, 0.02, BASE_DIFFUSE, 0 },
+    { "coated-gold", 196, 267, 0.1, BASE_GOLD, NULL, 0.1 },
+    { "coated-gold-medium", 196, 267, 0.1, BASE_GOLD, &original_medium, 0.1 },
+    { "coated-diffuse", 1098, 2103, 0.02, BASE_DIFFUSE, NULL, 0.1 },
+    { "dust-on-gold-400", 400, 800, 0.0, BASE_GOLD, &dust, 0.02 },
+    { "dust-on-gold", 1098, 4194, 0.0, BASE_GOLD, &dust, 0.02 },
 };
 
 /* Gold's complex index per channel (R, G, B) exactly as the original
@@ -66,9 +80,7 @@ static const double gold_eta[3] = { 0.14317534881908534, 0.37309576813050427,
 static const double gold_k[3] = { 3.9826674681176435, 2.3874442318808597, 1.6024561077023662 };
 
 static const double diffuse_albedo[3] = { 0.5, 0.5, 0.6 };
-static const double medium_albedo[3] = { 0.25, 0.0, 0.95 };
-static const double medium_g = 0.5, medium_tau = 0.5;
-static const double coat_eta = 1.5, gold_alpha = 0.1;
+static const double coat_eta = 1.5;
 
 typedef struct stage_clock {
     double wall[STAGE_COUNT], cpu[STAGE_COUNT];
@@ -104,7 +116,7 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
 {
     double *nodes = bench_alloc(r->n_nodes, sizeof(double));
     double *weights = bench_alloc(r->n_nodes, sizeof(double));
-    ll_layer *coating, *channels[3];
+    ll_layer *coating, *channels[3], *medium = NULL;
     int c;
 
     stage_begin(clk, STAGE_SETUP);
@@ -113,40 +125,50 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
 
     /* The original's setMicrofacet defaults: conserveEnergy = false,
      * fourierOrders = 0 (the layer's). */
-    coating = new_layer(r, nodes, weights, clk);
-    stage_begin(clk, STAGE_INTERFACES);
-    bench_check(ll_layer_set_microfacet(coating, coat_eta, 0.0, r->coat_alpha, 0, 0),
-                "ll_layer_set_microfacet (coating)");
-    stage_end(clk);
+    coating = r->coat_alpha > 0.0 ? new_layer(r, nodes, weights, clk) : NULL;
+    if (coating) {
+        stage_begin(clk, STAGE_INTERFACES);
+        bench_check(ll_layer_set_microfacet(coating, coat_eta, 0.0, r->coat_alpha, 0, 0),
+                    "ll_layer_set_microfacet (coating)");
+        stage_end(clk);
+    }
 
     for (c = 0; c < 3; ++c) {
         ll_layer *base = new_layer(r, nodes, weights, clk);
+        /* A medium the same in every channel (the dust) is built once and
+         * added to each, as llbuild shares it. */
+        int shared = r->medium && c > 0 && r->medium->albedo[c] == r->medium->albedo[c - 1];
         stage_begin(clk, STAGE_INTERFACES);
         if (r->base == BASE_GOLD)
-            bench_check(ll_layer_set_microfacet(base, gold_eta[c], gold_k[c], gold_alpha, 0, 0),
+            bench_check(ll_layer_set_microfacet(base, gold_eta[c], gold_k[c], r->base_alpha, 0, 0),
                         "ll_layer_set_microfacet (gold)");
         else
             bench_check(ll_layer_set_diffuse(base, diffuse_albedo[c]), "ll_layer_set_diffuse");
         stage_end(clk);
 
-        if (r->medium) {
-            ll_layer *medium = new_layer(r, nodes, weights, clk);
+        if (r->medium && !shared) {
+            ll_layer_destroy(medium);
+            medium = new_layer(r, nodes, weights, clk);
             stage_begin(clk, STAGE_MEDIA);
-            bench_check(ll_layer_set_henyey_greenstein(medium, medium_albedo[c], medium_g),
+            bench_check(ll_layer_set_henyey_greenstein(medium, r->medium->albedo[c],
+                                                       r->medium->g),
                         "ll_layer_set_henyey_greenstein");
             stage_end(clk);
             stage_begin(clk, STAGE_EXPANDING);
-            bench_check(ll_layer_expand(medium, medium_tau), "ll_layer_expand");
+            bench_check(ll_layer_expand(medium, r->medium->tau), "ll_layer_expand");
             stage_end(clk);
+        }
+        if (r->medium) {
             stage_begin(clk, STAGE_ADDING);
             bench_check(ll_layer_add_to_top(base, medium), "ll_layer_add_to_top (medium)");
-            ll_layer_destroy(medium);
             stage_end(clk);
         }
 
-        stage_begin(clk, STAGE_ADDING);
-        bench_check(ll_layer_add_to_top(base, coating), "ll_layer_add_to_top (coating)");
-        stage_end(clk);
+        if (coating) {
+            stage_begin(clk, STAGE_ADDING);
+            bench_check(ll_layer_add_to_top(base, coating), "ll_layer_add_to_top (coating)");
+            stage_end(clk);
+        }
         channels[c] = base;
     }
 
@@ -157,7 +179,9 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
 
     for (c = 0; c < 3; ++c)
         ll_layer_destroy(channels[c]);
-    ll_layer_destroy(coating);
+    if (coating)
+        ll_layer_destroy(coating);
+    ll_layer_destroy(medium);
     free(nodes);
     free(weights);
 }
@@ -172,19 +196,21 @@ static void report_estimate(const recipe *r)
     ll_material *m = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    len = snprintf(text, sizeof text, "set nodes=%zu orders=%zu channels=3\n"
-                                      "dielectric eta=%.17g alpha=%.17g\n",
-                   r->n_nodes, r->n_orders, coat_eta, r->coat_alpha);
+    len = snprintf(text, sizeof text, "set nodes=%zu orders=%zu channels=3\n", r->n_nodes,
+                   r->n_orders);
+    if (r->coat_alpha > 0.0)
+        len += snprintf(text + len, sizeof text - (size_t)len,
+                        "dielectric eta=%.17g alpha=%.17g\n", coat_eta, r->coat_alpha);
     if (r->medium)
         len += snprintf(text + len, sizeof text - (size_t)len,
                         "medium albedo=%.17g,%.17g,%.17g g=%.17g tau=%.17g\n",
-                        medium_albedo[0], medium_albedo[1], medium_albedo[2], medium_g,
-                        medium_tau);
+                        r->medium->albedo[0], r->medium->albedo[1], r->medium->albedo[2],
+                        r->medium->g, r->medium->tau);
     if (r->base == BASE_GOLD)
         snprintf(text + len, sizeof text - (size_t)len,
                  "conductor eta=%.17g+%.17gi,%.17g+%.17gi,%.17g+%.17gi alpha=%.17g\n",
                  gold_eta[0], gold_k[0], gold_eta[1], gold_k[1], gold_eta[2], gold_k[2],
-                 gold_alpha);
+                 r->base_alpha);
     else
         snprintf(text + len, sizeof text - (size_t)len, "diffuse albedo=%.17g,%.17g,%.17g\n",
                  diffuse_albedo[0], diffuse_albedo[1], diffuse_albedo[2]);
@@ -207,7 +233,7 @@ int main(int argc, char **argv)
 
     if (argc != 4)
         bench_die("usage: %s NAME OUT.bsdf THREADS (NAME: coated-gold, coated-gold-medium, "
-                  "coated-diffuse)", argv[0]);
+                  "coated-diffuse, dust-on-gold-400, dust-on-gold)", argv[0]);
     for (i = 0; i < sizeof recipes / sizeof recipes[0]; ++i)
         if (strcmp(argv[1], recipes[i].name) == 0)
             r = &recipes[i];

@@ -141,6 +141,63 @@ static void print_recipes(FILE *out, const bench_store *s)
     }
 }
 
+/* Issue 18: the dust on gold, per stage, next to the figures before; and
+ * the slab against doubling per order. */
+static void print_dust(FILE *out, const bench_store *s)
+{
+    size_t r, k, i;
+    char a[128], b[128], c[128];
+    fprintf(out, "\n1b. Dust on gold (issue 18: HG g 0.9, tau 4, albedo 0.9 over gold alpha "
+                 "0.02; whole process, all cores)\n");
+    fprintf(out, "%-20s %-24s %-24s %-24s\n", "recipe", "wall s", "CPU s", "peak MiB");
+    for (r = 0; r < BENCH_DUST_COUNT; ++r) {
+        const char *name = bench_dust[r].name;
+        bench_stats w = stats_of(s, "dust.%s.wall", name);
+        if (w.count == 0) {
+            fprintf(out, "%-20s %s\n", name,
+                    bench_dust[r].opt_in ? "not run (LL_BENCH_DUST_FULL=1 make bench runs it)"
+                                         : "not measured");
+            continue;
+        }
+        fprintf(out, "%-20s %-24s %-24s %-24s\n", name, format_stats(a, sizeof a, w),
+                format_stats(b, sizeof b, stats_of(s, "dust.%s.cpu", name)),
+                format_stats(c, sizeof c, stats_of(s, "dust.%s.peak_rss", name)));
+        fprintf(out, "%-20s stages, CPU s:", "");
+        for (k = 0; k < BENCH_STAGE_COUNT; ++k) {
+            format_value(a, sizeof a,
+                         stats_of(s, "dust.%s.stage_cpu.%s", name, bench_stages[k]).median);
+            fprintf(out, " %s %s", bench_stages[k], a);
+        }
+        fputc('\n', out);
+        if (stats_of(s, "dust.%s.llbuild.wall", name).count) {
+            fprintf(out, "%-20s llbuild, the same stack as a material: wall %s", "",
+                    format_stats(a, sizeof a, stats_of(s, "dust.%s.llbuild.wall", name)));
+            fprintf(out, "  CPU %s",
+                    format_stats(b, sizeof b, stats_of(s, "dust.%s.llbuild.cpu", name)));
+            fprintf(out, "  peak MiB %s\n",
+                    format_stats(c, sizeof c, stats_of(s, "dust.%s.llbuild.peak_rss", name)));
+        }
+        if (bench_dust[r].before_wall_s > 0.0) {
+            format_value(a, sizeof a, bench_dust[r].before_wall_s);
+            format_value(b, sizeof b, bench_dust[r].before_cpu_s);
+            format_value(c, sizeof c, bench_dust[r].before_rss_mib);
+            fprintf(out, "%-20s before (%s): wall %s s, CPU %s s, peak %s MiB\n", "",
+                    bench_dust[r].before_source, a, b, c);
+        }
+    }
+    fprintf(out, "\n1c. One order (order 0, HG g 0.9, tau 4), 1 thread: doubling vs the "
+                 "closed-form slab, s\n");
+    fprintf(out, "%-6s %-24s %-24s %-24s\n", "n", "doubling", "slab", "speedup");
+    for (i = 0; i < BENCH_SLAB_SIZE_COUNT; ++i) {
+        size_t n = bench_slab_sizes[i];
+        char d[128];
+        fprintf(out, "%-6zu %-24s %-24s %-24s\n", n,
+                format_stats(a, sizeof a, stats_of(s, "slab.%zu.doubling", n)),
+                format_stats(b, sizeof b, stats_of(s, "slab.%zu.slab", n)),
+                format_stats(d, sizeof d, stats_of(s, "slab.%zu.speedup", n)));
+    }
+}
+
 static void print_adding(FILE *out, const bench_store *s)
 {
     const char *cores_text = bench_store_info_get(s, "machine.cores");
@@ -247,7 +304,7 @@ static void print_targets(FILE *out, const bench_store *s)
     bench_target targets[BENCH_MAX_TARGETS];
     size_t count = bench_compute_targets(s, targets), i;
     char v[32], g[32];
-    fprintf(out, "\nTargets (issue 7)\n");
+    fprintf(out, "\nTargets (issues 7 and 18)\n");
     for (i = 0; i < count; ++i) {
         format_value(v, sizeof v, targets[i].value);
         format_value(g, sizeof g, targets[i].goal);
@@ -294,6 +351,7 @@ void bench_report_table(FILE *out, const bench_store *store)
 {
     print_header(out, store);
     print_recipes(out, store);
+    print_dust(out, store);
     print_adding(out, store);
     print_eval(out, store);
     print_scaling(out, store);

@@ -89,14 +89,18 @@ interrupt diffuse TERM diffuse 'set nodes=12000 orders=1\ndiffuse albedo=0.5\n'
 # A rough dielectric resolved on many orders: seconds of series per column.
 interrupt interface TERM "dielectric interface" \
     'set nodes=800 orders=250\ndielectric eta=1.5 alpha=0.05\n'
-# A strongly forward-scattering medium: n x n x K products for 40 orders.
-interrupt phase INT "phase function" 'set nodes=800 orders=40\nmedium albedo=0.9 g=0.99 tau=1\n'
-# A very thick medium: 45 doublings of every order.
-interrupt doubling TERM medium 'set nodes=400 orders=20\nmedium albedo=0.99 g=0.9 tau=1e9\n'
-# Two isotropic media: their doublings are quick (orders > 0 are diagonal),
-# adding them is dense work for every order.
+# A strongly forward-scattering medium: n x n x K products for 40 orders
+# (so thin that it is doubled: a thicker one gets its phase matrices and
+# its slab in one pass, the "medium" stage below).
+interrupt phase INT "phase function" 'set nodes=800 orders=40\nmedium albedo=0.9 g=0.99 tau=1e-4\n'
+# A very thick medium: the slab of every order (one eigendecomposition of
+# h = 400 each) in one pass with its phase matrices.
+interrupt doubling TERM medium 'set nodes=800 orders=60\nmedium albedo=0.99 g=0.9 tau=1e9\n'
+# Two thin forward-scattering media: quick to double (two doublings each),
+# adding them is dense work for every order (isotropic media would not do:
+# their orders > 0 only transmit straight through, added without dense work).
 interrupt adding INT adding \
-    'set nodes=800 orders=80\nmedium albedo=0.5 phase=isotropic tau=0.001\nmedium albedo=0.9 phase=isotropic tau=0.002\n'
+    'set nodes=800 orders=80\nmedium albedo=0.5 g=0.9 tau=0.0001\nmedium albedo=0.9 g=0.9 tau=0.0002\n'
 # Writing: 3000 nodes make a 125 MB file.
 interrupt writing TERM writing 'set nodes=3000 orders=1\ndiffuse albedo=0.5\n'
 # A swept material (a textured file): in the second basis's interface, and

@@ -213,17 +213,22 @@ LL_API ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top);
 /* layer = layer stacked on bottom. */
 LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom);
 
-/* Doubling: the layer holds a phase function (set_isotropic, set_henyey_
+/* Thickness: the layer holds a phase function (set_isotropic, set_henyey_
  * greenstein, set_von_mises_fisher); turn it into a slab of optical
- * thickness tau >= 0 (tau = 0 gives a clear layer). Starts from a thin
+ * thickness tau >= 0 (tau = 0 gives a clear layer). By doubling: a thin
  * slab tau0 <= min(2 min|mu|, 2^-15) chosen so that tau0 2^k = tau exactly,
- * and adds it to itself k times. */
+ * added to itself k times; or by the closed form that doubling converges
+ * to (one symmetric eigendecomposition per Fourier order, the
+ * discrete-ordinate method of DISORT), whichever costs less for the node
+ * count and k: the same choice for any data and thread count (method.md,
+ * "Thickening a medium: the slab or doubling"). */
 LL_API ll_status ll_layer_expand(ll_layer *layer, double tau);
 
 /* ll_layer_expand with a monitor (ll_common.h; NULL = the plain call).
  * Stage "doubling", one unit per doubling step of each Fourier order.
  * Progress runs on the calling thread only; workers poll before every
- * doubling step and between its BLAS/LAPACK calls, and LL_ERROR_CANCELLED
+ * doubling step and between its BLAS/LAPACK calls (the closed form: before
+ * every order), and LL_ERROR_CANCELLED
  * leaves the layer exactly as it was (the phase function, not a partial
  * slab). */
 LL_API ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *monitor);

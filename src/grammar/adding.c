@@ -1,7 +1,8 @@
 /*
  * The grammar of layers: adding (Grant and Hunt 1969; Jakob et al. 2014,
- * section 5) and doubling (section 5.2). This is the only code that
- * combines layers.
+ * section 5) and doubling (section 5.2), with the closed-form slab of
+ * slab.c as the other way to give a medium its thickness. This is the only
+ * code that combines layers.
  *
  * Each Fourier order is independent, so orders run in parallel
  * (ll_parallel_for); inside an order the blocks are expanded to dense
@@ -9,6 +10,7 @@
  * BLAS-3 (gemm), then compressed back.
  */
 #include "grammar/grammar.h"
+#include "grammar/slab.h"
 #include "support/watch.h"
 
 #include <cblas.h>
@@ -32,10 +34,15 @@ typedef struct workspace {
     double *rhs;               /* h x h: Ra Tb                          */
     lapack_int *piv_tb, *piv_bt;
     void *memory;
+    double *slab;              /* slab.c's scratch, made when first needed */
     ll_watch *watch;           /* polled between the BLAS calls (nullable) */
 } workspace;
 
-static void workspace_free(workspace *w) { ll_free(w->memory); }
+static void workspace_free(workspace *w)
+{
+    ll_free(w->memory);
+    ll_free(w->slab);
+}
 
 static ll_status workspace_init(workspace *w, size_t h)
 {
@@ -63,6 +70,54 @@ static ll_status workspace_init(workspace *w, size_t h)
     w->rhs = p; p += hh;
     w->piv_tb = (lapack_int *)p; p += h;
     w->piv_bt = (lapack_int *)p;
+    return LL_OK;
+}
+
+/*
+ * One workspace per thread, made by the first order a thread runs and
+ * reused by its next ones: the work matrices of h = 550 are 40 MB, and
+ * fresh ones per order cost a page fault per 4 KiB (the system time of
+ * long builds). Orders write every entry they read, so what a slot held
+ * before changes nothing: results stay the same for any thread count.
+ */
+typedef struct workspace_pool {
+    size_t count;
+    workspace *slot;
+} workspace_pool;
+
+static ll_status pool_create(workspace_pool *p, const char *fn)
+{
+    p->count = ll_get_thread_count();
+    p->slot = ll_calloc_array(p->count, sizeof *p->slot);
+    return p->slot ? LL_OK : ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+}
+
+static void pool_destroy(workspace_pool *p)
+{
+    size_t i;
+    for (i = 0; p->slot && i < p->count; ++i)
+        workspace_free(&p->slot[i]);
+    ll_free(p->slot);
+    p->slot = NULL;
+}
+
+/* The calling thread's workspace for h, made on first use. */
+static ll_status pool_get(workspace_pool *p, size_t h, ll_watch *watch, workspace **out)
+{
+    size_t i = ll_parallel_slot();
+    workspace *w;
+    ll_status s;
+    if (i >= p->count)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "adding: thread %zu of a loop sized for %zu threads", i, p->count);
+    w = &p->slot[i];
+    if (!w->memory) {
+        s = workspace_init(w, h);
+        if (s != LL_OK)
+            return s;
+    }
+    w->watch = watch;
+    *out = w;
     return LL_OK;
 }
 
@@ -243,6 +298,7 @@ typedef struct add_job {
     ll_order **result;
     int homogeneous;
     ll_watch *watch;
+    workspace_pool pool;
 } add_job;
 
 static ll_status add_order(size_t k, add_job *job);
@@ -258,11 +314,63 @@ static ll_status add_one_order(size_t k, void *ctx)
     return s;
 }
 
+/*
+ * One side only transmits straight through (R = 0, diagonal T: a medium's
+ * order beyond its phase function's moments, where only the unscattered
+ * light is left): then nothing reflects between the two, and the sum is
+ * the other side's matrix scaled by those diagonals,
+ *     top straight:    R^t = Du R^t_b Dd, T^tb = T^tb_b Dd, T^bt = Du T^bt_b, R^b = R^b_b,
+ *     bottom straight: R^b = Dd R^b_t Du, T^tb = Dd T^tb_t, T^bt = T^bt_t Du, R^t = R^t_t
+ * (Dd, Du: the diagonals of T^tb, T^bt), on the compact runs, with the
+ * products in the order of the dense path (the same bits, without its
+ * O(h^3) work). *done = 0 if neither side is such an order.
+ */
+static ll_status add_straight_through(const ll_order *ot, const ll_order *ob, size_t n,
+                                      ll_order **out, int *done)
+{
+    size_t h = n / 2, i;
+    double *buf = ll_alloc_array(n, 3 * sizeof(double));
+    double *down, *up, *left, *right;
+    const ll_order *other = NULL;
+    ll_status s = LL_OK;
+
+    *done = 0;
+    if (!buf)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
+    down = buf;
+    up = down + h;
+    left = up + h;
+    right = left + n;
+    if (ll_order_diagonal(ot, down, up)) {
+        for (i = 0; i < h; ++i) {
+            left[i] = up[i];
+            left[h + i] = 1.0;
+            right[i] = 1.0;
+            right[h + i] = down[i];
+        }
+        other = ob;
+    } else if (ll_order_diagonal(ob, down, up)) {
+        for (i = 0; i < h; ++i) {
+            left[i] = 1.0;
+            left[h + i] = down[i];
+            right[i] = up[i];
+            right[h + i] = 1.0;
+        }
+        other = ot;
+    }
+    if (other) {
+        s = ll_order_scaled(other, left, right, LL_DROP_THRESHOLD, out);
+        *done = 1;
+    }
+    ll_free(buf);
+    return s;
+}
+
 static ll_status add_order(size_t k, add_job *job)
 {
     ll_order *ot = job->top->orders[k], *ob = job->bottom->orders[k];
     size_t n = job->top->n;
-    workspace w;
+    workspace *w;
     ll_status s;
 
     if (!ot && !ob)
@@ -276,16 +384,20 @@ static ll_status add_order(size_t k, add_job *job)
         return ll_order_keep_block(ot, LL_BLOCK_RT, &job->result[k]);
     if (!ot)
         return ll_order_keep_block(ob, LL_BLOCK_RB, &job->result[k]);
-    s = workspace_init(&w, n / 2);
+    {
+        int done;
+        s = add_straight_through(ot, ob, n, &job->result[k], &done);
+        if (s != LL_OK || done)
+            return s;
+    }
+    s = pool_get(&job->pool, n / 2, job->watch, &w);
     if (s != LL_OK)
         return s;
-    w.watch = job->watch;
-    load_order(ot, n, &w.top);
-    load_order(ob, n, &w.bottom);
-    s = add_dense(&w, job->homogeneous);
+    load_order(ot, n, &w->top);
+    load_order(ob, n, &w->bottom);
+    s = add_dense(w, job->homogeneous);
     if (s == LL_OK)
-        s = store_dense(&w.out, n / 2, &job->result[k]);
-    workspace_free(&w);
+        s = store_dense(&w->out, n / 2, &job->result[k]);
     return s;
 }
 
@@ -311,10 +423,16 @@ ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer 
     job.result = ll_calloc_array(top->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_add: out of memory");
+    s = pool_create(&job.pool, fn);
+    if (s != LL_OK) {
+        ll_free(job.result);
+        return s;
+    }
     /* An order is one unit (they cost about the same). */
     s = ll_watch_stage(&watch, "adding", 0.0, 1.0, top->m) ? ll_watch_check(&watch, fn) : LL_OK;
     if (s == LL_OK)
         s = ll_parallel_for_watched(top->m, add_one_order, &job, &watch);
+    pool_destroy(&job.pool);
     s = ll_watch_finish(&watch, s, fn);
     return ll_layer_commit_orders(out, job.result, s);
 }
@@ -342,8 +460,11 @@ typedef struct expand_job {
     const ll_layer *layer;
     double tau0;
     size_t doublings;
+    int slab;       /* the closed form of slab.c instead of doubling */
+    double tau;
     ll_order **result;
     ll_watch *watch;
+    workspace_pool pool;
 } expand_job;
 
 /* Is the block zero off its diagonal? */
@@ -357,29 +478,124 @@ static int is_diagonal(const double *x, size_t h)
     return 1;
 }
 
+/*
+ * One order by the closed form (slab.c) into w->out's R^t and T^tb; the
+ * phase blocks are w->top's. An order whose only content is the diagonal
+ * of T (no sideways scattering: beyond the kept moments of the phase
+ * function only the unscattered and truncated-forward light) is the
+ * exponential of its extinction, exactly.
+ */
+static ll_status slab_order(const expand_job *job, workspace *w, int *solved)
+{
+    const ll_layer *l = job->layer;
+    size_t h = l->n / 2, c;
+    const double *PT = w->top.blk[LL_BLOCK_TTB], *PR = w->top.blk[LL_BLOCK_RT];
+    double *R = w->out.blk[LL_BLOCK_RT], *T = w->out.blk[LL_BLOCK_TTB], *scratch;
+    size_t doubles;
+
+    *solved = 0;
+    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(PT, h)) {
+        memset(R, 0, h * h * sizeof(double));
+        memset(T, 0, h * h * sizeof(double));
+        for (c = 0; c < h; ++c)
+            T[c * h + c] = exp(-job->tau * (1.0 - PT[c * h + c]) / l->nodes[h + c]);
+        *solved = 1;
+        return LL_OK;
+    }
+    if (!w->slab) {
+        doubles = ll_slab_scratch_doubles(h);
+        w->slab = doubles ? ll_alloc_array(doubles, sizeof(double)) : NULL;
+        if (!w->slab)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                           "ll_layer_expand: out of memory for the slab of %zu nodes", l->n);
+    }
+    scratch = w->slab;
+    *solved = ll_slab_solve(h, PT, PR, l->nodes + h, l->weights + h, job->tau, scratch, R, T);
+    return LL_OK;
+}
+
+/*
+ * An order of the medium that only transmits straight through (no sideways
+ * scattering: beyond the kept moments of the phase function only the
+ * unscattered and the truncated-forward light) stays one, built from its
+ * diagonal without dense work: doubling squares the thin layer's diagonal
+ * once per doubling, the slab takes the exponential of the extinction.
+ * *done = 0 for any other order.
+ */
+static ll_status expand_straight_through(const expand_job *job, size_t k, int *done)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, h = n / 2, c, d;
+    double *down = ll_alloc_array(n, sizeof(double)), *up = down ? down + h : NULL;
+    ll_status s = LL_OK;
+
+    *done = 0;
+    if (!down)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
+    if (!l->orders[k])
+        memset(down, 0, n * sizeof(double)); /* a pure absorber */
+    else if (!ll_order_diagonal(l->orders[k], down, up))
+        goto done;
+    /* The slab is the same from both sides: T^tb (the phase matrix's
+     * down-from-down diagonal) on both, as the dense path does. */
+    for (c = 0; c < h; ++c) {
+        double x = l->nodes[h + c];
+        if (job->slab) {
+            down[c] = exp(-job->tau * (1.0 - down[c]) / x);
+        } else {
+            double t = 1.0 + (job->tau0 / x) * (down[c] - 1.0);
+            for (d = 0; d < job->doublings; ++d)
+                t *= t;
+            down[c] = t;
+        }
+    }
+    s = ll_order_from_diagonals(n, down, down, LL_DROP_THRESHOLD, &job->result[k]);
+    ll_watch_advance(job->watch, job->doublings + 1);
+    *done = 1;
+done:
+    ll_free(down);
+    return s;
+}
+
 static ll_status expand_one_order(size_t k, void *ctx)
 {
     expand_job *job = ctx;
     const ll_layer *l = job->layer;
     size_t n = l->n, h = n / 2, r, c, d;
-    workspace w;
+    workspace *w;
+    dense_order own_bottom; /* the doubling points the bottom at the top */
     double *R, *T;
+    int solved = 0;
     ll_status s;
 
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
-    s = workspace_init(&w, h);
+    s = expand_straight_through(job, k, &solved);
+    if (s != LL_OK || solved)
+        return s;
+    s = pool_get(&job->pool, h, job->watch, &w);
     if (s != LL_OK)
         return s;
-    w.watch = job->watch;
+    own_bottom = w->bottom;
     /* The phase matrices of a medium are the same seen from either side, so
      * R^t and T^tb describe the slab. Initial thin slab (Grant and Hunt 1969,
      * first order in tau0): R = (tau0 / mu_o) P_R and T = I + (tau0 / mu_o)
      * (P_T - I). With phase matrices that conserve energy exactly this
      * conserves energy exactly too, and adding preserves it. */
-    load_order(l->orders[k], n, &w.top);
-    R = w.top.blk[LL_BLOCK_RT];
-    T = w.top.blk[LL_BLOCK_TTB];
+    load_order(l->orders[k], n, &w->top);
+    R = w->top.blk[LL_BLOCK_RT];
+    T = w->top.blk[LL_BLOCK_TTB];
+    if (job->slab) {
+        /* An order the closed form does not take (not reciprocal) is
+         * doubled instead. */
+        s = slab_order(job, w, &solved);
+        if (s != LL_OK)
+            goto done;
+        if (solved) {
+            ll_watch_advance(job->watch, job->doublings);
+            goto store;
+        }
+    }
     for (c = 0; c < h; ++c)
         for (r = 0; r < h; ++r) {
             double scale = job->tau0 / l->nodes[h + r];
@@ -387,14 +603,14 @@ static ll_status expand_one_order(size_t k, void *ctx)
             T[c * h + r] = (r == c ? 1.0 : 0.0) + scale * (T[c * h + r] - (r == c ? 1.0 : 0.0));
         }
 
-    if (w.top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
+    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
         /* Nothing scatters sideways in this order (only the unscattered and
          * exactly-forward part): each doubling squares the diagonal. */
         for (c = 0; c < h; ++c)
             for (d = 0; d < job->doublings; ++d)
                 T[c * h + c] *= T[c * h + c];
-        memset(w.out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
-        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+        memset(w->out.blk[LL_BLOCK_RT], 0, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
         ll_watch_advance(job->watch, job->doublings);
     } else {
         for (d = 0; d < job->doublings; ++d) {
@@ -403,31 +619,32 @@ static ll_status expand_one_order(size_t k, void *ctx)
                 goto done;
             }
             /* The slab added to itself: its top is the bottom's copy. */
-            memcpy(w.top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
-            memcpy(w.top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
-            w.top.zero[LL_BLOCK_RT] = w.top.zero[LL_BLOCK_RB] = all_zero(R, h * h);
-            w.top.zero[LL_BLOCK_TTB] = w.top.zero[LL_BLOCK_TBT] = 0;
-            memcpy(w.bottom.blk, w.top.blk, sizeof w.top.blk);
-            memcpy(w.bottom.zero, w.top.zero, sizeof w.top.zero);
-            s = add_dense(&w, 1);
+            memcpy(w->top.blk[LL_BLOCK_RB], R, h * h * sizeof(double));
+            memcpy(w->top.blk[LL_BLOCK_TBT], T, h * h * sizeof(double));
+            w->top.zero[LL_BLOCK_RT] = w->top.zero[LL_BLOCK_RB] = all_zero(R, h * h);
+            w->top.zero[LL_BLOCK_TTB] = w->top.zero[LL_BLOCK_TBT] = 0;
+            memcpy(w->bottom.blk, w->top.blk, sizeof w->top.blk);
+            memcpy(w->bottom.zero, w->top.zero, sizeof w->top.zero);
+            s = add_dense(w, 1);
             if (s != LL_OK)
                 goto done;
-            memcpy(R, w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
-            memcpy(T, w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+            memcpy(R, w->out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+            memcpy(T, w->out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
             ll_watch_advance(job->watch, 1);
         }
-        memcpy(w.out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
-        memcpy(w.out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_RT], R, h * h * sizeof(double));
+        memcpy(w->out.blk[LL_BLOCK_TTB], T, h * h * sizeof(double));
     }
-    memcpy(w.out.blk[LL_BLOCK_RB], w.out.blk[LL_BLOCK_RT], h * h * sizeof(double));
-    memcpy(w.out.blk[LL_BLOCK_TBT], w.out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
-    w.out.zero[LL_BLOCK_RT] = w.out.zero[LL_BLOCK_RB] = all_zero(w.out.blk[LL_BLOCK_RT], h * h);
-    w.out.zero[LL_BLOCK_TTB] = w.out.zero[LL_BLOCK_TBT] =
-        all_zero(w.out.blk[LL_BLOCK_TTB], h * h);
-    s = store_dense(&w.out, h, &job->result[k]);
+store:
+    memcpy(w->out.blk[LL_BLOCK_RB], w->out.blk[LL_BLOCK_RT], h * h * sizeof(double));
+    memcpy(w->out.blk[LL_BLOCK_TBT], w->out.blk[LL_BLOCK_TTB], h * h * sizeof(double));
+    w->out.zero[LL_BLOCK_RT] = w->out.zero[LL_BLOCK_RB] = all_zero(w->out.blk[LL_BLOCK_RT], h * h);
+    w->out.zero[LL_BLOCK_TTB] = w->out.zero[LL_BLOCK_TBT] =
+        all_zero(w->out.blk[LL_BLOCK_TTB], h * h);
+    s = store_dense(&w->out, h, &job->result[k]);
     ll_watch_advance(job->watch, 1);
 done:
-    workspace_free(&w);
+    w->bottom = own_bottom;
     return s;
 }
 
@@ -443,7 +660,8 @@ void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublin
 }
 
 /* Doubling on a begun watch: one code path for every entry point. */
-static ll_status expand_watched(ll_layer *layer, double tau, ll_watch *watch)
+static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method method,
+                                ll_watch *watch)
 {
     static const char fn[] = "ll_layer_expand";
     expand_job job;
@@ -470,15 +688,27 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_watch *watch)
             min_mu = fabs(layer->nodes[i]);
     job.layer = layer;
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
+    job.tau = tau;
+    /* The cost model depends on n and the doublings alone: the same pick
+     * for any data and any thread count. */
+    job.slab = method == LL_EXPAND_SLAB ||
+               (method == LL_EXPAND_CHEAPEST &&
+                ll_slab_order_steps(layer->n / 2) < (double)job.doublings);
     job.watch = watch;
     if (!ll_size_mul(layer->m, job.doublings + 1, &units))
         units = SIZE_MAX;
     job.result = ll_calloc_array(layer->m, sizeof(ll_order *));
     if (!job.result)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_expand: out of memory");
+    s = pool_create(&job.pool, fn);
+    if (s != LL_OK) {
+        ll_free(job.result);
+        return s;
+    }
     s = ll_watch_stage(watch, "doubling", 0.0, 1.0, units) ? ll_watch_check(watch, fn) : LL_OK;
     if (s == LL_OK)
         s = ll_parallel_for_watched(layer->m, expand_one_order, &job, watch);
+    pool_destroy(&job.pool);
     s = ll_watch_finish(watch, s, fn);
     return ll_layer_commit_orders(layer, job.result, s);
 }
@@ -487,7 +717,7 @@ ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *moni
 {
     ll_watch watch;
     ll_status s = ll_watch_begin(&watch, monitor, "ll_layer_expand");
-    return s == LL_OK ? expand_watched(layer, tau, &watch) : s;
+    return s == LL_OK ? expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch) : s;
 }
 
 ll_status ll_layer_expand(ll_layer *layer, double tau)
@@ -516,5 +746,12 @@ ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
     } else {
         ll_watch_begin_raw(&watch, NULL, NULL, NULL);
     }
-    return expand_watched(layer, tau, &watch);
+    return expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch);
+}
+
+ll_status ll_layer_expand_by(ll_layer *layer, double tau, ll_expand_method method)
+{
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, NULL, "ll_layer_expand");
+    return s == LL_OK ? expand_watched(layer, tau, method, &watch) : s;
 }

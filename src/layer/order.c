@@ -460,3 +460,104 @@ ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out)
     *out = o;
     return LL_OK;
 }
+
+/* ------------------------------------------- orders without dense work */
+
+/* Is segment s (= 2 col + half) in a transmission block? */
+static int segment_transmits(size_t col, int half, size_t h) { return (col < h) == (half == 0); }
+
+int ll_order_diagonal(const ll_order *o, double *down, double *up)
+{
+    size_t n, h, col;
+    int half;
+    if (!o)
+        return 0;
+    n = o->n;
+    h = n / 2;
+    for (col = 0; col < n; ++col)
+        for (half = 0; half < 2; ++half) {
+            const ll_segment *g = &o->seg[2 * col + (size_t)half];
+            size_t c = col < h ? col : col - h;
+            double *diag = col < h ? up : down;
+            if (!segment_transmits(col, half, h)) {
+                if (g->len != 0)
+                    return 0;
+                continue;
+            }
+            if (g->len == 0)
+                diag[c] = 0.0;
+            else if (g->len == 1 && g->lo == c)
+                diag[c] = o->val[g->off];
+            else
+                return 0;
+        }
+    return 1;
+}
+
+ll_status ll_order_scaled(const ll_order *o, const double *left, const double *right,
+                          double drop, ll_order **out)
+{
+    size_t n, h, col, total = 0, s;
+    int half;
+    ll_order *r;
+    *out = NULL;
+    if (!o)
+        return LL_OK;
+    n = o->n;
+    h = n / 2;
+    r = order_alloc(n, ll_order_stored(o) ? ll_order_stored(o) : 1);
+    if (!r)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory scaling a %zu x %zu order", n, n);
+    for (col = 0; col < n; ++col)
+        for (half = 0; half < 2; ++half) {
+            const ll_segment *g = &o->seg[2 * col + (size_t)half];
+            const double *row_scale = left + (half ? h : 0);
+            double *v = r->val + total;
+            size_t i, lo, len;
+            s = 2 * col + (size_t)half;
+            /* (x right) left: the order of the dense products it replaces
+             * (adding.c), so the bits are theirs. */
+            for (i = 0; i < g->len; ++i)
+                v[i] = (o->val[g->off + i] * right[col]) * row_scale[g->lo + i];
+            find_run(v, g->len, drop, &lo, &len);
+            if (lo > 0 && len > 0)
+                memmove(v, v + lo, len * sizeof(double));
+            r->seg[s].lo = (uint32_t)(g->lo + lo);
+            r->seg[s].len = (uint32_t)len;
+            r->seg[s].off = total;
+            total += len;
+        }
+    r->seg[2 * n].off = total;
+    if (total == 0)
+        ll_order_release(r);
+    else
+        *out = r;
+    return LL_OK;
+}
+
+ll_status ll_order_from_diagonals(size_t n, const double *down, const double *up, double drop,
+                                  ll_order **out)
+{
+    size_t h = n / 2, i;
+    ll_order *id = NULL;
+    double *ones = ll_alloc_array(n, sizeof(double)), *right = ll_alloc_array(n, sizeof(double));
+    ll_status s;
+    *out = NULL;
+    if (!ones || !right) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory storing a %zu x %zu order", n, n);
+        goto done;
+    }
+    for (i = 0; i < h; ++i) {
+        ones[i] = ones[h + i] = 1.0;
+        right[i] = up[i];
+        right[h + i] = down[i];
+    }
+    s = ll_order_identity(n, &id);
+    if (s == LL_OK)
+        s = ll_order_scaled(id, ones, right, drop, out);
+done:
+    ll_order_release(id);
+    ll_free(ones);
+    ll_free(right);
+    return s;
+}

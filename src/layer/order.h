@@ -73,6 +73,22 @@ LL_INTERNAL ll_status ll_order_from_runs(size_t n, const ll_segment *seg, const 
 /* A clear order: T = I, R = 0. */
 LL_INTERNAL ll_status ll_order_identity(size_t n, ll_order **out);
 
+/* ---- orders that need no dense work (Fourier orders beyond a phase
+ * function's moments hold only the unscattered light: a diagonal T)
+ * Is o only the diagonals of its two T blocks (R blocks empty, each T
+ * column at most its diagonal entry)? Then down[j] = T^tb(j, j) and
+ * up[j] = T^bt(j, j), j < h, and 1; else 0 (and down, up unspecified),
+ * also for NULL. */
+LL_INTERNAL int ll_order_diagonal(const ll_order *o, double *down, double *up);
+/* diag(left) o diag(right) (left, right: n each), every run trimmed at both
+ * ends by drop; entries are (x right[col]) left[row]. NULL for NULL/empty. */
+LL_INTERNAL ll_status ll_order_scaled(const ll_order *o, const double *left,
+                                      const double *right, double drop, ll_order **out);
+/* The order whose T blocks are diag(down) (T^tb) and diag(up) (T^bt), h
+ * each, R empty; entries |x| <= drop not stored (NULL if none is left). */
+LL_INTERNAL ll_status ll_order_from_diagonals(size_t n, const double *down, const double *up,
+                                              double drop, ll_order **out);
+
 /* ---- building an order column by column (interfaces, media, MERL):
  * thread-safe for distinct columns; trims exact zeros (|x| <= drop). */
 typedef struct ll_order_builder ll_order_builder;

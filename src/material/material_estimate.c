@@ -13,6 +13,7 @@
  */
 #include "material/word_table.h"
 #include "grammar/grammar.h"
+#include "grammar/slab.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -47,7 +48,8 @@
 #define PROCESS_BYTES (7.5 * 1048576.0)
 /* Per stored order: its segment table. */
 #define ORDER_BYTES(n) (16.0 * (2.0 * (double)(n) + 1.0) + 64.0)
-/* The adding's dense h x h blocks per thread. */
+/* The adding's dense h x h blocks per thread (a medium's slab scratch is
+ * the medium word's thread_bytes). */
 #define ADD_WORKSPACE_BLOCKS 12.0
 
 static double parallel(double seconds, size_t items, size_t threads)
@@ -112,11 +114,14 @@ static void word_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost 
         c->orders_nonzero = (double)m;
 }
 
-/* CPU and wall seconds of one word's layer with its doublings. */
+/* CPU and wall seconds of one word's layer with its thickness: per dense
+ * order the doublings' adding steps, or the slab's equivalent where
+ * ll_layer_expand takes the slab (grammar/slab.h). */
 static void word_seconds(const ll_word_cost *c, size_t n, size_t m, size_t threads,
                          double *cpu, double *wall)
 {
-    double d = (double)c->doublings * add_cpu(n, c->orders_nonzero, c->orders_nonzero, m);
+    double d = ll_expand_order_steps(n / 2, c->doublings) *
+               add_cpu(n, c->orders_nonzero, c->orders_nonzero, m);
     *cpu = c->parallel_seconds + c->serial_seconds + d;
     *wall = parallel(c->parallel_seconds, c->items, threads) + c->serial_seconds +
             parallel(d, (size_t)c->orders_nonzero, threads);

@@ -5,6 +5,7 @@
  * then ll_layer_expand doubles it to tau).
  */
 #include "material/word_table.h"
+#include "grammar/grammar.h"
 
 #include "layerlab/ll_layer.h"
 
@@ -151,16 +152,34 @@ static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cos
     out->doublings = p->v[TAU] > 0.0 ? ll_doubling_count(p->v[TAU], 1.0) : 0;
     out->orders_nonzero = nonzero;
     out->dense_orders = dense;
+    /* Per thread, where the slab gives the thickness in one pass: an order's
+     * phase matrix with its Legendre values (n^2 + 2 n K, at most 3 n^2)
+     * and the slab's 11 h x h matrices (grammar/slab_medium.c). */
+    if (p->v[TAU] > 0.0)
+        out->thread_bytes = 8.0 * (double)n * (double)n * (3.0 + 11.0 / 4.0);
 }
 
 static ll_status medium_build(const ll_word_build_ctx *ctx, const ll_word *w,
                               const ll_word_params *p, ll_layer *layer)
 {
-    /* The phase matrices show as their own stage; the doublings below
-     * carry the medium's cost. */
-    const ll_monitor *phase = ctx->monitor(ctx->user, 0.0);
+    const ll_monitor *phase;
     ll_status s;
     (void)w;
+    /* Where the slab gives the thickness, in one pass with the phase
+     * matrices (half the memory of two; grammar.h), carrying the whole
+     * cost; else the phase matrices show as their own stage and the
+     * doublings carry the medium's cost. */
+    if (ll_medium_slab_applies(layer, p->v[TAU])) {
+        int done;
+        ll_medium_kind kind = p->choice == LL_PHASE_HG    ? LL_MEDIUM_HG
+                              : p->choice == LL_PHASE_VMF ? LL_MEDIUM_VMF
+                                                          : LL_MEDIUM_ISOTROPIC;
+        s = ll_layer_set_medium_slab(layer, kind, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE],
+                                     p->v[TAU], ctx->monitor(ctx->user, 1.0), &done);
+        if (s != LL_OK || done)
+            return s;
+    }
+    phase = ctx->monitor(ctx->user, 0.0);
     if (p->choice == LL_PHASE_HG)
         s = ll_layer_set_henyey_greenstein_ex(layer, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE], phase);
     else if (p->choice == LL_PHASE_VMF)

@@ -93,6 +93,12 @@ LL_INTERNAL ll_status ll_struct_check(const void *caller, const char *fn, const 
 typedef ll_status (*ll_parallel_body)(size_t index, void *ctx);
 LL_INTERNAL ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx);
 
+/* Inside a body of ll_parallel_for: the index, below the caller's
+ * ll_get_thread_count(), of the thread that runs it (0 outside a loop), so
+ * that items can reuse per-thread scratch (one slot per thread, read before
+ * the loop's count of threads is known: size it by the caller's count). */
+LL_INTERNAL size_t ll_parallel_slot(void);
+
 /* Helpers for argument checks. */
 LL_INTERNAL int ll_is_finite(double x);
 

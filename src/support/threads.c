@@ -79,6 +79,15 @@ static void wait_polling(ll_watch *w, const size_t *finished, size_t count)
     }
 }
 
+size_t ll_parallel_slot(void)
+{
+#ifdef _OPENMP
+    return (size_t)omp_get_thread_num();
+#else
+    return 0;
+#endif
+}
+
 ll_status ll_parallel_for(size_t count, ll_parallel_body body, void *ctx)
 {
     return ll_parallel_for_watched(count, body, ctx, NULL);
