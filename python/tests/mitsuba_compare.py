@@ -44,7 +44,6 @@ def per_lane_costs(path, n=1 << 18):
     time, the library's threads) and per lane of the traced code (one kernel
     of n lanes, Dr.Jit's threads), on random directions around the mirror
     direction (where the series are long), best of 3."""
-    import ctypes
     import drjit as dr
     import layerlab as ll
     from layerlab import _native
