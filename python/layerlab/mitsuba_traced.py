@@ -11,18 +11,20 @@ ll_bsdf.h (mu_i > 0: light arriving from above; mu_o the outgoing cosine):
 - eval: the node interval of mu_i and of mu_o (a binary search over the
   nodes), their Catmull-Rom weights (4 each: a 4 x 4 stencil of stored
   series), and sum_k a_k cos(k phi) over the 16 series in one symbolic loop
-  (dr.while_loop) over k, cos(k phi) from the three-term recurrence
-  cos((k+1) phi) = 2 cos(phi) cos(k phi) - cos((k-1) phi);
+  (dr.while_loop) over lines of orders (LINE below), cos(k phi) from
+  interleaved Chebyshev chains x_{k+P} = 2 cos(P phi) x_k - x_{k-P} (the
+  C reader's recurrence, there with P = 4);
 - pdf: the luminance of that sum over the albedo 2 pi CDF[n-1] of the
   interpolated row;
 - sample: mu_o by inverting the Catmull-Rom CDF of the interpolated row
   (binary search for the segment, Newton-bisection on the segment's quartic
-  integral), then phi by Newton-bisection on the series' integral
-  a_0 phi + sum_k a_k sin(k phi) / k, from the same wrapped-Cauchy first
-  guess as the C reader, u[0] >= 1/2 picking the mirrored half. The same u
-  gives the C reader's direction up to float32 rounding (the arithmetic here
-  is in the variant's Float, float32 in llvm_ad_rgb, where C uses double;
-  the tolerances of the Newton loops are set for float32 accordingly).
+  integral), then phi by a bracketed root search on the series' integral
+  a_0 phi + sum_k a_k sin(k phi) / k (Halley steps, bisection when a step
+  leaves the bracket), from the same wrapped-Cauchy first guess as the C
+  reader, u[0] >= 1/2 picking the mirrored half. The same u gives the C
+  reader's direction up to float32 rounding (the arithmetic here is in the
+  variant's Float, float32 in llvm_ad_rgb, where C uses double; the
+  tolerances of the loops are set for float32 accordingly).
 
 Textured files: the basis weights for per-lane parameter values are the
 tensor product of 1-D linear (hat) weights over each parameter's sample
@@ -48,29 +50,31 @@ import mitsuba as mi
 G_FROM_Y, G_FROM_B, G_FROM_R = 1.39829, -0.100913, -0.297375
 MU_FLOOR = 1e-6          # LL_BSDF_MU_FLOOR of bsdf_internal.h
 PI = math.pi
-# Newton-bisection bounds. The C reader stops at 1e-12 in double. In
+# Bounds of the root searches. The C reader stops at 1e-12 in double. In
 # float32 a bracket or step of 1e-7 is below one ulp of phi near pi (2.4e-7)
-# or of t near 1 (1.2e-7), and rounding noise in F keeps Newton from
-# settling closer, so such a bound is never met and every such lane runs to
-# the iteration cap (measured: 5% of the phi loops at 32 steps with 2e-7,
-# which in 8-lane packets costs most of the loop's time). 1e-6 (radians,
-# or of the unit segment) is a few ulps: reached in 2-5 steps, and far
-# below any visible change of direction.
+# or of t near 1 (1.2e-7), and rounding noise in F keeps the steps from
+# settling closer, so such a bound can only be met by luck and those lanes
+# run to the iteration cap (measured on the gold file, 20000 lanes, with
+# 2e-7: the slowest phi searches at the cap of 32 steps, mean 4.5; with
+# 1e-6: at most 23, mean 4.2; a 16-lane packet runs as long as its slowest
+# lane). 1e-6 (radians, or of the unit segment) is a few ulps and far below
+# any visible change of direction.
 MU_ITERATIONS = 32
 PHI_ITERATIONS = 32
 T_TOLERANCE = 1e-6
 PHI_TOLERANCE = 1e-6
 # The coefficients are re-laid in lines of 16 floats (64 bytes, a cache
-# line): one line holds the next LINE_ORDERS orders of every channel of a
-# series (16 orders of a one-channel file; 4 orders of Y, R, B and 4 zeros of
-# a three-channel one). A lane then reads one cache line per series and step
-# of the loop, as one packet gather (Dr.Jit bundles gathers of a power of two
-# of contiguous floats into packet loads). Measured on the gold file
-# (llvm_ad_rgb, AVX-512), 1M random near-specular evaluations: with one
-# gather per order and channel the series' cache lines are touched 3 times
-# per order, and the loop cost 8 times what the same work costs when every
-# lane reads the same addresses; the memory access, not the arithmetic,
-# sets the speed.
+# line): one line holds the next orders of every channel of a series (16
+# orders of a one-channel file; 4 orders of Y, R, B and 4 zeros of a
+# three-channel one), read by one packet gather (Dr.Jit bundles gathers of a
+# power of two of contiguous floats into packet loads), so that a lane reads
+# one cache line per series and step instead of one gather per order and
+# channel. Measured on the gold file (llvm_ad_rgb, AVX-512, 1M near-specular
+# evaluations, all three channels): 0.5 us per lane when every lane has the
+# same direction, 3.8-4.8 us for independent directions, with this layout or
+# with packets of 4 orders per channel alike (the differences were within
+# the noise of the shared machine): the lanes' scattered memory accesses and
+# their different series lengths set the speed, not the arithmetic.
 LINE = 16
 
 
