@@ -301,10 +301,40 @@ def _check_within_noise(native, ours, native2, ours2):
             SIGMAS * sigma + BIAS_ALLOWANCE ** 2)
 
 
+def _render_in_subprocess(path, mode, spp, seeds):
+    """Renders of the gold scene with the layerlab BSDF on path in a fresh
+    Python process (the same scene functions), one per seed."""
+    import subprocess
+    import sys
+    import tempfile
+    here = os.path.dirname(os.path.abspath(__file__))
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "renders.npy")
+        code = (
+            "import sys; sys.path.insert(0, %r)\n"
+            "import numpy as np, mitsuba as mi\n"
+            "mi.set_variant('llvm_ad_rgb')\n"
+            "import layerlab.mitsuba\n"
+            "import mitsuba_scenes as S\n"
+            "scn = S.scene(mi, {'type': 'layerlab', 'filename': %r, 'mode': %r}, %d, %d)\n"
+            "np.save(%r, np.stack([S.render(mi, scn, %d, s) for s in %r]))\n"
+            % (here, path, mode, SIZE, spp, out, spp, tuple(seeds)))
+        subprocess.run([sys.executable, "-c", code], check=True)
+        images = np.load(out)
+    return [images[k] for k in range(len(seeds))]
+
+
 @pytest.fixture(scope="module")
 def renders(files):
     _use("llvm_ad_rgb")
     out = {}
+    # The batch path in a process of its own: it turns the symbolic modes
+    # off for the whole process, and in this one, after the other tests of
+    # the module, its wavefront-mode render failed in Dr.Jit 1.5 ("Variable
+    # ... remains dirty") although the same scene renders in a fresh process
+    # after traced renders of both kinds (measured; the cause is not known).
+    spp = SPP["conductor"]
+    out["batch"] = _render_in_subprocess(files["conductor"], "batch", spp, (2, 3))
     for kind in ("conductor", "dielectric"):
         spp = SPP[kind]
         native = S.scene(mi, S.native_bsdf(kind), SIZE, spp)
@@ -322,12 +352,6 @@ def renders(files):
                                     "alpha": 0.2}),
                       ("reference", {"type": "layerlab", "filename": files["reference"]})):
         out[key] = S.render(mi, S.scene(mi, bsdf, SIZE, spp), spp, 6)
-    # The batch path last: it turns the symbolic modes off for the process.
-    batch = S.scene(mi, {"type": "layerlab", "filename": files["conductor"], "mode": "batch"},
-                    SIZE, spp)
-    out["batch"] = [S.render(mi, batch, spp, 2), S.render(mi, batch, spp, 3)]
-    dr.set_flag(dr.JitFlag.SymbolicLoops, True)
-    dr.set_flag(dr.JitFlag.SymbolicCalls, True)
     return out
 
 
