@@ -180,6 +180,51 @@ LL_API ll_status ll_bsdf_basis_coefficients(const ll_bsdf *b, const double *para
 /* The file's nodes (n_nodes floats, ascending, owned by b). */
 LL_API const float *ll_bsdf_nodes(const ll_bsdf *b);
 
+/* The validated tables of an opened file, as the evaluator reads them, for
+ * renderers that evaluate the format themselves (e.g. traced into a GPU or
+ * JIT kernel: python/layerlab/mitsuba_traced.py) without parsing the file a
+ * second time. Const pointers into b: valid while b lives, never to be
+ * written. Set struct_size = sizeof(ll_bsdf_tables) (the INIT macro does);
+ * the library writes only the fields struct_size covers. n = n_nodes, nb =
+ * n_bases; i the incident and o the outgoing node in the layer convention.
+ *  nodes: [n] ascending (two at mu = 0);
+ *  pairs: [2 (i n + o)] the first coefficient of pair (i, o)'s block in
+ *    coeffs, [2 (i n + o) + 1] its series length (0: f is zero there);
+ *  coeffs: [n_coeffs] floats; pair (i, o), channel c, basis k, order j at
+ *    coeffs[offset + (c nb + k) length + j] (channels Y[, R, B]);
+ *  cdf: [(i n + o) nb + k] the running integral over the outgoing nodes of
+ *    a_0 of the luminance (the sampler's CDF rows, rounding dips already
+ *    flattened as the reader stores them); a0: the same layout, a_0 itself;
+ *  parameter_counts: [n_parameters] sample positions per textured
+ *    parameter; parameter_positions: [n_parameter_values] those positions,
+ *    parameter 0's first (NULL pointers and 0 counts for an untextured
+ *    file). The scalars repeat ll_bsdf_info's so that one call suffices. */
+typedef struct ll_bsdf_tables {
+    size_t struct_size;
+    size_t n_nodes;
+    size_t n_channels;
+    size_t n_bases;
+    size_t max_order;
+    size_t n_coeffs;
+    size_t n_parameters;
+    size_t n_parameter_values;
+    double eta;
+    const float *nodes;
+    const uint32_t *pairs;
+    const float *coeffs;
+    const double *cdf;
+    const double *a0;
+    const uint32_t *parameter_counts;
+    const float *parameter_positions;
+} ll_bsdf_tables;
+
+#define LL_BSDF_TABLES_INIT { sizeof(ll_bsdf_tables), 0, 0, 0, 0, 0, 0, 0, 0.0, NULL, NULL, \
+                              NULL, NULL, NULL, NULL, NULL }
+
+/* Fill *out with b's tables (above). LL_ERROR_INVALID_ARGUMENT for NULL
+ * arguments or a struct_size smaller than the first field's end. */
+LL_API ll_status ll_bsdf_get_tables(const ll_bsdf *b, ll_bsdf_tables *out);
+
 /* ------------------------------------------------- layer convention */
 
 /* f(mu_i -> mu_o, phi_d) without cosine, as ll_layer_eval (see the top of

@@ -16,20 +16,33 @@ here. Radiance mode multiplies transmitted values by the eta^2 of the
 interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
-Vectorised: in the LLVM variants one call of the batch API
-(ll_bsdf_eval_dir_batch, ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch)
-evaluates a whole wavefront, through numpy copies of the Dr.Jit arrays.
-That needs evaluated (wavefront) loops and calls: symbolic ones hold no
-values to hand to C. Creating a layerlab BSDF in an LLVM variant therefore
-turns Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting
-of Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
-the same batch functions with one element. CUDA variants are refused: the
-directions would have to travel to the CPU and back at every bounce.
+Two implementations, chosen with the property "mode":
+- "traced" (the default in the LLVM variants): eval, pdf and sample written
+  in Dr.Jit operations (layerlab.mitsuba_traced) over the file's tables,
+  uploaded once as Dr.Jit arrays (ll_bsdf_get_tables). They trace into
+  Mitsuba's rendering kernel, so its default symbolic (megakernel) mode
+  stays on; values and sampled directions are the C reader's up to float32
+  rounding.
+- "batch" (the only one in the scalar variants): one call of the C batch API
+  (ll_bsdf_eval_dir_batch, ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch)
+  per wavefront, through numpy copies of the Dr.Jit arrays. That needs
+  evaluated (wavefront) loops and calls: symbolic ones hold no values to
+  hand to C. Creating a batch-mode BSDF in an LLVM variant therefore turns
+  Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting of
+  Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
+  the same batch functions with one element.
+CUDA variants are refused: "batch" would move the directions to the CPU and
+back at every bounce, and "traced" is not tested there.
 
-Textured files (more than one basis function) are refused for now: the C
-API has no call yet that gives the basis weights for given parameter values
-(ll_bsdf_basis_coefficients is planned), and weights made up here would
-render something else than the file describes.
+Textured files (more than one basis function): one property per textured
+parameter, by the parameter's name (ll_bsdf_get_parameter_name when the
+library has it, else the metadata's top-level "parameters" array, else p0,
+p1, ...; a "." in a name may be written "_"), a float or any Mitsuba texture
+(so a bitmap drives the roughness). Its value at the shading point gives the
+basis weights: the tensor product of linear hat weights over the
+parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
+only the bases of non-zero weight are read. In "batch" mode the same weights
+are computed per element in numpy and passed with a stride.
 
 Lobes: glossy reflection on both sides, and glossy transmission when the
 file transmits (its eta differs from 1, or it has non-zero transmission
@@ -41,8 +54,10 @@ import math
 
 import numpy as np
 
+import json
+
 from . import _native
-from ._native import c_double_p, lib
+from ._native import c_double_p, c_float_p, lib
 from .storage import BSDFStorage
 
 try:
@@ -51,6 +66,8 @@ try:
 except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
+
+from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0
 _LL_INVALID_ARGUMENT_ELEMENT = 1  # an element's zero/non-finite direction: zeros, as scalar
@@ -79,8 +96,13 @@ def _ptr(a):
     return a.ctypes.data_as(c_double_p)
 
 
+def _fptr(a):
+    return None if a is None else a.ctypes.data_as(c_float_p)
+
+
 class _Table:
-    """The opened file and the three batch calls over numpy arrays."""
+    """The opened file, its parameters, and the three batch calls over numpy
+    arrays (coeffs: None, or per-element basis weights (n, n_bases) float32)."""
 
     def __init__(self, path):
         self.storage = BSDFStorage(path)
@@ -91,6 +113,59 @@ class _Table:
         self.n_bases = info.n_bases
         self.n_parameters = info.n_parameters
         self.n_channels = info.n_channels
+        self.metadata = info.metadata.decode("utf-8", "replace") if info.metadata else ""
+        self.positions = []
+        for p in range(self.n_parameters):
+            count = ctypes.c_size_t()
+            pos = c_float_p()
+            _native.check(lib.ll_bsdf_get_parameter(self.handle, p, ctypes.byref(count),
+                                                    ctypes.byref(pos)))
+            self.positions.append(np.array(pos[:count.value], dtype=np.float64))
+        self.names = self._parameter_names()
+
+    def _parameter_names(self):
+        """ll_bsdf_get_parameter_name when the library exports it; else the
+        same rule read here: the metadata's top-level "parameters" array of
+        n_parameters distinct non-empty strings, else p0, p1, ..."""
+        n = self.n_parameters
+        fn = getattr(lib._cdll, "ll_bsdf_get_parameter_name", None)
+        if fn is not None:
+            fn.restype = ctypes.c_int
+            fn.argtypes = [_native.bsdf_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_char_p)]
+            names = []
+            for p in range(n):
+                name = ctypes.c_char_p()
+                _native.check(fn(self.handle, p, ctypes.byref(name)))
+                names.append(name.value.decode("utf-8"))
+            return names
+        try:
+            listed = json.loads(self.metadata).get("parameters")
+        except (ValueError, AttributeError):
+            listed = None
+        if (isinstance(listed, list) and len(listed) == n and len(set(listed)) == n
+                and all(isinstance(x, str) and 0 < len(x.encode()) <= 255 for x in listed)):
+            return list(listed)
+        return ["p%d" % p for p in range(n)]
+
+    def coefficients(self, params):
+        """Per-element basis weights for parameter values params (list of
+        arrays, one per parameter): the tensor product of linear hat weights
+        (ll_bsdf_basis_coefficients, vectorised), (n, n_bases) float32."""
+        width = max(len(v) for v in params)
+        coeffs = np.ones((width, 1))
+        for p, pos in enumerate(self.positions):
+            x = np.clip(np.broadcast_to(params[p], (width,)), pos[0], pos[-1])
+            w = np.zeros((width, len(pos)))
+            if len(pos) == 1:
+                w[:, 0] = 1.0
+            else:
+                j = np.clip(np.searchsorted(pos, x, side="right") - 1, 0, len(pos) - 2)
+                t = (x - pos[j]) / (pos[j + 1] - pos[j])
+                w[np.arange(width), j] = 1.0 - t
+                w[np.arange(width), j + 1] = t
+            # parameter 0 fastest in the basis index
+            coeffs = (w[:, :, None] * coeffs[:, None, :]).reshape(width, -1)
+        return np.ascontiguousarray(coeffs, dtype=np.float32)
 
     @staticmethod
     def _check(status):
@@ -100,32 +175,38 @@ class _Table:
         if status not in (_LL_OK, _LL_INVALID_ARGUMENT_ELEMENT):
             _native.check(status)
 
-    def eval(self, wo, wi, mode):
+    def _stride(self, coeffs):
+        return 0 if coeffs is None else (self.n_bases if coeffs.shape[0] > 1 else 0)
+
+    def eval(self, wo, wi, mode, coeffs=None):
         n = wo.shape[0]
         rgb = np.zeros((n, 3))
-        self._check(lib.ll_bsdf_eval_dir_batch(self.handle, n, _ptr(wo), _ptr(wi), mode, None,
-                                               0, _ptr(rgb)))
+        self._check(lib.ll_bsdf_eval_dir_batch(self.handle, n, _ptr(wo), _ptr(wi), mode,
+                                               _fptr(coeffs), self._stride(coeffs), _ptr(rgb)))
         return rgb
 
-    def pdf(self, wo, wi):
+    def pdf(self, wo, wi, coeffs=None):
         n = wo.shape[0]
         pdf = np.zeros(n)
-        self._check(lib.ll_bsdf_pdf_dir_batch(self.handle, n, _ptr(wo), _ptr(wi), None, 0,
-                                              _ptr(pdf)))
+        self._check(lib.ll_bsdf_pdf_dir_batch(self.handle, n, _ptr(wo), _ptr(wi), _fptr(coeffs),
+                                              self._stride(coeffs), _ptr(pdf)))
         return pdf
 
-    def sample(self, wo, u, mode):
+    def sample(self, wo, u, mode, coeffs=None):
         n = wo.shape[0]
         wi = np.zeros((n, 3))
         pdf = np.zeros(n)
         rgb = np.zeros((n, 3))
-        self._check(lib.ll_bsdf_sample_dir_batch(self.handle, n, _ptr(wo), _ptr(u), mode, None,
-                                                 0, _ptr(wi), _ptr(pdf), _ptr(rgb)))
+        self._check(lib.ll_bsdf_sample_dir_batch(self.handle, n, _ptr(wo), _ptr(u), mode,
+                                                 _fptr(coeffs), self._stride(coeffs), _ptr(wi),
+                                                 _ptr(pdf), _ptr(rgb)))
         return wi, pdf, rgb
 
     def transmits(self):
         """Whether any transmitted value is non-zero, on a grid of direction
-        pairs across the surface (both ways), or eta differs from 1."""
+        pairs across the surface (both ways), or eta differs from 1. A
+        textured file is probed with every basis weighted equally (f >= 0
+        per basis, so the sum transmits if any basis does)."""
         if self.eta != 1.0:
             return True
         cosines = np.linspace(0.05, 1.0, 12)
@@ -137,13 +218,32 @@ class _Table:
                     pairs.append(((sa, 0.0, a), (sb * math.cos(phi), sb * math.sin(phi), -b)))
         wo = np.ascontiguousarray([p[0] for p in pairs], dtype=np.float64)
         wi = np.ascontiguousarray([p[1] for p in pairs], dtype=np.float64)
+        coeffs = None
+        if self.n_bases > 1:
+            coeffs = np.full((1, self.n_bases), 1.0 / self.n_bases, dtype=np.float32)
         importance = 1
-        down = self.eval(wo, wi, importance)
-        up = self.eval(np.ascontiguousarray(-wo), np.ascontiguousarray(-wi), importance)
+        down = self.eval(wo, wi, importance, coeffs)
+        up = self.eval(np.ascontiguousarray(-wo), np.ascontiguousarray(-wi), importance, coeffs)
         return bool(down.max() > 0.0 or up.max() > 0.0)
 
 
 _CLASSES = {}
+
+
+def _file_axes(wi_m, wo_m):
+    """Mitsuba's (si.wi, wo) as the file's (mu_i, mu_o, cos phi_d): pbrt's
+    wo = si.wi and wi = wo (ll_bsdf.h, renderer convention)."""
+    inv_a = dr.rsqrt(dr.squared_norm(wi_m))
+    inv_b = dr.rsqrt(dr.squared_norm(wo_m))
+    mu_i = dr.clip(wi_m.z * inv_a, -1.0, 1.0)
+    mu_o = dr.clip(-wo_m.z * inv_b, -1.0, 1.0)
+    xy_a = dr.fma(wi_m.x, wi_m.x, wi_m.y * wi_m.y)
+    xy_b = dr.fma(wo_m.x, wo_m.x, wo_m.y * wo_m.y)
+    # pbrt-v3's CosDPhi(-wi, wo): 1 when either has no azimuth.
+    cos_phi = dr.select((xy_a > 0) & (xy_b > 0),
+                        dr.clip(-dr.fma(wo_m.x, wi_m.x, wo_m.y * wi_m.y) *
+                                dr.rsqrt(xy_a * xy_b), -1.0, 1.0), 1.0)
+    return mu_i, mu_o, cos_phi
 
 
 def _make_class():
@@ -155,7 +255,9 @@ def _make_class():
     Flags = mi.BSDFFlags
 
     class LayerlabBSDF(mi.BSDF):
-        """Mitsuba BSDF "layerlab": {"type": "layerlab", "filename": "x.bsdf"}."""
+        """Mitsuba BSDF "layerlab": {"type": "layerlab", "filename": "x.bsdf"},
+        optional "mode": "traced" | "batch", and for a textured file one
+        property per parameter name (float or texture)."""
 
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
@@ -163,8 +265,8 @@ def _make_class():
             if current.startswith("cuda"):
                 raise RuntimeError(
                     "layerlab: the CUDA variant %s is not supported: the .bsdf evaluation runs "
-                    "on the CPU (liblayerlab); use an LLVM variant such as llvm_ad_rgb, or "
-                    "scalar_rgb" % current)
+                    "on the CPU (liblayerlab) or is traced for LLVM only; use an LLVM variant "
+                    "such as llvm_ad_rgb, or scalar_rgb" % current)
             if not current.endswith("_rgb"):
                 raise RuntimeError(
                     "layerlab: variant %s is not supported: .bsdf files hold RGB (or one "
@@ -177,12 +279,15 @@ def _make_class():
             path = str(resolver.resolve(name))
             self.m_filename = path
             self.m_table = _Table(path)
-            if self.m_table.n_bases > 1:
-                raise ValueError(
-                    "layerlab: %s is textured (%d basis functions over %d parameters); the "
-                    "Mitsuba plugin cannot give their weights yet (the C API has no "
-                    "ll_bsdf_basis_coefficients), so textured files are refused"
-                    % (path, self.m_table.n_bases, self.m_table.n_parameters))
+            self.m_jit = dr.is_jit_v(mi.Float)
+            mode = str(props["mode"]) if "mode" in props else ("traced" if self.m_jit else "batch")
+            if mode not in ("traced", "batch"):
+                raise ValueError('layerlab: "mode" is "%s"; it must be "traced" or "batch"' % mode)
+            if mode == "traced" and not self.m_jit:
+                raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
+                                 'the scalar variants use "batch"')
+            self.m_mode = mode
+            self.m_params = self._parameters(props, path)
             self.m_eta = self.m_table.eta
             self.m_transmits = self.m_table.transmits()
             both = Flags.FrontSide | Flags.BackSide
@@ -194,11 +299,50 @@ def _make_class():
             for c in components[1:]:
                 flags = flags | c
             self.m_flags = flags
-            self.m_jit = dr.is_jit_v(mi.Float)
-            if self.m_jit:
+            self.m_traced = TracedBSDF(self.m_table.handle) if mode == "traced" else None
+            if self.m_jit and mode == "batch":
                 _wavefront_mode()
 
+        def _parameters(self, props, path):
+            """One (name, float or texture) per textured parameter."""
+            names = self.m_table.names
+            values = []
+            for p, name in enumerate(names):
+                key = name if name in props else name.replace(".", "_")
+                if key not in props:
+                    raise ValueError(
+                        "layerlab: %s is textured over %s; give each parameter's value as a "
+                        "property (a float or a texture): missing \"%s\"%s"
+                        % (path, ", ".join(names), name,
+                           "" if key == name else ' (or "%s")' % key))
+                value = props[key]
+                if isinstance(value, (int, float)):
+                    value = float(value)
+                elif not isinstance(value, mi.Texture):
+                    raise ValueError('layerlab: parameter "%s" must be a float or a texture, '
+                                     'not %r' % (name, value))
+                values.append((name, value))
+            return values
+
         # -------------------------------------------------------- helpers
+
+        def _param_values(self, si, active):
+            out = []
+            for _, v in self.m_params:
+                out.append(mi.Float(v) if isinstance(v, float) else v.eval_1(si, active))
+            return out
+
+        def _corners(self, si, active):
+            return self.m_traced.basis_corners(self._param_values(si, active))
+
+        def _coeffs(self, si, active, width):
+            if not self.m_params:
+                return None
+            values = []
+            for v in self._param_values(si, active):
+                a = np.asarray(v.numpy() if dr.is_jit_v(v) else [float(v)], dtype=np.float64)
+                values.append(np.broadcast_to(a.ravel(), (width,)) if a.size == 1 else a.ravel())
+            return self.m_table.coefficients(values)
 
         def _out_float(self, values):
             if self.m_jit:
@@ -229,38 +373,84 @@ def _make_class():
             width = max(dr.width(si.wi), dr.width(wo))
             return width, _packed(si.wi, width, 3), _packed(wo, width, 3)
 
+        # ------------------------------------------------------ traced path
+
+        def _traced_eval_pdf(self, ctx, si, wo, active, want_pdf):
+            mu_i, mu_o, cos_phi = _file_axes(si.wi, wo)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            f, pdf = self.m_traced.eval_pdf(mu_i, mu_o, cos_phi, self._corners(si, active),
+                                            radiance, want_pdf)
+            cos_o = mi.Frame3f.cos_theta(wo)
+            ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
+            f = dr.select(ok, f * dr.abs(cos_o), 0.0)
+            return f, (dr.select(ok, pdf, 0.0) if want_pdf else None)
+
+        def _traced_sample(self, ctx, si, sample2, active):
+            wi = si.wi
+            mu_i = dr.clip(wi.z * dr.rsqrt(dr.squared_norm(wi)), -1.0, 1.0)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            u = dr.clip(sample2, 0.0, 1.0)
+            mu_o, phi, pdf, f, ok = self.m_traced.sample(mu_i, u.x, u.y,
+                                                         self._corners(si, active), radiance)
+            # pbrt-v3's construction of its wi from phi and mu_o about its
+            # wo's azimuth (x when wo is the normal), as ll_bsdf_sample_dir.
+            sin_o = dr.sqrt(dr.fma(wi.x, wi.x, wi.y * wi.y))
+            has = sin_o > 0
+            cx = dr.select(has, wi.x / dr.select(has, sin_o, 1.0), 1.0)
+            cy = dr.select(has, wi.y / dr.select(has, sin_o, 1.0), 0.0)
+            sin_i = dr.safe_sqrt(1.0 - mu_o * mu_o)
+            sp, cp = dr.sincos(phi)
+            out = dr.normalize(mi.Vector3f(-sin_i * (cp * cx - sp * cy),
+                                           -sin_i * (sp * cx + cp * cy), -mu_o))
+            return out, pdf, f, ok
+
         # ---------------------------------------------------- BSDF interface
 
         def eval(self, ctx, si, wo, active=True):
+            if self.m_traced is not None:
+                return self._traced_eval_pdf(ctx, si, wo, active, False)[0]
             width, a, b = self._pairs(si, wo)
-            f = self._out_color(self.m_table.eval(a, b, self._mode(ctx)))
+            coeffs = self._coeffs(si, active, width)
+            f = self._out_color(self.m_table.eval(a, b, self._mode(ctx), coeffs))
             cos_o = mi.Frame3f.cos_theta(wo)
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_traced is not None:
+                return self._traced_eval_pdf(ctx, si, wo, active, True)[1]
             width, a, b = self._pairs(si, wo)
-            p = self._out_float(self.m_table.pdf(a, b))
+            coeffs = self._coeffs(si, active, width)
+            p = self._out_float(self.m_table.pdf(a, b, coeffs))
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi),
                                           mi.Frame3f.cos_theta(wo))
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_traced is not None:
+                return self._traced_eval_pdf(ctx, si, wo, active, True)
             width, a, b = self._pairs(si, wo)
-            f = self._out_color(self.m_table.eval(a, b, self._mode(ctx)))
-            p = self._out_float(self.m_table.pdf(a, b))
+            coeffs = self._coeffs(si, active, width)
+            f = self._out_color(self.m_table.eval(a, b, self._mode(ctx), coeffs))
+            p = self._out_float(self.m_table.pdf(a, b, coeffs))
             cos_o = mi.Frame3f.cos_theta(wo)
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0), dr.select(ok, p, 0.0)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
-            width = max(dr.width(si.wi), dr.width(sample2))
-            a = _packed(si.wi, width, 3)
-            u = np.clip(_packed(sample2, width, 2), 0.0, 1.0)
-            wi, pdf, rgb = self.m_table.sample(a, u, self._mode(ctx))
             bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = self._out_vector(wi)
-            bs.pdf = self._out_float(pdf)
+            if self.m_traced is not None:
+                bs.wo, pdf, f, found = self._traced_sample(ctx, si, sample2, active)
+                bs.pdf = pdf
+            else:
+                width = max(dr.width(si.wi), dr.width(sample2))
+                a = _packed(si.wi, width, 3)
+                u = np.clip(_packed(sample2, width, 2), 0.0, 1.0)
+                wi, pdf, rgb = self.m_table.sample(a, u, self._mode(ctx),
+                                                   self._coeffs(si, active, width))
+                bs.wo = self._out_vector(wi)
+                bs.pdf = self._out_float(pdf)
+                f = self._out_color(rgb)
             cos_i = mi.Frame3f.cos_theta(si.wi)
             cos_o = mi.Frame3f.cos_theta(bs.wo)
             reflected = cos_i * cos_o > 0
@@ -274,7 +464,6 @@ def _make_class():
             bs.pdf = dr.select(ok, bs.pdf, 0.0)
             # Weight f |cos| / pdf, with f and pdf of the same direction (the
             # sampler's pdf equals ll_bsdf_pdf_dir there).
-            f = self._out_color(rgb)
             weight = f * dr.abs(cos_o) / dr.select(ok, bs.pdf, 1.0)
             return bs, dr.select(ok, weight, 0.0)
 
@@ -285,8 +474,9 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("LayerlabBSDF[filename=\"%s\", eta=%g, transmission=%s]"
-                    % (self.m_filename, self.m_eta, self.m_transmits))
+            return ("LayerlabBSDF[filename=\"%s\", eta=%g, transmission=%s, mode=%s%s]"
+                    % (self.m_filename, self.m_eta, self.m_transmits, self.m_mode,
+                       "".join(", %s=%s" % (n, v) for n, v in self.m_params)))
 
     _CLASSES[variant] = LayerlabBSDF
     return LayerlabBSDF

@@ -21,6 +21,12 @@ GOLD_K = (3.983, 2.385, 1.603)
 CONDUCTOR_ALPHA = 0.2
 DIELECTRIC_ETA = 1.5
 DIELECTRIC_ALPHA = 0.3
+# The textured file's samples of alpha (rough gold).
+TEXTURED_ALPHAS = (0.15, 0.2, 0.3)
+EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples")
+# A coated diffuse ("roughplastic"-like): examples/plastic.layers.
+with open(os.path.join(EXAMPLES, "plastic.layers")) as _f:
+    COATED_TEXT = _f.read()
 
 
 def conductor_text(alpha=CONDUCTOR_ALPHA):
@@ -107,3 +113,38 @@ def render(mi, scn, spp=0, seed=0):
 def relative_rmse(a, b):
     """RMSE of a - b over the RMS of b (all pixels and channels)."""
     return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b ** 2)))
+
+
+def build_textured_conductor(path, alphas, reference_path=None, reference_alpha=None):
+    """Rough gold textured over alpha (one basis per value of alphas),
+    written with ll_bsdf_write_textured from layers built at those values at
+    one common resolution (the sharpest alpha's), with the metadata naming
+    the parameter "alpha". With reference_path, also the untextured file of
+    the layers at reference_alpha (one of alphas) at the same resolution."""
+    import ctypes
+    from layerlab import _native
+    lib = _native.lib
+    sharpest = ll.Material.parse(conductor_text(min(alphas)))
+    n, m, _ = sharpest.resolution()
+    handles, keep, header = [], [], None
+    for alpha in alphas:
+        layers, header = ll.Material.parse(conductor_text(alpha)).build_layers(nodes=n, orders=m)
+        keep.append(layers)
+        handles.extend(layer._handle for layer in layers)
+        if reference_path and alpha == reference_alpha:
+            ll.Material.parse(conductor_text(alpha)).write(reference_path, layers)
+    opts = _native.BsdfWriteOptions()
+    opts.eta = header["eta"]
+    opts.alpha[0], opts.alpha[1] = header["alpha"]
+    opts.metadata = b'{"generator": "python/tests/mitsuba_scenes.py", "parameters": ["alpha"]}'
+    fn = lib._cdll.ll_bsdf_write_textured
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.c_char_p, ctypes.POINTER(_native.layer_p), ctypes.c_size_t,
+                   ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t),
+                   ctypes.POINTER(ctypes.c_double), ctypes.POINTER(_native.BsdfWriteOptions)]
+    array = (_native.layer_p * len(handles))(*handles)
+    counts = (ctypes.c_size_t * 1)(len(alphas))
+    positions = (ctypes.c_double * len(alphas))(*alphas)
+    _native.check(fn(os.fsencode(path), array, len(keep[0]), 1, counts, positions,
+                     ctypes.byref(opts)))
+    return path
