@@ -2,8 +2,11 @@
  * textured_grid: a textured .bsdf file from a material template, built basis
  * by basis with the public API (ll_material_build_layers at each point of
  * the grid, then ll_bsdf_write_textured), for the tests and checks of the
- * file's consumers (tests/llplot.sh, shims/pbrt-v3/check/check.sh) until
- * the material language's sweeps make such files with llbuild.
+ * file's consumers (tests/llplot.sh, shims/pbrt-v3/check/check.sh).
+ * llbuild makes such files from a swept material too (`alpha=[0.1 0.2]`,
+ * material-language.md, "Sweeps"); this builder stays as an independent
+ * one, on the public API only, so that the consumers' checks do not rest on
+ * the sweep builder whose files they read.
  *
  *   textured_grid OUT.bsdf TEMPLATE NAME=V1,V2,... [NAME=V1,... ...]
  *
