@@ -74,6 +74,12 @@ step="llplot --vary with a name the file does not have exits 1 and names both"
 check sh -c '"$1" --sphere "$2/tg.bsdf" --vary alpha -o "$2/bad.png" 2> "$2/err.txt";
     [ $? = 1 ] && grep -q "coat.alpha, base.albedo" "$2/err.txt" && [ ! -e "$2/bad.png" ]' \
     sh "$llplot" "$work"
+step="llplot --grid and --vary on a swept material file (compiled to its textured file)"
+printf 'dielectric eta=1.5 alpha=[0.1 0.3]\ndiffuse name=base albedo=[0.2 0.8]\nset nodes=16 orders=8\n' \
+    > "$work/swept.layers"
+check sh -c '"$1" --grid "$2/swept.layers" -o "$2/swept.exr" --size 16 --spp 2 &&
+    "$1" --sphere "$2/swept.layers" --vary base.albedo -o "$2/swept.png" --size 16 --spp 2 &&
+    [ -s "$2/swept.exr" ] && [ -s "$2/swept.png" ]' sh "$llplot" "$work"
 step="textured_grid refuses values that do not increase"
 check sh -c '! "$1" "$2/never.bsdf" "diffuse albedo={0}" albedo=0.5,0.2 && [ ! -e "$2/never.bsdf" ]' \
     sh "$grid_tool" "$work"

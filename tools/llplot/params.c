@@ -58,7 +58,8 @@ int llplot_axes_open(const llplot_options *o, const llplot_source *s, const char
     if (!s->bsdf || s->n_layers > 0 || ll_bsdf_get_info(s->bsdf, &info) != LL_OK ||
         info.n_parameters == 0)
         return llplot_fail(LLPLOT_EXIT_INPUT,
-                           "%s: %s needs a textured .bsdf file (this one has no parameters)",
+                           "%s: %s needs a textured .bsdf file or a swept material (this one "
+                           "has no parameters)",
                            o->input, what);
     a->n = info.n_parameters;
     a->n_bases = info.n_bases;
