@@ -46,4 +46,41 @@ if [ -n "$san" ]; then
     LSAN_OPTIONS="suppressions=$work/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
     export LSAN_OPTIONS
 fi
-"$checker" "$llplot" "$work"
+"$checker" "$llplot" "$work" || exit 1
+
+# A textured file from a material template (tests/textured_grid.c, on the
+# public API: ll_material_build_layers per sample, ll_bsdf_write_textured
+# with the names in the metadata), drawn by name: --grid and --vary work on
+# what a material build produces, and a wrong name is refused.
+grid_tool="$build/tests/textured_grid"
+# shellcheck disable=SC2086
+$CC -std=c99 -O1 -g -Wall -Wextra -pedantic -Werror -D_POSIX_C_SOURCE=200809L $san \
+    -I"$root/include" -o "$grid_tool" "$root/tests/textured_grid.c" \
+    -L"$build/lib" -Wl,-rpath,"$build/lib" -llayerlab -lm
+failed=0
+check() { if "$@" > "$work/step.log" 2>&1; then echo "PASS: $step"; else echo "FAIL: $step"; cat "$work/step.log"; failed=1; fi; }
+step="textured_grid builds a 3 x 2 file of a dielectric over a diffuse base"
+check "$grid_tool" "$work/tg.bsdf" \
+    'dielectric eta=1.5 alpha={0}\ndiffuse albedo={1}\nset nodes=16 orders=8' \
+    coat.alpha=0.1,0.2,0.4 base.albedo=0.2,0.8
+step="llplot --grid on it writes a PNG and an EXR of 3 x 2 cells of 16 pixels"
+check sh -c '"$1" --grid "$2/tg.bsdf" -o "$2/tg.png" --size 16 --spp 2 &&
+    "$1" --grid "$2/tg.bsdf" -o "$2/tg.exr" --size 16 --spp 2 &&
+    [ -s "$2/tg.png" ] && [ -s "$2/tg.exr" ]' sh "$llplot" "$work"
+step="llplot --vary base.albedo --param coat.alpha=0.3 on it"
+check "$llplot" --sphere "$work/tg.bsdf" --vary base.albedo --param coat.alpha=0.3 \
+    -o "$work/tg-vary.png" --size 24 --spp 2
+step="llplot --vary with a name the file does not have exits 1 and names both"
+check sh -c '"$1" --sphere "$2/tg.bsdf" --vary alpha -o "$2/bad.png" 2> "$2/err.txt";
+    [ $? = 1 ] && grep -q "coat.alpha, base.albedo" "$2/err.txt" && [ ! -e "$2/bad.png" ]' \
+    sh "$llplot" "$work"
+step="llplot --grid and --vary on a swept material file (compiled to its textured file)"
+printf 'dielectric eta=1.5 alpha=[0.1 0.3]\ndiffuse name=base albedo=[0.2 0.8]\nset nodes=16 orders=8\n' \
+    > "$work/swept.layers"
+check sh -c '"$1" --grid "$2/swept.layers" -o "$2/swept.exr" --size 16 --spp 2 &&
+    "$1" --sphere "$2/swept.layers" --vary base.albedo -o "$2/swept.png" --size 16 --spp 2 &&
+    [ -s "$2/swept.exr" ] && [ -s "$2/swept.png" ]' sh "$llplot" "$work"
+step="textured_grid refuses values that do not increase"
+check sh -c '! "$1" "$2/never.bsdf" "diffuse albedo={0}" albedo=0.5,0.2 && [ ! -e "$2/never.bsdf" ]' \
+    sh "$grid_tool" "$work"
+exit $failed

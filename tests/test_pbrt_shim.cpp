@@ -10,8 +10,10 @@
  *    closed form from pbrt-v3's FourierBSDF::f / Pdf formulas: it pins down
  *    which table index is which direction, the azimuth convention, and the
  *    eta^2 factor of pbrt's Radiance transport mode on both sides;
- *  - damaged files (truncated, an offset out of range, textured): reported
- *    once through the callback, rendered black, never a crash.
+ *  - damaged files (truncated, an offset out of range): reported once
+ *    through the callback, rendered black, never a crash;
+ *  - a textured synthetic file: its named parameter, and f / Pdf / Sample_f
+ *    at parameter values equal to the blend of its bases.
  */
 #include "layerlab_pbrt_adapter.h"
 
@@ -215,7 +217,10 @@ struct Synthetic {
     std::vector<float> nodes{-1.0f, -0.8f, -0.6f, -0.4f, -0.2f, 0.0f,
                              0.0f,  0.2f,  0.4f,  0.6f,  0.8f,  1.0f};
     float eta = 1.5f;
-    std::uint32_t n_bases = 1;  // 2: one textured parameter with two samples
+    std::uint32_t n_bases = 1;  // 2: one textured parameter "coat.alpha" sampled at 0, 1
+
+    /* Basis b holds the table times 1 + 2 b (textured files: the bases differ). */
+    static double basis_scale(std::uint32_t b) { return 1.0 + 2.0 * b; }
 
     // [muI > 0][muO > 0]: a0 and a1. muI * muO > 0 is transmission.
     double a0[2][2] = {{0.20, 0.50}, {0.70, 0.30}};
@@ -266,7 +271,9 @@ struct Synthetic {
         std::uint32_t pairs = 0;
         for (float x : nodes) pairs += x != 0;
         pairs *= pairs;
-        const std::string metadata = "{\"synthetic\": true}";
+        const std::string metadata =
+            n_bases > 1 ? "{\"synthetic\": true, \"parameters\": [\"coat.alpha\"]}"
+                        : "{\"synthetic\": true}";
 
         const char magic[8] = {'S', 'C', 'A', 'T', 'F', 'U', 'N', 1};
         out.insert(out.end(), magic, magic + 8);
@@ -296,7 +303,7 @@ struct Synthetic {
                 f[o] = nodes[o] == 0 || nodes[i] == 0 ? 0.0 : coefficient(o, i, 0);
             std::vector<double> cdf = running_integral(f);
             for (std::uint32_t o = 0; o < n; ++o)
-                for (std::uint32_t b = 0; b < n_bases; ++b) f32(float(cdf[o]));
+                for (std::uint32_t b = 0; b < n_bases; ++b) f32(float(cdf[o] * basis_scale(b)));
         }
         std::uint32_t offset = 0;
         for (std::uint32_t i = 0; i < n; ++i) {  // offset table, entry o + i n
@@ -312,7 +319,7 @@ struct Synthetic {
                 if (nodes[o] != 0 && nodes[i] != 0)
                     for (std::uint32_t b = 0; b < n_bases; ++b)
                         for (std::uint32_t k = 0; k < length; ++k)
-                            f32(float(coefficient(o, i, int(k))));
+                            f32(float(coefficient(o, i, int(k)) * basis_scale(b)));
         out.insert(out.end(), metadata.begin(), metadata.end());
         return out;
     }
@@ -543,11 +550,86 @@ void test_unusable_files(const std::string &golden, const std::string &dir) {
     bad[entry + 7] = 0x00;
     write_bytes(dir + "/bad_length.bsdf", bad);
     expect_black(cache, dir + "/bad_length.bsdf", "series longer than nMaxOrder", "");
+}
 
+/* ---------------------------------------------------- textured files */
+
+/* A textured file (the synthetic table, basis b scaled by 1 + 2 b, one
+ * parameter "coat.alpha" sampled at 0 and 1): usable, its parameter named
+ * and ranged, and f / Pdf / Sample_f at a parameter value equal to the
+ * linear blend of the bases, as pbrt's material evaluates it at a shading
+ * point. */
+void test_textured_files(const std::string &dir) {
     Synthetic textured;
     textured.n_bases = 2;
-    write_bytes(dir + "/textured.bsdf", textured.bytes());
-    expect_black(cache, dir + "/textured.bsdf", "textured file", "textured");
+    std::string path = dir + "/textured.bsdf";
+    check(write_bytes(path, textured.bytes()), "write the textured file");
+    ll_pbrt::TableCache cache;
+    Messages messages;
+    ll_pbrt::Table table = cache.acquire(path, messages.reporter());
+    check(table.valid() && messages.list.empty(),
+          "a textured file is usable" +
+              (messages.list.empty() ? std::string() : ": " + messages.list[0]));
+    if (!table.valid()) return;
+    std::vector<ll_pbrt::Parameter> params = ll_pbrt::parameters_of(table.get());
+    check(params.size() == 1 && params[0].name == "coat.alpha" && params[0].lo == 0.0 &&
+              params[0].hi == 1.0,
+          "the file's parameter: \"coat.alpha\" over [0, 1]");
+    check(ll_pbrt::basis_count(table.get()) == 2, "two bases");
+    check(ll_pbrt::parameters_of(nullptr).empty(), "no parameters for a null file");
+
+    const ll_pbrt::Vec3 wo = spherical(0.5, 0.3), wi = spherical(0.45, 1.9 + 0.7);
+    const double want = textured.expected_f(wo, wi, ll_pbrt::Transport::Radiance);
+    const double want_pdf = textured.expected_pdf(wo, wi);
+    // value -> the blend 0.75 x 1 + 0.25 x 3 etc.; outside the range and
+    // not finite: clamped, the lowest sample.
+    const double values[5] = {0.25, 0.0, 1.0, -5.0, 7.0};
+    const double blends[5] = {1.5, 1.0, 3.0, 1.0, 3.0};
+    for (int k = 0; k < 5; ++k) {
+        float w[2] = {-1, -1};
+        double scratch[1];
+        std::string at = "coat.alpha = " + std::to_string(values[k]);
+        check(ll_pbrt::basis_weights(table.get(), &values[k], 1, scratch, w), at + ": weights");
+        ll_pbrt::Lobe lobe(table.get(), ll_pbrt::Transport::Radiance, w);
+        double rgb[3];
+        lobe.f(wo, wi, rgb);
+        check_rel(rgb[0], want * blends[k], 1e-4, at + ": f is the blend of the bases");
+        // The pdf is f |cos| over the albedo, both blended alike.
+        check_rel(lobe.pdf(wo, wi), want_pdf, 1e-3, at + ": Pdf as the untextured table's");
+        ll_pbrt::Vec3 ws{0, 0, 0};
+        double pdf = 0, f[3];
+        bool sampled = lobe.sample(wo, 0.3, 0.6, &ws, &pdf, rgb);
+        lobe.f(wo, ws, f);
+        check(sampled && near_rel(pdf, lobe.pdf(wo, ws), 2e-3) && near_rel(rgb[0], f[0], 2e-3),
+              at + ": Sample_f agrees with f and Pdf");
+    }
+    {
+        const double nan = std::nan("");
+        float w[2] = {-1, -1};
+        double scratch[1];
+        check(ll_pbrt::basis_weights(table.get(), &nan, 1, scratch, w) && w[0] == 1 && w[1] == 0,
+              "a NaN value takes the lowest sample");
+        check(!ll_pbrt::basis_weights(table.get(), values, 2, scratch, w) &&
+                  !ll_pbrt::basis_weights(nullptr, values, 1, scratch, w),
+              "weights refused for a wrong count or no file");
+    }
+    // A textured table without weights is black, not evaluated with guesses.
+    ll_pbrt::Lobe unweighted(table.get(), ll_pbrt::Transport::Radiance);
+    double rgb[3] = {1, 1, 1};
+    check(!unweighted.f(wo, wi, rgb) && rgb[0] == 0, "no weights: black");
+    std::string m = ll_pbrt::missing_parameter_message(path, params[0]);
+    check(m.find(path) != std::string::npos && m.find("\"float coat.alpha\"") != std::string::npos &&
+              m.find("using 0.5") != std::string::npos,
+          "the message for an unset parameter names file, parameter and value: " + m);
+
+    // An untextured file: no parameters, one basis, as before.
+    Synthetic untextured;
+    std::vector<unsigned char> bytes = untextured.bytes();
+    check(write_bytes(dir + "/untextured.bsdf", bytes), "write the untextured file");
+    ll_pbrt::Table plain = cache.acquire(dir + "/untextured.bsdf", messages.reporter());
+    check(plain.valid() && ll_pbrt::parameters_of(plain.get()).empty() &&
+              ll_pbrt::basis_count(plain.get()) == 1,
+          "an untextured file has no parameters and one basis");
 }
 
 }  // namespace
@@ -567,6 +649,7 @@ int main(int argc, char **argv) {
     test_synthetic_conventions(dir);
     test_cache_shares_and_counts(golden);
     test_unusable_files(golden, dir);
+    test_textured_files(dir);
 
     std::printf("%d passed, %d failed\n", g_passed, g_failed);
     return g_failed == 0 ? 0 : 1;

@@ -162,6 +162,20 @@ LL_API ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info);
 LL_API ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,
                                        const float **positions);
 
+/* Name of textured parameter p (p < info.n_parameters): *name is a
+ * NUL-terminated UTF-8 string owned by b, valid while b lives. Names come
+ * from the metadata's top-level JSON key "parameters", an array of exactly
+ * n_parameters distinct non-empty strings of at most 255 bytes in the
+ * file's order (what layerlab's textured builds write, e.g.
+ * ["coat.alpha", "base.alpha"]), read when the file is opened (the text is
+ * scanned, bounded and allocation-free, before the names' one block is
+ * allocated). A file without such an array -- other or no JSON, the default
+ * writer's "parameters": <count>, a wrong count, a malformed or duplicate
+ * string, more than 256 parameters -- opens as before and gets the names
+ * "p0", "p1", ... Thread-safe (b is immutable).
+ * LL_ERROR_INVALID_ARGUMENT for NULL arguments or p out of range. */
+LL_API ll_status ll_bsdf_get_parameter_name(const ll_bsdf *b, size_t p, const char **name);
+
 /* The weights are products of 1-D linear (hat) weights over each parameter's positions: >= 0,
  * at most two non-zero per parameter, summing to 1, so f stays >= 0 and sampling is exact;
  * evaluation and sampling visit only the non-zero ones. Chosen over Catmull-Rom after measuring

@@ -3,13 +3,16 @@
 sampled, over ``ll_bsdf`` in ``layerlab/ll_bsdf.h``."""
 
 import ctypes
+import json
+import math
 import os
 import weakref
 
 import numpy as np
 
 from ._errors import InvalidArgumentError, UnsupportedError
-from ._native import BsdfInfo, BsdfWriteOptions, bsdf_p, c_float_p, check, fspath, layer_p, lib
+from ._native import (BsdfInfo, BsdfWriteOptions, bsdf_p, c_double_p, c_float_p, check, fspath,
+                      layer_p, lib)
 from ._util import count_argument, real_argument
 from .layer import Layer
 
@@ -52,6 +55,76 @@ def _write(filename, layers, eta, alpha, metadata, errorGoal):
     opts.error_goal = real_argument(errorGoal, "errorGoal")
     handles = (layer_p * len(layers))(*[layer._handle for layer in layers])
     check(lib.ll_bsdf_write(fspath(filename), handles, len(layers), ctypes.byref(opts)))
+
+
+def _parameter_grid(nBases, nParameters, paramSampleCounts, paramSamplePositions):
+    """The textured writer's parameter arrays from fromLayerGeneral's
+    arguments: counts (size_t[]) and positions (double[], parameter 0's
+    first). Positions may be one flat list (with paramSampleCounts, as the
+    original layerlab takes them) or one list per parameter."""
+    if paramSamplePositions is None:
+        positions = []
+    else:
+        positions = list(paramSamplePositions)
+    nested = any(np.ndim(p) > 0 for p in positions)
+    if nested:
+        per_parameter = [[real_argument(v, "paramSamplePositions") for v in p] for p in positions]
+        counts = [len(p) for p in per_parameter]
+        if paramSampleCounts is not None and list(paramSampleCounts) != counts:
+            raise InvalidArgumentError("paramSampleCounts %s disagree with the lists of "
+                                       "paramSamplePositions %s" % (list(paramSampleCounts),
+                                                                    counts))
+        flat = [v for p in per_parameter for v in p]
+    else:
+        counts = [count_argument(c, "paramSampleCounts") for c in (paramSampleCounts or [])]
+        flat = [real_argument(v, "paramSamplePositions") for v in positions]
+        if sum(counts) != len(flat):
+            raise InvalidArgumentError("paramSampleCounts %s add up to %d, but %d "
+                                       "paramSamplePositions are given"
+                                       % (counts, sum(counts), len(flat)))
+    if nParameters is None:
+        nParameters = len(counts)
+    nParameters = count_argument(nParameters, "nParameters")
+    if nParameters != len(counts):
+        raise InvalidArgumentError("nParameters = %d, but %d parameters have sample positions"
+                                   % (nParameters, len(counts)))
+    product = 1
+    for c in counts:
+        product *= c
+    if nBases is None:
+        nBases = product
+    nBases = count_argument(nBases, "nBases")
+    if nBases != product:
+        raise InvalidArgumentError("nBases = %d, but the parameters' sample counts %s make %d"
+                                   % (nBases, counts, product))
+    return nBases, counts, flat
+
+
+def _metadata_with_names(metadata, names, nParameters):
+    """The metadata text that carries the parameter names ("parameters": a
+    JSON array, what ll_bsdf_get_parameter_name reads); None keeps the
+    library's default JSON (names p0, p1, ...)."""
+    if names is None:
+        return metadata
+    names = [str(n) for n in names]
+    if len(names) != nParameters:
+        raise InvalidArgumentError("paramNames has %d names for %d parameters"
+                                   % (len(names), nParameters))
+    if len(set(names)) != len(names) or any(not n or len(n.encode("utf-8")) > 255 for n in names):
+        raise InvalidArgumentError("paramNames must be distinct, non-empty and at most 255 "
+                                   "bytes each: %r" % (names,))
+    if metadata is None:
+        document = {"generator": "layerlab (Python, BSDFStorage.fromLayerGeneral)"}
+    else:
+        try:
+            document = json.loads(str(metadata))
+        except ValueError:
+            document = None
+        if not isinstance(document, dict):
+            raise InvalidArgumentError("paramNames are stored in the metadata's JSON object; "
+                                       "metadata must then be one (or None)")
+    document["parameters"] = names
+    return json.dumps(document, indent=2)
 
 
 def _vector3(v, name):
@@ -187,6 +260,69 @@ class BSDFStorage:
         _write(filename, [layerR, layerG, layerB], eta, alpha, metadata, errorGoal)
         return cls(filename)
 
+    @classmethod
+    def fromLayerGeneral(cls, filename, layers, nChannels=1, nBases=None, nParameters=None,
+                         paramSampleCounts=None, paramSamplePositions=None, extrapolate=False,
+                         metadata=None, paramNames=None, eta=1.0, alpha=0.0, errorGoal=1e-3):
+        """fromLayerGeneral(filename, layers, nChannels=1, nBases=None,
+        nParameters=None, paramSampleCounts=None, paramSamplePositions=None,
+        extrapolate=False, metadata=None, paramNames=None, eta=1.0,
+        alpha=0.0, errorGoal=1e-3) -> BSDFStorage
+
+        Create a (possibly textured) BSDF storage file from layers built by
+        hand, as the original layerlab's ``fromLayerGeneral``, and open it
+        (``ll_bsdf_write_textured``; atomic).
+
+        Parameter ``layers``:
+            nBases * nChannels layers, basis-major: ``layers[b * nChannels +
+            c]`` is channel c (R, G, B for three) of basis b; the basis index
+            runs over parameter 0 fastest. All share nodes and order count.
+
+        Parameter ``paramSamplePositions``:
+            One list of strictly increasing sample positions per parameter
+            (``[[0.05, 0.1, 0.2], [0.1, 0.3]]``), or the original's flat list
+            with ``paramSampleCounts``. ``nBases`` and ``nParameters``
+            default to what the positions imply and must agree with them.
+
+        Parameter ``paramNames``:
+            The parameters' names (``["coat.alpha", "base.alpha"]``), stored
+            as the metadata's JSON key "parameters" (merged into
+            ``metadata`` when that is a JSON object); without them the file's
+            parameters are called ``p0``, ``p1``, ...
+
+        ``extrapolate=True`` (harmonic extrapolation) is not supported, as
+        by the C writer. The other keyword arguments are those of
+        :meth:`fromLayer`.
+        """
+        if extrapolate:
+            raise UnsupportedError("fromLayerGeneral: harmonic extrapolation is not supported "
+                                   "(the reader refuses such files too)", 6)
+        nChannels = count_argument(nChannels, "nChannels")
+        if nChannels not in (1, 3):
+            raise InvalidArgumentError("nChannels must be 1 or 3, not %d" % nChannels)
+        layers = list(layers)
+        nBases, counts, positions = _parameter_grid(nBases, nParameters, paramSampleCounts,
+                                                    paramSamplePositions)
+        if len(layers) != nBases * nChannels:
+            raise InvalidArgumentError("%d layers given; %d bases x %d channels need %d"
+                                       % (len(layers), nBases, nChannels, nBases * nChannels))
+        for k, layer in enumerate(layers):
+            if not isinstance(layer, Layer):
+                raise TypeError("layer %d must be a layerlab.Layer, not %s"
+                                % (k, type(layer).__name__))
+        opts = BsdfWriteOptions()
+        opts.eta = real_argument(eta, "eta")
+        opts.alpha[0], opts.alpha[1] = _alpha_pair(alpha)
+        text = _metadata_with_names(metadata, paramNames, len(counts))
+        opts.metadata = None if text is None else str(text).encode("utf-8")
+        opts.error_goal = real_argument(errorGoal, "errorGoal")
+        handles = (layer_p * len(layers))(*[layer._handle for layer in layers])
+        c_counts = (ctypes.c_size_t * max(1, len(counts)))(*counts)
+        c_positions = (ctypes.c_double * max(1, len(positions)))(*positions)
+        check(lib.ll_bsdf_write_textured(fspath(filename), handles, nChannels, len(counts),
+                                         c_counts, c_positions, ctypes.byref(opts)))
+        return cls(filename)
+
     # ------------------------------------------------------------ header
 
     @property
@@ -272,9 +408,74 @@ class BSDFStorage:
         """The sample positions of textured parameter ``i`` (a list)"""
         return [float(x) for x in self._parameter(i)]
 
+    def parameterName(self, i):
+        """The name of textured parameter ``i``: from the file's metadata
+        (its JSON key "parameters"), else ``"p<i>"``"""
+        i = count_argument(i, "i")
+        if i >= self.parameterCount:
+            raise IndexError("parameter %d is beyond the file's %d" % (i, self.parameterCount))
+        name = ctypes.c_char_p()
+        check(lib.ll_bsdf_get_parameter_name(self._live(), i, ctypes.byref(name)))
+        return name.value.decode("utf-8", "replace")
+
+    @property
+    def parameterNames(self):
+        """The names of the textured parameters, in the file's order"""
+        return [self.parameterName(i) for i in range(self.parameterCount)]
+
+    @property
+    def axes(self):
+        """The textured parameters as a list of ``(name, positions)`` pairs
+        in the file's order (positions: a float64 array of the samples);
+        empty for an untextured file. The bases run over the first axis
+        fastest."""
+        return [(self.parameterName(i), self._parameter(i).astype(np.float64))
+                for i in range(self.parameterCount)]
+
+    def basisCoefficients(self, params):
+        """basisCoefficients(params) -> numpy float32 array (basisCount,)
+
+        The weights of the file's bases at one point of parameter space
+        (``ll_bsdf_basis_coefficients``: products of linear weights, >= 0,
+        summing to 1; values outside a parameter's samples are clamped).
+        ``params``: one value per parameter in the file's order, or a dict
+        {name: value} that names every parameter.
+        """
+        n = self.parameterCount
+        if n == 0:
+            raise InvalidArgumentError("%s is not textured: it has no parameters" % self.filename)
+        if isinstance(params, dict):
+            names = self.parameterNames
+            unknown = sorted(set(params) - set(names))
+            missing = [name for name in names if name not in params]
+            if unknown or missing:
+                problems = (["unknown %s" % unknown] if unknown else []) + \
+                           (["missing %s" % missing] if missing else [])
+                raise InvalidArgumentError("params for %s: %s (the file's parameters are %s)"
+                                           % (self.filename, "; ".join(problems), names))
+            values = [real_argument(params[name], name) for name in names]
+        else:
+            values = [real_argument(v, "params") for v in np.ravel(np.asarray(params, dtype=object))]
+            if len(values) != n:
+                raise InvalidArgumentError("params has %d values; %s has %d parameters (%s)"
+                                           % (len(values), self.filename, n,
+                                              ", ".join(self.parameterNames)))
+        for v in values:
+            if not math.isfinite(v):
+                raise InvalidArgumentError("params: %r is not finite" % v)
+        c_values = (ctypes.c_double * n)(*values)
+        coeffs = np.empty(self.basisCount, dtype=np.float32)
+        check(lib.ll_bsdf_basis_coefficients(self._live(), ctypes.cast(c_values, c_double_p),
+                                             coeffs.ctypes.data_as(c_float_p)))
+        return coeffs
+
     # ------------------------------------------------------------ evaluation
 
-    def _basis(self, basisCoeffs):
+    def _basis(self, basisCoeffs, params=None):
+        if params is not None:
+            if basisCoeffs is not None:
+                raise InvalidArgumentError("give basisCoeffs or params, not both")
+            basisCoeffs = self.basisCoefficients(params)
         if basisCoeffs is None:
             return None, None
         coeffs = np.ascontiguousarray(basisCoeffs, dtype=np.float32).reshape(-1)
@@ -283,16 +484,21 @@ class BSDFStorage:
                                        "functions" % (coeffs.size, self.basisCount))
         return coeffs, coeffs.ctypes.data_as(c_float_p)
 
-    def eval(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None):
-        """eval(mu_i, mu_o, phi_d=0, basisCoeffs=None) -> numpy array (..., 3)
+    def eval(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None, params=None):
+        """eval(mu_i, mu_o, phi_d=0, basisCoeffs=None, params=None) -> numpy array (..., 3)
 
         Evaluate the model (the BSDF without cosine factor, R, G, B; three
         equal values for a one-channel file) for the given values of mu_i,
         mu_o and phi_d. Numbers or arrays that broadcast together; the
         result has the broadcast shape plus a last axis of 3.
+
+        A textured file needs its basis weights: ``basisCoeffs`` (basisCount
+        values) or ``params``, the point of parameter space
+        (:meth:`basisCoefficients`: a value per parameter, or a dict by
+        name). The same holds for pdf, sample and the *Dir calls.
         """
         handle = self._live()
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         shape, points = _broadcast_points(mu_i, mu_o, phi_d)
         out = np.empty((len(points[0]), 3))
         rgb = (ctypes.c_double * 3)()
@@ -302,22 +508,22 @@ class BSDFStorage:
             out[k] = rgb
         return out.reshape(shape + (3,))
 
-    def pdf(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None):
-        """pdf(mu_i, mu_o, phi_d=0, basisCoeffs=None) -> float or numpy array
+    def pdf(self, mu_i, mu_o, phi_d=0.0, basisCoeffs=None, params=None):
+        """pdf(mu_i, mu_o, phi_d=0, basisCoeffs=None, params=None) -> float or numpy array
 
         The probability density per solid angle with which :meth:`sample`
         picks (mu_o, phi_d) given mu_i. Broadcasts like :meth:`eval`.
         """
         handle = self._live()
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         shape, points = _broadcast_points(mu_i, mu_o, phi_d)
         fn = lib.ll_bsdf_pdf
         out = np.array([fn(handle, mi, mo, ph, coeffs) for mi, mo, ph in zip(*points)],
                        dtype=np.float64).reshape(shape)
         return float(out) if out.ndim == 0 else out
 
-    def sample(self, mu_i, sample, basisCoeffs=None):
-        """sample(mu_i, sample, basisCoeffs=None) -> (weight, mu_o, phi_d, pdf)
+    def sample(self, mu_i, sample, basisCoeffs=None, params=None):
+        """sample(mu_i, sample, basisCoeffs=None, params=None) -> (weight, mu_o, phi_d, pdf)
 
         Importance sample the model for light arriving along ``mu_i``, from
         two uniform numbers ``sample`` in [0, 1). Returns the weight
@@ -325,7 +531,7 @@ class BSDFStorage:
         pdf. A zero weight and pdf mean that no direction was found.
         """
         handle = self._live()
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         mu_o, phi_d, pdf = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
         weight = (ctypes.c_double * 3)()
         check(lib.ll_bsdf_sample(handle, real_argument(mu_i, "mu_i"), _uniform_pair(sample),
@@ -333,39 +539,39 @@ class BSDFStorage:
                                  ctypes.byref(pdf), weight))
         return np.array(weight), mu_o.value, phi_d.value, pdf.value
 
-    def evalDir(self, wo, wi, mode="radiance", basisCoeffs=None):
-        """evalDir(wo, wi, mode="radiance", basisCoeffs=None) -> numpy array (3,)
+    def evalDir(self, wo, wi, mode="radiance", basisCoeffs=None, params=None):
+        """evalDir(wo, wi, mode="radiance", basisCoeffs=None, params=None) -> numpy array (3,)
 
         The BSDF value f(wo, wi) (no cosine) for renderer directions in the
         local shading frame, as pbrt-v3's ``BxDF::f``. ``mode`` is
         "radiance" (scales by eta^2 across a dielectric, as radiance
         requires) or "importance".
         """
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         rgb = (ctypes.c_double * 3)()
         check(lib.ll_bsdf_eval_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
                                    _transport(mode), coeffs, rgb))
         return np.array(rgb)
 
-    def pdfDir(self, wo, wi, basisCoeffs=None):
-        """pdfDir(wo, wi, basisCoeffs=None) -> float
+    def pdfDir(self, wo, wi, basisCoeffs=None, params=None):
+        """pdfDir(wo, wi, basisCoeffs=None, params=None) -> float
 
         The density (per solid angle) of sampling ``wi`` given ``wo``, as
         pbrt-v3's ``Pdf(wo, wi)``.
         """
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         value = lib.ll_bsdf_pdf_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
                                     coeffs)
         return value
 
-    def sampleDir(self, wo, sample, mode="radiance", basisCoeffs=None):
-        """sampleDir(wo, sample, mode="radiance", basisCoeffs=None) -> (f, wi, pdf)
+    def sampleDir(self, wo, sample, mode="radiance", basisCoeffs=None, params=None):
+        """sampleDir(wo, sample, mode="radiance", basisCoeffs=None, params=None) -> (f, wi, pdf)
 
         Sample ``wi`` given ``wo`` as pbrt-v3's ``FourierBSDF::Sample_f``
         does (the same ``sample`` gives the same direction); returns f(wo,
         wi) (R, G, B array), the unit vector ``wi`` and its pdf.
         """
-        _keep, coeffs = self._basis(basisCoeffs)
+        _keep, coeffs = self._basis(basisCoeffs, params)
         wi = (ctypes.c_double * 3)()
         rgb = (ctypes.c_double * 3)()
         pdf = ctypes.c_double()

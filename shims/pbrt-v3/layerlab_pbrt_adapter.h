@@ -12,7 +12,12 @@
  *                        black instead of crashing.
  *   ll_pbrt::Lobe        f / Pdf / Sample_f with pbrt-v3's FourierBSDF
  *                        conventions, over ll_bsdf_eval_dir, ll_bsdf_pdf_dir
- *                        and ll_bsdf_sample_dir.
+ *                        and ll_bsdf_sample_dir, with the basis weights of
+ *                        a textured file.
+ *   ll_pbrt::Parameter   a textured file's parameter (name, sampled range),
+ *   ll_pbrt::parameters_of, basis_weights: what the material needs to turn
+ *                        its per-shading-point parameter values into basis
+ *                        weights (ll_bsdf_basis_coefficients).
  *
  * Conventions (pbrt-v3's BxDF interface, which ll_bsdf.h's "renderer
  * convention" was made to match): vectors are in the local shading frame
@@ -33,11 +38,13 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace ll_pbrt {
 
@@ -87,18 +94,85 @@ class Table {
     ll_bsdf *bsdf_;
 };
 
-/* Why a file cannot be used; "" when it can. pbrt-v3's fourier material has
- * no parameters that would give the basis weights of a textured file, so
- * such a file is refused here rather than evaluated with made-up weights. */
+/* Why a file cannot be used; "" when it can. A textured file is usable:
+ * its parameters become material parameters of the same names (see
+ * parameters_of), whose values at each shading point give the basis
+ * weights. */
 inline std::string unusable_reason(const ll_bsdf *bsdf) {
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     if (ll_bsdf_get_info(bsdf, &info) != LL_OK)
         return ll_last_error_message();
-    if (info.n_bases != 1)
-        return "the file is textured (" + std::to_string(info.n_bases) +
-               " basis functions), which pbrt-v3's \"fourier\" material cannot "
-               "parameterise";
+    if (info.n_bases != 1 && info.n_parameters == 0)
+        return "the file has " + std::to_string(info.n_bases) +
+               " basis functions but no parameters to weight them by";
     return std::string();
+}
+
+/* One textured parameter of a file, in the file's order: its name
+ * (ll_bsdf_get_parameter_name: the metadata's, else "p0", "p1", ...) and the
+ * range of its sample positions, to which values are clamped. */
+struct Parameter {
+    std::string name;
+    double lo, hi;
+    double middle() const { return 0.5 * (lo + hi); }
+};
+
+/* The textured parameters of bsdf (empty for an untextured file or a null
+ * one). */
+inline std::vector<Parameter> parameters_of(const ll_bsdf *bsdf) {
+    std::vector<Parameter> out;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    if (!bsdf || ll_bsdf_get_info(bsdf, &info) != LL_OK) return out;
+    for (std::size_t p = 0; p < info.n_parameters; ++p) {
+        const char *name = nullptr;
+        const float *positions = nullptr;
+        std::size_t count = 0;
+        if (ll_bsdf_get_parameter_name(bsdf, p, &name) != LL_OK ||
+            ll_bsdf_get_parameter(bsdf, p, &count, &positions) != LL_OK || count == 0)
+            return std::vector<Parameter>();
+        out.push_back(Parameter{name, positions[0], positions[count - 1]});
+    }
+    return out;
+}
+
+/* Number of basis weights a Lobe of bsdf needs (1 for untextured files). */
+inline std::size_t basis_count(const ll_bsdf *bsdf) {
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    return bsdf && ll_bsdf_get_info(bsdf, &info) == LL_OK ? info.n_bases : 0;
+}
+
+/* The basis weights (basis_count floats into coeffs) of the point whose
+ * parameter values are values[0 .. count), count = parameters_of(bsdf).size(),
+ * clamped to each parameter's range (ll_bsdf_basis_coefficients: products
+ * of linear weights, >= 0, summing to 1). A non-finite value (a texture
+ * gone wrong) takes the parameter's lowest sample, so that a shading point
+ * never fails; scratch holds count doubles. false only for a null or
+ * untextured bsdf or a wrong count. */
+inline bool basis_weights(const ll_bsdf *bsdf, const double *values, std::size_t count,
+                          double *scratch, float *coeffs) {
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    if (!bsdf || count == 0 || ll_bsdf_get_info(bsdf, &info) != LL_OK ||
+        info.n_parameters != count)
+        return false;
+    for (std::size_t p = 0; p < count; ++p) {
+        const float *positions = nullptr;
+        std::size_t n = 0;
+        if (ll_bsdf_get_parameter(bsdf, p, &n, &positions) != LL_OK || n == 0) return false;
+        scratch[p] = std::isfinite(values[p]) ? values[p] : double(positions[0]);
+    }
+    return ll_bsdf_basis_coefficients(bsdf, scratch, coeffs) == LL_OK;
+}
+
+/* What the material reports when a scene gives no value for a textured
+ * parameter (neither "float NAME" nor "texture NAME"): the parameter then
+ * takes the middle of its sampled range. */
+inline std::string missing_parameter_message(const std::string &path, const Parameter &p) {
+    char range[96];
+    std::snprintf(range, sizeof range, "%g (the middle of its samples %g .. %g)", p.middle(),
+                  p.lo, p.hi);
+    return "fourier material: \"" + path + "\" is textured over \"" + p.name +
+           "\", which the material does not set (\"float " + p.name + "\" or \"texture " +
+           p.name + "\"); using " + range;
 }
 
 /* Opens each file once and hands out shared references. */
@@ -174,10 +248,14 @@ inline void set_black(double rgb[3]) { rgb[0] = rgb[1] = rgb[2] = 0.0; }
 /* pbrt-v3's FourierBSDF in terms of the library. Holds a borrowed pointer:
  * the material's Table keeps the file alive for as long as the scene (and
  * so every BxDF allocated from it) exists, which keeps atomic reference
- * counting out of the per-intersection path. A null bsdf is black. */
+ * counting out of the per-intersection path. A null bsdf is black.
+ * coeffs: the basis weights of a textured file (basis_weights; borrowed,
+ * e.g. from pbrt's per-intersection arena), nullptr for an untextured one;
+ * a textured file without weights evaluates to black (the library refuses). */
 class Lobe {
   public:
-    Lobe(const ll_bsdf *bsdf, Transport mode) noexcept : bsdf_(bsdf), mode_(mode) {}
+    Lobe(const ll_bsdf *bsdf, Transport mode, const float *coeffs = nullptr) noexcept
+        : bsdf_(bsdf), mode_(mode), coeffs_(coeffs) {}
 
     Transport mode() const noexcept { return mode_; }
 
@@ -187,7 +265,7 @@ class Lobe {
         set_black(rgb);
         double o[3], i[3];
         if (!bsdf_ || !normalize_into(wo, o) || !normalize_into(wi, i)) return false;
-        if (ll_bsdf_eval_dir(bsdf_, o, i, to_ll_transport(mode_), nullptr, rgb) != LL_OK) {
+        if (ll_bsdf_eval_dir(bsdf_, o, i, to_ll_transport(mode_), coeffs_, rgb) != LL_OK) {
             set_black(rgb);
             return false;
         }
@@ -198,7 +276,7 @@ class Lobe {
     double pdf(const Vec3 &wo, const Vec3 &wi) const {
         double o[3], i[3];
         if (!bsdf_ || !normalize_into(wo, o) || !normalize_into(wi, i)) return 0.0;
-        double p = ll_bsdf_pdf_dir(bsdf_, o, i, nullptr);
+        double p = ll_bsdf_pdf_dir(bsdf_, o, i, coeffs_);
         return p > 0.0 && std::isfinite(p) ? p : 0.0;
     }
 
@@ -212,7 +290,7 @@ class Lobe {
         *pdf = 0.0;
         double o[3], u[2] = {u0, u1}, w[3], p = 0.0;
         if (!bsdf_ || !normalize_into(wo, o)) return false;
-        if (ll_bsdf_sample_dir(bsdf_, o, u, to_ll_transport(mode_), nullptr, w, &p, rgb) !=
+        if (ll_bsdf_sample_dir(bsdf_, o, u, to_ll_transport(mode_), coeffs_, w, &p, rgb) !=
                 LL_OK ||
             !(p > 0.0) || !std::isfinite(p)) {
             set_black(rgb);
@@ -226,6 +304,7 @@ class Lobe {
   private:
     const ll_bsdf *bsdf_;
     Transport mode_;
+    const float *coeffs_;
 };
 
 }  // namespace ll_pbrt

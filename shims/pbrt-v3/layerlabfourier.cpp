@@ -10,6 +10,7 @@
 #include "paramset.h"
 #include "spectrum.h"
 #include "texture.h"
+#include "textures/constant.h"
 
 namespace pbrt {
 
@@ -61,11 +62,31 @@ std::string LayerlabFourierBSDF::ToString() const {
            " ]";
 }
 
+namespace {
+
+ll_pbrt::Table AcquireTable(const std::string &filename) {
+    return LoadedTables().acquire(
+        filename, [](const std::string &message) { Error("%s", message.c_str()); });
+}
+
+}  // namespace
+
 LayerlabFourierMaterial::LayerlabFourierMaterial(
     const std::string &filename, const std::shared_ptr<Texture<Float>> &bumpMap)
-    : table(LoadedTables().acquire(
-          filename, [](const std::string &message) { Error("%s", message.c_str()); })),
-      bumpMap(bumpMap) {}
+    : LayerlabFourierMaterial(AcquireTable(filename), {}, bumpMap) {}
+
+LayerlabFourierMaterial::LayerlabFourierMaterial(
+    const ll_pbrt::Table &table,
+    const std::vector<std::shared_ptr<Texture<Float>>> &parameters,
+    const std::shared_ptr<Texture<Float>> &bumpMap)
+    : table(table), parameters(parameters), bumpMap(bumpMap) {
+    nBases = ll_pbrt::basis_count(table.get());
+    // A textured file's parameters must all have a texture (the factory
+    // below gives each one); anything else would evaluate without weights.
+    if (!this->table.valid() ||
+        ll_pbrt::parameters_of(this->table.get()).size() != this->parameters.size())
+        this->table = ll_pbrt::Table();
+}
 
 void LayerlabFourierMaterial::ComputeScatteringFunctions(
     SurfaceInteraction *si, MemoryArena &arena, TransportMode mode,
@@ -74,13 +95,39 @@ void LayerlabFourierMaterial::ComputeScatteringFunctions(
     si->bsdf = ARENA_ALLOC(arena, BSDF)(*si);
     // No BxDF at all for an unusable file: the surface is black, as with
     // pbrt-v3's own loader after a failed read.
-    if (table.valid())
-        si->bsdf->Add(ARENA_ALLOC(arena, LayerlabFourierBSDF)(table.get(), mode));
+    if (!table.valid()) return;
+    const float *coeffs = nullptr;
+    if (!parameters.empty()) {
+        // The parameters' values here (after bump mapping, as pbrt's own
+        // materials evaluate their textures), then the bases' weights; both
+        // live in the intersection's arena, as the BxDF does.
+        std::size_t n = parameters.size();
+        double *values = arena.Alloc<double>(2 * n);
+        float *weights = arena.Alloc<float>(nBases);
+        for (std::size_t p = 0; p < n; ++p) values[p] = parameters[p]->Evaluate(*si);
+        if (!ll_pbrt::basis_weights(table.get(), values, n, values + n, weights)) return;
+        coeffs = weights;
+    }
+    si->bsdf->Add(ARENA_ALLOC(arena, LayerlabFourierBSDF)(table.get(), mode, coeffs));
 }
 
 LayerlabFourierMaterial *CreateLayerlabFourierMaterial(const TextureParams &mp) {
     std::shared_ptr<Texture<Float>> bumpMap = mp.GetFloatTextureOrNull("bumpmap");
-    return new LayerlabFourierMaterial(mp.FindFilename("bsdffile"), bumpMap);
+    std::string filename = mp.FindFilename("bsdffile");
+    ll_pbrt::Table table = AcquireTable(filename);
+    // Each textured parameter of the file is a material parameter of the
+    // same name: "float NAME" (a constant) or "texture NAME" (any float
+    // texture, evaluated at the shading point).
+    std::vector<std::shared_ptr<Texture<Float>>> parameters;
+    for (const ll_pbrt::Parameter &p : ll_pbrt::parameters_of(table.get())) {
+        std::shared_ptr<Texture<Float>> texture = mp.GetFloatTextureOrNull(p.name);
+        if (!texture) {
+            Warning("%s", ll_pbrt::missing_parameter_message(filename, p).c_str());
+            texture = std::make_shared<ConstantTexture<Float>>(Float(p.middle()));
+        }
+        parameters.push_back(texture);
+    }
+    return new LayerlabFourierMaterial(table, parameters, bumpMap);
 }
 
 }  // namespace pbrt

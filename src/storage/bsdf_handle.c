@@ -27,6 +27,7 @@ void ll_bsdf_free(ll_bsdf *b)
     ll_free(b->bucket_first);
     ll_free(b->intervals);
     ll_free(b->metadata);
+    ll_free(b->param_names);
     ll_free(b);
 }
 

@@ -66,6 +66,9 @@ struct ll_bsdf {
     uint32_t *bucket_first;     /* [n_buckets] interval at the bucket's start  */
     char *metadata;             /* NUL-terminated copy                         */
     size_t metadata_size;
+    const char **param_names;   /* [n_parameters] (NULL if none), one block
+                                   with the names' bytes after the pointers
+                                   (bsdf_names.c)                              */
 };
 
 /* The Fourier series at one (mu_i, mu_o): the spline-weighted sum of up to
@@ -104,6 +107,11 @@ static inline size_t ll_bsdf_active_basis(const ll_bsdf_series *s, size_t q)
 {
     return s->all_bases ? q : s->active[q];
 }
+
+/* Fill b->param_names from b->metadata (validated first, then one
+ * allocation; default names "p0", ... when the metadata has none):
+ * bsdf_names.c. 0 when out of memory. */
+LL_INTERNAL int ll_bsdf_read_parameter_names(ll_bsdf *b);
 
 /* Free every part of a (possibly half-built) bsdf; NULL is fine. */
 LL_INTERNAL void ll_bsdf_free(ll_bsdf *b);

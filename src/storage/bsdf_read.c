@@ -524,6 +524,8 @@ static ll_status parse_body(const unsigned char *front, const bsdf_header *h,
         s = read_coeffs(b, src, l->coeffs, file);
     if (s == LL_OK && !source_read(src, l->metadata, b->metadata, b->metadata_size))
         s = read_failure(file);
+    if (s == LL_OK && !ll_bsdf_read_parameter_names(b))
+        s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory (parameter names)");
     if (s != LL_OK) {
         ll_bsdf_free(b);
         return s;

@@ -16,6 +16,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <layerlab.h>
 
@@ -139,7 +140,12 @@ static int ll_fuzz_bsdf_one(const uint8_t *data, size_t size)
     for (k = 0; k < info.n_parameters; ++k) {
         size_t count;
         const float *positions;
+        const char *name = NULL;
         ll_fuzz_require(ll_bsdf_get_parameter(b, k, &count, &positions) == LL_OK && count > 0);
+        /* Every parameter has a name (from the metadata or "p<k>"), a C
+         * string of at most 255 bytes (strlen reads it whole under ASan). */
+        ll_fuzz_require(ll_bsdf_get_parameter_name(b, k, &name) == LL_OK && name != NULL &&
+                        strlen(name) >= 1 && strlen(name) <= 255);
     }
     for (i = 0; i < n_mu; ++i) {
         for (o = 0; o < n_mu; ++o) {

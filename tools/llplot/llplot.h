@@ -41,7 +41,7 @@ int llplot_fail_ll(ll_status status, const char *what);
 
 /* ----------------------------------------------------------- options */
 
-typedef enum { LLPLOT_BLOCKS, LLPLOT_SPHERE, LLPLOT_POLAR } llplot_mode;
+typedef enum { LLPLOT_BLOCKS, LLPLOT_SPHERE, LLPLOT_POLAR, LLPLOT_GRID } llplot_mode;
 typedef enum { LLPLOT_PNG, LLPLOT_EXR } llplot_format;
 
 /* What a blocks panel shows: the BSDF times |mu_i mu_o| (the default, as
@@ -49,6 +49,14 @@ typedef enum { LLPLOT_PNG, LLPLOT_EXR } llplot_format;
 typedef enum { LLPLOT_QUANTITY_FCOS, LLPLOT_QUANTITY_F } llplot_quantity;
 
 #define LLPLOT_MAX_ANGLES 8
+/* --param NAME=VALUE options (one per textured parameter at most). */
+#define LLPLOT_MAX_PARAMS 16
+
+typedef struct llplot_param {
+    const char *name;         /* points into argv: "NAME=VALUE" up to '=' */
+    size_t name_len;
+    double value;
+} llplot_param;
 
 typedef struct llplot_options {
     llplot_mode mode;
@@ -68,6 +76,10 @@ typedef struct llplot_options {
     llplot_quantity quantity;
     double angles_deg[LLPLOT_MAX_ANGLES]; /* --polar: incident zenith angles */
     size_t n_angles;
+    const char *vary;         /* --sphere: the parameter varied left to right */
+    llplot_param params[LLPLOT_MAX_PARAMS]; /* --param: fixed values        */
+    size_t n_params;
+    int basis_given;          /* --basis was given                          */
 } llplot_options;
 
 /* ------------------------------------------------------------ source */
@@ -98,6 +110,41 @@ void llplot_source_close(llplot_source *s);
  * channel). */
 void llplot_source_eval(const llplot_source *s, double mu_i, double mu_o, double phi_d,
                         double rgb[3]);
+
+/* ---------------------------------------------------- parameter space */
+
+/* The textured parameters of a .bsdf source (params.c): names from the
+ * file (ll_bsdf_get_parameter_name), sampled ranges, and the point every
+ * sphere is drawn at unless a mode varies a parameter: --param NAME=VALUE
+ * where given, else the middle of the parameter's range. */
+typedef struct llplot_axes {
+    size_t n;                 /* parameters (>= 1)                          */
+    size_t n_bases;
+    const char **names;       /* [n], owned by the source's bsdf            */
+    const float **positions;  /* [n] sample positions, owned likewise       */
+    size_t *counts;           /* [n]                                        */
+    double *point;            /* [n] the fixed point                        */
+} llplot_axes;
+
+/* Set up a for a textured source, checking every --param name (an unknown
+ * one is an error listing the file's names). what: the option that needs a
+ * textured file ("--vary", "--grid", "--param"), for the message when s is
+ * not one. Returns an exit code. */
+int llplot_axes_open(const llplot_options *o, const llplot_source *s, const char *what,
+                     llplot_axes *a);
+void llplot_axes_close(llplot_axes *a);
+/* The index of parameter name, or an error (exit code in *code) listing the
+ * file's names; what names the option. */
+int llplot_axes_find(const llplot_axes *a, const char *name, size_t len, const char *what,
+                     const char *input, size_t *index);
+/* The basis weights (a->n_bases floats) of point (a->n values). */
+int llplot_axes_weights(const llplot_source *s, const double *point, float *coeffs);
+/* "%g" of a parameter value, as labels show it. */
+void llplot_format_value(double v, char *buf, size_t size);
+
+/* --param without --vary or --grid: the source's weights become those of
+ * the fixed point (instead of --basis's one-hot weights). */
+int llplot_source_set_point(const llplot_options *o, llplot_source *s);
 
 /* Luminance of linear sRGB (the weights the .bsdf format uses for Y). */
 double llplot_luminance(const double rgb[3]);
@@ -154,11 +201,27 @@ void llplot_parallel_rows(size_t n_rows, size_t threads, llplot_row_fn body, voi
 int llplot_blocks(const llplot_options *o, const llplot_source *s);
 int llplot_sphere(const llplot_options *o, const llplot_source *s);
 int llplot_polar(const llplot_options *o, const llplot_source *s);
+int llplot_grid(const llplot_options *o, const llplot_source *s);
+
+/* The sphere of --sphere as a linear RGBA image of size x size pixels
+ * (premultiplied, filtered), with the basis weights of the source or, if
+ * column_coeffs is not NULL, those of column x at column_coeffs + x *
+ * n_bases (--vary; n_bases 0: the same weights for every column, --grid).
+ * img is allocated here. Returns an exit code. */
+int llplot_sphere_image(const llplot_options *o, const llplot_source *s, size_t size, size_t spp,
+                        const float *column_coeffs, size_t n_bases, llplot_image *img);
+/* Tone-map the sphere image (as --sphere's PNG: exposure, filmic curve,
+ * sRGB, over the backdrop gradient) into a cairo RGB24 surface's pixels at
+ * (x0, y0). */
+void llplot_sphere_paint(const llplot_options *o, const llplot_image *img, unsigned char *data,
+                         int stride, size_t x0, size_t y0);
 
 /* Default sizes (see --help). */
 #define LLPLOT_DEFAULT_BLOCK_SIZE 200
 #define LLPLOT_DEFAULT_SPHERE_SIZE 320
 #define LLPLOT_DEFAULT_POLAR_SIZE 760
 #define LLPLOT_DEFAULT_SPP 32
+#define LLPLOT_DEFAULT_GRID_CELL 128
+#define LLPLOT_DEFAULT_GRID_SPP 16
 
 #endif /* LLPLOT_H */

@@ -1,7 +1,7 @@
 /*
  * llplot — command line: parse the options, open the material, draw.
  *
- *   llplot --blocks|--sphere|--polar INPUT -o OUTPUT.png|OUTPUT.exr [options]
+ *   llplot --blocks|--sphere|--polar|--grid INPUT -o OUTPUT.png|OUTPUT.exr [options]
  *
  * Exit codes: 0 done, 1 bad input (usage, malformed file or material),
  * 2 a file could not be read or written. The output is written atomically.
@@ -17,7 +17,7 @@
 #include <strings.h>
 
 static const char usage_text[] =
-    "usage: llplot --blocks|--sphere|--polar INPUT -o OUTPUT.png|OUTPUT.exr [options]\n"
+    "usage: llplot --blocks|--sphere|--polar|--grid INPUT -o OUTPUT.png|OUTPUT.exr [options]\n"
     "\n"
     "Draw a layered material. INPUT is a .bsdf file or a material file (compiled\n"
     "in memory). The output's extension chooses the format: .png is a figure\n"
@@ -35,19 +35,23 @@ static const char usage_text[] =
     "  --polar    f * cos(theta_o) in the plane of incidence for a few incident\n"
     "             angles, as a polar plot. EXR: one row per angle, --size columns\n"
     "             over theta_o = -90..90 degrees (negative: toward the light).\n"
+    "  --grid     textured .bsdf: one small sphere per sample of the first two\n"
+    "             parameters (first across, second down), labelled with their\n"
+    "             values; other parameters at --param or their range's middle.\n"
+    "             EXR: the spheres' RGBA side by side, no labels.\n"
     "\n"
     "options:\n"
     "  -o, --output FILE    the picture to write (required)\n"
     "  --size N             blocks: samples per block side (200); sphere: image\n"
     "                       side in pixels (320); polar: PNG width, or EXR\n"
-    "                       columns (760)\n"
+    "                       columns (760); grid: each sphere's side (128)\n"
     "  --phi DEG            blocks: azimuth difference phi_d in degrees (0: the\n"
     "                       plane of the mirror direction)\n"
     "  --quantity fcos|f    blocks: f * |mu_i mu_o| (default) or f alone\n"
     "  --channel Y|R|G|B    blocks/polar PNG: luminance (default) or one channel\n"
     "  --angles A,B,...     polar: incident zenith angles in degrees, at most 8\n"
     "                       (default 0,30,45,60,75)\n"
-    "  --spp N              sphere: samples per pixel (32)\n"
+    "  --spp N              sphere: samples per pixel (32; grid 16)\n"
     "  --seed N             sphere: random seed (0)\n"
     "  --exposure EV        sphere PNG: exposure in stops (0)\n"
     "  --title TEXT         a title instead of the input's file name\n"
@@ -56,6 +60,10 @@ static const char usage_text[] =
     "  --orders N           material input: Fourier orders (default: the\n"
     "                       material's, at most 200)\n"
     "  --basis K            textured .bsdf: show basis function K (0)\n"
+    "  --vary NAME          sphere, textured .bsdf: parameter NAME runs from its\n"
+    "                       smallest sample (left) to its largest (right)\n"
+    "  --param NAME=VALUE   textured .bsdf: the value of parameter NAME (default:\n"
+    "                       the middle of its samples; clamped to them); repeatable\n"
     "  --threads N          worker threads (0: all processors)\n"
     "  -h, --help           this text\n"
     "  --version            the layerlab version\n"
@@ -118,6 +126,30 @@ static int parse_angles(const char *text, llplot_options *o)
     return LLPLOT_EXIT_OK;
 }
 
+/* --param NAME=VALUE (a finite VALUE; out of range is clamped later). */
+static int parse_param(const char *text, llplot_options *o)
+{
+    const char *eq = strchr(text, '=');
+    llplot_param *p;
+    size_t k;
+    if (!eq || eq == text)
+        return llplot_fail(LLPLOT_EXIT_INPUT, "--param: '%s' is not NAME=VALUE", text);
+    if (o->n_params == LLPLOT_MAX_PARAMS)
+        return llplot_fail(LLPLOT_EXIT_INPUT, "--param: at most %d of them", LLPLOT_MAX_PARAMS);
+    for (k = 0; k < o->n_params; ++k)
+        if (o->params[k].name_len == (size_t)(eq - text) &&
+            memcmp(o->params[k].name, text, o->params[k].name_len) == 0)
+            return llplot_fail(LLPLOT_EXIT_INPUT, "--param: %.*s is given twice",
+                               (int)(eq - text), text);
+    p = &o->params[o->n_params];
+    p->name = text;
+    p->name_len = (size_t)(eq - text);
+    if (parse_double("--param", eq + 1, -1e30, 1e30, &p->value) != LLPLOT_EXIT_OK)
+        return LLPLOT_EXIT_INPUT;
+    ++o->n_params;
+    return LLPLOT_EXIT_OK;
+}
+
 static int has_extension(const char *path, const char *ext)
 {
     size_t n = strlen(path), e = strlen(ext);
@@ -126,25 +158,40 @@ static int has_extension(const char *path, const char *ext)
 
 /* Options given that the mode does not use are mistakes worth reporting. */
 typedef struct given_flags {
-    int phi, quantity, channel, angles, spp, seed, exposure;
+    int phi, quantity, channel, angles, spp, seed, exposure, vary, param;
 } given_flags;
+
+static const char *mode_name(llplot_mode mode)
+{
+    switch (mode) {
+    case LLPLOT_BLOCKS: return "blocks";
+    case LLPLOT_SPHERE: return "sphere";
+    case LLPLOT_GRID: return "grid";
+    default: return "polar";
+    }
+}
 
 static int check_mode_options(const llplot_options *o, const given_flags *g)
 {
     const char *wrong = NULL;
+    int spheres = o->mode == LLPLOT_SPHERE || o->mode == LLPLOT_GRID;
     if (o->mode != LLPLOT_BLOCKS && (g->phi || g->quantity))
         wrong = g->phi ? "--phi" : "--quantity";
     else if (o->mode != LLPLOT_POLAR && g->angles)
         wrong = "--angles";
-    else if (o->mode != LLPLOT_SPHERE && (g->spp || g->seed || g->exposure))
+    else if (!spheres && (g->spp || g->seed || g->exposure))
         wrong = g->spp ? "--spp" : g->seed ? "--seed" : "--exposure";
-    else if (o->mode == LLPLOT_SPHERE && g->channel)
+    else if (spheres && g->channel)
         wrong = "--channel";
+    else if (o->mode != LLPLOT_SPHERE && g->vary)
+        wrong = "--vary";
     if (wrong)
         return llplot_fail(LLPLOT_EXIT_INPUT, "%s does not apply to --%s (see llplot --help)",
-                           wrong, o->mode == LLPLOT_BLOCKS   ? "blocks"
-                                  : o->mode == LLPLOT_SPHERE ? "sphere"
-                                                             : "polar");
+                           wrong, mode_name(o->mode));
+    if (o->basis_given && (g->vary || g->param || o->mode == LLPLOT_GRID))
+        return llplot_fail(LLPLOT_EXIT_INPUT,
+                           "--basis picks one basis function; it does not combine with %s",
+                           o->mode == LLPLOT_GRID ? "--grid" : g->vary ? "--vary" : "--param");
     if (o->format == LLPLOT_EXR && (g->channel || g->exposure))
         return llplot_fail(LLPLOT_EXIT_INPUT,
                            "%s applies to PNG figures only (EXR files hold linear RGB)",
@@ -197,9 +244,12 @@ static int parse_args(int argc, char **argv, llplot_options *o)
             mode = LLPLOT_SPHERE;
         else if (strcmp(arg, "--polar") == 0)
             mode = LLPLOT_POLAR;
+        else if (strcmp(arg, "--grid") == 0)
+            mode = LLPLOT_GRID;
         if (mode >= 0) {
             if (have_mode && o->mode != (llplot_mode)mode)
-                return llplot_fail(LLPLOT_EXIT_INPUT, "choose one of --blocks, --sphere, --polar");
+                return llplot_fail(LLPLOT_EXIT_INPUT,
+                                   "choose one of --blocks, --sphere, --polar, --grid");
             o->mode = (llplot_mode)mode;
             have_mode = 1;
             continue;
@@ -258,8 +308,16 @@ static int parse_args(int argc, char **argv, llplot_options *o)
             code = parse_size(name, value, 2, 1u << 16, &o->nodes);
         else if (strcmp(name, "--orders") == 0)
             code = parse_size(name, value, 1, 1u << 16, &o->orders);
-        else if (strcmp(name, "--basis") == 0)
+        else if (strcmp(name, "--basis") == 0) {
             code = parse_size(name, value, 0, (size_t)-1, &o->basis);
+            o->basis_given = 1;
+        } else if (strcmp(name, "--vary") == 0) {
+            o->vary = value;
+            given.vary = 1;
+        } else if (strcmp(name, "--param") == 0) {
+            code = parse_param(value, o);
+            given.param = 1;
+        }
         else if (strcmp(name, "--threads") == 0)
             code = parse_size(name, value, 0, 1024, &o->threads);
         else
@@ -268,8 +326,8 @@ static int parse_args(int argc, char **argv, llplot_options *o)
     if (code != LLPLOT_EXIT_OK)
         return code;
     if (!have_mode)
-        return llplot_fail(LLPLOT_EXIT_INPUT, "choose a picture: --blocks, --sphere or --polar "
-                                              "(see llplot --help)");
+        return llplot_fail(LLPLOT_EXIT_INPUT, "choose a picture: --blocks, --sphere, --polar or "
+                                              "--grid (see llplot --help)");
     if (!o->input)
         return llplot_fail(LLPLOT_EXIT_INPUT, "no input file (a .bsdf or material file)");
     if (!o->output)
@@ -283,7 +341,7 @@ static int parse_args(int argc, char **argv, llplot_options *o)
                            o->output);
     if (o->mode == LLPLOT_POLAR && o->format == LLPLOT_PNG && o->size && o->size < 320)
         return llplot_fail(LLPLOT_EXIT_INPUT, "--size: a polar figure needs at least 320 pixels");
-    if (o->mode == LLPLOT_SPHERE && o->size && o->size < 8)
+    if ((o->mode == LLPLOT_SPHERE || o->mode == LLPLOT_GRID) && o->size && o->size < 8)
         return llplot_fail(LLPLOT_EXIT_INPUT, "--size: a sphere needs at least 8 pixels");
     return check_mode_options(o, &given);
 }
@@ -301,13 +359,20 @@ int main(int argc, char **argv)
      * --threads as well. */
     if (o.threads)
         ll_set_thread_count(o.threads);
-    code = llplot_source_open(&o, o.mode == LLPLOT_SPHERE, &source);
+    code = llplot_source_open(&o, o.mode == LLPLOT_SPHERE || o.mode == LLPLOT_GRID, &source);
     if (code != LLPLOT_EXIT_OK)
         return code;
-    switch (o.mode) {
-    case LLPLOT_BLOCKS: code = llplot_blocks(&o, &source); break;
-    case LLPLOT_SPHERE: code = llplot_sphere(&o, &source); break;
-    default: code = llplot_polar(&o, &source); break;
+    /* --param alone fixes the point of every picture; --vary and --grid
+     * read it themselves. */
+    if (o.n_params > 0 && !o.vary && o.mode != LLPLOT_GRID)
+        code = llplot_source_set_point(&o, &source);
+    if (code == LLPLOT_EXIT_OK) {
+        switch (o.mode) {
+        case LLPLOT_BLOCKS: code = llplot_blocks(&o, &source); break;
+        case LLPLOT_SPHERE: code = llplot_sphere(&o, &source); break;
+        case LLPLOT_GRID: code = llplot_grid(&o, &source); break;
+        default: code = llplot_polar(&o, &source); break;
+        }
     }
     llplot_source_close(&source);
     llplot_figure_release_caches();

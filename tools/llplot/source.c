@@ -86,6 +86,36 @@ static int open_compiled_file(const llplot_options *o, llplot_source *s,
     return code;
 }
 
+
+/* A swept material (material-language.md, "Sweeps") compiled to its textured
+ * file in a private temporary directory, opened, and removed at once; the
+ * source then is that file, drawn like a textured .bsdf. */
+static int build_swept_file(const llplot_options *o, const ll_material *material,
+                            const ll_build_options *opts, llplot_source *s)
+{
+    const char *tmp = getenv("TMPDIR");
+    char dir[4096], path[4200];
+    ll_status st;
+    int code;
+    if (!tmp || !tmp[0])
+        tmp = "/tmp";
+    if ((size_t)snprintf(dir, sizeof dir, "%s/llplot-XXXXXX", tmp) >= sizeof dir)
+        return llplot_fail(LLPLOT_EXIT_IO, "TMPDIR is too long");
+    if (!mkdtemp(dir))
+        return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot create a temporary directory: %s", dir,
+                           strerror(errno));
+    snprintf(path, sizeof path, "%s/swept.bsdf", dir);
+    st = ll_material_build(material, opts, path);
+    if (opts->progress)
+        fputc('\n', stderr);
+    if (st == LL_OK)
+        st = ll_bsdf_open(path, &s->bsdf);
+    code = st == LL_OK ? choose_basis(o, s) : llplot_fail_ll(st, o->input);
+    unlink(path);
+    rmdir(dir);
+    return code;
+}
+
 /* Compiling a glossy stack takes seconds: show how far it got when stderr
  * is a terminal (one line, rewritten in place). */
 /* What show_progress prints: the progress callback's user pointer is not
@@ -136,6 +166,12 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
                 "and %zu; set --nodes/--orders to change)\n",
                 o->input, opts.n_nodes ? opts.n_nodes : n_nodes,
                 opts.n_orders ? opts.n_orders : n_orders, n_nodes, n_orders);
+    if (ll_material_basis_count(material) > 1) {
+        /* A swept material is one textured file, not one set of layers:
+         * build it and draw the file (its bases at the resolution above). */
+        code = build_swept_file(o, material, &opts, s);
+        goto done;
+    }
     st = ll_material_build_layers(material, &opts, s->layers, &s->n_layers, &header);
     if (opts.progress)
         fputc('\n', stderr);

@@ -39,6 +39,8 @@ typedef struct sphere_job {
     size_t size, spp;
     uint64_t seed;
     double key_dir[3], key_e[3];
+    const float *column_coeffs; /* --vary: n_bases weights per column, or NULL */
+    size_t n_bases;
 } sphere_job;
 
 /* SplitMix64 (Steele, Lea and Flood 2014): a fast generator whose output
@@ -143,8 +145,8 @@ static void to_world(const shading_frame *f, const double w[3], double out[3])
  * side, where the BSDF's bottom half (R^b, T^bt) takes over. Opaque stacks
  * never get there. The first bounce uses the stratified numbers u, later
  * ones the pixel's random stream. */
-static void shade_environment(const sphere_job *job, const double hit[3], const double u[2],
-                              uint64_t *state, double out[3])
+static void shade_environment(const sphere_job *job, const float *basis, const double hit[3],
+                              const double u[2], uint64_t *state, double out[3])
 {
     const llplot_source *s = job->source;
     double p[3], d[3], throughput[3] = { 1.0, 1.0, 1.0 }, v[2];
@@ -165,8 +167,8 @@ static void shade_environment(const sphere_job *job, const double hit[3], const 
         for (c = 0; c < 3; ++c)
             back[c] = -d[c];
         to_local(&f, back, wo);
-        if (ll_bsdf_sample_dir(s->bsdf, wo, v, LL_TRANSPORT_RADIANCE, s->basis_coeffs, wi, &pdf,
-                               fr) != LL_OK ||
+        if (ll_bsdf_sample_dir(s->bsdf, wo, v, LL_TRANSPORT_RADIANCE, basis, wi, &pdf, fr) !=
+                LL_OK ||
             !(pdf > 0.0))
             return;
         for (c = 0; c < 3; ++c)
@@ -197,7 +199,8 @@ static void shade_environment(const sphere_job *job, const double hit[3], const 
 
 /* Reflected key light: a delta direction, evaluated exactly. It is seen
  * in reflection only (not through a transmissive sphere). */
-static void shade_key(const sphere_job *job, const double hit[3], double out[3])
+static void shade_key(const sphere_job *job, const float *basis, const double hit[3],
+                      double out[3])
 {
     const llplot_source *s = job->source;
     const double camera[3] = { 0.0, 0.0, 1.0 };
@@ -209,7 +212,7 @@ static void shade_key(const sphere_job *job, const double hit[3], double out[3])
     to_local(&frame, job->key_dir, l);
     to_local(&frame, camera, wo);
     if (l[2] > 0.0 &&
-        ll_bsdf_eval_dir(s->bsdf, wo, l, LL_TRANSPORT_RADIANCE, s->basis_coeffs, f) == LL_OK)
+        ll_bsdf_eval_dir(s->bsdf, wo, l, LL_TRANSPORT_RADIANCE, basis, f) == LL_OK)
         for (c = 0; c < 3; ++c)
             out[c] = f[c] * l[2] * job->key_e[c];
 }
@@ -234,6 +237,8 @@ static void sphere_row(size_t y, void *ctx)
         uint32_t shift0 = (uint32_t)splitmix64(&state), shift1 = (uint32_t)splitmix64(&state);
         double env_sum[3] = { 0.0, 0.0, 0.0 }, key_sum[3] = { 0.0, 0.0, 0.0 };
         double covered = 0.0, key_positions = 0.0;
+        const float *basis = job->column_coeffs ? job->column_coeffs + x * job->n_bases
+                                                : job->source->basis_coeffs;
         for (i = 0; i < job->spp; ++i) {
             double px = (double)x + uniform01(&state), py = (double)y + uniform01(&state);
             double sx = (px - half) / radius, sy = (half - py) / radius, u[2], L[3], hit[3];
@@ -251,12 +256,12 @@ static void sphere_row(size_t y, void *ctx)
             u[1] = to_unit(sobol_dim2((uint32_t)i) ^ shift1);
             /* A failed or degenerate sample counts as black rather than
              * poisoning the pixel. */
-            shade_environment(job, hit, u, &state, L);
+            shade_environment(job, basis, hit, u, &state, L);
             if (finite3(L))
                 for (c = 0; c < 3; ++c)
                     env_sum[c] += L[c];
             if (key) {
-                shade_key(job, hit, L);
+                shade_key(job, basis, hit, L);
                 if (finite3(L))
                     for (c = 0; c < 3; ++c)
                         key_sum[c] += L[c];
@@ -293,21 +298,13 @@ static void backdrop(double v, double rgb[3])
     rgb[2] = 0.37 - 0.16 * v;
 }
 
-static int write_png(const llplot_options *o, const llplot_image *img)
+void llplot_sphere_paint(const llplot_options *o, const llplot_image *img, unsigned char *data,
+                         int stride, size_t x0, size_t y0)
 {
-    cairo_t *cr;
-    cairo_surface_t *surface = llplot_canvas_create((int)img->width, (int)img->height, &cr);
     double gain = pow(2.0, o->exposure);
-    unsigned char *data;
-    int stride, code;
     size_t x, y, c;
-    if (!surface)
-        return LLPLOT_EXIT_IO;
-    cairo_surface_flush(surface);
-    data = cairo_image_surface_get_data(surface);
-    stride = cairo_image_surface_get_stride(surface);
     for (y = 0; y < img->height; ++y) {
-        uint32_t *row = (uint32_t *)(void *)(data + (size_t)stride * y);
+        uint32_t *row = (uint32_t *)(void *)(data + (size_t)stride * (y0 + y)) + x0;
         double back[3];
         backdrop((double)y / (double)img->height, back);
         for (x = 0; x < img->width; ++x) {
@@ -324,12 +321,26 @@ static int write_png(const llplot_options *o, const llplot_image *img)
             row[x] = packed;
         }
     }
+}
+
+/* vary: the caption of --vary ("NAME: LO (left) to HI (right)"), or NULL. */
+static int write_png(const llplot_options *o, const llplot_image *img, const char *vary)
+{
+    cairo_t *cr;
+    cairo_surface_t *surface = llplot_canvas_create((int)img->width, (int)img->height, &cr);
+    int code;
+    if (!surface)
+        return LLPLOT_EXIT_IO;
+    cairo_surface_flush(surface);
+    llplot_sphere_paint(o, img, cairo_image_surface_get_data(surface),
+                        cairo_image_surface_get_stride(surface), 0, 0);
     cairo_surface_mark_dirty(surface);
-    if (o->title) {
-        cairo_set_source_rgb(cr, 0.92, 0.92, 0.92);
+    cairo_set_source_rgb(cr, 0.92, 0.92, 0.92);
+    if (o->title)
         llplot_text(cr, 0.5 * (double)img->width, (double)img->height - 8, 13, 0, 0.5, 1.0,
                     o->title);
-    }
+    if (vary)
+        llplot_text(cr, 0.5 * (double)img->width, 8, 13, 0, 0.5, 0.0, vary);
     cairo_destroy(cr);
     code = llplot_write_png(o->output, surface);
     cairo_surface_destroy(surface);
@@ -376,40 +387,108 @@ static int reconstruction_filter(llplot_image *img)
     return LLPLOT_EXIT_OK;
 }
 
-int llplot_sphere(const llplot_options *o, const llplot_source *s)
+int llplot_sphere_image(const llplot_options *o, const llplot_source *s, size_t size, size_t spp,
+                        const float *column_coeffs, size_t n_bases, llplot_image *img)
 {
-    llplot_image img;
     sphere_job job;
-    char comments[512];
     int code;
-    job.size = o->size ? o->size : LLPLOT_DEFAULT_SPHERE_SIZE;
-    job.spp = o->spp ? o->spp : LLPLOT_DEFAULT_SPP;
-    code = llplot_image_alloc(&img, job.size, job.size, 4);
+    job.size = size;
+    job.spp = spp;
+    code = llplot_image_alloc(img, job.size, job.size, 4);
     if (code != LLPLOT_EXIT_OK)
         return code;
-    img.names[0] = "R";
-    img.names[1] = "G";
-    img.names[2] = "B";
-    img.names[3] = "A";
+    img->names[0] = "R";
+    img->names[1] = "G";
+    img->names[2] = "B";
+    img->names[3] = "A";
     job.source = s;
-    job.img = &img;
+    job.img = img;
     job.seed = o->seed;
+    job.column_coeffs = column_coeffs;
+    job.n_bases = n_bases;
     llplot_key_direction(job.key_dir);
     llplot_key_irradiance(job.key_e);
     llplot_parallel_rows(job.size, o->threads, sphere_row, &job);
-    code = reconstruction_filter(&img);
+    code = reconstruction_filter(img);
+    if (code != LLPLOT_EXIT_OK)
+        llplot_image_free(img);
+    return code;
+}
+
+/* --vary NAME: the weights of each pixel column, NAME running linearly from
+ * its smallest sample at the sphere's left edge to its largest at the right
+ * edge (pixel centres; columns beyond the sphere are clamped), the other
+ * parameters at the fixed point; *caption says so. */
+static int vary_weights(const llplot_options *o, const llplot_source *s, size_t size,
+                        float **coeffs, size_t *n_bases, char *caption, size_t caption_size)
+{
+    llplot_axes a;
+    size_t p, x, total;
+    double half = 0.5 * (double)size, radius = LLPLOT_SPHERE_RADIUS * half, lo, hi;
+    char lo_text[32], hi_text[32];
+    int code = llplot_axes_open(o, s, "--vary", &a);
+    if (code != LLPLOT_EXIT_OK)
+        return code;
+    code = llplot_axes_find(&a, o->vary, strlen(o->vary), "--vary", o->input, &p);
+    if (code == LLPLOT_EXIT_OK && (a.n_bases == 0 || size > (size_t)-1 / a.n_bases ||
+                                   size * a.n_bases > (size_t)-1 / sizeof(float)))
+        code = llplot_fail(LLPLOT_EXIT_INPUT, "%s: %zu bases x %zu columns are too many",
+                           o->input, a.n_bases, size);
     if (code != LLPLOT_EXIT_OK) {
-        llplot_image_free(&img);
+        llplot_axes_close(&a);
         return code;
     }
+    total = size * a.n_bases;
+    *coeffs = malloc(total * sizeof(float));
+    if (!*coeffs) {
+        llplot_axes_close(&a);
+        return llplot_fail(LLPLOT_EXIT_IO, "out of memory");
+    }
+    lo = a.positions[p][0];
+    hi = a.positions[p][a.counts[p] - 1];
+    for (x = 0; x < size && code == LLPLOT_EXIT_OK; ++x) {
+        double t = 0.5 * (((double)x + 0.5 - half) / radius + 1.0);
+        t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+        a.point[p] = lo + (hi - lo) * t;
+        code = llplot_axes_weights(s, a.point, *coeffs + x * a.n_bases);
+    }
+    llplot_format_value(lo, lo_text, sizeof lo_text);
+    llplot_format_value(hi, hi_text, sizeof hi_text);
+    snprintf(caption, caption_size, "%s: %s (left) to %s (right)", o->vary, lo_text, hi_text);
+    *n_bases = a.n_bases;
+    llplot_axes_close(&a);
+    if (code != LLPLOT_EXIT_OK) {
+        free(*coeffs);
+        *coeffs = NULL;
+    }
+    return code;
+}
+
+int llplot_sphere(const llplot_options *o, const llplot_source *s)
+{
+    llplot_image img;
+    char comments[768], caption[320] = "";
+    float *column_coeffs = NULL;
+    size_t n_bases = 0;
+    size_t size = o->size ? o->size : LLPLOT_DEFAULT_SPHERE_SIZE;
+    size_t spp = o->spp ? o->spp : LLPLOT_DEFAULT_SPP;
+    int code = LLPLOT_EXIT_OK;
+    if (o->vary)
+        code = vary_weights(o, s, size, &column_coeffs, &n_bases, caption, sizeof caption);
+    if (code == LLPLOT_EXIT_OK)
+        code = llplot_sphere_image(o, s, size, spp, column_coeffs, n_bases, &img);
+    free(column_coeffs);
+    if (code != LLPLOT_EXIT_OK)
+        return code;
     if (o->format == LLPLOT_EXR) {
         snprintf(comments, sizeof comments,
                  "llplot --sphere %s: linear RGB radiance, premultiplied by A (coverage); "
-                 "%zu samples per pixel, seed %llu; lighting as in tools/llplot/scene.h",
-                 s->label, job.spp, (unsigned long long)o->seed);
+                 "%zu samples per pixel, seed %llu; lighting as in tools/llplot/scene.h%s%s",
+                 s->label, spp, (unsigned long long)o->seed, o->vary ? "; varied: " : "",
+                 caption);
         code = llplot_write_exr(o->output, &img, comments);
     } else {
-        code = write_png(o, &img);
+        code = write_png(o, &img, o->vary ? caption : NULL);
     }
     llplot_image_free(&img);
     return code;

@@ -9,7 +9,9 @@
 #     `llbuild` makes it from examples/coated-gold.layers, and prints their
 #     image difference;
 #  3. renders it with both on eight damaged copies of the golden file
-#     (damage.py) and prints what each build does with each.
+#     (damage.py) and prints what each build does with each;
+#  4. renders a textured coated gold with the shim: constant and
+#     image-textured coat roughness (section 4 says what it checks).
 #
 # It passes when both builds build and render the intact files, the two
 # builds' images of each intact file agree to RMSE/mean < PBRT_TOLERANCE, and
@@ -264,6 +266,79 @@ echo "The shim's messages:"
 while IFS="$(printf '\t')" read -r name damage; do
     grep -m 1 'Error:' "$out/shim-$name.log" | sed 's/^/    /'
 done < "$work/cases.txt"
+
+# ------------------------------------------------------- 4. textured files
+# A textured coated gold (coat alpha sampled at 0.1, 0.2, 0.3, 0.4 over gold
+# of alpha 0.1), built basis by basis with the public API
+# (tests/textured_grid.c) and rendered by the shim only (stock pbrt-v3's
+# "fourier" material takes no parameters): with "float coat.alpha" 0.1 and
+# 0.4, with an imagemap whose upper half is 0.4 and lower half 0.1, with a
+# striped roughness map (textures.py), and without the parameter. It passes
+# when the constant 0.1 renders as the untextured coated gold above (the
+# same material at the same resolution: RMSE/mean < PBRT_TOLERANCE), the
+# textured sphere's upper half renders as the constant 0.4 and its lower
+# half as 0.1 (of the pixels that the two constants render differently, at
+# least 90 % closer to the constant of their half), and the scene without
+# the parameter renders, with one warning naming it.
+echo
+echo "Textured coated gold through the shim (coat.alpha sampled at 0.1, 0.2, 0.3, 0.4):"
+tg=$work/textured_grid
+# shellcheck disable=SC2046
+cc -std=c99 -O2 -o "$tg" "$top/tests/textured_grid.c" \
+    $(PKG_CONFIG_PATH=$prefix/lib/pkgconfig pkg-config --cflags --libs layerlab) -lm \
+    > "$work/textured_grid.log" 2>&1 ||
+    { cat "$work/textured_grid.log" >&2; fail "cannot compile tests/textured_grid.c"; }
+"$tg" "$scenes/textured.bsdf" 'dielectric eta=1.5 alpha={0}\nconductor eta=Au alpha=0.1' \
+    coat.alpha=0.1,0.2,0.3,0.4 >> "$work/textured_grid.log" 2>&1 ||
+    { cat "$work/textured_grid.log" >&2; fail "textured_grid failed"; }
+sed 's/^/    /' "$work/textured_grid.log" | tail -n 1
+python3 "$here/textures.py" halves "$scenes/halves.pfm" 0.4 0.1 &&
+python3 "$here/textures.py" stripes "$scenes/stripes.pfm" 0.1 0.4 || fail "textures.py failed"
+textured() {
+    scene "$1" "$2
+  Material \"fourier\" \"string bsdffile\" [ \"textured.bsdf\" ] $3"
+}
+textured tex-0.1 '' '"float coat.alpha" [ 0.1 ]'
+textured tex-0.4 '' '"float coat.alpha" [ 0.4 ]'
+textured tex-halves 'Texture "halves" "float" "imagemap" "string filename" [ "halves.pfm" ]' \
+    '"texture coat.alpha" "halves"'
+textured tex-stripes 'Texture "stripes" "float" "imagemap" "string filename" [ "stripes.pfm" ]' \
+    '"texture coat.alpha" "stripes"'
+textured tex-unset '' ''
+for name in tex-0.1 tex-0.4 tex-halves tex-stripes; do
+    render shim "$name"
+    [ "$(cat "$out/shim-$name.rc")" = 0 ] && [ -f "$out/shim-$name.pfm" ] ||
+        { tail -n 5 "$out/shim-$name.log" >&2; fail "the shim did not render $name.pbrt"; }
+done
+# Without --quiet, which silences pbrt's warnings.
+(cd "$scenes" && timeout "$limit" "$work/build-shim/pbrt" --nthreads "$threads" tex-unset.pbrt \
+    --outfile "$out/shim-tex-unset.pfm" > "$out/shim-tex-unset.log" 2>&1) ||
+    problem "the shim did not render tex-unset.pbrt (exit status $?)"
+echo
+echo "| scene | compared with | result | render CPU s |"
+echo "|---|---|---|---|"
+set -- $(diffs "shim-coated-gold" "shim-tex-0.1")
+pct=$(awk -v f="$6" 'BEGIN { printf "%.0f %%", 100 * f }')
+echo "| \"float coat.alpha\" 0.1 | untextured coated gold | RMSE/mean $5, $pct bit-identical pixels | $(cat "$out/shim-tex-0.1.time") |"
+awk -v r="$5" -v t="$tolerance" 'BEGIN { exit !(r < t) }' ||
+    problem "tex-0.1: RMSE/mean $5 against the untextured coated gold is not below $tolerance"
+set -- $(diffs "shim-tex-0.1" "shim-tex-0.4")
+echo "| \"float coat.alpha\" 0.4 | \"float coat.alpha\" 0.1 | RMSE/mean $5 | $(cat "$out/shim-tex-0.4.time") |"
+# Rows 25 .. 94 show the sphere's upper half, rows 135 .. 174 its lower
+# half: this camera puts the equator z = 1 between rows 105 (at the limbs)
+# and 123 (in front), the sphere's bottom at row 179.
+set -- $(python3 "$here/textures.py" regions "$out/shim-tex-halves.pfm" \
+    "$out/shim-tex-0.4.pfm" "$out/shim-tex-0.1.pfm" 25 95 135 175)
+echo "| imagemap, upper half 0.4, lower 0.1 | the two constants | upper rows: $1 of $2 differing pixels closer to 0.4; lower rows: $3 of $4 closer to 0.1 | $(cat "$out/shim-tex-halves.time") |"
+awk -v a="$1" -v b="$3" 'BEGIN { exit !(a >= 0.9 && b >= 0.9) }' ||
+    problem "tex-halves: the halves do not render as their constants ($1 and $3 of the pixels)"
+set -- $(diffs "shim-tex-0.1" "shim-tex-stripes")
+echo "| imagemap stripes (0.1, and 0.1 .. 0.4 bottom to top) | \"float coat.alpha\" 0.1 | RMSE/mean $5 | $(cat "$out/shim-tex-stripes.time") |"
+warnings=$(grep -c 'Warning:.*coat\.alpha' "$out/shim-tex-unset.log")
+echo
+echo "Without the parameter ($warnings warning naming it):"
+grep -m 1 'Warning:.*coat\.alpha' "$out/shim-tex-unset.log" | sed 's/^/    /'
+[ "$warnings" = 1 ] || problem "tex-unset: $warnings warnings naming coat.alpha, not 1"
 
 echo
 cat "$problems"

@@ -162,6 +162,37 @@ static void diffuse_path(char *out, size_t size)
         write_diffuse_bsdf(out);
 }
 
+/* A textured Lambertian file (monochrome) over two parameters, "albedo"
+ * sampled at 0 and 1 (albedo 0.2 and 0.8) and "dim" sampled at 0 and 1
+ * (the albedo times 1 and 0.5), written with its parameter names. Its
+ * BSDF is linear in both weights: at (a, d) the albedo is
+ * (0.2 + 0.6 a) (1 - 0.5 d). */
+static double textured_albedo(double a, double d) { return (0.2 + 0.6 * a) * (1.0 - 0.5 * d); }
+
+static void textured_path(char *out, size_t size)
+{
+    double nodes[DIFFUSE_NODES], weights[DIFFUSE_NODES];
+    const double positions[4] = { 0.0, 1.0, 0.0, 1.0 };
+    const size_t counts[2] = { 2, 2 };
+    ll_layer *layers[4];
+    ll_bsdf_write_options opts = LL_BSDF_WRITE_OPTIONS_INIT;
+    int k;
+    path_in_work(out, size, "textured.bsdf");
+    if (file_exists(out))
+        return;
+    opts.metadata = "{\"parameters\": [\"albedo\", \"dim\"]}";
+    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights), LL_OK);
+    for (k = 0; k < 4; ++k) { /* parameter 0 fastest */
+        assert_int_equal(ll_layer_create(nodes, weights, DIFFUSE_NODES, 1, &layers[k]), LL_OK);
+        assert_int_equal(ll_layer_set_diffuse(layers[k], textured_albedo(k % 2, k / 2)), LL_OK);
+    }
+    assert_int_equal(ll_bsdf_write_textured(out, (const ll_layer *const *)layers, 1, 2, counts,
+                                            positions, &opts),
+                     LL_OK);
+    for (k = 0; k < 4; ++k)
+        ll_layer_destroy(layers[k]);
+}
+
 /* ------------------------------------------------------------ EXR reader */
 
 typedef struct exr_picture {
@@ -259,7 +290,8 @@ static void irradiance_table(double table[IRRADIANCE_TABLE][3])
  * times the irradiance of the lighting, premultiplied by coverage and
  * averaged over each pixel (8 x 8 points), then passed through the
  * renderer's documented 3 x 3 binomial reconstruction filter. */
-static void expected_sphere(float expect[3][SPHERE_SIZE][SPHERE_SIZE])
+static void expected_sphere_columns(double alb[SPHERE_SIZE][3],
+                                    float expect[3][SPHERE_SIZE][SPHERE_SIZE])
 {
     static double table[IRRADIANCE_TABLE][3];
     static float box[3][SPHERE_SIZE][SPHERE_SIZE], tmp[3][SPHERE_SIZE][SPHERE_SIZE];
@@ -290,7 +322,7 @@ static void expected_sphere(float expect[3][SPHERE_SIZE][SPHERE_SIZE])
                     cos_key = n[0] * key_dir[0] + n[1] * key_dir[1] + n[2] * key_dir[2];
                     for (c = 0; c < 3; ++c) {
                         double e = (1.0 - t) * table[lo][c] + t * table[lo + 1][c];
-                        sum[c] += albedo[c] / PI * (e + key_e[c] * (cos_key > 0.0 ? cos_key : 0.0));
+                        sum[c] += alb[x][c] / PI * (e + key_e[c] * (cos_key > 0.0 ? cos_key : 0.0));
                     }
                 }
             for (c = 0; c < 3; ++c)
@@ -316,6 +348,45 @@ static void expected_sphere(float expect[3][SPHERE_SIZE][SPHERE_SIZE])
                 }
                 expect[c][y][x] = (float)v;
             }
+}
+
+/* The same with the albedo above in every column. */
+static void expected_sphere(float expect[3][SPHERE_SIZE][SPHERE_SIZE])
+{
+    static double alb[SPHERE_SIZE][3];
+    int x, c;
+    for (x = 0; x < SPHERE_SIZE; ++x)
+        for (c = 0; c < 3; ++c)
+            alb[x][c] = albedo[c];
+    expected_sphere_columns(alb, expect);
+}
+
+/* Mean and max relative error of the sphere's R, G, B against expect over
+ * the pixels well inside the silhouette (r <= 0.8, see below). */
+static int compare_sphere(const exr_picture *p, float expect[3][SPHERE_SIZE][SPHERE_SIZE],
+                          double *mean_err, double *max_err)
+{
+    static const char *names[3] = { "R", "G", "B" };
+    const double half = 0.5 * SPHERE_SIZE, radius = LLPLOT_SPHERE_RADIUS * half;
+    double sum_err = 0.0;
+    int x, y, c, inside = 0;
+    *max_err = 0.0;
+    for (y = 0; y < SPHERE_SIZE; ++y)
+        for (x = 0; x < SPHERE_SIZE; ++x) {
+            double sx = (x + 0.5 - half) / radius, sy = (half - y - 0.5) / radius;
+            if (sqrt(sx * sx + sy * sy) > 0.8)
+                continue;
+            ++inside;
+            for (c = 0; c < 3; ++c) {
+                double want = expect[c][y][x], got = exr_at(p, names[c], x, y);
+                double err = fabs(got - want) / want;
+                sum_err += err;
+                if (err > *max_err)
+                    *max_err = err;
+            }
+        }
+    *mean_err = sum_err / (3 * inside);
+    return inside;
 }
 
 /* A Lambertian sphere must shade as albedo/pi times the irradiance of the
@@ -677,6 +748,197 @@ static void test_errors(void **state)
     (void)state;
 }
 
+
+/* --sphere --vary: column x shows the parameter at the sphere's horizontal
+ * position of its centre (smallest sample at the left edge, largest at the
+ * right), the other parameter at the middle of its range or at --param; a
+ * Lambertian file then shades column by column as its albedo there. */
+static void test_sphere_vary(void **state)
+{
+    static float expect[3][SPHERE_SIZE][SPHERE_SIZE];
+    static double alb[SPHERE_SIZE][3];
+    const double half = 0.5 * SPHERE_SIZE, radius = LLPLOT_SPHERE_RADIUS * half;
+    const double dims[2] = { 0.5, 1.0 }; /* the middle, then --param dim=1 */
+    char in[4096], out[4096], size_text[16];
+    int x, c, run;
+    textured_path(in, sizeof in);
+    path_in_work(out, sizeof out, "vary.exr");
+    snprintf(size_text, sizeof size_text, "%d", SPHERE_SIZE);
+    for (run = 0; run < 2; ++run) {
+        exr_picture p;
+        double mean_err, max_err;
+        int inside;
+        if (run == 0)
+            assert_int_equal(run_llplot("--sphere", in, "--vary", "albedo", "-o", out, "--size",
+                                        size_text, "--spp", "256", (char *)NULL),
+                             0);
+        else
+            assert_int_equal(run_llplot("--sphere", in, "--vary", "albedo", "--param", "dim=1",
+                                        "-o", out, "--size", size_text, "--spp", "256",
+                                        (char *)NULL),
+                             0);
+        for (x = 0; x < SPHERE_SIZE; ++x) {
+            double t = 0.5 * ((x + 0.5 - half) / radius + 1.0);
+            t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+            for (c = 0; c < 3; ++c)
+                alb[x][c] = textured_albedo(t, dims[run]);
+        }
+        expected_sphere_columns(alb, expect);
+        read_exr(out, &p);
+        assert_int_equal(p.width, SPHERE_SIZE);
+        assert_int_equal(p.height, SPHERE_SIZE);
+        inside = compare_sphere(&p, expect, &mean_err, &max_err);
+        free(p.data);
+        print_message("--vary albedo (dim %.1f): %d pixels, relative error mean %.4f, max %.4f\n",
+                      dims[run], inside, mean_err, max_err);
+        assert_true(inside > 600);
+        assert_true(mean_err < 0.01);
+        assert_true(max_err < 0.03);
+    }
+    path_in_work(out, sizeof out, "vary.png");
+    assert_int_equal(run_llplot("--sphere", in, "--vary", "dim", "-o", out, "--size", "48",
+                                "--spp", "4", (char *)NULL),
+                     0);
+    check_png(out, 48, 48);
+    (void)state;
+}
+
+/* --param alone: the whole sphere at one point of parameter space. */
+static void test_sphere_param(void **state)
+{
+    static float expect[3][SPHERE_SIZE][SPHERE_SIZE];
+    static double alb[SPHERE_SIZE][3];
+    char in[4096], out[4096], size_text[16];
+    exr_picture p;
+    double mean_err, max_err;
+    int x, c;
+    textured_path(in, sizeof in);
+    path_in_work(out, sizeof out, "param.exr");
+    snprintf(size_text, sizeof size_text, "%d", SPHERE_SIZE);
+    /* albedo = 0.25 between the samples, dim clamped from 3 to 1. */
+    assert_int_equal(run_llplot("--sphere", in, "--param", "albedo=0.25", "--param", "dim=3",
+                                "-o", out, "--size", size_text, "--spp", "256", (char *)NULL),
+                     0);
+    for (x = 0; x < SPHERE_SIZE; ++x)
+        for (c = 0; c < 3; ++c)
+            alb[x][c] = textured_albedo(0.25, 1.0);
+    expected_sphere_columns(alb, expect);
+    read_exr(out, &p);
+    compare_sphere(&p, expect, &mean_err, &max_err);
+    free(p.data);
+    print_message("--param albedo=0.25 dim=3: relative error mean %.4f, max %.4f\n", mean_err,
+                  max_err);
+    assert_true(mean_err < 0.01);
+    assert_true(max_err < 0.03);
+    (void)state;
+}
+
+/* The sum of channel G over cell (i, j) of a grid mosaic of cells of side n. */
+static double cell_sum(const exr_picture *p, int i, int j, int n)
+{
+    double sum = 0.0;
+    int x, y;
+    for (y = 0; y < n; ++y)
+        for (x = 0; x < n; ++x)
+            sum += exr_at(p, "G", i * n + x, j * n + y);
+    return sum;
+}
+
+/* --grid: one sphere per sample of the first two parameters, each the
+ * basis of its cell: the cells of the Lambertian file are the same picture
+ * scaled by their albedos (the sampler draws the same directions for every
+ * Lambertian basis), so their sums stand in the albedos' ratios. */
+static void test_grid(void **state)
+{
+    char in[4096], out[4096];
+    exr_picture p;
+    double base;
+    int i, j;
+    textured_path(in, sizeof in);
+    path_in_work(out, sizeof out, "grid.exr");
+    assert_int_equal(run_llplot("--grid", in, "-o", out, "--size", "16", "--spp", "8",
+                                (char *)NULL),
+                     0);
+    read_exr(out, &p);
+    assert_int_equal(p.width, 2 * 16);
+    assert_int_equal(p.height, 2 * 16);
+    base = cell_sum(&p, 0, 0, 16);
+    assert_true(base > 0.0);
+    for (j = 0; j < 2; ++j)
+        for (i = 0; i < 2; ++i) {
+            double want = textured_albedo(i, j) / textured_albedo(0, 0);
+            double got = cell_sum(&p, i, j, 16) / base;
+            print_message("--grid cell (%d, %d): %.6f of cell (0, 0), albedo ratio %.6f\n", i, j,
+                          got, want);
+            assert_true(fabs(got - want) < 1e-4 * want);
+        }
+    free(p.data);
+    path_in_work(out, sizeof out, "grid.png");
+    assert_int_equal(run_llplot("--grid", in, "-o", out, "--size", "24", "--spp", "2",
+                                (char *)NULL),
+                     0);
+    {
+        /* Two 24-pixel cells and gaps across, two down, labels beside and
+         * above: larger than the cells, and dark where no sphere is. */
+        cairo_surface_t *s = cairo_image_surface_create_from_png(out);
+        assert_int_equal(cairo_surface_status(s), CAIRO_STATUS_SUCCESS);
+        assert_true(cairo_image_surface_get_width(s) > 2 * 24 + 60);
+        assert_true(cairo_image_surface_get_height(s) > 2 * 24 + 40);
+        cairo_surface_destroy(s);
+        {
+            uint32_t corner = png_pixel(out, 1, 1);
+            assert_true(((corner >> 16) & 0xff) < 0x40 && ((corner >> 8) & 0xff) < 0x40 &&
+                        (corner & 0xff) < 0x40);
+        }
+    }
+    assert_no_temporaries();
+    (void)state;
+}
+
+/* --vary, --param and --grid: an unknown name or an untextured file is an
+ * error that says so (and lists the file's names); nothing is written. */
+static void test_parameter_errors(void **state)
+{
+    char in[4096], plain[4096], out[4096], msg[4096];
+    textured_path(in, sizeof in);
+    diffuse_path(plain, sizeof plain);
+    path_in_work(out, sizeof out, "never-param.png");
+
+    assert_int_equal(run_llplot("--sphere", in, "--vary", "roughness", "-o", out, (char *)NULL), 1);
+    read_stderr(msg, sizeof msg);
+    assert_non_null(strstr(msg, "'roughness'"));
+    assert_non_null(strstr(msg, "albedo, dim"));
+    assert_int_equal(run_llplot("--sphere", in, "--param", "gloss=1", "-o", out, (char *)NULL), 1);
+    read_stderr(msg, sizeof msg);
+    assert_non_null(strstr(msg, "'gloss'"));
+    assert_int_equal(run_llplot("--grid", in, "--param", "gloss=1", "-o", out, (char *)NULL), 1);
+
+    assert_int_equal(run_llplot("--sphere", plain, "--vary", "albedo", "-o", out, (char *)NULL), 1);
+    read_stderr(msg, sizeof msg);
+    assert_non_null(strstr(msg, "textured"));
+    assert_int_equal(run_llplot("--grid", plain, "-o", out, (char *)NULL), 1);
+    read_stderr(msg, sizeof msg);
+    assert_non_null(strstr(msg, "--grid needs a textured .bsdf file"));
+    assert_int_equal(run_llplot("--blocks", plain, "--param", "albedo=1", "-o", out, (char *)NULL),
+                     1);
+
+    /* Usage: --vary is for --sphere; --basis does not mix with the rest. */
+    assert_int_equal(run_llplot("--blocks", in, "--vary", "albedo", "-o", out, (char *)NULL), 1);
+    assert_int_equal(run_llplot("--sphere", in, "--vary", "albedo", "--basis", "1", "-o", out,
+                                (char *)NULL),
+                     1);
+    assert_int_equal(run_llplot("--grid", in, "--basis", "1", "-o", out, (char *)NULL), 1);
+    assert_int_equal(run_llplot("--sphere", in, "--param", "albedo", "-o", out, (char *)NULL), 1);
+    assert_int_equal(run_llplot("--sphere", in, "--param", "albedo=x", "-o", out, (char *)NULL), 1);
+    assert_int_equal(run_llplot("--sphere", in, "--param", "albedo=1", "--param", "albedo=0",
+                                "-o", out, (char *)NULL),
+                     1);
+    assert_int_equal(run_llplot("--grid", in, "--channel", "R", "-o", out, (char *)NULL), 1);
+    assert_false(file_exists(out));
+    assert_no_temporaries();
+    (void)state;
+}
+
 /* An existing picture survives a failed run untouched. */
 static void test_failure_keeps_existing_output(void **state)
 {
@@ -706,6 +968,10 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_sphere_reproducible),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_failure_keeps_existing_output),
+        cmocka_unit_test(test_sphere_vary),
+        cmocka_unit_test(test_sphere_param),
+        cmocka_unit_test(test_grid),
+        cmocka_unit_test(test_parameter_errors),
     };
     if (argc != 3) {
         fprintf(stderr, "usage: %s PATH/TO/llplot WORK_DIR\n", argv[0]);
