@@ -71,7 +71,8 @@ static ll_status medium_order(size_t order, void *ctx)
     ll_status s;
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
-    s = build_order(order, job);
+    /* Another rank's order in a distributed build (layer/distribution.c). */
+    s = ll_layer_owns_order(job->layer, order) ? build_order(order, job) : LL_OK;
     ll_watch_advance(job->watch, 1);
     return s;
 }

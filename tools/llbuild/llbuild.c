@@ -349,6 +349,9 @@ static int die_cancelled(void)
     return 128 + sig;
 }
 
+/* llbuild-mpi (tools/llbuild-mpi) includes this file for the options,
+ * messages and summary above and brings its own main. */
+#ifndef LLBUILD_NO_MAIN
 int main(int argc, char **argv)
 {
     args a;
@@ -427,3 +430,4 @@ int main(int argc, char **argv)
     ll_material_destroy(m);
     return code >= 0 ? code : die_cancelled();
 }
+#endif /* LLBUILD_NO_MAIN */

@@ -1,0 +1,90 @@
+/*
+ * layerlab — one material built by several processes (ranks), for builds
+ * that outgrow one machine (docs/mpi.md). The library stays free of any
+ * message-passing library: the caller (tools/llbuild-mpi, over MPI)
+ * supplies one collective operation, and the library decides what moves.
+ *
+ * How the work is split (Jakob et al. 2014: every step but the expansion
+ * of an interface works on each Fourier order alone):
+ *  - rank r owns the Fourier orders l with l mod n_ranks == r (round robin,
+ *    which spreads the long early orders evenly);
+ *  - a rough interface or a measured BRDF produces all orders of one
+ *    incident column at a time, so each rank computes the columns
+ *    c with c mod n_ranks == r, and one all-to-all hands every rank its
+ *    orders of every column;
+ *  - phase functions, doubling and adding run on each rank's own orders
+ *    only: a layer holds nothing and costs nothing in the orders it does
+ *    not own, so each rank holds about 1 / n_ranks of the layers;
+ *  - rank 0 receives the orders of the finished stack and holds it whole.
+ * Every number is computed by the same code as in ll_material_build, so the
+ * layers, and a file written from them, are the same bytes for every
+ * n_ranks.
+ *
+ * Failure: every rank agrees on the outcome. A rank that fails (bad
+ * options, out of memory, a cancel through its monitor or opts->cancel)
+ * stops its own work and says so at the next exchange; then every rank
+ * returns the same status. On rank 0 the message is the failing rank's own,
+ * prefixed "rank R of N: "; on the others it says which rank failed.
+ */
+#ifndef LAYERLAB_LL_DISTRIBUTION_H
+#define LAYERLAB_LL_DISTRIBUTION_H
+
+#include "ll_common.h"
+#include "ll_layer.h"
+#include "ll_material.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The caller's collective, size-tagged (struct_size = sizeof, fields may be
+ * appended later). alltoallv is called by every rank in the same order
+ * (the library's sequence of calls is the same on every rank, whatever
+ * fails): rank r sends send_bytes[d] bytes to each rank d, taken one
+ * after the other from send in rank order, and receives recv_bytes[s] bytes
+ * from each rank s into recv, likewise in rank order (MPI_Alltoallv on
+ * bytes; counts may exceed INT_MAX). Both arrays hold n_ranks counts; the
+ * library always knows what it will receive. A non-LL_OK return is taken
+ * as that rank's failure (an MPI implementation normally aborts the whole
+ * job instead). */
+typedef struct ll_distribution {
+    size_t struct_size;   /* sizeof(ll_distribution)                       */
+    int rank;             /* this process, 0 <= rank < n_ranks              */
+    int n_ranks;          /* 1 or more                                      */
+    void *user;           /* passed to alltoallv                            */
+    ll_status (*alltoallv)(void *user, const void *send, const size_t *send_bytes,
+                           void *recv, const size_t *recv_bytes);
+} ll_distribution;
+
+#define LL_DISTRIBUTION_INIT { sizeof(ll_distribution), 0, 1, NULL, NULL }
+
+/* ll_material_build_layers_ex across the ranks of dist; every rank calls it
+ * with the same material and options. On rank 0, layers receives the
+ * n_channels finished layers (caller frees each) and header (nullable) the
+ * file's eta and alpha; on the other ranks layers stay NULL, and
+ * *n_channels is set on every rank. The memory budget applies per rank, to
+ * the estimate divided by n_ranks. monitor and opts->progress are called
+ * on every rank (a tool shows rank 0's); a cancel on any rank stops all.
+ * A file written from rank 0's layers with ll_material_write is byte for
+ * byte the one ll_material_build writes. */
+LL_API ll_status ll_material_build_layers_distributed(const ll_material *material,
+                                                      const ll_build_options *opts,
+                                                      const ll_monitor *monitor,
+                                                      const ll_distribution *dist,
+                                                      ll_layer *layers[3], size_t *n_channels,
+                                                      ll_bsdf_write_options *header);
+
+/* Build and write: ll_material_build_ex across the ranks. Rank 0 writes
+ * out_path atomically (the other ranks ignore out_path, which may be NULL
+ * there); every rank returns the outcome of the whole, the write included.
+ * A failure anywhere leaves no file and no temporary. */
+LL_API ll_status ll_material_build_distributed(const ll_material *material,
+                                               const ll_build_options *opts,
+                                               const ll_monitor *monitor,
+                                               const ll_distribution *dist,
+                                               const char *out_path);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_DISTRIBUTION_H */

@@ -1,0 +1,147 @@
+/*
+ * llbuild-mpi — llbuild across MPI ranks, for builds that outgrow one
+ * machine (docs/mpi.md):
+ *
+ *     mpirun -n N llbuild-mpi [llbuild options] MATERIAL.layers -o OUT.bsdf
+ *
+ * The same options, messages, summary and exit codes as llbuild, whose
+ * source it includes for them (tools/llbuild/llbuild.c without its main),
+ * so the two cannot drift apart. The build is
+ * ll_material_build_layers_distributed over an MPI ll_distribution
+ * (mpi_hook.c); rank 0 prints, shows the progress and writes the file
+ * with ll_material_write, byte for byte llbuild's for every N. Every
+ * outcome is agreed between the ranks, so all exit with the same code; a
+ * dead rank makes mpirun end the others, and no file is left (rank 0
+ * writes only once it holds the whole stack, through the atomic writer).
+ */
+#define LLBUILD_NO_MAIN
+/* Helpers of llbuild's own main that this main does not call. */
+#pragma GCC diagnostic ignored "-Wunused-function"
+#include "../llbuild/llbuild.c"
+#pragma GCC diagnostic warning "-Wunused-function"
+
+#include "mpi_hook.h"
+
+#include <mpi.h>
+
+#define MESSAGE_SIZE 1200
+
+/* Ranks other than 0 print nothing: what goes wrong on them reaches rank
+ * 0 through the agreements, and rank 0 says it once. */
+static void silence_other_ranks(int rank)
+{
+    if (rank != 0) {
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr))
+            return;
+    }
+}
+
+/* llbuild's refused_by_budget, for the share of each rank. */
+static int refused_per_rank(const ll_material *m, const ll_build_options *o, int ranks)
+{
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    return ll_material_estimate(m, o, &e) == LL_OK &&
+           e.peak_bytes / (double)ranks > (double)e.max_memory_bytes;
+}
+
+static int finish(int code)
+{
+    MPI_Finalize();
+    return code >= 0 ? code : die_cancelled();
+}
+
+int main(int argc, char **argv)
+{
+    args a;
+    ll_material *m = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_layer *layers[3] = { NULL, NULL, NULL };
+    ll_distribution dist;
+    size_t n_channels = 0, c;
+    ll_progress bar;
+    mpi_job job;
+    char message[MESSAGE_SIZE];
+    double start = now_seconds();
+    ll_status s;
+    int code;
+
+    if (MPI_Init(&argc, &argv) != MPI_SUCCESS) {
+        fprintf(stderr, "llbuild-mpi: MPI_Init failed\n");
+        return EXIT_IO;
+    }
+    MPI_Comm_rank(MPI_COMM_WORLD, &job.rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &job.size);
+    silence_other_ranks(job.rank);
+    catch_signals();
+    /* The arguments are the same on every rank: so is this outcome. */
+    code = parse_args(argc, argv, &a);
+    if (code >= 0)
+        return finish(code);
+    if (a.ior_dir && setenv("LAYERLAB_IOR_DIR", a.ior_dir, 1) != 0)
+        return finish(bad_usage("cannot set LAYERLAB_IOR_DIR", NULL));
+    /* Every rank reads the material (across machines, each its own copy). */
+    s = mpi_agree(&job, ll_material_parse_file(a.input, &m), message, sizeof message);
+    if (s != LL_OK) {
+        fprintf(stderr, "llbuild: %s\n", message);
+        ll_material_destroy(m);
+        return finish(exit_code_for(s));
+    }
+    o.n_nodes = a.nodes;
+    o.n_orders = a.orders;
+    o.n_channels = a.channels;
+    o.threads = a.threads;
+    o.error_goal = a.error;
+    o.cancel = &cancel_flag;
+    o.max_memory_bytes = a.max_memory;
+    if (a.dry_run) {
+        if (job.rank == 0) {
+            code = print_resolution(m, &o);
+            if (code == 0)
+                printf("per rank     about 1/%d of the layers' memory on each of %d ranks\n",
+                       job.size, job.size);
+        }
+        MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        ll_material_destroy(m);
+        return finish(cancel_flag ? -1 : code);
+    }
+
+    ll_progress_init(&bar, stderr, a.quiet || job.rank != 0, start);
+    o.progress = ll_progress_update;
+    o.progress_user = &bar;
+    bar.scale = 0.97;
+    mpi_distribution(&job, &dist);
+    s = ll_material_build_layers_distributed(m, &o, NULL, &dist, layers, &n_channels, NULL);
+    snprintf(message, sizeof message, "%s", ll_last_error_message());
+    if (s == LL_OK) {
+        bar.scale = 1.0;
+        ll_progress_update(0.97, "writing", &bar);
+        if (job.rank == 0)
+            s = ll_material_write(m, &o, layers, n_channels, a.output);
+        s = mpi_agree(&job, s, message, sizeof message);
+    }
+    if (s == LL_OK) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (cancel_flag)
+            raise(cancel_signal ? cancel_signal : SIGINT);
+    }
+    ll_progress_finish(&bar, s == LL_OK);
+    if (s == LL_ERROR_CANCELLED) {
+        code = -1;
+    } else if (s != LL_OK) {
+        fprintf(stderr, "llbuild: %s\n", message);
+        code = s == LL_ERROR_OUT_OF_MEMORY && refused_per_rank(m, &o, job.size)
+                   ? EXIT_BAD_INPUT
+                   : exit_code_for(s);
+    } else {
+        if (!a.quiet && job.rank == 0) {
+            print_summary(&a, layers, n_channels, now_seconds() - start);
+            printf("ranks        %d (MPI)\n", job.size);
+        }
+        code = 0;
+    }
+    for (c = 0; c < 3; ++c)
+        ll_layer_destroy(layers[c]);
+    ll_material_destroy(m);
+    return finish(code);
+}
