@@ -46,7 +46,14 @@ extern "C" {
  * bytes; counts may exceed INT_MAX). Both arrays hold n_ranks counts; the
  * library always knows what it will receive. A non-LL_OK return is taken
  * as that rank's failure (an MPI implementation normally aborts the whole
- * job instead). */
+ * job instead).
+ *
+ * abort (nullable) is called when this rank cannot take part at all: the
+ * few bytes per rank that the agreements need are allocated once, on
+ * entry, and if even that fails the others would wait for this rank for
+ * ever. It should end the job (MPI_Abort); if it returns, or is NULL, the
+ * call returns LL_ERROR_OUT_OF_MEMORY without telling the other ranks,
+ * and ending the job is the caller's duty. */
 typedef struct ll_distribution {
     size_t struct_size;   /* sizeof(ll_distribution)                       */
     int rank;             /* this process, 0 <= rank < n_ranks              */
@@ -54,9 +61,10 @@ typedef struct ll_distribution {
     void *user;           /* passed to alltoallv                            */
     ll_status (*alltoallv)(void *user, const void *send, const size_t *send_bytes,
                            void *recv, const size_t *recv_bytes);
+    void (*abort)(void *user, ll_status status);
 } ll_distribution;
 
-#define LL_DISTRIBUTION_INIT { sizeof(ll_distribution), 0, 1, NULL, NULL }
+#define LL_DISTRIBUTION_INIT { sizeof(ll_distribution), 0, 1, NULL, NULL, NULL }
 
 /* ll_material_build_layers_ex across the ranks of dist; every rank calls it
  * with the same material and options. On rank 0, layers receives the

@@ -36,29 +36,56 @@ static ll_status call_alltoallv(ll_share *share, const void *send, const size_t 
     return LL_OK;
 }
 
-/* Which rank's status is the outcome: a real failure comes before a
- * cancel (which another rank's failure or a signal to every rank may have
- * caused), a lower rank before a higher one. */
-static size_t deciding_rank(const int32_t *status, size_t n_ranks)
+ll_status ll_share_begin(ll_share *share, const ll_distribution *dist)
 {
-    size_t r, cancelled = n_ranks;
-    for (r = 0; r < n_ranks; ++r) {
-        if (status[r] != LL_OK && status[r] != LL_ERROR_CANCELLED)
-            return r;
-        if (status[r] == LL_ERROR_CANCELLED && cancelled == n_ranks)
-            cancelled = r;
+    size_t n = (size_t)dist->n_ranks, rank = (size_t)dist->rank, bytes = 0, part;
+    size_t counts = 6 * n * sizeof(size_t), wire = 2 * n * sizeof(uint64_t);
+    size_t agree_send = n * STATUS_BYTES + MESSAGE_BYTES;
+    size_t agree_recv = n * (rank == 0 ? STATUS_BYTES + MESSAGE_BYTES : STATUS_BYTES);
+    unsigned char *p;
+    memset(share, 0, sizeof *share);
+    share->dist = *dist;
+    share->rank = rank;
+    share->n_ranks = n;
+    /* (n is an int: none of these sums can overflow a size_t.) */
+    part = counts + wire;
+    bytes = part + agree_send + agree_recv;
+    share->scratch = p = ll_malloc(bytes);
+    if (!p) {
+        ll_status s = ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                              "rank %zu of %zu: out of memory for the %zu bytes that agreeing "
+                              "with the other ranks needs; this rank cannot take part (end "
+                              "the job)",
+                              rank, n, bytes);
+        if (dist->abort)
+            dist->abort(dist->user, s);
+        return s;
     }
-    return cancelled;
+    share->agree_bytes = (size_t *)(void *)p;
+    share->exchange_bytes = share->agree_bytes + 2 * n;
+    share->gather_bytes = share->exchange_bytes + 2 * n;
+    share->wire = (uint64_t *)(void *)(p + counts);
+    share->agree_send = p + part;
+    share->agree_recv = p + part + agree_send;
+    return LL_OK;
+}
+
+void ll_share_end(ll_share *share)
+{
+    if (share) {
+        ll_free(share->scratch);
+        share->scratch = NULL;
+    }
 }
 
 ll_status ll_share_agree(ll_share *share, ll_status local)
 {
     size_t n = share->n_ranks, r, decider;
     size_t to_root = STATUS_BYTES + MESSAGE_BYTES;
-    size_t *send_bytes = NULL, *recv_bytes = NULL;
-    unsigned char *send = NULL, *recv = NULL, *p;
+    size_t *send_bytes = share->agree_bytes, *recv_bytes = send_bytes + n;
+    unsigned char *p = share->agree_send, *recv = share->agree_recv;
     char message[MESSAGE_BYTES];
-    int32_t *status = NULL, mine = (int32_t)local;
+    int32_t mine = (int32_t)local, status, deciding = LL_OK;
     ll_status s;
 
     memset(message, 0, sizeof message);
@@ -69,16 +96,6 @@ ll_status ll_share_agree(ll_share *share, ll_status local)
         else
             snprintf(message, sizeof message, "%s", ll_last_error_message());
     }
-    send_bytes = ll_alloc_array(2 * n, sizeof *send_bytes);
-    send = ll_alloc_array(n * STATUS_BYTES + MESSAGE_BYTES, 1);
-    recv = ll_alloc_array(n, share->rank == 0 ? to_root : STATUS_BYTES);
-    status = ll_alloc_array(n, sizeof *status);
-    if (!send_bytes || !send || !recv || !status) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory for the agreement of %zu ranks", n);
-        goto done;
-    }
-    recv_bytes = send_bytes + n;
-    p = send;
     for (r = 0; r < n; ++r) {
         send_bytes[r] = r == 0 ? to_root : STATUS_BYTES;
         recv_bytes[r] = share->rank == 0 ? to_root : STATUS_BYTES;
@@ -89,47 +106,46 @@ ll_status ll_share_agree(ll_share *share, ll_status local)
             p += MESSAGE_BYTES;
         }
     }
-    s = call_alltoallv(share, send, send_bytes, recv, recv_bytes);
+    s = call_alltoallv(share, share->agree_send, send_bytes, recv, recv_bytes);
     if (s != LL_OK)
         goto done;
-    for (r = 0; r < n; ++r)
-        memcpy(&status[r], recv + r * recv_bytes[0], STATUS_BYTES);
-    decider = deciding_rank(status, n);
+    /* The outcome: a real failure before a cancel (which another rank's
+     * failure or a signal to every rank may have caused), a lower rank
+     * before a higher one. */
+    decider = n;
+    for (r = 0; r < n; ++r) {
+        memcpy(&status, recv + r * recv_bytes[0], STATUS_BYTES);
+        if (status != LL_OK && (decider == n || (deciding == LL_ERROR_CANCELLED &&
+                                                  status != LL_ERROR_CANCELLED))) {
+            decider = r;
+            deciding = status;
+        }
+    }
     if (decider == n) {
         s = LL_OK;
     } else if (share->rank == 0) {
         char *text = (char *)recv + decider * to_root + STATUS_BYTES;
         text[MESSAGE_BYTES - 1] = '\0';
-        s = n == 1 ? ll_fail(status[decider], "%s", text)
-                   : ll_fail(status[decider], "rank %zu of %zu: %s", decider, n, text);
+        s = n == 1 ? ll_fail(deciding, "%s", text)
+                   : ll_fail(deciding, "rank %zu of %zu: %s", decider, n, text);
     } else {
-        s = ll_fail(status[decider], "rank %zu of %zu failed (%s); rank 0 reports why",
-                    decider, n, ll_status_string(status[decider]));
+        s = ll_fail(deciding, "rank %zu of %zu failed (%s); rank 0 reports why", decider, n,
+                    ll_status_string(deciding));
     }
 done:
     if (s != LL_OK)
         share->settled = 1;
-    ll_free(send_bytes);
-    ll_free(send);
-    ll_free(recv);
-    ll_free(status);
     return s;
 }
 
 ll_status ll_share_exchange(ll_share *share, const unsigned char *send,
                             const size_t *send_bytes, unsigned char **recv, size_t *recv_bytes)
 {
-    size_t n = share->n_ranks, r, total = 0, *ones = NULL;
-    uint64_t *counts = NULL;
+    size_t n = share->n_ranks, r, total = 0, *ones = share->exchange_bytes;
+    uint64_t *counts = share->wire;
     ll_status s;
 
     *recv = NULL;
-    counts = ll_alloc_array(2 * n, sizeof *counts);
-    ones = ll_alloc_array(n, sizeof *ones);
-    if (!counts || !ones) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory for the counts of %zu ranks", n);
-        goto done;
-    }
     /* First the counts (one uint64 each way), then the bytes. */
     for (r = 0; r < n; ++r) {
         counts[r] = (uint64_t)send_bytes[r];
@@ -153,13 +169,10 @@ ll_status ll_share_exchange(ll_share *share, const unsigned char *send,
     s = ll_share_agree(share, s);
     if (s == LL_OK)
         s = call_alltoallv(share, send, send_bytes, *recv, recv_bytes);
-done:
     if (s != LL_OK) {
         ll_free(*recv);
         *recv = NULL;
     }
-    ll_free(counts);
-    ll_free(ones);
     return s;
 }
 
@@ -197,10 +210,9 @@ ll_status ll_share_gather_layers(ll_share *share, ll_layer *const *layers, size_
     const unsigned char *p, *end;
     ll_status s;
 
-    send_bytes = ll_calloc_array(2 * n, sizeof *send_bytes);
-    if (!send_bytes)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory for the counts of %zu ranks", n);
+    send_bytes = share->gather_bytes;
     recv_bytes = send_bytes + n;
+    memset(send_bytes, 0, n * sizeof *send_bytes);
     s = pack_owned(share, layers, n_channels, &send, &packed);
     send_bytes[0] = packed;
     /* A failure to pack must be agreed before the exchange. */
@@ -228,6 +240,5 @@ ll_status ll_share_gather_layers(ll_share *share, ll_layer *const *layers, size_
         for (c = 0; c < n_channels; ++c)
             layers[c]->share = NULL;
     ll_free(recv);
-    ll_free(send_bytes);
     return s;
 }

@@ -30,6 +30,12 @@ typedef struct ll_share {
     size_t rank, n_ranks;
     int settled;           /* a failure was agreed: no further exchanges   */
     double peak_bytes;     /* this rank's estimated peak, for messages     */
+    /* What the agreements and the counts of the exchanges use, allocated
+     * by ll_share_begin, so that agreeing never fails to allocate. */
+    void *scratch;
+    size_t *agree_bytes, *exchange_bytes, *gather_bytes; /* [2 n_ranks] each */
+    unsigned char *agree_send, *agree_recv;
+    uint64_t *wire;        /* [2 n_ranks]                                  */
 } ll_share;
 
 struct ll_layer {
@@ -43,6 +49,12 @@ struct ll_layer {
 };
 
 /* ---- distributed builds (distribution.c) */
+/* Start a share from a checked distribution: the scratch of the
+ * agreements. If even that cannot be allocated this rank cannot take part:
+ * the distribution's abort is called (if any) and LL_ERROR_OUT_OF_MEMORY
+ * returned, with no agreement. ll_share_end frees it (NULL-safe). */
+LL_INTERNAL ll_status ll_share_begin(ll_share *share, const ll_distribution *dist);
+LL_INTERNAL void ll_share_end(ll_share *share);
 /* Does this rank compute order k of the layer? Always without a share;
  * with one, round robin: k mod n_ranks == rank. */
 LL_INTERNAL int ll_layer_owns_order(const ll_layer *layer, size_t k);

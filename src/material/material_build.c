@@ -504,10 +504,7 @@ static ll_status share_read(ll_share *share, const ll_distribution *dist, const 
                        "%s: the distribution has rank %d of %d ranks and %s alltoallv; "
                        "expected 0 <= rank < n_ranks and a function",
                        fn, d.rank, d.n_ranks, d.alltoallv ? "an" : "no");
-    share->dist = d;
-    share->rank = (size_t)d.rank;
-    share->n_ranks = (size_t)d.n_ranks;
-    return LL_OK;
+    return ll_share_begin(share, &d);
 }
 
 /* The build on every rank; s: this rank's state so far (a failure is only
@@ -575,7 +572,9 @@ ll_status ll_material_build_layers_distributed(const ll_material *material,
         return s; /* no collective to agree with */
     if (header)
         s = ll_struct_check(header, fn, "ll_bsdf_write_options");
-    return build_shared(material, opts, monitor, &share, s, layers, n_channels, header, fn);
+    s = build_shared(material, opts, monitor, &share, s, layers, n_channels, header, fn);
+    ll_share_end(&share);
+    return s;
 }
 
 ll_status ll_material_build_distributed(const ll_material *material,
@@ -594,12 +593,14 @@ ll_status ll_material_build_distributed(const ll_material *material,
     if (share.rank == 0 && (!out_path || !*out_path))
         s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out_path is NULL or empty", fn);
     s = build_shared(material, opts, monitor, &share, s, layers, &n_channels, NULL, fn);
-    if (s != LL_OK)
-        return s; /* agreed */
-    /* Rank 0 writes (atomically) while the others wait for the outcome. */
-    if (share.rank == 0)
-        s = ll_material_write(material, opts, layers, n_channels, out_path);
-    for (c = 0; c < 3; ++c)
-        ll_layer_destroy(layers[c]);
-    return ll_share_agree(&share, s);
+    if (s == LL_OK) {
+        /* Rank 0 writes (atomically) while the others wait for the outcome. */
+        if (share.rank == 0)
+            s = ll_material_write(material, opts, layers, n_channels, out_path);
+        for (c = 0; c < 3; ++c)
+            ll_layer_destroy(layers[c]);
+        s = ll_share_agree(&share, s);
+    }
+    ll_share_end(&share);
+    return s;
 }

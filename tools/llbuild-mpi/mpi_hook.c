@@ -82,6 +82,15 @@ static ll_status alltoallv(void *user, const void *send, const size_t *send_byte
     return ok ? LL_OK : LL_ERROR_IO;
 }
 
+/* This rank cannot take part in the agreements: end the job. */
+static void abort_job(void *user, ll_status status)
+{
+    const mpi_job *job = user;
+    fprintf(stderr, "llbuild-mpi: rank %d of %d: %s\n", job->rank, job->size,
+            ll_last_error_message());
+    MPI_Abort(MPI_COMM_WORLD, status == LL_ERROR_OUT_OF_MEMORY ? 3 : 1);
+}
+
 void mpi_distribution(mpi_job *job, ll_distribution *out)
 {
     ll_distribution d = LL_DISTRIBUTION_INIT;
@@ -89,6 +98,7 @@ void mpi_distribution(mpi_job *job, ll_distribution *out)
     d.n_ranks = job->size;
     d.user = job;
     d.alltoallv = alltoallv;
+    d.abort = abort_job;
     *out = d;
 }
 
