@@ -61,10 +61,12 @@ int main(int argc, char **argv)
     ll_progress bar;
     mpi_job job;
     char message[MESSAGE_SIZE];
-    double start = now_seconds();
+    double start = now_seconds(), sent = 0.0;
     ll_status s;
     int code;
 
+    job.bytes_sent = 0.0;
+    job.calls = 0;
     if (MPI_Init(&argc, &argv) != MPI_SUCCESS) {
         fprintf(stderr, "llbuild-mpi: MPI_Init failed\n");
         return EXIT_IO;
@@ -112,6 +114,8 @@ int main(int argc, char **argv)
     mpi_distribution(&job, &dist);
     s = ll_material_build_layers_distributed(m, &o, NULL, &dist, layers, &n_channels, NULL);
     snprintf(message, sizeof message, "%s", ll_last_error_message());
+    /* The bytes all ranks sent, for the summary. */
+    MPI_Reduce(&job.bytes_sent, &sent, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
     if (s == LL_OK) {
         bar.scale = 1.0;
         ll_progress_update(0.97, "writing", &bar);
@@ -136,7 +140,8 @@ int main(int argc, char **argv)
     } else {
         if (!a.quiet && job.rank == 0) {
             print_summary(&a, layers, n_channels, now_seconds() - start);
-            printf("ranks        %d (MPI)\n", job.size);
+            printf("ranks        %d (MPI): %.1f MiB exchanged in %lu collective calls\n",
+                   job.size, sent / 1048576.0, job.calls);
         }
         code = 0;
     }

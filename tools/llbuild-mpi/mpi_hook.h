@@ -10,6 +10,8 @@
 
 typedef struct mpi_job {
     int rank, size;
+    double bytes_sent;   /* by this rank to the others, over all exchanges */
+    unsigned long calls; /* collective calls made                          */
 } mpi_job;
 
 /* An ll_distribution over MPI_COMM_WORLD (job must outlive it). */
