@@ -63,6 +63,8 @@ static const size_t estimate_ends[] = {
     offsetof(ll_build_estimate, cpu_seconds),
     offsetof(ll_build_estimate, max_memory_bytes),
     offsetof(ll_build_estimate, over_budget),
+    offsetof(ll_build_estimate, n_bases),
+    offsetof(ll_build_estimate, file_bytes),
     sizeof(ll_build_estimate),
 };
 static const size_t monitor_ends[] = {
@@ -399,15 +401,18 @@ static void every_field_is_listed(void **state)
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 13);
     assert_int_equal(COUNT(build_options_ends), 10);
-    assert_int_equal(COUNT(estimate_ends), 12);
+    assert_int_equal(COUNT(estimate_ends), 14);
     assert_int_equal(COUNT(monitor_ends), 3);
     assert_int_equal(COUNT(open_options_ends), 4);
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
                      sizeof(ll_bsdf_write_options));
     assert_int_equal(offsetof(ll_build_options, max_memory_bytes) + sizeof(size_t),
                      sizeof(ll_build_options));
-    assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <= sizeof(ll_build_estimate) &&
-                offsetof(ll_build_estimate, over_budget) + 8 >= sizeof(ll_build_estimate));
+    assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
+                    offsetof(ll_build_estimate, n_bases) &&
+                offsetof(ll_build_estimate, over_budget) + 8 >= offsetof(ll_build_estimate, n_bases));
+    assert_int_equal(offsetof(ll_build_estimate, file_bytes) + sizeof(double),
+                     sizeof(ll_build_estimate));
     assert_int_equal(offsetof(ll_monitor, user) + sizeof(void *), sizeof(ll_monitor));
     assert_int_equal(offsetof(ll_open_options, max_nodes) + sizeof(size_t),
                      sizeof(ll_open_options));

@@ -80,6 +80,43 @@ LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layer
                                   size_t n_channels, const ll_bsdf_write_options *opts,
                                   const ll_monitor *monitor);
 
+/* A streaming writer of textured files: the bases are added one at a time,
+ * in order 0 .. n_bases - 1, and the writer never holds more than one
+ * basis's layers (it keeps none of the caller's layers after add_basis
+ * returns): each basis's coefficients go to a hidden spill file beside
+ * path (".NAME.XXXXXX.tmp", as the atomic writer's temporary), and commit
+ * writes the file from it, so memory does not grow with n_bases beyond a
+ * few bytes per basis and node. The file is byte for byte what
+ * ll_bsdf_write_textured writes for the same layers (series truncated by
+ * the same rule, the longest over channels and bases), and as atomic: it
+ * appears only when commit succeeds; abort, a failure or a cancel leaves no
+ * file (not even the spill) and keeps an existing one.
+ *
+ * open: n_channels 1 or 3; the parameters as ll_bsdf_write_textured
+ * (n_parameters = 0: one basis, an untextured file); opts (nullable) read
+ * now (opts->metadata is copied). Statuses as ll_bsdf_write_textured. */
+typedef struct ll_bsdf_writer ll_bsdf_writer;
+
+LL_API ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_parameters,
+                                     const size_t *param_counts, const double *param_positions,
+                                     const ll_bsdf_write_options *opts, ll_bsdf_writer **out);
+
+/* The next basis: layers[0 .. n_channels-1], all with the nodes and order
+ * count of the first basis. LL_ERROR_INVALID_ARGUMENT (mismatched,
+ * non-finite or NULL layers, more bases than the parameters make),
+ * LL_ERROR_IO (the spill file), LL_ERROR_OUT_OF_MEMORY. After a failure the
+ * writer only accepts ll_bsdf_writer_abort. */
+LL_API ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *writer,
+                                          const ll_layer *const *layers);
+
+/* Write the file (all bases must have been added) and free the writer,
+ * whatever the outcome. monitor (nullable) as for ll_bsdf_write_ex: stage
+ * "writing", and a cancel leaves no file. */
+LL_API ll_status ll_bsdf_writer_commit(ll_bsdf_writer *writer, const ll_monitor *monitor);
+
+/* Give up: no file is left (nor the spill); frees the writer. NULL is fine. */
+LL_API void ll_bsdf_writer_abort(ll_bsdf_writer *writer);
+
 #ifdef __cplusplus
 }
 #endif

@@ -155,9 +155,16 @@ typedef struct ll_build_estimate {
     size_t max_memory_bytes; /* the budget in effect (opts or half the RAM)      */
     int over_budget;      /* nonzero: peak_bytes > max_memory_bytes, so a build
                              with these options is refused                       */
+    /* Appended in 1.x (sweeps): for a swept material layers_built, additions,
+     * doublings, seconds and cpu_seconds count every basis (a word layer
+     * shared between bases counted once), peak_bytes is the builder's (a few
+     * bases at once, never all). */
+    size_t n_bases;       /* ll_material_basis_count: 1 for an untextured build  */
+    double file_bytes;    /* estimated size of the .bsdf file                    */
 } ll_build_estimate;
 
-#define LL_BUILD_ESTIMATE_INIT { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0 }
+#define LL_BUILD_ESTIMATE_INIT \
+    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0 }
 
 /* estimate->struct_size may be the sizeof of an older, smaller
  * ll_build_estimate: only the fields it covers are written (the least
@@ -167,6 +174,92 @@ typedef struct ll_build_estimate {
 LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,
                                       ll_build_estimate *estimate);
+
+/* ------------------------------------------------------------ sweeps
+ *
+ * A number parameter written as a sweep, `alpha=[0.02 0.05 0.1]` or
+ * `alpha=[0.05..0.4:8]` (docs/material-language.md, "Sweeps"), is one axis
+ * of a textured .bsdf file: the file holds one basis per point of the
+ * tensor product of the axes, axis 0 (the first sweep in the text, top
+ * word first, left to right) fastest. ll_material_build / _ex write such a
+ * file (through the builder and the streaming writer below);
+ * ll_material_build_layers / _ex and ll_material_write, which hold one
+ * stack, refuse a swept material (LL_ERROR_INVALID_ARGUMENT): build its
+ * bases one at a time with a builder. */
+
+/* Number of swept parameters (axes): 0 for an untextured material. */
+LL_API size_t ll_material_axis_count(const ll_material *material);
+
+/* One axis. name: "LABEL.key" for a word given name=LABEL, else
+ * "INDEX.key" with INDEX the word's 0-based position from the top of the
+ * stack ("1.alpha"). positions: the n_values sample positions the file
+ * stores (strictly increasing): each value, or for R,G,B triples their
+ * luminance 0.212671 R + 0.715160 G + 0.072169 B. The strings and arrays
+ * belong to the material and live as long as it. */
+typedef struct ll_material_axis {
+    size_t struct_size;       /* sizeof(ll_material_axis)                        */
+    const char *name;
+    size_t n_values;
+    const double *positions;  /* [n_values]                                      */
+} ll_material_axis;
+
+#define LL_MATERIAL_AXIS_INIT { sizeof(ll_material_axis), NULL, 0, NULL }
+
+/* Axis `axis` (< ll_material_axis_count) into *out (its struct_size set by
+ * the caller; only the fields it covers are written).
+ * LL_ERROR_INVALID_ARGUMENT for a NULL argument or an axis out of range. */
+LL_API ll_status ll_material_get_axis(const ll_material *material, size_t axis,
+                                      ll_material_axis *out);
+
+/* Number of bases: the product of the axes' value counts; 1 for an
+ * untextured material (0 for NULL). */
+LL_API size_t ll_material_basis_count(const ll_material *material);
+
+/* A builder makes the bases of a (swept or plain) material one at a time,
+ * all at one resolution: the largest any basis's heuristics ask for, unless
+ * the options or `set` give it. Word layers are shared between bases: a
+ * word whose resolved parameters (its own values and the indices above it)
+ * are those of a word already built is not built again but taken from a
+ * cache of word layers (bounded: LRU, at most a fixed number of entries,
+ * docs/material-language.md "Sweeps" says how many), so an 8 x 8 coat x
+ * base grid built in basis order builds 8 + 8 interfaces and 64 additions.
+ * Memory: the cache, the quadrature and one basis's stack, whatever the
+ * basis count. The budget of opts->max_memory_bytes applies to that peak
+ * (ll_material_estimate). A builder is not thread-safe (one thread at a
+ * time); several builders of one material may run in parallel.
+ * monitor (nullable): the progress of each build_basis call as a whole
+ * (stages "basis 3/64: adding", ...); a non-zero return cancels the call
+ * in progress with LL_ERROR_CANCELLED, and the builder may be used again.
+ * opts->progress and opts->cancel are honoured likewise. create fails
+ * (LL_ERROR_INVALID_ARGUMENT) when bases would need different file
+ * headers' eta (the format stores one relative index: sweep indices only
+ * in opaque stacks) or the options are bad; LL_ERROR_OUT_OF_MEMORY over
+ * the budget, as ll_material_build. */
+typedef struct ll_material_builder ll_material_builder;
+
+LL_API ll_status ll_material_builder_create(const ll_material *material,
+                                            const ll_build_options *opts,
+                                            const ll_monitor *monitor,
+                                            ll_material_builder **out);
+
+/* Build basis `basis` (< ll_material_basis_count; any order, though basis
+ * order shares the most): layers receives *n_channels layers (the caller
+ * destroys each with ll_layer_destroy), header (nullable) the file's
+ * header: the eta and alpha of basis 0 (one per file), the material's
+ * metadata, the error goal. Every basis has the same nodes and order count,
+ * ready for ll_bsdf_writer_add_basis. Same statuses as
+ * ll_material_build_layers_ex. */
+LL_API ll_status ll_material_builder_build_basis(ll_material_builder *builder, size_t basis,
+                                                 ll_layer *layers[3], size_t *n_channels,
+                                                 ll_bsdf_write_options *header);
+
+/* Word layers the builder has built so far (a cache hit builds none), and
+ * adding steps performed: what sharing saves, observable. NULL: 0. */
+LL_API size_t ll_material_builder_layers_built(const ll_material_builder *builder);
+LL_API size_t ll_material_builder_additions(const ll_material_builder *builder);
+
+/* Frees the builder and its cache; NULL is fine. */
+LL_API void ll_material_builder_destroy(ll_material_builder *builder);
 
 #ifdef __cplusplus
 }

@@ -25,6 +25,10 @@ typedef struct ll_number {
 } ll_number;
 
 #define LL_WORD_MAX_NUMBERS 6
+/* name=LABEL of a word: at most this many characters. */
+#define LL_WORD_LABEL_MAX 32
+/* Swept parameters of one material (the axes of its textured file). */
+#define LL_MATERIAL_MAX_AXES 4
 
 /* One word as parsed. The meaning of number[] and of the other fields is
  * the word's own (its word_NAME.c). */
@@ -39,7 +43,22 @@ typedef struct ll_word {
     ll_metal_ior metal_ior;   /* its indices, relative to vacuum          */
     char *file;               /* measured: the resolved path              */
     double file_bytes;        /* measured: its size (for the estimate)    */
+    char label[LL_WORD_LABEL_MAX + 1]; /* name=LABEL ("" if none): axis names */
+    size_t label_line, label_column;
 } ll_word;
+
+/* A swept parameter (material_sweep.c): one axis of a textured file. The
+ * word's number[slot] holds values[0], so everything that reads one
+ * material (the stack checks, the channel count) sees the first basis. */
+typedef struct ll_sweep {
+    size_t word;              /* the word's index, 0 at the top           */
+    int slot;                 /* its ll_word.number slot                  */
+    size_t count;             /* values (>= 2)                            */
+    ll_number *values;        /* [count] as written: one value or three   */
+    double *positions;        /* [count] stored in the file: the value, or
+                                 the luminance of a triple               */
+    char name[LL_WORD_LABEL_MAX + 48]; /* "coat.alpha" or "1.alpha"      */
+} ll_sweep;
 
 struct ll_material {
     char *source;             /* name used in messages                   */
@@ -48,6 +67,8 @@ struct ll_material {
     size_t nodes, orders, channels; /* settings; 0 = not set             */
     double error_goal;        /* 0 = not set                              */
     char *metadata;           /* JSON stored in written files             */
+    ll_sweep axes[LL_MATERIAL_MAX_AXES]; /* in order of appearance       */
+    size_t n_axes;
 };
 
 #define LL_WORD_MAX_VALUES 6
@@ -120,6 +141,8 @@ typedef struct ll_cost_plan {
     size_t n, m, channels, threads;
     size_t layers_built, additions, doublings;
     double peak_bytes, seconds, cpu_seconds;
+    double stored_values;     /* values the finished layers hold, all channels */
+    double file_bytes;        /* the .bsdf file's estimated size              */
 } ll_cost_plan;
 /* The whole build's cost; params[word][channel] as ll_word_params_get. */
 LL_INTERNAL void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
@@ -129,6 +152,19 @@ LL_INTERNAL void ll_material_cost(const ll_material *mat, const ll_word_params (
 LL_INTERNAL double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_add(size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_write(size_t n, size_t m, size_t n_channels);
+/* One word's CPU and wall seconds, doublings and the bytes its layer keeps;
+ * and a process's fixed CPU, wall seconds and resident bytes. */
+LL_INTERNAL void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m,
+                                     size_t threads, double *cpu, double *wall,
+                                     size_t *doublings, double *bytes);
+LL_INTERNAL void ll_cost_process(double *cpu, double *wall, double *bytes);
+/* material_sweep_estimate.c: the cost of every basis of a swept material
+ * built by a builder (its cache of word layers simulated), and a file's
+ * size from the values its layers hold (stored_values per basis). */
+LL_INTERNAL ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders,
+                                             size_t nch, size_t threads, ll_cost_plan *out);
+LL_INTERNAL double ll_file_bytes_estimate(size_t n, size_t nch, size_t n_bases,
+                                          size_t n_parameter_values, double stored_values);
 /* LL_ERROR_OUT_OF_MEMORY naming the estimate, the budget and how to raise
  * it when peak_bytes > budget. */
 LL_INTERNAL ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan,
@@ -138,6 +174,49 @@ LL_INTERNAL ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan
 LL_INTERNAL size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c);
 LL_INTERNAL void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
                                  const size_t *below, size_t *owner);
+
+/* ---- material_sweep.c */
+/* Once the text is read: labels unique, axis names. */
+LL_INTERNAL ll_status ll_material_finish_axes(ll_material *m);
+LL_INTERNAL void ll_material_free_axes(ll_material *m);
+/* The axis indices of basis b (parameter 0 fastest). */
+LL_INTERNAL void ll_basis_indices(const ll_material *m, size_t basis, size_t *index);
+/* Basis `basis` as a plain material: *out shares everything with m except
+ * its words, copied into words (m->count of them) with the swept numbers
+ * of that basis; no axes. Never destroyed (nothing of its own). */
+LL_INTERNAL void ll_material_basis_view(const ll_material *m, size_t basis, ll_word *words,
+                                        ll_material *out);
+/* ll_material_plan over every basis: the largest resolution any asks for
+ * (all bases of a file share nodes and orders). */
+LL_INTERNAL ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
+                                             size_t *n_nodes, size_t *n_orders,
+                                             size_t *n_channels);
+
+/* ---- material_sweep_build.c: the builder's cache of word layers (LRU,
+ * this many entries; material_sweep_estimate.c simulates it) */
+#define LL_WORD_CACHE_ENTRIES 16
+typedef struct ll_word_cache ll_word_cache;
+/* The cached layer of word `word` with parameters p (borrowed), or NULL. */
+LL_INTERNAL const ll_layer *ll_word_cache_find(ll_word_cache *c, size_t word,
+                                               const ll_word_params *p);
+/* Keep a copy of layer (sharing its orders), evicting the least recently
+ * used entry when full; counts a layer built. */
+LL_INTERNAL ll_status ll_word_cache_put(ll_word_cache *c, size_t word, const ll_word_params *p,
+                                        const ll_layer *layer);
+LL_INTERNAL void ll_word_cache_count_addition(ll_word_cache *c);
+/* ll_material_build for a swept material: builder and streaming writer. */
+LL_INTERNAL ll_status ll_material_build_textured(const ll_material *m,
+                                                 const ll_build_options *opts,
+                                                 const ll_monitor *monitor,
+                                                 const char *out_path);
+/* ---- material_build.c: one stack, its word layers shared through cache
+ * (nullable); refuses nothing swept-related (the caller passes a basis). */
+LL_INTERNAL ll_status ll_material_build_layers_cached(const ll_material *material,
+                                                      const ll_build_options *opts,
+                                                      const ll_monitor *monitor,
+                                                      ll_word_cache *cache, ll_layer *layers[3],
+                                                      size_t *n_channels,
+                                                      ll_bsdf_write_options *header);
 
 /* ---- material_metadata.c */
 LL_INTERNAL ll_status ll_material_make_metadata(ll_material *m, const char *text);

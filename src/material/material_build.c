@@ -37,6 +37,7 @@ typedef struct build {
     const char *call_stage;
     int call_ends_build;         /* its 1 is the build's 1 (the writing) */
     ll_share *share;             /* a distributed build's (NULL: one process) */
+    ll_word_cache *cache;        /* a builder's word layers (nullable)  */
 } build;
 
 static int cancel_raised(const build *b)
@@ -160,6 +161,26 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     return check_cancel(b);
 }
 
+/* A builder's bases share word layers: a copy of the cached layer of equal
+ * parameters (the copy shares its orders), else built and cached. */
+static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
+{
+    const ll_layer *hit = b->cache ? ll_word_cache_find(b->cache, w, p) : NULL;
+    ll_status s;
+    if (hit) {
+        b->done += ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+        return ll_layer_clone(hit, out);
+    }
+    s = build_word(b, w, p, out);
+    if (s == LL_OK && b->cache)
+        s = ll_word_cache_put(b->cache, w, p, *out);
+    if (s != LL_OK) {
+        ll_layer_destroy(*out);
+        *out = NULL;
+    }
+    return s;
+}
+
 /* One level of the stack: word w on top of acc (bottom-up). */
 static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
                            int bottom)
@@ -176,7 +197,7 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
         if (same != c && word[same])
             word[c] = word[same];
         else
-            s = build_word(b, w, &b->params[w][c], &word[c]);
+            s = cached_word(b, w, &b->params[w][c], &word[c]);
     }
     /* Channels that part from a shared stack here start from a copy of it
      * as it was below this word; copy all before adding to any. */
@@ -194,6 +215,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             start = b->done;
             /* word[c] on top of acc[c] (ll_layer_add_to_top, with a monitor) */
             s = ll_layer_add_ex(word[c], acc[c], acc[c], 0, next_call(b, "adding", cost));
+            if (b->cache && s == LL_OK)
+                ll_word_cache_count_addition(b->cache);
             if (s != LL_OK)
                 s = word_failed(b, w, s);
             b->done = start + cost;
@@ -365,6 +388,27 @@ ll_status ll_material_build_layers_ex(const ll_material *material,
                                       ll_layer *layers[3], size_t *n_channels,
                                       ll_bsdf_write_options *header)
 {
+    if (material && material->n_axes > 0) {
+        if (layers)
+            layers[0] = layers[1] = layers[2] = NULL;
+        if (n_channels)
+            *n_channels = 0;
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_material_build_layers: %s has %zu swept parameters (%zu bases); "
+                       "build its file with ll_material_build, or its bases one at a time "
+                       "with ll_material_builder_build_basis",
+                       material->source, material->n_axes, ll_material_basis_count(material));
+    }
+    return ll_material_build_layers_cached(material, opts, monitor, NULL, layers, n_channels,
+                                           header);
+}
+
+ll_status ll_material_build_layers_cached(const ll_material *material,
+                                          const ll_build_options *opts,
+                                          const ll_monitor *monitor, ll_word_cache *cache,
+                                          ll_layer *layers[3], size_t *n_channels,
+                                          ll_bsdf_write_options *header)
+{
     build b;
     ll_status s;
     size_t c;
@@ -383,6 +427,7 @@ ll_status ll_material_build_layers_ex(const ll_material *material,
     s = build_init(&b, material, opts, monitor, "ll_material_build_layers", NULL);
     if (s != LL_OK)
         return s;
+    b.cache = cache;
     s = run_build(&b, layers, 0.0);
     if (s == LL_OK) {
         /* The last report comes before the layers are handed over: a cancel
@@ -431,6 +476,11 @@ ll_status ll_material_write(const ll_material *material, const ll_build_options 
     if (n_channels != 1 && n_channels != 3)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_material_write: n_channels = %zu; expected 1 or 3", n_channels);
+    if (material->n_axes > 0)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_material_write: %s has swept parameters: its file holds %zu bases "
+                       "(ll_material_build writes it, or ll_bsdf_writer_* basis by basis)",
+                       material->source, ll_material_basis_count(material));
     for (c = 0; c < n_channels; ++c)
         if (!layers[c])
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_write: layers[%zu] is NULL",
@@ -460,6 +510,8 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
 
     if (!out_path || !*out_path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_build: out_path is NULL or empty");
+    if (material && material->n_axes > 0)
+        return ll_material_build_textured(material, opts, monitor, out_path);
     s = build_init(&b, material, opts, monitor, "ll_material_build", NULL);
     if (s != LL_OK)
         return s;
@@ -518,6 +570,11 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
     int initialised = 0;
     size_t c;
 
+    if (s == LL_OK && material && material->n_axes > 0)
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                    "%s: %s is swept (%zu bases): distribute its bases instead, each "
+                    "built with an ll_material_builder (llbuild-mpi does)",
+                    fn, material->source, ll_material_basis_count(material));
     if (s == LL_OK)
         s = build_init(&b, material, opts, monitor, fn, share);
     if (s == LL_OK) {

@@ -92,6 +92,12 @@ static double add_cpu(size_t n, double a_orders, double b_orders, size_t m)
     return pairs * (both * LL_COST_ADD_ORDER + ((double)m - both) * LL_COST_ADD_EMPTY);
 }
 
+/* Bytes a layer keeps: its stored values and every order's segments. */
+static double layer_bytes(size_t n, size_t m, double dense_orders)
+{
+    return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
+}
+
 double ll_cost_add(size_t n, size_t m, size_t threads)
 {
     return parallel(add_cpu(n, (double)m, (double)m, m), m, threads);
@@ -114,6 +120,23 @@ static void word_seconds(const ll_word_cost *c, size_t n, size_t m, size_t threa
     *cpu = c->parallel_seconds + c->serial_seconds + d;
     *wall = parallel(c->parallel_seconds, c->items, threads) + c->serial_seconds +
             parallel(d, (size_t)c->orders_nonzero, threads);
+}
+
+void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, size_t threads,
+                         double *cpu, double *wall, size_t *doublings, double *bytes)
+{
+    ll_word_cost c;
+    word_cost(p, n, m, &c);
+    word_seconds(&c, n, m, threads, cpu, wall);
+    *doublings = c.doublings;
+    *bytes = layer_bytes(n, m, c.dense_orders);
+}
+
+void ll_cost_process(double *cpu, double *wall, double *bytes)
+{
+    *cpu = PROCESS_SECONDS;
+    *wall = PROCESS_WALL_SECONDS;
+    *bytes = PROCESS_BYTES;
 }
 
 double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
@@ -156,11 +179,6 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
     }
 }
 
-/* Bytes a layer keeps: its stored values and every order's segments. */
-static double layer_bytes(size_t n, size_t m, double dense_orders)
-{
-    return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
-}
 
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
                       size_t m, size_t nch, size_t threads, ll_cost_plan *out)
@@ -240,6 +258,7 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
             stored += (double)n * (double)n * acc_dense[c];
     if (16.0 * stored > peak)
         peak = 16.0 * stored;
+    out->stored_values = stored;
     out->cpu_seconds += stored * COST_WRITE + PROCESS_SECONDS;
     out->seconds += stored * COST_WRITE + PROCESS_WALL_SECONDS;
     out->peak_bytes = peak + PROCESS_BYTES;
@@ -295,16 +314,26 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
     s = ll_build_options_read(opts, &o, "ll_material_estimate");
     if (s == LL_OK)
-        s = ll_material_plan(material, &o, &n, &m, &nch);
+        s = ll_material_plan_bases(material, &o, &n, &m, &nch);
     if (s != LL_OK)
         return s;
-    params = ll_calloc_array(material->count, sizeof *params);
-    if (!params)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_material_estimate: out of memory");
-    ll_material_params(material, nch, params);
-    ll_material_cost(material, (const ll_word_params(*)[3])params, n, m, nch,
-                     build_threads(&o), &plan);
-    ll_free(params);
+    if (material->n_axes > 0) {
+        /* A swept material: every basis, with the builder's sharing. */
+        s = ll_material_cost_bases(material, n, m, nch, build_threads(&o), &plan);
+        if (s != LL_OK)
+            return s;
+    } else {
+        params = ll_calloc_array(material->count, sizeof *params);
+        if (!params)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_material_estimate: out of memory");
+        ll_material_params(material, nch, params);
+        ll_material_cost(material, (const ll_word_params(*)[3])params, n, m, nch,
+                         build_threads(&o), &plan);
+        ll_free(params);
+        plan.file_bytes = ll_file_bytes_estimate(n, nch, 1, 0, plan.stored_values);
+    }
+    e.n_bases = ll_material_basis_count(material);
+    e.file_bytes = plan.file_bytes;
     e.n_nodes = n;
     e.n_orders = m;
     e.n_channels = nch;

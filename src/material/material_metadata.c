@@ -140,6 +140,42 @@ static char *strip_comments(const char *text)
     return s;
 }
 
+/* A swept material's axes (material_sweep.c), in the file's order:
+ * "parameters" the names, "parameter_positions" the positions stored for
+ * each, "parameter_values" the values as written (one or three each). */
+static void describe_axes(ll_text *b, const ll_material *m)
+{
+    size_t a, k;
+    if (m->n_axes == 0)
+        return;
+    ll_text_append(b, ",\n  \"parameters\": [");
+    for (a = 0; a < m->n_axes; ++a) {
+        ll_text_append(b, "%s", a ? ", " : "");
+        ll_text_string(b, m->axes[a].name);
+    }
+    ll_text_append(b, "],\n  \"parameter_positions\": [");
+    for (a = 0; a < m->n_axes; ++a) {
+        ll_text_append(b, "%s[", a ? ", " : "");
+        for (k = 0; k < m->axes[a].count; ++k)
+            ll_text_append(b, "%s%.9g", k ? ", " : "", m->axes[a].positions[k]);
+        ll_text_append(b, "]");
+    }
+    ll_text_append(b, "],\n  \"parameter_values\": [");
+    for (a = 0; a < m->n_axes; ++a) {
+        ll_text_append(b, "%s[", a ? ", " : "");
+        for (k = 0; k < m->axes[a].count; ++k) {
+            const ll_number *x = &m->axes[a].values[k];
+            if (x->count == 3)
+                ll_text_append(b, "%s[%.9g, %.9g, %.9g]", k ? ", " : "", x->v[0], x->v[1],
+                               x->v[2]);
+            else
+                ll_text_append(b, "%s%.9g", k ? ", " : "", x->v[0]);
+        }
+        ll_text_append(b, "]");
+    }
+    ll_text_append(b, "]");
+}
+
 /* level 0: everything; 1: without the text; 2: without the layers too. */
 static void describe(ll_text *b, const ll_material *m, const char *stripped, int level)
 {
@@ -147,6 +183,7 @@ static void describe(ll_text *b, const ll_material *m, const char *stripped, int
     ll_text_append(b, "{\n  \"generator\": \"layerlab %s\",\n  \"source\": ",
                    ll_version_string());
     ll_text_string(b, m->source);
+    describe_axes(b, m);
     if (level == 0) {
         ll_text_append(b, ",\n  \"material\": ");
         ll_text_string(b, stripped);
@@ -163,6 +200,10 @@ static void describe(ll_text *b, const ll_material *m, const char *stripped, int
     for (i = 0; i < m->count; ++i) {
         const ll_word *w = &m->words[i];
         ll_text_append(b, "%s\n    { \"type\": \"%s\"", i ? "," : "", w->desc->name);
+        if (w->label[0]) {
+            ll_text_append(b, ", \"label\": ");
+            ll_text_string(b, w->label);
+        }
         w->desc->metadata(b, w);
         ll_text_append(b, " }");
     }

@@ -176,6 +176,12 @@ static ll_status next_token(const parser *p, const char **at, const char *line_e
             if (!close)
                 return ll_parse_error(p, s, "unterminated quote; expected a closing \"");
             s = close;
+        } else if (*s == '[') {
+            /* A sweep, alpha=[0.02 0.05 0.1]: its spaces are inside the value. */
+            const char *close = memchr(s + 1, ']', (size_t)(line_end - s - 1));
+            if (!close)
+                return ll_parse_error(p, s, "unterminated sweep; expected a closing ]");
+            s = close;
         }
         ++s;
     }
@@ -246,12 +252,16 @@ static ll_status parse_word_parameter(parser *p, ll_word *w, const token *t)
     if (s != LL_OK)
         return s;
     param = find_param(d, &key);
+    if (!param && ll_token_is(&key, "name"))
+        return ll_parse_label(p, w, &key, &v);
     if (!param) {
         char keys[256];
         list_keys(d, keys, sizeof keys);
         return ll_parse_error(p, key.begin, "%s has no parameter '%.*s'; expected one of: %s",
                               d->name, (int)key.len, key.begin, keys);
     }
+    if (v.begin[0] == '[')
+        return ll_parse_sweep(p, p->m, w, param, &key, &v);
     if (param->parse)
         return param->parse(p, w, &key, &v);
     slot = &w->number[param->slot];
@@ -427,6 +437,7 @@ void ll_material_destroy(ll_material *m)
     for (k = 0; k < m->count; ++k)
         if (m->words[k].desc && m->words[k].desc->destroy)
             m->words[k].desc->destroy(&m->words[k]);
+    ll_material_free_axes(m);
     ll_free(m->words);
     ll_free(m->source);
     ll_free(m->metadata);
@@ -484,6 +495,8 @@ static ll_status parse_text(const char *text, const char *source, const char *ma
     }
     if (s == LL_OK)
         s = ll_material_check_stack(m);
+    if (s == LL_OK)
+        s = ll_material_finish_axes(m);
     if (s == LL_OK)
         s = ll_material_make_metadata(m, text);
     if (s != LL_OK) {

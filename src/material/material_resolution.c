@@ -137,7 +137,7 @@ ll_status ll_material_resolution(const ll_material *material, const ll_build_opt
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_resolution: material is NULL");
     s = ll_build_options_read(opts, &o, "ll_material_resolution");
     if (s == LL_OK)
-        s = ll_material_plan(material, &o, &n, &m, &c);
+        s = ll_material_plan_bases(material, &o, &n, &m, &c);
     if (s != LL_OK)
         return s;
     if (n_nodes)

@@ -20,6 +20,7 @@ typedef struct ll_token {
 } ll_token;
 
 typedef struct ll_parser ll_parser; /* material_parse.c */
+typedef struct ll_param_desc ll_param_desc; /* below */
 
 LL_INTERNAL int ll_token_is(const ll_token *t, const char *s);
 /* Split a value at commas (R,G,B): up to 3 parts. Returns the part count,
@@ -45,6 +46,15 @@ LL_INTERNAL size_t ll_parser_column(const ll_parser *p, const char *at);
 /* The material file's directory (names and relative paths), or NULL. */
 LL_INTERNAL const char *ll_parser_dir(const ll_parser *p);
 
+/* Sweeps (material_sweep.c): v = "[...]" for number parameter `param` of
+ * word w (the material's last): its values into a new axis of m, the
+ * first into the word's slot; and name=LABEL of a word. */
+LL_INTERNAL ll_status ll_parse_sweep(const ll_parser *p, ll_material *m, ll_word *w,
+                                     const ll_param_desc *param, const ll_token *key,
+                                     const ll_token *v);
+LL_INTERNAL ll_status ll_parse_label(const ll_parser *p, ll_word *w, const ll_token *key,
+                                     const ll_token *v);
+
 /* --------------------------------------------- metadata, for the words */
 
 typedef struct ll_text {
@@ -64,7 +74,7 @@ LL_INTERNAL void ll_text_number(ll_text *b, const char *key, const ll_number *x)
  * ll_word.number[slot], may be one value or three (R, G, B) and must lie
  * in [lo, hi]; `check` (nullable) adds what a range cannot say. Other
  * parameters (a name, a path, a choice) parse themselves. */
-typedef struct ll_param_desc {
+struct ll_param_desc {
     const char *key;
     int required;
     int slot;                 /* index into ll_word.number, or -1       */
@@ -75,7 +85,7 @@ typedef struct ll_param_desc {
                        const ll_token *v);
     ll_status (*check)(const ll_parser *p, const ll_word *w, const ll_token *key,
                        const ll_token *v, const ll_number *x);
-} ll_param_desc;
+};
 
 /* The context a word's builder gets: the monitor to pass to its next
  * public layer call (credited with `share` of the word's modelled cost; it

@@ -30,6 +30,7 @@
  */
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
+#include "storage/bsdf_write_job.h"
 #include "storage/bsdf_format.h"
 #include "support/parse_number.h"
 #include "layer/layer.h"
@@ -42,43 +43,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Everything known about one file before its bytes are produced. */
-typedef struct write_job {
-    const char *fn;
-    const ll_layer *const *layers; /* [n_bases * n_channels] */
-    size_t n_channels, n_bases, n_parameters, n_parameter_values;
-    const size_t *param_counts;
-    const double *param_positions;
-    ll_bsdf_write_options opts;
-    size_t n, h, m;                /* layer nodes, half, orders            */
-    size_t nn;                     /* file nodes = n + 2                   */
-    float *nodes;                  /* [nn] file nodes                      */
-    uint32_t *length;              /* [nn * nn] series length, i * nn + o  */
-    uint32_t *offset;              /* [nn * nn]                            */
-    float *cdf;                    /* [(i * nn + o) * n_bases + b]         */
-    size_t max_order, n_coeffs;
-    char *metadata;                /* default JSON, when opts has none     */
-    ll_watch *watch;               /* polled per column / node row        */
-} write_job;
-
-static ll_status write_cancelled(const write_job *job)
-{
-    return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
-}
-
-/* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */
-static size_t layer_index(size_t f, size_t h)
-{
-    if (f < h)
-        return h - 1 - f;
-    if (f >= h + 2)
-        return f - 2;
-    return (size_t)-1;
-}
-
 /* ------------------------------------------------------------ arguments */
 
-static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
+ll_status ll_wjob_read_options(write_job *job, const ll_bsdf_write_options *opts)
 {
     ll_bsdf_write_options defaults = LL_BSDF_WRITE_OPTIONS_INIT;
     job->opts = defaults;
@@ -109,7 +76,7 @@ static ll_status read_options(write_job *job, const ll_bsdf_write_options *opts)
     return LL_OK;
 }
 
-static ll_status check_parameters(write_job *job)
+ll_status ll_wjob_check_parameters(write_job *job)
 {
     size_t p, k, bases = 1, values = 0;
     if (job->n_parameters > 0 && (!job->param_counts || !job->param_positions))
@@ -176,7 +143,7 @@ static ll_status check_layers(write_job *job)
  * the top, a pair's length is fixed at the first order where its running
  * tail exceeds error_goal * |M_0|. Visits stored entries only. Also checks
  * that every stored value is finite. */
-static ll_status layer_lengths(const write_job *job, const ll_layer *l, uint32_t *len,
+ll_status ll_wjob_layer_lengths(const write_job *job, const ll_layer *l, uint32_t *len,
                                double *tail, double *ref0)
 {
     size_t n = job->n, h = job->h, col, j, k;
@@ -243,7 +210,7 @@ static ll_status compute_lengths(write_job *job)
     }
     ll_watch_stage(job->watch, "writing", 0.0, 0.3, count * job->m);
     for (k = 0; k < count && s == LL_OK; ++k) {
-        s = layer_lengths(job, job->layers[k], len, tail, ref0);
+        s = ll_wjob_layer_lengths(job, job->layers[k], len, tail, ref0);
         for (i = 0; i < nn && s == LL_OK; ++i) {
             if (ll_watch_poll(job->watch)) {
                 s = write_cancelled(job);
@@ -264,7 +231,7 @@ done:
     return s;
 }
 
-static ll_status compute_offsets(write_job *job)
+ll_status ll_wjob_compute_offsets(write_job *job)
 {
     size_t k, total = 0, block = job->n_bases * job->n_channels;
     job->max_order = 0;
@@ -301,7 +268,7 @@ static double layer_coeff(const ll_layer *l, size_t lo, size_t li, size_t k)
 
 /* Stored coefficient k of channel ch (Y, R, B for colour files), basis b,
  * at file pair (o, i); the pair must not touch a mu = 0 node. */
-static double stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, size_t i,
+double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, size_t i,
                            size_t k)
 {
     size_t lo = layer_index(o, job->h), li = layer_index(i, job->h);
@@ -319,7 +286,7 @@ static double stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, 
 
 /* ------------------------------------------------------------------ CDF */
 
-static void integrate_row(const float *nodes, const double *values, size_t n, float *cdf,
+void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n, float *cdf,
                           size_t stride)
 {
     double sum = 0.0;
@@ -357,9 +324,9 @@ static ll_status compute_cdf(write_job *job)
             for (o = 0; o < nn; ++o)
                 /* The value a reader will see: the stored float. */
                 values[o] = job->length[i * nn + o]
-                                ? (double)(float)stored_coeff(job, 0, b, o, i, 0)
+                                ? (double)(float)ll_wjob_stored_coeff(job, 0, b, o, i, 0)
                                 : 0.0;
-            integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
+            ll_wjob_integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
         }
     }
     ll_free(values);
@@ -368,7 +335,7 @@ static ll_status compute_cdf(write_job *job)
 
 /* ------------------------------------------------------------- metadata */
 
-static ll_status default_metadata(write_job *job)
+ll_status ll_wjob_default_metadata(write_job *job)
 {
     char text[1024];
     int len = ll_format_c(
@@ -401,7 +368,7 @@ static ll_status default_metadata(write_job *job)
 
 /* ------------------------------------------------------------ the bytes */
 
-static void put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_size)
+void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_size)
 {
     unsigned char h[LL_BSDF_HEADER_SIZE];
     memset(h, 0, sizeof h);
@@ -427,7 +394,7 @@ static void put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_s
 /* Copy (or clear) column col of a layer's orders k < kmax into
  * stage[row * m + k]: each order's two runs of that column are read once,
  * where looking every coefficient up separately cost a cache miss each. */
-static void stage_column(const ll_layer *l, size_t col, size_t kmax, double *stage, int clear)
+void ll_wjob_stage_column(const ll_layer *l, size_t col, size_t kmax, double *stage, int clear)
 {
     size_t h = l->n / 2, m = l->m, k, j;
     int half;
@@ -471,7 +438,7 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
             if (job->length[i * nn + o] > kmax)
                 kmax = job->length[i * nn + o];
         for (L = 0; L < count; ++L)
-            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 0);
+            ll_wjob_stage_column(job->layers[L], li, kmax, stage + L * per_layer, 0);
         /* a_k = M_k(o, i) |mu_o| / (pi |mu_i| w_i), times 1/2 for k = 0
          * (bsdf-format.md): the layer's column factor of order 0 and k > 0. */
         factor[0] = ll_layer_surface_factor(l0, li, 0);
@@ -490,15 +457,8 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
                 for (b = 0; b < job->n_bases && s == LL_OK; ++b) {
                     const double *set = stage + b * job->n_channels * per_layer + lo * m;
                     for (k = 0; k < len; ++k) {
-                        double v, f = factor[k > 0];
-                        if (job->n_channels == 1 || c == 1)
-                            v = set[k] * mu_o / f;
-                        else if (c == 2)
-                            v = set[2 * per_layer + k] * mu_o / f;
-                        else
-                            v = LL_BSDF_Y_FROM_R * (set[k] * mu_o / f) +
-                                LL_BSDF_Y_FROM_G * (set[per_layer + k] * mu_o / f) +
-                                LL_BSDF_Y_FROM_B * (set[2 * per_layer + k] * mu_o / f);
+                        double v = ll_wjob_staged_value(job->n_channels, c, set, per_layer, k,
+                                                        mu_o, factor[k > 0]);
                         if (!(fabs(v) <= FLT_MAX)) {
                             s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
                                         "%s: coefficient %zu of node pair (%zu, %zu) is %g, "
@@ -511,7 +471,7 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
                 }
         }
         for (L = 0; L < count; ++L)
-            stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
+            ll_wjob_stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
     }
     ll_free(stage);
     return s;
@@ -525,7 +485,7 @@ static ll_status put_file(const write_job *job, const char *path)
     ll_status s = ll_bsdf_out_begin(path, job->fn, &out);
     if (s != LL_OK)
         return s;
-    put_header(out, job, metadata_size);
+    ll_wjob_put_header(out, job, metadata_size);
     for (k = 0; k < nn; ++k)
         ll_bsdf_out_f32(out, job->nodes[k]);
     for (k = 0; k < job->n_parameters; ++k)
@@ -581,11 +541,11 @@ static ll_status prepare(write_job *job)
         size_t l = layer_index(k, job->h);
         job->nodes[k] = l == (size_t)-1 ? 0.0f : (float)job->layers[0]->nodes[l];
     }
-    if ((s = compute_lengths(job)) != LL_OK || (s = compute_offsets(job)) != LL_OK ||
+    if ((s = compute_lengths(job)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK ||
         (s = compute_cdf(job)) != LL_OK)
         return s;
     if (!job->opts.metadata)
-        return default_metadata(job);
+        return ll_wjob_default_metadata(job);
     return LL_OK;
 }
 
@@ -608,7 +568,7 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
     if (!path || !*path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn);
     if ((s = ll_watch_begin(&watch, monitor, fn)) == LL_OK &&
-        (s = read_options(&job, opts)) == LL_OK && (s = check_parameters(&job)) == LL_OK &&
+        (s = ll_wjob_read_options(&job, opts)) == LL_OK && (s = ll_wjob_check_parameters(&job)) == LL_OK &&
         (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
         s = put_file(&job, path);
     ll_free(job.nodes);

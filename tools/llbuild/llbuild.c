@@ -252,6 +252,19 @@ static double now_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* The axes of a swept material, one line each. */
+static void print_axes(const ll_material *m)
+{
+    size_t k, n = ll_material_axis_count(m);
+    for (k = 0; k < n; ++k) {
+        ll_material_axis axis = LL_MATERIAL_AXIS_INIT;
+        if (ll_material_get_axis(m, k, &axis) != LL_OK)
+            continue;
+        printf("axis %zu       %s: %zu values, %g to %g\n", k, axis.name, axis.n_values,
+               axis.positions[0], axis.positions[axis.n_values - 1]);
+    }
+}
+
 /* --dry-run: the estimate; exit 1 when a build would be refused. */
 static int print_resolution(const ll_material *m, const ll_build_options *o)
 {
@@ -263,6 +276,11 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
     }
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n", e.n_nodes,
            e.n_orders, e.n_channels, e.n_channels == 1 ? "" : "s");
+    if (ll_material_axis_count(m) > 0) {
+        print_axes(m);
+        printf("bases        %zu (one textured file)\n", e.n_bases);
+    }
+    printf("file         about %.2f MiB\n", e.file_bytes / 1048576.0);
     printf("work         %zu layer%s built, %zu addition%s, %zu doubling%s\n", e.layers_built,
            e.layers_built == 1 ? "" : "s", e.additions, e.additions == 1 ? "" : "s",
            e.doublings, e.doublings == 1 ? "" : "s");
@@ -336,6 +354,28 @@ static void print_summary(const args *a, ll_layer *const *layers, size_t n_chann
     ll_bsdf_release(b);
 }
 
+static void print_textured_summary(const args *a, const ll_material *m, double seconds)
+{
+    ll_bsdf *b = NULL;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    if (ll_bsdf_open(a->output, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
+        fprintf(stderr, "llbuild: cannot read back %s: %s\n", a->output,
+                ll_last_error_message());
+        ll_bsdf_release(b);
+        return;
+    }
+    printf("%s -> %s\n", a->input, a->output);
+    print_axes(m);
+    printf("bases        %zu (textured file, %zu parameter%s)\n", info.n_bases,
+           info.n_parameters, info.n_parameters == 1 ? "" : "s");
+    printf("resolution   %zu file nodes, %zu channel%s\n", info.n_nodes, info.n_channels,
+           info.n_channels == 1 ? "" : "s");
+    printf("orders kept  %zu (longest series in the file)\n", info.max_order);
+    printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
+    printf("wall time    %.2f s\n", seconds);
+    ll_bsdf_release(b);
+}
+
 /* Stop: no file was written. End by the signal, so that the shell sees
  * it ($? = 128 + 2 = 130 for SIGINT, 143 for SIGTERM) and a script that ran
  * llbuild stops too; 128 + sig should raise return. */
@@ -397,11 +437,18 @@ int main(int argc, char **argv)
     o.progress_user = &bar;
     /* Writing a file takes a few percent of a build. */
     bar.scale = 0.97;
-    s = ll_material_build_layers(m, &o, layers, &n_channels, NULL);
-    if (s == LL_OK) {
+    if (ll_material_axis_count(m) > 0) {
+        /* A swept material: its bases one at a time into one textured file
+         * (the bar shows "basis 3/64: ..."); the library writes it. */
         bar.scale = 1.0;
-        ll_progress_update(0.97, "writing", &bar);
-        s = ll_material_write(m, &o, layers, n_channels, a.output);
+        s = ll_material_build(m, &o, a.output);
+    } else {
+        s = ll_material_build_layers(m, &o, layers, &n_channels, NULL);
+        if (s == LL_OK) {
+            bar.scale = 1.0;
+            ll_progress_update(0.97, "writing", &bar);
+            s = ll_material_write(m, &o, layers, n_channels, a.output);
+        }
     }
     if (s == LL_OK) {
         /* The file is complete: from here on a signal just ends llbuild
@@ -421,7 +468,9 @@ int main(int argc, char **argv)
         code = s == LL_ERROR_OUT_OF_MEMORY && refused_by_budget(m, &o) ? EXIT_BAD_INPUT
                                                                          : exit_code_for(s);
     } else {
-        if (!a.quiet)
+        if (!a.quiet && ll_material_axis_count(m) > 0)
+            print_textured_summary(&a, m, now_seconds() - start);
+        else if (!a.quiet)
             print_summary(&a, layers, n_channels, now_seconds() - start);
         code = 0;
     }

@@ -1,0 +1,88 @@
+/*
+ * The inside of the .bsdf writers (bsdf_write.c, all layers at once;
+ * bsdf_writer.c, streaming one basis at a time): what is known about one
+ * file before its bytes are produced, and the pieces both use, so that
+ * the two write the same bytes (the rules are in bsdf_write.c's comment).
+ */
+#ifndef LL_BSDF_WRITE_JOB_H
+#define LL_BSDF_WRITE_JOB_H
+
+#include "layerlab/ll_bsdf_write.h"
+#include "storage/bsdf_file_out.h"
+#include "storage/bsdf_format.h"
+#include "support/watch.h"
+
+/* Everything known about one file before its bytes are produced. */
+typedef struct write_job {
+    const char *fn;
+    const ll_layer *const *layers; /* [n_bases * n_channels] */
+    size_t n_channels, n_bases, n_parameters, n_parameter_values;
+    const size_t *param_counts;
+    const double *param_positions;
+    ll_bsdf_write_options opts;
+    size_t n, h, m;                /* layer nodes, half, orders            */
+    size_t nn;                     /* file nodes = n + 2                   */
+    float *nodes;                  /* [nn] file nodes                      */
+    uint32_t *length;              /* [nn * nn] series length, i * nn + o  */
+    uint32_t *offset;              /* [nn * nn]                            */
+    float *cdf;                    /* [(i * nn + o) * n_bases + b]         */
+    size_t max_order, n_coeffs;
+    char *metadata;                /* default JSON, when opts has none     */
+    ll_watch *watch;               /* polled per column / node row        */
+} write_job;
+
+static inline ll_status write_cancelled(const write_job *job)
+{
+    return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
+}
+
+/* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */
+static inline size_t layer_index(size_t f, size_t h)
+{
+    if (f < h)
+        return h - 1 - f;
+    if (f >= h + 2)
+        return f - 2;
+    return (size_t)-1;
+}
+
+/* Options (up to the caller's struct_size) and checks; parameters. */
+LL_INTERNAL ll_status ll_wjob_read_options(write_job *job, const ll_bsdf_write_options *opts);
+LL_INTERNAL ll_status ll_wjob_check_parameters(write_job *job);
+/* Series lengths of one layer, col * n + row (layer indices); checks that
+ * every value is finite. len, tail, ref0: n * n scratch each. */
+LL_INTERNAL ll_status ll_wjob_layer_lengths(const write_job *job, const ll_layer *l,
+                                            uint32_t *len, double *tail, double *ref0);
+/* offset[], max_order, n_coeffs from length[]. */
+LL_INTERNAL ll_status ll_wjob_compute_offsets(write_job *job);
+/* Stored coefficient k of channel ch, basis b at file pair (o, i), from
+ * job->layers (no mu = 0 node). */
+LL_INTERNAL double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t b, size_t o,
+                                        size_t i, size_t k);
+/* The CDF of one row: running exact integrals of the Catmull-Rom segments. */
+LL_INTERNAL void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n,
+                                       float *cdf, size_t stride);
+LL_INTERNAL ll_status ll_wjob_default_metadata(write_job *job);
+LL_INTERNAL void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job,
+                                    size_t metadata_size);
+/* Column col of a layer's orders k < kmax into stage[row * m + k] (or
+ * clear them). */
+LL_INTERNAL void ll_wjob_stage_column(const ll_layer *l, size_t col, size_t kmax, double *stage,
+                                      int clear);
+
+/* The stored value of channel c (Y, R, B of colour files) from one basis's
+ * staged columns: set[L * per_layer + k] is layer L's order k at the row;
+ * mu_o the row's |mu|, f the column's surface factor of order k. */
+static inline double ll_wjob_staged_value(size_t n_channels, size_t c, const double *set,
+                                          size_t per_layer, size_t k, double mu_o, double f)
+{
+    if (n_channels == 1 || c == 1)
+        return set[k] * mu_o / f;
+    if (c == 2)
+        return set[2 * per_layer + k] * mu_o / f;
+    return LL_BSDF_Y_FROM_R * (set[k] * mu_o / f) +
+           LL_BSDF_Y_FROM_G * (set[per_layer + k] * mu_o / f) +
+           LL_BSDF_Y_FROM_B * (set[2 * per_layer + k] * mu_o / f);
+}
+
+#endif /* LL_BSDF_WRITE_JOB_H */

@@ -1,0 +1,672 @@
+/*
+ * The streaming writer of textured files (ll_bsdf_writer_*, ll_bsdf_write.h):
+ * bases arrive one at a time, and the file's coefficient block interleaves
+ * them (pair after pair, [channel][basis][k]), with every pair's series as
+ * long as the longest over channels and bases (bsdf_write.c's rule). The
+ * final lengths are known only when the last basis has been seen, so each
+ * basis goes to a spill file as it arrives, and commit writes the file
+ * from the spill:
+ *
+ *  - add_basis: the basis's series lengths join the running maxima
+ *    (length[], nn * nn); its CDF (which depends on its own a_0 only:
+ *    a pair whose final length is 0 has a_0 = 0 in every basis) and, for
+ *    each pair, its stored floats up to the pair's extent E (one past the
+ *    last order that stores anything, over the channels: beyond it every
+ *    coefficient is 0, and a final length never exceeds the largest E) go
+ *    to the spill: [CDF nn*nn floats][E nn*nn u32][pairs in table order:
+ *    channel-major, E floats per channel]. The values are the floats the
+ *    file will hold, computed by the same expression as bsdf_write.c's.
+ *  - commit: offsets from the final lengths, then the file in order, the
+ *    interleaved parts read back in chunks of at most LL_WRITER_CHUNK
+ *    floats (per column of pairs: every basis's E of that column, then the
+ *    rows that fit), padding with zeros from E to the final length.
+ *
+ * Memory: the tables of nn * nn entries (as the in-memory writer), one
+ * basis's staging while it is added, the chunk, and per basis its spill
+ * offset and one column's extents (4 nn + 16 bytes): never a layer per
+ * basis. The spill lives beside the output (same file system, and the
+ * output's size is the spill's bound) and is unlinked as soon as it is
+ * created, so no path ever names it: whatever happens to the process, the
+ * space returns when the descriptor closes. The output itself is the
+ * atomic writer's (bsdf_file_out.c).
+ */
+#include "storage/bsdf_write_job.h"
+#include "layer/layer.h"
+#include "layerlab/ll_bsdf_write.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Floats read back at once at commit (4 MiB). */
+#define LL_WRITER_CHUNK ((size_t)1 << 20)
+/* Spill bytes buffered before a write. */
+#define LL_WRITER_SPILL_BUFFER ((size_t)1 << 20)
+
+static const char *const fn_open = "ll_bsdf_writer_open";
+static const char *const fn_add = "ll_bsdf_writer_add_basis";
+static const char *const fn_commit = "ll_bsdf_writer_commit";
+
+struct ll_bsdf_writer {
+    char *path;
+    write_job job;               /* lengths, nodes, options, parameters   */
+    size_t *counts;              /* copies of the parameters              */
+    double *positions;
+    char *metadata_copy;
+    size_t added;                /* bases added so far                     */
+    int failed;                  /* an add failed: only abort is left      */
+    int fd;                      /* the spill (unlinked), -1 before        */
+    unsigned long long *basis_at;/* [n_bases] spill offset of each basis   */
+    unsigned long long spill_end;
+    unsigned char *buffer;       /* LL_WRITER_SPILL_BUFFER                 */
+    size_t buffered;
+    /* one basis's scratch, n * n unless said */
+    uint32_t *len, *ext;
+    double *tail, *ref0, *stage, *values;
+    float *row_cdf;              /* nn * nn                                */
+    ll_layer *first;             /* basis 0's layer 0 (a clone): the shape */
+};
+
+/* ------------------------------------------------------------- the spill */
+
+static ll_status spill_io_error(const ll_bsdf_writer *w, const char *what, int err)
+{
+    return ll_fail(LL_ERROR_IO, "%s: \"%s\": %s the spill file beside it: %s", fn_add, w->path,
+                   what, strerror(err));
+}
+
+/* A file beside path, unlinked at once (mkstemp: O_EXCL, mode 0600). */
+static ll_status spill_open(ll_bsdf_writer *w)
+{
+    const char *slash = strrchr(w->path, '/');
+    size_t dir = slash ? (size_t)(slash - w->path) + 1 : 0, name = strlen(w->path) - dir;
+    char *temp = ll_malloc(dir + name + 16);
+    int err;
+    if (!temp)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+    memcpy(temp, w->path, dir);
+    temp[dir] = '.';
+    memcpy(temp + dir + 1, w->path + dir, name);
+    memcpy(temp + dir + 1 + name, ".spill.XXXXXX", 14);
+    w->fd = mkstemp(temp);
+    err = errno;
+    if (w->fd >= 0)
+        (void)unlink(temp);
+    ll_free(temp);
+    if (w->fd < 0)
+        return ll_fail(LL_ERROR_IO, "%s: \"%s\": cannot create a spill file beside it: %s",
+                       fn_open, w->path, strerror(err));
+    return LL_OK;
+}
+
+static ll_status spill_flush(ll_bsdf_writer *w)
+{
+    size_t done = 0;
+    while (done < w->buffered) {
+        ssize_t k = write(w->fd, w->buffer + done, w->buffered - done);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return spill_io_error(w, "writing", k < 0 ? errno : EIO);
+        done += (size_t)k;
+    }
+    w->spill_end += w->buffered;
+    w->buffered = 0;
+    return LL_OK;
+}
+
+static ll_status spill_put(ll_bsdf_writer *w, const void *data, size_t size)
+{
+    const unsigned char *p = data;
+    while (size > 0) {
+        size_t room = LL_WRITER_SPILL_BUFFER - w->buffered, n = size < room ? size : room;
+        memcpy(w->buffer + w->buffered, p, n);
+        w->buffered += n;
+        p += n;
+        size -= n;
+        if (w->buffered == LL_WRITER_SPILL_BUFFER) {
+            ll_status s = spill_flush(w);
+            if (s != LL_OK)
+                return s;
+        }
+    }
+    return LL_OK;
+}
+
+static ll_status spill_read(const ll_bsdf_writer *w, unsigned long long at, void *data,
+                            size_t size)
+{
+    unsigned char *p = data;
+    while (size > 0) {
+        ssize_t k = pread(w->fd, p, size, (off_t)at);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return ll_fail(LL_ERROR_IO, "%s: \"%s\": reading the spill file beside it: %s",
+                           fn_commit, w->path, k < 0 ? strerror(errno) : "it is shorter");
+        p += k;
+        at += (unsigned long long)k;
+        size -= (size_t)k;
+    }
+    return LL_OK;
+}
+
+/* --------------------------------------------------------------- open */
+
+static void writer_free(ll_bsdf_writer *w)
+{
+    if (w->fd >= 0)
+        close(w->fd);
+    ll_layer_destroy(w->first);
+    ll_free(w->path);
+    ll_free(w->counts);
+    ll_free(w->positions);
+    ll_free(w->metadata_copy);
+    ll_free(w->basis_at);
+    ll_free(w->buffer);
+    ll_free(w->len);
+    ll_free(w->ext);
+    ll_free(w->tail);
+    ll_free(w->ref0);
+    ll_free(w->stage);
+    ll_free(w->values);
+    ll_free(w->row_cdf);
+    ll_free(w->job.nodes);
+    ll_free(w->job.length);
+    ll_free(w->job.offset);
+    ll_free(w->job.metadata);
+    ll_free(w);
+}
+
+static ll_status copy_parameters(ll_bsdf_writer *w, size_t n_parameters, const size_t *counts,
+                                 const double *positions)
+{
+    size_t p, values = 0;
+    w->job.n_parameters = n_parameters;
+    w->job.param_counts = counts;
+    w->job.param_positions = positions;
+    if (n_parameters > 0 && counts)
+        for (p = 0; p < n_parameters; ++p)
+            if (!ll_size_add(values, counts[p], &values))
+                values = SIZE_MAX;
+    /* Checked on the caller's arrays (counts first), then kept as copies. */
+    if (n_parameters > 0 && counts && values != SIZE_MAX && positions) {
+        ll_status s = ll_wjob_check_parameters(&w->job);
+        if (s != LL_OK)
+            return s;
+    } else if (n_parameters > 0) {
+        return ll_wjob_check_parameters(&w->job); /* names the problem */
+    } else {
+        w->job.n_bases = 1;
+    }
+    if (n_parameters > 0) {
+        w->counts = ll_alloc_array(n_parameters, sizeof *w->counts);
+        w->positions = ll_alloc_array(w->job.n_parameter_values, sizeof *w->positions);
+        if (!w->counts || !w->positions)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        memcpy(w->counts, counts, n_parameters * sizeof *counts);
+        memcpy(w->positions, positions, w->job.n_parameter_values * sizeof *positions);
+    }
+    w->job.param_counts = w->counts;
+    w->job.param_positions = w->positions;
+    return LL_OK;
+}
+
+ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_parameters,
+                              const size_t *param_counts, const double *param_positions,
+                              const ll_bsdf_write_options *opts, ll_bsdf_writer **out)
+{
+    ll_bsdf_writer *w = NULL;
+    ll_status s;
+    size_t len;
+    if (!out)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out is NULL", fn_open);
+    *out = NULL;
+    if (!path || !*path)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn_open);
+    if (n_channels != 1 && n_channels != 3)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", fn_open,
+                       n_channels);
+    w = ll_calloc(1, sizeof *w);
+    if (!w)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+    w->fd = -1;
+    w->job.fn = fn_open;
+    w->job.n_channels = n_channels;
+    len = strlen(path);
+    w->path = ll_malloc(len + 1);
+    if (!w->path) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        goto fail;
+    }
+    memcpy(w->path, path, len + 1);
+    if ((s = ll_wjob_read_options(&w->job, opts)) != LL_OK ||
+        (s = copy_parameters(w, n_parameters, param_counts, param_positions)) != LL_OK)
+        goto fail;
+    if (w->job.opts.metadata) {
+        size_t m = strlen(w->job.opts.metadata);
+        w->metadata_copy = ll_malloc(m + 1);
+        if (!w->metadata_copy) {
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+            goto fail;
+        }
+        memcpy(w->metadata_copy, w->job.opts.metadata, m + 1);
+        w->job.opts.metadata = w->metadata_copy;
+    }
+    w->basis_at = ll_calloc_array(w->job.n_bases, sizeof *w->basis_at);
+    w->buffer = ll_malloc(LL_WRITER_SPILL_BUFFER);
+    if (!w->basis_at || !w->buffer) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        goto fail;
+    }
+    if ((s = spill_open(w)) != LL_OK)
+        goto fail;
+    *out = w;
+    return LL_OK;
+fail:
+    writer_free(w);
+    return s;
+}
+
+/* ----------------------------------------------------------- add_basis */
+
+/* The shape of the file, from the first basis's first layer. */
+static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
+{
+    write_job *job = &w->job;
+    size_t n = l->n, nn = n + 2, k, n2, nn2, per_layer;
+    ll_status s;
+    job->n = n;
+    job->h = n / 2;
+    job->m = l->m;
+    job->nn = nn;
+    if (nn > UINT32_MAX / 2)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", fn_add, n);
+    if (!ll_size_mul(n, n, &n2) || !ll_size_mul(nn, nn, &nn2) ||
+        !ll_size_mul(n, l->m, &per_layer) || !ll_size_mul(per_layer, job->n_channels, &per_layer))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", fn_add);
+    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
+    job->length = ll_calloc_array(nn2, sizeof *job->length);
+    job->offset = ll_alloc_array(nn2, sizeof *job->offset);
+    w->len = ll_alloc_array(n2, sizeof *w->len);
+    w->ext = ll_alloc_array(nn2, sizeof *w->ext);
+    w->tail = ll_alloc_array(n2, sizeof *w->tail);
+    w->ref0 = ll_alloc_array(n2, sizeof *w->ref0);
+    w->stage = ll_calloc_array(per_layer, sizeof *w->stage);
+    w->values = ll_alloc_array(nn, sizeof *w->values);
+    w->row_cdf = ll_alloc_array(nn2, sizeof *w->row_cdf);
+    if (!job->nodes || !job->length || !job->offset || !w->len || !w->ext || !w->tail ||
+        !w->ref0 || !w->stage || !w->values || !w->row_cdf)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
+    for (k = 0; k < nn; ++k) {
+        size_t li = layer_index(k, job->h);
+        job->nodes[k] = li == (size_t)-1 ? 0.0f : (float)l->nodes[li];
+    }
+    s = ll_layer_clone(l, &w->first);
+    return s;
+}
+
+/* Extent of every file pair of this basis into w->ext (i * nn + o): one
+ * past the last order that stores an entry there, over the channels. */
+static void basis_extents(ll_bsdf_writer *w, const ll_layer *const *layers)
+{
+    const write_job *job = &w->job;
+    size_t n = job->n, h = job->h, nn = job->nn, c, k, col, j;
+    int half;
+    memset(w->len, 0, n * n * sizeof *w->len); /* (reused: col * n + row) */
+    for (c = 0; c < job->n_channels; ++c)
+        for (k = 0; k < job->m; ++k) {
+            const ll_order *o = layers[c]->orders[k];
+            if (!o)
+                continue;
+            for (col = 0; col < n; ++col)
+                for (half = 0; half < 2; ++half) {
+                    const ll_segment *sg = &o->seg[2 * col + (size_t)half];
+                    for (j = 0; j < sg->len; ++j) {
+                        size_t row = (size_t)half * h + sg->lo + j;
+                        w->len[col * n + row] = (uint32_t)(k + 1);
+                    }
+                }
+        }
+    for (j = 0; j < nn; ++j)
+        for (k = 0; k < nn; ++k) {
+            size_t li = layer_index(j, h), lo = layer_index(k, h);
+            w->ext[j * nn + k] =
+                li == (size_t)-1 || lo == (size_t)-1 ? 0 : w->len[li * n + lo];
+        }
+}
+
+/* The basis's CDF, as bsdf_write.c's compute_cdf for one basis. */
+static ll_status basis_cdf(ll_bsdf_writer *w)
+{
+    write_job *job = &w->job;
+    size_t nn = job->nn, i, o;
+    for (i = 0; i < nn; ++i) {
+        size_t li = layer_index(i, job->h);
+        for (o = 0; o < nn; ++o) {
+            size_t lo = layer_index(o, job->h);
+            /* A pair of final length 0 has a_0 = 0 here too (its M_0 is 0
+             * in every layer): the value bsdf_write.c reads as 0. */
+            w->values[o] = li == (size_t)-1 || lo == (size_t)-1
+                               ? 0.0
+                               : (double)(float)ll_wjob_stored_coeff(job, 0, 0, o, i, 0);
+        }
+        ll_wjob_integrate_row(job->nodes, w->values, nn, w->row_cdf + i * nn, 1);
+    }
+    return spill_put(w, w->row_cdf, nn * nn * sizeof *w->row_cdf);
+}
+
+/* The basis's stored floats, pair after pair, up to each pair's extent. */
+static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
+{
+    write_job *job = &w->job;
+    size_t nn = job->nn, m = job->m, per_layer = job->n * job->m, i, o, c, k, L;
+    ll_status s = spill_put(w, w->ext, nn * nn * sizeof *w->ext);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        size_t li = layer_index(i, job->h), kmax = 0;
+        double factor[2];
+        if (li == (size_t)-1)
+            continue;
+        for (o = 0; o < nn; ++o)
+            if (w->ext[i * nn + o] > kmax)
+                kmax = w->ext[i * nn + o];
+        for (L = 0; L < job->n_channels; ++L)
+            ll_wjob_stage_column(layers[L], li, kmax, w->stage + L * per_layer, 0);
+        factor[0] = ll_layer_surface_factor(layers[0], li, 0);
+        factor[1] = ll_layer_surface_factor(layers[0], li, 1);
+        for (o = 0; o < nn && s == LL_OK; ++o) {
+            size_t e = w->ext[i * nn + o], lo = layer_index(o, job->h);
+            double mu_o;
+            if (e == 0)
+                continue;
+            mu_o = fabs(layers[0]->nodes[lo]);
+            for (c = 0; c < job->n_channels && s == LL_OK; ++c)
+                for (k = 0; k < e && s == LL_OK; ++k) {
+                    float f = (float)ll_wjob_staged_value(job->n_channels, c,
+                                                          w->stage + lo * m, per_layer, k,
+                                                          mu_o, factor[k > 0]);
+                    s = spill_put(w, &f, sizeof f);
+                }
+        }
+        for (L = 0; L < job->n_channels; ++L)
+            ll_wjob_stage_column(layers[L], li, kmax, w->stage + L * per_layer, 1);
+    }
+    return s;
+}
+
+ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *layers)
+{
+    write_job *job;
+    size_t c, i, o;
+    ll_status s = LL_OK;
+    if (!w)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", fn_add);
+    job = &w->job;
+    job->fn = fn_add;
+    if (w->failed)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: an earlier call failed; only ll_bsdf_writer_abort is left", fn_add);
+    if (w->added == job->n_bases) {
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: all %zu bases are added already", fn_add,
+                    job->n_bases);
+        goto fail;
+    }
+    if (!layers) {
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", fn_add);
+        goto fail;
+    }
+    for (c = 0; c < job->n_channels; ++c)
+        if (!layers[c]) {
+            s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers[%zu] of basis %zu is NULL",
+                        fn_add, c, w->added);
+            goto fail;
+        }
+    if (!w->first && (s = take_shape(w, layers[0])) != LL_OK)
+        goto fail;
+    for (c = 0; c < job->n_channels; ++c)
+        if ((s = ll_layer_check_compatible(w->first, layers[c], fn_add)) != LL_OK)
+            goto fail;
+    /* The lengths: each layer's, joined into the running maxima. */
+    for (c = 0; c < job->n_channels; ++c) {
+        if ((s = ll_wjob_layer_lengths(job, layers[c], w->len, w->tail, w->ref0)) != LL_OK)
+            goto fail;
+        for (i = 0; i < job->nn; ++i)
+            for (o = 0; o < job->nn; ++o) {
+                size_t li = layer_index(i, job->h), lo = layer_index(o, job->h);
+                uint32_t *dst = &job->length[i * job->nn + o];
+                if (li != (size_t)-1 && lo != (size_t)-1 && w->len[li * job->n + lo] > *dst)
+                    *dst = w->len[li * job->n + lo];
+            }
+    }
+    job->layers = layers;
+    w->basis_at[w->added] = w->spill_end + w->buffered;
+    basis_extents(w, layers);
+    if ((s = basis_cdf(w)) != LL_OK || (s = basis_values(w, layers)) != LL_OK)
+        goto fail;
+    job->layers = NULL;
+    w->added++;
+    return LL_OK;
+fail:
+    job->layers = NULL;
+    w->failed = 1;
+    return s;
+}
+
+/* ---------------------------------------------------------------- commit */
+
+/* The CDF table, [(i * nn + o) * n_bases + b], from each basis's block. */
+static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
+{
+    write_job *job = &w->job;
+    size_t nb = job->n_bases, pairs = job->nn * job->nn, per = LL_WRITER_CHUNK / nb, at, b, k;
+    ll_status s = LL_OK;
+    if (per == 0)
+        per = 1;
+    ll_watch_stage(job->watch, "writing", 0.0, 0.1, (pairs + per - 1) / per);
+    for (at = 0; at < pairs && s == LL_OK; at += per) {
+        size_t count = pairs - at < per ? pairs - at : per;
+        if (ll_watch_poll(job->watch))
+            return write_cancelled(job);
+        for (b = 0; b < nb && s == LL_OK; ++b)
+            s = spill_read(w, w->basis_at[b] + at * sizeof(float), chunk + b * count,
+                           count * sizeof(float));
+        for (k = 0; k < count && s == LL_OK; ++k)
+            for (b = 0; b < nb; ++b)
+                ll_bsdf_out_f32(out, chunk[b * count + k]);
+        ll_watch_advance(job->watch, 1);
+    }
+    return s;
+}
+
+static ll_status put_value(ll_bsdf_out *out, float v, size_t k, size_t o, size_t i)
+{
+    if (!(fabsf(v) <= FLT_MAX))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: coefficient %zu of node pair (%zu, %zu) is %g, beyond float range",
+                       fn_commit, k, o, i, (double)v);
+    ll_bsdf_out_f32(out, v);
+    return LL_OK;
+}
+
+/* Column i of the coefficient block: rows [o0, o1) at a time, as many as
+ * fit in the chunk. ext: [n_bases * nn] this column's extents; cursor:
+ * [n_bases] where each basis's data of the next row starts in the spill;
+ * pos: [n_bases] scratch. */
+static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const uint32_t *ext,
+                            unsigned long long *cursor, float *chunk, size_t *pos)
+{
+    const write_job *job = &w->job;
+    size_t nn = job->nn, nb = job->n_bases, nch = job->n_channels, o0 = 0, o1, b, o, c, k;
+    ll_status s = LL_OK;
+    while (o0 < nn && s == LL_OK) {
+        size_t used = 0, at = 0;
+        for (o1 = o0; o1 < nn; ++o1) {
+            size_t row = 0;
+            for (b = 0; b < nb; ++b)
+                row += ext[b * nn + o1] * nch;
+            if (o1 > o0 && used + row > LL_WRITER_CHUNK)
+                break;
+            used += row;
+        }
+        if (used > LL_WRITER_CHUNK) {
+            /* One row of all bases exceeds the chunk (long series times
+             * many bases): each (channel, basis) series read by itself. */
+            size_t L = job->length[i * nn + o0];
+            for (c = 0; c < nch && s == LL_OK; ++c)
+                for (b = 0; b < nb && s == LL_OK; ++b) {
+                    size_t e = ext[b * nn + o0], got = e < L ? e : L;
+                    s = spill_read(w, cursor[b] + c * e * sizeof(float), chunk,
+                                   got * sizeof(float));
+                    for (k = 0; k < L && s == LL_OK; ++k)
+                        s = put_value(out, k < got ? chunk[k] : 0.0f, k, o0, i);
+                }
+            for (b = 0; b < nb; ++b)
+                cursor[b] += ext[b * nn + o0] * nch * sizeof(float);
+            o0 = o1;
+            continue;
+        }
+        for (b = 0; b < nb && s == LL_OK; ++b) {
+            size_t floats = 0;
+            for (o = o0; o < o1; ++o)
+                floats += ext[b * nn + o] * nch;
+            pos[b] = at;
+            s = spill_read(w, cursor[b], chunk + at, floats * sizeof(float));
+            cursor[b] += floats * sizeof(float);
+            at += floats;
+        }
+        for (o = o0; o < o1 && s == LL_OK; ++o) {
+            size_t L = job->length[i * nn + o];
+            for (c = 0; c < nch && L > 0 && s == LL_OK; ++c)
+                for (b = 0; b < nb && s == LL_OK; ++b) {
+                    size_t e = ext[b * nn + o];
+                    const float *series = chunk + pos[b] + c * e;
+                    for (k = 0; k < L && s == LL_OK; ++k)
+                        s = put_value(out, k < e ? series[k] : 0.0f, k, o, i);
+                }
+            for (b = 0; b < nb; ++b)
+                pos[b] += ext[b * nn + o] * nch;
+        }
+        o0 = o1;
+    }
+    return s;
+}
+
+static ll_status put_coefficients(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
+{
+    write_job *job = &w->job;
+    size_t nn = job->nn, nb = job->n_bases, i, b;
+    uint32_t *ext = ll_alloc_array(nb * nn, sizeof *ext);
+    unsigned long long *cursor = ll_alloc_array(nb, sizeof *cursor);
+    size_t *pos = ll_alloc_array(nb, sizeof *pos);
+    ll_status s = LL_OK;
+    if (!ext || !cursor || !pos) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+        goto done;
+    }
+    for (b = 0; b < nb; ++b)
+        cursor[b] = w->basis_at[b] + nn * nn * (sizeof(float) + sizeof(uint32_t));
+    ll_watch_stage(job->watch, "writing", 0.15, 0.85, nn);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch)) {
+            s = write_cancelled(job);
+            break;
+        }
+        if (layer_index(i, job->h) == (size_t)-1)
+            continue; /* the mu = 0 nodes hold no coefficients */
+        for (b = 0; b < nb && s == LL_OK; ++b)
+            s = spill_read(w, w->basis_at[b] + nn * nn * sizeof(float) + i * nn * sizeof(uint32_t),
+                           ext + b * nn, nn * sizeof(uint32_t));
+        if (s == LL_OK)
+            s = put_column(w, out, i, ext, cursor, chunk, pos);
+    }
+done:
+    ll_free(ext);
+    ll_free(cursor);
+    ll_free(pos);
+    return s;
+}
+
+static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
+{
+    write_job *job = &w->job;
+    ll_watch watch;
+    ll_bsdf_out *out = NULL;
+    float *chunk = NULL;
+    const char *metadata;
+    size_t k, metadata_size;
+    ll_status s;
+
+    job->fn = fn_commit;
+    job->watch = &watch;
+    if ((s = ll_watch_begin(&watch, monitor, fn_commit)) != LL_OK)
+        return s;
+    if (w->failed)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: an earlier call failed; only ll_bsdf_writer_abort is left",
+                       fn_commit);
+    if (w->added != job->n_bases)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu of the %zu bases were added",
+                       fn_commit, w->added, job->n_bases);
+    if ((s = spill_flush(w)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK)
+        return s;
+    if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
+        return s;
+    metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
+    metadata_size = strlen(metadata);
+    chunk = ll_alloc_array(LL_WRITER_CHUNK, sizeof *chunk);
+    if (!chunk)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
+        goto done;
+    ll_wjob_put_header(out, job, metadata_size);
+    for (k = 0; k < job->nn; ++k)
+        ll_bsdf_out_f32(out, job->nodes[k]);
+    for (k = 0; k < job->n_parameters; ++k)
+        ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
+    for (k = 0; k < job->n_parameter_values; ++k)
+        ll_bsdf_out_f32(out, (float)job->param_positions[k]);
+    s = put_cdf(w, out, chunk);
+    ll_watch_stage(job->watch, "writing", 0.1, 0.05, job->nn);
+    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
+        if (k % job->nn == 0) {
+            ll_watch_advance(job->watch, 1);
+            if (ll_watch_poll(job->watch))
+                s = write_cancelled(job);
+        }
+        ll_bsdf_out_u32(out, job->offset[k]);
+        ll_bsdf_out_u32(out, job->length[k]);
+    }
+    if (s == LL_OK)
+        s = put_coefficients(w, out, chunk);
+    s = ll_watch_finish(job->watch, s, fn_commit);
+    if (s != LL_OK) {
+        ll_bsdf_out_abort(out);
+        goto done;
+    }
+    ll_bsdf_out_bytes(out, metadata, metadata_size);
+    s = ll_bsdf_out_commit(out);
+done:
+    ll_free(chunk);
+    return s;
+}
+
+ll_status ll_bsdf_writer_commit(ll_bsdf_writer *w, const ll_monitor *monitor)
+{
+    ll_status s;
+    if (!w)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", fn_commit);
+    s = commit_file(w, monitor);
+    writer_free(w);
+    return s;
+}
+
+void ll_bsdf_writer_abort(ll_bsdf_writer *w)
+{
+    if (w)
+        writer_free(w);
+}
