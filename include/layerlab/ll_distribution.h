@@ -92,6 +92,21 @@ LL_API ll_status ll_material_build_distributed(const ll_material *material,
                                                const ll_distribution *dist,
                                                const char *out_path);
 
+/* A layer as bytes, to move built layers between processes (llbuild-mpi
+ * sends each basis of a textured material to rank 0 this way): the stored
+ * form copied exactly, so the unpacked layer is the same layer bit for bit
+ * and a file written from it the same bytes. The bytes are for the same
+ * build of the library on the same architecture (native byte order).
+ * ll_layer_pack_size: the bytes that ll_layer_pack writes (0 for NULL).
+ * ll_layer_pack: LL_ERROR_INVALID_ARGUMENT for NULL or a buffer smaller
+ * than that. ll_layer_unpack checks the bytes before allocating what they
+ * claim (LL_ERROR_FORMAT when they are not a whole packed layer, with what
+ * is wrong in the message) and *out receives a new layer (NULL on failure;
+ * free it with ll_layer_destroy). */
+LL_API size_t ll_layer_pack_size(const ll_layer *layer);
+LL_API ll_status ll_layer_pack(const ll_layer *layer, void *buffer, size_t size);
+LL_API ll_status ll_layer_unpack(const void *buffer, size_t size, ll_layer **out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -6,9 +6,10 @@
  *
  * The same options, messages, summary and exit codes as llbuild, whose
  * source it includes for them (tools/llbuild/llbuild.c without its main),
- * so the two cannot drift apart. The build is
+ * so the two cannot drift apart. One material is built by
  * ll_material_build_layers_distributed over an MPI ll_distribution
- * (mpi_hook.c); rank 0 prints, shows the progress and writes the file
+ * (mpi_hook.c: its Fourier orders split between the ranks), a textured one
+ * basis by basis across the ranks (textured.c); rank 0 prints, shows the progress and writes the file
  * with ll_material_write, byte for byte llbuild's for every N. Every
  * outcome is agreed between the ranks, so all exit with the same code; a
  * dead rank makes mpirun end the others, and no file is left (rank 0
@@ -21,6 +22,7 @@
 #pragma GCC diagnostic warning "-Wunused-function"
 
 #include "mpi_hook.h"
+#include "textured.h"
 
 #include <mpi.h>
 
@@ -63,7 +65,7 @@ int main(int argc, char **argv)
     char message[MESSAGE_SIZE];
     double start = now_seconds(), sent = 0.0;
     ll_status s;
-    int code;
+    int code, textured;
 
     job.bytes_sent = 0.0;
     job.calls = 0;
@@ -82,7 +84,7 @@ int main(int argc, char **argv)
     if (a.ior_dir && setenv("LAYERLAB_IOR_DIR", a.ior_dir, 1) != 0)
         return finish(bad_usage("cannot set LAYERLAB_IOR_DIR", NULL));
     /* Every rank reads the material (across machines, each its own copy). */
-    s = mpi_agree(&job, ll_material_parse_file(a.input, &m), message, sizeof message);
+    s = mpi_agree(&job, ll_material_parse_file(a.input, &m), NULL, message, sizeof message);
     if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", message);
         ll_material_destroy(m);
@@ -95,6 +97,7 @@ int main(int argc, char **argv)
     o.error_goal = a.error;
     o.cancel = &cancel_flag;
     o.max_memory_bytes = a.max_memory;
+    textured = ll_material_axis_count(m) > 0;
     if (a.dry_run) {
         if (job.rank == 0) {
             code = print_resolution(m, &o);
@@ -112,16 +115,27 @@ int main(int argc, char **argv)
     o.progress_user = &bar;
     bar.scale = 0.97;
     mpi_distribution(&job, &dist);
-    s = ll_material_build_layers_distributed(m, &o, NULL, &dist, layers, &n_channels, NULL);
-    snprintf(message, sizeof message, "%s", ll_last_error_message());
+    if (textured) {
+        /* Bases across the ranks (textured.c); the bar shows the bases
+         * written, not each basis's own progress. */
+        o.progress = NULL;
+        bar.scale = 1.0;
+        s = textured_build(&job, m, &o, a.output, &cancel_flag,
+                           job.rank == 0 ? ll_progress_update : NULL, &bar, message,
+                           sizeof message);
+    } else {
+        s = ll_material_build_layers_distributed(m, &o, NULL, &dist, layers, &n_channels,
+                                                 NULL);
+        snprintf(message, sizeof message, "%s", ll_last_error_message());
+    }
     /* The bytes all ranks sent, for the summary. */
     MPI_Reduce(&job.bytes_sent, &sent, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-    if (s == LL_OK) {
+    if (s == LL_OK && !textured) {
         bar.scale = 1.0;
         ll_progress_update(0.97, "writing", &bar);
         if (job.rank == 0)
             s = ll_material_write(m, &o, layers, n_channels, a.output);
-        s = mpi_agree(&job, s, message, sizeof message);
+        s = mpi_agree(&job, s, NULL, message, sizeof message);
     }
     if (s == LL_OK) {
         signal(SIGINT, SIG_DFL);
@@ -139,7 +153,10 @@ int main(int argc, char **argv)
                    : exit_code_for(s);
     } else {
         if (!a.quiet && job.rank == 0) {
-            print_summary(&a, layers, n_channels, now_seconds() - start);
+            if (textured)
+                print_textured_summary(&a, m, now_seconds() - start);
+            else
+                print_summary(&a, layers, n_channels, now_seconds() - start);
             printf("ranks        %d (MPI): %.1f MiB exchanged in %lu collective calls\n",
                    job.size, sent / 1048576.0, job.calls);
         }

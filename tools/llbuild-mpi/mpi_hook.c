@@ -107,8 +107,10 @@ void mpi_distribution(mpi_job *job, ll_distribution *out)
     *out = d;
 }
 
-ll_status mpi_agree(const mpi_job *job, ll_status local, char *message, size_t size)
+ll_status mpi_agree(const mpi_job *job, ll_status local, const char *local_text, char *message,
+                    size_t size)
 {
+    const char *mine_text = local_text ? local_text : ll_last_error_message();
     int *all = malloc((size_t)job->size * sizeof *all), r, decider = -1, mine = (int)local;
     ll_status outcome = LL_OK;
     if (!all) {
@@ -132,7 +134,7 @@ ll_status mpi_agree(const mpi_job *job, ll_status local, char *message, size_t s
     if (decider != 0 && (job->rank == decider || job->rank == 0)) {
         char text[MESSAGE_BYTES];
         if (job->rank == decider) {
-            snprintf(text, sizeof text, "%s", ll_last_error_message());
+            snprintf(text, sizeof text, "%s", mine_text);
             MPI_Send(text, MESSAGE_BYTES, MPI_CHAR, 0, 0, MPI_COMM_WORLD);
         } else {
             MPI_Recv(text, MESSAGE_BYTES, MPI_CHAR, decider, 0, MPI_COMM_WORLD,
@@ -142,7 +144,7 @@ ll_status mpi_agree(const mpi_job *job, ll_status local, char *message, size_t s
                 snprintf(message, size, "rank %d of %d: %s", decider, job->size, text);
         }
     } else if (job->rank == 0 && message) {
-        snprintf(message, size, "%s", ll_last_error_message());
+        snprintf(message, size, "%s", mine_text);
     }
     return outcome;
 }

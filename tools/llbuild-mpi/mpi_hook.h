@@ -18,10 +18,11 @@ typedef struct mpi_job {
 void mpi_distribution(mpi_job *job, ll_distribution *out);
 
 /* Every rank's status: the outcome (the lowest failing rank's, a real
- * failure before a cancel). On rank 0, *message (if non-NULL on entry to
- * be filled, up to size bytes) receives the failing rank's
- * ll_last_error_message(), prefixed "rank R of N: " when R != 0.
+ * failure before a cancel). On rank 0, message (nullable, size bytes)
+ * receives the failing rank's text, prefixed "rank R of N: " when R != 0:
+ * its local_text, or when that is NULL its ll_last_error_message().
  * Collective. */
-ll_status mpi_agree(const mpi_job *job, ll_status local, char *message, size_t size);
+ll_status mpi_agree(const mpi_job *job, ll_status local, const char *local_text, char *message,
+                    size_t size);
 
 #endif
