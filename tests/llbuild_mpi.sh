@@ -55,6 +55,25 @@ for case in "medium --rgb" "medium --mono" "glass --mono"; do
         fi
     done
 done
+# A textured material (bases across the ranks, shared words, the streaming
+# writer): byte-identical too, and no spill left beside the output.
+cat >"$tmp/tex.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=[0.1..0.4:3]
+medium      albedo=0.8,0.6,0.4 g=0.5 tau=0.5
+conductor   eta=Au alpha=[0.1 0.2]
+set nodes=30 orders=40
+LAYERS
+"$llbuild" -q --threads 1 "$tmp/tex.layers" -o "$tmp/tex.ref.bsdf" || bad "llbuild textured failed"
+for n in 1 2 3 4; do
+    if run "$n" -q --threads 1 "$tmp/tex.layers" -o "$tmp/tex.$n.bsdf" >"$tmp/out" 2>"$tmp/err"
+    then
+        if cmp -s "$tmp/tex.ref.bsdf" "$tmp/tex.$n.bsdf"; then ok; else
+            bad "textured on $n ranks: the file differs from llbuild's"; fi
+    else
+        bad "textured on $n ranks failed"; sed 's/^/  | /' "$tmp/err" | head -5
+    fi
+done
+[ "$(ls -A "$tmp" | grep -c '\.tmp$')" -eq 0 ] && ok || bad "a textured build left a temporary"
 # The summary is llbuild's, from rank 0 only.
 run 2 --threads 1 "$tmp/medium.layers" -o "$tmp/summary.bsdf" >"$tmp/out" 2>/dev/null
 if [ "$(grep -c '^resolution' "$tmp/out")" -eq 1 ] && grep -q '^ranks        2' "$tmp/out"; then
@@ -118,6 +137,39 @@ code=$?
 # (No rank is left behind either.)
 sleep 0.5
 pgrep -f "$tmp/long.layers" >/dev/null && bad "ranks still running after the interrupt" || ok
+
+# A textured build with a worker killed, and with an interrupt: no file and
+# no temporary (the writer's spill is unlinked once open; rank 0 aborts it).
+cat >"$tmp/longtex.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=[0.1..0.4:4]
+medium      albedo=0.9 g=0.8 tau=4
+conductor   eta=Au alpha=[0.1 0.2]
+set nodes=200 orders=300
+LAYERS
+start_tex() {
+    mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/longtex.layers" \
+        -o "$tmp/longtex.bsdf" >"$tmp/out" 2>"$tmp/err" &
+    launcher=$!
+    tries=0
+    while [ "$(pgrep -P "$launcher" | wc -l)" -lt 3 ] && [ $tries -lt 100 ]; do
+        sleep 0.1
+        tries=$((tries + 1))
+    done
+    sleep 2
+}
+start_tex
+victim=$(pgrep -P "$launcher" | sed -n 3p)
+[ -n "$victim" ] && kill -9 "$victim"
+wait "$launcher"
+code=$?
+[ "$code" -ne 0 ] && ok || bad "textured, a killed rank: mpirun exited 0"
+[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+    { bad "textured, a killed rank left:"; ls -A "$tmp"; }
+start_tex
+kill -INT "$launcher"
+wait "$launcher"
+[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+    { bad "textured, an interrupt left:"; ls -A "$tmp"; }
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -64,6 +64,7 @@ int main(int argc, char **argv)
     mpi_job job;
     char message[MESSAGE_SIZE];
     double start = now_seconds(), sent = 0.0;
+    unsigned long transfers = 0;
     ll_status s;
     int code, textured;
 
@@ -130,6 +131,7 @@ int main(int argc, char **argv)
     }
     /* The bytes all ranks sent, for the summary. */
     MPI_Reduce(&job.bytes_sent, &sent, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    MPI_Reduce(&job.calls, &transfers, 1, MPI_UNSIGNED_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
     if (s == LL_OK && !textured) {
         bar.scale = 1.0;
         ll_progress_update(0.97, "writing", &bar);
@@ -157,8 +159,8 @@ int main(int argc, char **argv)
                 print_textured_summary(&a, m, now_seconds() - start);
             else
                 print_summary(&a, layers, n_channels, now_seconds() - start);
-            printf("ranks        %d (MPI): %.1f MiB exchanged in %lu collective calls\n",
-                   job.size, sent / 1048576.0, job.calls);
+            printf("ranks        %d (MPI): %.1f MiB sent between them in %lu transfers\n",
+                   job.size, sent / 1048576.0, transfers);
         }
         code = 0;
     }

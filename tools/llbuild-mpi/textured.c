@@ -12,8 +12,9 @@
  * Rank 0 never blocks on the others: it polls (MPI_Iprobe) between and
  * inside its own bases (from the builder's monitor) and, when idle, every
  * millisecond, watching the cancel flag all the while. So when a worker
- * dies and mpirun sends SIGTERM, rank 0 aborts the writer, whose spill
- * beside the output is removed, before mpirun's SIGKILL.
+ * dies and mpirun sends SIGTERM, rank 0 aborts the writer at once (its
+ * spill is an unlinked file; no output or temporary is left) rather than
+ * wait for the others.
  *
  * Messages (tags): WORK (rank 0 -> worker: int64 basis, or -1 = stop);
  * RESULT (worker -> rank 0: int64 basis, status, byte count), then the
