@@ -391,6 +391,59 @@ static void out_of_memory_anywhere_is_agreed(void **state)
     ll_material_destroy(m);
 }
 
+/* A packed layer unpacks to the same layer (the same .bsdf bytes); every
+ * truncation and a damaged count are refused as LL_ERROR_FORMAT. */
+static void packed_layers_round_trip(void **state)
+{
+    char a[600], b[600];
+    ll_material *m = NULL;
+    ll_layer *layers[3], *copy[3] = { NULL, NULL, NULL };
+    size_t nch, c, size, cut;
+    unsigned char *bytes;
+    ll_build_options o = small_options(3);
+    (void)state;
+    assert_int_equal(ll_material_parse("dielectric eta=1.5 alpha=0.3\nmedium albedo=0.8 g=0.5 "
+                                       "tau=1\nconductor eta=Au alpha=0.2\nset nodes=16 "
+                                       "orders=12\n",
+                                       "pack.layers", &m),
+                     LL_OK);
+    assert_int_equal(ll_material_build_layers(m, &o, layers, &nch, NULL), LL_OK);
+    for (c = 0; c < nch; ++c) {
+        size = ll_layer_pack_size(layers[c]);
+        bytes = malloc(size);
+        assert_non_null(bytes);
+        assert_int_equal(ll_layer_pack(layers[c], bytes, size - 1), LL_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(ll_layer_pack(layers[c], bytes, size), LL_OK);
+        assert_int_equal(ll_layer_unpack(bytes, size, &copy[c]), LL_OK);
+        assert_int_equal(ll_layer_stored_count(copy[c]), ll_layer_stored_count(layers[c]));
+        for (cut = 0; cut < size; cut += 1 + cut / 7) {
+            ll_layer *bad = NULL;
+            assert_int_equal(ll_layer_unpack(bytes, cut, &bad), LL_ERROR_FORMAT);
+            assert_null(bad);
+        }
+        {
+            ll_layer *bad = NULL;
+            bytes[8] = 0xff; /* the node count: 255, odd */
+            assert_int_equal(ll_layer_unpack(bytes, size, &bad), LL_ERROR_FORMAT);
+            assert_null(bad);
+        }
+        free(bytes);
+    }
+    snprintf(a, sizeof a, "%s/pack.a.bsdf", ll_test_dir());
+    snprintf(b, sizeof b, "%s/pack.b.bsdf", ll_test_dir());
+    assert_int_equal(ll_material_write(m, NULL, layers, nch, a), LL_OK);
+    assert_int_equal(ll_material_write(m, NULL, copy, nch, b), LL_OK);
+    assert_same_file(a, b);
+    unlink(a);
+    unlink(b);
+    for (c = 0; c < 3; ++c) {
+        ll_layer_destroy(layers[c]);
+        ll_layer_destroy(copy[c]);
+    }
+    assert_int_equal(ll_layer_pack_size(NULL), 0);
+    ll_material_destroy(m);
+}
+
 static void bad_distributions_are_refused(void **state)
 {
     ll_distribution d = LL_DISTRIBUTION_INIT;
@@ -422,6 +475,7 @@ int main(void)
         cmocka_unit_test(one_rank_over_budget_fails_all),
         cmocka_unit_test(one_rank_cancelled_stops_all),
         cmocka_unit_test(out_of_memory_anywhere_is_agreed),
+        cmocka_unit_test(packed_layers_round_trip),
         cmocka_unit_test(bad_distributions_are_refused),
     };
     return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
