@@ -65,6 +65,15 @@ build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
 
 [ -x "$BIN/driver" ] || exit 1
 
+# The textured build against separate builds (bench/textured.c): its own
+# table, before the driver's; LL_BENCH_TEXTURED_RUNS (1..64, default 64)
+# separate builds, extrapolated to 64 when fewer.
+build textured bench/textured.c bench/child.c bench/metrics.c bench/bench_util.c
+if [ -x "$BIN/textured" ]; then
+    "$BIN/textured" "$BUILD/bin/llbuild" "$WORK" "${LL_BENCH_TEXTURED_RUNS:-64}" ||
+        echo "bench: textured failed" >&2
+fi
+
 COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ "$COMMIT" != unknown ] && [ -n "$(git status --porcelain -- src include 2>/dev/null)" ]; then
     COMMIT="$COMMIT+local-changes"

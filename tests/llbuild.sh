@@ -162,5 +162,23 @@ for sig in INT TERM; do
     contains "$tmp/slow.err" "interrupted; no file written" "SIG$sig message"
 done
 
+# --- a swept material: --dry-run names the axes, the bases and the file's
+# size; the build writes one textured file and says so; a bad sweep is bad
+# input with its position
+printf 'set nodes=12 orders=6\ndielectric name=coat eta=1.5 alpha=[0.1 0.2 0.3]\nconductor eta=2+3i alpha=[0.1..0.3:2]\n' \
+    >"$tmp/sweep.layers"
+expect 0 "--dry-run of a sweep" -- "$llbuild" --dry-run "$tmp/sweep.layers"
+contains "$tmp/out" "axis 0       coat.alpha: 3 values, 0.1 to 0.3" "--dry-run axis 0"
+contains "$tmp/out" "axis 1       1.alpha: 2 values, 0.1 to 0.3" "--dry-run axis 1"
+contains "$tmp/out" "bases        6 (one textured file)" "--dry-run bases"
+contains "$tmp/out" "file         about" "--dry-run file size"
+expect 0 "a textured build" -- "$llbuild" "$tmp/sweep.layers" -o "$tmp/sweep.bsdf"
+contains "$tmp/out" "bases        6 (textured file, 2 parameters)" "textured summary"
+contains "$tmp/err" "basis 6/6" "progress per basis"
+printf 'conductor eta=Au alpha=[0.3 0.2]\n' >"$tmp/badsweep.layers"
+expect 1 "a decreasing sweep" -- "$llbuild" "$tmp/badsweep.layers" -o "$tmp/x.bsdf"
+contains "$tmp/err" "badsweep.layers:1:29: alpha: the values of a sweep must be strictly increasing" \
+    "decreasing sweep message"
+
 echo "llbuild.sh: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -99,6 +99,11 @@ interrupt adding INT adding \
     'set nodes=800 orders=80\nmedium albedo=0.5 phase=isotropic tau=0.001\nmedium albedo=0.9 phase=isotropic tau=0.002\n'
 # Writing: 3000 nodes make a 125 MB file.
 interrupt writing TERM writing 'set nodes=3000 orders=1\ndiffuse albedo=0.5\n'
+# A swept material (a textured file): in the second basis's interface, and
+# in the streaming writer's commit at the end (2 bases of 2400 nodes).
+interrupt basis INT "basis 2/3: dielectric interface" \
+    'set nodes=800 orders=250\ndielectric eta=1.5 alpha=[0.05 0.06 0.07]\n'
+interrupt textured-writing TERM writing 'set nodes=2400 orders=1\ndiffuse albedo=[0.3 0.5]\n'
 
 echo "llbuild_signals.sh: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

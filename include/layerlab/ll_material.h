@@ -220,10 +220,11 @@ LL_API size_t ll_material_basis_count(const ll_material *material);
  * the options or `set` give it. Word layers are shared between bases: a
  * word whose resolved parameters (its own values and the indices above it)
  * are those of a word already built is not built again but taken from a
- * cache of word layers (bounded: LRU, at most a fixed number of entries,
- * docs/material-language.md "Sweeps" says how many), so an 8 x 8 coat x
- * base grid built in basis order builds 8 + 8 interfaces and 64 additions.
- * Memory: the cache, the quadrature and one basis's stack, whatever the
+ * cache of word layers (bounded: LRU over 64 entries kept in an unlinked
+ * scratch file from tmpfile(), the 4 most recently used also in memory;
+ * docs/material-language.md "Sweeps"), so an 8 x 8 coat x base grid built
+ * in basis order builds 8 + 8 interfaces and 64 additions. Memory: those
+ * few word layers, the quadrature and one basis's stack, whatever the
  * basis count. The budget of opts->max_memory_bytes applies to that peak
  * (ll_material_estimate). A builder is not thread-safe (one thread at a
  * time); several builders of one material may run in parallel.

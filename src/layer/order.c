@@ -47,6 +47,20 @@ fail:
     return NULL;
 }
 
+ll_status ll_order_from_runs(size_t n, const ll_segment *seg, const double *val,
+                             ll_order **out)
+{
+    size_t stored = seg[2 * n].off;
+    ll_order *o = order_alloc(n, stored);
+    *out = NULL;
+    if (!o)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory reading a layer back");
+    memcpy(o->seg, seg, (2 * n + 1) * sizeof *seg);
+    memcpy(o->val, val, stored * sizeof *val);
+    *out = o;
+    return LL_OK;
+}
+
 /* The run of x[0..count) (stride 1) outside which |x| <= drop. */
 static void find_run(const double *x, size_t count, double drop, size_t *lo, size_t *len)
 {

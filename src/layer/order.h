@@ -65,6 +65,11 @@ LL_INTERNAL ll_status ll_order_keep_block(ll_order *o, int block, ll_order **out
 LL_INTERNAL size_t ll_order_stored(const ll_order *o);
 /* The order with its top and bottom swapped (reverse), or NULL for NULL. */
 LL_INTERNAL ll_status ll_order_reversed(const ll_order *o, ll_order **out);
+/* An order from its runs as stored (seg[2n + 1], val[seg[2n].off]): the
+ * exact copy of an order whose fields these were (a builder's cache of
+ * word layers on disk, material_sweep_build.c). */
+LL_INTERNAL ll_status ll_order_from_runs(size_t n, const ll_segment *seg, const double *val,
+                                         ll_order **out);
 /* A clear order: T = I, R = 0. */
 LL_INTERNAL ll_status ll_order_identity(size_t n, ll_order **out);
 

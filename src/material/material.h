@@ -192,18 +192,29 @@ LL_INTERNAL ll_status ll_material_plan_bases(const ll_material *m, const ll_buil
                                              size_t *n_nodes, size_t *n_orders,
                                              size_t *n_channels);
 
-/* ---- material_sweep_build.c: the builder's cache of word layers (LRU,
- * this many entries; material_sweep_estimate.c simulates it) */
-#define LL_WORD_CACHE_ENTRIES 16
+/* ---- material_sweep_cache.c: the builder's cache of word layers: LRU
+ * over LL_WORD_CACHE_ENTRIES entries kept in a scratch file, of which the
+ * LL_WORD_CACHE_IN_MEMORY most recently used also stay in memory
+ * (material_sweep_estimate.c simulates it) */
+#define LL_WORD_CACHE_ENTRIES 64
+#define LL_WORD_CACHE_IN_MEMORY 4
 typedef struct ll_word_cache ll_word_cache;
-/* The cached layer of word `word` with parameters p (borrowed), or NULL. */
-LL_INTERNAL const ll_layer *ll_word_cache_find(ll_word_cache *c, size_t word,
-                                               const ll_word_params *p);
+/* *out = a copy of the cached layer of word `word` with parameters p (read
+ * back from the file if need be), or NULL when there is none. */
+LL_INTERNAL ll_status ll_word_cache_get(ll_word_cache *c, size_t word, const ll_word_params *p,
+                                        ll_layer **out);
 /* Keep a copy of layer (sharing its orders), evicting the least recently
  * used entry when full; counts a layer built. */
 LL_INTERNAL ll_status ll_word_cache_put(ll_word_cache *c, size_t word, const ll_word_params *p,
                                         const ll_layer *layer);
 LL_INTERNAL void ll_word_cache_count_addition(ll_word_cache *c);
+/* NULL when out of memory; destroy frees its layers and scratch file
+ * (NULL is fine); the counts of layers built and additions (0 for NULL). */
+LL_INTERNAL ll_word_cache *ll_word_cache_create(void);
+LL_INTERNAL void ll_word_cache_destroy(ll_word_cache *c);
+LL_INTERNAL size_t ll_word_cache_built(const ll_word_cache *c);
+LL_INTERNAL size_t ll_word_cache_additions(const ll_word_cache *c);
+/* ---- material_sweep_build.c */
 /* ll_material_build for a swept material: builder and streaming writer. */
 LL_INTERNAL ll_status ll_material_build_textured(const ll_material *m,
                                                  const ll_build_options *opts,

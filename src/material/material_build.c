@@ -165,11 +165,10 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
  * parameters (the copy shares its orders), else built and cached. */
 static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
 {
-    const ll_layer *hit = b->cache ? ll_word_cache_find(b->cache, w, p) : NULL;
-    ll_status s;
-    if (hit) {
+    ll_status s = b->cache ? ll_word_cache_get(b->cache, w, p, out) : LL_OK;
+    if (s != LL_OK || (b->cache && *out)) {
         b->done += ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
-        return ll_layer_clone(hit, out);
+        return s;
     }
     s = build_word(b, w, p, out);
     if (s == LL_OK && b->cache)

@@ -27,8 +27,11 @@
 #include <stdio.h>
 #include <string.h>
 
-/* Values one axis may have (the file holds product-of-counts bases). */
+/* Values one axis may have, and bases a material may have (the product;
+ * 16^4, or 256 x 256): every basis is a whole build, and planning and the
+ * estimate visit each, in about 10 us a basis. */
 #define LL_SWEEP_MAX_VALUES 4096
+#define LL_MATERIAL_MAX_BASES 65536
 
 static double luminance(const ll_number *x)
 {
@@ -281,11 +284,13 @@ ll_status ll_material_finish_axes(ll_material *m)
             snprintf(x->name, sizeof x->name, "%s.%s", w->label, key);
         else
             snprintf(x->name, sizeof x->name, "%zu.%s", x->word, key);
-        if (!ll_size_mul(bases, x->count, &bases) || bases > UINT32_MAX)
+        if (!ll_size_mul(bases, x->count, &bases) || bases > LL_MATERIAL_MAX_BASES)
             return ll_fail(LL_ERROR_PARSE,
-                           "%s:%zu:%zu: the sweeps make more than 2^32 - 1 bases (the "
-                           "format's limit)",
-                           m->source, x->values[0].line, x->values[0].column);
+                           "%s:%zu:%zu: the sweeps make more than %d bases, the most a "
+                           "material may have (every basis is a whole build; the planning "
+                           "and the estimate visit each)",
+                           m->source, x->values[0].line, x->values[0].column,
+                           LL_MATERIAL_MAX_BASES);
     }
     return LL_OK;
 }

@@ -2,26 +2,17 @@
  * Building a swept material (ll_material_builder_*, ll_material.h): one
  * basis at a time, each basis a plain material (the sweep's values of that
  * basis in its words, ll_material_basis_view) built by material_build.c at
- * the resolution common to all bases, its word layers shared through a
- * cache keyed by (word, resolved parameters). Two words with equal
- * parameters build identical layers (the sharing between channels relies
- * on it too), so a hit is exact: the bases come out bit-identical to
- * separate builds at that resolution.
- *
- * The cache is LRU with LL_WORD_CACHE_ENTRIES entries: with bases built in
- * order (axis 0 fastest) a word that varies only along axis 0 needs one
- * entry per value of that axis, a word below it one (per channel) for the
- * current value of the slower axes, so an 8 x 8 grid of coat x gold fits
- * (8 coats + 3 gold channels) and builds 8 + 8 interfaces. Memory is the
- * cache plus one basis's build, whatever the number of bases.
+ * the resolution common to all bases, its word layers shared through the
+ * cache of material_sweep_cache.c, keyed by (word, resolved parameters).
+ * Two words with equal parameters build identical layers (the sharing
+ * between channels relies on it too), so a hit is exact: the bases come out
+ * bit-identical to separate builds at that resolution.
  *
  * ll_material_build_textured drives a builder and the streaming writer
  * (ll_bsdf_writer_*): bases go to the writer's spill as they are made, so
  * the build never holds more than one basis's stack.
  */
 #include "material/word_table.h"
-#include "layer/layer.h"
-#include "layer/order.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -29,19 +20,6 @@
 /* Share of the progress bar of ll_material_build_textured that the
  * writer's commit takes (llbuild gives writing the same). */
 #define LL_TEXTURED_WRITE_SHARE 0.03
-
-typedef struct cache_entry {
-    size_t word;
-    ll_word_params params;
-    ll_layer *layer;          /* NULL: free                        */
-    unsigned long long used;  /* last use, for LRU                 */
-} cache_entry;
-
-struct ll_word_cache {
-    cache_entry entry[LL_WORD_CACHE_ENTRIES];
-    unsigned long long clock;
-    size_t built, added;
-};
 
 struct ll_material_builder {
     const ll_material *m;
@@ -51,63 +29,11 @@ struct ll_material_builder {
     size_t n, orders, nch, bases;
     ll_bsdf_write_options header; /* the file's: basis 0's eta, alpha   */
     ll_word *words;               /* [m->count] scratch of a basis view */
-    ll_word_cache cache;
+    ll_word_cache *cache;
     double start, span;           /* the share of the caller's progress */
     size_t basis;                 /* the basis being built              */
     char stage[96];
 };
-
-/* ------------------------------------------------------------- the cache */
-
-const ll_layer *ll_word_cache_find(ll_word_cache *c, size_t word, const ll_word_params *p)
-{
-    size_t k;
-    for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k) {
-        cache_entry *e = &c->entry[k];
-        if (e->layer && e->word == word && ll_word_params_equal(&e->params, p)) {
-            e->used = ++c->clock;
-            return e->layer;
-        }
-    }
-    return NULL;
-}
-
-ll_status ll_word_cache_put(ll_word_cache *c, size_t word, const ll_word_params *p,
-                            const ll_layer *layer)
-{
-    size_t k, victim = 0;
-    ll_layer *copy;
-    ll_status s;
-    c->built++;
-    for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k) {
-        if (!c->entry[k].layer) {
-            victim = k;
-            break;
-        }
-        if (c->entry[k].used < c->entry[victim].used)
-            victim = k;
-    }
-    s = ll_layer_clone(layer, &copy);
-    if (s != LL_OK)
-        return s;
-    ll_layer_destroy(c->entry[victim].layer);
-    c->entry[victim].layer = copy;
-    c->entry[victim].word = word;
-    c->entry[victim].params = *p;
-    c->entry[victim].used = ++c->clock;
-    return LL_OK;
-}
-
-void ll_word_cache_count_addition(ll_word_cache *c) { c->added++; }
-
-static void cache_clear(ll_word_cache *c)
-{
-    size_t k;
-    for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k) {
-        ll_layer_destroy(c->entry[k].layer);
-        c->entry[k].layer = NULL;
-    }
-}
 
 /* ----------------------------------------------------------- the builder */
 
@@ -167,12 +93,22 @@ ll_status ll_material_builder_create(const ll_material *m, const ll_build_option
         (s = ll_material_plan_bases(m, &b->o, &b->n, &b->orders, &b->nch)) != LL_OK)
         goto fail;
     b->words = ll_alloc_array(m->count, sizeof *b->words);
-    if (!b->words) {
+    b->cache = ll_word_cache_create();
+    if (!b->words || !b->cache) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
         goto fail;
     }
     if ((s = check_headers(b)) != LL_OK)
         goto fail;
+    if (m->n_axes > 0) {
+        /* The budget, on the estimate of the whole textured build (a few
+         * word layers and one basis at a time), before anything grows. */
+        ll_cost_plan plan;
+        size_t threads = b->o.threads ? b->o.threads : ll_get_thread_count();
+        if ((s = ll_material_cost_bases(m, b->n, b->orders, b->nch, threads, &plan)) != LL_OK ||
+            (s = ll_check_budget(m, &plan, b->o.max_memory_bytes, fn)) != LL_OK)
+            goto fail;
+    }
     b->header.metadata = m->metadata;
     b->header.error_goal = b->o.error_goal > 0.0 ? b->o.error_goal
                            : m->error_goal > 0.0 ? m->error_goal
@@ -232,7 +168,7 @@ ll_status ll_material_builder_build_basis(ll_material_builder *b, size_t basis,
     monitor.progress = on_basis_progress;
     monitor.user = b;
     b->basis = basis;
-    s = ll_material_build_layers_cached(&view, &o, &monitor, &b->cache, layers, n_channels,
+    s = ll_material_build_layers_cached(&view, &o, &monitor, b->cache, layers, n_channels,
                                         NULL);
     if (s == LL_OK && header)
         s = ll_struct_write(header, &b->header, sizeof b->header, fn, "ll_bsdf_write_options");
@@ -249,19 +185,19 @@ ll_status ll_material_builder_build_basis(ll_material_builder *b, size_t basis,
 
 size_t ll_material_builder_layers_built(const ll_material_builder *b)
 {
-    return b ? b->cache.built : 0;
+    return ll_word_cache_built(b ? b->cache : NULL);
 }
 
 size_t ll_material_builder_additions(const ll_material_builder *b)
 {
-    return b ? b->cache.added : 0;
+    return ll_word_cache_additions(b ? b->cache : NULL);
 }
 
 void ll_material_builder_destroy(ll_material_builder *b)
 {
     if (!b)
         return;
-    cache_clear(&b->cache);
+    ll_word_cache_destroy(b->cache);
     ll_free(b->words);
     ll_free(b);
 }

@@ -3,7 +3,8 @@
  * with axes): every basis as material_estimate.c models one build, less
  * what the builder's cache of word layers saves (material_sweep_build.c:
  * the same LRU of LL_WORD_CACHE_ENTRIES entries keyed by word and
- * parameters, simulated in the same order), less the process overhead
+ * parameters, LL_WORD_CACHE_IN_MEMORY of them in memory, simulated in the
+ * same order), less the process overhead
  * that all bases share. Memory: the largest basis's peak plus the cache's
  * layers at that time plus the streaming writer's tables and buffers;
  * never all bases.
@@ -15,7 +16,7 @@
 /* The streaming writer's chunk and spill buffer (bsdf_writer.c), and its
  * tables per file node pair: length, offset (the file's), extent, CDF row,
  * plus the n x n scratch of one layer's series lengths (len, tail, ref0). */
-#define WRITER_BUFFER_BYTES (5.0 * 1048576.0)
+#define WRITER_BUFFER_BYTES (1.25 * 1048576.0)
 #define WRITER_PAIR_BYTES 16.0
 #define WRITER_LAYER_PAIR_BYTES 20.0
 /* Coefficients a file keeps per value its layers hold (as the cost model
@@ -102,7 +103,11 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
         out->doublings += one.doublings;
         out->seconds += one.seconds - (b > 0 ? proc_wall : 0.0);
         out->cpu_seconds += one.cpu_seconds - (b > 0 ? proc_cpu : 0.0);
-        stored += one.stored_values;
+        /* Every basis's series are as long as the longest over the bases
+         * (the writer's rule): the file holds about bases x the basis that
+         * holds the most. */
+        if (one.stored_values > stored)
+            stored = one.stored_values;
         /* The words the cache gives: as the build visits them, bottom-up. */
         for (w = m->count; w-- > 0;) {
             int bottom = w + 1 == m->count;
@@ -124,9 +129,16 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
             }
             memcpy(below, owner, sizeof below);
         }
-        for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k)
-            if (cache[k].full)
+        /* in memory: the most recently used entries */
+        for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k) {
+            size_t j, newer = 0;
+            if (!cache[k].full)
+                continue;
+            for (j = 0; j < LL_WORD_CACHE_ENTRIES; ++j)
+                newer += cache[j].full && cache[j].used > cache[k].used;
+            if (newer < LL_WORD_CACHE_IN_MEMORY)
                 cached += cache[k].bytes;
+        }
         if (one.peak_bytes + cached > peak)
             peak = one.peak_bytes + cached;
     }
@@ -136,6 +148,7 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
     out->m = orders;
     out->channels = nch;
     out->threads = threads;
+    stored *= (double)bases;
     out->stored_values = stored;
     out->peak_bytes = peak + WRITER_BUFFER_BYTES + WRITER_PAIR_BYTES * nn * nn +
                       WRITER_LAYER_PAIR_BYTES * (double)n * (double)n +

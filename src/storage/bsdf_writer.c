@@ -41,8 +41,9 @@
 #include <string.h>
 #include <unistd.h>
 
-/* Floats read back at once at commit (4 MiB). */
-#define LL_WRITER_CHUNK ((size_t)1 << 20)
+/* Floats read back at once at commit (256 KiB: big enough that the reads
+ * are few, small beside a layer). */
+#define LL_WRITER_CHUNK ((size_t)1 << 16)
 /* Spill bytes buffered before a write. */
 #define LL_WRITER_SPILL_BUFFER ((size_t)1 << 20)
 
@@ -181,27 +182,16 @@ static void writer_free(ll_bsdf_writer *w)
     ll_free(w);
 }
 
+/* Check the parameters as ll_bsdf_write_textured does, then keep copies. */
 static ll_status copy_parameters(ll_bsdf_writer *w, size_t n_parameters, const size_t *counts,
                                  const double *positions)
 {
-    size_t p, values = 0;
+    ll_status s;
     w->job.n_parameters = n_parameters;
     w->job.param_counts = counts;
     w->job.param_positions = positions;
-    if (n_parameters > 0 && counts)
-        for (p = 0; p < n_parameters; ++p)
-            if (!ll_size_add(values, counts[p], &values))
-                values = SIZE_MAX;
-    /* Checked on the caller's arrays (counts first), then kept as copies. */
-    if (n_parameters > 0 && counts && values != SIZE_MAX && positions) {
-        ll_status s = ll_wjob_check_parameters(&w->job);
-        if (s != LL_OK)
-            return s;
-    } else if (n_parameters > 0) {
-        return ll_wjob_check_parameters(&w->job); /* names the problem */
-    } else {
-        w->job.n_bases = 1;
-    }
+    if ((s = ll_wjob_check_parameters(&w->job)) != LL_OK)
+        return s;
     if (n_parameters > 0) {
         w->counts = ll_alloc_array(n_parameters, sizeof *w->counts);
         w->positions = ll_alloc_array(w->job.n_parameter_values, sizeof *w->positions);
@@ -328,7 +318,8 @@ static void basis_extents(ll_bsdf_writer *w, const ll_layer *const *layers)
                     const ll_segment *sg = &o->seg[2 * col + (size_t)half];
                     for (j = 0; j < sg->len; ++j) {
                         size_t row = (size_t)half * h + sg->lo + j;
-                        w->len[col * n + row] = (uint32_t)(k + 1);
+                        if (w->len[col * n + row] < k + 1)
+                            w->len[col * n + row] = (uint32_t)(k + 1);
                     }
                 }
         }
