@@ -2,7 +2,8 @@
 # The MPI section of `make bench` (docs/mpi.md): llbuild-mpi on this
 # machine, oversubscribed where it has fewer cores than ranks.
 #  - speed: the coated-gold-with-medium recipe on 1 and 2 ranks of one
-#    thread each, against llbuild on 1 and 2 threads (best of LL_BENCH_RUNS);
+#    thread each, against llbuild on 1 and 2 threads (best of LL_BENCH_RUNS),
+#    and the 8 x 8 coated-gold grid (a textured file: bases across ranks);
 #  - memory: each rank's peak RSS on 1, 2 and 4 ranks for one larger single
 #    material (the same recipe at 300 nodes x 600 orders), next to the RSS
 #    of a process that builds almost nothing (what is not the layers'), so
@@ -47,6 +48,22 @@ printf '%-34s %8s s\n' "llbuild, 1 thread" "$s1" "llbuild, 2 threads" "$s2" \
     "llbuild-mpi, 1 rank x 1 thread" "$m1" "llbuild-mpi, 2 ranks x 1 thread" "$m2"
 awk -v a="$m1" -v b="$m2" -v c="$s2" 'BEGIN {
     printf "speed-up of 2 ranks over 1: %.2fx (over llbuild on 2 threads: %.2fx)\n", a / b, c / b }'
+echo "files: llbuild-mpi's and llbuild's are $same"
+
+echo
+echo "== MPI: the 8 x 8 coated-gold grid (textured: bases across the ranks), 196 x 267, RGB"
+cat >"$work/grid.layers" <<'LAYERS'
+set nodes=196 orders=267
+dielectric name=coat eta=1.5 alpha=[0.05..0.4:8]
+conductor  name=gold eta=Au alpha=[0.05..0.4:8]
+LAYERS
+g0=$(best_wall "$serial" -q --threads 1 "$work/grid.layers" -o "$work/gs.bsdf")
+g1=$(best_wall mpirun --oversubscribe -n 1 "$mpi" -q --threads 1 "$work/grid.layers" -o "$work/gm.bsdf")
+g2=$(best_wall mpirun --oversubscribe -n 2 "$mpi" -q --threads 1 "$work/grid.layers" -o "$work/gm.bsdf")
+cmp -s "$work/gs.bsdf" "$work/gm.bsdf" && same="byte-identical" || same="DIFFERENT"
+printf '%-34s %8s s\n' "llbuild, 1 thread" "$g0" "llbuild-mpi, 1 rank x 1 thread" "$g1" \
+    "llbuild-mpi, 2 ranks x 1 thread" "$g2"
+awk -v a="$g1" -v b="$g2" 'BEGIN { printf "speed-up of 2 ranks over 1: %.2fx\n", a / b }'
 echo "files: llbuild-mpi's and llbuild's are $same"
 
 echo
