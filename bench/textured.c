@@ -7,7 +7,8 @@
  * process (wait4), the file sizes; then ns per ll_bsdf_eval_dir and
  * ll_bsdf_sample_dir on the grid file at random parameter values (the
  * weights from ll_bsdf_basis_coefficients, computed per call as a renderer
- * does per shading point) against the untextured file of one of the 64.
+ * does per shading point) against the untextured files of the sharpest
+ * and the smoothest corner of the grid.
  *
  * usage: textured LLBUILD WORKDIR [SEPARATE_RUNS]
  *   SEPARATE_RUNS: how many of the 64 separate builds to run (default 64);
@@ -100,7 +101,10 @@ static void time_calls(const ll_bsdf *b, int textured, double *eval_ns, double *
             }
             sum += f[0];
         }
-        *(pass == 0 ? eval_ns : sample_ns) = (bench_wall_seconds() - t0) / CALLS * 1e9;
+        if (pass == 0)
+            *eval_ns = (bench_wall_seconds() - t0) / CALLS * 1e9;
+        else
+            *sample_ns = (bench_wall_seconds() - t0) / CALLS * 1e9;
     }
     if (sum < 0.0)
         printf("(never)\n");
@@ -114,7 +118,8 @@ int main(int argc, char **argv)
     size_t runs = SIDE * SIDE, k, done = 0;
     bench_child_result grid, one;
     double sep_wall = 0.0, sep_cpu = 0.0, sep_rss = 0.0, sep_mib = 0.0, grid_mib, scale;
-    double ev_grid, sa_grid, ev_one, sa_one;
+    double ev_grid = 0.0, sa_grid = 0.0, ev_one = 0.0, sa_one = 0.0, ev_smooth = 0.0,
+           sa_smooth = 0.0;
     ll_bsdf *b;
     ll_open_options open_opts = LL_OPEN_OPTIONS_INIT;
 
@@ -198,17 +203,34 @@ int main(int argc, char **argv)
     bench_check(ll_bsdf_open_ex(out, &open_opts, &b), "open grid");
     time_calls(b, 1, &ev_grid, &sa_grid);
     ll_bsdf_release(b);
-    snprintf(out, sizeof out, "%s/one.bsdf", work);
-    bench_check(ll_bsdf_open(out, &b), "open one");
-    time_calls(b, 0, &ev_one, &sa_one);
-    ll_bsdf_release(b);
+    /* Untextured files of the sharpest and the smoothest corner: every
+     * series of the grid file is as long as the longest over its bases
+     * (the sharpest's), and 4 bases are weighted at an interior point. */
+    for (k = 0; k < 2; ++k) {
+        bench_child_result r;
+        double a = k == 0 ? grid_alpha(0) : grid_alpha(SIDE - 1);
+        snprintf(path, sizeof path, "%s/corner.layers", work);
+        snprintf(text, sizeof text,
+                 "set nodes=%d orders=%d\ndielectric eta=1.5 alpha=%.17g\n"
+                 "conductor eta=Au alpha=%.17g\n",
+                 NODES, ORDERS, a, a);
+        write_text(path, text);
+        snprintf(out, sizeof out, "%s/corner.bsdf", work);
+        run_llbuild(llbuild, path, out, &r);
+        bench_check(ll_bsdf_open(out, &b), "open corner");
+        time_calls(b, 0, k == 0 ? &ev_one : &ev_smooth, k == 0 ? &sa_one : &sa_smooth);
+        ll_bsdf_release(b);
+    }
     printf("  ns per call (random directions)    eval_dir  sample_dir\n");
     printf("  %-34s %9.0f %10.0f\n", "grid file, random parameters", ev_grid, sa_grid);
-    printf("  %-34s %9.0f %10.0f\n", "untextured file", ev_one, sa_one);
+    printf("  %-34s %9.0f %10.0f\n", "untextured, alpha 0.05 / 0.05", ev_one, sa_one);
+    printf("  %-34s %9.0f %10.0f\n", "untextured, alpha 0.4 / 0.4", ev_smooth, sa_smooth);
 
     bench_metric("textured.grid.eval_dir", "ns", ev_grid);
     bench_metric("textured.grid.sample_dir", "ns", sa_grid);
-    bench_metric("textured.one.eval_dir", "ns", ev_one);
-    bench_metric("textured.one.sample_dir", "ns", sa_one);
+    bench_metric("textured.sharp.eval_dir", "ns", ev_one);
+    bench_metric("textured.sharp.sample_dir", "ns", sa_one);
+    bench_metric("textured.smooth.eval_dir", "ns", ev_smooth);
+    bench_metric("textured.smooth.sample_dir", "ns", sa_smooth);
     return 0;
 }

@@ -160,6 +160,10 @@ static const char material_text[] = "set nodes=10 orders=4\n"
 static const char metal_text[] = "set nodes=10 orders=4\n"
                                  "dielectric eta=1.5 alpha=0.3\n"
                                  "conductor eta=Tst alpha=0.2\n";
+/* A swept material: 2 x 2 bases, mono, the coat shared by two bases. */
+static const char sweep_text[] = "set nodes=10 orders=4\n"
+                                 "dielectric name=coat eta=1.5 alpha=[0.2 0.3]\n"
+                                 "diffuse albedo=[0.4 0.6]\n";
 static const char measured_text[] = "set nodes=10 orders=4\n"
                                     "dielectric eta=1.4 alpha=0.4\n"
                                     "measured file=tiny.binary\n";
@@ -253,7 +257,23 @@ static void put_material(blob *b, const ll_material *m)
     put_size(b, c);
     assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
     put(b, &e, sizeof e);
-    assert_int_equal(ll_material_build_layers(m, NULL, layers, &nch, &header), LL_OK);
+    if (ll_material_axis_count(m) > 0) {
+        /* a swept material: its axes, and its first basis */
+        ll_material_builder *builder = NULL;
+        size_t a;
+        for (a = 0; a < ll_material_axis_count(m); ++a) {
+            ll_material_axis axis = LL_MATERIAL_AXIS_INIT;
+            assert_int_equal(ll_material_get_axis(m, a, &axis), LL_OK);
+            put_text(b, axis.name);
+            put(b, axis.positions, axis.n_values * sizeof *axis.positions);
+        }
+        assert_int_equal(ll_material_builder_create(m, NULL, NULL, &builder), LL_OK);
+        assert_int_equal(ll_material_builder_build_basis(builder, 0, layers, &nch, &header),
+                         LL_OK);
+        ll_material_builder_destroy(builder);
+    } else {
+        assert_int_equal(ll_material_build_layers(m, NULL, layers, &nch, &header), LL_OK);
+    }
     put_text(b, header.metadata);
     header.metadata = NULL;
     put(b, &header, sizeof header);
@@ -499,6 +519,37 @@ static ll_status call_material_write(world *w)
 {
     return ll_material_write(w->material, NULL, w->in, 3, out_path);
 }
+static ll_status call_parse_sweep(world *w)
+{
+    return ll_material_parse(sweep_text, "sweep.layers", &w->parsed);
+}
+static void prep_sweep_out(world *w)
+{
+    prep_material_out(w);
+    ll_material_destroy(w->material);
+    w->material = NULL;
+    assert_int_equal(ll_material_parse(sweep_text, "sweep.layers", &w->material), LL_OK);
+}
+static ll_status call_sweep_estimate(world *w)
+{
+    return ll_material_estimate(w->material, NULL, &w->estimate);
+}
+/* The streaming writer: open, two bases, commit. */
+static ll_status call_writer(world *w)
+{
+    const size_t counts[1] = { 2 };
+    const double positions[2] = { 0.0, 1.0 };
+    ll_bsdf_writer *writer = NULL;
+    ll_status s = ll_bsdf_writer_open(out_path, 1, 1, counts, positions, NULL, &writer);
+    if (s == LL_OK)
+        s = ll_bsdf_writer_add_basis(writer, (const ll_layer *const *)&w->in[0]);
+    if (s == LL_OK)
+        s = ll_bsdf_writer_add_basis(writer, (const ll_layer *const *)&w->in[1]);
+    if (s == LL_OK)
+        return ll_bsdf_writer_commit(writer, NULL);
+    ll_bsdf_writer_abort(writer);
+    return s;
+}
 
 static alloc_case cases[] = {
     { "ll_layer_create", prep_nothing, call_create, snap_layers },
@@ -537,6 +588,10 @@ static alloc_case cases[] = {
     { "ll_material_build_layers (measured)", prep_measured, call_build_layers, snap_build_layers },
     { "ll_material_build", prep_material_out, call_build, snap_out_dir },
     { "ll_material_write", prep_material_write, call_material_write, snap_out_dir },
+    { "ll_material_parse (sweep)", prep_nothing, call_parse_sweep, snap_parsed },
+    { "ll_material_estimate (sweep)", prep_sweep_out, call_sweep_estimate, snap_estimate },
+    { "ll_material_build (textured)", prep_sweep_out, call_build, snap_out_dir },
+    { "ll_bsdf_writer_*", prep_write_textured, call_writer, snap_out_dir },
 };
 
 /* --------------------------------------------------------------- runner */

@@ -126,7 +126,9 @@ class BuildEstimate(ctypes.Structure):
                 ("seconds", ctypes.c_double),
                 ("cpu_seconds", ctypes.c_double),
                 ("max_memory_bytes", ctypes.c_size_t),
-                ("over_budget", ctypes.c_int)]
+                ("over_budget", ctypes.c_int),
+                ("n_bases", ctypes.c_size_t),
+                ("file_bytes", ctypes.c_double)]
 
     def __init__(self):
         super().__init__()

@@ -78,5 +78,7 @@ int main(void)
     FIELD(ll_build_estimate, cpu_seconds);
     FIELD(ll_build_estimate, max_memory_bytes);
     FIELD(ll_build_estimate, over_budget);
+    FIELD(ll_build_estimate, n_bases);
+    FIELD(ll_build_estimate, file_bytes);
     return 0;
 }

@@ -126,3 +126,15 @@ def test_material_layers_evaluate_like_any_layer():
     layers, _ = ll.Material.parse("diffuse albedo=0.25\n").build_layers(nodes=16, orders=1)
     np.testing.assert_allclose(layers[0].eval(-0.5, np.array([0.2, 0.9])), 0.25 / np.pi,
                                rtol=1e-12)
+
+
+def test_swept_material_builds_one_textured_file(tmp_path):
+    # Material.build handles sweeps as it is: ll_material_build writes the
+    # textured file (3 x 2 bases, axis 0 the coat's alpha).
+    material = ll.Material.parse("set nodes=12 orders=6\n"
+                                 "dielectric name=coat eta=1.5 alpha=[0.1 0.2 0.3]\n"
+                                 "conductor eta=2+3i alpha=[0.1 0.3]\n")
+    assert material.estimate()["layers_built"] == 5
+    storage = material.build(tmp_path / "swept.bsdf")
+    assert storage.basisCount == 6
+    assert '"parameters": ["coat.alpha", "1.alpha"]' in storage.metadata

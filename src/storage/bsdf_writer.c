@@ -23,8 +23,8 @@
  *
  * Memory: the tables of nn * nn entries (as the in-memory writer), one
  * basis's staging while it is added, the chunk, and per basis its spill
- * offset and one column's extents (4 nn + 16 bytes): never a layer per
- * basis. The spill lives beside the output (same file system, and the
+ * offset, one column's extents and room in the chunk for one row of its
+ * longest series (4 nn + 12 m + 16 bytes): never a layer per basis. The spill lives beside the output (same file system, and the
  * output's size is the spill's bound) and is unlinked as soon as it is
  * created, so no path ever names it: whatever happens to the process, the
  * space returns when the descriptor closes. The output itself is the
@@ -64,10 +64,13 @@ struct ll_bsdf_writer {
     unsigned long long spill_end;
     unsigned char *buffer;       /* LL_WRITER_SPILL_BUFFER                 */
     size_t buffered;
+    size_t chunk_floats;         /* commit's read-back chunk               */
+    unsigned char *bytes;        /* commit: one series as file bytes (4 m) */
     /* one basis's scratch, n * n unless said */
     uint32_t *len, *ext;
     double *tail, *ref0, *stage, *values;
     float *row_cdf;              /* nn * nn                                */
+    float *row;                  /* channels * m: one pair's floats        */
     ll_layer *first;             /* basis 0's layer 0 (a clone): the shape */
 };
 
@@ -168,6 +171,7 @@ static void writer_free(ll_bsdf_writer *w)
     ll_free(w->metadata_copy);
     ll_free(w->basis_at);
     ll_free(w->buffer);
+    ll_free(w->bytes);
     ll_free(w->len);
     ll_free(w->ext);
     ll_free(w->tail);
@@ -175,6 +179,7 @@ static void writer_free(ll_bsdf_writer *w)
     ll_free(w->stage);
     ll_free(w->values);
     ll_free(w->row_cdf);
+    ll_free(w->row);
     ll_free(w->job.nodes);
     ll_free(w->job.length);
     ll_free(w->job.offset);
@@ -289,8 +294,9 @@ static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
     w->stage = ll_calloc_array(per_layer, sizeof *w->stage);
     w->values = ll_alloc_array(nn, sizeof *w->values);
     w->row_cdf = ll_alloc_array(nn2, sizeof *w->row_cdf);
+    w->row = ll_alloc_array(job->n_channels * l->m, sizeof *w->row);
     if (!job->nodes || !job->length || !job->offset || !w->len || !w->ext || !w->tail ||
-        !w->ref0 || !w->stage || !w->values || !w->row_cdf)
+        !w->ref0 || !w->stage || !w->values || !w->row_cdf || !w->row)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
     for (k = 0; k < nn; ++k) {
         size_t li = layer_index(k, job->h);
@@ -375,13 +381,14 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
             if (e == 0)
                 continue;
             mu_o = fabs(layers[0]->nodes[lo]);
-            for (c = 0; c < job->n_channels && s == LL_OK; ++c)
-                for (k = 0; k < e && s == LL_OK; ++k) {
-                    float f = (float)ll_wjob_staged_value(job->n_channels, c,
-                                                          w->stage + lo * m, per_layer, k,
-                                                          mu_o, factor[k > 0]);
-                    s = spill_put(w, &f, sizeof f);
-                }
+            /* The pair's floats, channel-major, then one copy to the spill
+             * (a private file of this process: the floats as in memory). */
+            for (c = 0; c < job->n_channels; ++c)
+                for (k = 0; k < e; ++k)
+                    w->row[c * e + k] = (float)ll_wjob_staged_value(
+                        job->n_channels, c, w->stage + lo * m, per_layer, k, mu_o,
+                        factor[k > 0]);
+            s = spill_put(w, w->row, job->n_channels * e * sizeof *w->row);
         }
         for (L = 0; L < job->n_channels; ++L)
             ll_wjob_stage_column(layers[L], li, kmax, w->stage + L * per_layer, 1);
@@ -453,7 +460,7 @@ fail:
 static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
 {
     write_job *job = &w->job;
-    size_t nb = job->n_bases, pairs = job->nn * job->nn, per = LL_WRITER_CHUNK / nb, at, b, k;
+    size_t nb = job->n_bases, pairs = job->nn * job->nn, per = w->chunk_floats / nb, at, b, k;
     ll_status s = LL_OK;
     if (per == 0)
         per = 1;
@@ -473,25 +480,35 @@ static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
     return s;
 }
 
-static ll_status put_value(ll_bsdf_out *out, float v, size_t k, size_t o, size_t i)
+/* One series of L coefficients, the first e of them (e <= L or not) from
+ * values, the rest 0: checked, then as little-endian bytes in one call. */
+static ll_status put_series(ll_bsdf_out *out, unsigned char *bytes, const float *values,
+                            size_t e, size_t L, size_t o, size_t i)
 {
-    if (!(fabsf(v) <= FLT_MAX))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: coefficient %zu of node pair (%zu, %zu) is %g, beyond float range",
-                       fn_commit, k, o, i, (double)v);
-    ll_bsdf_out_f32(out, v);
+    size_t k;
+    for (k = 0; k < L; ++k) {
+        float v = k < e ? values[k] : 0.0f;
+        if (!(fabsf(v) <= FLT_MAX))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "%s: coefficient %zu of node pair (%zu, %zu) is %g, beyond float "
+                           "range",
+                           fn_commit, k, o, i, (double)v);
+        ll_le_put_f32(bytes + 4 * k, v);
+    }
+    ll_bsdf_out_bytes(out, bytes, 4 * L);
     return LL_OK;
 }
 
 /* Column i of the coefficient block: rows [o0, o1) at a time, as many as
- * fit in the chunk. ext: [n_bases * nn] this column's extents; cursor:
- * [n_bases] where each basis's data of the next row starts in the spill;
- * pos: [n_bases] scratch. */
+ * fit in the chunk of w->chunk_floats (one row always does). ext:
+ * [n_bases * nn] this column's extents; cursor: [n_bases] where each
+ * basis's data of the next row starts in the spill; pos: [n_bases]
+ * scratch. */
 static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const uint32_t *ext,
                             unsigned long long *cursor, float *chunk, size_t *pos)
 {
     const write_job *job = &w->job;
-    size_t nn = job->nn, nb = job->n_bases, nch = job->n_channels, o0 = 0, o1, b, o, c, k;
+    size_t nn = job->nn, nb = job->n_bases, nch = job->n_channels, o0 = 0, o1, b, o, c;
     ll_status s = LL_OK;
     while (o0 < nn && s == LL_OK) {
         size_t used = 0, at = 0;
@@ -499,26 +516,9 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             size_t row = 0;
             for (b = 0; b < nb; ++b)
                 row += ext[b * nn + o1] * nch;
-            if (o1 > o0 && used + row > LL_WRITER_CHUNK)
+            if (o1 > o0 && used + row > w->chunk_floats)
                 break;
             used += row;
-        }
-        if (used > LL_WRITER_CHUNK) {
-            /* One row of all bases exceeds the chunk (long series times
-             * many bases): each (channel, basis) series read by itself. */
-            size_t L = job->length[i * nn + o0];
-            for (c = 0; c < nch && s == LL_OK; ++c)
-                for (b = 0; b < nb && s == LL_OK; ++b) {
-                    size_t e = ext[b * nn + o0], got = e < L ? e : L;
-                    s = spill_read(w, cursor[b] + c * e * sizeof(float), chunk,
-                                   got * sizeof(float));
-                    for (k = 0; k < L && s == LL_OK; ++k)
-                        s = put_value(out, k < got ? chunk[k] : 0.0f, k, o0, i);
-                }
-            for (b = 0; b < nb; ++b)
-                cursor[b] += ext[b * nn + o0] * nch * sizeof(float);
-            o0 = o1;
-            continue;
         }
         for (b = 0; b < nb && s == LL_OK; ++b) {
             size_t floats = 0;
@@ -534,9 +534,7 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             for (c = 0; c < nch && L > 0 && s == LL_OK; ++c)
                 for (b = 0; b < nb && s == LL_OK; ++b) {
                     size_t e = ext[b * nn + o];
-                    const float *series = chunk + pos[b] + c * e;
-                    for (k = 0; k < L && s == LL_OK; ++k)
-                        s = put_value(out, k < e ? series[k] : 0.0f, k, o, i);
+                    s = put_series(out, w->bytes, chunk + pos[b] + c * e, e, L, o, i);
                 }
             for (b = 0; b < nb; ++b)
                 pos[b] += ext[b * nn + o] * nch;
@@ -609,7 +607,18 @@ static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
         return s;
     metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
     metadata_size = strlen(metadata);
-    chunk = ll_alloc_array(LL_WRITER_CHUNK, sizeof *chunk);
+    /* The chunk: LL_WRITER_CHUNK floats, or one row of every basis's
+     * longest series if that is more (12 m bytes a basis). */
+    if (!ll_size_mul(job->n_bases * job->n_channels, job->m, &w->chunk_floats))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    if (w->chunk_floats < LL_WRITER_CHUNK)
+        w->chunk_floats = LL_WRITER_CHUNK;
+    chunk = ll_alloc_array(w->chunk_floats, sizeof *chunk);
+    w->bytes = ll_alloc_array(job->m, 4);
+    if (chunk && !w->bytes) {
+        ll_free(chunk);
+        chunk = NULL;
+    }
     if (!chunk)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
     if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
