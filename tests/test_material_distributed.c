@@ -97,7 +97,7 @@ static ll_status fabric_alltoallv(void *user, const void *send, const size_t *se
         /* What the library expects must be what was sent. */
         if (f->send_bytes[s][r->rank] != recv_bytes[s])
             ok = 0;
-        else
+        else if (recv_bytes[s] > 0) /* (a rank with nothing to send may pass NULL) */
             memcpy((unsigned char *)recv + at, f->send[s] + off, recv_bytes[s]);
         at += recv_bytes[s];
     }
