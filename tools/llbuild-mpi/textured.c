@@ -398,33 +398,42 @@ ll_status textured_build(mpi_job *job, const ll_material *m, const ll_build_opti
     size_t k;
     ll_status s;
 
-    /* Every rank's builder (the options, the budget), agreed. */
-    s = mpi_agree(job, ll_material_builder_create(m, o, NULL, &b), NULL, message, size);
-    if (s != LL_OK) {
-        ll_material_builder_destroy(b);
-        return s;
-    }
-    text[0] = '\0';
-    if (job->rank != 0) {
-        s = run_worker(job, b, text, sizeof text);
-        ll_material_builder_destroy(b);
-        return mpi_agree(job, s, s == LL_OK ? NULL : text, message, size);
-    }
+    ll_monitor serving = LL_MONITOR_INIT;
+
     memset(&q, 0, sizeof q);
-    q.job = job;
-    q.m = m;
-    q.cancel = cancel;
-    q.path = out_path;
-    q.bases = ll_material_basis_count(m);
-    q.progress = progress;
-    q.progress_user = progress_user;
-    q.outstanding = calloc((size_t)job->size, sizeof *q.outstanding);
-    q.stopped = calloc((size_t)job->size, sizeof *q.stopped);
-    q.early = calloc(q.bases, sizeof *q.early);
-    if (!q.outstanding || !q.stopped || !q.early) {
-        fprintf(stderr, "llbuild-mpi: rank 0 is out of memory for the queue of %zu bases\n",
-                q.bases);
-        MPI_Abort(MPI_COMM_WORLD, 3);
+    text[0] = '\0';
+    if (job->rank == 0) {
+        q.job = job;
+        q.m = m;
+        q.cancel = cancel;
+        q.path = out_path;
+        q.bases = ll_material_basis_count(m);
+        q.progress = progress;
+        q.progress_user = progress_user;
+        q.outstanding = calloc((size_t)job->size, sizeof *q.outstanding);
+        q.stopped = calloc((size_t)job->size, sizeof *q.stopped);
+        q.early = calloc(q.bases, sizeof *q.early);
+        if (!q.outstanding || !q.stopped || !q.early) {
+            fprintf(stderr, "llbuild-mpi: rank 0 is out of memory for the queue of %zu bases\n",
+                    q.bases);
+            MPI_Abort(MPI_COMM_WORLD, 3);
+        }
+        /* Rank 0 answers the workers from inside its own bases. */
+        serving.progress = serve_from_monitor;
+        serving.user = &q;
+    }
+    /* Every rank's builder (the options, the budget), agreed. */
+    s = mpi_agree(job, ll_material_builder_create(m, o, job->rank == 0 ? &serving : NULL, &b),
+                  NULL, message, size);
+    if (s != LL_OK || job->rank != 0) {
+        if (s == LL_OK)
+            s = mpi_agree(job, run_worker(job, b, text, sizeof text), text[0] ? text : NULL,
+                          message, size);
+        ll_material_builder_destroy(b);
+        free(q.early);
+        free(q.outstanding);
+        free(q.stopped);
+        return s;
     }
     s = run_queue(&q, b);
     if (q.writer)
