@@ -99,6 +99,12 @@ $(filter-out $(READER_OBJ),$(LIB_OBJ)): CFLAGS_OMP := -fopenmp
 
 # Tools: each directory tools/NAME/ holds the sources of one program NAME.
 TOOL_NAMES := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard tools/*/*.c)))))
+# llbuild-mpi (tools/llbuild-mpi, docs/mpi.md) needs MPI's compiler wrapper:
+# built only where mpicc is found (make deps installs OpenMPI).
+MPICC ?= $(shell command -v mpicc 2>/dev/null)
+ifeq ($(MPICC),)
+TOOL_NAMES := $(filter-out llbuild-mpi,$(TOOL_NAMES))
+endif
 TOOLS    := $(TOOL_NAMES:%=$(BUILD)/bin/%)
 TOOL_CFLAGS = -std=c99 $(OPT) -g $(WARN) -D_POSIX_C_SOURCE=200809L -Iinclude $(SAN) \
                $(shell pkg-config --cflags cairo OpenEXR 2>/dev/null)
@@ -209,6 +215,15 @@ $(BUILD)/bin/%: $$(wildcard tools/%/*.c) $$(wildcard tools/%/*.h) $(SHARED) | de
 	@mkdir -p $(dir $@)
 	$(CC) $(TOOL_CFLAGS) -o $@ $(filter %.c,$^) -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' \
 	    -llayerlab $(TOOL_LIBS)
+
+# llbuild-mpi: its own sources, llbuild's (which it includes) and llbuild's
+# progress display, through mpicc with this build's compiler.
+LLBUILD_MPI_SRC := $(wildcard tools/llbuild-mpi/*.c)
+$(BUILD)/bin/llbuild-mpi: $(LLBUILD_MPI_SRC) $(wildcard tools/llbuild-mpi/*.h tools/llbuild/*.c \
+                          tools/llbuild/*.h) $(SHARED) | deps-tools
+	@mkdir -p $(dir $@)
+	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c \
+	    -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' -llayerlab -lm
 
 $(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | deps-test
 	@mkdir -p $(dir $@)

@@ -99,6 +99,9 @@ if [ "$COMMIT" != unknown ] && [ -n "$(git status --porcelain -- src include 2>/
 fi
 COMPILER=$($CC --version 2>/dev/null | head -n 1)
 
+# llbuild-mpi's section (skipped without OpenMPI), before the driver's table.
+sh bench/mpi.sh "$BUILD" || echo "bench: the MPI section failed" >&2
+
 exec "$BIN/driver" --bin "$BIN" --work "$WORK" --testdata tests/data --json "$JSON" \
     --runs "$RUNS" --original "$ORIGINAL" --dust-full "$DUST_FULL" \
     --llbuild "$BUILD/bin/llbuild" --commit "$COMMIT" \

@@ -19,5 +19,6 @@
 #include "layerlab/ll_bsdf.h"
 #include "layerlab/ll_bsdf_write.h"
 #include "layerlab/ll_material.h"
+#include "layerlab/ll_distribution.h"
 
 #endif /* LAYERLAB_H */

@@ -10,13 +10,15 @@ set -eu
 
 # The library: a C99 compiler, OpenBLAS (its OpenMP build) and LAPACKE.
 lib_packages="build-essential pkg-config libopenblas-openmp-dev liblapacke-dev"
-# The tools' pictures (llplot): cairo, the OpenEXR C API.
-tools_packages="libopenexr-dev libcairo2-dev"
+# The tools' pictures (llplot): cairo, the OpenEXR C API; llbuild-mpi:
+# OpenMPI's headers and mpicc.
+tools_packages="libopenexr-dev libcairo2-dev libopenmpi-dev"
 # The tests: cmocka, abidiff/abidw (tests/abidiff.sh), Python with pip for
 # the Python package and the cross-checks (they pip-install the rest),
 # venv for python/tests/pip_install.sh, LLVM 19 for Mitsuba 3.9's LLVM
-# variants (Dr.Jit finds it; Debian 12's default LLVM 14/15 aborts them).
-test_packages="libcmocka-dev abigail-tools python3 python3-pip python3-venv libllvm19"
+# variants (Dr.Jit finds it; Debian 12's default LLVM 14/15 aborts them);
+# mpirun for llbuild-mpi's tests (tests/llbuild_mpi.sh).
+test_packages="libcmocka-dev abigail-tools python3 python3-pip python3-venv libllvm19 openmpi-bin"
 # The fuzzer: clang with its libFuzzer runtime.
 fuzz_packages="clang libclang-rt-14-dev"
 

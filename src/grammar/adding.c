@@ -570,6 +570,11 @@ static ll_status expand_one_order(size_t k, void *ctx)
 
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
+    if (!ll_layer_owns_order(l, k)) {
+        /* Another rank's order of a distributed build: not computed, NULL. */
+        ll_watch_advance(job->watch, job->doublings + 1);
+        return LL_OK;
+    }
     s = expand_straight_through(job, k, &solved);
     if (s != LL_OK || solved)
         return s;

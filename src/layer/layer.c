@@ -148,6 +148,7 @@ ll_status ll_layer_clone(const ll_layer *src, ll_layer **out)
     memcpy(l->weights, src->weights, src->n * sizeof(double));
     for (k = 0; k < src->m; ++k)
         l->orders[k] = ll_order_retain(src->orders[k]);
+    l->share = src->share;
     *out = l;
     return LL_OK;
 oom:
@@ -192,6 +193,12 @@ void ll_layer_replace_orders(ll_layer *layer, ll_order **new_orders)
     for (k = 0; k < layer->m; ++k) {
         ll_order_release(layer->orders[k]);
         layer->orders[k] = new_orders[k];
+        if (!ll_layer_owns_order(layer, k)) {
+            /* A distributed build keeps only this rank's orders (a clear
+             * layer's identity, a diffuse order 0 of another rank). */
+            ll_order_release(layer->orders[k]);
+            layer->orders[k] = NULL;
+        }
     }
 }
 

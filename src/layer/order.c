@@ -561,3 +561,62 @@ done:
     ll_free(right);
     return s;
 }
+
+/* ------------------------------------------- builder columns, packed
+ * (a distributed build's all-to-all, layer/columns.c): per half column its
+ * uint32 lo and len, then len doubles, all copied byte for byte, so the
+ * receiving builder holds exactly the run the sending one held. */
+
+size_t ll_order_builder_column_bytes(const ll_order_builder *b, size_t col)
+{
+    return 4 * sizeof(uint32_t) +
+           ((size_t)b->len[2 * col] + (size_t)b->len[2 * col + 1]) * sizeof(double);
+}
+
+unsigned char *ll_order_builder_pack_column(const ll_order_builder *b, size_t col,
+                                            unsigned char *dst)
+{
+    size_t s;
+    for (s = 2 * col; s < 2 * col + 2; ++s) {
+        memcpy(dst, &b->lo[s], sizeof(uint32_t));
+        memcpy(dst + sizeof(uint32_t), &b->len[s], sizeof(uint32_t));
+        dst += 2 * sizeof(uint32_t);
+        if (b->len[s])
+            memcpy(dst, b->seg[s], b->len[s] * sizeof(double));
+        dst += b->len[s] * sizeof(double);
+    }
+    return dst;
+}
+
+ll_status ll_order_builder_unpack_column(ll_order_builder *b, size_t col,
+                                         const unsigned char **src, const unsigned char *end)
+{
+    const unsigned char *p = *src;
+    size_t s, h = b->n / 2;
+    for (s = 2 * col; s < 2 * col + 2; ++s) {
+        uint32_t lo, len;
+        if ((size_t)(end - p) < 2 * sizeof(uint32_t))
+            goto truncated;
+        memcpy(&lo, p, sizeof lo);
+        memcpy(&len, p + sizeof lo, sizeof len);
+        p += 2 * sizeof(uint32_t);
+        if ((size_t)lo + len > h || (size_t)(end - p) / sizeof(double) < len)
+            goto truncated;
+        ll_free(b->seg[s]);
+        b->seg[s] = NULL;
+        b->lo[s] = lo;
+        b->len[s] = 0;
+        if (len) {
+            b->seg[s] = ll_malloc((size_t)len * sizeof(double));
+            if (!b->seg[s])
+                return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory receiving an order");
+            memcpy(b->seg[s], p, (size_t)len * sizeof(double));
+            b->len[s] = len;
+        }
+        p += (size_t)len * sizeof(double);
+    }
+    *src = p;
+    return LL_OK;
+truncated:
+    return ll_fail(LL_ERROR_FORMAT, "a received column of an order is malformed");
+}

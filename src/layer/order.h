@@ -103,5 +103,25 @@ LL_INTERNAL ll_status ll_order_builder_set_column_range(ll_order_builder *b, siz
 /* Finish: *out = the order (NULL if all zero); frees the builder. */
 LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
 LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);
+/* One column of a builder as bytes, for a distributed build's exchange
+ * (layer/columns.c): its size, the packing (returns the end of what was
+ * written) and the unpacking into another builder of the same n (advances
+ * *src; LL_ERROR_FORMAT if [*src, end) is not a column). */
+LL_INTERNAL size_t ll_order_builder_column_bytes(const ll_order_builder *b, size_t col);
+LL_INTERNAL unsigned char *ll_order_builder_pack_column(const ll_order_builder *b, size_t col,
+                                                        unsigned char *dst);
+LL_INTERNAL ll_status ll_order_builder_unpack_column(ll_order_builder *b, size_t col,
+                                                     const unsigned char **src,
+                                                     const unsigned char *end);
+
+/* ---- a whole order as bytes (order_pack.c), for gathering a distributed
+ * build's layers: a flag (NULL or not), then the segments and values as
+ * stored, so the copy is the same order bit for bit. */
+LL_INTERNAL size_t ll_order_packed_bytes(const ll_order *o);
+LL_INTERNAL unsigned char *ll_order_pack(const ll_order *o, unsigned char *dst);
+/* *out = the order (NULL for a packed NULL) of an n x n matrix; advances
+ * *src; LL_ERROR_FORMAT if the bytes are not an order of that size. */
+LL_INTERNAL ll_status ll_order_unpack(size_t n, const unsigned char **src,
+                                      const unsigned char *end, ll_order **out);
 
 #endif /* LL_LAYER_ORDER_H */

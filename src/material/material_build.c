@@ -11,6 +11,7 @@
 #include "material/word_table.h"
 #include "layer/layer.h"
 #include "layerlab/ll_quad.h"
+#include "layerlab/ll_distribution.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -35,6 +36,7 @@ typedef struct build {
     double call_start, call_cost;
     const char *call_stage;
     int call_ends_build;         /* its 1 is the build's 1 (the writing) */
+    ll_share *share;             /* a distributed build's (NULL: one process) */
     ll_word_cache *cache;        /* a builder's word layers (nullable)  */
 } build;
 
@@ -142,6 +144,7 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
+    l->share = b->share; /* the word builds only this rank's orders */
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
@@ -280,12 +283,14 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
     return ll_build_options_read(opts, &b->o, fn);
 }
 
-/* Resolution, budget, quadrature and per-channel parameters. */
+/* Resolution, budget, quadrature and per-channel parameters. share: a
+ * distributed build's (nullable), whose ranks hold 1 / n_ranks each. */
 static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
-                            const ll_monitor *monitor, const char *fn)
+                            const ll_monitor *monitor, const char *fn, ll_share *share)
 {
     ll_cost_plan cost;
     ll_status s = build_start(b, m, opts, monitor, fn);
+    b->share = share;
     if (s == LL_OK)
         s = ll_material_plan(m, &b->o, &b->n, &b->orders, &b->nch);
     if (s != LL_OK)
@@ -298,6 +303,10 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     ll_material_params(m, b->nch, b->params);
     ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
                      b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
+    if (share) {
+        cost.peak_bytes /= (double)share->n_ranks;
+        share->peak_bytes = cost.peak_bytes;
+    }
     s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);
     if (s != LL_OK) {
         build_free(b);
@@ -414,7 +423,7 @@ ll_status ll_material_build_layers_cached(const ll_material *material,
         if (s != LL_OK)
             return s;
     }
-    s = build_init(&b, material, opts, monitor, "ll_material_build_layers");
+    s = build_init(&b, material, opts, monitor, "ll_material_build_layers", NULL);
     if (s != LL_OK)
         return s;
     b.cache = cache;
@@ -502,7 +511,7 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_build: out_path is NULL or empty");
     if (material && material->n_axes > 0)
         return ll_material_build_textured(material, opts, monitor, out_path);
-    s = build_init(&b, material, opts, monitor, "ll_material_build");
+    s = build_init(&b, material, opts, monitor, "ll_material_build", NULL);
     if (s != LL_OK)
         return s;
     /* The writing's share of the progress bar. */
@@ -522,5 +531,132 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
     for (c = 0; c < 3; ++c)
         ll_layer_destroy(layers[c]);
     build_free(&b);
+    return s;
+}
+
+/* ------------------------------------------------- distributed builds
+ * (layerlab/ll_distribution.h): the same build on every rank, each word
+ * layer keeping only the rank's orders (layer/distribution.c), and the
+ * finished stack gathered on rank 0. Every path through here makes the
+ * same sequence of agreements and exchanges on every rank. */
+
+static ll_status share_read(ll_share *share, const ll_distribution *dist, const char *fn)
+{
+    ll_distribution d = LL_DISTRIBUTION_INIT;
+    ll_status s;
+    memset(share, 0, sizeof *share);
+    if (!dist)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: dist is NULL", fn);
+    s = ll_struct_read(&d, sizeof d, dist, fn, "ll_distribution");
+    if (s != LL_OK)
+        return s;
+    if (d.n_ranks < 1 || d.rank < 0 || d.rank >= d.n_ranks || !d.alltoallv)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: the distribution has rank %d of %d ranks and %s alltoallv; "
+                       "expected 0 <= rank < n_ranks and a function",
+                       fn, d.rank, d.n_ranks, d.alltoallv ? "an" : "no");
+    return ll_share_begin(share, &d);
+}
+
+/* The build on every rank; s: this rank's state so far (a failure is only
+ * agreed). On success rank 0 holds the layers whole, the others none. */
+static ll_status build_shared(const ll_material *material, const ll_build_options *opts,
+                              const ll_monitor *monitor, ll_share *share, ll_status s,
+                              ll_layer *layers[3], size_t *n_channels,
+                              ll_bsdf_write_options *header, const char *fn)
+{
+    build b;
+    int initialised = 0;
+    size_t c;
+
+    if (s == LL_OK && material && material->n_axes > 0)
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                    "%s: %s is swept (%zu bases): distribute its bases instead, each "
+                    "built with an ll_material_builder (llbuild-mpi does)",
+                    fn, material->source, ll_material_basis_count(material));
+    if (s == LL_OK)
+        s = build_init(&b, material, opts, monitor, fn, share);
+    if (s == LL_OK) {
+        initialised = 1;
+        s = run_build(&b, layers, 0.0);
+    }
+    if (!share->settled)
+        s = ll_share_agree(share, s);
+    if (s == LL_OK)
+        s = ll_share_gather_layers(share, layers, b.nch);
+    if (s == LL_OK) {
+        b.done = b.total;
+        report(&b, "done");
+        s = check_cancel(&b);
+    }
+    if (!share->settled)
+        s = ll_share_agree(share, s);
+    if (s == LL_OK) {
+        *n_channels = b.nch;
+        if (header && share->rank == 0)
+            fill_header(b.m, &b.o, b.nch, header);
+    }
+    if (s != LL_OK || share->rank != 0)
+        for (c = 0; c < 3; ++c) {
+            ll_layer_destroy(layers[c]);
+            layers[c] = NULL;
+        }
+    if (initialised)
+        build_free(&b);
+    return s;
+}
+
+ll_status ll_material_build_layers_distributed(const ll_material *material,
+                                               const ll_build_options *opts,
+                                               const ll_monitor *monitor,
+                                               const ll_distribution *dist,
+                                               ll_layer *layers[3], size_t *n_channels,
+                                               ll_bsdf_write_options *header)
+{
+    static const char fn[] = "ll_material_build_layers_distributed";
+    ll_share share;
+    ll_status s;
+    size_t c;
+
+    if (!layers || !n_channels)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers or n_channels is NULL", fn);
+    for (c = 0; c < 3; ++c)
+        layers[c] = NULL;
+    *n_channels = 0;
+    s = share_read(&share, dist, fn);
+    if (s != LL_OK)
+        return s; /* no collective to agree with */
+    if (header)
+        s = ll_struct_check(header, fn, "ll_bsdf_write_options");
+    s = build_shared(material, opts, monitor, &share, s, layers, n_channels, header, fn);
+    ll_share_end(&share);
+    return s;
+}
+
+ll_status ll_material_build_distributed(const ll_material *material,
+                                        const ll_build_options *opts,
+                                        const ll_monitor *monitor,
+                                        const ll_distribution *dist, const char *out_path)
+{
+    static const char fn[] = "ll_material_build_distributed";
+    ll_layer *layers[3] = { NULL, NULL, NULL };
+    size_t n_channels = 0, c;
+    ll_share share;
+    ll_status s = share_read(&share, dist, fn);
+
+    if (s != LL_OK)
+        return s;
+    if (share.rank == 0 && (!out_path || !*out_path))
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out_path is NULL or empty", fn);
+    s = build_shared(material, opts, monitor, &share, s, layers, &n_channels, NULL, fn);
+    if (s == LL_OK) {
+        /* Rank 0 writes (atomically) while the others wait for the outcome. */
+        if (share.rank == 0)
+            s = ll_material_write(material, opts, layers, n_channels, out_path);
+        for (c = 0; c < 3; ++c)
+            ll_layer_destroy(layers[c]);
+        s = ll_share_agree(&share, s);
+    }
+    ll_share_end(&share);
     return s;
 }

@@ -75,10 +75,13 @@ static ll_status medium_order(size_t order, void *ctx)
     ll_status s;
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
-    /* Beyond the kept moments an order is the forward term alone, the same
-     * for all of them: one shared order, no n x n matrix (order 0 always
-     * has a moment, K >= 1). */
-    if (order >= job->K && job->finish) {
+    /* Another rank's order in a distributed build (layer/distribution.c):
+     * not computed, NULL. Beyond the kept moments an order is the forward
+     * term alone, the same for all of them: one shared order, no n x n
+     * matrix (order 0 always has a moment, K >= 1). */
+    if (!ll_layer_owns_order(job->layer, order)) {
+        s = LL_OK;
+    } else if (order >= job->K && job->finish) {
         s = job->finish->order(job->finish->user, order, NULL, job->forward,
                                &job->result[order]);
     } else if (order >= job->K) {

@@ -385,8 +385,8 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
     s = ll_watch_stage(watch, "measured", 0.1, 0.9, layer->n / 2) ? ll_watch_check(watch, fn)
                                                                    : LL_OK;
     if (s == LL_OK)
-        s = ll_layer_build_by_columns(layer, layer->n / 2, merl_column, NULL, &job,
-                                      &job.builders, watch, fn);
+        s = ll_layer_build_by_columns_ex(layer, layer->n / 2, layer->n / 2, merl_column, NULL,
+                                         &job, &job.builders, NULL, 0, watch, fn);
     ll_free(cos_table);
     return s;
 }

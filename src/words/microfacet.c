@@ -1147,9 +1147,14 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
     job.eta_im = eta_im;
     job.conserve_energy = conserve_energy;
     s = ll_watch_stage(&watch, "interface", 0.1, 0.85, n) ? ll_watch_check(&watch, fn) : LL_OK;
-    if (s == LL_OK)
-        s = ll_layer_build_by_columns(layer, n, layer_column, finish_order0, &job,
-                                      &job.builders, &watch, fn);
+    if (s == LL_OK) {
+        /* finish_order0 reads order 0 (and the mirror's) whole. */
+        double *dense[2];
+        dense[0] = order0;
+        dense[1] = ref0;
+        s = ll_layer_build_by_columns_ex(layer, n, 0, layer_column, finish_order0, &job,
+                                         &job.builders, dense, ref0 ? 2 : 1, &watch, fn);
+    }
     goto done;
 oom:
     s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory for %zu nodes",

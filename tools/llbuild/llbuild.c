@@ -441,6 +441,23 @@ static int die_cancelled(void)
     return 128 + sig;
 }
 
+/* llbuild-mpi (tools/llbuild-mpi) includes this file for the options,
+ * messages and summary above and brings its own main. */
+/* The build options the command line asks for (llbuild and llbuild-mpi). */
+static void options_from_args(const args *a, ll_build_options *o)
+{
+    o->n_nodes = a->nodes;
+    o->n_orders = a->orders;
+    o->n_channels = a->channels;
+    o->threads = a->threads;
+    o->error_goal = a->error;
+    o->cancel = &cancel_flag;
+    o->max_memory_bytes = a->max_memory;
+    o->tolerance = a->tolerance;
+    o->mu_min = a->mu_min;
+}
+
+#ifndef LLBUILD_NO_MAIN
 int main(int argc, char **argv)
 {
     args a;
@@ -464,15 +481,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
         return exit_code_for(s);
     }
-    o.n_nodes = a.nodes;
-    o.n_orders = a.orders;
-    o.n_channels = a.channels;
-    o.threads = a.threads;
-    o.error_goal = a.error;
-    o.cancel = &cancel_flag;
-    o.max_memory_bytes = a.max_memory;
-    o.tolerance = a.tolerance;
-    o.mu_min = a.mu_min;
+    options_from_args(&a, &o);
     if (cancel_flag) {
         ll_material_destroy(m);
         return die_cancelled();
@@ -530,3 +539,4 @@ int main(int argc, char **argv)
     ll_material_destroy(m);
     return code >= 0 ? code : die_cancelled();
 }
+#endif /* LLBUILD_NO_MAIN */

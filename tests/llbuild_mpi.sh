@@ -1,0 +1,179 @@
+#!/bin/sh
+# llbuild-mpi across 1 to 4 ranks on one machine (oversubscribed): its files
+# are llbuild's byte for byte; bad input exits 1 with one message; a budget
+# refusal names the rank and its estimate; a rank killed with SIGKILL, or an
+# interrupt to mpirun, leaves no file and no temporary.
+# Run by `make test` from the checkout with BUILD set; skipped (with a
+# message, exit 0) where OpenMPI is not installed (make deps installs it).
+set -u
+BUILD=${BUILD:-build}
+llbuild="$BUILD/bin/llbuild"
+mpi="$BUILD/bin/llbuild-mpi"
+if ! command -v mpirun >/dev/null 2>&1 || [ ! -x "$mpi" ]; then
+    echo "llbuild_mpi.sh: skipped: needs mpirun and $mpi (OpenMPI: make deps)"
+    echo "0 passed, 0 failed"
+    exit 0
+fi
+tmp=$(mktemp -d /tmp/llbuild_mpi_test.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+# CI runs as root, which OpenMPI refuses unless told.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# Under `make test SANITIZE=1`: OpenMPI keeps allocations past MPI_Finalize,
+# which LeakSanitizer would report on every rank; the library's side of a
+# distributed build is leak-checked by test_material_distributed instead.
+export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
+# No MPI warnings about the transport on a machine without a network card.
+export OMPI_MCA_btl=self,vader OMPI_MCA_btl_base_warn_component_unused=0
+
+ok() { passed=$((passed + 1)); }
+bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
+run() { n=$1; shift; mpirun --oversubscribe -n "$n" "$mpi" "$@"; }
+
+# --- byte-identical to llbuild for every N: a medium between rough
+# interfaces (RGB from the named metal, and mono), and a transmissive stack.
+cat >"$tmp/medium.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=0.2
+medium      albedo=0.8,0.5,0.9 g=0.6 tau=1.5
+conductor   eta=Au alpha=0.15
+set nodes=40 orders=60
+LAYERS
+cat >"$tmp/glass.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=0.3
+medium      albedo=0.95 g=0.3 tau=0.5
+dielectric  eta=0.8 alpha=0.1
+set nodes=30 orders=40
+LAYERS
+for case in "medium --rgb" "medium --mono" "glass --mono"; do
+    set -- $case
+    "$llbuild" -q --threads 1 "$2" "$tmp/$1.layers" -o "$tmp/$1$2.ref.bsdf" ||
+        bad "llbuild $case failed"
+    for n in 1 2 3 4; do
+        out="$tmp/$1$2.$n.bsdf"
+        if run "$n" -q --threads 1 "$2" "$tmp/$1.layers" -o "$out" >"$tmp/out" 2>"$tmp/err"; then
+            if cmp -s "$tmp/$1$2.ref.bsdf" "$out"; then ok; else
+                bad "$case on $n ranks: the file differs from llbuild's"; fi
+        else
+            bad "$case on $n ranks failed"; sed 's/^/  | /' "$tmp/err" | head -5
+        fi
+    done
+done
+# A textured material (bases across the ranks, shared words, the streaming
+# writer): byte-identical too, and no spill left beside the output.
+cat >"$tmp/tex.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=[0.1..0.4:3]
+medium      albedo=0.8,0.6,0.4 g=0.5 tau=0.5
+conductor   eta=Au alpha=[0.1 0.2]
+set nodes=30 orders=40
+LAYERS
+"$llbuild" -q --threads 1 "$tmp/tex.layers" -o "$tmp/tex.ref.bsdf" || bad "llbuild textured failed"
+for n in 1 2 3 4; do
+    if run "$n" -q --threads 1 "$tmp/tex.layers" -o "$tmp/tex.$n.bsdf" >"$tmp/out" 2>"$tmp/err"
+    then
+        if cmp -s "$tmp/tex.ref.bsdf" "$tmp/tex.$n.bsdf"; then ok; else
+            bad "textured on $n ranks: the file differs from llbuild's"; fi
+    else
+        bad "textured on $n ranks failed"; sed 's/^/  | /' "$tmp/err" | head -5
+    fi
+done
+[ "$(ls -A "$tmp" | grep -c '\.tmp$')" -eq 0 ] && ok || bad "a textured build left a temporary"
+# The summary is llbuild's, from rank 0 only.
+run 2 --threads 1 "$tmp/medium.layers" -o "$tmp/summary.bsdf" >"$tmp/out" 2>/dev/null
+if [ "$(grep -c '^resolution' "$tmp/out")" -eq 1 ] && grep -q '^ranks        2' "$tmp/out"; then
+    ok; else bad "summary: expected one from rank 0"; sed 's/^/  | /' "$tmp/out"; fi
+
+# --- bad input: exit 1 on every rank, one message with file:line:column
+printf 'dielectric eta=1.5 alpha=0.1\nmedium albedo=2 tau=1\n' >"$tmp/bad.layers"
+run 3 "$tmp/bad.layers" -o "$tmp/bad.bsdf" >"$tmp/out" 2>"$tmp/err"
+code=$?
+[ "$code" -eq 1 ] && ok || bad "bad material: exit $code, expected 1"
+lines=$(grep -c '^llbuild: ' "$tmp/err")
+[ "$lines" -eq 1 ] && ok || { bad "bad material: $lines messages, expected 1"; cat "$tmp/err"; }
+grep -q 'bad.layers:2:15: albedo=2 is out of range' "$tmp/err" && ok ||
+    bad "bad material: no file:line:column in the message"
+[ ! -e "$tmp/bad.bsdf" ] && ok || bad "bad material left a file"
+
+# --- a budget refusal: each rank's share is checked; the message names
+# the rank and its estimate; exit 1 as llbuild's.
+run 2 -q --threads 1 --nodes 60 --orders 120 --max-memory 1M "$tmp/medium.layers" \
+    -o "$tmp/budget.bsdf" >"$tmp/out" 2>"$tmp/err"
+code=$?
+[ "$code" -eq 1 ] && ok || bad "over budget: exit $code, expected 1"
+grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok ||
+    { bad "over budget: no rank and estimate in the message"; cat "$tmp/err"; }
+
+# --- a rank killed (SIGKILL, no chance to clean up) and an interrupt to
+# mpirun: no file, no temporary. The build is long enough (tens of seconds
+# on one thread) that the signal comes while it runs.
+cat >"$tmp/long.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=0.1
+medium      albedo=0.9 g=0.8 tau=4
+conductor   eta=Au alpha=0.1
+set nodes=300 orders=600
+LAYERS
+# Start a build in the background; wait for its ranks (children of mpirun).
+start_long() {
+    mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/long.layers" \
+        -o "$tmp/long.bsdf" >"$tmp/out" 2>"$tmp/err" &
+    launcher=$!
+    tries=0
+    while [ "$(pgrep -P "$launcher" | wc -l)" -lt 3 ] && [ $tries -lt 100 ]; do
+        sleep 0.1
+        tries=$((tries + 1))
+    done
+    sleep 1
+}
+leftovers() { ls -A "$tmp" | grep -c 'long\.bsdf'; }
+start_long
+victim=$(pgrep -P "$launcher" | sed -n 2p)
+[ -n "$victim" ] && kill -9 "$victim"
+wait "$launcher"
+code=$?
+[ "$code" -ne 0 ] && ok || bad "a killed rank: mpirun exited 0"
+[ "$(leftovers)" -eq 0 ] && ok || { bad "a killed rank left:"; ls -A "$tmp"; }
+start_long
+kill -INT "$launcher"
+wait "$launcher"
+code=$?
+[ "$code" -ne 0 ] && ok || bad "interrupted mpirun exited 0"
+[ "$(leftovers)" -eq 0 ] && ok || { bad "an interrupt left:"; ls -A "$tmp"; }
+# (No rank is left behind either.)
+sleep 0.5
+pgrep -f "$tmp/long.layers" >/dev/null && bad "ranks still running after the interrupt" || ok
+
+# A textured build with a worker killed, and with an interrupt: no file and
+# no temporary (the writer's spill is unlinked once open; rank 0 aborts it).
+cat >"$tmp/longtex.layers" <<'LAYERS'
+dielectric  eta=1.5 alpha=[0.1..0.4:4]
+medium      albedo=0.9 g=0.8 tau=4
+conductor   eta=Au alpha=[0.1 0.2]
+set nodes=200 orders=300
+LAYERS
+start_tex() {
+    mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/longtex.layers" \
+        -o "$tmp/longtex.bsdf" >"$tmp/out" 2>"$tmp/err" &
+    launcher=$!
+    tries=0
+    while [ "$(pgrep -P "$launcher" | wc -l)" -lt 3 ] && [ $tries -lt 100 ]; do
+        sleep 0.1
+        tries=$((tries + 1))
+    done
+    sleep 2
+}
+start_tex
+victim=$(pgrep -P "$launcher" | sed -n 3p)
+[ -n "$victim" ] && kill -9 "$victim"
+wait "$launcher"
+code=$?
+[ "$code" -ne 0 ] && ok || bad "textured, a killed rank: mpirun exited 0"
+[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+    { bad "textured, a killed rank left:"; ls -A "$tmp"; }
+start_tex
+kill -INT "$launcher"
+wait "$launcher"
+[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+    { bad "textured, an interrupt left:"; ls -A "$tmp"; }
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
