@@ -82,6 +82,7 @@ typedef struct ll_word_params {
     const ll_word_desc *desc;
     int choice;
     double v[LL_WORD_MAX_VALUES];
+    const char *file; /* the word's table (measured), or NULL: part of its identity */
 } ll_word_params;
 
 /* Luminance weights of linear sRGB (as the .bsdf Y channel). */

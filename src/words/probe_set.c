@@ -147,6 +147,15 @@ ll_status ll_probe_medium(double mu_min, ll_probe_set *out)
     return s;
 }
 
+ll_status ll_probe_opaque(double mu_min, ll_probe_set *out)
+{
+    /* A conductor's probes are those of any surface that only reflects
+     * light arriving from above: around the mirror direction (the
+     * specular peak of a measured BRDF is there too) out to 0.25 in mu,
+     * plus the pseudo-random ones for the rest of the hemisphere. */
+    return ll_probe_interface(1.0, 1.0, mu_min, out);
+}
+
 void ll_probe_free(ll_probe_set *set)
 {
     ll_free(set->pairs);
