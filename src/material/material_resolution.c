@@ -101,6 +101,8 @@ static int same_resolution_key(const ll_word_params *a, const ll_word_params *b)
     size_t k;
     if (a->desc != b->desc || a->choice != b->choice)
         return 0;
+    if ((a->file || b->file) && (!a->file || !b->file || strcmp(a->file, b->file) != 0))
+        return 0;
     if (reads == 0)
         return ll_word_params_equal(a, b);
     for (k = 0; k < LL_WORD_MAX_VALUES; ++k)

@@ -103,10 +103,15 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
 
 /* The resolution at which the projected table is within the tolerance of
  * twice it (issue 14; words/merl_probe.c): the file is read once more for
- * the search, which costs what docs/method.md "Resolution" measures. */
+ * the search, which costs what docs/method.md "Resolution" measures (5 to
+ * 18 s for a table of the database's size). One search per file, on the
+ * luminance mix, for every channel (resolution_reads: the file alone): the
+ * channels of a table share its cells, and so its steps, and a relative
+ * error does not see their scales; three searches would triple the cost. */
 static ll_status measured_resolution(const ll_word_params *p, double tolerance, double mu_min,
                                      size_t *n, size_t *m)
 {
+    static const double luma[3] = { LL_LUMA_R, LL_LUMA_G, LL_LUMA_B };
     ll_merl *merl = NULL;
     ll_status s;
     if (!p->file)
@@ -115,7 +120,7 @@ static ll_status measured_resolution(const ll_word_params *p, double tolerance, 
     *n = MEASURED_NODES;
     *m = MEASURED_ORDERS;
     if (s == LL_OK)
-        s = ll_merl_resolution(merl, p->v, tolerance, mu_min, n, m, NULL);
+        s = ll_merl_resolution(merl, luma, tolerance, mu_min, n, m, NULL);
     ll_merl_free(merl);
     return s;
 }
@@ -170,5 +175,5 @@ const ll_word_desc ll_word_measured = {
     "measured", "measured file=gold-metallic-paint.binary", "measured", 1, 0,
     { { "file", 0, -1, 0, 0, 0, 0, NULL, measured_parse_file, NULL } },
     measured_finish, measured_needs_colour, NULL, measured_params, measured_resolution,
-    measured_cost, measured_build, measured_metadata, measured_destroy, 0
+    measured_cost, measured_build, measured_metadata, measured_destroy, 1u << 3
 };
