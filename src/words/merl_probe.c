@@ -44,19 +44,20 @@ static ll_status pair_values(size_t u, void *ctx)
     const pair_job *job = ctx;
     double *f = ll_alloc_array(job->N, sizeof(double)), *a = ll_alloc_array(job->m, sizeof(double));
     double *acc = job->at_phi + u * job->set->n_phi;
+    ll_status s = LL_OK;
     if (!f || !a) {
-        ll_free(f);
-        ll_free(a);
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "measured resolution: out of memory for %zu orders",
-                       job->m);
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "measured resolution: out of memory for %zu orders",
+                    job->m);
+        goto done;
     }
     ll_merl_pair_series(job->merl, job->weights, job->half[job->in[u]], job->half[job->out[u]],
                         job->m, job->N, job->cos_table, f, a);
     memset(acc, 0, job->set->n_phi * sizeof(double));
     ll_probe_add_series(a, job->m, job->set->phi, job->set->n_phi, 1.0, acc);
+done:
     ll_free(f);
     ll_free(a);
-    return LL_OK;
+    return s;
 }
 
 ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3], size_t n, size_t m,
