@@ -184,7 +184,8 @@ static ll_status true_series(ll_microfacet *mf, const ll_probe_pair *pair, doubl
 static size_t needed_length(const double *c, size_t len, const double *phi, size_t n_phi,
                             const double *full, double floor, double tolerance)
 {
-    double c1[12], prev[12], cur[12], sum[12];
+    double c1[LL_PROBE_MAX_PHI], prev[LL_PROBE_MAX_PHI], cur[LL_PROBE_MAX_PHI],
+        sum[LL_PROBE_MAX_PHI];
     size_t k, l, needed = 1;
     for (k = 0; k < n_phi; ++k) {
         c1[k] = cos(phi[k]);

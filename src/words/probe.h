@@ -21,10 +21,13 @@ typedef struct ll_probe_pair {
     size_t group;
 } ll_probe_pair;
 
+/* Azimuths per pair, at most. */
+#define LL_PROBE_MAX_PHI 16
+
 typedef struct ll_probe_set {
     ll_probe_pair *pairs;
     size_t n_pairs, cap_pairs;
-    double phi[12];
+    double phi[LL_PROBE_MAX_PHI];
     size_t n_phi;
     size_t n_groups;
 } ll_probe_set;
