@@ -188,11 +188,13 @@ static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.5, 0.8 };
 /* The subset CI runs (index into cases, alpha): the issue's own failure
  * (eta 1.5, alpha 0.5), a dielectric below 1, and two metals, whose layers
  * at twice the chosen resolution stay small (n <= 600): 17 s of CPU with
- * eta 2, alpha 0.5 too, which the full grid keeps. */
+ * eta 2, alpha 0.5 too, which the full grid keeps. And eta 1.5, alpha 0.8,
+ * which the full grid found 1.04% off at phi 0.5 (transmission at mu_i
+ * 0.1) while the probes' azimuths stepped from 0.3 to 0.6 (probe_set.c). */
 static const struct {
     size_t c;
     double alpha;
-} ci_subset[] = { { 2, 0.5 }, { 4, 0.8 }, { 5, 0.3 }, { 7, 0.5 } };
+} ci_subset[] = { { 2, 0.5 }, { 2, 0.8 }, { 4, 0.8 }, { 5, 0.3 }, { 7, 0.5 } };
 
 static void interfaces_meet_the_tolerance(void **state)
 {

@@ -67,6 +67,7 @@ static const size_t estimate_ends[] = {
     offsetof(ll_build_estimate, over_budget),
     offsetof(ll_build_estimate, n_bases),
     offsetof(ll_build_estimate, file_bytes),
+    offsetof(ll_build_estimate, resolution_error),
     sizeof(ll_build_estimate),
 };
 static const size_t monitor_ends[] = {
@@ -411,7 +412,7 @@ static void every_field_is_listed(void **state)
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 13);
     assert_int_equal(COUNT(build_options_ends), 12);
-    assert_int_equal(COUNT(estimate_ends), 14);
+    assert_int_equal(COUNT(estimate_ends), 15);
     assert_int_equal(COUNT(monitor_ends), 3);
     assert_int_equal(COUNT(open_options_ends), 4);
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
@@ -421,7 +422,7 @@ static void every_field_is_listed(void **state)
     assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
                     offsetof(ll_build_estimate, n_bases) &&
                 offsetof(ll_build_estimate, over_budget) + 8 >= offsetof(ll_build_estimate, n_bases));
-    assert_int_equal(offsetof(ll_build_estimate, file_bytes) + sizeof(double),
+    assert_int_equal(offsetof(ll_build_estimate, resolution_error) + sizeof(double),
                      sizeof(ll_build_estimate));
     assert_int_equal(offsetof(ll_monitor, user) + sizeof(void *), sizeof(ll_monitor));
     assert_int_equal(offsetof(ll_open_options, max_nodes) + sizeof(size_t),

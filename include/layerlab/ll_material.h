@@ -184,10 +184,18 @@ typedef struct ll_build_estimate {
      * bases at once, never all). */
     size_t n_bases;       /* ll_material_basis_count: 1 for an untextured build  */
     double file_bytes;    /* estimated size of the .bsdf file                    */
+    /* Appended in 1.x (the tolerance): the largest relative error, where the
+     * BSDF is above 1% of its peak at |mu| >= mu_min, that the chosen
+     * resolution was measured to against twice itself, over every word (0
+     * for words exact at any resolution); HUGE_VAL when some word is beyond
+     * the search's reach (ll_heuristic_*_ex: e.g. |g| > 0.95, a MERL table
+     * sharper than its own cells) and its resolution is not verified; -1
+     * when the resolution is given (set nodes= orders=, opts), not chosen. */
+    double resolution_error;
 } ll_build_estimate;
 
 #define LL_BUILD_ESTIMATE_INIT \
-    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0 }
+    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0, -1.0 }
 
 /* estimate->struct_size may be the sizeof of an older, smaller
  * ll_build_estimate: only the fields it covers are written (the least

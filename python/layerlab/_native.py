@@ -130,7 +130,8 @@ class BuildEstimate(ctypes.Structure):
                 ("max_memory_bytes", ctypes.c_size_t),
                 ("over_budget", ctypes.c_int),
                 ("n_bases", ctypes.c_size_t),
-                ("file_bytes", ctypes.c_double)]
+                ("file_bytes", ctypes.c_double),
+                ("resolution_error", ctypes.c_double)]
 
     def __init__(self):
         super().__init__()

@@ -153,8 +153,11 @@ class Material:
         What a build with these keywords would take, estimated without
         building (as ``llbuild --dry-run``): ``nodes``, ``orders``,
         ``channels``, ``layers_built``, ``additions``, ``doublings``,
-        ``peak_bytes`` (an upper bound) and ``seconds`` (wall time; within a
-        factor of about 2 on machines like the one it was calibrated on).
+        ``peak_bytes`` (an upper bound), ``seconds`` (wall time; within a
+        factor of about 2 on machines like the one it was calibrated on) and
+        ``resolution_error`` (the largest relative error the chosen
+        resolution was measured to against twice itself; ``inf`` when a word
+        could not be verified, -1 when the resolution is given).
         """
         build = _Build(nodes, orders, channels, threads, error_goal, None, None,
                        tolerance, mu_min)
@@ -163,7 +166,7 @@ class Material:
         return {"nodes": est.n_nodes, "orders": est.n_orders, "channels": est.n_channels,
                 "layers_built": est.layers_built, "additions": est.additions,
                 "doublings": est.doublings, "peak_bytes": est.peak_bytes,
-                "seconds": est.seconds}
+                "seconds": est.seconds, "resolution_error": est.resolution_error}
 
     def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
               progress=None, cancel=None, tolerance=0.0, mu_min=0.0):

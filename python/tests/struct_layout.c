@@ -82,5 +82,6 @@ int main(void)
     FIELD(ll_build_estimate, over_budget);
     FIELD(ll_build_estimate, n_bases);
     FIELD(ll_build_estimate, file_bytes);
+    FIELD(ll_build_estimate, resolution_error);
     return 0;
 }

@@ -82,6 +82,7 @@ typedef struct ll_word_params {
     const ll_word_desc *desc;
     int choice;
     double v[LL_WORD_MAX_VALUES];
+    const char *file; /* the word's table (measured), or NULL: part of its identity */
 } ll_word_params;
 
 /* Luminance weights of linear sRGB (as the .bsdf Y channel). */
@@ -137,12 +138,16 @@ LL_INTERNAL ll_status ll_material_plan(const ll_material *m, const ll_build_opti
 typedef struct ll_resolution_memo {
     ll_word_params *key;
     size_t (*answer)[2];
+    double *error;
     size_t count, capacity;
 } ll_resolution_memo;
-#define LL_RESOLUTION_MEMO_INIT { NULL, NULL, 0, 0 }
+#define LL_RESOLUTION_MEMO_INIT { NULL, NULL, NULL, 0, 0 }
+/* error (nullable): the largest error a word's resolution was verified
+ * to (HUGE_VAL: some word not verified), -1 when the resolution is given. */
 LL_INTERNAL ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                                             ll_resolution_memo *memo, size_t *n_nodes,
-                                            size_t *n_orders, size_t *n_channels);
+                                            size_t *n_orders, size_t *n_channels,
+                                            double *error);
 LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 /* The smallest node count whose quadrature is meaningful
  * (docs/material-language.md, "Settings"), and the largest node or order
@@ -204,7 +209,7 @@ LL_INTERNAL void ll_material_basis_view(const ll_material *m, size_t basis, ll_w
  * (all bases of a file share nodes and orders). */
 LL_INTERNAL ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
                                              size_t *n_nodes, size_t *n_orders,
-                                             size_t *n_channels);
+                                             size_t *n_channels, double *error);
 
 /* ---- material_sweep_cache.c: the builder's cache of word layers: LRU
  * over LL_WORD_CACHE_ENTRIES entries kept in a scratch file, of which the

@@ -308,6 +308,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     ll_word_params(*params)[3] = NULL;
     ll_cost_plan plan;
     size_t n, m, nch;
+    double resolution_error;
     ll_status s;
 
     /* Computed in full here, then written up to the caller's struct_size:
@@ -319,7 +320,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
     s = ll_build_options_read(opts, &o, "ll_material_estimate");
     if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &n, &m, &nch);
+        s = ll_material_plan_bases(material, &o, &n, &m, &nch, &resolution_error);
     if (s != LL_OK)
         return s;
     if (material->n_axes > 0) {
@@ -339,6 +340,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     }
     e.n_bases = ll_material_basis_count(material);
     e.file_bytes = plan.file_bytes;
+    e.resolution_error = resolution_error;
     e.n_nodes = n;
     e.n_orders = m;
     e.n_channels = nch;

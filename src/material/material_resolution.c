@@ -20,6 +20,7 @@
 #include "material/word_table.h"
 
 #include <stddef.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -101,6 +102,8 @@ static int same_resolution_key(const ll_word_params *a, const ll_word_params *b)
     size_t k;
     if (a->desc != b->desc || a->choice != b->choice)
         return 0;
+    if ((a->file || b->file) && (!a->file || !b->file || strcmp(a->file, b->file) != 0))
+        return 0;
     if (reads == 0)
         return ll_word_params_equal(a, b);
     for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
@@ -113,8 +116,10 @@ void ll_resolution_memo_free(ll_resolution_memo *memo)
 {
     ll_free(memo->key);
     ll_free(memo->answer);
+    ll_free(memo->error);
     memo->key = NULL;
     memo->answer = NULL;
+    memo->error = NULL;
     memo->count = memo->capacity = 0;
 }
 
@@ -122,7 +127,7 @@ void ll_resolution_memo_free(ll_resolution_memo *memo)
  * key (another channel's, another basis's): the resolution search probes
  * layers (a second or more per word), the look-up is a comparison. */
 static ll_status word_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                 ll_resolution_memo *memo, size_t *n, size_t *m)
+                                 ll_resolution_memo *memo, size_t *n, size_t *m, double *error)
 {
     size_t k;
     ll_status s;
@@ -130,15 +135,18 @@ static ll_status word_resolution(const ll_word_params *p, double tolerance, doub
         if (same_resolution_key(&memo->key[k], p)) {
             *n = memo->answer[k][0];
             *m = memo->answer[k][1];
+            *error = memo->error[k];
             return LL_OK;
         }
-    s = p->desc->resolution(p, tolerance, mu_min, n, m);
+    *error = HUGE_VAL; /* (a hook that says nothing has verified nothing) */
+    s = p->desc->resolution(p, tolerance, mu_min, n, m, error);
     if (s != LL_OK)
         return s;
     if (memo->count == memo->capacity) {
         size_t capacity = memo->capacity ? 2 * memo->capacity : 8;
         ll_word_params *key = ll_realloc_array(memo->key, capacity, sizeof *key);
         size_t(*answer)[2];
+        double *errors;
         if (!key)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution: out of memory");
         memo->key = key;
@@ -146,21 +154,26 @@ static ll_status word_resolution(const ll_word_params *p, double tolerance, doub
         if (!answer)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution: out of memory");
         memo->answer = answer;
+        errors = ll_realloc_array(memo->error, capacity, sizeof *errors);
+        if (!errors)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution: out of memory");
+        memo->error = errors;
         memo->capacity = capacity;
     }
     memo->key[memo->count] = *p;
     memo->answer[memo->count][0] = *n;
     memo->answer[memo->count][1] = *m;
+    memo->error[memo->count] = *error;
     ++memo->count;
     return LL_OK;
 }
 
 ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                                 ll_resolution_memo *memo, size_t *n_nodes, size_t *n_orders,
-                                size_t *n_channels)
+                                size_t *n_channels, double *error)
 {
     size_t channels, n = 0, orders = 0, w, c;
-    double tolerance, mu_min;
+    double tolerance, mu_min, worst = -1.0; /* -1: given, not chosen */
     ll_status s;
 
     channels = o->n_channels ? o->n_channels
@@ -169,13 +182,15 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
     goal_of(m, o, &tolerance, &mu_min);
     if (!(o->n_nodes || m->nodes) || !(o->n_orders || m->orders)) {
         double above[3] = { 1.0, 1.0, 1.0 };
+        worst = 0.0;
         for (w = 0; w < m->count; ++w)
             for (c = 0; c < channels; ++c) {
                 ll_word_params p;
                 size_t wn, wm;
+                double we;
                 ll_word_params_above(m, w, c, channels, above[c], &p);
                 above[c] *= ll_word_index_ratio(m, w, c, channels);
-                s = word_resolution(&p, tolerance, mu_min, memo, &wn, &wm);
+                s = word_resolution(&p, tolerance, mu_min, memo, &wn, &wm, &we);
                 if (s != LL_OK) {
                     char detail[700]; /* (the message is rewritten below) */
                     snprintf(detail, sizeof detail, "%s", ll_last_error_message());
@@ -187,6 +202,8 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                     n = wn;
                 if (wm > orders)
                     orders = wm;
+                if (!(we <= worst)) /* (HUGE_VAL and NaN stay the worst) */
+                    worst = we;
             }
     }
     if (n % 2)
@@ -206,9 +223,15 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                        "%s: the heuristics ask for %zu nodes x %zu orders, beyond the %d "
                        "supported; give the resolution with set nodes=N orders=M",
                        m->source, n, orders, LL_MATERIAL_MAX_RESOLUTION);
+    /* A resolution given in part keeps the searched error of the other
+     * part only when both were searched. */
+    if ((o->n_nodes || m->nodes) || (o->n_orders || m->orders))
+        worst = -1.0;
     *n_nodes = n;
     *n_orders = orders;
     *n_channels = channels;
+    if (error)
+        *error = worst;
     return LL_OK;
 }
 
@@ -216,7 +239,7 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
                            size_t *n_orders, size_t *n_channels)
 {
     ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
-    ll_status s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels);
+    ll_status s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, NULL);
     ll_resolution_memo_free(&memo);
     return s;
 }
@@ -231,7 +254,7 @@ ll_status ll_material_resolution(const ll_material *material, const ll_build_opt
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_resolution: material is NULL");
     s = ll_build_options_read(opts, &o, "ll_material_resolution");
     if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &n, &m, &c);
+        s = ll_material_plan_bases(material, &o, &n, &m, &c, NULL);
     if (s != LL_OK)
         return s;
     if (n_nodes)

@@ -107,6 +107,9 @@ int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
     size_t k;
     if (a->desc != b->desc || a->choice != b->choice)
         return 0;
+    /* Two tables of the same size are different words. */
+    if ((a->file || b->file) && (!a->file || !b->file || strcmp(a->file, b->file) != 0))
+        return 0;
     for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
         if (a->v[k] != b->v[k])
             return 0;

@@ -329,14 +329,19 @@ void ll_material_basis_view(const ll_material *m, size_t basis, ll_word *words,
 }
 
 ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
-                                 size_t *n_nodes, size_t *n_orders, size_t *n_channels)
+                                 size_t *n_nodes, size_t *n_orders, size_t *n_channels,
+                                 double *error)
 {
     size_t bases = ll_material_basis_count(m), b, n = 0, orders = 0, nch = 0;
     ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
     ll_word *words;
     ll_status s = LL_OK;
-    if (m->n_axes == 0)
-        return ll_material_plan(m, o, n_nodes, n_orders, n_channels);
+    double worst = -1.0;
+    if (m->n_axes == 0) {
+        s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, error);
+        ll_resolution_memo_free(&memo);
+        return s;
+    }
     words = ll_alloc_array(m->count, sizeof *words);
     if (!words)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", m->source);
@@ -345,12 +350,15 @@ ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o
     for (b = 0; b < bases && s == LL_OK; ++b) {
         ll_material view;
         size_t bn, bm, bc;
+        double be;
         ll_material_basis_view(m, b, words, &view);
-        s = ll_material_plan_memo(&view, o, &memo, &bn, &bm, &bc);
+        s = ll_material_plan_memo(&view, o, &memo, &bn, &bm, &bc, &be);
         if (s == LL_OK) {
             n = bn > n ? bn : n;
             orders = bm > orders ? bm : orders;
             nch = bc;
+            if (b == 0 || !(be <= worst) || be < 0.0)
+                worst = be;
         }
     }
     ll_free(words);
@@ -359,6 +367,8 @@ ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o
         *n_nodes = n;
         *n_orders = orders;
         *n_channels = nch;
+        if (error)
+            *error = worst;
     }
     return s;
 }

@@ -90,7 +90,7 @@ ll_status ll_material_builder_create(const ll_material *m, const ll_build_option
         b->monitor_user = caller.user;
     }
     if ((s = ll_build_options_read(opts, &b->o, fn)) != LL_OK ||
-        (s = ll_material_plan_bases(m, &b->o, &b->n, &b->orders, &b->nch)) != LL_OK)
+        (s = ll_material_plan_bases(m, &b->o, &b->n, &b->orders, &b->nch, NULL)) != LL_OK)
         goto fail;
     b->words = ll_alloc_array(m->count, sizeof *b->words);
     b->cache = ll_word_cache_create();

@@ -175,10 +175,10 @@ static void conductor_params(const ll_word *w, size_t c, size_t n_channels, doub
 }
 
 static ll_status conductor_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                      size_t *n, size_t *m)
+                                      size_t *n, size_t *m, double *error)
 {
     return ll_heuristic_microfacet_ex(p->v[ALPHA], p->v[ETA], p->v[K], tolerance, mu_min, n, m,
-                                      NULL);
+                                      error);
 }
 
 static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)

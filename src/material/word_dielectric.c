@@ -38,9 +38,9 @@ static void dielectric_params(const ll_word *w, size_t c, size_t n_channels, dou
 }
 
 static ll_status dielectric_resolution(const ll_word_params *p, double tolerance,
-                                       double mu_min, size_t *n, size_t *m)
+                                       double mu_min, size_t *n, size_t *m, double *error)
 {
-    return ll_heuristic_microfacet_ex(p->v[1], p->v[0], 0.0, tolerance, mu_min, n, m, NULL);
+    return ll_heuristic_microfacet_ex(p->v[1], p->v[0], 0.0, tolerance, mu_min, n, m, error);
 }
 
 static void dielectric_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)

@@ -11,11 +11,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
-/* MERL tables sample theta_half on a square-root scale down to (1/90)^2 of
- * 90 degrees; their other axes in 1 or 2 degree steps. 100 nodes (about
- * 1.8 degrees between nodes near the horizon, finer near the pole) and 180
- * orders (azimuthal detail of 1 degree) resolve the tables' own step in
- * phi_diff; sharper highlights need `set` overrides. */
+/* The search's first guess (words/merl_probe.c searches from it): 100
+ * nodes (about 1.8 degrees between nodes near the horizon, finer near the
+ * pole) and 180 orders (azimuthal detail of 1 degree, the database's step
+ * in phi_diff), the fixed resolution before issue 14. */
 #define MEASURED_NODES 100
 #define MEASURED_ORDERS 180
 
@@ -92,6 +91,7 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
     (void)w;
     (void)above;
     out->v[3] = w->file_bytes;
+    out->file = w->file;
     if (n_channels == 3) {
         out->v[c] = 1.0;
     } else {
@@ -101,17 +101,28 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
     }
 }
 
-/* The measured BRDF's fixed resolution: no tolerance-driven choice yet
- * (issue 14 asks for the convergence of its projected lobe; not built). */
+/* The resolution at which the projected table is within the tolerance of
+ * twice it (issue 14; words/merl_probe.c): the file is read once more for
+ * the search, which costs what docs/method.md "Resolution" measures (5 to
+ * 18 s for a table of the database's size). One search per file, on the
+ * luminance mix, for every channel (resolution_reads: the file alone): the
+ * channels of a table share its cells, and so its steps, and a relative
+ * error does not see their scales; three searches would triple the cost. */
 static ll_status measured_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                     size_t *n, size_t *m)
+                                     size_t *n, size_t *m, double *error)
 {
-    (void)p;
-    (void)tolerance;
-    (void)mu_min;
+    static const double luma[3] = { LL_LUMA_R, LL_LUMA_G, LL_LUMA_B };
+    ll_merl *merl = NULL;
+    ll_status s;
+    if (!p->file)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "measured: no file");
+    s = ll_merl_load(p->file, &merl);
     *n = MEASURED_NODES;
     *m = MEASURED_ORDERS;
-    return LL_OK;
+    if (s == LL_OK)
+        s = ll_merl_resolution(merl, luma, tolerance, mu_min, n, m, error);
+    ll_merl_free(merl);
+    return s;
 }
 
 static void measured_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
@@ -164,5 +175,5 @@ const ll_word_desc ll_word_measured = {
     "measured", "measured file=gold-metallic-paint.binary", "measured", 1, 0,
     { { "file", 0, -1, 0, 0, 0, 0, NULL, measured_parse_file, NULL } },
     measured_finish, measured_needs_colour, NULL, measured_params, measured_resolution,
-    measured_cost, measured_build, measured_metadata, measured_destroy, 0
+    measured_cost, measured_build, measured_metadata, measured_destroy, 1u << 3
 };

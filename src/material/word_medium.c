@@ -87,7 +87,7 @@ static double vmf_mean_cosine(double kappa)
 }
 
 static ll_status medium_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                   size_t *n, size_t *m)
+                                   size_t *n, size_t *m, double *error)
 {
     double shape = p->v[LL_MEDIUM_SHAPE];
     if (p->choice == LL_PHASE_ISOTROPIC) {
@@ -98,6 +98,7 @@ static ll_status medium_resolution(const ll_word_params *p, double tolerance, do
          * nodes for a function the layers hold exactly. */
         (void)tolerance;
         (void)mu_min;
+        *error = 0.0; /* exact at any resolution */
         *n = LL_MATERIAL_MIN_NODES;
         *m = 1;
         return LL_OK;
@@ -118,7 +119,7 @@ static ll_status medium_resolution(const ll_word_params *p, double tolerance, do
                        shape, KAPPA_MAX, G_MAX);
     return ll_heuristic_henyey_greenstein_ex(
         p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape), tolerance, mu_min, n, m,
-        NULL);
+        error);
 }
 
 /* Measured (docs/material-language.md, "Estimates"): an HG medium's

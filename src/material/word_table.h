@@ -140,10 +140,12 @@ struct ll_word_desc {
                    ll_word_params *out);
     /* Nodes and orders it needs to be within `tolerance` (relative) of the
      * converged layer at |mu| >= mu_min (the ll_heuristic_*_ex of
-     * ll_layer.h); may fail with a message naming the largest supported
-     * parameter. */
+     * ll_layer.h); *error receives the largest relative error measured
+     * against twice that resolution (0 for words exact at any resolution,
+     * HUGE_VAL when it is beyond the search's reach and not verified); may
+     * fail with a message naming the largest supported parameter. */
     ll_status (*resolution)(const ll_word_params *p, double tolerance, double mu_min,
-                            size_t *n_nodes, size_t *n_orders);
+                            size_t *n_nodes, size_t *n_orders, double *error);
     void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);
     /* Fill a created layer (any content) for one channel. */
     ll_status (*build)(const ll_word_build_ctx *ctx, const ll_word *w, const ll_word_params *p,

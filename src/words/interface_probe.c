@@ -31,9 +31,8 @@
 #define TRUE_ORDERS ((size_t)1 << 20)
 #define TRUE_MAX_LEN ((size_t)100000)
 
-/* The stencil of one direction on the positive half of the nodes:
- * signed node cosines and weights; count of the non-zero ones. */
-static size_t stencil(const double *half, size_t h, double mu, double node[4], double w[4])
+size_t ll_probe_stencil(const double *half, size_t h, double mu, double node[4], double w[4],
+                        size_t index[4])
 {
     ptrdiff_t offset = 0;
     double wk[4];
@@ -46,13 +45,14 @@ static size_t stencil(const double *half, size_t h, double mu, double node[4], d
             continue;
         node[count] = mu < 0.0 ? -half[i] : half[i];
         w[count] = wk[k];
+        if (index)
+            index[count] = (size_t)i;
         ++count;
     }
     return count;
 }
 
-/* acc[k] += weight * sum_l c[l] cos(l phi[k]) */
-static void add_series(const double *c, size_t len, const double *phi, size_t n_phi,
+void ll_probe_add_series(const double *c, size_t len, const double *phi, size_t n_phi,
                        double weight, double *acc)
 {
     size_t k, l;
@@ -108,8 +108,8 @@ static ll_status eval_pair(size_t p, void *ctx)
             s = ll_microfacet_series(job->mf, -st->no[a], -st->ni[b], job->m, series, &len, NULL,
                                      scratch);
             if (s == LL_OK)
-                add_series(series, len, job->set->phi, job->set->n_phi, st->wo[a] * st->wi[b],
-                           acc);
+                ll_probe_add_series(series, len, job->set->phi, job->set->n_phi,
+                                    st->wo[a] * st->wi[b], acc);
         }
     for (k = 0; k < job->set->n_phi; ++k)
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
@@ -137,8 +137,8 @@ ll_status ll_probe_interface_eval(ll_microfacet *mf, size_t n, size_t m,
     s = ll_quad_gauss_lobatto(n, nodes, weights);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
         pair_stencil *st = stencils + p;
-        st->co = stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo);
-        st->ci = stencil(nodes + h, h, set->pairs[p].mu_i, st->ni, st->wi);
+        st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, NULL);
+        st->ci = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_i, st->ni, st->wi, NULL);
         for (a = 0; a < st->co; ++a)
             for (b = 0; b < st->ci; ++b) {
                 mu_o[count] = -st->no[a];
@@ -184,7 +184,8 @@ static ll_status true_series(ll_microfacet *mf, const ll_probe_pair *pair, doubl
 static size_t needed_length(const double *c, size_t len, const double *phi, size_t n_phi,
                             const double *full, double floor, double tolerance)
 {
-    double c1[12], prev[12], cur[12], sum[12];
+    double c1[LL_PROBE_MAX_PHI], prev[LL_PROBE_MAX_PHI], cur[LL_PROBE_MAX_PHI],
+        sum[LL_PROBE_MAX_PHI];
     size_t k, l, needed = 1;
     for (k = 0; k < n_phi; ++k) {
         c1[k] = cos(phi[k]);
@@ -226,7 +227,7 @@ ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
         s = true_series(mf, &set->pairs[p], c, &len, scratch);
         if (s != LL_OK)
             break;
-        add_series(c, len, set->phi, nphi, 1.0, full + p * nphi);
+        ll_probe_add_series(c, len, set->phi, nphi, 1.0, full + p * nphi);
         for (k = 0; k < nphi; ++k)
             peak[set->pairs[p].group] = fmax(peak[set->pairs[p].group], full[p * nphi + k]);
     }

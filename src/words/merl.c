@@ -254,6 +254,77 @@ typedef struct merl_job {
     ll_watch *watch; /* one unit per column, polled per outgoing node */
 } merl_job;
 
+/* The series of one node pair (mu_i > 0 arriving, mu_o > 0 the magnitude
+ * of the outgoing cosine): N samples of f over the azimuth into f[], their
+ * DCT-I into a[0 .. m), the tail cut where it becomes negligible. The one
+ * code path of the layer (below) and of the resolution probes
+ * (merl_probe.c). */
+void ll_merl_pair_series(const ll_merl *merl, const double weights[3], double mu_i,
+                         double mu_o, size_t m, size_t N, const double *cos_table, double *f,
+                         double *a)
+{
+    size_t period = 2 * (N - 1), j, k;
+    double sin_i = sqrt(fmax(0.0, 1.0 - mu_i * mu_i)), sin_o = sqrt(fmax(0.0, 1.0 - mu_o * mu_o));
+    double wi[3], ref, tail;
+    wi[0] = sin_i;
+    wi[1] = 0.0;
+    wi[2] = mu_i;
+    for (j = 0; j < N; ++j) {
+        /* The outgoing direction travels up; phi = 0 is the mirror
+         * direction of wi, as in the layer convention. */
+        double phi = LL_PI * (double)j / (double)(N - 1), wo[3];
+        wo[0] = -sin_o * cos(phi);
+        wo[1] = -sin_o * sin(phi);
+        wo[2] = mu_o;
+        f[j] = ll_merl_eval(merl, wi, wo, weights);
+    }
+    /* DCT-I: a_k = (1/(N-1)) [f_0 + (-1)^k f_{N-1} + 2 sum_j f_j cos(pi j k/(N-1))],
+     * halved for k = 0: the coefficients of f(phi) = sum_k a_k cos(k phi)
+     * by the trapezoid rule on [0, pi]. */
+    for (k = 0; k < m; ++k) {
+        double sum = f[0] + ((k & 1) ? -f[N - 1] : f[N - 1]);
+        size_t t = 0;
+        for (j = 1; j + 1 < N; ++j) {
+            t += k;
+            if (t >= period)
+                t %= period;
+            sum += 2.0 * f[j] * cos_table[t];
+        }
+        a[k] = sum / (double)(N - 1) * (k == 0 ? 0.5 : 1.0);
+    }
+    /* Truncate the series where its tail becomes negligible. */
+    ref = fabs(a[0]);
+    tail = 0.0;
+    for (k = m; k-- > 1;) {
+        tail += fabs(a[k]);
+        if (tail > ref * MERL_TAIL_GOAL)
+            break;
+        a[k] = 0.0;
+    }
+    if (ref == 0.0)
+        for (k = 0; k < m; ++k)
+            a[k] = 0.0;
+}
+
+ll_status ll_merl_cos_table(size_t orders, size_t *samples, double **table)
+{
+    size_t N, period, t;
+    *table = NULL;
+    if (!ll_size_mul(orders, 4, &N) || N > ((size_t)1 << 24))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_layer_set_matusik: %zu internal orders are too many", orders);
+    if (N < 4)
+        N = 4;
+    period = 2 * (N - 1);
+    *table = ll_alloc_array(period, sizeof(double));
+    if (!*table)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_matusik: out of memory");
+    for (t = 0; t < period; ++t)
+        (*table)[t] = cos(LL_PI * (double)t / (double)(N - 1));
+    *samples = N;
+    return LL_OK;
+}
+
 /* One incident column (internal index h + col_index, mu_i > 0): for every
  * outgoing node mu_o < 0, sample f over the azimuth and take its cosine
  * series; write the weighted column of every order. */
@@ -261,10 +332,10 @@ static ll_status merl_column(size_t col_index, void *ctx)
 {
     const merl_job *job = ctx;
     const ll_layer *l = job->layer;
-    size_t n = l->n, h = n / 2, m = l->m, N = job->samples, period = 2 * (N - 1);
-    size_t col = h + col_index, o, j, k;
-    double mu_i = l->nodes[col], sin_i = sqrt(fmax(0.0, 1.0 - mu_i * mu_i));
-    double wi[3], *f = NULL, *coeff = NULL, *column = NULL;
+    size_t n = l->n, h = n / 2, m = l->m, N = job->samples;
+    size_t col = h + col_index, o, k;
+    double mu_i = l->nodes[col];
+    double *f = NULL, *coeff = NULL, *column = NULL;
     ll_status s = LL_OK;
 
     if (ll_watch_poll(job->watch))
@@ -276,51 +347,13 @@ static ll_status merl_column(size_t col_index, void *ctx)
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_matusik: out of memory");
         goto done;
     }
-    wi[0] = sin_i;
-    wi[1] = 0.0;
-    wi[2] = mu_i;
     for (o = 0; o < h; ++o) {
-        /* Outgoing node o travels up (mu_o < 0); phi = 0 is the mirror
-         * direction of wi, as in the layer convention. */
-        double mu_o = fabs(l->nodes[o]), sin_o = sqrt(fmax(0.0, 1.0 - mu_o * mu_o));
-        double *a = coeff + o * m, ref, tail;
         if (ll_watch_poll(job->watch)) {
             s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_matusik: cancelled");
             goto done;
         }
-        for (j = 0; j < N; ++j) {
-            double phi = LL_PI * (double)j / (double)(N - 1), wo[3];
-            wo[0] = -sin_o * cos(phi);
-            wo[1] = -sin_o * sin(phi);
-            wo[2] = mu_o;
-            f[j] = ll_merl_eval(job->merl, wi, wo, job->weights);
-        }
-        /* DCT-I: a_k = (1/(N-1)) [f_0 + (-1)^k f_{N-1} + 2 sum_j f_j cos(pi j k/(N-1))],
-         * halved for k = 0: the coefficients of f(phi) = sum_k a_k cos(k phi)
-         * by the trapezoid rule on [0, pi]. */
-        for (k = 0; k < m; ++k) {
-            double sum = f[0] + ((k & 1) ? -f[N - 1] : f[N - 1]);
-            size_t t = 0;
-            for (j = 1; j + 1 < N; ++j) {
-                t += k;
-                if (t >= period)
-                    t %= period;
-                sum += 2.0 * f[j] * job->cos_table[t];
-            }
-            a[k] = sum / (double)(N - 1) * (k == 0 ? 0.5 : 1.0);
-        }
-        /* Truncate the series where its tail becomes negligible. */
-        ref = fabs(a[0]);
-        tail = 0.0;
-        for (k = m; k-- > 1;) {
-            tail += fabs(a[k]);
-            if (tail > ref * MERL_TAIL_GOAL)
-                break;
-            a[k] = 0.0;
-        }
-        if (ref == 0.0)
-            for (k = 0; k < m; ++k)
-                a[k] = 0.0;
+        ll_merl_pair_series(job->merl, job->weights, mu_i, fabs(l->nodes[o]), m, N,
+                            job->cos_table, f, coeff + o * m);
     }
     for (k = 0; k < m && s == LL_OK; ++k) {
         double factor = ll_layer_surface_factor(l, col, k);
@@ -354,7 +387,7 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
 {
     static const char fn[] = "ll_layer_set_matusik";
     merl_job job;
-    size_t m, orders, N, period, t;
+    size_t m, orders, N = 0;
     double *cos_table = NULL;
     ll_status s;
 
@@ -362,17 +395,9 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_merl_set_layer: a pointer is NULL");
     m = layer->m;
     orders = n_orders_internal > m ? n_orders_internal : m;
-    if (!ll_size_mul(orders, 4, &N) || N > ((size_t)1 << 24))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_layer_set_matusik: %zu internal orders are too many", orders);
-    if (N < 4)
-        N = 4;
-    period = 2 * (N - 1);
-    cos_table = ll_alloc_array(period, sizeof(double));
-    if (!cos_table)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_matusik: out of memory");
-    for (t = 0; t < period; ++t)
-        cos_table[t] = cos(LL_PI * (double)t / (double)(N - 1));
+    s = ll_merl_cos_table(orders, &N, &cos_table);
+    if (s != LL_OK)
+        return s;
     job.layer = layer;
     job.merl = merl;
     job.weights = weights;

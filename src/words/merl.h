@@ -14,6 +14,7 @@
 
 #include "layer/layer.h"
 #include "support/watch.h"
+#include "words/probe.h"
 
 /* MERL's own reader (BRDFRead.cpp: RED_SCALE, GREEN_SCALE, BLUE_SCALE) turns
  * the stored numbers into reflectance in 1/sr with these factors. The
@@ -57,5 +58,30 @@ LL_INTERNAL ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl,
 LL_INTERNAL ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
                                                 const double weights[3],
                                                 size_t n_orders_internal, ll_watch *watch);
+
+/* The cosine series of one node pair (mu_i > 0 the incident cosine, mu_o
+ * > 0 the outgoing one's magnitude) as the layer holds it: m coefficients
+ * into a (the negligible tail zeroed) from N azimuth samples into f, with
+ * the table of ll_merl_cos_table. */
+LL_INTERNAL void ll_merl_pair_series(const ll_merl *merl, const double weights[3], double mu_i,
+                                     double mu_o, size_t m, size_t N, const double *cos_table,
+                                     double *f, double *a);
+/* The samples N of a layer of `orders` internal orders (4 per order, at
+ * least 4) and cos(pi t / (N - 1)) for t < 2 (N - 1), allocated. */
+LL_INTERNAL ll_status ll_merl_cos_table(size_t orders, size_t *samples, double **table);
+
+/* What ll_merl_set_layer on n nodes and m orders followed by ll_layer_eval
+ * gives at the probes (merl_probe.c), from the series of the probes'
+ * stencils alone. values holds LL_PROBE_VALUES(set). */
+LL_INTERNAL ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3],
+                                         size_t n, size_t m, const ll_probe_set *set,
+                                         double *values);
+/* The smallest (n, m) found, from the guess in *n_nodes, *n_orders, whose
+ * projected lobe is within the tolerance of (2n, 2m) on the probes of
+ * ll_probe_opaque (ll_probe_search); *error the difference there
+ * (nullable). */
+LL_INTERNAL ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3],
+                                         double tolerance, double mu_min, size_t *n_nodes,
+                                         size_t *n_orders, double *error);
 
 #endif /* LL_MERL_H */

@@ -21,10 +21,13 @@ typedef struct ll_probe_pair {
     size_t group;
 } ll_probe_pair;
 
+/* Azimuths per pair, at most. */
+#define LL_PROBE_MAX_PHI 16
+
 typedef struct ll_probe_set {
     ll_probe_pair *pairs;
     size_t n_pairs, cap_pairs;
-    double phi[12];
+    double phi[LL_PROBE_MAX_PHI];
     size_t n_phi;
     size_t n_groups;
 } ll_probe_set;
@@ -48,6 +51,9 @@ LL_INTERNAL ll_status ll_probe_interface(double eta_re, double eta_im, double mu
  * outgoing cosines spread over both hemispheres (the forward peak at
  * mu_o = mu_i included). */
 LL_INTERNAL ll_status ll_probe_medium(double mu_min, ll_probe_set *out);
+/* The probes of an opaque surface seen from above (a measured BRDF): those
+ * of a conductor, reflection from above only. */
+LL_INTERNAL ll_status ll_probe_opaque(double mu_min, ll_probe_set *out);
 LL_INTERNAL void ll_probe_free(ll_probe_set *set);
 
 /* The worst relative difference |v - ref| / ref over the values whose ref
@@ -72,6 +78,16 @@ LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf, size_t n, size_
  * its group's peak; the largest such L over the pairs. */
 LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
                                                 const ll_probe_set *set, size_t *n_orders);
+
+/* The Catmull-Rom stencil of ll_layer_eval for the cosine mu on the
+ * positive half (h nodes) of the Gauss-Lobatto nodes: the signed node
+ * cosines, weights and (nullable) indices into half of the non-zero ones;
+ * their count (at most 4). */
+LL_INTERNAL size_t ll_probe_stencil(const double *half, size_t h, double mu, double node[4],
+                                    double w[4], size_t index[4]);
+/* acc[k] += weight * sum_l c[l] cos(l phi[k]), k < n_phi. */
+LL_INTERNAL void ll_probe_add_series(const double *c, size_t len, const double *phi,
+                                     size_t n_phi, double weight, double *acc);
 
 /* What the layer of a word gives at the probes at n nodes and m orders. */
 typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, double *values);
