@@ -105,12 +105,14 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 
 # --- a rank killed (SIGKILL, no chance to clean up) and an interrupt to
 # mpirun: no file, no temporary. The build is long enough (tens of seconds
-# on one thread) that the signal comes while it runs.
+# on one thread; 9 s on 3 ranks of an idle 2-core machine, so the interrupt
+# a second after the ranks start comes while it runs: at 300 x 600 the
+# build was done first) that the signal comes while it runs.
 cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1
 medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=0.1
-set nodes=300 orders=600
+set nodes=600 orders=2000
 LAYERS
 # Start a build in the background; wait for its ranks (children of mpirun).
 start_long() {
@@ -148,7 +150,7 @@ cat >"$tmp/longtex.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=[0.1..0.4:4]
 medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=[0.1 0.2]
-set nodes=200 orders=300
+set nodes=300 orders=800
 LAYERS
 start_tex() {
     mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/longtex.layers" \

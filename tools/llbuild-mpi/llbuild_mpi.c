@@ -56,7 +56,8 @@ int main(int argc, char **argv)
 {
     args a;
     ll_material *m = NULL;
-    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT, built;
+    ll_build_estimate plan = LL_BUILD_ESTIMATE_INIT;
     ll_layer *layers[3] = { NULL, NULL, NULL };
     ll_distribution dist;
     size_t n_channels = 0, c;
@@ -110,16 +111,20 @@ int main(int argc, char **argv)
     o.progress_user = &bar;
     bar.scale = 0.97;
     mpi_distribution(&job, &dist);
+    /* Every rank chooses the same resolution (the search is deterministic). */
+    built = o;
+    ll_progress_update(0.0, "choosing the resolution", &bar);
+    choose_resolution(m, &built, &plan);
     if (textured) {
         /* Bases across the ranks (textured.c); the bar shows the bases
          * written, not each basis's own progress. */
-        o.progress = NULL;
+        built.progress = NULL;
         bar.scale = 1.0;
-        s = textured_build(&job, m, &o, a.output, &cancel_flag,
+        s = textured_build(&job, m, &built, a.output, &cancel_flag,
                            job.rank == 0 ? ll_progress_update : NULL, &bar, message,
                            sizeof message);
     } else {
-        s = ll_material_build_layers_distributed(m, &o, NULL, &dist, layers, &n_channels,
+        s = ll_material_build_layers_distributed(m, &built, NULL, &dist, layers, &n_channels,
                                                  NULL);
         snprintf(message, sizeof message, "%s", ll_last_error_message());
     }
@@ -130,7 +135,7 @@ int main(int argc, char **argv)
         bar.scale = 1.0;
         ll_progress_update(0.97, "writing", &bar);
         if (job.rank == 0)
-            s = ll_material_write(m, &o, layers, n_channels, a.output);
+            s = ll_material_write(m, &built, layers, n_channels, a.output);
         s = mpi_agree(&job, s, NULL, message, sizeof message);
     }
     if (s == LL_OK) {
@@ -150,9 +155,9 @@ int main(int argc, char **argv)
     } else {
         if (!a.quiet && job.rank == 0) {
             if (textured)
-                print_textured_summary(&a, m, &o, now_seconds() - start);
+                print_textured_summary(&a, m, &o, &plan, now_seconds() - start);
             else
-                print_summary(&a, m, &o, layers, n_channels, now_seconds() - start);
+                print_summary(&a, m, &o, &plan, layers, n_channels, now_seconds() - start);
             printf("ranks        %d (MPI): %.1f MiB sent between them in %lu transfers\n",
                    job.size, sent / 1048576.0, transfers);
         }

@@ -288,26 +288,51 @@ static void print_axes(const ll_material *m)
     }
 }
 
-/* The goal the resolution met: the tolerance, or that it was given. */
+/* The goal the resolution met: the tolerance and the error measured
+ * (ll_build_estimate.resolution_error: against twice the resolution, HUGE_VAL
+ * when some word is beyond the search's reach), or that it was given.
+ * choose_seconds < 0: not timed. */
 static void print_goal(const ll_material *m, const ll_build_options *o, size_t n, size_t orders,
-                       double choose_seconds)
+                       double error, double choose_seconds)
 {
     double tolerance = 0.0, mu_min = 0.0;
     int chosen = 0;
+    char timed[64] = "";
     if (ll_material_goal(m, o, &tolerance, &mu_min, &chosen) != LL_OK)
         return;
+    if (choose_seconds >= 0.0)
+        snprintf(timed, sizeof timed, ", %.2f s", choose_seconds);
     if (!chosen)
         printf("tolerance    not checked: the resolution is given (set nodes= orders=, or "
                "--nodes --orders)\n");
-    else if (choose_seconds >= 0.0)
+    else if (error >= 0.0 && error <= tolerance)
         printf("tolerance    %g (relative, where the BSDF is above 1%% of its peak, |mu| >= "
-               "%g): met by %zu nodes x %zu orders, chosen by probing every word's lobes "
-               "(%.2f s)\n",
-               tolerance, mu_min, n, orders, choose_seconds);
+               "%g): met by %zu nodes x %zu orders, %.2g against twice that resolution "
+               "(every word's lobes probed%s)\n",
+               tolerance, mu_min, n, orders, error, timed);
     else
-        printf("tolerance    %g (relative, where the BSDF is above 1%% of its peak, |mu| >= "
-               "%g): met by %zu nodes x %zu orders\n",
-               tolerance, mu_min, n, orders);
+        printf("tolerance    %g (|mu| >= %g): NOT verified at %zu nodes x %zu orders: a word "
+               "is beyond the resolution search's reach (|g| > 0.95, more than 8000 nodes, or "
+               "a measured table sharper than its cells), so its heuristic's answer is used%s; "
+               "give the resolution with --nodes --orders to choose it yourself\n",
+               tolerance, mu_min, n, orders, timed);
+}
+
+/* Choose the resolution once, before the build (the build then does not
+ * search again): plan receives the estimate, o the chosen nodes and orders
+ * when the estimate succeeds (a failure is left for the build to report).
+ * Returns the seconds it took. */
+static double choose_resolution(const ll_material *m, ll_build_options *o,
+                                ll_build_estimate *plan)
+{
+    double start = now_seconds();
+    if (ll_material_estimate(m, o, plan) == LL_OK) {
+        o->n_nodes = plan->n_nodes;
+        o->n_orders = plan->n_orders;
+    } else {
+        plan->n_nodes = 0;
+    }
+    return now_seconds() - start;
 }
 
 /* --dry-run: the estimate; exit 1 when a build would be refused. */
@@ -322,7 +347,7 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
     }
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n", e.n_nodes,
            e.n_orders, e.n_channels, e.n_channels == 1 ? "" : "s");
-    print_goal(m, o, e.n_nodes, e.n_orders, now_seconds() - start);
+    print_goal(m, o, e.n_nodes, e.n_orders, e.resolution_error, now_seconds() - start);
     if (ll_material_axis_count(m) > 0) {
         print_axes(m);
         printf("bases        %zu (one textured file)\n", e.n_bases);
@@ -378,7 +403,8 @@ static void print_albedo(ll_layer *const *layers, size_t n_channels, int transmi
 }
 
 static void print_summary(const args *a, const ll_material *m, const ll_build_options *o,
-                          ll_layer *const *layers, size_t n_channels, double seconds)
+                          const ll_build_estimate *plan, ll_layer *const *layers,
+                          size_t n_channels, double seconds)
 {
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
@@ -392,7 +418,8 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n",
            ll_layer_node_count(layers[0]), ll_layer_order_count(layers[0]), n_channels,
            n_channels == 1 ? "" : "s");
-    print_goal(m, o, ll_layer_node_count(layers[0]), ll_layer_order_count(layers[0]), -1.0);
+    if (plan->n_nodes)
+        print_goal(m, o, plan->n_nodes, plan->n_orders, plan->resolution_error, -1.0);
     printf("orders kept  %zu (longest series in the file)\n", info.max_order);
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("header       eta %g, alpha %g (top) %g (bottom)\n", info.eta, info.alpha[0],
@@ -403,9 +430,9 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
 }
 
 static void print_textured_summary(const args *a, const ll_material *m,
-                                   const ll_build_options *o, double seconds)
+                                   const ll_build_options *o, const ll_build_estimate *plan,
+                                   double seconds)
 {
-    size_t n = 0, orders = 0;
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     if (ll_bsdf_open(a->output, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
@@ -420,8 +447,8 @@ static void print_textured_summary(const args *a, const ll_material *m,
            info.n_parameters, info.n_parameters == 1 ? "" : "s");
     printf("resolution   %zu file nodes, %zu channel%s\n", info.n_nodes, info.n_channels,
            info.n_channels == 1 ? "" : "s");
-    if (ll_material_resolution(m, o, &n, &orders, NULL) == LL_OK)
-        print_goal(m, o, n, orders, -1.0);
+    if (plan->n_nodes)
+        print_goal(m, o, plan->n_nodes, plan->n_orders, plan->resolution_error, -1.0);
     printf("orders kept  %zu (longest series in the file)\n", info.max_order);
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("wall time    %.2f s\n", seconds);
@@ -462,7 +489,8 @@ int main(int argc, char **argv)
 {
     args a;
     ll_material *m = NULL;
-    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT, built;
+    ll_build_estimate plan = LL_BUILD_ESTIMATE_INIT;
     ll_layer *layers[3] = { NULL, NULL, NULL };
     size_t n_channels = 0, c;
     ll_progress bar;
@@ -497,17 +525,20 @@ int main(int argc, char **argv)
     o.progress_user = &bar;
     /* Writing a file takes a few percent of a build. */
     bar.scale = 0.97;
+    built = o;
+    ll_progress_update(0.0, "choosing the resolution", &bar);
+    choose_resolution(m, &built, &plan);
     if (ll_material_axis_count(m) > 0) {
         /* A swept material: its bases one at a time into one textured file
          * (the bar shows "basis 3/64: ..."); the library writes it. */
         bar.scale = 1.0;
-        s = ll_material_build(m, &o, a.output);
+        s = ll_material_build(m, &built, a.output);
     } else {
-        s = ll_material_build_layers(m, &o, layers, &n_channels, NULL);
+        s = ll_material_build_layers(m, &built, layers, &n_channels, NULL);
         if (s == LL_OK) {
             bar.scale = 1.0;
             ll_progress_update(0.97, "writing", &bar);
-            s = ll_material_write(m, &o, layers, n_channels, a.output);
+            s = ll_material_write(m, &built, layers, n_channels, a.output);
         }
     }
     if (s == LL_OK) {
@@ -529,9 +560,9 @@ int main(int argc, char **argv)
                                                                          : exit_code_for(s);
     } else {
         if (!a.quiet && ll_material_axis_count(m) > 0)
-            print_textured_summary(&a, m, &o, now_seconds() - start);
+            print_textured_summary(&a, m, &o, &plan, now_seconds() - start);
         else if (!a.quiet)
-            print_summary(&a, m, &o, layers, n_channels, now_seconds() - start);
+            print_summary(&a, m, &o, &plan, layers, n_channels, now_seconds() - start);
         code = 0;
     }
     for (c = 0; c < 3; ++c)
