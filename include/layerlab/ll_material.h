@@ -195,7 +195,7 @@ typedef struct ll_build_estimate {
 } ll_build_estimate;
 
 #define LL_BUILD_ESTIMATE_INIT \
-    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0, -1.0 }
+    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0, 0.0 }
 
 /* estimate->struct_size may be the sizeof of an older, smaller
  * ll_build_estimate: only the fields it covers are written (the least
