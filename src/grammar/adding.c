@@ -167,7 +167,7 @@ static int all_zero(const double *x, size_t count)
 /* Z = B G^-1 from the LU factors of G (G = P L U, as getrf leaves them):
  * Z P L U = B is solved by two right-sided triangular solves and the column
  * interchanges of P undone in reverse order. In place on B (h x h). */
-static void right_solve(size_t h, const double *lu, const lapack_int *piv, double *B)
+void ll_right_solve_lu(size_t h, const double *lu, const lapack_int *piv, double *B)
 {
     size_t i, r;
     cblas_dtrsm(CblasColMajor, CblasRight, CblasUpper, CblasNoTrans, CblasNonUnit, (blasint)h,
@@ -223,7 +223,7 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
             return s;
         if (ll_watch_poll(watch))
             return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
-        right_solve(h, gain, piv, Z);
+        ll_right_solve_lu(h, gain, piv, Z);
         if (ll_watch_poll(watch))
             return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
     }

@@ -9,6 +9,8 @@
 #include "layer/layer.h"
 #include "words/media.h"
 
+#include <lapacke.h>
+
 /* ---- doubling with progress and cancellation (for long builds) */
 typedef struct ll_expand_monitor {
     const volatile int *cancel;                       /* nullable; nonzero stops */
@@ -47,5 +49,9 @@ LL_INTERNAL int ll_medium_slab_applies(const ll_layer *layer, double tau);
 LL_INTERNAL ll_status ll_layer_set_medium_slab(ll_layer *layer, ll_medium_kind kind,
                                                double albedo, double shape, double tau,
                                                const ll_monitor *monitor, int *done);
+
+/* B = B G^-1 from the LU factors of G (G = P L U, as getrf leaves them), in
+ * place on the h x h column-major B (adding.c; the slab's solves use it). */
+LL_INTERNAL void ll_right_solve_lu(size_t h, const double *lu, const lapack_int *piv, double *B);
 
 #endif /* LL_GRAMMAR_GRAMMAR_H */

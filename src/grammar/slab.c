@@ -42,6 +42,7 @@
  * products again and two LU solves: about the work of two or three adding
  * steps, where doubling takes one adding step per doubling (15 to 25).
  */
+#include "grammar/grammar.h"
 #include "grammar/slab.h"
 
 #include <cblas.h>
@@ -93,23 +94,10 @@ static double symmetrize(size_t h, double *a)
  * interchanges of P undone in reverse order. Returns 0 if A is singular. */
 static int solve_from_right(size_t h, double *A, lapack_int *piv, double *B)
 {
-    size_t i, r;
     if (LAPACKE_dgetrf_work(LAPACK_COL_MAJOR, (lapack_int)h, (lapack_int)h, A, (lapack_int)h,
                             piv) != 0)
         return 0;
-    cblas_dtrsm(CblasColMajor, CblasRight, CblasUpper, CblasNoTrans, CblasNonUnit, (blasint)h,
-                (blasint)h, 1.0, A, (blasint)h, B, (blasint)h);
-    cblas_dtrsm(CblasColMajor, CblasRight, CblasLower, CblasNoTrans, CblasUnit, (blasint)h,
-                (blasint)h, 1.0, A, (blasint)h, B, (blasint)h);
-    for (i = h; i-- > 0;) {
-        size_t j = (size_t)piv[i] - 1; /* LAPACK pivots are 1-based */
-        if (j != i)
-            for (r = 0; r < h; ++r) {
-                double t = B[i * h + r];
-                B[i * h + r] = B[j * h + r];
-                B[j * h + r] = t;
-            }
-    }
+    ll_right_solve_lu(h, A, piv, B);
     return 1;
 }
 
