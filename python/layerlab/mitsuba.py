@@ -73,10 +73,27 @@ _LL_OK = 0
 _LL_INVALID_ARGUMENT_ELEMENT = 1  # an element's zero/non-finite direction: zeros, as scalar
 
 
-def _wavefront_mode():
-    """Evaluated loops and calls: what handing Dr.Jit arrays to C needs."""
+def wavefront_mode():
+    """Turn Dr.Jit's symbolic loops and calls off on the calling thread
+    (Mitsuba then renders in wavefront mode): what the "batch" mode needs in
+    the LLVM variants, whose arrays must be evaluated to be handed to C.
+    Dr.Jit's flags belong to a thread, and Mitsuba builds a scene's objects
+    on worker threads, so the flags a BSDF sets while it is built may not be
+    those of the thread that renders: call this on that thread."""
     dr.set_flag(dr.JitFlag.SymbolicLoops, False)
     dr.set_flag(dr.JitFlag.SymbolicCalls, False)
+
+
+def _require_wavefront_mode():
+    """The batch mode inside a symbolic region (a render whose thread has
+    the symbolic modes on) cannot read its arrays (Dr.Jit fails with
+    "Variable ... remains dirty"): say what to do instead."""
+    if dr.flag(dr.JitFlag.SymbolicScope):
+        raise RuntimeError(
+            'layerlab: "mode": "batch" needs Dr.Jit\'s wavefront mode on the thread '
+            "that renders: call layerlab.mitsuba.wavefront_mode() (or turn "
+            "dr.JitFlag.SymbolicLoops and SymbolicCalls off) before mi.render, or use "
+            'the default "traced" mode')
 
 
 def _packed(values, width, components):
@@ -301,7 +318,7 @@ def _make_class():
             self.m_flags = flags
             self.m_traced = TracedBSDF(self.m_table.handle) if mode == "traced" else None
             if self.m_jit and mode == "batch":
-                _wavefront_mode()
+                wavefront_mode()  # (enough when the scene is built on this thread)
 
         def _parameters(self, props, path):
             """One (name, float or texture) per textured parameter."""
@@ -370,6 +387,8 @@ def _make_class():
             return dr.select(same, reflect, transmit)
 
         def _pairs(self, si, wo):
+            if self.m_jit:
+                _require_wavefront_mode()
             width = max(dr.width(si.wi), dr.width(wo))
             return width, _packed(si.wi, width, 3), _packed(wo, width, 3)
 
@@ -443,6 +462,8 @@ def _make_class():
                 bs.wo, pdf, f, found = self._traced_sample(ctx, si, sample2, active)
                 bs.pdf = pdf
             else:
+                if self.m_jit:
+                    _require_wavefront_mode()
                 width = max(dr.width(si.wi), dr.width(sample2))
                 a = _packed(si.wi, width, 3)
                 u = np.clip(_packed(sample2, width, 2), 0.0, 1.0)

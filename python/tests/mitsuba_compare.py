@@ -171,8 +171,12 @@ def main():
                            size, spp), spp, 0)
     save_png(os.path.join(out, "gold-textured-alpha.png"), img)
     print("textured gold, alpha from a bitmap (0.15 .. 0.3 in 8 stripes over u): %.2f s" % t)
-    # Wavefront mode last (a batch-mode BSDF switches the process to it).
+    # Wavefront mode last, set on this thread (the batch mode needs it; the
+    # flags a BSDF sets while Mitsuba builds it on a loader thread may miss
+    # this one).
     import drjit as dr
+    import layerlab.mitsuba
+    layerlab.mitsuba.wavefront_mode()
     for kind, path in files.items():
         ours = S.scene(mi, {"type": "layerlab", "filename": path, "mode": "batch"}, size, spp)
         _, t_batch = timed(ours, spp, 2)
