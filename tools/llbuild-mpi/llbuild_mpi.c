@@ -138,12 +138,8 @@ int main(int argc, char **argv)
             s = ll_material_write(m, &built, layers, n_channels, a.output);
         s = mpi_agree(&job, s, NULL, message, sizeof message);
     }
-    if (s == LL_OK) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (cancel_flag)
-            raise(cancel_signal ? cancel_signal : SIGINT);
-    }
+    if (s == LL_OK)
+        file_is_complete();
     ll_progress_finish(&bar, s == LL_OK);
     if (s == LL_ERROR_CANCELLED) {
         code = -1;

@@ -470,6 +470,17 @@ static int die_cancelled(void)
 
 /* llbuild-mpi (tools/llbuild-mpi) includes this file for the options,
  * messages and summary above and brings its own main. */
+/* The file is complete: from here on a signal just ends the program
+ * (reading the file back for the summary is not worth waiting for), and one
+ * that came during the last step ends it now (llbuild and llbuild-mpi). */
+static void file_is_complete(void)
+{
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    if (cancel_flag)
+        raise(cancel_signal ? cancel_signal : SIGINT);
+}
+
 /* The build options the command line asks for (llbuild and llbuild-mpi). */
 static void options_from_args(const args *a, ll_build_options *o)
 {
@@ -541,14 +552,8 @@ int main(int argc, char **argv)
             s = ll_material_write(m, &built, layers, n_channels, a.output);
         }
     }
-    if (s == LL_OK) {
-        /* The file is complete: from here on a signal just ends llbuild
-         * (reading the file back for the summary is not worth waiting for). */
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (cancel_flag)
-            raise(cancel_signal ? cancel_signal : SIGINT);
-    }
+    if (s == LL_OK)
+        file_is_complete();
     ll_progress_finish(&bar, s == LL_OK);
     if (s == LL_ERROR_CANCELLED) {
         /* (A signal after the file was complete is too late to matter: the
