@@ -107,6 +107,22 @@ static void child_failed(bench_store *store, const char *what, const bench_child
     bench_store_error(store, message);
 }
 
+/* A child's wall and CPU seconds (and, with memory, its peak resident
+ * size) under PREFIXwall, PREFIXcpu, PREFIXpeak_rss. */
+static void store_costs(bench_store *store, const char *prefix, const bench_child_result *res,
+                        int memory)
+{
+    char id[256];
+    snprintf(id, sizeof id, "%swall", prefix);
+    bench_store_add(store, id, "s", res->wall);
+    snprintf(id, sizeof id, "%scpu", prefix);
+    bench_store_add(store, id, "s", res->cpu);
+    if (memory) {
+        snprintf(id, sizeof id, "%speak_rss", prefix);
+        bench_store_add(store, id, "MiB", res->peak_rss_mib);
+    }
+}
+
 /* 1. The three recipes at all threads, interleaved run by run so that a
  * burst of load elsewhere spreads over all of them. */
 static void run_recipes(const config *cfg, bench_store *store)
@@ -139,12 +155,8 @@ static void run_recipes(const config *cfg, bench_store *store)
                 failed[r] = 1;
                 continue;
             }
-            snprintf(id, sizeof id, "recipe.%s.wall", name);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "recipe.%s.cpu", name);
-            bench_store_add(store, id, "s", res.cpu);
-            snprintf(id, sizeof id, "recipe.%s.peak_rss", name);
-            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            snprintf(id, sizeof id, "recipe.%s.", name);
+            store_costs(store, id, &res, 1);
             if (stat(out_path, &st) == 0) {
                 snprintf(id, sizeof id, "recipe.%s.output", name);
                 bench_store_add(store, id, "MB", (double)st.st_size * 1e-6);
@@ -184,12 +196,8 @@ static void run_dust(const config *cfg, bench_store *store)
                 child_failed(store, name, &res);
                 break;
             }
-            snprintf(id, sizeof id, "dust.%s.wall", name);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "dust.%s.cpu", name);
-            bench_store_add(store, id, "s", res.cpu);
-            snprintf(id, sizeof id, "dust.%s.peak_rss", name);
-            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            snprintf(id, sizeof id, "dust.%s.", name);
+            store_costs(store, id, &res, 1);
         }
         /* The same stack as a material (WORK/NAME.layers, from run.sh). */
         for (run = 0; cfg->llbuild && run < runs; ++run) {
@@ -209,12 +217,8 @@ static void run_dust(const config *cfg, bench_store *store)
                 child_failed(store, layers, &res);
                 break;
             }
-            snprintf(id, sizeof id, "dust.%s.llbuild.wall", name);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "dust.%s.llbuild.cpu", name);
-            bench_store_add(store, id, "s", res.cpu);
-            snprintf(id, sizeof id, "dust.%s.llbuild.peak_rss", name);
-            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            snprintf(id, sizeof id, "dust.%s.llbuild.", name);
+            store_costs(store, id, &res, 1);
         }
     }
     argv[0] = slab_bin;
@@ -251,12 +255,8 @@ static void run_original_program(const config *cfg, bench_store *store, const ch
         child_failed(store, path, &res);
         return;
     }
-    snprintf(id, sizeof id, "original.%s.wall", name);
-    bench_store_add(store, id, "s", res.wall);
-    snprintf(id, sizeof id, "original.%s.cpu", name);
-    bench_store_add(store, id, "s", res.cpu);
-    snprintf(id, sizeof id, "original.%s.peak_rss", name);
-    bench_store_add(store, id, "MiB", res.peak_rss_mib);
+    snprintf(id, sizeof id, "original.%s.", name);
+    store_costs(store, id, &res, 1);
 }
 
 /* The same recipes built by another implementation (--original): for each
@@ -311,10 +311,8 @@ static void run_scaling(const config *cfg, bench_store *store)
                 child_failed(store, "scaling", &res);
                 return;
             }
-            snprintf(id, sizeof id, "scaling.coated-gold.t%zu.wall", cfg->threads[t]);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "scaling.coated-gold.t%zu.cpu", cfg->threads[t]);
-            bench_store_add(store, id, "s", res.cpu);
+            snprintf(id, sizeof id, "scaling.coated-gold.t%zu.", cfg->threads[t]);
+            store_costs(store, id, &res, 0);
         }
     remove(out_path);
 }
@@ -448,12 +446,8 @@ static void run_tolerance(const config *cfg, bench_store *store)
                 continue;
             }
             built[t] = 1;
-            snprintf(id, sizeof id, "tolerance.%s.%s.wall", recipe, tol);
-            bench_store_add(store, id, "s", res.wall);
-            snprintf(id, sizeof id, "tolerance.%s.%s.cpu", recipe, tol);
-            bench_store_add(store, id, "s", res.cpu);
-            snprintf(id, sizeof id, "tolerance.%s.%s.peak_rss", recipe, tol);
-            bench_store_add(store, id, "MiB", res.peak_rss_mib);
+            snprintf(id, sizeof id, "tolerance.%s.%s.", recipe, tol);
+            store_costs(store, id, &res, 1);
         }
         for (t = 0; t + 1 < BENCH_TOLERANCE_COUNT; ++t) {
             char *argv[5];

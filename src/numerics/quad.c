@@ -165,6 +165,27 @@ static ll_status check_buffers(const char *fn, size_t n, size_t min_n, const dou
     return LL_OK;
 }
 
+/* Root k (1 nearest x = 1) of the polynomial `kind` of the given degree,
+ * as an angle, starting from the asymptotic guess; the middle root of an odd
+ * count is x = 0 exactly. `previous` is root k - 1 (0 for k = 1): Newton's
+ * method must land between it and pi / 2. */
+static ll_status root_angle(ll_quad_roots kind, size_t degree, size_t k, int middle, double previous,
+                            double *theta, ll_watch *w, const char *fn)
+{
+    if (ll_watch_poll(w))
+        return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", fn);
+    if (middle) {
+        *theta = 0.5 * LL_PI;
+        return LL_OK;
+    }
+    *theta = initial_angle(kind, degree, k);
+    if (!newton_angle(kind, degree, previous, theta))
+        return ll_fail(LL_ERROR_NUMERICAL,
+                       "%s: Newton's method did not settle on root %zu of P_%zu%s", fn, k,
+                       degree, kind == LL_QUAD_ROOTS_OF_DP ? "'" : "");
+    return LL_OK;
+}
+
 /* The rules proper, into buffers checked by the caller; one unit of
  * progress and one poll per root (each O(n): the rule is O(n^2)). */
 static ll_status legendre_rule(size_t n, double *nodes, double *weights, ll_watch *w)
@@ -179,18 +200,9 @@ static ll_status legendre_rule(size_t n, double *nodes, double *weights, ll_watc
     for (k = 1; k <= (n + 1) / 2; ++k) {
         double p, d, dp;
         int middle = 2 * k - 1 == n;
-        if (ll_watch_poll(w))
-            return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", fn);
-        if (middle) {
-            theta = 0.5 * LL_PI;
-        } else {
-            double previous = theta;
-            theta = initial_angle(LL_QUAD_ROOTS_OF_P, n, k);
-            if (!newton_angle(LL_QUAD_ROOTS_OF_P, n, previous, &theta))
-                return ll_fail(LL_ERROR_NUMERICAL,
-                               "%s: Newton's method did not settle on root %zu of P_%zu", fn,
-                               k, n);
-        }
+        ll_status s = root_angle(LL_QUAD_ROOTS_OF_P, n, k, middle, theta, &theta, w, fn);
+        if (s != LL_OK)
+            return s;
         legendre_at_angle(n, theta, &p, &d);
         dp = legendre_angle_derivative(n, theta, p, d);
         place_pair(nodes, weights, n, k - 1, middle ? 0.0 : cos(theta), 2.0 / (dp * dp));
@@ -213,18 +225,9 @@ static ll_status lobatto_rule(size_t n, double *nodes, double *weights, ll_watch
     for (k = 1; k <= (n - 1) / 2; ++k) {
         double p, d;
         int middle = 2 * k + 1 == n;
-        if (ll_watch_poll(w))
-            return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", fn);
-        if (middle) {
-            theta = 0.5 * LL_PI;
-        } else {
-            double previous = theta;
-            theta = initial_angle(LL_QUAD_ROOTS_OF_DP, m, k);
-            if (!newton_angle(LL_QUAD_ROOTS_OF_DP, m, previous, &theta))
-                return ll_fail(LL_ERROR_NUMERICAL,
-                               "%s: Newton's method did not settle on root %zu of P_%zu'", fn,
-                               k, m);
-        }
+        ll_status s = root_angle(LL_QUAD_ROOTS_OF_DP, m, k, middle, theta, &theta, w, fn);
+        if (s != LL_OK)
+            return s;
         legendre_at_angle(m, theta, &p, &d);
         place_pair(nodes, weights, n, k, middle ? 0.0 : cos(theta), scale / (p * p));
         ll_watch_advance(w, 1);
