@@ -76,10 +76,21 @@ typedef struct ll_build_options {
      * given (n_nodes and n_orders, or the material's set nodes= orders=). */
     double tolerance;
     double mu_min;
+    /* Each channel's finished layer (appended in 1.x, issue 18; callers
+     * whose struct_size ends before them get NULL): ll_material_build and
+     * ll_material_build_ex hand every channel's stack to the file as soon
+     * as it is complete and free it, so that no two channels' stacks are
+     * alive at once; channel_done (nullable) sees the layer just before
+     * that, on the calling thread (channel 0 = R or mono, 1 = G, 2 = B, in
+     * the order the build finishes them), e.g. to report its albedo. The
+     * layer is valid only during the call. Not called by the other builds,
+     * which return the layers. */
+    void (*channel_done)(void *user, size_t channel, const ll_layer *layer);
+    void *channel_done_user;
 } ll_build_options;
 
 #define LL_BUILD_OPTIONS_INIT                                                               \
-    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0 }
+    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0, NULL, NULL }
 
 /* The resolution's goal of a build with these options: the tolerance and
  * mu_min in effect (opts, else the material's set, else the defaults) and

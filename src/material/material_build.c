@@ -10,6 +10,7 @@
  */
 #include "material/word_table.h"
 #include "layer/layer.h"
+#include "storage/bsdf_write_channels.h"
 #include "layerlab/ll_quad.h"
 #include "layerlab/ll_distribution.h"
 
@@ -38,6 +39,7 @@ typedef struct build {
     int call_ends_build;         /* its 1 is the build's 1 (the writing) */
     ll_share *share;             /* a distributed build's (NULL: one process) */
     ll_word_cache *cache;        /* a builder's word layers (nullable)  */
+    ll_channel_writer *sink;     /* the file, fed each finished channel (nullable) */
 } build;
 
 static int cancel_raised(const build *b)
@@ -180,9 +182,33 @@ static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_lay
     return s;
 }
 
-/* One level of the stack: word w on top of acc (bottom-up). */
+/*
+ * A channel's stack is final once the top word is on it: with a sink, it
+ * goes to the file at once (for every channel whose stack it is) and is
+ * freed, so that the next channel's adding runs without it (issue 18: the
+ * dust on gold held three finished stacks of about 0.45 GB each beside the
+ * third channel's adding). The order of the calls changes no byte of the
+ * file (bsdf_write_channels.c).
+ */
+static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_layer *acc[3])
+{
+    size_t d;
+    ll_status s = LL_OK;
+    for (d = 0; d < b->nch && s == LL_OK; ++d) {
+        if (owner[d] != c)
+            continue;
+        if (b->o.channel_done)
+            b->o.channel_done(b->o.channel_done_user, d, acc[c]);
+        s = ll_channel_writer_add(b->sink, d, acc[c], next_call(b, "writing", 0.0));
+    }
+    ll_layer_destroy(acc[c]);
+    acc[c] = NULL;
+    return s == LL_OK ? check_cancel(b) : s;
+}
+
+/* One level of the stack: word w on top of acc (bottom-up); top: the last. */
 static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
-                           int bottom)
+                           int bottom, int top)
 {
     ll_layer *word[3] = { NULL, NULL, NULL };
     size_t owner[3], c;
@@ -222,6 +248,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             if (s == LL_OK)
                 s = check_cancel(b);
         }
+        if (s == LL_OK && top && b->sink)
+            s = finish_channel(b, c, owner, acc);
     }
     for (c = 0; c < b->nch; ++c) {
         if (word[c] && same_word_as(b, w, c) == c)
@@ -353,11 +381,11 @@ static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
         s = ll_set_thread_count(b->o.threads);
     b->total = total_cost(b) + extra_cost;
     for (w = b->m->count; w-- > 0 && s == LL_OK;)
-        s = add_level(b, w, acc, below, w + 1 == b->m->count);
-    for (c = 0; c < b->nch && s == LL_OK; ++c)
+        s = add_level(b, w, acc, below, w + 1 == b->m->count, w == 0);
+    for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
         if (below[c] != c)
             s = ll_layer_clone(acc[below[c]], &layers[c]);
-    if (s == LL_OK)
+    if (s == LL_OK && !b->sink)
         for (c = 0; c < b->nch; ++c)
             if (below[c] == c) {
                 layers[c] = acc[c];
@@ -516,7 +544,13 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         return s;
     /* The writing's share of the progress bar. */
     write_cost = ll_cost_write(b.n, b.orders, b.nch);
-    s = run_build(&b, layers, write_cost);
+    {
+        ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+        fill_header(b.m, &b.o, b.nch, &header);
+        s = ll_channel_writer_open(out_path, b.nch, &header, &b.sink);
+    }
+    if (s == LL_OK)
+        s = run_build(&b, layers, write_cost);
     if (s == LL_OK) {
         const ll_monitor *writing;
         report(&b, "writing");
@@ -524,8 +558,10 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         b.call_ends_build = 1;
         /* The writer's last report, before the file replaces out_path, is
          * the build's last: the caller's monitor gets no "done" after it. */
-        s = write_layers(b.m, &b.o, layers, b.nch, out_path, writing);
+        s = ll_channel_writer_commit(b.sink, writing);
+        b.sink = NULL;
     }
+    ll_channel_writer_abort(b.sink);
     if (s == LL_OK && b.o.progress)
         b.o.progress(1.0, "done", b.o.progress_user);
     for (c = 0; c < 3; ++c)
