@@ -40,6 +40,8 @@ typedef struct build {
     ll_share *share;             /* a distributed build's (NULL: one process) */
     ll_word_cache *cache;        /* a builder's word layers (nullable)  */
     ll_channel_writer *sink;     /* the file, fed each finished channel (nullable) */
+    int pending;                 /* the bottom word is built when first needed */
+    size_t pending_word;
 } build;
 
 static int cancel_raised(const build *b)
@@ -206,6 +208,21 @@ static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_la
     return s == LL_OK ? check_cancel(b) : s;
 }
 
+/*
+ * A streamed build makes a channel's bottom word only when the level above
+ * first needs it (add_level), so that the next channel's is not alive
+ * while this one's stack grows and goes to the file: the dust on gold held
+ * all three gold layers beside the first channel's adding. The bottom's
+ * owners never share a word (owner and same word coincide there), so each
+ * is its own word layer, as the clone of it was.
+ */
+static ll_status ensure_bottom(build *b, size_t c, ll_layer *acc[3])
+{
+    if (!b->pending || acc[c])
+        return LL_OK;
+    return cached_word(b, b->pending_word, &b->params[b->pending_word][c], &acc[c]);
+}
+
 /* One level of the stack: word w on top of acc (bottom-up); top: the last. */
 static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
                            int bottom, int top)
@@ -215,6 +232,13 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
     ll_status s = LL_OK;
 
     stack_owners(b, w, bottom ? NULL : below, owner);
+    if (bottom && !top && b->sink) {
+        for (c = 0; c < b->nch; ++c)
+            below[c] = owner[c];
+        b->pending = 1;
+        b->pending_word = w;
+        return LL_OK;
+    }
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
         size_t same = same_word_as(b, w, c);
         if (owner[c] != c)
@@ -227,7 +251,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
     /* Channels that part from a shared stack here start from a copy of it
      * as it was below this word; copy all before adding to any. */
     for (c = 0; c < b->nch && s == LL_OK; ++c)
-        if (owner[c] == c && !bottom && below[c] != c)
+        if (owner[c] == c && !bottom && below[c] != c &&
+            (s = ensure_bottom(b, below[c], acc)) == LL_OK)
             s = ll_layer_clone(acc[below[c]], &acc[c]);
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
         if (owner[c] != c)
@@ -236,6 +261,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
             double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
+            if ((s = ensure_bottom(b, c, acc)) != LL_OK)
+                break;
             report(b, "adding");
             start = b->done;
             /* word[c] on top of acc[c] (ll_layer_add_to_top, with a monitor) */
@@ -256,6 +283,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             ll_layer_destroy(word[c]);
         below[c] = owner[c];
     }
+    if (!bottom)
+        b->pending = 0; /* every stack the levels above need is made */
     return s;
 }
 
