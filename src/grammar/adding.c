@@ -195,26 +195,33 @@ void ll_right_solve_lu(size_t h, const double *lu, const lapack_int *piv, double
  * sides where solving G X = [Ta | Ra Tb] would need 2h; the products are
  * written straight into the output blocks (R_out accumulates onto Rb_out
  * with beta = 1). zero flags skip products with zero operands.
+ *
+ * Z is where Z is made: Tb_through itself when the caller lets it be
+ * overwritten (Z == Tb_through), else a scratch it is copied to; R_out may
+ * be Rb_out itself likewise. Adding two layers overwrites its loaded
+ * copies that way (no h x h copy per direction); doubling, whose top and
+ * bottom are one set of blocks, keeps them.
  */
 static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const double *Rb_in,
                           int zRb_in, const double *Ta_through, int zTa_through,
                           const double *Tb_back, int zTb_back, const double *Tb_through,
                           int zTb_through, const double *Rb_out, int zRb_out, double *gain,
-                          lapack_int *piv, double *rhs, double *T_out, double *R_out,
-                          ll_watch *watch)
+                          lapack_int *piv, double *rhs, double *Z, double *T_out,
+                          double *R_out, ll_watch *watch)
 {
     size_t hh = h * h;
     int coupled = !zRa_in && !zRb_in; /* multiple reflections between the layers */
     int reflect_back = !zRa_in && !zTb_back;
-    double *Z = gain + hh; /* scratch after the gain matrix (see workspace) */
     ll_status s;
 
     if (zTb_through || (zTa_through && !reflect_back)) {
         memset(T_out, 0, hh * sizeof(double));
-        memcpy(R_out, Rb_out, hh * sizeof(double));
+        if (R_out != Rb_out)
+            memcpy(R_out, Rb_out, hh * sizeof(double));
         return LL_OK;
     }
-    memcpy(Z, Tb_through, hh * sizeof(double));
+    if (Z != Tb_through)
+        memcpy(Z, Tb_through, hh * sizeof(double));
     /* Each BLAS/LAPACK call below is O(h^3): a cancel is seen between them
      * (about 1 s apart at h = 1000 on one loaded core). */
     if (coupled) {
@@ -233,7 +240,8 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
         memset(T_out, 0, hh * sizeof(double));
     else
         gemm(h, h, 1.0, Z, Ta_through, 0.0, T_out);
-    memcpy(R_out, Rb_out, hh * sizeof(double));
+    if (R_out != Rb_out)
+        memcpy(R_out, Rb_out, hh * sizeof(double));
     if (ll_watch_poll(watch))
         return ll_fail(LL_ERROR_CANCELLED, "adding: cancelled");
     (void)zRb_out; /* a zero block is stored zero-filled */
@@ -246,11 +254,26 @@ static ll_status half_add(size_t h, const double *Ra_in, int zRa_in, const doubl
     return LL_OK;
 }
 
-/* out = top on bottom, both dense. homogeneous: top == bottom, symmetric. */
+/* Swap two of the workspace's h x h buffers. */
+static void swap_blocks(double **a, double **b)
+{
+    double *t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* out = top on bottom, both dense. homogeneous: top == bottom, symmetric
+ * (doubling: the blocks are kept); otherwise the loaded blocks are scratch:
+ * the downward half reads T^tb and R^b of the bottom last and makes Z and
+ * R^b of the sum in them, the upward half likewise with T^bt and R^t of the
+ * top (neither half reads what the other overwrites), and the results'
+ * buffers trade places with them. */
 static ll_status add_dense(workspace *w, int homogeneous)
 {
-    size_t h = w->h;
+    size_t h = w->h, hh = h * h;
     dense_order *t = &w->top, *b = &w->bottom, *o = &w->out;
+    double *Z = homogeneous ? w->gain_tb + hh : b->blk[LL_BLOCK_TTB];
+    double *R = homogeneous ? o->blk[LL_BLOCK_RB] : b->blk[LL_BLOCK_RB];
     ll_status s;
     int k;
 
@@ -259,9 +282,11 @@ static ll_status add_dense(workspace *w, int homogeneous)
                  b->zero[LL_BLOCK_RT], t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB],
                  b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT], b->blk[LL_BLOCK_TTB],
                  b->zero[LL_BLOCK_TTB], b->blk[LL_BLOCK_RB], b->zero[LL_BLOCK_RB], w->gain_tb,
-                 w->piv_tb, w->rhs, o->blk[LL_BLOCK_TTB], o->blk[LL_BLOCK_RB], w->watch);
+                 w->piv_tb, w->rhs, Z, o->blk[LL_BLOCK_TTB], R, w->watch);
     if (s != LL_OK)
         return s;
+    if (!homogeneous)
+        swap_blocks(&o->blk[LL_BLOCK_RB], &b->blk[LL_BLOCK_RB]);
     if (homogeneous) {
         /* Both sides of a symmetric slab are the same. */
         memcpy(o->blk[LL_BLOCK_TBT], o->blk[LL_BLOCK_TTB], h * h * sizeof(double));
@@ -272,10 +297,11 @@ static ll_status add_dense(workspace *w, int homogeneous)
                      t->zero[LL_BLOCK_RB], b->blk[LL_BLOCK_TBT], b->zero[LL_BLOCK_TBT],
                      t->blk[LL_BLOCK_TTB], t->zero[LL_BLOCK_TTB], t->blk[LL_BLOCK_TBT],
                      t->zero[LL_BLOCK_TBT], t->blk[LL_BLOCK_RT], t->zero[LL_BLOCK_RT],
-                     w->gain_bt, w->piv_bt, w->rhs, o->blk[LL_BLOCK_TBT],
-                     o->blk[LL_BLOCK_RT], w->watch);
+                     w->gain_bt, w->piv_bt, w->rhs, t->blk[LL_BLOCK_TBT], o->blk[LL_BLOCK_TBT],
+                     t->blk[LL_BLOCK_RT], w->watch);
         if (s != LL_OK)
             return s;
+        swap_blocks(&o->blk[LL_BLOCK_RT], &t->blk[LL_BLOCK_RT]);
     }
     for (k = 0; k < 4; ++k)
         o->zero[k] = all_zero(o->blk[k], h * h);
