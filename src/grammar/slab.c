@@ -102,8 +102,7 @@ static double symmetrize(size_t h, double *a)
  * interchanges of P undone in reverse order. Returns 0 if A is singular. */
 static int solve_from_right(size_t h, double *A, lapack_int *piv, double *B)
 {
-    if (LAPACKE_dgetrf_work(LAPACK_COL_MAJOR, (lapack_int)h, (lapack_int)h, A, (lapack_int)h,
-                            piv) != 0)
+    if (ll_lu_factor(h, A, piv) != 0)
         return 0;
     ll_right_solve_lu(h, A, piv, B);
     return 1;
