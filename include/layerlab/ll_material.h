@@ -109,6 +109,11 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
 
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
  * leaves no file and does not touch an existing one). opts may be NULL.
+ * Each channel's stack goes to the file as soon as it is complete and is
+ * freed (opts->channel_done sees it first): its stored values wait in an
+ * unlinked spill file beside out_path, which needs room for them there, and
+ * the file is written from the spill at the end, byte for byte what
+ * ll_material_build_layers then ll_material_write give.
  * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
  * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY (also when the estimated peak
  * is above opts->max_memory_bytes: refused before anything is allocated,
