@@ -32,6 +32,7 @@
 #include "bench_util.h"
 
 #include <cblas.h>
+#include <lapacke.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -179,6 +180,45 @@ static double gemm_concurrent_gflops(size_t size, size_t threads, bench_rng *rng
     return 2.0 * pow((double)size, 3.0) * (double)(calls * threads) / elapsed * 1e-9;
 }
 
+/* GFLOP/s of the non-gemm part of one half of an adding step on one
+ * thread: LU of an h x h gain matrix (2/3 h^3) and the two right-sided
+ * triangular solves of Z = Tb G^-1 (2 h^3), a quarter of the step's flops,
+ * on a diagonally dominant random G as adding factors (I - R R). Beside
+ * dgemm's rate this says how much of the gap to dgemm is LAPACK's. */
+static double lu_solve_gflops(size_t h, bench_rng *rng)
+{
+    double *g0 = bench_alloc(h * h, sizeof(double)), *g = bench_alloc(h * h, sizeof(double));
+    double *b0 = bench_alloc(h * h, sizeof(double)), *b = bench_alloc(h * h, sizeof(double));
+    lapack_int *piv = bench_alloc(h, sizeof(lapack_int));
+    size_t calls = 0, i;
+    blasint s = (blasint)h;
+    double start, elapsed;
+    fill_random(g0, h * h, rng);
+    fill_random(b0, h * h, rng);
+    for (i = 0; i < h; ++i)
+        g0[i * h + i] += (double)h;
+    openblas_set_num_threads(1);
+    start = bench_wall_seconds();
+    do {
+        memcpy(g, g0, h * h * sizeof(double));
+        memcpy(b, b0, h * h * sizeof(double));
+        if (LAPACKE_dgetrf_work(LAPACK_COL_MAJOR, s, s, g, s, piv) != 0)
+            bench_die("adding: dgetrf failed on a diagonally dominant matrix");
+        cblas_dtrsm(CblasColMajor, CblasRight, CblasUpper, CblasNoTrans, CblasNonUnit, s, s,
+                    1.0, g, s, b, s);
+        cblas_dtrsm(CblasColMajor, CblasRight, CblasLower, CblasNoTrans, CblasUnit, s, s, 1.0,
+                    g, s, b, s);
+        ++calls;
+        elapsed = bench_wall_seconds() - start;
+    } while (elapsed < MIN_SAMPLE_SECONDS);
+    free(g0);
+    free(g);
+    free(b0);
+    free(b);
+    free(piv);
+    return 8.0 / 3.0 * pow((double)h, 3.0) * (double)calls / elapsed * 1e-9;
+}
+
 static void bench_size(size_t n, size_t runs, const size_t *threads, size_t n_threads,
                        bench_rng *rng)
 {
@@ -232,6 +272,14 @@ static void bench_size(size_t n, size_t runs, const size_t *threads, size_t n_th
             bench_metric(id, "GFLOP/s", gemm_n);
             snprintf(id, sizeof id, "add.n%zu.t%zu.ratio", n, th);
             bench_metric(id, "x", add_gflops / gemm_h);
+            if (th == 1) {
+                /* (The two copies per sample are not counted: a lower bound.) */
+                double lu = lu_solve_gflops(n / 2, rng);
+                snprintf(id, sizeof id, "add.n%zu.t1.lu_solve", n);
+                bench_metric(id, "GFLOP/s", lu);
+                snprintf(id, sizeof id, "add.n%zu.t1.lu_solve_ratio", n);
+                bench_metric(id, "x", lu / gemm_h);
+            }
         }
     }
     ll_layer_destroy(top);

@@ -51,6 +51,8 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, max_memory_bytes),
     offsetof(ll_build_options, tolerance),
     offsetof(ll_build_options, mu_min),
+    offsetof(ll_build_options, channel_done),
+    offsetof(ll_build_options, channel_done_user),
     sizeof(ll_build_options),
 };
 static const size_t estimate_ends[] = {
@@ -273,7 +275,20 @@ typedef struct outcome {
     ll_status goal_status;     /* ll_material_goal: the resolution's goal */
     double tolerance, mu_min;
     int chosen;
+    ll_status file_status;     /* ll_material_build, with the cancel flag down */
+    seen channels;             /* what channel_done saw there */
 } outcome;
+
+/* The flag given as opts->cancel: raised, except while run_material writes
+ * a file, whose streamed channels channel_done sees. */
+static volatile int raised = 1;
+static seen channels_seen;
+
+static void on_channel_done(void *user, size_t channel, const ll_layer *layer)
+{
+    channels_seen.called += channel + 1 + ll_layer_node_count(layer);
+    channels_seen.user = user;
+}
 
 static void run_material(const ll_material *m, const ll_build_options *o, outcome *out)
 {
@@ -296,12 +311,22 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
     }
     for (c = 0; c < 3; ++c)
         ll_layer_destroy(layers[c]);
+    {
+        char dir[64], path[96];
+        ll_test_mkdtemp(dir, sizeof dir);
+        snprintf(path, sizeof path, "%s/out.bsdf", dir);
+        memset(&channels_seen, 0, sizeof channels_seen);
+        raised = 0;
+        out->file_status = ll_material_build(m, o, path);
+        raised = 1;
+        out->channels = channels_seen;
+        ll_test_rmdir(dir);
+    }
 }
 
 static void build_options_read_to_struct_size(void **state)
 {
-    static const volatile int raised = 1;
-    static int tag;
+    static int tag, channel_tag;
     ll_build_options defaults = LL_BUILD_OPTIONS_INIT, given = LL_BUILD_OPTIONS_INIT, full;
     ll_material *m = NULL;
     outcome got, want, previous;
@@ -327,6 +352,9 @@ static void build_options_read_to_struct_size(void **state)
      * given, but reported by ll_material_goal). */
     given.tolerance = 0.05;
     given.mu_min = 0.2;
+    /* The streamed file build's channels (issue 18). */
+    given.channel_done = on_channel_done;
+    given.channel_done_user = &channel_tag;
     for (i = 0; i < COUNT(build_options_ends); ++i) {
         size_t b = build_options_ends[i];
         ll_build_options *opts = caller_init(&c, b);
@@ -411,13 +439,13 @@ static void every_field_is_listed(void **state)
     (void)state;
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 13);
-    assert_int_equal(COUNT(build_options_ends), 12);
+    assert_int_equal(COUNT(build_options_ends), 14);
     assert_int_equal(COUNT(estimate_ends), 15);
     assert_int_equal(COUNT(monitor_ends), 3);
     assert_int_equal(COUNT(open_options_ends), 4);
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
                      sizeof(ll_bsdf_write_options));
-    assert_int_equal(offsetof(ll_build_options, mu_min) + sizeof(double),
+    assert_int_equal(offsetof(ll_build_options, channel_done_user) + sizeof(void *),
                      sizeof(ll_build_options));
     assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
                     offsetof(ll_build_estimate, n_bases) &&

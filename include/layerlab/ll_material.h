@@ -76,10 +76,21 @@ typedef struct ll_build_options {
      * given (n_nodes and n_orders, or the material's set nodes= orders=). */
     double tolerance;
     double mu_min;
+    /* Each channel's finished layer (appended in 1.x, issue 18; callers
+     * whose struct_size ends before them get NULL): ll_material_build and
+     * ll_material_build_ex hand every channel's stack to the file as soon
+     * as it is complete and free it, so that no two channels' stacks are
+     * alive at once; channel_done (nullable) sees the layer just before
+     * that, on the calling thread (channel 0 = R or mono, 1 = G, 2 = B, in
+     * the order the build finishes them), e.g. to report its albedo. The
+     * layer is valid only during the call. Not called by the other builds,
+     * which return the layers. */
+    void (*channel_done)(void *user, size_t channel, const ll_layer *layer);
+    void *channel_done_user;
 } ll_build_options;
 
 #define LL_BUILD_OPTIONS_INIT                                                               \
-    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0 }
+    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0, NULL, NULL }
 
 /* The resolution's goal of a build with these options: the tolerance and
  * mu_min in effect (opts, else the material's set, else the defaults) and
@@ -98,6 +109,11 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
 
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
  * leaves no file and does not touch an existing one). opts may be NULL.
+ * Each channel's stack goes to the file as soon as it is complete and is
+ * freed (opts->channel_done sees it first): its stored values wait in an
+ * unlinked spill file beside out_path, which needs room for them there, and
+ * the file is written from the spill at the end, byte for byte what
+ * ll_material_build_layers then ll_material_write give.
  * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
  * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY (also when the estimated peak
  * is above opts->max_memory_bytes: refused before anything is allocated,

@@ -107,7 +107,11 @@ class BuildOptions(ctypes.Structure):
                 ("cancel", ctypes.POINTER(ctypes.c_int)),
                 ("max_memory_bytes", ctypes.c_size_t),
                 ("tolerance", ctypes.c_double),
-                ("mu_min", ctypes.c_double)]
+                ("mu_min", ctypes.c_double),
+                # void (*)(void *user, size_t channel, const ll_layer *layer)
+                ("channel_done", ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_size_t,
+                                                  ctypes.c_void_p)),
+                ("channel_done_user", ctypes.c_void_p)]
 
     def __init__(self):
         super().__init__()

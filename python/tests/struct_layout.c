@@ -66,6 +66,8 @@ int main(void)
     FIELD(ll_build_options, max_memory_bytes);
     FIELD(ll_build_options, tolerance);
     FIELD(ll_build_options, mu_min);
+    FIELD(ll_build_options, channel_done);
+    FIELD(ll_build_options, channel_done_user);
 
     STRUCT(ll_build_estimate, LL_BUILD_ESTIMATE_INIT);
     FIELD(ll_build_estimate, struct_size);

@@ -54,4 +54,9 @@ LL_INTERNAL ll_status ll_layer_set_medium_slab(ll_layer *layer, ll_medium_kind k
  * place on the h x h column-major B (adding.c; the slab's solves use it). */
 LL_INTERNAL void ll_right_solve_lu(size_t h, const double *lu, const lapack_int *piv, double *B);
 
+/* LU with partial pivoting of the h x h column-major A in place, as
+ * LAPACK's dgetrf leaves it (adding.c; recursive, gemm-bound); returns
+ * dgetrf's info. */
+LL_INTERNAL lapack_int ll_lu_factor(size_t h, double *A, lapack_int *piv);
+
 #endif /* LL_GRAMMAR_GRAMMAR_H */

@@ -10,6 +10,7 @@
  */
 #include "material/word_table.h"
 #include "layer/layer.h"
+#include "storage/bsdf_write_channels.h"
 #include "layerlab/ll_quad.h"
 #include "layerlab/ll_distribution.h"
 
@@ -38,6 +39,9 @@ typedef struct build {
     int call_ends_build;         /* its 1 is the build's 1 (the writing) */
     ll_share *share;             /* a distributed build's (NULL: one process) */
     ll_word_cache *cache;        /* a builder's word layers (nullable)  */
+    ll_channel_writer *sink;     /* the file, fed each finished channel (nullable) */
+    int pending;                 /* the bottom word is built when first needed */
+    size_t pending_word;
 } build;
 
 static int cancel_raised(const build *b)
@@ -180,15 +184,61 @@ static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_lay
     return s;
 }
 
-/* One level of the stack: word w on top of acc (bottom-up). */
+/*
+ * A channel's stack is final once the top word is on it: with a sink, it
+ * goes to the file at once (for every channel whose stack it is) and is
+ * freed, so that the next channel's adding runs without it (issue 18: the
+ * dust on gold held three finished stacks of about 0.45 GB each beside the
+ * third channel's adding). The order of the calls changes no byte of the
+ * file (bsdf_write_channels.c).
+ */
+static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_layer *acc[3])
+{
+    size_t d;
+    ll_status s = LL_OK;
+    for (d = 0; d < b->nch && s == LL_OK; ++d) {
+        if (owner[d] != c)
+            continue;
+        if (b->o.channel_done)
+            b->o.channel_done(b->o.channel_done_user, d, acc[c]);
+        s = ll_channel_writer_add(b->sink, d, acc[c], next_call(b, "writing", 0.0));
+    }
+    ll_layer_destroy(acc[c]);
+    acc[c] = NULL;
+    return s == LL_OK ? check_cancel(b) : s;
+}
+
+/*
+ * A streamed build makes a channel's bottom word only when the level above
+ * first needs it (add_level), so that the next channel's is not alive
+ * while this one's stack grows and goes to the file: the dust on gold held
+ * all three gold layers beside the first channel's adding. The bottom's
+ * owners never share a word (owner and same word coincide there), so each
+ * is its own word layer, as the clone of it was.
+ */
+static ll_status ensure_bottom(build *b, size_t c, ll_layer *acc[3])
+{
+    if (!b->pending || acc[c])
+        return LL_OK;
+    return cached_word(b, b->pending_word, &b->params[b->pending_word][c], &acc[c]);
+}
+
+/* One level of the stack: word w on top of acc (bottom-up); top: the last. */
 static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
-                           int bottom)
+                           int bottom, int top)
 {
     ll_layer *word[3] = { NULL, NULL, NULL };
     size_t owner[3], c;
     ll_status s = LL_OK;
 
     stack_owners(b, w, bottom ? NULL : below, owner);
+    if (bottom && !top && b->sink) {
+        for (c = 0; c < b->nch; ++c)
+            below[c] = owner[c];
+        b->pending = 1;
+        b->pending_word = w;
+        return LL_OK;
+    }
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
         size_t same = same_word_as(b, w, c);
         if (owner[c] != c)
@@ -201,7 +251,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
     /* Channels that part from a shared stack here start from a copy of it
      * as it was below this word; copy all before adding to any. */
     for (c = 0; c < b->nch && s == LL_OK; ++c)
-        if (owner[c] == c && !bottom && below[c] != c)
+        if (owner[c] == c && !bottom && below[c] != c &&
+            (s = ensure_bottom(b, below[c], acc)) == LL_OK)
             s = ll_layer_clone(acc[below[c]], &acc[c]);
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
         if (owner[c] != c)
@@ -210,6 +261,8 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
             double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
+            if ((s = ensure_bottom(b, c, acc)) != LL_OK)
+                break;
             report(b, "adding");
             start = b->done;
             /* word[c] on top of acc[c] (ll_layer_add_to_top, with a monitor) */
@@ -222,12 +275,16 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             if (s == LL_OK)
                 s = check_cancel(b);
         }
+        if (s == LL_OK && top && b->sink)
+            s = finish_channel(b, c, owner, acc);
     }
     for (c = 0; c < b->nch; ++c) {
         if (word[c] && same_word_as(b, w, c) == c)
             ll_layer_destroy(word[c]);
         below[c] = owner[c];
     }
+    if (!bottom)
+        b->pending = 0; /* every stack the levels above need is made */
     return s;
 }
 
@@ -353,11 +410,11 @@ static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
         s = ll_set_thread_count(b->o.threads);
     b->total = total_cost(b) + extra_cost;
     for (w = b->m->count; w-- > 0 && s == LL_OK;)
-        s = add_level(b, w, acc, below, w + 1 == b->m->count);
-    for (c = 0; c < b->nch && s == LL_OK; ++c)
+        s = add_level(b, w, acc, below, w + 1 == b->m->count, w == 0);
+    for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
         if (below[c] != c)
             s = ll_layer_clone(acc[below[c]], &layers[c]);
-    if (s == LL_OK)
+    if (s == LL_OK && !b->sink)
         for (c = 0; c < b->nch; ++c)
             if (below[c] == c) {
                 layers[c] = acc[c];
@@ -516,7 +573,13 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         return s;
     /* The writing's share of the progress bar. */
     write_cost = ll_cost_write(b.n, b.orders, b.nch);
-    s = run_build(&b, layers, write_cost);
+    {
+        ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+        fill_header(b.m, &b.o, b.nch, &header);
+        s = ll_channel_writer_open(out_path, b.nch, &header, &b.sink);
+    }
+    if (s == LL_OK)
+        s = run_build(&b, layers, write_cost);
     if (s == LL_OK) {
         const ll_monitor *writing;
         report(&b, "writing");
@@ -524,8 +587,10 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         b.call_ends_build = 1;
         /* The writer's last report, before the file replaces out_path, is
          * the build's last: the caller's monitor gets no "done" after it. */
-        s = write_layers(b.m, &b.o, layers, b.nch, out_path, writing);
+        s = ll_channel_writer_commit(b.sink, writing);
+        b.sink = NULL;
     }
+    ll_channel_writer_abort(b.sink);
     if (s == LL_OK && b.o.progress)
         b.o.progress(1.0, "done", b.o.progress_user);
     for (c = 0; c < 3; ++c)

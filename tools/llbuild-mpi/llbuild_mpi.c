@@ -152,8 +152,13 @@ int main(int argc, char **argv)
         if (!a.quiet && job.rank == 0) {
             if (textured)
                 print_textured_summary(&a, m, &o, &plan, now_seconds() - start);
-            else
-                print_summary(&a, m, &o, &plan, layers, n_channels, now_seconds() - start);
+            else {
+                channel_summary sum;
+                memset(&sum, 0, sizeof sum);
+                for (c = 0; c < n_channels; ++c)
+                    remember_channel(&sum, c, layers[c]);
+                print_summary(&a, m, &o, &plan, &sum, now_seconds() - start);
+            }
             printf("ranks        %d (MPI): %.1f MiB sent between them in %lu transfers\n",
                    job.size, sent / 1048576.0, transfers);
         }

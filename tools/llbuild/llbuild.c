@@ -380,31 +380,52 @@ static int refused_by_budget(const ll_material *m, const ll_build_options *o)
 }
 
 /* Directional albedo of the built layers at a few incident angles. */
-static void print_albedo(ll_layer *const *layers, size_t n_channels, int transmissive)
+/* What the summary shows of each channel's finished layer, taken while
+ * the build streams it to the file (ll_build_options.channel_done): the
+ * library frees each stack once it is written. */
+static const double summary_degrees[4] = { 0.0, 30.0, 60.0, 80.0 };
+
+typedef struct channel_summary {
+    size_t n_nodes, n_orders, n_channels;
+    double R[3][4], T[3][4];
+} channel_summary;
+
+static void remember_channel(void *user, size_t channel, const ll_layer *layer)
 {
-    static const double degrees[] = { 0.0, 30.0, 60.0, 80.0 };
-    size_t a, c;
+    channel_summary *sum = user;
+    size_t a;
+    if (channel >= 3)
+        return;
+    sum->n_nodes = ll_layer_node_count(layer);
+    sum->n_orders = ll_layer_order_count(layer);
+    if (channel + 1 > sum->n_channels)
+        sum->n_channels = channel + 1;
+    for (a = 0; a < 4; ++a)
+        ll_layer_albedo(layer, cos(summary_degrees[a] * 3.14159265358979323846 / 180.0),
+                        &sum->R[channel][a], &sum->T[channel][a]);
+}
+
+static void print_albedo(const channel_summary *sum, int transmissive)
+{
+    size_t a, c, n_channels = sum->n_channels;
     printf("albedo       %s%s\n", n_channels == 3 ? "(R G B) " : "",
            transmissive ? "reflected | transmitted" : "reflected");
-    for (a = 0; a < sizeof degrees / sizeof degrees[0]; ++a) {
-        double mu = cos(degrees[a] * 3.14159265358979323846 / 180.0), R[3], T[3];
+    for (a = 0; a < 4; ++a) {
+        printf("  %4.0f deg  ", summary_degrees[a]);
         for (c = 0; c < n_channels; ++c)
-            ll_layer_albedo(layers[c], mu, &R[c], &T[c]);
-        printf("  %4.0f deg  ", degrees[a]);
-        for (c = 0; c < n_channels; ++c)
-            printf(" %.4f", R[c]);
+            printf(" %.4f", sum->R[c][a]);
         if (transmissive) {
             printf("  |");
             for (c = 0; c < n_channels; ++c)
-                printf(" %.4f", T[c]);
+                printf(" %.4f", sum->T[c][a]);
         }
         printf("\n");
     }
 }
 
 static void print_summary(const args *a, const ll_material *m, const ll_build_options *o,
-                          const ll_build_estimate *plan, ll_layer *const *layers,
-                          size_t n_channels, double seconds)
+                          const ll_build_estimate *plan, const channel_summary *sum,
+                          double seconds)
 {
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
@@ -416,15 +437,14 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
     }
     printf("%s -> %s\n", a->input, a->output);
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n",
-           ll_layer_node_count(layers[0]), ll_layer_order_count(layers[0]), n_channels,
-           n_channels == 1 ? "" : "s");
+           sum->n_nodes, sum->n_orders, sum->n_channels, sum->n_channels == 1 ? "" : "s");
     if (plan->n_nodes)
         print_goal(m, o, plan->n_nodes, plan->n_orders, plan->resolution_error, -1.0);
     printf("orders kept  %zu (longest series in the file)\n", info.max_order);
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("header       eta %g, alpha %g (top) %g (bottom)\n", info.eta, info.alpha[0],
            info.alpha[1]);
-    print_albedo(layers, n_channels, info.eta != 1.0);
+    print_albedo(sum, info.eta != 1.0);
     printf("wall time    %.2f s\n", seconds);
     ll_bsdf_release(b);
 }
@@ -502,8 +522,7 @@ int main(int argc, char **argv)
     ll_material *m = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT, built;
     ll_build_estimate plan = LL_BUILD_ESTIMATE_INIT;
-    ll_layer *layers[3] = { NULL, NULL, NULL };
-    size_t n_channels = 0, c;
+    channel_summary summary;
     ll_progress bar;
     double start = now_seconds();
     ll_status s;
@@ -545,12 +564,13 @@ int main(int argc, char **argv)
         bar.scale = 1.0;
         s = ll_material_build(m, &built, a.output);
     } else {
-        s = ll_material_build_layers(m, &built, layers, &n_channels, NULL);
-        if (s == LL_OK) {
-            bar.scale = 1.0;
-            ll_progress_update(0.97, "writing", &bar);
-            s = ll_material_write(m, &built, layers, n_channels, a.output);
-        }
+        /* Each channel goes to the file as soon as its stack is complete
+         * (the summary's albedo is taken from it on the way). */
+        memset(&summary, 0, sizeof summary);
+        built.channel_done = remember_channel;
+        built.channel_done_user = &summary;
+        bar.scale = 1.0;
+        s = ll_material_build(m, &built, a.output);
     }
     if (s == LL_OK)
         file_is_complete();
@@ -567,11 +587,9 @@ int main(int argc, char **argv)
         if (!a.quiet && ll_material_axis_count(m) > 0)
             print_textured_summary(&a, m, &o, &plan, now_seconds() - start);
         else if (!a.quiet)
-            print_summary(&a, m, &o, &plan, layers, n_channels, now_seconds() - start);
+            print_summary(&a, m, &o, &plan, &summary, now_seconds() - start);
         code = 0;
     }
-    for (c = 0; c < 3; ++c)
-        ll_layer_destroy(layers[c]);
     ll_material_destroy(m);
     return code >= 0 ? code : die_cancelled();
 }

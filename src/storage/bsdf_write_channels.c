@@ -1,0 +1,599 @@
+/*
+ * The channel-by-channel writer (bsdf_write_channels.h): what the material
+ * builder hands the file to as soon as a channel's stack is complete, so
+ * that its double layer can be freed before the next channel's is built.
+ *
+ * Why a spill. A file's coefficient block is pair-major (pair after pair,
+ * channels Y, R, B within a pair) with every pair's series as long as the
+ * longest over the channels (bsdf_write.c's rule), and Y mixes all three
+ * in double precision before rounding, so nothing of a pair can be written
+ * before the last channel is seen. Each channel therefore goes, as it
+ * arrives, to a spill file beside the output (unlinked right after it is
+ * created, as ll_bsdf_writer's: no name while the writer works, its space
+ * returns however the process ends): for each column, each row's stored
+ * doubles up to the row's extent E (one past the last order the layer
+ * stores there; beyond it every value is 0 and no final length exceeds
+ * the largest E). In memory stay only what is n x n: the channel's series
+ * lengths (joined into the running maxima), its extents and its order-0
+ * matrix (the CDF's), about 20 n^2 bytes a channel, against the layer's
+ * 8 bytes per stored value plus 16 per column per order.
+ *
+ * Commit reads the spill back column by column and writes every value by
+ * the expression bsdf_write.c uses (ll_wjob_staged_value on the same
+ * doubles), so the file is byte for byte ll_bsdf_write's for the same
+ * layers; the output itself is the atomic writer's (bsdf_file_out.c).
+ */
+#include "storage/bsdf_write_channels.h"
+#include "storage/bsdf_write_job.h"
+#include "layer/layer.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Spill bytes buffered before a write. */
+#define LL_CHANNELS_SPILL_BUFFER ((size_t)1 << 20)
+
+static const char *const fn_open = "ll_material_build (opening the file)";
+static const char *const fn_add = "ll_material_build (a finished channel)";
+static const char *const fn_commit = "ll_material_build (writing)";
+
+struct ll_channel_writer {
+    char *path;
+    write_job job;                 /* options, shape, lengths (max), offsets */
+    char *metadata_copy;
+    int failed;                    /* only abort is left                     */
+    int added[3];
+    double *nodes, *weights;       /* [n] the first channel's: every layer's */
+    double *factor;                /* [2 n] surface factor, order 0 | k > 0  */
+    double *order0[3];             /* [n * n] col * n + row: M_0 (the CDF)   */
+    uint32_t *ext[3];              /* [n * n] col * n + row: extents         */
+    unsigned long long *col_at[3]; /* [n] spill offset of each column       */
+    size_t *col_values[3];         /* [n] doubles of each column in the spill */
+    uint32_t *len;                 /* [n * n] one channel's lengths (add)    */
+    double *tail;                  /* [n * n] scratch of the lengths (add)   */
+    double *stage;                 /* [n * m] one column's orders (add)      */
+    int fd;                        /* the spill (unlinked), -1 before        */
+    unsigned long long spill_end;  /* bytes written to the spill             */
+    unsigned char *buffer;         /* LL_CHANNELS_SPILL_BUFFER               */
+    size_t buffered;
+};
+
+/* ------------------------------------------------------------- the spill */
+
+static ll_status spill_open(ll_channel_writer *w)
+{
+    const char *slash = strrchr(w->path, '/');
+    size_t dir = slash ? (size_t)(slash - w->path) + 1 : 0, name = strlen(w->path) - dir;
+    char *temp = ll_malloc(dir + name + 16);
+    int err;
+    if (!temp)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+    memcpy(temp, w->path, dir);
+    temp[dir] = '.';
+    memcpy(temp + dir + 1, w->path + dir, name);
+    memcpy(temp + dir + 1 + name, ".spill.XXXXXX", 14);
+    w->fd = mkstemp(temp);
+    err = errno;
+    if (w->fd >= 0)
+        (void)unlink(temp);
+    ll_free(temp);
+    if (w->fd < 0)
+        return ll_fail(LL_ERROR_IO, "%s: \"%s\": cannot create a spill file beside it: %s",
+                       fn_open, w->path, strerror(err));
+    return LL_OK;
+}
+
+static ll_status spill_flush(ll_channel_writer *w)
+{
+    size_t done = 0;
+    while (done < w->buffered) {
+        ssize_t k = write(w->fd, w->buffer + done, w->buffered - done);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return ll_fail(LL_ERROR_IO, "%s: \"%s\": writing the spill file beside it: %s",
+                           fn_add, w->path, strerror(k < 0 ? errno : EIO));
+        done += (size_t)k;
+    }
+    w->spill_end += w->buffered;
+    w->buffered = 0;
+    return LL_OK;
+}
+
+static ll_status spill_put(ll_channel_writer *w, const void *data, size_t size)
+{
+    const unsigned char *p = data;
+    while (size > 0) {
+        size_t room = LL_CHANNELS_SPILL_BUFFER - w->buffered, n = size < room ? size : room;
+        memcpy(w->buffer + w->buffered, p, n);
+        w->buffered += n;
+        p += n;
+        size -= n;
+        if (w->buffered == LL_CHANNELS_SPILL_BUFFER) {
+            ll_status s = spill_flush(w);
+            if (s != LL_OK)
+                return s;
+        }
+    }
+    return LL_OK;
+}
+
+static ll_status spill_read(const ll_channel_writer *w, unsigned long long at, void *data,
+                            size_t size)
+{
+    unsigned char *p = data;
+    while (size > 0) {
+        ssize_t k = pread(w->fd, p, size, (off_t)at);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            return ll_fail(LL_ERROR_IO, "%s: \"%s\": reading the spill file beside it: %s",
+                           fn_commit, w->path, k < 0 ? strerror(errno) : "it is shorter");
+        p += k;
+        at += (unsigned long long)k;
+        size -= (size_t)k;
+    }
+    return LL_OK;
+}
+
+/* ------------------------------------------------------------------ open */
+
+static void writer_free(ll_channel_writer *w)
+{
+    size_t c;
+    if (w->fd >= 0)
+        close(w->fd);
+    for (c = 0; c < 3; ++c) {
+        ll_free(w->order0[c]);
+        ll_free(w->ext[c]);
+        ll_free(w->col_at[c]);
+        ll_free(w->col_values[c]);
+    }
+    ll_free(w->path);
+    ll_free(w->metadata_copy);
+    ll_free(w->nodes);
+    ll_free(w->weights);
+    ll_free(w->factor);
+    ll_free(w->len);
+    ll_free(w->tail);
+    ll_free(w->stage);
+    ll_free(w->buffer);
+    ll_free(w->job.nodes);
+    ll_free(w->job.length);
+    ll_free(w->job.offset);
+    ll_free(w->job.cdf);
+    ll_free(w->job.metadata);
+    ll_free(w);
+}
+
+static char *copy_text(const char *text)
+{
+    size_t len = strlen(text);
+    char *c = ll_malloc(len + 1);
+    if (c)
+        memcpy(c, text, len + 1);
+    return c;
+}
+
+ll_status ll_channel_writer_open(const char *path, size_t n_channels,
+                                 const ll_bsdf_write_options *opts, ll_channel_writer **out)
+{
+    ll_channel_writer *w;
+    ll_status s;
+    *out = NULL;
+    if (!path || !*path)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn_open);
+    if (n_channels != 1 && n_channels != 3)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", fn_open,
+                       n_channels);
+    w = ll_calloc(1, sizeof *w);
+    if (!w)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+    w->fd = -1;
+    w->job.fn = fn_open;
+    w->job.n_channels = n_channels;
+    w->job.n_bases = 1;
+    w->path = copy_text(path);
+    w->buffer = ll_malloc(LL_CHANNELS_SPILL_BUFFER);
+    if (!w->path || !w->buffer) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        goto fail;
+    }
+    if ((s = ll_wjob_read_options(&w->job, opts)) != LL_OK)
+        goto fail;
+    if (w->job.opts.metadata) {
+        w->metadata_copy = copy_text(w->job.opts.metadata);
+        if (!w->metadata_copy) {
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+            goto fail;
+        }
+        w->job.opts.metadata = w->metadata_copy;
+    }
+    if ((s = spill_open(w)) != LL_OK)
+        goto fail;
+    *out = w;
+    return LL_OK;
+fail:
+    writer_free(w);
+    return s;
+}
+
+/* ------------------------------------------------------------------- add */
+
+/* The file's shape from the first channel's layer (as check_layers and
+ * prepare of bsdf_write.c take it). */
+static ll_status take_shape(ll_channel_writer *w, const ll_layer *l)
+{
+    write_job *job = &w->job;
+    size_t n = l->n, nn = n + 2, n2, nn2, nm, k, c;
+    job->n = n;
+    job->h = n / 2;
+    job->m = l->m;
+    job->nn = nn;
+    if (nn > UINT32_MAX / 2)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", fn_add, n);
+    if (!ll_size_mul(n, n, &n2) || !ll_size_mul(nn, nn, &nn2) || !ll_size_mul(n, l->m, &nm))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", fn_add);
+    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
+    job->length = ll_calloc_array(nn2, sizeof *job->length);
+    job->offset = ll_alloc_array(nn2, sizeof *job->offset);
+    w->nodes = ll_alloc_array(n, sizeof *w->nodes);
+    w->weights = ll_alloc_array(n, sizeof *w->weights);
+    w->factor = ll_alloc_array(n, 2 * sizeof *w->factor);
+    w->len = ll_alloc_array(n2, sizeof *w->len);
+    w->tail = ll_alloc_array(n2, sizeof *w->tail);
+    w->stage = ll_calloc_array(nm, sizeof *w->stage);
+    if (!job->nodes || !job->length || !job->offset || !w->nodes || !w->weights ||
+        !w->factor || !w->len || !w->tail || !w->stage)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
+    for (c = 0; c < job->n_channels; ++c) {
+        w->order0[c] = ll_alloc_array(n2, sizeof *w->order0[c]);
+        w->ext[c] = ll_alloc_array(n2, sizeof *w->ext[c]);
+        w->col_at[c] = ll_alloc_array(n, sizeof *w->col_at[c]);
+        w->col_values[c] = ll_alloc_array(n, sizeof *w->col_values[c]);
+        if (!w->order0[c] || !w->ext[c] || !w->col_at[c] || !w->col_values[c])
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
+    }
+    memcpy(w->nodes, l->nodes, n * sizeof *w->nodes);
+    memcpy(w->weights, l->weights, n * sizeof *w->weights);
+    for (k = 0; k < n; ++k) {
+        w->factor[k] = ll_layer_surface_factor(l, k, 0);
+        w->factor[n + k] = ll_layer_surface_factor(l, k, 1);
+    }
+    for (k = 0; k < nn; ++k) {
+        size_t li = layer_index(k, job->h);
+        job->nodes[k] = li == (size_t)-1 ? 0.0f : (float)l->nodes[li];
+    }
+    return LL_OK;
+}
+
+/* What ll_layer_check_compatible checks, against the first channel's. */
+static ll_status check_shape(const ll_channel_writer *w, const ll_layer *l)
+{
+    const write_job *job = &w->job;
+    if (l->n != job->n || l->m != job->m)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: the layers do not match (%zu nodes x %zu orders vs %zu x %zu)",
+                       fn_add, job->n, job->m, l->n, l->m);
+    if (memcmp(l->nodes, w->nodes, job->n * sizeof *w->nodes) != 0 ||
+        memcmp(l->weights, w->weights, job->n * sizeof *w->weights) != 0)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers use different nodes or weights",
+                       fn_add);
+    return LL_OK;
+}
+
+/* The layer's series lengths joined into the running maxima (as
+ * bsdf_write.c's compute_lengths); its order 0 kept for the CDF. */
+static ll_status join_lengths(ll_channel_writer *w, size_t channel, const ll_layer *l)
+{
+    write_job *job = &w->job;
+    size_t n = job->n, nn = job->nn, i, o;
+    ll_status s = ll_wjob_layer_lengths(job, l, w->len, w->tail, w->order0[channel]);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        size_t li = layer_index(i, job->h);
+        if (li == (size_t)-1)
+            continue;
+        for (o = 0; o < nn; ++o) {
+            size_t lo = layer_index(o, job->h);
+            uint32_t *dst = &job->length[i * nn + o];
+            if (lo != (size_t)-1 && w->len[li * n + lo] > *dst)
+                *dst = w->len[li * n + lo];
+        }
+    }
+    return s;
+}
+
+/* Extents of the layer (col * n + row): one past its last stored order. */
+static void layer_extents(const ll_layer *l, uint32_t *ext)
+{
+    size_t n = l->n, h = n / 2, k, col, j;
+    int half;
+    memset(ext, 0, n * n * sizeof *ext);
+    for (k = 0; k < l->m; ++k) {
+        const ll_order *o = l->orders[k];
+        if (!o)
+            continue;
+        for (col = 0; col < n; ++col)
+            for (half = 0; half < 2; ++half) {
+                const ll_segment *sg = &o->seg[2 * col + (size_t)half];
+                for (j = 0; j < sg->len; ++j)
+                    ext[col * n + (size_t)half * h + sg->lo + j] = (uint32_t)(k + 1);
+            }
+    }
+}
+
+/* The layer's stored doubles to the spill, column after column, each row
+ * up to its extent. */
+static ll_status spill_layer(ll_channel_writer *w, size_t channel, const ll_layer *l,
+                             ll_watch *watch)
+{
+    const write_job *job = &w->job;
+    size_t n = job->n, m = job->m, col, row;
+    const uint32_t *ext = w->ext[channel];
+    ll_status s = LL_OK;
+    for (col = 0; col < n && s == LL_OK; ++col) {
+        size_t kmax = 0, values = 0;
+        if (ll_watch_poll(watch))
+            return write_cancelled(job);
+        for (row = 0; row < n; ++row) {
+            size_t e = ext[col * n + row];
+            kmax = e > kmax ? e : kmax;
+            values += e;
+        }
+        w->col_at[channel][col] = w->spill_end + w->buffered;
+        w->col_values[channel][col] = values;
+        ll_wjob_stage_column(l, col, kmax, w->stage, 0);
+        for (row = 0; row < n && s == LL_OK; ++row)
+            s = spill_put(w, w->stage + row * m, ext[col * n + row] * sizeof(double));
+        ll_wjob_stage_column(l, col, kmax, w->stage, 1);
+    }
+    return s;
+}
+
+ll_status ll_channel_writer_add(ll_channel_writer *w, size_t channel, const ll_layer *layer,
+                                const ll_monitor *monitor)
+{
+    write_job *job = &w->job;
+    ll_watch watch;
+    ll_status s;
+    if (w->failed)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: an earlier call failed; only abort is left", fn_add);
+    job->fn = fn_add;
+    if ((s = ll_watch_begin(&watch, monitor, fn_add)) != LL_OK)
+        goto fail;
+    job->watch = &watch;
+    if (!layer || channel >= job->n_channels || w->added[channel]) {
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                    "%s: channel %zu of %zu is %s", fn_add, channel, job->n_channels,
+                    !layer ? "NULL" : channel >= job->n_channels ? "not one" : "added already");
+        goto fail;
+    }
+    if (!w->nodes && (s = take_shape(w, layer)) != LL_OK)
+        goto fail;
+    if ((s = check_shape(w, layer)) != LL_OK)
+        goto fail;
+    ll_watch_stage(&watch, "writing", 0.0, 1.0, job->m);
+    if ((s = join_lengths(w, channel, layer)) != LL_OK)
+        goto fail;
+    layer_extents(layer, w->ext[channel]);
+    if ((s = spill_layer(w, channel, layer, &watch)) != LL_OK)
+        goto fail;
+    job->watch = NULL;
+    w->added[channel] = 1;
+    return LL_OK;
+fail:
+    job->watch = NULL;
+    w->failed = 1;
+    return s;
+}
+
+/* ---------------------------------------------------------------- commit */
+
+/* Stored value of file channel c (Y, R, B) at order k from the channels'
+ * doubles v[L * stride + k], by bsdf_write.c's expression. */
+static double stored_value(const write_job *job, size_t c, const double *v, size_t stride,
+                           size_t k, size_t lo, double factor, const double *nodes)
+{
+    return ll_wjob_staged_value(job->n_channels, c, v, stride, k, fabs(nodes[lo]), factor);
+}
+
+/* The CDF table, as bsdf_write.c's compute_cdf (one basis). */
+static ll_status compute_cdf(ll_channel_writer *w)
+{
+    write_job *job = &w->job;
+    size_t nn = job->nn, n = job->n, i, o, c;
+    double *values = ll_alloc_array(nn, sizeof *values);
+    job->cdf = ll_alloc_array(nn * nn, sizeof *job->cdf);
+    if (!values || !job->cdf) {
+        ll_free(values);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    }
+    ll_watch_stage(job->watch, "writing", 0.0, 0.1, nn);
+    for (i = 0; i < nn; ++i) {
+        size_t li = layer_index(i, job->h);
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch)) {
+            ll_free(values);
+            return write_cancelled(job);
+        }
+        for (o = 0; o < nn; ++o) {
+            size_t lo = layer_index(o, job->h);
+            double v[3];
+            values[o] = 0.0;
+            if (!job->length[i * nn + o])
+                continue; /* (also every pair with a mu = 0 node) */
+            for (c = 0; c < job->n_channels; ++c)
+                v[c] = w->order0[c][li * n + lo];
+            values[o] = (double)(float)stored_value(job, 0, v, 1, 0, lo, w->factor[li],
+                                                    w->nodes);
+        }
+        ll_wjob_integrate_row(job->nodes, values, nn, job->cdf + i * nn, 1);
+    }
+    ll_free(values);
+    return LL_OK;
+}
+
+/* File column i (layer column li): every channel's spilled column read
+ * back into col[c] (rows at row_at[c][row]), then each pair's series. */
+static ll_status put_column(ll_channel_writer *w, ll_bsdf_out *out, size_t i, double *const *col,
+                            size_t *const *row_at, double *row)
+{
+    const write_job *job = &w->job;
+    size_t n = job->n, m = job->m, nn = job->nn, nch = job->n_channels, li, o, c, k, r;
+    ll_status s = LL_OK;
+    li = layer_index(i, job->h);
+    for (c = 0; c < nch && s == LL_OK; ++c) {
+        size_t at = 0;
+        s = spill_read(w, w->col_at[c][li], col[c], w->col_values[c][li] * sizeof(double));
+        for (r = 0; r < n; ++r) {
+            row_at[c][r] = at;
+            at += w->ext[c][li * n + r];
+        }
+    }
+    for (o = 0; o < nn && s == LL_OK; ++o) {
+        size_t len = job->length[i * nn + o], lo = layer_index(o, job->h);
+        if (len == 0)
+            continue;
+        if (ll_watch_poll(job->watch))
+            return write_cancelled(job);
+        /* row[c * m + k]: channel c's order k at (lo, li), 0 beyond its extent. */
+        for (c = 0; c < nch; ++c) {
+            size_t e = w->ext[c][li * n + lo];
+            for (k = 0; k < len; ++k)
+                row[c * m + k] = k < e ? col[c][row_at[c][lo] + k] : 0.0;
+        }
+        for (c = 0; c < nch && s == LL_OK; ++c)
+            for (k = 0; k < len; ++k) {
+                double v = stored_value(job, c, row, m, k, lo, w->factor[(k > 0) * n + li],
+                                        w->nodes);
+                if (!(fabs(v) <= FLT_MAX)) {
+                    s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                                "%s: coefficient %zu of node pair (%zu, %zu) is %g, beyond "
+                                "float range",
+                                fn_commit, k, o, i, v);
+                    break;
+                }
+                ll_bsdf_out_f32(out, (float)v);
+            }
+    }
+    return s;
+}
+
+static ll_status put_coefficients(ll_channel_writer *w, ll_bsdf_out *out)
+{
+    write_job *job = &w->job;
+    size_t n = job->n, nch = job->n_channels, nn = job->nn, c, i, most[3] = { 0, 0, 0 };
+    double *col[3] = { NULL, NULL, NULL }, *row = NULL;
+    size_t *row_at[3] = { NULL, NULL, NULL };
+    ll_status s = LL_OK;
+    for (c = 0; c < nch; ++c) {
+        for (i = 0; i < n; ++i)
+            most[c] = w->col_values[c][i] > most[c] ? w->col_values[c][i] : most[c];
+        col[c] = ll_alloc_array(most[c] ? most[c] : 1, sizeof(double));
+        row_at[c] = ll_alloc_array(n, sizeof(size_t));
+        if (!col[c] || !row_at[c])
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    }
+    row = ll_alloc_array(nch * job->m, sizeof *row);
+    if (!row)
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    ll_watch_stage(job->watch, "writing", 0.15, 0.85, nn);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch)) {
+            s = write_cancelled(job);
+            break;
+        }
+        if (layer_index(i, job->h) != (size_t)-1) /* mu = 0 holds no coefficients */
+            s = put_column(w, out, i, col, row_at, row);
+    }
+    for (c = 0; c < 3; ++c) {
+        ll_free(col[c]);
+        ll_free(row_at[c]);
+    }
+    ll_free(row);
+    return s;
+}
+
+static ll_status commit_file(ll_channel_writer *w, const ll_monitor *monitor)
+{
+    write_job *job = &w->job;
+    ll_watch watch;
+    ll_bsdf_out *out = NULL;
+    const char *metadata;
+    size_t c, k, metadata_size;
+    ll_status s;
+
+    job->fn = fn_commit;
+    if ((s = ll_watch_begin(&watch, monitor, fn_commit)) != LL_OK)
+        return s;
+    job->watch = &watch;
+    if (w->failed)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: an earlier call failed; only abort is left", fn_commit);
+    for (c = 0; c < job->n_channels; ++c)
+        if (!w->added[c])
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: channel %zu was not added",
+                           fn_commit, c);
+    /* The stage is the add's scratch; the commit reads columns instead. */
+    ll_free(w->stage);
+    w->stage = NULL;
+    if ((s = spill_flush(w)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK ||
+        (s = compute_cdf(w)) != LL_OK)
+        return s;
+    if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
+        return s;
+    metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
+    metadata_size = strlen(metadata);
+    if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
+        return s;
+    ll_wjob_put_header(out, job, metadata_size);
+    for (k = 0; k < job->nn; ++k)
+        ll_bsdf_out_f32(out, job->nodes[k]);
+    ll_watch_stage(job->watch, "writing", 0.1, 0.05, job->nn);
+    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
+        if (k % job->nn == 0) {
+            ll_watch_advance(job->watch, 1);
+            if (ll_watch_poll(job->watch))
+                s = write_cancelled(job);
+        }
+        ll_bsdf_out_f32(out, job->cdf[k]);
+    }
+    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
+        ll_bsdf_out_u32(out, job->offset[k]);
+        ll_bsdf_out_u32(out, job->length[k]);
+    }
+    if (s == LL_OK)
+        s = put_coefficients(w, out);
+    /* The last report comes before the temporary file replaces the
+     * target: a cancel there still leaves no file. */
+    s = ll_watch_finish(job->watch, s, fn_commit);
+    if (s != LL_OK) {
+        ll_bsdf_out_abort(out);
+        return s;
+    }
+    ll_bsdf_out_bytes(out, metadata, metadata_size);
+    return ll_bsdf_out_commit(out);
+}
+
+ll_status ll_channel_writer_commit(ll_channel_writer *w, const ll_monitor *monitor)
+{
+    ll_status s;
+    if (!w)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", fn_commit);
+    s = commit_file(w, monitor);
+    writer_free(w);
+    return s;
+}
+
+void ll_channel_writer_abort(ll_channel_writer *w)
+{
+    if (w)
+        writer_free(w);
+}
