@@ -182,40 +182,57 @@ LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
 }
 
 /* Weighted dot products of one stored series (channels `stride` apart)
- * with h over m >= 1 values, added to the channel accumulators. */
+ * with h over m >= 1 values, added to the channel accumulators. Two
+ * accumulators per channel (four for one channel): a multiply-add waits
+ * about four cycles for the one before it into the same register, and the
+ * conversions of the stored floats allow one group of four every cycle, so
+ * a single chain per channel left the loop waiting on latency. */
 LL_AVX2 __attribute__((always_inline)) static inline void
-series_dot_avx2(const float *a, size_t stride, size_t n_channels,
-                                    const double *h, size_t m, double w, __m256d *acc0,
-                                    __m256d *acc1, __m256d *acc2)
+series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *h, size_t m,
+                double w, __m256d *acc0, __m256d *acc1, __m256d *acc2)
 {
     size_t last = (m - 1) & ~(size_t)3, j = 0;
     __m256d mask = _mm256_castsi256_pd(
         _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
     __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
+    __m256d t0 = _mm256_setzero_pd(), t1 = _mm256_setzero_pd();
     if (n_channels == 3) {
         const float *r = a + stride, *b = a + 2 * stride;
-        __m256d s2 = _mm256_setzero_pd(), hv;
-        for (; j < last; j += 4) {
+        __m256d s2 = _mm256_setzero_pd(), t2 = _mm256_setzero_pd(), hv, hw;
+        for (; j + 8 <= last; j += 8) {
+            hv = _mm256_loadu_pd(h + j);
+            hw = _mm256_loadu_pd(h + j + 4);
+            s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
+            s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
+            s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
+            t0 = _mm256_fmadd_pd(load4(a + j + 4), hw, t0);
+            t1 = _mm256_fmadd_pd(load4(r + j + 4), hw, t1);
+            t2 = _mm256_fmadd_pd(load4(b + j + 4), hw, t2);
+        }
+        if (j < last) {
             hv = _mm256_loadu_pd(h + j);
             s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
             s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
             s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
         }
         hv = _mm256_loadu_pd(h + last);
-        s0 = _mm256_fmadd_pd(load_last(a + last, mask), hv, s0);
-        s1 = _mm256_fmadd_pd(load_last(r + last, mask), hv, s1);
-        s2 = _mm256_fmadd_pd(load_last(b + last, mask), hv, s2);
-        *acc1 = _mm256_fmadd_pd(s1, wv, *acc1);
-        *acc2 = _mm256_fmadd_pd(s2, wv, *acc2);
+        t0 = _mm256_fmadd_pd(load_last(a + last, mask), hv, t0);
+        t1 = _mm256_fmadd_pd(load_last(r + last, mask), hv, t1);
+        t2 = _mm256_fmadd_pd(load_last(b + last, mask), hv, t2);
+        *acc1 = _mm256_fmadd_pd(_mm256_add_pd(s1, t1), wv, *acc1);
+        *acc2 = _mm256_fmadd_pd(_mm256_add_pd(s2, t2), wv, *acc2);
+        s0 = _mm256_add_pd(s0, t0);
     } else {
-        for (; j + 8 <= last; j += 8) {
+        for (; j + 16 <= last; j += 16) {
             s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
             s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
+            t0 = _mm256_fmadd_pd(load4(a + j + 8), _mm256_loadu_pd(h + j + 8), t0);
+            t1 = _mm256_fmadd_pd(load4(a + j + 12), _mm256_loadu_pd(h + j + 12), t1);
         }
-        if (j < last)
+        for (; j < last; j += 4)
             s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
         s1 = _mm256_fmadd_pd(load_last(a + last, mask), _mm256_loadu_pd(h + last), s1);
-        s0 = _mm256_add_pd(s0, s1);
+        s0 = _mm256_add_pd(_mm256_add_pd(s0, s1), _mm256_add_pd(t0, t1));
     }
     *acc0 = _mm256_fmadd_pd(s0, wv, *acc0);
 }
