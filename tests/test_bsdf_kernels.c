@@ -187,8 +187,8 @@ static void densify_agrees(void **state)
                 scale += fabs(w[j]);
                 ll_bsdf_add_scaled(0, one, a[j], w[j], m);
             }
-            ll_bsdf_add_scaled4(0, p4, a, w, m);
-            ll_bsdf_add_scaled4(vector, v4, a, w, m);
+            ll_bsdf_add_scaled4(0, p4, a, w, m, NULL, 0);
+            ll_bsdf_add_scaled4(vector, v4, a, w, m, s.coeff[4], 256);
         }
         for (j = 0; j < m; ++j) {
             assert_true(fabs(p4[j] - v4[j]) <= 1e-14 * (1.0 + scale));

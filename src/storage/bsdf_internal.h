@@ -199,9 +199,12 @@ LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const float *a, dou
                                     size_t m);
 /* sum_j a[j] h[j], j < m (a summed series against harmonics). */
 LL_INTERNAL double ll_bsdf_dot_dense(int vector, const double *a, const double *h, size_t m);
-/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass). */
+/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass); asks
+ * for the prefetch_bytes from prefetch (NULL: none) on the way, a cache
+ * line per 64 bytes read (the next block, bsdf_fourier.c). */
 LL_INTERNAL void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4],
-                                     const double w[4], size_t m);
+                                     const double w[4], size_t m, const void *prefetch,
+                                     size_t prefetch_bytes);
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,
                                         const ll_harmonics *hs, double *F, double *f);

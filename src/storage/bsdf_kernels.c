@@ -18,6 +18,12 @@
 #define LL_BSDF_HAVE_AVX2_PATH 0
 #endif
 
+#if defined(__GNUC__) || defined(__clang__)
+#define LL_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+#else
+#define LL_PREFETCH(p) ((void)(p))
+#endif
+
 /* ------------------------------------------------------------- portable */
 
 /* Four partial sums: one accumulator would be a chain of dependent adds.
@@ -114,12 +120,17 @@ static void add_scaled_portable(double *acc, const float *a, double w, size_t m)
 }
 
 static void add_scaled4_portable(double *acc, const float *const a[4], const double w[4],
-                                 size_t m)
+                                 size_t m, const char *pf, const char *pf_end)
 {
     size_t j;
-    for (j = 0; j < m; ++j)
+    for (j = 0; j < m; ++j) {
+        if (j % 4 == 0 && pf < pf_end) {
+            LL_PREFETCH(pf);
+            pf += 64;
+        }
         acc[j] += (w[0] * (double)a[0][j] + w[1] * (double)a[1][j]) +
                   (w[2] * (double)a[2][j] + w[3] * (double)a[3][j]);
+    }
 }
 
 static void integral_portable(const double *a, const double *recip, size_t n4,
@@ -189,7 +200,8 @@ LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
  * a single chain per channel left the loop waiting on latency. */
 LL_AVX2 __attribute__((always_inline)) static inline void
 series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *h, size_t m,
-                double w, __m256d *acc0, __m256d *acc1, __m256d *acc2)
+                double w, const char *pf, const char *pf_end, __m256d *acc0, __m256d *acc1,
+                __m256d *acc2)
 {
     size_t last = (m - 1) & ~(size_t)3, j = 0;
     __m256d mask = _mm256_castsi256_pd(
@@ -200,6 +212,12 @@ series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *
         const float *r = a + stride, *b = a + 2 * stride;
         __m256d s2 = _mm256_setzero_pd(), t2 = _mm256_setzero_pd(), hv, hw;
         for (; j + 8 <= last; j += 8) {
+            /* 96 bytes read per step, two lines of the next block asked for */
+            if (pf < pf_end) {
+                LL_PREFETCH(pf);
+                LL_PREFETCH(pf + 64);
+                pf += 128;
+            }
             hv = _mm256_loadu_pd(h + j);
             hw = _mm256_loadu_pd(h + j + 4);
             s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
@@ -224,6 +242,10 @@ series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *
         s0 = _mm256_add_pd(s0, t0);
     } else {
         for (; j + 16 <= last; j += 16) {
+            if (pf < pf_end) {
+                LL_PREFETCH(pf);
+                pf += 64;
+            }
             s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
             s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
             t0 = _mm256_fmadd_pd(load4(a + j + 8), _mm256_loadu_pd(h + j + 8), t0);
@@ -241,7 +263,16 @@ series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *
  * chunk, weighted, summed per channel. The accumulators stay in registers
  * across the series (an accumulator in memory would chain every series to
  * the previous one through a store and a load); h has room for the chunk
- * rounded up to 4 values. */
+ * rounded up to 4 values.
+ *
+ * The series of one stencil row (same incident node, four outgoing ones)
+ * are adjacent in the file, so the hardware prefetcher follows a row as one
+ * stream; the next row starts elsewhere and its first misses would each
+ * wait a memory latency. So while series p is summed, the block of series
+ * p + 4 (the next row's, in gather order) is asked for at the pace of the
+ * reading: the fetches of the two rows overlap (measured on random 16 KiB
+ * blocks of a 200 MB array: 4.3 -> 6.0 GB/s on this machine). Only the
+ * untextured whole-series case (the one that reads long series). */
 LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, size_t k0,
                                    size_t count, const double *h, double out[3])
 {
@@ -253,8 +284,14 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
             continue;
         m = len - k0 < count ? len - k0 : count;
         if (nb == 1) {
+            const char *pf = NULL, *pf_end = NULL;
+            if (k0 == 0 && p + 4 < s->count) {
+                pf = (const char *)(const void *)s->coeff[p + 4];
+                pf_end = pf + (size_t)s->length[p + 4] * n_channels * sizeof(float);
+            }
             series_dot_avx2(s->coeff[p] + k0, len, n_channels, h, m,
-                            s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
+                            s->weight[p] * (double)s->basis[0], pf, pf_end, &acc0, &acc1,
+                            &acc2);
             continue;
         }
         for (q = 0; q < s->n_active; ++q) {
@@ -263,7 +300,7 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
             w = s->weight[p] * (double)s->basis[basis];
             if (w != 0.0)
                 series_dot_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h, m, w,
-                                &acc0, &acc1, &acc2);
+                                NULL, NULL, &acc0, &acc1, &acc2);
         }
     }
     out[0] += hsum(acc0);
@@ -326,15 +363,20 @@ LL_AVX2 static double dot_dense_avx2(const double *a, const double *h, size_t m)
 /* Four series at once: the sum is loaded and stored once for four inputs
  * (a pass per series would move it 16 times per call). */
 LL_AVX2 static void add_scaled4_avx2(double *acc, const float *const a[4], const double w[4],
-                                     size_t m)
+                                     size_t m, const char *pf, const char *pf_end)
 {
     __m256d w0 = _mm256_set1_pd(w[0]), w1 = _mm256_set1_pd(w[1]);
     __m256d w2 = _mm256_set1_pd(w[2]), w3 = _mm256_set1_pd(w[3]);
     const float *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
     size_t j = 0;
     for (; j + 4 <= m; j += 4) {
-        __m256d s = _mm256_fmadd_pd(load4(a0 + j), w0, _mm256_loadu_pd(acc + j));
-        __m256d r = _mm256_mul_pd(load4(a2 + j), w2);
+        __m256d s = _mm256_fmadd_pd(load4(a0 + j), w0, _mm256_loadu_pd(acc + j)), r;
+        /* 64 bytes read per step: one line of the next block (pf) */
+        if (pf < pf_end) {
+            LL_PREFETCH(pf);
+            pf += 64;
+        }
+        r = _mm256_mul_pd(load4(a2 + j), w2);
         s = _mm256_fmadd_pd(load4(a1 + j), w1, s);
         r = _mm256_fmadd_pd(load4(a3 + j), w3, r);
         _mm256_storeu_pd(acc + j, _mm256_add_pd(s, r));
@@ -381,12 +423,6 @@ static int have_avx2(void) { return 0; }
 #endif
 
 /* ----------------------------------------------------------- dispatch */
-
-#if defined(__GNUC__) || defined(__clang__)
-#define LL_PREFETCH(p) __builtin_prefetch((p), 0, 3)
-#else
-#define LL_PREFETCH(p) ((void)(p))
-#endif
 
 void ll_bsdf_prefetch_series(const ll_bsdf_series *s, size_t n_channels)
 {
@@ -445,16 +481,17 @@ void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w, size_
 }
 
 void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4], const double w[4],
-                         size_t m)
+                         size_t m, const void *prefetch, size_t prefetch_bytes)
 {
+    const char *pf = prefetch, *pf_end = pf ? pf + prefetch_bytes : NULL;
 #if LL_BSDF_HAVE_AVX2_PATH
     if (vector) {
-        add_scaled4_avx2(acc, a, w, m);
+        add_scaled4_avx2(acc, a, w, m, pf, pf_end);
         return;
     }
 #endif
     (void)vector;
-    add_scaled4_portable(acc, a, w, m);
+    add_scaled4_portable(acc, a, w, m, pf, pf_end);
 }
 
 void ll_bsdf_integral_dense(int vector, const double *a, const double *recip, size_t n4,
