@@ -193,13 +193,55 @@ LL_AVX2 static __m256d load_last(const float *a, const __m256d mask)
 }
 
 /* Weighted dot products of one stored series (channels `stride` apart)
- * with h over m >= 1 values, added to the channel accumulators. Two
- * accumulators per channel (four for one channel): a multiply-add waits
- * about four cycles for the one before it into the same register, and the
- * conversions of the stored floats allow one group of four every cycle, so
- * a single chain per channel left the loop waiting on latency. */
+ * with h over m >= 1 values, added to the channel accumulators: one
+ * accumulator per channel, the fewest instructions for a short series. */
 LL_AVX2 __attribute__((always_inline)) static inline void
-series_dot_avx2(const float *a, size_t stride, size_t n_channels, const double *h, size_t m,
+series_dot_short_avx2(const float *a, size_t stride, size_t n_channels, const double *h,
+                      size_t m, double w, __m256d *acc0, __m256d *acc1, __m256d *acc2)
+{
+    size_t last = (m - 1) & ~(size_t)3, j = 0;
+    __m256d mask = _mm256_castsi256_pd(
+        _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
+    __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
+    if (n_channels == 3) {
+        const float *r = a + stride, *b = a + 2 * stride;
+        __m256d s2 = _mm256_setzero_pd(), hv;
+        for (; j < last; j += 4) {
+            hv = _mm256_loadu_pd(h + j);
+            s0 = _mm256_fmadd_pd(load4(a + j), hv, s0);
+            s1 = _mm256_fmadd_pd(load4(r + j), hv, s1);
+            s2 = _mm256_fmadd_pd(load4(b + j), hv, s2);
+        }
+        hv = _mm256_loadu_pd(h + last);
+        s0 = _mm256_fmadd_pd(load_last(a + last, mask), hv, s0);
+        s1 = _mm256_fmadd_pd(load_last(r + last, mask), hv, s1);
+        s2 = _mm256_fmadd_pd(load_last(b + last, mask), hv, s2);
+        *acc1 = _mm256_fmadd_pd(s1, wv, *acc1);
+        *acc2 = _mm256_fmadd_pd(s2, wv, *acc2);
+    } else {
+        for (; j + 8 <= last; j += 8) {
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+            s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
+        }
+        if (j < last)
+            s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
+        s1 = _mm256_fmadd_pd(load_last(a + last, mask), _mm256_loadu_pd(h + last), s1);
+        s0 = _mm256_add_pd(s0, s1);
+    }
+    *acc0 = _mm256_fmadd_pd(s0, wv, *acc0);
+}
+
+/* The same for a long series (LL_BSDF_LONG_SERIES values and more), with
+ * two accumulators per channel (four for one channel): a multiply-add
+ * waits about four cycles for the one before it into the same register,
+ * and the conversions of the stored floats allow one group of four every
+ * cycle, so a single chain per channel left the loop waiting on latency.
+ * On the way it asks for [pf, pf_end) (dot_chunk_avx2). Short series keep
+ * the version above: the extra accumulators' set-up and sums cost 13-14%
+ * more instructions per call on the golden file, whose series are short. */
+#define LL_BSDF_LONG_SERIES 64
+LL_AVX2 __attribute__((always_inline)) static inline void
+series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const double *h, size_t m,
                 double w, const char *pf, const char *pf_end, __m256d *acc0, __m256d *acc1,
                 __m256d *acc2)
 {
@@ -285,13 +327,18 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
         m = len - k0 < count ? len - k0 : count;
         if (nb == 1) {
             const char *pf = NULL, *pf_end = NULL;
+            if (m < LL_BSDF_LONG_SERIES) {
+                series_dot_short_avx2(s->coeff[p] + k0, len, n_channels, h, m,
+                                      s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
+                continue;
+            }
             if (k0 == 0 && p + 4 < s->count) {
                 pf = (const char *)(const void *)s->coeff[p + 4];
                 pf_end = pf + (size_t)s->length[p + 4] * n_channels * sizeof(float);
             }
-            series_dot_avx2(s->coeff[p] + k0, len, n_channels, h, m,
-                            s->weight[p] * (double)s->basis[0], pf, pf_end, &acc0, &acc1,
-                            &acc2);
+            series_dot_long_avx2(s->coeff[p] + k0, len, n_channels, h, m,
+                                 s->weight[p] * (double)s->basis[0], pf, pf_end, &acc0, &acc1,
+                                 &acc2);
             continue;
         }
         for (q = 0; q < s->n_active; ++q) {
@@ -299,8 +346,8 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
             basis = ll_bsdf_active_basis(s, q);
             w = s->weight[p] * (double)s->basis[basis];
             if (w != 0.0)
-                series_dot_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h, m, w,
-                                NULL, NULL, &acc0, &acc1, &acc2);
+                series_dot_short_avx2(s->coeff[p] + basis * len + k0, nb * len, n_channels, h,
+                                      m, w, &acc0, &acc1, &acc2);
         }
     }
     out[0] += hsum(acc0);
