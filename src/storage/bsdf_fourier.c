@@ -129,7 +129,8 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
             size_t m = s->length[p], q, next_bytes = 0;
             const char *next = NULL;
             double w[4];
-            if (n_channels == 3 && s->max_length >= 64 && p + 4 < s->count) {
+            if (n_channels == 3 && s->prefetch_rows && s->max_length >= 64 &&
+                p + 4 < s->count) {
                 size_t last = p + 7 < s->count ? p + 7 : s->count - 1;
                 for (q = p + 4; q <= last; ++q)
                     next_bytes += (size_t)s->length[q] * 3 * sizeof(float);

@@ -313,8 +313,8 @@ series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const dou
  * wait a memory latency. So while series p is summed, the block of series
  * p + 4 (the next row's, in gather order) is asked for at the pace of the
  * reading: the fetches of the two rows overlap (measured on random 16 KiB
- * blocks of a 200 MB array: 4.3 -> 6.0 GB/s on this machine). Only the
- * untextured whole-series case (the one that reads long series). */
+ * blocks of a 200 MB array: 4.3 -> 6.0 GB/s on this machine). Only in files
+ * larger than the caches (s->prefetch_rows), untextured, long series. */
 LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, size_t k0,
                                    size_t count, const double *h, double out[3])
 {
@@ -332,7 +332,7 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
                                       s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
                 continue;
             }
-            if (k0 == 0 && p + 4 < s->count) {
+            if (k0 == 0 && p + 4 < s->count && s->prefetch_rows) {
                 pf = (const char *)(const void *)s->coeff[p + 4];
                 pf_end = pf + (size_t)s->length[p + 4] * n_channels * sizeof(float);
             }
