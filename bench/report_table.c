@@ -232,7 +232,8 @@ static void print_adding(FILE *out, const bench_store *s)
  * roughgold and coated-diffuse; issue 18's text for coated-gold, which
  * that run did not measure (no pdf figure: 0 prints as "-"). Then the
  * second render-side pass's starting point, cfeba3b, measured side by side
- * with c4e9af3 in one run (5 alternating rounds of 2 x 10^5 calls, median;
+ * with 2b5271c in one run (5 alternating rounds of 2 x 10^5 calls, median,
+ * load 6.7-8.6 on 2 cores;
  * docs/benchmarks.md, "Issue 18, render side, second pass"). Order:
  * eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
 static const struct {
@@ -240,11 +241,11 @@ static const struct {
     double ns[3];
 } previous_eval[] = {
     { "roughgold", "f61ccd6", { 521.2, 389.7, 1945.9 } },
-    { "roughgold", "cfeba3b", { @RG@ } },
+    { "roughgold", "cfeba3b", { 678.0, 536.0, 2420.0 } },
     { "coated-gold", "issue 18", { 2300.0, 0.0, 6200.0 } },
-    { "coated-gold", "cfeba3b", { @CG@ } },
+    { "coated-gold", "cfeba3b", { 1454.0, 979.0, 4228.0 } },
     { "coated-diffuse", "f61ccd6", { 11839.3, 5218.5, 47432.9 } },
-    { "coated-diffuse", "cfeba3b", { @CD@ } },
+    { "coated-diffuse", "cfeba3b", { 8418.0, 5463.0, 25510.0 } },
 };
 
 static void print_eval(FILE *out, const bench_store *s)

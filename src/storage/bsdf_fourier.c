@@ -131,13 +131,18 @@ void ll_bsdf_series_densify_channels(const ll_bsdf_series *s, size_t n_channels,
             double w[4];
             if (n_channels == 3 && s->prefetch_rows && s->max_length >= 64 &&
                 p + 4 < s->count) {
-                size_t last = p + 7 < s->count ? p + 7 : s->count - 1;
+                size_t last = p + 7 < s->count ? p + 7 : s->count - 1, values = 0;
                 for (q = p + 4; q <= last; ++q)
-                    next_bytes += (size_t)s->length[q] * 3 * sizeof(float);
-                next = (const char *)(const void *)s->coeff[p + 4];
-                if ((const char *)(const void *)(s->coeff[last] + 3 * (size_t)s->length[last]) !=
-                    next + next_bytes)
-                    next = NULL; /* not one block: leave it to the hardware */
+                    values += 3 * (size_t)s->length[q];
+                /* one block: the last series ends where the sum of the
+                 * lengths says (all point into b->coeffs, so the
+                 * difference is defined) */
+                if (s->coeff[last] >= s->coeff[p + 4] &&
+                    (size_t)(s->coeff[last] - s->coeff[p + 4]) + 3 * (size_t)s->length[last] ==
+                        values) {
+                    next = (const char *)(const void *)s->coeff[p + 4];
+                    next_bytes = values * sizeof(float);
+                }
             }
             for (q = 1; q < 4; ++q)
                 if (s->length[p + q] < m)

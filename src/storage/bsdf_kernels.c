@@ -120,13 +120,13 @@ static void add_scaled_portable(double *acc, const float *a, double w, size_t m)
 }
 
 static void add_scaled4_portable(double *acc, const float *const a[4], const double w[4],
-                                 size_t m, const char *pf, const char *pf_end)
+                                 size_t m, const char *pf, size_t pf_bytes)
 {
-    size_t j;
+    size_t j, pf_at = 0;
     for (j = 0; j < m; ++j) {
-        if (j % 4 == 0 && pf < pf_end) {
-            LL_PREFETCH(pf);
-            pf += 64;
+        if (j % 4 == 0 && pf_at < pf_bytes) {
+            LL_PREFETCH(pf + pf_at);
+            pf_at += 64;
         }
         acc[j] += (w[0] * (double)a[0][j] + w[1] * (double)a[1][j]) +
                   (w[2] * (double)a[2][j] + w[3] * (double)a[3][j]);
@@ -236,16 +236,18 @@ series_dot_short_avx2(const float *a, size_t stride, size_t n_channels, const do
  * waits about four cycles for the one before it into the same register,
  * and the conversions of the stored floats allow one group of four every
  * cycle, so a single chain per channel left the loop waiting on latency.
- * On the way it asks for [pf, pf_end) (dot_chunk_avx2). Short series keep
- * the version above: the extra accumulators' set-up and sums cost 13-14%
- * more instructions per call on the golden file, whose series are short. */
+ * On the way it asks for pf_bytes from pf (dot_chunk_avx2). Short series
+ * keep the version above: from 32 orders on, the extra accumulators' set-up
+ * and sums cost 13-14% more instructions per eval/pdf call on the golden
+ * file, whose series are short; from 64 (and without the prefetches in
+ * files that fit the caches) 2-6% (callgrind). */
 #define LL_BSDF_LONG_SERIES 64
 LL_AVX2 __attribute__((always_inline)) static inline void
-series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const double *h, size_t m,
-                double w, const char *pf, const char *pf_end, __m256d *acc0, __m256d *acc1,
-                __m256d *acc2)
+series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const double *h,
+                     size_t m, double w, const char *pf, size_t pf_bytes, __m256d *acc0,
+                     __m256d *acc1, __m256d *acc2)
 {
-    size_t last = (m - 1) & ~(size_t)3, j = 0;
+    size_t last = (m - 1) & ~(size_t)3, j = 0, pf_at = 0;
     __m256d mask = _mm256_castsi256_pd(
         _mm256_loadu_si256((const __m256i *)(const void *)ll_group_masks[m & 3]));
     __m256d wv = _mm256_set1_pd(w), s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd();
@@ -254,11 +256,13 @@ series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const dou
         const float *r = a + stride, *b = a + 2 * stride;
         __m256d s2 = _mm256_setzero_pd(), t2 = _mm256_setzero_pd(), hv, hw;
         for (; j + 8 <= last; j += 8) {
-            /* 96 bytes read per step, two lines of the next block asked for */
-            if (pf < pf_end) {
-                LL_PREFETCH(pf);
-                LL_PREFETCH(pf + 64);
-                pf += 128;
+            /* 96 bytes read per step, two lines of the next block asked for
+             * (offsets, so that no pointer passes the block's end) */
+            if (pf_at < pf_bytes) {
+                LL_PREFETCH(pf + pf_at);
+                if (pf_bytes - pf_at > 64)
+                    LL_PREFETCH(pf + pf_at + 64);
+                pf_at += 128;
             }
             hv = _mm256_loadu_pd(h + j);
             hw = _mm256_loadu_pd(h + j + 4);
@@ -284,9 +288,9 @@ series_dot_long_avx2(const float *a, size_t stride, size_t n_channels, const dou
         s0 = _mm256_add_pd(s0, t0);
     } else {
         for (; j + 16 <= last; j += 16) {
-            if (pf < pf_end) {
-                LL_PREFETCH(pf);
-                pf += 64;
+            if (pf_at < pf_bytes) {
+                LL_PREFETCH(pf + pf_at);
+                pf_at += 64;
             }
             s0 = _mm256_fmadd_pd(load4(a + j), _mm256_loadu_pd(h + j), s0);
             s1 = _mm256_fmadd_pd(load4(a + j + 4), _mm256_loadu_pd(h + j + 4), s1);
@@ -326,7 +330,8 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
             continue;
         m = len - k0 < count ? len - k0 : count;
         if (nb == 1) {
-            const char *pf = NULL, *pf_end = NULL;
+            const char *pf = NULL;
+            size_t pf_bytes = 0;
             if (m < LL_BSDF_LONG_SERIES) {
                 series_dot_short_avx2(s->coeff[p] + k0, len, n_channels, h, m,
                                       s->weight[p] * (double)s->basis[0], &acc0, &acc1, &acc2);
@@ -334,10 +339,10 @@ LL_AVX2 static void dot_chunk_avx2(const ll_bsdf_series *s, size_t n_channels, s
             }
             if (k0 == 0 && p + 4 < s->count && s->prefetch_rows) {
                 pf = (const char *)(const void *)s->coeff[p + 4];
-                pf_end = pf + (size_t)s->length[p + 4] * n_channels * sizeof(float);
+                pf_bytes = (size_t)s->length[p + 4] * n_channels * sizeof(float);
             }
             series_dot_long_avx2(s->coeff[p] + k0, len, n_channels, h, m,
-                                 s->weight[p] * (double)s->basis[0], pf, pf_end, &acc0, &acc1,
+                                 s->weight[p] * (double)s->basis[0], pf, pf_bytes, &acc0, &acc1,
                                  &acc2);
             continue;
         }
@@ -410,18 +415,18 @@ LL_AVX2 static double dot_dense_avx2(const double *a, const double *h, size_t m)
 /* Four series at once: the sum is loaded and stored once for four inputs
  * (a pass per series would move it 16 times per call). */
 LL_AVX2 static void add_scaled4_avx2(double *acc, const float *const a[4], const double w[4],
-                                     size_t m, const char *pf, const char *pf_end)
+                                     size_t m, const char *pf, size_t pf_bytes)
 {
     __m256d w0 = _mm256_set1_pd(w[0]), w1 = _mm256_set1_pd(w[1]);
     __m256d w2 = _mm256_set1_pd(w[2]), w3 = _mm256_set1_pd(w[3]);
     const float *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
-    size_t j = 0;
+    size_t j = 0, pf_at = 0;
     for (; j + 4 <= m; j += 4) {
         __m256d s = _mm256_fmadd_pd(load4(a0 + j), w0, _mm256_loadu_pd(acc + j)), r;
         /* 64 bytes read per step: one line of the next block (pf) */
-        if (pf < pf_end) {
-            LL_PREFETCH(pf);
-            pf += 64;
+        if (pf_at < pf_bytes) {
+            LL_PREFETCH(pf + pf_at);
+            pf_at += 64;
         }
         r = _mm256_mul_pd(load4(a2 + j), w2);
         s = _mm256_fmadd_pd(load4(a1 + j), w1, s);
@@ -530,15 +535,16 @@ void ll_bsdf_add_scaled(int vector, double *acc, const float *a, double w, size_
 void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4], const double w[4],
                          size_t m, const void *prefetch, size_t prefetch_bytes)
 {
-    const char *pf = prefetch, *pf_end = pf ? pf + prefetch_bytes : NULL;
+    const char *pf = prefetch;
+    size_t pf_bytes = pf ? prefetch_bytes : 0;
 #if LL_BSDF_HAVE_AVX2_PATH
     if (vector) {
-        add_scaled4_avx2(acc, a, w, m, pf, pf_end);
+        add_scaled4_avx2(acc, a, w, m, pf, pf_bytes);
         return;
     }
 #endif
     (void)vector;
-    add_scaled4_portable(acc, a, w, m, pf, pf_end);
+    add_scaled4_portable(acc, a, w, m, pf, pf_bytes);
 }
 
 void ll_bsdf_integral_dense(int vector, const double *a, const double *recip, size_t n4,
