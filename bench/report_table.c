@@ -230,21 +230,28 @@ static void print_adding(FILE *out, const bench_store *s)
 /* The figures before issue 18's kernel work, printed under each file's
  * row: bench/results.json at f61ccd6 (median of 3, load ~3 on 2 cores) for
  * roughgold and coated-diffuse; issue 18's text for coated-gold, which
- * that run did not measure (no pdf figure: 0 prints as "-"). Order:
+ * that run did not measure (no pdf figure: 0 prints as "-"). Then the
+ * second render-side pass's starting point, cfeba3b, measured side by side
+ * with 2b5271c in one run (5 alternating rounds of 2 x 10^5 calls, median,
+ * load 6.7-8.6 on 2 cores;
+ * docs/benchmarks.md, "Issue 18, render side, second pass"). Order:
  * eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
 static const struct {
     const char *label, *source;
     double ns[3];
-} previous_eval[3] = {
+} previous_eval[] = {
     { "roughgold", "f61ccd6", { 521.2, 389.7, 1945.9 } },
+    { "roughgold", "cfeba3b", { 678.0, 536.0, 2420.0 } },
     { "coated-gold", "issue 18", { 2300.0, 0.0, 6200.0 } },
+    { "coated-gold", "cfeba3b", { 1454.0, 979.0, 4228.0 } },
     { "coated-diffuse", "f61ccd6", { 11839.3, 5218.5, 47432.9 } },
+    { "coated-diffuse", "cfeba3b", { 8418.0, 5463.0, 25510.0 } },
 };
 
 static void print_eval(FILE *out, const bench_store *s)
 {
     const char *labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
-    size_t i, f;
+    size_t i, f, k;
     char a[128];
     fprintf(out, "\n3. Evaluation, ns per call (1 thread, 10^6 random directions, fixed seed)\n");
     fprintf(out, "%-20s", "file");
@@ -260,15 +267,19 @@ static void print_eval(FILE *out, const bench_store *s)
             fprintf(out, " %-24s", format_stats(a, sizeof a, bench_store_stats(s, id)));
         }
         fputc('\n', out);
-        snprintf(before, sizeof before, "  before (%s)", previous_eval[i].source);
-        fprintf(out, "%-20s", before);
-        for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT && f < 3; ++f) {
-            if (previous_eval[i].ns[f] > 0.0)
-                fprintf(out, " %-24.0f", previous_eval[i].ns[f]);
-            else
-                fprintf(out, " %-24s", "-");
+        for (k = 0; k < sizeof previous_eval / sizeof previous_eval[0]; ++k) {
+            if (strcmp(previous_eval[k].label, labels[i]) != 0)
+                continue;
+            snprintf(before, sizeof before, "  before (%s)", previous_eval[k].source);
+            fprintf(out, "%-20s", before);
+            for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT && f < 3; ++f) {
+                if (previous_eval[k].ns[f] > 0.0)
+                    fprintf(out, " %-24.0f", previous_eval[k].ns[f]);
+                else
+                    fprintf(out, " %-24s", "-");
+            }
+            fputc('\n', out);
         }
-        fputc('\n', out);
     }
     fprintf(out, "%-20s", "pbrt-v3 (issue 7)");
     for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f) {

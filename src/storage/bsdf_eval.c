@@ -39,6 +39,7 @@ int ll_bsdf_gather_weighted(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[
     s->n_bases = b->n_bases;
     s->basis = basis;
     s->dense = NULL;
+    s->prefetch_rows = b->n_coeffs >= LL_BSDF_PREFETCH_ROWS_FROM;
     list_active_bases(s, b->n_bases, basis);
     if (!ll_bsdf_weights(b, mu_o, &off_o, w_o))
         return 0;

@@ -100,7 +100,17 @@ typedef struct ll_bsdf_series {
                                    read only when dense is set);
                                    the stored references stay valid            */
     size_t dense_channels, dense_stride;
+    int prefetch_rows;          /* ask for the next stencil row while one is
+                                   read (a file larger than the caches:
+                                   LL_BSDF_PREFETCH_ROWS_FROM)                 */
 } ll_bsdf_series;
+
+/* Files of at least this many stored coefficients (32 MiB as float, more
+ * than the caches of the machines we measure on hold) get the next-row
+ * prefetches of ll_bsdf_series.prefetch_rows; in a smaller file the rows
+ * are mostly in cache and the prefetches would only add instructions (on
+ * coated gold, 7 MB: 9-11% more per eval/pdf call, callgrind). */
+#define LL_BSDF_PREFETCH_ROWS_FROM ((size_t)8 << 20)
 
 /* Basis q of the series' visiting order, q < s->n_active. */
 static inline size_t ll_bsdf_active_basis(const ll_bsdf_series *s, size_t q)
@@ -199,9 +209,12 @@ LL_INTERNAL void ll_bsdf_add_scaled(int vector, double *acc, const float *a, dou
                                     size_t m);
 /* sum_j a[j] h[j], j < m (a summed series against harmonics). */
 LL_INTERNAL double ll_bsdf_dot_dense(int vector, const double *a, const double *h, size_t m);
-/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass). */
+/* acc[j] += sum_q w[q] a[q][j], j < m (four series in one pass); asks
+ * for the prefetch_bytes from prefetch (NULL: none) on the way, a cache
+ * line per 64 bytes read (the next block, bsdf_fourier.c). */
 LL_INTERNAL void ll_bsdf_add_scaled4(int vector, double *acc, const float *const a[4],
-                                     const double w[4], size_t m);
+                                     const double w[4], size_t m, const void *prefetch,
+                                     size_t prefetch_bytes);
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,
                                         const ll_harmonics *hs, double *F, double *f);
