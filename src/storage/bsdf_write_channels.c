@@ -25,17 +25,13 @@
  */
 #include "storage/bsdf_write_channels.h"
 #include "storage/bsdf_write_job.h"
+#include "storage/bsdf_write_spill.h"
 #include "layer/layer.h"
 
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
-
-/* Spill bytes buffered before a write. */
-#define LL_CHANNELS_SPILL_BUFFER ((size_t)1 << 20)
 
 static const char *const fn_open = "ll_material_build (opening the file)";
 static const char *const fn_add = "ll_material_build (a finished channel)";
@@ -56,97 +52,15 @@ struct ll_channel_writer {
     uint32_t *len;                 /* [n * n] one channel's lengths (add)    */
     double *tail;                  /* [n * n] scratch of the lengths (add)   */
     double *stage;                 /* [n * m] one column's orders (add)      */
-    int fd;                        /* the spill (unlinked), -1 before        */
-    unsigned long long spill_end;  /* bytes written to the spill             */
-    unsigned char *buffer;         /* LL_CHANNELS_SPILL_BUFFER               */
-    size_t buffered;
+    ll_spill spill;                /* bsdf_write_spill.h                     */
 };
-
-/* ------------------------------------------------------------- the spill */
-
-static ll_status spill_open(ll_channel_writer *w)
-{
-    const char *slash = strrchr(w->path, '/');
-    size_t dir = slash ? (size_t)(slash - w->path) + 1 : 0, name = strlen(w->path) - dir;
-    char *temp = ll_malloc(dir + name + 16);
-    int err;
-    if (!temp)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-    memcpy(temp, w->path, dir);
-    temp[dir] = '.';
-    memcpy(temp + dir + 1, w->path + dir, name);
-    memcpy(temp + dir + 1 + name, ".spill.XXXXXX", 14);
-    w->fd = mkstemp(temp);
-    err = errno;
-    if (w->fd >= 0)
-        (void)unlink(temp);
-    ll_free(temp);
-    if (w->fd < 0)
-        return ll_fail(LL_ERROR_IO, "%s: \"%s\": cannot create a spill file beside it: %s",
-                       fn_open, w->path, strerror(err));
-    return LL_OK;
-}
-
-static ll_status spill_flush(ll_channel_writer *w)
-{
-    size_t done = 0;
-    while (done < w->buffered) {
-        ssize_t k = write(w->fd, w->buffer + done, w->buffered - done);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return ll_fail(LL_ERROR_IO, "%s: \"%s\": writing the spill file beside it: %s",
-                           fn_add, w->path, strerror(k < 0 ? errno : EIO));
-        done += (size_t)k;
-    }
-    w->spill_end += w->buffered;
-    w->buffered = 0;
-    return LL_OK;
-}
-
-static ll_status spill_put(ll_channel_writer *w, const void *data, size_t size)
-{
-    const unsigned char *p = data;
-    while (size > 0) {
-        size_t room = LL_CHANNELS_SPILL_BUFFER - w->buffered, n = size < room ? size : room;
-        memcpy(w->buffer + w->buffered, p, n);
-        w->buffered += n;
-        p += n;
-        size -= n;
-        if (w->buffered == LL_CHANNELS_SPILL_BUFFER) {
-            ll_status s = spill_flush(w);
-            if (s != LL_OK)
-                return s;
-        }
-    }
-    return LL_OK;
-}
-
-static ll_status spill_read(const ll_channel_writer *w, unsigned long long at, void *data,
-                            size_t size)
-{
-    unsigned char *p = data;
-    while (size > 0) {
-        ssize_t k = pread(w->fd, p, size, (off_t)at);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return ll_fail(LL_ERROR_IO, "%s: \"%s\": reading the spill file beside it: %s",
-                           fn_commit, w->path, k < 0 ? strerror(errno) : "it is shorter");
-        p += k;
-        at += (unsigned long long)k;
-        size -= (size_t)k;
-    }
-    return LL_OK;
-}
 
 /* ------------------------------------------------------------------ open */
 
 static void writer_free(ll_channel_writer *w)
 {
     size_t c;
-    if (w->fd >= 0)
-        close(w->fd);
+    ll_spill_close(&w->spill);
     for (c = 0; c < 3; ++c) {
         ll_free(w->order0[c]);
         ll_free(w->ext[c]);
@@ -161,7 +75,6 @@ static void writer_free(ll_channel_writer *w)
     ll_free(w->len);
     ll_free(w->tail);
     ll_free(w->stage);
-    ll_free(w->buffer);
     ll_free(w->job.nodes);
     ll_free(w->job.length);
     ll_free(w->job.offset);
@@ -194,13 +107,12 @@ ll_status ll_channel_writer_open(const char *path, size_t n_channels,
     w = ll_calloc(1, sizeof *w);
     if (!w)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-    w->fd = -1;
+    ll_spill_init(&w->spill);
     w->job.fn = fn_open;
     w->job.n_channels = n_channels;
     w->job.n_bases = 1;
     w->path = copy_text(path);
-    w->buffer = ll_malloc(LL_CHANNELS_SPILL_BUFFER);
-    if (!w->path || !w->buffer) {
+    if (!w->path) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
         goto fail;
     }
@@ -214,7 +126,7 @@ ll_status ll_channel_writer_open(const char *path, size_t n_channels,
         }
         w->job.opts.metadata = w->metadata_copy;
     }
-    if ((s = spill_open(w)) != LL_OK)
+    if ((s = ll_spill_open(&w->spill, w->path, fn_open)) != LL_OK)
         goto fail;
     *out = w;
     return LL_OK;
@@ -345,11 +257,12 @@ static ll_status spill_layer(ll_channel_writer *w, size_t channel, const ll_laye
             kmax = e > kmax ? e : kmax;
             values += e;
         }
-        w->col_at[channel][col] = w->spill_end + w->buffered;
+        w->col_at[channel][col] = ll_spill_tell(&w->spill);
         w->col_values[channel][col] = values;
         ll_wjob_stage_column(l, col, kmax, w->stage, 0);
         for (row = 0; row < n && s == LL_OK; ++row)
-            s = spill_put(w, w->stage + row * m, ext[col * n + row] * sizeof(double));
+            s = ll_spill_put(&w->spill, w->stage + row * m, ext[col * n + row] * sizeof(double),
+                             fn_add);
         ll_wjob_stage_column(l, col, kmax, w->stage, 1);
     }
     return s;
@@ -450,7 +363,8 @@ static ll_status put_column(ll_channel_writer *w, ll_bsdf_out *out, size_t i, do
     li = layer_index(i, job->h);
     for (c = 0; c < nch && s == LL_OK; ++c) {
         size_t at = 0;
-        s = spill_read(w, w->col_at[c][li], col[c], w->col_values[c][li] * sizeof(double));
+        s = ll_spill_read(&w->spill, w->col_at[c][li], col[c],
+                          w->col_values[c][li] * sizeof(double), fn_commit);
         for (r = 0; r < n; ++r) {
             row_at[c][r] = at;
             at += w->ext[c][li * n + r];
@@ -544,8 +458,8 @@ static ll_status commit_file(ll_channel_writer *w, const ll_monitor *monitor)
     /* The stage is the add's scratch; the commit reads columns instead. */
     ll_free(w->stage);
     w->stage = NULL;
-    if ((s = spill_flush(w)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK ||
-        (s = compute_cdf(w)) != LL_OK)
+    if ((s = ll_spill_flush(&w->spill, fn_commit)) != LL_OK ||
+        (s = ll_wjob_compute_offsets(job)) != LL_OK || (s = compute_cdf(w)) != LL_OK)
         return s;
     if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
         return s;

@@ -33,21 +33,18 @@
  * the atomic writer's (bsdf_file_out.c).
  */
 #include "storage/bsdf_write_job.h"
+#include "storage/bsdf_write_spill.h"
 #include "layer/layer.h"
 #include "layerlab/ll_bsdf_write.h"
 
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 /* Floats read back at once at commit (256 KiB: big enough that the reads
  * are few, small beside a layer). */
 #define LL_WRITER_CHUNK ((size_t)1 << 16)
-/* Spill bytes buffered before a write. */
-#define LL_WRITER_SPILL_BUFFER ((size_t)1 << 20)
 
 static const char *const fn_open = "ll_bsdf_writer_open";
 static const char *const fn_add = "ll_bsdf_writer_add_basis";
@@ -61,11 +58,8 @@ struct ll_bsdf_writer {
     char *metadata_copy;
     size_t added;                /* bases added so far                     */
     int failed;                  /* an add failed: only abort is left      */
-    int fd;                      /* the spill (unlinked), -1 before        */
+    ll_spill spill;              /* bsdf_write_spill.h                     */
     unsigned long long *basis_at;/* [n_bases] spill offset of each basis   */
-    unsigned long long spill_end;
-    unsigned char *buffer;       /* LL_WRITER_SPILL_BUFFER                 */
-    size_t buffered;
     size_t chunk_floats;         /* commit's read-back chunk               */
     unsigned char *bytes;        /* commit: one series as file bytes (4 m) */
     /* one basis's scratch, n * n unless said */
@@ -76,103 +70,17 @@ struct ll_bsdf_writer {
     ll_layer *first;             /* basis 0's layer 0 (a clone): the shape */
 };
 
-/* ------------------------------------------------------------- the spill */
-
-static ll_status spill_io_error(const ll_bsdf_writer *w, const char *what, int err)
-{
-    return ll_fail(LL_ERROR_IO, "%s: \"%s\": %s the spill file beside it: %s", fn_add, w->path,
-                   what, strerror(err));
-}
-
-/* A file beside path, unlinked at once (mkstemp: O_EXCL, mode 0600). */
-static ll_status spill_open(ll_bsdf_writer *w)
-{
-    const char *slash = strrchr(w->path, '/');
-    size_t dir = slash ? (size_t)(slash - w->path) + 1 : 0, name = strlen(w->path) - dir;
-    char *temp = ll_malloc(dir + name + 16);
-    int err;
-    if (!temp)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-    memcpy(temp, w->path, dir);
-    temp[dir] = '.';
-    memcpy(temp + dir + 1, w->path + dir, name);
-    memcpy(temp + dir + 1 + name, ".spill.XXXXXX", 14);
-    w->fd = mkstemp(temp);
-    err = errno;
-    if (w->fd >= 0)
-        (void)unlink(temp);
-    ll_free(temp);
-    if (w->fd < 0)
-        return ll_fail(LL_ERROR_IO, "%s: \"%s\": cannot create a spill file beside it: %s",
-                       fn_open, w->path, strerror(err));
-    return LL_OK;
-}
-
-static ll_status spill_flush(ll_bsdf_writer *w)
-{
-    size_t done = 0;
-    while (done < w->buffered) {
-        ssize_t k = write(w->fd, w->buffer + done, w->buffered - done);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return spill_io_error(w, "writing", k < 0 ? errno : EIO);
-        done += (size_t)k;
-    }
-    w->spill_end += w->buffered;
-    w->buffered = 0;
-    return LL_OK;
-}
-
-static ll_status spill_put(ll_bsdf_writer *w, const void *data, size_t size)
-{
-    const unsigned char *p = data;
-    while (size > 0) {
-        size_t room = LL_WRITER_SPILL_BUFFER - w->buffered, n = size < room ? size : room;
-        memcpy(w->buffer + w->buffered, p, n);
-        w->buffered += n;
-        p += n;
-        size -= n;
-        if (w->buffered == LL_WRITER_SPILL_BUFFER) {
-            ll_status s = spill_flush(w);
-            if (s != LL_OK)
-                return s;
-        }
-    }
-    return LL_OK;
-}
-
-static ll_status spill_read(const ll_bsdf_writer *w, unsigned long long at, void *data,
-                            size_t size)
-{
-    unsigned char *p = data;
-    while (size > 0) {
-        ssize_t k = pread(w->fd, p, size, (off_t)at);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k <= 0)
-            return ll_fail(LL_ERROR_IO, "%s: \"%s\": reading the spill file beside it: %s",
-                           fn_commit, w->path, k < 0 ? strerror(errno) : "it is shorter");
-        p += k;
-        at += (unsigned long long)k;
-        size -= (size_t)k;
-    }
-    return LL_OK;
-}
-
 /* --------------------------------------------------------------- open */
 
 static void writer_free(ll_bsdf_writer *w)
 {
-    if (w->fd >= 0)
-        close(w->fd);
+    ll_spill_close(&w->spill);
     ll_layer_destroy(w->first);
     ll_free(w->path);
     ll_free(w->counts);
     ll_free(w->positions);
     ll_free(w->metadata_copy);
     ll_free(w->basis_at);
-    ll_free(w->buffer);
     ll_free(w->bytes);
     ll_free(w->len);
     ll_free(w->ext);
@@ -231,7 +139,7 @@ ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_para
     w = ll_calloc(1, sizeof *w);
     if (!w)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-    w->fd = -1;
+    ll_spill_init(&w->spill);
     w->job.fn = fn_open;
     w->job.n_channels = n_channels;
     len = strlen(path);
@@ -255,12 +163,11 @@ ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_para
         w->job.opts.metadata = w->metadata_copy;
     }
     w->basis_at = ll_calloc_array(w->job.n_bases, sizeof *w->basis_at);
-    w->buffer = ll_malloc(LL_WRITER_SPILL_BUFFER);
-    if (!w->basis_at || !w->buffer) {
+    if (!w->basis_at) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
         goto fail;
     }
-    if ((s = spill_open(w)) != LL_OK)
+    if ((s = ll_spill_open(&w->spill, w->path, fn_open)) != LL_OK)
         goto fail;
     *out = w;
     return LL_OK;
@@ -356,7 +263,7 @@ static ll_status basis_cdf(ll_bsdf_writer *w)
         }
         ll_wjob_integrate_row(job->nodes, w->values, nn, w->row_cdf + i * nn, 1);
     }
-    return spill_put(w, w->row_cdf, nn * nn * sizeof *w->row_cdf);
+    return ll_spill_put(&w->spill, w->row_cdf, nn * nn * sizeof *w->row_cdf, fn_add);
 }
 
 /* The basis's stored floats, pair after pair, up to each pair's extent. */
@@ -364,7 +271,7 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
 {
     write_job *job = &w->job;
     size_t nn = job->nn, m = job->m, per_layer = job->n * job->m, i, o, c, k, L;
-    ll_status s = spill_put(w, w->ext, nn * nn * sizeof *w->ext);
+    ll_status s = ll_spill_put(&w->spill, w->ext, nn * nn * sizeof *w->ext, fn_add);
     for (i = 0; i < nn && s == LL_OK; ++i) {
         size_t li = layer_index(i, job->h), kmax = 0;
         double factor[2];
@@ -390,7 +297,7 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
                     w->row[c * e + k] = (float)ll_wjob_staged_value(
                         job->n_channels, c, w->stage + lo * m, per_layer, k, mu_o,
                         factor[k > 0]);
-            s = spill_put(w, w->row, job->n_channels * e * sizeof *w->row);
+            s = ll_spill_put(&w->spill, w->row, job->n_channels * e * sizeof *w->row, fn_add);
         }
         for (L = 0; L < job->n_channels; ++L)
             ll_wjob_stage_column(layers[L], li, kmax, w->stage + L * per_layer, 1);
@@ -443,7 +350,7 @@ ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *lay
             }
     }
     job->layers = layers;
-    w->basis_at[w->added] = w->spill_end + w->buffered;
+    w->basis_at[w->added] = ll_spill_tell(&w->spill);
     basis_extents(w, layers);
     if ((s = basis_cdf(w)) != LL_OK || (s = basis_values(w, layers)) != LL_OK)
         goto fail;
@@ -472,8 +379,8 @@ static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
         if (ll_watch_poll(job->watch))
             return write_cancelled(job);
         for (b = 0; b < nb && s == LL_OK; ++b)
-            s = spill_read(w, w->basis_at[b] + at * sizeof(float), chunk + b * count,
-                           count * sizeof(float));
+            s = ll_spill_read(&w->spill, w->basis_at[b] + at * sizeof(float),
+                              chunk + b * count, count * sizeof(float), fn_commit);
         for (k = 0; k < count && s == LL_OK; ++k)
             for (b = 0; b < nb; ++b)
                 ll_bsdf_out_f32(out, chunk[b * count + k]);
@@ -527,7 +434,8 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             for (o = o0; o < o1; ++o)
                 floats += ext[b * nn + o] * nch;
             pos[b] = at;
-            s = spill_read(w, cursor[b], chunk + at, floats * sizeof(float));
+            s = ll_spill_read(&w->spill, cursor[b], chunk + at, floats * sizeof(float),
+                              fn_commit);
             cursor[b] += floats * sizeof(float);
             at += floats;
         }
@@ -570,8 +478,10 @@ static ll_status put_coefficients(ll_bsdf_writer *w, ll_bsdf_out *out, float *ch
         if (layer_index(i, job->h) == (size_t)-1)
             continue; /* the mu = 0 nodes hold no coefficients */
         for (b = 0; b < nb && s == LL_OK; ++b)
-            s = spill_read(w, w->basis_at[b] + nn * nn * sizeof(float) + i * nn * sizeof(uint32_t),
-                           ext + b * nn, nn * sizeof(uint32_t));
+            s = ll_spill_read(&w->spill,
+                              w->basis_at[b] + nn * nn * sizeof(float) +
+                                  i * nn * sizeof(uint32_t),
+                              ext + b * nn, nn * sizeof(uint32_t), fn_commit);
         if (s == LL_OK)
             s = put_column(w, out, i, ext, cursor, chunk, pos);
     }
@@ -603,7 +513,8 @@ static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
     if (w->added != job->n_bases)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu of the %zu bases were added",
                        fn_commit, w->added, job->n_bases);
-    if ((s = spill_flush(w)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK)
+    if ((s = ll_spill_flush(&w->spill, fn_commit)) != LL_OK ||
+        (s = ll_wjob_compute_offsets(job)) != LL_OK)
         return s;
     if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
         return s;
