@@ -9,8 +9,9 @@ For each spp and material: native and the traced plugin in Mitsuba's
 default (symbolic, megakernel) mode, alternating, two renders each after a
 1-spp warm-up that compiles the kernels (the smaller time counts); then, in
 wavefront mode (set on this thread, as the batch mode needs), native and the
-batch plugin once each. Prints the load average before and after, since the
-machine is shared.
+batch plugin once each. Each render's wall time and the process's CPU time
+(all threads; on a shared machine the CPU-time ratio is the steadier
+figure). Prints the load average before and after.
 """
 
 import os
@@ -27,6 +28,19 @@ mi.set_variant("llvm_ad_rgb")
 import layerlab.mitsuba  # noqa: E402,F401
 import mitsuba_compare as C  # noqa: E402
 import mitsuba_scenes as S  # noqa: E402
+
+
+def timed(scene, spp, seed):
+    """(wall, CPU) seconds of one render, after a 1-spp warm-up that
+    compiles the kernels."""
+    S.render(mi, scene, spp=1, seed=99)
+    wall, cpu = time.perf_counter(), time.process_time()
+    S.render(mi, scene, spp=spp, seed=seed)
+    return time.perf_counter() - wall, time.process_time() - cpu
+
+
+def _fmt(times):
+    return "/".join("%.2f" % t for t in times)
 
 
 def main():
@@ -52,24 +66,30 @@ def main():
             ours = S.scene(mi, {"type": "layerlab", "filename": path}, size, spp)
             tn, tl = [], []
             for r in range(2):
-                tn.append(C.timed(native, spp, r)[1])
-                tl.append(C.timed(ours, spp, r + 2)[1])
-            symbolic[kind, spp] = min(tn)
-            print("%4d spp %-10s symbolic mode: native %s s, traced %s s: ratio %.2f"
-                  % (spp, kind, "/".join("%.2f" % t for t in tn),
-                     "/".join("%.2f" % t for t in tl), min(tl) / min(tn)), flush=True)
+                tn.append(timed(native, spp, r))
+                tl.append(timed(ours, spp, r + 2))
+            symbolic[kind, spp] = (min(t[0] for t in tn), min(t[1] for t in tn))
+            print("%4d spp %-10s symbolic mode: native %s s (CPU %s), traced %s s (CPU %s): "
+                  "ratio %.2f, CPU ratio %.2f"
+                  % (spp, kind, _fmt(t[0] for t in tn), _fmt(t[1] for t in tn),
+                     _fmt(t[0] for t in tl), _fmt(t[1] for t in tl),
+                     min(t[0] for t in tl) / min(t[0] for t in tn),
+                     min(t[1] for t in tl) / min(t[1] for t in tn)), flush=True)
     if not skip_batch:
         layerlab.mitsuba.wavefront_mode()
         for spp in spps:
             for kind, path in files.items():
                 ours = S.scene(mi, {"type": "layerlab", "filename": path, "mode": "batch"},
                                size, spp)
-                t_batch = C.timed(ours, spp, 2)[1]
-                t_native = C.timed(S.scene(mi, S.native_bsdf(kind), size, spp), spp, 0)[1]
-                print("%4d spp %-10s wavefront mode: native %.2f s, batch %.2f s: ratio %.2f; "
-                      "batch / native symbolic %.2f"
-                      % (spp, kind, t_native, t_batch, t_batch / t_native,
-                         t_batch / symbolic[kind, spp]), flush=True)
+                t_batch = timed(ours, spp, 2)
+                t_native = timed(S.scene(mi, S.native_bsdf(kind), size, spp), spp, 0)
+                sym = symbolic[kind, spp]
+                print("%4d spp %-10s wavefront mode: native %.2f s (CPU %.2f), batch %.2f s "
+                      "(CPU %.2f): ratio %.2f, CPU ratio %.2f; batch / native symbolic %.2f, "
+                      "CPU %.2f"
+                      % (spp, kind, t_native[0], t_native[1], t_batch[0], t_batch[1],
+                         t_batch[0] / t_native[0], t_batch[1] / t_native[1],
+                         t_batch[0] / sym[0], t_batch[1] / sym[1]), flush=True)
     print("load average %s" % (os.getloadavg(),))
 
 
