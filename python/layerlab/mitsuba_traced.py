@@ -78,6 +78,13 @@ PHI_TOLERANCE = 1e-6
 # 4.98 to 3.72 on average (mean per lane 3.40 -> 2.65). Without the Newton
 # condition, 1e-4 already sent some lanes 0.5 rad off.
 PHI_STEP_TOLERANCE = 1e-3
+# Halley steps on the luminance series truncated to its first 16 orders
+# that refine the wrapped-Cauchy first guess of phi before the search over
+# the whole series (sample_phi). Measured on 2^16 samples of the gold file
+# (16 lanes sharing mu_i): passes over the series 2.65 -> 1.50 per lane on
+# average, 3.72 -> 2.84 per 16-lane packet (1 step: 1.83 and 3.18; 3: 1.49
+# and 2.76); the render's CPU time 4 % (gold) and 11 % (glass) lower.
+GUESS_STEPS = 2
 # The coefficients are re-laid in lines of 16 floats (64 bytes, a cache
 # line): one line holds the next orders of every channel of a series (16
 # orders of a one-channel file; 4 orders of Y, R, B and 4 zeros of a
@@ -631,6 +638,32 @@ class TracedBSDF:
         r = dr.clip(self.series_coefficient(entries, 1) / (2.0 * a0), -0.99, 0.99)
         phi = 2.0 * dr.atan((1.0 - r) / (1.0 + r) * dr.tan(0.5 * PI * u))
         phi = dr.select((phi > 0) & (phi < PI), phi, 0.5 * PI)
+        # A better first guess (GUESS_STEPS): Halley steps on the series
+        # truncated to its first 16 orders, combined once from the stencil's
+        # first luminance lines and then held in registers, so the steps cost
+        # no pass over memory. A step that leaves (0, pi) is not taken; the
+        # search below keeps its bracket, so the root is the same.
+        head = [Float(0.0)] * LINE
+        for _, _, ystarts, ylength in entries:
+            m = ylength > 0
+            for start, w in ystarts:
+                v = self._packet(start, LINE, m, self.ycoeffs)
+                head = [dr.fma(w, v[j], head[j]) for j in range(LINE)]
+        for _ in range(GUESS_STEPS):
+            sin_phi, cos_phi = dr.sincos(phi)
+            cj, sj = [Float(1.0), cos_phi], [Float(0.0), sin_phi]
+            for _ in range(LINE - 2):
+                cj.append(dr.fma(2.0 * cos_phi, cj[-1], -cj[-2]))
+                sj.append(dr.fma(2.0 * cos_phi, sj[-1], -sj[-2]))
+            F, f, d = head[0] * phi - target, Float(0.0), Float(0.0)
+            for j in range(LINE):
+                if j:
+                    F = dr.fma(head[j], sj[j] / float(j), F)
+                    d = dr.fma(head[j] * float(j), sj[j], d)
+                f = dr.fma(head[j], cj[j], f)
+            # f' = -d here
+            step = phi - 2.0 * F * f / (2.0 * f * f + F * d)
+            phi = dr.select(dr.isfinite(step) & (step > 0) & (step < PI), step, phi)
 
         def cond(it, phi, lo, hi, done):
             return ~done
