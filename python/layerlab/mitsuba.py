@@ -397,10 +397,10 @@ def _make_class():
         def _traced_eval_pdf(self, ctx, si, wo, active, want_pdf):
             mu_i, mu_o, cos_phi = _file_axes(si.wi, wo)
             radiance = ctx.mode == mi.TransportMode.Radiance
-            f, pdf = self.m_traced.eval_pdf(mu_i, mu_o, cos_phi, self._corners(si, active),
-                                            radiance, want_pdf)
             cos_o = mi.Frame3f.cos_theta(wo)
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
+            f, pdf = self.m_traced.eval_pdf(mu_i, mu_o, cos_phi, self._corners(si, active),
+                                            radiance, want_pdf, ok)
             f = dr.select(ok, f * dr.abs(cos_o), 0.0)
             return f, (dr.select(ok, pdf, 0.0) if want_pdf else None)
 
@@ -410,7 +410,8 @@ def _make_class():
             radiance = ctx.mode == mi.TransportMode.Radiance
             u = dr.clip(sample2, 0.0, 1.0)
             mu_o, phi, pdf, f, ok = self.m_traced.sample(mu_i, u.x, u.y,
-                                                         self._corners(si, active), radiance)
+                                                         self._corners(si, active), radiance,
+                                                         active)
             # pbrt-v3's construction of its wi from phi and mu_o about its
             # wo's azimuth (x when wo is the normal), as ll_bsdf_sample_dir.
             sin_o = dr.sqrt(dr.fma(wi.x, wi.x, wi.y * wi.y))
