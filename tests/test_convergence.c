@@ -300,7 +300,7 @@ static void probe_matches_layer(double eta_re, double eta_im, double alpha, int 
 {
     ll_probe_set set;
     ll_probe_compensation c;
-    ll_microfacet *mf = NULL;
+    ll_microfacet *mf = NULL, *mf0 = NULL;
     ll_layer *l = ll_test_layer(64, 40);
     double *v, worst = 0.0;
     size_t p, k;
@@ -309,8 +309,11 @@ static void probe_matches_layer(double eta_re, double eta_im, double alpha, int 
     v = malloc(LL_PROBE_VALUES(&set) * sizeof *v);
     assert_non_null(v);
     assert_int_equal(ll_probe_interface_model(eta_re, eta_im, alpha, &mf), LL_OK);
-    if (compensate)
-        assert_int_equal(ll_probe_compensation_make(mf, eta_re, eta_im, 64, NULL, &c), LL_OK);
+    if (compensate) {
+        assert_int_equal(ll_probe_compensation_model(eta_re, eta_im, alpha, &mf0), LL_OK);
+        assert_int_equal(ll_probe_compensation_make(mf0, eta_re, eta_im, 64, NULL, &c), LL_OK);
+        ll_microfacet_destroy(mf0);
+    }
     assert_int_equal(ll_probe_interface_eval(mf, compensate ? &c : NULL, 64, 40, &set, NULL, v),
                      LL_OK);
     if (compensate)

@@ -192,6 +192,7 @@ static ll_status read_goal(const char *fn, double *tolerance, double *mu_min)
 
 typedef struct interface_ctx {
     ll_microfacet *mf;
+    ll_microfacet *mf0; /* the compensation's: order 0 only */
     double eta_re, eta_im;
     int compensate;
     const ll_probe_set *set;
@@ -216,7 +217,7 @@ static ll_status compensation_for(interface_ctx *c, size_t n, ll_watch *watch,
             c->made[k - 1] = c->made[k];
         --c->n_made;
     }
-    s = ll_probe_compensation_make(c->mf, c->eta_re, c->eta_im, n, watch, &c->made[c->n_made]);
+    s = ll_probe_compensation_make(c->mf0, c->eta_re, c->eta_im, n, watch, &c->made[c->n_made]);
     if (s != LL_OK)
         return s;
     *out = &c->made[c->n_made++];
@@ -278,6 +279,7 @@ ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int c
     if (s != LL_OK)
         return s;
     ctx.mf = NULL;
+    ctx.mf0 = NULL;
     ctx.n_made = 0;
     ctx.eta_re = eta_re;
     ctx.eta_im = eta_im;
@@ -285,6 +287,8 @@ ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int c
     ctx.set = &set;
     /* n: the fit's guess; m: what the probes' own series need. */
     s = ll_probe_interface_model(eta_re, eta_im, alpha, &ctx.mf);
+    if (s == LL_OK && compensate)
+        s = ll_probe_compensation_model(eta_re, eta_im, alpha, &ctx.mf0);
     if (s == LL_OK)
         s = ll_probe_interface_orders(ctx.mf, tolerance, &set, &m);
     if (s == LL_OK)
@@ -293,6 +297,7 @@ ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int c
     while (ctx.n_made > 0)
         ll_probe_compensation_free(&ctx.made[--ctx.n_made]);
     ll_microfacet_destroy(ctx.mf);
+    ll_microfacet_destroy(ctx.mf0);
     ll_probe_free(&set);
     if (s != LL_OK)
         return s;

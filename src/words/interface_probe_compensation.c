@@ -75,6 +75,13 @@ done:
     return s;
 }
 
+ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
+                                      ll_microfacet **out)
+{
+    /* No widening, series of one term (maps of one order). */
+    return ll_microfacet_create(eta_re, eta_im, alpha, LL_PROBE_TRUE_ORDERS, 1, out);
+}
+
 ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double eta_im, size_t n,
                                      ll_watch *watch, ll_probe_compensation *out)
 {
@@ -93,9 +100,9 @@ ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double et
     s = ll_quad_gauss_lobatto(n, rule, rule + n);
     if (s != LL_OK)
         goto done;
-    /* Order 0 of a widened lobe is that of the true one
-     * (ll_microfacet_series): the terms hold for every m. */
-    ll_microfacet_set_orders(mf, LL_PROBE_TRUE_ORDERS);
+    /* (mf: ll_probe_compensation_model's. Order 0 of a widened lobe is
+     * that of the true one, ll_microfacet_series: the terms hold for
+     * every m.) */
     /* The layer's order (ll_layer_create): the negative half reversed. */
     for (k = 0; k < n; ++k)
         x[k] = rule[k < h ? h - 1 - k : k];

@@ -75,9 +75,13 @@ LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, dou
  * nodes of n adds to order 0, from the albedos of every node pair
  * (O(n^2) order-0 series; words/interface_probe_compensation.c). They do
  * not depend on the layer's orders (a widened lobe keeps the order 0 of
- * the true one), so they are computed from the true series (the model is
- * left at LL_PROBE_TRUE_ORDERS) once per n. watch (nullable) is polled
+ * the true one), so they are computed once per n from the true series'
+ * order 0, with a model of its own (ll_probe_compensation_model: maps of
+ * one order; the lobe's maps of every order at every B of n^2 pairs took
+ * 600 MB and most of a minute at alpha 0.02). watch (nullable) is polled
  * per column. */
+LL_INTERNAL ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
+                                                  ll_microfacet **out);
 typedef struct ll_probe_compensation {
     size_t h;
     double *memory;
