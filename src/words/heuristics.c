@@ -319,6 +319,10 @@ ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im, si
 
 /* The largest |g| whose resolution is searched (see below). */
 #define HG_SEARCHED 0.95
+/* The most nodes or orders a medium's search tries: ten times the 344 x 181
+ * that g = 0.95 needs; its probes hold one n x n phase matrix per thread
+ * (128 MB each at 4000). */
+#define HG_SEARCH_LIMIT 4000
 
 typedef struct medium_ctx {
     double g;
@@ -342,29 +346,10 @@ static ll_status medium_eval(void *ctx, size_t n, size_t m, ll_watch *watch, dou
 {
     const medium_ctx *c = ctx;
     ll_monitor monitor = LL_MONITOR_INIT;
-    const ll_probe_set *set = c->set;
-    double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
-    ll_layer *layer = NULL;
-    size_t p, k;
-    ll_status s = nodes && weights ? LL_OK
-                                   : ll_fail(LL_ERROR_OUT_OF_MEMORY,
-                                             "resolution probes: out of memory for %zu nodes", n);
-    if (s == LL_OK)
-        s = ll_quad_gauss_lobatto(n, nodes, weights);
-    if (s == LL_OK)
-        s = ll_layer_create(nodes, weights, n, m, &layer);
     monitor.progress = poll_watch;
     monitor.user = watch;
-    if (s == LL_OK)
-        s = ll_layer_set_henyey_greenstein_ex(layer, 1.0, c->g, watch ? &monitor : NULL);
-    for (p = 0; p < set->n_pairs && s == LL_OK; ++p)
-        for (k = 0; k < set->n_phi; ++k)
-            values[p * set->n_phi + k] =
-                ll_layer_eval(layer, set->pairs[p].mu_o, set->pairs[p].mu_i, set->phi[k]);
-    ll_layer_destroy(layer);
-    ll_free(nodes);
-    ll_free(weights);
-    return s;
+    return ll_probe_medium_eval(LL_MEDIUM_HG, c->g, 0, n, m, c->set, watch ? &monitor : NULL,
+                                values);
 }
 
 ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
@@ -405,7 +390,7 @@ ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
         return LL_OK;
     }
     s = ll_probe_search(&set, medium_eval, &ctx, watch, tolerance, SEARCH_MIN_NODES,
-                        SEARCH_LIMIT, fn, &n, &m, &e);
+                        HG_SEARCH_LIMIT, fn, &n, &m, &e);
     ll_probe_free(&set);
     if (s != LL_OK)
         return s;

@@ -12,6 +12,7 @@
 #include "support/support.h"
 #include "words/microfacet.h"
 #include "support/watch.h"
+#include "words/media.h"
 
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
@@ -107,6 +108,17 @@ LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf,
                                               const ll_probe_compensation *compensation,
                                               size_t n, size_t m, const ll_probe_set *set,
                                               ll_watch *watch, double *values);
+
+/* What ll_layer_set_henyey_greenstein / _von_mises_fisher (kind, shape:
+ * g or kappa; albedo 1) on the Gauss-Lobatto nodes of n and m orders
+ * followed by ll_layer_eval gives at the probes, read from each order as
+ * it is made and keeping none (words/medium_probe.c): O(n^2) memory per
+ * thread instead of the layer's O(n^2 m); without with_forward, less the
+ * delta-M forward term (a delta, not a lobe; the search compares the
+ * lobe). monitor: nullable. */
+LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, int with_forward,
+                                           size_t n, size_t m, const ll_probe_set *set,
+                                           const ll_monitor *monitor, double *values);
 
 /* The Fourier orders the lobes themselves need: at every probe pair, the
  * true series (no widening) truncated after L terms is within tolerance / 2
