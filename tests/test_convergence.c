@@ -234,15 +234,18 @@ static const interface_case cases[] = {
 static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.5, 0.8 };
 
 /* The subset CI runs (index into cases, alpha): the issue's own failure
- * (eta 1.5, alpha 0.5), a dielectric below 1, and two metals, whose layers
- * at twice the chosen resolution stay small (n <= 600): 17 s of CPU with
- * eta 2, alpha 0.5 too, which the full grid keeps. And eta 1.5, alpha 0.8,
- * which the full grid found 1.04% off at phi 0.5 (transmission at mu_i
- * 0.1) while the probes' azimuths stepped from 0.3 to 0.6 (probe_set.c). */
+ * (eta 1.5, alpha 0.5), eta 1.5, alpha 0.8, which the full grid found
+ * 1.04% off at phi 0.5 (transmission at mu_i 0.1) while the probes'
+ * azimuths stepped from 0.3 to 0.6 (probe_set.c), and three metals:
+ * copper, alpha 0.8 is the case that the compensation's term left out of
+ * the probes made 1.32% off. The search probes the compensation now, which
+ * costs O(n^2) per node count (a dielectric's 3 to 6 s of CPU), so eta
+ * 1/1.5, alpha 0.8 and eta 2, alpha 0.5 are the full grid's: the whole
+ * test is 19 s of CPU (69 s wall at load 9 on 2 cores). */
 static const struct {
     size_t c;
     double alpha;
-} ci_subset[] = { { 2, 0.5 }, { 2, 0.8 }, { 4, 0.8 }, { 5, 0.3 }, { 7, 0.5 } };
+} ci_subset[] = { { 2, 0.5 }, { 2, 0.8 }, { 5, 0.3 }, { 7, 0.5 }, { 7, 0.8 } };
 
 static void interfaces_meet_the_tolerance(void **state)
 {
