@@ -328,15 +328,18 @@ LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta
  * ll_layer_set_microfacet with conserve_energy = 1 (the compensation term
  * is made from every node's albedo, and copper, alpha 0.8 converged more
  * slowly with it: 1.32% off at a resolution that met 1% without it); a
- * material's `compensate=0` is searched without it. Where the fit asks for more than 8000 nodes (alpha below
- * about 0.02 for eta 1.1, 0.007 for eta 1.5, 0.002 for conductors) the fit
+ * material's `compensate=0` is searched without it. Where the fit asks
+ * for more than 8000 nodes (alpha below about 0.02 for eta 1.1, 0.007 for
+ * eta 1.5, 0.002 for conductors) the fit
  * is returned unverified (*error = HUGE_VAL): probing would take minutes. */
 /* Henyey-Greenstein medium, g in (-1, 1): the convergence of the phase
  * function's own layer (ll_layer_set_henyey_greenstein, the single-
  * scattering lobe; a slab's multiple scattering is smoother), the fit
- * above the first guess of both n and m. Beyond |g| = 0.95 the fit is
- * returned unverified (*error = HUGE_VAL): the probes would cost tens of
- * seconds there. */
+ * above the first guess of both n and m, compared without the delta-M
+ * forward term (a delta, not a lobe: docs/method.md, "Resolution"). Not
+ * met within 4000 nodes or orders: LL_ERROR_INVALID_ARGUMENT. Beyond
+ * |g| = 0.95 the fit is returned unverified (*error = HUGE_VAL): the
+ * probes would cost minutes there (g = -0.95 takes 86 s of CPU). */
 LL_API ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
                                                    size_t *n_nodes, size_t *n_orders,
                                                    double *error);
