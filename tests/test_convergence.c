@@ -19,6 +19,13 @@
 #include "test_util.h"
 
 #include "words/probe.h"
+#include "words/media.h"
+#include "material/word_table.h"
+#include "numerics/spline.h"
+
+#include <pthread.h>
+#include <time.h>
+#include <unistd.h>
 
 #define MAX_POINTS 4096
 
@@ -50,6 +57,31 @@ static int full_grid(void)
     return v && *v && strcmp(v, "0") != 0;
 }
 
+/* LL_CONVERGENCE_CASES=TEXT: the full grid's cases whose word contains
+ * TEXT alone (e.g. "conductor"). */
+static int selected(const char *text)
+{
+    const char *v = getenv("LL_CONVERGENCE_CASES");
+    return !v || !*v || strstr(text, v) != NULL;
+}
+
+/* The full grid's build at twice the resolution, as ll_material_estimate
+ * puts its peak: beyond this the case is reported and skipped (four
+ * builds share the machine). */
+#define FULL_GRID_BYTES 4e9
+
+/* The estimated peak of building mat at n x m, bytes. */
+static double peak_bytes(const ll_material *mat, size_t n, size_t m)
+{
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    o.n_nodes = n;
+    o.n_orders = m;
+    o.n_channels = 1;
+    assert_int_equal(ll_material_estimate(mat, &o, &e), LL_OK);
+    return e.peak_bytes;
+}
+
 /* One lobe (group): around outgoing cosine `centre` (signed), incident
  * mu_i; mirror and off-mirror azimuths. */
 static void add_lobe(point_set *s, double mu_i, double centre, uint64_t *rng)
@@ -74,9 +106,10 @@ static void add_lobe(point_set *s, double mu_i, double centre, uint64_t *rng)
     ++s->groups;
 }
 
-/* Interface points: incident 0.1, 0.15, 0.2 and four random cosines, from
- * above and (dielectric) from below: reflection and transmission. */
-static void interface_points(point_set *s, double eta, int conductor)
+/* Interface points: incident 0.1, 0.15, 0.2 and four random cosines (the
+ * first n_incident of them), from above and (dielectric) from below:
+ * reflection and transmission. */
+static void interface_points_of(point_set *s, double eta, int conductor, size_t n_incident)
 {
     uint64_t rng = 2014;
     double incident[7] = { 0.1, 0.15, 0.2, 0, 0, 0, 0 };
@@ -86,7 +119,7 @@ static void interface_points(point_set *s, double eta, int conductor)
     for (k = 3; k < 7; ++k)
         incident[k] = 0.1 + 0.9 * next_uniform(&rng);
     for (side = 0; side < (conductor ? 1 : 2); ++side)
-        for (k = 0; k < 7; ++k) {
+        for (k = 0; k < n_incident; ++k) {
             double sign = side ? -1.0 : 1.0, e = side ? 1.0 / eta : eta, mu = incident[k];
             double sin_t = sqrt(1.0 - mu * mu) / e;
             /* Reflection where the index ahead is above 1 (the dense side
@@ -97,6 +130,11 @@ static void interface_points(point_set *s, double eta, int conductor)
             if (!conductor && sin_t < 1.0)
                 add_lobe(s, sign * mu, sign * sqrt(1.0 - sin_t * sin_t), &rng);
         }
+}
+
+static void interface_points(point_set *s, double eta, int conductor)
+{
+    interface_points_of(s, eta, conductor, 7);
 }
 
 /* The worst relative difference of a against b where b is above 1% of
@@ -142,8 +180,10 @@ static ll_layer *build_one(const ll_material *mat, size_t n, size_t m)
     return layers[0];
 }
 
-/* The interface word `text` (one line), monochrome, at tolerance t. */
-static void check_interface(const char *text, double eta, int conductor, double tolerance)
+/* The interface word `text` (one line), monochrome, at tolerance t:
+ * whether it meets it (the full grid goes on past a failure, to report
+ * every case). */
+static int check_interface(const char *text, double eta, int conductor, double tolerance)
 {
     ll_material *mat = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
@@ -156,6 +196,13 @@ static void check_interface(const char *text, double eta, int conductor, double 
     o.n_channels = 1;
     o.tolerance = tolerance;
     assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
+    if (peak_bytes(mat, 2 * n, 2 * m) > FULL_GRID_BYTES) {
+        printf("  %-40s n %5zu m %5zu: skipped (twice it needs %.1f GB)\n", text, n, m,
+               peak_bytes(mat, 2 * n, 2 * m) / 1e9);
+        ll_material_destroy(mat);
+        free(s);
+        return 1;
+    }
     a = build_one(mat, n, m);
     b = build_one(mat, 2 * n, 2 * m);
     interface_points(s, eta, conductor);
@@ -163,11 +210,12 @@ static void check_interface(const char *text, double eta, int conductor, double 
     if (verbose() || e > tolerance)
         printf("  %-40s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n", text,
                n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
-    assert_true(e <= tolerance);
+    fflush(stdout);
     ll_layer_destroy(a);
     ll_layer_destroy(b);
     ll_material_destroy(mat);
     free(s);
+    return e <= tolerance;
 }
 
 typedef struct interface_case {
@@ -186,34 +234,109 @@ static const interface_case cases[] = {
 static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.5, 0.8 };
 
 /* The subset CI runs (index into cases, alpha): the issue's own failure
- * (eta 1.5, alpha 0.5), a dielectric below 1, and two metals, whose layers
- * at twice the chosen resolution stay small (n <= 600): 17 s of CPU with
- * eta 2, alpha 0.5 too, which the full grid keeps. And eta 1.5, alpha 0.8,
- * which the full grid found 1.04% off at phi 0.5 (transmission at mu_i
- * 0.1) while the probes' azimuths stepped from 0.3 to 0.6 (probe_set.c). */
+ * (eta 1.5, alpha 0.5), eta 1.5, alpha 0.8, which the full grid found
+ * 1.04% off at phi 0.5 (transmission at mu_i 0.1) while the probes'
+ * azimuths stepped from 0.3 to 0.6 (probe_set.c), and three metals:
+ * copper, alpha 0.8 is the case that the compensation's term left out of
+ * the probes made 1.32% off. The search probes the compensation now, which
+ * costs O(n^2) per node count (a dielectric's 3 to 6 s of CPU), so eta
+ * 1/1.5, alpha 0.8 and eta 2, alpha 0.5 are the full grid's: the whole
+ * test is 19 s of CPU (69 s wall at load 9 on 2 cores). */
 static const struct {
     size_t c;
     double alpha;
-} ci_subset[] = { { 2, 0.5 }, { 2, 0.8 }, { 4, 0.8 }, { 5, 0.3 }, { 7, 0.5 } };
+} ci_subset[] = { { 2, 0.5 }, { 2, 0.8 }, { 5, 0.3 }, { 7, 0.5 }, { 7, 0.8 } };
 
 static void interfaces_meet_the_tolerance(void **state)
 {
     char text[128];
-    size_t c, a;
+    size_t c, a, failed = 0;
     (void)state;
     if (full_grid()) {
         for (c = 0; c < sizeof cases / sizeof cases[0]; ++c)
             for (a = 0; a < sizeof alphas / sizeof alphas[0]; ++a) {
                 snprintf(text, sizeof text, "%s alpha=%g\n", cases[c].name, alphas[a]);
-                check_interface(text, cases[c].eta, cases[c].conductor, 0.01);
+                if (selected(text) && !check_interface(text, cases[c].eta, cases[c].conductor,
+                                                       0.01))
+                    ++failed;
             }
+        assert_int_equal(failed, 0);
         return;
     }
     for (c = 0; c < sizeof ci_subset / sizeof ci_subset[0]; ++c) {
         const interface_case *ic = &cases[ci_subset[c].c];
         snprintf(text, sizeof text, "%s alpha=%g\n", ic->name, ci_subset[c].alpha);
-        check_interface(text, ic->eta, ic->conductor, 0.01);
+        assert_true(check_interface(text, ic->eta, ic->conductor, 0.01));
     }
+}
+
+/* LL_CONVERGENCE_TABLE=1: docs/method.md's resolution table, before (the
+ * original's fit, ll_fit_microfacet) and after (the tolerance 1%), each
+ * against the layer at twice the chosen n and m, at the grazing incident
+ * cosines 0.1, 0.15, 0.2 alone (mirror and off-mirror, reflection and
+ * transmission), compensation on. Prints markdown rows. */
+static void resolution_table(void **state)
+{
+    static const struct {
+        const char *text, *label;
+        double eta;
+        int conductor;
+    } rows[] = {
+        { "dielectric eta=1.33 alpha=0.3\n", "eta 1.33, alpha 0.3", 1.33, 0 },
+        { "dielectric eta=1.5 alpha=0.3\n", "eta 1.5, alpha 0.3", 1.5, 0 },
+        { "dielectric eta=1.5 alpha=0.5\n", "eta 1.5, alpha 0.5", 1.5, 0 },
+        { "dielectric eta=1.5 alpha=0.8\n", "eta 1.5, alpha 0.8", 1.5, 0 },
+        { "dielectric eta=2.0 alpha=0.5\n", "eta 2.0, alpha 0.5", 2.0, 0 },
+        { "dielectric eta=0.6666666666666666 alpha=0.8\n", "eta 1/1.5, alpha 0.8", 1.0 / 1.5,
+          0 },
+        { "conductor eta=Au alpha=0.3\n", "gold, alpha 0.3", 0.0, 1 },
+        { "conductor eta=Au alpha=0.5\n", "gold, alpha 0.5", 0.0, 1 },
+    };
+    const char *v = getenv("LL_CONVERGENCE_TABLE");
+    point_set *s = malloc(sizeof *s);
+    size_t r;
+    (void)state;
+    assert_non_null(s);
+    if (!v || !*v || strcmp(v, "0") == 0) {
+        free(s);
+        return;
+    }
+    printf("| interface | before: n x m, worst | after: n x m, worst |\n|---|---|---|\n");
+    for (r = 0; r < sizeof rows / sizeof rows[0]; ++r) {
+        ll_material *mat = NULL;
+        ll_build_options o = LL_BUILD_OPTIONS_INIT;
+        ll_layer *fit, *chosen, *ref;
+        size_t n, m, fn, fm, where;
+        double eta_re, eta_im, alpha, ef, ec;
+        if (!selected(rows[r].text))
+            continue;
+        assert_int_equal(ll_material_parse(rows[r].text, "table", &mat), LL_OK);
+        o.n_channels = 1;
+        assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
+        /* The fit of the layer's own index (gold: its monochrome channel). */
+        {
+            ll_word_params p;
+            ll_word_params_above(mat, 0, 0, 1, 1.0, &p);
+            eta_re = rows[r].conductor ? p.v[LL_CONDUCTOR_ETA] : p.v[LL_DIELECTRIC_ETA];
+            eta_im = rows[r].conductor ? p.v[LL_CONDUCTOR_K] : 0.0;
+            alpha = rows[r].conductor ? p.v[LL_CONDUCTOR_ALPHA] : p.v[LL_DIELECTRIC_ALPHA];
+        }
+        assert_int_equal(ll_fit_microfacet(alpha, eta_re, eta_im, &fn, &fm), LL_OK);
+        fit = build_one(mat, fn, fm);
+        chosen = build_one(mat, n, m);
+        ref = build_one(mat, 2 * n, 2 * m);
+        interface_points_of(s, rows[r].eta, rows[r].conductor, 3);
+        ef = worst_difference(s, fit, ref, &where);
+        ec = worst_difference(s, chosen, ref, &where);
+        printf("| %s | %zu x %zu, %.3g%% | %zu x %zu, %.2f%% |\n", rows[r].label, fn, fm,
+               100.0 * ef, n, m, 100.0 * ec);
+        fflush(stdout);
+        ll_layer_destroy(fit);
+        ll_layer_destroy(chosen);
+        ll_layer_destroy(ref);
+        ll_material_destroy(mat);
+    }
+    free(s);
 }
 
 /* The issue's failure itself: eta 1.5, alpha 0.5 at mu_i 0.1 in the
@@ -250,70 +373,462 @@ static void grazing_mirror_of_the_issue_is_fixed(void **state)
 }
 
 /* The probe of an interface reproduces what ll_layer_eval of the built
- * layer (no compensation) gives: the search measures the layer the build
- * makes. */
-static void probes_are_the_layer(void **state)
+ * layer gives, with and without the energy compensation, for a dielectric
+ * and a conductor: the search measures the layer the build makes. */
+static void probe_matches_layer(double eta_re, double eta_im, double alpha, int compensate)
 {
     ll_probe_set set;
-    ll_microfacet *mf = NULL;
+    ll_probe_compensation c;
+    ll_microfacet *mf = NULL, *mf0 = NULL;
     ll_layer *l = ll_test_layer(64, 40);
-    double *v;
+    double *v, worst = 0.0;
     size_t p, k;
-    (void)state;
-    assert_int_equal(ll_probe_interface(1.5, 0.0, 0.1, &set), LL_OK);
-    assert_true(set.n_pairs > 100);
+    assert_int_equal(ll_probe_interface(eta_re, eta_im, 0.1, &set), LL_OK);
+    assert_true(set.n_pairs > 50);
     v = malloc(LL_PROBE_VALUES(&set) * sizeof *v);
     assert_non_null(v);
-    assert_int_equal(ll_probe_interface_model(1.5, 0.0, 0.4, &mf), LL_OK);
-    assert_int_equal(ll_probe_interface_eval(mf, 64, 40, &set, v), LL_OK);
-    assert_int_equal(ll_layer_set_microfacet(l, 1.5, 0.0, 0.4, 0, 0), LL_OK);
+    assert_int_equal(ll_probe_interface_model(eta_re, eta_im, alpha, &mf), LL_OK);
+    if (compensate) {
+        assert_int_equal(ll_probe_compensation_model(eta_re, eta_im, alpha, &mf0), LL_OK);
+        assert_int_equal(ll_probe_compensation_make(mf0, eta_re, eta_im, 64, NULL, &c), LL_OK);
+        ll_microfacet_destroy(mf0);
+    }
+    assert_int_equal(ll_probe_interface_eval(mf, compensate ? &c : NULL, 64, 40, &set, NULL, v),
+                     LL_OK);
+    if (compensate)
+        ll_probe_compensation_free(&c);
+    assert_int_equal(ll_layer_set_microfacet(l, eta_re, eta_im, alpha, compensate, 0), LL_OK);
     for (p = 0; p < set.n_pairs; ++p)
         for (k = 0; k < set.n_phi; ++k) {
             double e = ll_layer_eval(l, set.pairs[p].mu_o, set.pairs[p].mu_i, set.phi[k]);
-            assert_true(fabs(e - v[p * set.n_phi + k]) <= 1e-9 * fmax(fabs(e), 1e-3));
+            double d = fabs(e - v[p * set.n_phi + k]) / fmax(fabs(e), 1e-3);
+            worst = fmax(worst, d);
         }
+    if (verbose())
+        printf("  probes against the layer, eta %g%+gi alpha %g compensate %d: %.2g\n", eta_re,
+               eta_im, alpha, compensate, worst);
+    assert_true(worst <= 1e-9);
     free(v);
     ll_microfacet_destroy(mf);
     ll_probe_free(&set);
     ll_layer_destroy(l);
 }
 
-/* Media: the phase function's layer at the chosen resolution against
- * twice it, for HG up to g = 0.95 (forward and backward lobes). */
-static void media_meet_the_tolerance(void **state)
+static void probes_are_the_layer(void **state)
 {
-    static const double gs[] = { 0.5, 0.8, 0.95, -0.9 };
-    point_set *s = malloc(sizeof *s);
-    size_t gi, k, n, m, where;
-    uint64_t rng = 7;
     (void)state;
-    assert_non_null(s);
+    probe_matches_layer(1.5, 0.0, 0.4, 0);
+    probe_matches_layer(1.5, 0.0, 0.4, 1);
+    probe_matches_layer(1.0 / 1.5, 0.0, 0.8, 1);
+    /* Copper (the full grid's failure before the term was probed). */
+    probe_matches_layer(0.27, 3.41, 0.8, 0);
+    probe_matches_layer(0.27, 3.41, 0.8, 1);
+}
+
+/* ------------------------------------------------------------- media
+ *
+ * The phase function's layer at twice the resolution of g = 0.95 (1376 x
+ * 724) is 11 GB of dense orders. So the layer is evaluated at the points
+ * as its orders are made (ll_layer_set_medium_finished hands each over and
+ * keeps none): each order's 4 x 4 spline stencils of ll_layer_eval
+ * (layer/layer.c eval_point), summed over the orders afterwards in order
+ * (the same for any thread count). One order's n x n matrix per thread.
+ * The comparison leaves out the delta-M forward term f I (the moments
+ * beyond the kept ones as exactly forward scattering: a delta, shown by
+ * ll_layer_eval near mu_o = mu_i as f over a node's weight, which changes
+ * with n without converging; words/medium_probe.c). */
+
+typedef struct lean_point {
+    ptrdiff_t oo, oi;  /* the stencils' first internal node indices */
+    double wo[4], wi[4];
+} lean_point;
+
+typedef struct lean_eval {
+    const ll_layer *layer;
+    const point_set *s;
+    lean_point *at;
+    double *per_order; /* m x points: order k's sum at each point */
+    int with_forward;
+} lean_eval;
+
+/* layer/layer.c direction_weights: the stencil of mu on its half. */
+static ptrdiff_t lean_stencil(const ll_layer *l, double mu, double w[4])
+{
+    size_t h = l->n / 2;
+    ptrdiff_t offset = 0;
+    assert_true(h >= 2 && mu != 0.0);
+    ll_spline_weights(l->nodes + h, h, fabs(mu), &offset, w, 1);
+    return mu < 0.0 ? offset : offset + (ptrdiff_t)h;
+}
+
+static ll_status lean_order(void *user, size_t l, double *P, double forward, ll_order **out)
+{
+    const lean_eval *e = user;
+    const ll_layer *layer = e->layer;
+    ptrdiff_t h = (ptrdiff_t)(layer->n / 2), n = (ptrdiff_t)layer->n;
+    size_t k;
+    for (k = 0; k < e->s->count; ++k) {
+        const lean_point *p = &e->at[k];
+        /* Rows and columns stay in the half of their direction. */
+        ptrdiff_t half_o = p->oo >= h - 1 ? h : 0, half_i = p->oi >= h - 1 ? h : 0;
+        double sum = 0.0;
+        int a, b;
+        for (b = 0; b < 4; ++b) {
+            ptrdiff_t col = p->oi + b;
+            double scale;
+            if (p->wi[b] == 0.0 || col < half_i || col >= half_i + h)
+                continue;
+            scale = p->wi[b] / (fabs(layer->nodes[col]) * layer->weights[col]);
+            for (a = 0; a < 4; ++a) {
+                ptrdiff_t row = p->oo + a;
+                double v;
+                if (p->wo[a] == 0.0 || row < half_o || row >= half_o + h)
+                    continue;
+                v = P ? P[col * n + row] : (row == col ? forward : 0.0);
+                if (!e->with_forward && row == col)
+                    v -= forward;
+                sum += p->wo[a] * scale * v;
+            }
+        }
+        e->per_order[l * e->s->count + k] = sum;
+    }
+    *out = NULL; /* (kept by nobody) */
+    return LL_OK;
+}
+
+/* What ll_layer_eval of the HG phase layer (albedo 1) of n x m gives at
+ * the points of s, into v (without with_forward, less the forward term). */
+static void lean_hg(double g, size_t n, size_t m, int with_forward, const point_set *s,
+                    double *v)
+{
+    ll_layer *layer = ll_test_layer(n, m);
+    lean_eval e;
+    size_t k, l;
+    e.layer = layer;
+    e.with_forward = with_forward;
+    e.s = s;
+    e.at = malloc(s->count * sizeof *e.at);
+    e.per_order = calloc(m * s->count, sizeof *e.per_order);
+    assert_non_null(e.at);
+    assert_non_null(e.per_order);
+    for (k = 0; k < s->count; ++k) {
+        e.at[k].oo = lean_stencil(layer, s->p[k].mu_o, e.at[k].wo);
+        e.at[k].oi = lean_stencil(layer, s->p[k].mu_i, e.at[k].wi);
+    }
+    {
+        ll_medium_finish finish;
+        finish.order = lean_order;
+        finish.user = &e;
+        assert_int_equal(ll_layer_set_medium_finished(layer, LL_MEDIUM_HG, 1.0, g, &finish, NULL),
+                         LL_OK);
+    }
+    for (k = 0; k < s->count; ++k) {
+        double c1 = cos(s->p[k].phi), prev = c1, cur = 1.0, sum = 0.0;
+        for (l = 0; l < m; ++l) {
+            double next = 2.0 * c1 * cur - prev;
+            sum += e.per_order[l * s->count + k] * cur * (l == 0 ? 0.5 : 1.0);
+            prev = cur;
+            cur = next;
+        }
+        sum *= 1.0 / 3.14159265358979323846;
+        v[k] = sum > 0.0 ? sum : 0.0;
+    }
+    free(e.at);
+    free(e.per_order);
+    ll_layer_destroy(layer);
+}
+
+/* The worst relative difference of a against b (values at the points of
+ * s) where b is above 1% of its group's peak. */
+static double worst_of_values(const point_set *s, const double *va, const double *vb,
+                              size_t *where)
+{
+    double peak[256] = { 0 }, worst = 0.0;
+    size_t k;
+    assert_true(s->groups <= 256);
+    for (k = 0; k < s->count; ++k)
+        peak[s->p[k].group] = fmax(peak[s->p[k].group], vb[k]);
+    *where = 0;
+    for (k = 0; k < s->count; ++k)
+        if (vb[k] > 0.01 * peak[s->p[k].group] && vb[k] > 0.0 &&
+            fabs(va[k] - vb[k]) / vb[k] > worst) {
+            worst = fabs(va[k] - vb[k]) / vb[k];
+            *where = k;
+        }
+    return worst;
+}
+
+/* The medium points: incident 0.1, 0.15, 0.2 and three random cosines,
+ * forward (transmission) and backward (reflection) lobes. */
+static void medium_points(point_set *s)
+{
+    uint64_t rng = 7;
+    size_t k;
     s->count = s->groups = 0;
     for (k = 0; k < 6; ++k) {
         double mu = k < 3 ? 0.1 + 0.05 * (double)k : 0.1 + 0.9 * next_uniform(&rng);
         add_lobe(s, mu, mu, &rng);  /* forward */
         add_lobe(s, mu, -mu, &rng); /* backward */
     }
+}
+
+/* The lean evaluation is ll_layer_eval of the built layer. */
+static void lean_media_evaluation_is_the_layer(void **state)
+{
+    point_set *s = malloc(sizeof *s);
+    double *lean, worst = 0.0;
+    ll_layer *l = ll_test_layer(60, 30);
+    size_t k;
+    (void)state;
+    assert_non_null(s);
+    medium_points(s);
+    lean = malloc(s->count * sizeof *lean);
+    assert_non_null(lean);
+    lean_hg(0.8, 60, 30, 1, s, lean);
+    assert_int_equal(ll_layer_set_henyey_greenstein(l, 1.0, 0.8), LL_OK);
+    for (k = 0; k < s->count; ++k) {
+        double v = ll_layer_eval(l, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
+        worst = fmax(worst, fabs(v - lean[k]) / fmax(fabs(v), 1e-6));
+    }
+    if (verbose())
+        printf("  lean HG evaluation against ll_layer_eval: %.2g\n", worst);
+    assert_true(worst <= 1e-12);
+    /* The search's probes of a medium (words/medium_probe.c), the same. */
+    {
+        ll_probe_set set;
+        double *v, w2 = 0.0;
+        size_t p, j;
+        assert_int_equal(ll_probe_medium(0.1, &set), LL_OK);
+        v = malloc(LL_PROBE_VALUES(&set) * sizeof *v);
+        assert_non_null(v);
+        assert_int_equal(ll_probe_medium_eval(LL_MEDIUM_HG, 0.8, 1, 60, 30, &set, NULL, v), LL_OK);
+        for (p = 0; p < set.n_pairs; ++p)
+            for (j = 0; j < set.n_phi; ++j) {
+                double e = ll_layer_eval(l, set.pairs[p].mu_o, set.pairs[p].mu_i, set.phi[j]);
+                w2 = fmax(w2, fabs(e - v[p * set.n_phi + j]) / fmax(fabs(e), 1e-6));
+            }
+        if (verbose())
+            printf("  medium probes against ll_layer_eval: %.2g\n", w2);
+        assert_true(w2 <= 1e-12);
+        free(v);
+        ll_probe_free(&set);
+    }
+    free(lean);
+    free(s);
+    ll_layer_destroy(l);
+}
+
+/* Media: the phase function's layer at the chosen resolution against
+ * twice it, for HG up to g = 0.95 (forward and backward lobes), evaluated
+ * lean (above). CI: g = 0.8 alone. */
+static void media_meet_the_tolerance(void **state)
+{
+    static const double gs[] = { 0.5, 0.8, 0.9, 0.95, -0.9, -0.95 };
+    point_set *s = malloc(sizeof *s);
+    double *va, *vb;
+    size_t gi, n, m, where, failed = 0;
+    (void)state;
+    assert_non_null(s);
+    medium_points(s);
+    va = malloc(s->count * sizeof *va);
+    vb = malloc(s->count * sizeof *vb);
+    assert_non_null(va);
+    assert_non_null(vb);
     for (gi = 0; gi < sizeof gs / sizeof gs[0]; ++gi) {
+        double e, err;
+        if (!full_grid() && gs[gi] != 0.8)
+            continue; /* CI: g = 0.8 alone (0.95's search is 19 s of CPU) */
+        assert_int_equal(ll_heuristic_henyey_greenstein_ex(gs[gi], 0.0, 0.0, &n, &m, &err),
+                         LL_OK);
+        lean_hg(gs[gi], n, m, 0, s, va);
+        lean_hg(gs[gi], 2 * n, 2 * m, 0, s, vb);
+        e = worst_of_values(s, va, vb, &where);
+        if (verbose() || e > 0.01)
+            printf("  hg g=%g n %zu m %zu (probes %.4f): worst %.4f at mu_o %.3f mu_i %.3f "
+                   "phi %.3f\n",
+                   gs[gi], n, m, err, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+        fflush(stdout);
+        if (e > 0.01)
+            ++failed;
+    }
+    assert_int_equal(failed, 0);
+    free(va);
+    free(vb);
+    free(s);
+}
+
+/* A slab of the medium (what a build makes of `medium ... tau=`: the
+ * phase layer doubled to its thickness) at the resolution the material
+ * chooses against twice it, reflection lobes (the transmission holds the
+ * unscattered beam, a diagonal spike that grows with n in ll_layer_eval
+ * and is not a lobe). Full grid only; skipped where twice it needs more
+ * than FULL_GRID_BYTES. */
+static void slabs_meet_the_tolerance(void **state)
+{
+    static const double gs[] = { 0.5, 0.8, 0.9, 0.95 };
+    point_set *all = malloc(sizeof *all), *s = malloc(sizeof *s);
+    size_t gi, k, n, m, where, failed = 0;
+    (void)state;
+    assert_non_null(all);
+    assert_non_null(s);
+    medium_points(all);
+    s->count = 0;
+    s->groups = all->groups;
+    for (k = 0; k < all->count; ++k)
+        if (all->p[k].mu_o < 0.0)
+            s->p[s->count++] = all->p[k];
+    for (gi = 0; gi < sizeof gs / sizeof gs[0] && full_grid(); ++gi) {
+        char text[128];
+        ll_material *mat = NULL;
+        ll_build_options o = LL_BUILD_OPTIONS_INIT;
         ll_layer *a, *b;
         double e;
-        if (!full_grid() && gi != 1)
-            continue; /* CI: g = 0.8 alone (0.95 builds 688 x 362 phase matrices: 6 s) */
-        assert_int_equal(ll_heuristic_henyey_greenstein_ex(gs[gi], 0.0, 0.0, &n, &m, NULL),
-                         LL_OK);
-        a = ll_test_layer(n, m);
-        b = ll_test_layer(2 * n, 2 * m);
-        assert_int_equal(ll_layer_set_henyey_greenstein(a, 1.0, gs[gi]), LL_OK);
-        assert_int_equal(ll_layer_set_henyey_greenstein(b, 1.0, gs[gi]), LL_OK);
+        snprintf(text, sizeof text, "medium albedo=0.95 g=%g tau=1\n", gs[gi]);
+        assert_int_equal(ll_material_parse(text, "slab", &mat), LL_OK);
+        o.n_channels = 1;
+        assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
+        if (peak_bytes(mat, 2 * n, 2 * m) > FULL_GRID_BYTES) {
+            printf("  slab g=%g n %zu m %zu: skipped (twice it needs %.1f GB)\n", gs[gi], n, m,
+                   peak_bytes(mat, 2 * n, 2 * m) / 1e9);
+            ll_material_destroy(mat);
+            continue;
+        }
+        a = build_one(mat, n, m);
+        b = build_one(mat, 2 * n, 2 * m);
         e = worst_difference(s, a, b, &where);
-        if (verbose() || e > 0.01)
-            printf("  hg g=%g n %zu m %zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n",
-                   gs[gi], n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
-        assert_true(e <= 0.01);
+        printf("  slab g=%g tau 1 n %zu m %zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n",
+               gs[gi], n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+        fflush(stdout);
+        if (e > 0.01)
+            ++failed;
         ll_layer_destroy(a);
         ll_layer_destroy(b);
+        ll_material_destroy(mat);
     }
+    assert_int_equal(failed, 0);
+    free(all);
     free(s);
+}
+
+/* ------------------------------------------------------- cancellation */
+
+static double now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* A monitor that cancels at its `at`-th report of the stage "resolution"
+ * (the search runs for seconds and reports while it runs). */
+typedef struct search_watcher {
+    size_t at, reports, resolution_reports;
+    double last, cancelled_at;
+    int monotone, other_stage_before;
+} search_watcher;
+
+static int watch_search(void *user, double fraction, const char *stage)
+{
+    search_watcher *w = user;
+    int resolution = stage && strcmp(stage, "resolution") == 0;
+    if (w->reports++ > 0 && fraction < w->last)
+        w->monotone = 0;
+    w->last = fraction;
+    if (!resolution && w->resolution_reports == 0)
+        w->other_stage_before = 1;
+    if (resolution && ++w->resolution_reports == w->at) {
+        w->cancelled_at = now_seconds();
+        return 1;
+    }
+    return w->cancelled_at > 0.0; /* (stays cancelled) */
+}
+
+/* A build whose resolution search is cancelled by its monitor in the
+ * middle of the search: LL_ERROR_CANCELLED, no file (nor a temporary one),
+ * nothing left allocated. */
+static void search_is_cancelled_by_the_monitor(void **state)
+{
+    ll_material *mat = NULL;
+    ll_monitor monitor = LL_MONITOR_INIT;
+    search_watcher w;
+    char out[600];
+    double end;
+    size_t entries;
+    ll_status s;
+    (void)state;
+    memset(&w, 0, sizeof w);
+    w.at = 4;
+    w.monotone = 1;
+    monitor.progress = watch_search;
+    monitor.user = &w;
+    snprintf(out, sizeof out, "%s/cancelled.bsdf", ll_test_dir());
+    entries = ll_test_count_entries(ll_test_dir());
+    assert_int_equal(ll_material_parse("dielectric eta=1.5 alpha=0.5\n", "cancel", &mat), LL_OK);
+    ll_alloc_fail_after(0); /* (counts the blocks alive, fails none) */
+    s = ll_material_build_ex(mat, NULL, &monitor, out);
+    end = now_seconds();
+    assert_int_equal(ll_alloc_live(), 0);
+    ll_alloc_hook_off();
+    assert_int_equal(s, LL_ERROR_CANCELLED);
+    assert_int_equal(w.resolution_reports, w.at); /* none after the cancel's */
+    assert_true(w.monotone);
+    assert_false(w.other_stage_before);
+    assert_int_equal(access(out, F_OK), -1);
+    assert_int_equal(ll_test_count_entries(ll_test_dir()), entries);
+    if (verbose())
+        printf("  search cancelled at report %zu: the build returned %.3f s later (%s)\n",
+               w.at, end - w.cancelled_at, ll_last_error_message());
+    ll_material_destroy(mat);
+}
+
+typedef struct raiser {
+    volatile int *flag;
+    double delay, raised_at;
+} raiser;
+
+static void *raise_later(void *arg)
+{
+    raiser *r = arg;
+    struct timespec t;
+    t.tv_sec = 0;
+    t.tv_nsec = (long)(r->delay * 1e9);
+    nanosleep(&t, NULL);
+    r->raised_at = now_seconds();
+    *r->flag = 1;
+    return NULL;
+}
+
+/* The options' cancel flag (what llbuild raises on Ctrl-C) stops the
+ * estimate's search too: a flag raised from another thread while a search
+ * runs gives LL_ERROR_CANCELLED with nothing left allocated. */
+static void estimate_search_is_cancelled_by_the_flag(void **state)
+{
+    ll_material *mat = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    volatile int flag = 0;
+    raiser r;
+    pthread_t thread;
+    double end;
+    ll_status s;
+    (void)state;
+    o.cancel = &flag;
+    r.flag = &flag;
+    r.delay = 0.3; /* (the search takes seconds) */
+    r.raised_at = 0.0;
+    assert_int_equal(ll_material_parse("conductor eta=Cu alpha=0.8\n", "cancel", &mat), LL_OK);
+    ll_alloc_fail_after(0);
+    assert_int_equal(pthread_create(&thread, NULL, raise_later, &r), 0);
+    s = ll_material_estimate(mat, &o, &e);
+    end = now_seconds();
+    assert_int_equal(pthread_join(thread, NULL), 0);
+    assert_int_equal(ll_alloc_live(), 0);
+    ll_alloc_hook_off();
+    assert_int_equal(s, LL_ERROR_CANCELLED);
+    if (verbose())
+        printf("  estimate cancelled by the flag: returned %.3f s after it was raised (%s)\n",
+               end - r.raised_at, ll_last_error_message());
+    ll_material_destroy(mat);
 }
 
 /* The goal's arguments and where it comes from. */
@@ -367,7 +882,12 @@ int main(void)
         cmocka_unit_test(goal_is_checked_and_reported),
         cmocka_unit_test(grazing_mirror_of_the_issue_is_fixed),
         cmocka_unit_test(interfaces_meet_the_tolerance),
+        cmocka_unit_test(lean_media_evaluation_is_the_layer),
         cmocka_unit_test(media_meet_the_tolerance),
+        cmocka_unit_test(slabs_meet_the_tolerance),
+        cmocka_unit_test(resolution_table),
+        cmocka_unit_test(search_is_cancelled_by_the_monitor),
+        cmocka_unit_test(estimate_search_is_cancelled_by_the_flag),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
 }

@@ -340,7 +340,7 @@ static void measured_resolution_meets_the_tolerance(void **state)
     assert_int_equal(ll_probe_opaque(0.1, &set), LL_OK);
     probe = malloc(LL_PROBE_VALUES(&set) * sizeof(double));
     assert_non_null(probe);
-    assert_int_equal(ll_merl_probe_eval(merl, red, n, m, &set, probe), LL_OK);
+    assert_int_equal(ll_merl_probe_eval(merl, red, n, m, &set, NULL, probe), LL_OK);
     for (i = 0; i < set.n_pairs; ++i)
         for (k = 0; k < set.n_phi; ++k) {
             double v = ll_layer_eval(a, set.pairs[i].mu_o, set.pairs[i].mu_i, set.phi[k]);
@@ -353,7 +353,7 @@ static void measured_resolution_meets_the_tolerance(void **state)
     /* The search's own verdict: met, with its margin. */
     n = 100;
     m = 180;
-    assert_int_equal(ll_merl_resolution(merl, red, tolerance, 0.1, &n, &m, &e), LL_OK);
+    assert_int_equal(ll_merl_resolution(merl, red, tolerance, 0.1, NULL, &n, &m, &e), LL_OK);
     assert_true(e <= 0.6 * tolerance);
     ll_merl_free(merl);
 
@@ -363,7 +363,7 @@ static void measured_resolution_meets_the_tolerance(void **state)
     assert_int_equal(ll_merl_load(path, &merl), LL_OK);
     n = 100;
     m = 180;
-    assert_int_equal(ll_merl_resolution(merl, red, tolerance, 0.1, &n, &m, &e), LL_OK);
+    assert_int_equal(ll_merl_resolution(merl, red, tolerance, 0.1, NULL, &n, &m, &e), LL_OK);
     assert_int_equal(n, 2 * TH);
     assert_int_equal(m, PD);
     assert_true(isinf(e));

@@ -132,6 +132,13 @@ LL_INTERNAL ll_status ll_build_options_read(const ll_build_options *in, ll_build
  * checked against the smallest meaningful resolution. */
 LL_INTERNAL ll_status ll_material_plan(const ll_material *m, const ll_build_options *o,
                                        size_t *n_nodes, size_t *n_orders, size_t *n_channels);
+/* The same with a monitor (nullable; ll_common.h), as a build's stage: the
+ * searches of the resolution (up to 5-18 s for a measured table) poll it,
+ * a cancel returns LL_ERROR_CANCELLED with nothing allocated, and the
+ * progress goes through the words (stage "resolution"). */
+LL_INTERNAL ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
+                                          const ll_monitor *monitor, size_t *n_nodes,
+                                          size_t *n_orders, size_t *n_channels);
 /* The words' answers so far, so that a word probed once (in one channel,
  * one basis) is not probed again: ll_material_plan_memo over the bases of
  * a swept material shares one memo. */
@@ -140,8 +147,11 @@ typedef struct ll_resolution_memo {
     size_t (*answer)[2];
     double *error;
     size_t count, capacity;
+    /* Nullable: polled by the searches, one stage ("resolution") per
+     * word and channel (see ll_material_plan_ex). */
+    struct ll_watch *watch;
 } ll_resolution_memo;
-#define LL_RESOLUTION_MEMO_INIT { NULL, NULL, NULL, 0, 0 }
+#define LL_RESOLUTION_MEMO_INIT { NULL, NULL, NULL, 0, 0, NULL }
 /* error (nullable): the largest error a word's resolution was verified
  * to (HUGE_VAL: some word not verified), -1 when the resolution is given. */
 LL_INTERNAL ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,

@@ -349,7 +349,8 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     ll_status s = build_start(b, m, opts, monitor, fn);
     b->share = share;
     if (s == LL_OK)
-        s = ll_material_plan(m, &b->o, &b->n, &b->orders, &b->nch);
+        s = ll_material_plan_ex(m, &b->o, next_call(b, "resolution", 0.0), &b->n, &b->orders,
+                                &b->nch);
     if (s != LL_OK)
         return s;
     /* The parameters (as many as the words), then the budget: nothing

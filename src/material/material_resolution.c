@@ -18,6 +18,7 @@
 #define _DEFAULT_SOURCE 1
 
 #include "material/word_table.h"
+#include "words/probe.h"
 
 #include <stddef.h>
 #include <math.h>
@@ -139,7 +140,7 @@ static ll_status word_resolution(const ll_word_params *p, double tolerance, doub
             return LL_OK;
         }
     *error = HUGE_VAL; /* (a hook that says nothing has verified nothing) */
-    s = p->desc->resolution(p, tolerance, mu_min, n, m, error);
+    s = p->desc->resolution(p, tolerance, mu_min, memo->watch, n, m, error);
     if (s != LL_OK)
         return s;
     if (memo->count == memo->capacity) {
@@ -172,7 +173,7 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                                 ll_resolution_memo *memo, size_t *n_nodes, size_t *n_orders,
                                 size_t *n_channels, double *error)
 {
-    size_t channels, n = 0, orders = 0, w, c;
+    size_t channels, n = 0, orders = 0, w, c, searched = 0;
     double tolerance, mu_min, worst = -1.0; /* -1: given, not chosen */
     ll_status s;
 
@@ -190,7 +191,17 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                 double we;
                 ll_word_params_above(m, w, c, channels, above[c], &p);
                 above[c] *= ll_word_index_ratio(m, w, c, channels);
+                /* Each word and channel one part of the progress (a memo
+                 * hit passes at once). */
+                if (ll_watch_stage(memo->watch, "resolution",
+                                   (double)searched / (double)(m->count * channels),
+                                   1.0 / (double)(m->count * channels), LL_PROBE_SEARCH_UNITS))
+                    return ll_fail(LL_ERROR_CANCELLED,
+                                   "%s: cancelled while choosing the resolution", m->source);
+                ++searched;
                 s = word_resolution(&p, tolerance, mu_min, memo, &wn, &wm, &we);
+                if (s == LL_ERROR_CANCELLED)
+                    return s; /* (its message stands: no fault of the word) */
                 if (s != LL_OK) {
                     char detail[700]; /* (the message is rewritten below) */
                     snprintf(detail, sizeof detail, "%s", ll_last_error_message());
@@ -242,6 +253,22 @@ ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size
     ll_status s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, NULL);
     ll_resolution_memo_free(&memo);
     return s;
+}
+
+ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
+                              const ll_monitor *monitor, size_t *n_nodes, size_t *n_orders,
+                              size_t *n_channels)
+{
+    static const char fn[] = "resolution";
+    ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, monitor, fn);
+    if (s != LL_OK)
+        return s;
+    memo.watch = &watch;
+    s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, NULL);
+    ll_resolution_memo_free(&memo);
+    return ll_watch_finish(&watch, s, fn);
 }
 
 ll_status ll_material_resolution(const ll_material *material, const ll_build_options *opts,

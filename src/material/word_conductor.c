@@ -12,6 +12,7 @@
  * has its per-channel indices from its spectra (material/ior.c).
  */
 #include "material/word_table.h"
+#include "words/probe.h"
 
 #include "layerlab/ll_layer.h"
 
@@ -175,10 +176,12 @@ static void conductor_params(const ll_word *w, size_t c, size_t n_channels, doub
 }
 
 static ll_status conductor_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                      size_t *n, size_t *m, double *error)
+                                      ll_watch *watch, size_t *n, size_t *m, double *error)
 {
-    return ll_heuristic_microfacet_ex(p->v[ALPHA], p->v[ETA], p->v[K], tolerance, mu_min, n, m,
-                                      error);
+    /* The layer conductor_build makes: with or without the compensation. */
+    return ll_search_microfacet(p->v[ALPHA], p->v[ETA], p->v[K],
+                                p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, tolerance, mu_min, watch,
+                                n, m, error);
 }
 
 static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)

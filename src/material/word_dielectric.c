@@ -5,6 +5,7 @@
  * the product of the dielectric indices above it.
  */
 #include "material/word_table.h"
+#include "words/probe.h"
 
 #include "layerlab/ll_layer.h"
 
@@ -38,9 +39,12 @@ static void dielectric_params(const ll_word *w, size_t c, size_t n_channels, dou
 }
 
 static ll_status dielectric_resolution(const ll_word_params *p, double tolerance,
-                                       double mu_min, size_t *n, size_t *m, double *error)
+                                       double mu_min, ll_watch *watch, size_t *n, size_t *m,
+                                       double *error)
 {
-    return ll_heuristic_microfacet_ex(p->v[1], p->v[0], 0.0, tolerance, mu_min, n, m, error);
+    /* The layer dielectric_build makes: with or without the compensation. */
+    return ll_search_microfacet(p->v[1], p->v[0], 0.0, p->v[2] != 0.0, tolerance, mu_min, watch,
+                                n, m, error);
 }
 
 static void dielectric_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)

@@ -20,9 +20,10 @@ static void diffuse_params(const ll_word *w, size_t c, size_t n_channels, double
  * smallest meaningful quadrature (LL_MATERIAL_MIN_NODES, what the HG fit
  * gives at g = 0) and one order. */
 static ll_status diffuse_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                    size_t *n, size_t *m, double *error)
+                                    ll_watch *watch, size_t *n, size_t *m, double *error)
 {
     (void)p;
+    (void)watch;
     (void)tolerance;
     (void)mu_min;
     *error = 0.0; /* exact at any resolution */

@@ -109,7 +109,7 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
  * channels of a table share its cells, and so its steps, and a relative
  * error does not see their scales; three searches would triple the cost. */
 static ll_status measured_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                     size_t *n, size_t *m, double *error)
+                                     ll_watch *watch, size_t *n, size_t *m, double *error)
 {
     static const double luma[3] = { LL_LUMA_R, LL_LUMA_G, LL_LUMA_B };
     ll_merl *merl = NULL;
@@ -120,7 +120,7 @@ static ll_status measured_resolution(const ll_word_params *p, double tolerance, 
     *n = MEASURED_NODES;
     *m = MEASURED_ORDERS;
     if (s == LL_OK)
-        s = ll_merl_resolution(merl, luma, tolerance, mu_min, n, m, error);
+        s = ll_merl_resolution(merl, luma, tolerance, mu_min, watch, n, m, error);
     ll_merl_free(merl);
     return s;
 }

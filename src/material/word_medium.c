@@ -6,6 +6,7 @@
  */
 #include "material/word_table.h"
 #include "grammar/grammar.h"
+#include "words/probe.h"
 
 #include "layerlab/ll_layer.h"
 
@@ -87,7 +88,7 @@ static double vmf_mean_cosine(double kappa)
 }
 
 static ll_status medium_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                   size_t *n, size_t *m, double *error)
+                                   ll_watch *watch, size_t *n, size_t *m, double *error)
 {
     double shape = p->v[LL_MEDIUM_SHAPE];
     if (p->choice == LL_PHASE_ISOTROPIC) {
@@ -98,6 +99,7 @@ static ll_status medium_resolution(const ll_word_params *p, double tolerance, do
          * nodes for a function the layers hold exactly. */
         (void)tolerance;
         (void)mu_min;
+        (void)watch;
         *error = 0.0; /* exact at any resolution */
         *n = LL_MATERIAL_MIN_NODES;
         *m = 1;
@@ -117,9 +119,8 @@ static ll_status medium_resolution(const ll_word_params *p, double tolerance, do
                        "the resolution yourself (set nodes=N orders=M, or llbuild --nodes "
                        "--orders)",
                        shape, KAPPA_MAX, G_MAX);
-    return ll_heuristic_henyey_greenstein_ex(
-        p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape), tolerance, mu_min, n, m,
-        error);
+    return ll_search_henyey_greenstein(p->choice == LL_PHASE_HG ? shape : vmf_mean_cosine(shape),
+                                       tolerance, mu_min, watch, n, m, error);
 }
 
 /* Measured (docs/material-language.md, "Estimates"): an HG medium's

@@ -10,6 +10,7 @@
 #define LL_MATERIAL_WORD_TABLE_H
 
 #include "material/material.h"
+#include "support/watch.h"
 
 /* ------------------------------------------------ parsing, for the words */
 
@@ -143,9 +144,11 @@ struct ll_word_desc {
      * ll_layer.h); *error receives the largest relative error measured
      * against twice that resolution (0 for words exact at any resolution,
      * HUGE_VAL when it is beyond the search's reach and not verified); may
-     * fail with a message naming the largest supported parameter. */
+     * fail with a message naming the largest supported parameter. watch
+     * (nullable): a search polls it (LL_ERROR_CANCELLED) and advances its
+     * stage by up to LL_PROBE_SEARCH_UNITS (words/probe.h). */
     ll_status (*resolution)(const ll_word_params *p, double tolerance, double mu_min,
-                            size_t *n_nodes, size_t *n_orders, double *error);
+                            ll_watch *watch, size_t *n_nodes, size_t *n_orders, double *error);
     void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);
     /* Fill a created layer (any content) for one channel. */
     ll_status (*build)(const ll_word_build_ctx *ctx, const ll_word *w, const ll_word_params *p,

@@ -186,20 +186,66 @@ static ll_status read_goal(const char *fn, double *tolerance, double *mu_min)
     return LL_OK;
 }
 
+/* The compensations made so far, one per node count (the search asks
+ * for each n at several m; the term depends on n alone). */
+#define MAX_COMPENSATIONS 64
+
 typedef struct interface_ctx {
     ll_microfacet *mf;
+    ll_microfacet *mf0; /* the compensation's: order 0 only */
+    double eta_re, eta_im;
+    int compensate;
     const ll_probe_set *set;
+    ll_probe_compensation made[MAX_COMPENSATIONS];
+    size_t n_made;
 } interface_ctx;
 
-static ll_status interface_eval(void *ctx, size_t n, size_t m, double *values)
+static ll_status compensation_for(interface_ctx *c, size_t n, ll_watch *watch,
+                                  const ll_probe_compensation **out)
 {
-    const interface_ctx *c = ctx;
-    return ll_probe_interface_eval(c->mf, n, m, c->set, values);
+    size_t k;
+    ll_status s;
+    for (k = 0; k < c->n_made; ++k)
+        if (c->made[k].h == n / 2) {
+            *out = &c->made[k];
+            return LL_OK;
+        }
+    if (c->n_made == MAX_COMPENSATIONS) {
+        /* Forget the oldest (the search has moved past it). */
+        ll_probe_compensation_free(&c->made[0]);
+        for (k = 1; k < MAX_COMPENSATIONS; ++k)
+            c->made[k - 1] = c->made[k];
+        --c->n_made;
+    }
+    s = ll_probe_compensation_make(c->mf0, c->eta_re, c->eta_im, n, watch, &c->made[c->n_made]);
+    if (s != LL_OK)
+        return s;
+    *out = &c->made[c->n_made++];
+    return LL_OK;
+}
+
+static ll_status interface_eval(void *ctx, size_t n, size_t m, ll_watch *watch, double *values)
+{
+    interface_ctx *c = ctx;
+    const ll_probe_compensation *compensation = NULL;
+    ll_status s = c->compensate ? compensation_for(c, n, watch, &compensation) : LL_OK;
+    return s == LL_OK
+               ? ll_probe_interface_eval(c->mf, compensation, n, m, c->set, watch, values)
+               : s;
 }
 
 ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
                                      double tolerance, double mu_min, size_t *n_nodes,
                                      size_t *n_orders, double *error)
+{
+    /* The layer a build makes by default: with the energy compensation. */
+    return ll_search_microfacet(alpha, eta_re, eta_im, 1, tolerance, mu_min, NULL, n_nodes,
+                                n_orders, error);
+}
+
+ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int compensate,
+                               double tolerance, double mu_min, ll_watch *watch,
+                               size_t *n_nodes, size_t *n_orders, double *error)
 {
     static const char fn[] = "ll_heuristic_microfacet_ex";
     ll_probe_set set;
@@ -233,15 +279,25 @@ ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
     if (s != LL_OK)
         return s;
     ctx.mf = NULL;
+    ctx.mf0 = NULL;
+    ctx.n_made = 0;
+    ctx.eta_re = eta_re;
+    ctx.eta_im = eta_im;
+    ctx.compensate = compensate;
     ctx.set = &set;
     /* n: the fit's guess; m: what the probes' own series need. */
     s = ll_probe_interface_model(eta_re, eta_im, alpha, &ctx.mf);
+    if (s == LL_OK && compensate)
+        s = ll_probe_compensation_model(eta_re, eta_im, alpha, &ctx.mf0);
     if (s == LL_OK)
         s = ll_probe_interface_orders(ctx.mf, tolerance, &set, &m);
     if (s == LL_OK)
-        s = ll_probe_search(&set, interface_eval, &ctx, tolerance, SEARCH_MIN_NODES,
+        s = ll_probe_search(&set, interface_eval, &ctx, watch, tolerance, SEARCH_MIN_NODES,
                             SEARCH_LIMIT, fn, &n, &m, &e);
+    while (ctx.n_made > 0)
+        ll_probe_compensation_free(&ctx.made[--ctx.n_made]);
     ll_microfacet_destroy(ctx.mf);
+    ll_microfacet_destroy(ctx.mf0);
     ll_probe_free(&set);
     if (s != LL_OK)
         return s;
@@ -263,43 +319,48 @@ ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im, si
 
 /* The largest |g| whose resolution is searched (see below). */
 #define HG_SEARCHED 0.95
+/* The most nodes or orders a medium's search tries: ten times the 344 x 181
+ * that g = 0.95 needs; its probes hold one n x n phase matrix per thread
+ * (128 MB each at 4000). */
+#define HG_SEARCH_LIMIT 4000
 
 typedef struct medium_ctx {
     double g;
     const ll_probe_set *set;
 } medium_ctx;
 
+/* A monitor for a layer call inside a search: it answers the search's
+ * watch (on the calling thread, the watch's owner: polling reports the
+ * search's progress and sees its cancel). */
+static int poll_watch(void *user, double fraction, const char *stage)
+{
+    (void)fraction;
+    (void)stage;
+    return ll_watch_poll(user);
+}
+
 /* The phase function's layer (ll_layer_set_henyey_greenstein on the
  * Gauss-Lobatto nodes of n) at the probes: the single-scattering lobe,
  * which is the sharpest part of a slab (the doubling only smooths it). */
-static ll_status medium_eval(void *ctx, size_t n, size_t m, double *values)
+static ll_status medium_eval(void *ctx, size_t n, size_t m, ll_watch *watch, double *values)
 {
     const medium_ctx *c = ctx;
-    const ll_probe_set *set = c->set;
-    double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
-    ll_layer *layer = NULL;
-    size_t p, k;
-    ll_status s = nodes && weights ? LL_OK
-                                   : ll_fail(LL_ERROR_OUT_OF_MEMORY,
-                                             "resolution probes: out of memory for %zu nodes", n);
-    if (s == LL_OK)
-        s = ll_quad_gauss_lobatto(n, nodes, weights);
-    if (s == LL_OK)
-        s = ll_layer_create(nodes, weights, n, m, &layer);
-    if (s == LL_OK)
-        s = ll_layer_set_henyey_greenstein(layer, 1.0, c->g);
-    for (p = 0; p < set->n_pairs && s == LL_OK; ++p)
-        for (k = 0; k < set->n_phi; ++k)
-            values[p * set->n_phi + k] =
-                ll_layer_eval(layer, set->pairs[p].mu_o, set->pairs[p].mu_i, set->phi[k]);
-    ll_layer_destroy(layer);
-    ll_free(nodes);
-    ll_free(weights);
-    return s;
+    ll_monitor monitor = LL_MONITOR_INIT;
+    monitor.progress = poll_watch;
+    monitor.user = watch;
+    return ll_probe_medium_eval(LL_MEDIUM_HG, c->g, 0, n, m, c->set, watch ? &monitor : NULL,
+                                values);
 }
 
 ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
                                             size_t *n_nodes, size_t *n_orders, double *error)
+{
+    return ll_search_henyey_greenstein(g, tolerance, mu_min, NULL, n_nodes, n_orders, error);
+}
+
+ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
+                                      ll_watch *watch, size_t *n_nodes, size_t *n_orders,
+                                      double *error)
 {
     static const char fn[] = "ll_heuristic_henyey_greenstein_ex";
     ll_probe_set set;
@@ -318,8 +379,9 @@ ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double m
     ctx.g = g;
     ctx.set = &set;
     /* The fit is the first guess of both. Beyond |g| = 0.95 the fit is the
-     * answer, unverified: each probe there builds phase matrices of
-     * O(n^2 m) at 2n, 2m (n = 2 x 860, m = 2 x 539 at |g| = 0.99: 22 s). */
+     * answer, unverified: each evaluation there makes phase matrices of
+     * O(n^2 m) work at 2n, 2m (n = 2 x 860, m = 2 x 539 at |g| = 0.99), and
+     * already g = -0.95 takes 86 s of CPU (426 x 261). */
     if (fabs(g) > HG_SEARCHED) {
         ll_probe_free(&set);
         *n_nodes = n;
@@ -328,8 +390,8 @@ ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double m
             *error = HUGE_VAL;
         return LL_OK;
     }
-    s = ll_probe_search(&set, medium_eval, &ctx, tolerance, SEARCH_MIN_NODES, SEARCH_LIMIT, fn,
-                        &n, &m, &e);
+    s = ll_probe_search(&set, medium_eval, &ctx, watch, tolerance, SEARCH_MIN_NODES,
+                        HG_SEARCH_LIMIT, fn, &n, &m, &e);
     ll_probe_free(&set);
     if (s != LL_OK)
         return s;

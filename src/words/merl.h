@@ -75,13 +75,13 @@ LL_INTERNAL ll_status ll_merl_cos_table(size_t orders, size_t *samples, double *
  * stencils alone. values holds LL_PROBE_VALUES(set). */
 LL_INTERNAL ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3],
                                          size_t n, size_t m, const ll_probe_set *set,
-                                         double *values);
+                                         ll_watch *watch, double *values);
 /* The smallest (n, m) found, from the guess in *n_nodes, *n_orders, whose
  * projected lobe is within the tolerance of (2n, 2m) on the probes of
  * ll_probe_opaque (ll_probe_search); *error the difference there
  * (nullable). */
 LL_INTERNAL ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3],
-                                         double tolerance, double mu_min, size_t *n_nodes,
-                                         size_t *n_orders, double *error);
+                                         double tolerance, double mu_min, ll_watch *watch,
+                                         size_t *n_nodes, size_t *n_orders, double *error);
 
 #endif /* LL_MERL_H */

@@ -37,6 +37,7 @@ typedef struct pair_job {
     size_t m, N;
     const double *cos_table;
     double *at_phi; /* distinct pairs x n_phi */
+    ll_watch *watch;
 } pair_job;
 
 static ll_status pair_values(size_t u, void *ctx)
@@ -50,6 +51,10 @@ static ll_status pair_values(size_t u, void *ctx)
                     job->m);
         goto done;
     }
+    if (ll_watch_poll(job->watch)) {
+        s = ll_fail(LL_ERROR_CANCELLED, "measured resolution: cancelled");
+        goto done;
+    }
     ll_merl_pair_series(job->merl, job->weights, job->half[job->in[u]], job->half[job->out[u]],
                         job->m, job->N, job->cos_table, f, a);
     memset(acc, 0, job->set->n_phi * sizeof(double));
@@ -61,7 +66,7 @@ done:
 }
 
 ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3], size_t n, size_t m,
-                             const ll_probe_set *set, double *values)
+                             const ll_probe_set *set, ll_watch *watch, double *values)
 {
     size_t h = n / 2, p, a, b, k, count = 0, pairs_max;
     double *nodes = ll_alloc_array(n, sizeof(double)), *qw = ll_alloc_array(n, sizeof(double));
@@ -105,8 +110,9 @@ ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3], size_
     job.out = out;
     job.m = m;
     job.cos_table = cos_table;
+    job.watch = watch;
     if (s == LL_OK)
-        s = ll_parallel_for(count, pair_values, &job);
+        s = ll_parallel_for_watched(count, pair_values, &job, watch);
     /* The spline sum of each probe, as ll_layer_eval: reflection from
      * above only (mu_i > 0, mu_o < 0), nothing elsewhere. */
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
@@ -137,14 +143,15 @@ done:
     return s;
 }
 
-static ll_status merl_eval(void *ctx, size_t n, size_t m, double *values)
+static ll_status merl_eval(void *ctx, size_t n, size_t m, ll_watch *watch, double *values)
 {
     const merl_probe_ctx *c = ctx;
-    return ll_merl_probe_eval(c->merl, c->weights, n, m, c->set, values);
+    return ll_merl_probe_eval(c->merl, c->weights, n, m, c->set, watch, values);
 }
 
 ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3], double tolerance,
-                             double mu_min, size_t *n_nodes, size_t *n_orders, double *error)
+                             double mu_min, ll_watch *watch, size_t *n_nodes, size_t *n_orders,
+                             double *error)
 {
     /* The table's own resolution bounds the search: the reader looks its
      * cells up nearest-neighbour (MERL's reader), so the converged layer
@@ -171,7 +178,7 @@ ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3], doubl
     ctx.merl = merl;
     ctx.weights = weights;
     ctx.set = &set;
-    s = ll_probe_search(&set, merl_eval, &ctx, tolerance, MERL_SEARCH_MIN_NODES,
+    s = ll_probe_search(&set, merl_eval, &ctx, watch, tolerance, MERL_SEARCH_MIN_NODES,
                         2 * (n_cap > m_cap ? n_cap : m_cap), "measured", &n, &m, &e);
     ll_probe_free(&set);
     if (s == LL_ERROR_INVALID_ARGUMENT) {

@@ -808,7 +808,7 @@ typedef struct layer_job {
     double *ref0;                /* n x n or NULL (conductor compensation) */
     ll_watch *watch;             /* one unit per column, polled per row */
     const double *w;             /* [h] outgoing weights 2 pi w_j mu_j  */
-    double *work;                /* [6 h] compensation scratch          */
+    double *work;                /* [8 h] compensation scratch          */
     double eta_re, eta_im;
     int conserve_energy;
 } layer_job;
@@ -944,86 +944,31 @@ static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, cons
             m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
 }
 
-static double dot(const double *a, const double *b, size_t n)
+/* Energy compensation (words/microfacet_compensation.c) of the unweighted
+ * order 0. Blocks of m0 (column-major): R^t rows < h, columns >= h; R^b
+ * rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. work
+ * holds 8 h doubles. */
+static void compensate(const layer_job *job, size_t n, double *work)
 {
-    double sum = 0.0;
-    size_t i;
-    for (i = 0; i < n; ++i)
-        sum += a[i] * b[i];
-    return sum;
-}
-
-/* Energy compensation of a dielectric (the original's "pseudo-diffuse
- * term"): per incident direction, the energy that single scattering loses
- * (1 - R - T) is put back as low-rank order-0 terms, first into
- * transmission in proportion to the current T / (R + T), as the product
- * of the two sides' deficits so that T^bt = (T^tb)^T / eta^2 keeps
- * reciprocity, then the rest into reflection as a symmetric u u^T / (W.u).
- * Blocks of m0 (column-major, unweighted): R^t rows < h, columns >= h;
- * R^b rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. */
-static void compensate_dielectric(double *m0, size_t n, const double *w, double eta,
-                                  double *work)
-{
-    size_t h = n / 2, j;
-    double *rt = work, *rb = work + h, *ttb = work + 2 * h, *tbt = work + 3 * h;
-    double *a_tb = work + 4 * h, *a_bt = work + 5 * h, eta2 = eta * eta, norm, wa;
-
-    block_albedo(m0, n, w, 0, h, rt);
-    block_albedo(m0, n, w, h, 0, rb);
-    block_albedo(m0, n, w, h, h, ttb);
-    block_albedo(m0, n, w, 0, 0, tbt);
-    for (j = 0; j < h; ++j) {
-        double sum_t = rt[j] + ttb[j], sum_b = rb[j] + tbt[j];
-        a_tb[j] = sum_t > 0.0 ? fmax(0.0, (1.0 - sum_t) * ttb[j] / sum_t) : 0.0;
-        a_bt[j] = sum_b > 0.0 ? fmax(0.0, (1.0 - sum_b) * tbt[j] / sum_b) : 0.0;
+    size_t h = n / 2, q;
+    double *albedo[4];
+    ll_microfacet_compensation c;
+    for (q = 0; q < 4; ++q)
+        albedo[q] = work + (4 + q) * h;
+    if (job->eta_im == 0.0) {
+        for (q = 0; q < 4; ++q) /* (block q: rows >= h when q > 1, columns when q odd) */
+            block_albedo(job->order0, n, job->w, (q >> 1) * h, (q & 1) * h, albedo[q]);
+        ll_microfacet_compensate_dielectric(h, job->w, job->eta_re,
+                                            (const double *const *)albedo, work, &c);
+    } else {
+        block_albedo(job->ref0, n, job->w, 0, h, albedo[LL_BLOCK_RT]);
+        ll_microfacet_compensate_conductor(h, job->w, job->eta_re, job->eta_im,
+                                           albedo[LL_BLOCK_RT], work, &c);
     }
-    /* C^tb = a_bt a_tb^T / norm; column j of W C^tb sums to a_tb[j] (W.a_bt)
-     * / norm <= a_tb[j], and C^bt = (C^tb)^T / eta^2 sums to at most
-     * a_bt[j]: the larger of the two normalisations keeps both below the
-     * deficit. */
-    norm = fmax(dot(w, a_bt, h), dot(w, a_tb, h) / eta2);
-    if (norm > 0.0) {
-        block_add_outer(m0, n, h, h, a_bt, a_tb, 1.0 / norm);
-        block_add_outer(m0, n, 0, 0, a_tb, a_bt, 1.0 / (norm * eta2));
-    }
-    block_albedo(m0, n, w, h, h, ttb);
-    block_albedo(m0, n, w, 0, 0, tbt);
-    for (j = 0; j < h; ++j) {
-        a_tb[j] = fmax(0.0, 1.0 - rt[j] - ttb[j]); /* reflection deficit, top    */
-        a_bt[j] = fmax(0.0, 1.0 - rb[j] - tbt[j]); /* reflection deficit, bottom */
-    }
-    wa = dot(w, a_tb, h);
-    if (wa > 0.0)
-        block_add_outer(m0, n, 0, h, a_tb, a_tb, 1.0 / wa);
-    wa = dot(w, a_bt, h);
-    if (wa > 0.0)
-        block_add_outer(m0, n, h, 0, a_bt, a_bt, 1.0 / wa);
-}
-
-/* Energy compensation of a conductor (the original's): a perfect mirror
- * of the same roughness (F = 1, the series ref0) keeps the fraction E(mu)
- * of the light arriving along mu and loses 1 - E(mu) to shadowing; that
- * light returns after further bounces, each reflecting about the average
- * Fresnel reflectance F_avg. The added order-0 term is u u^T (W.u)^-1 f,
- * u = 1 - E, so direction mu gets back f (1 - E(mu)), with
- * f = F_avg E_avg / (1 - F_avg (1 - E_avg)) and E_avg the hemispherical
- * average of E. Same on both sides. */
-static void compensate_conductor(double *m0, const double *ref0, size_t n, const double *w,
-                                 double eta_re, double eta_im, double *work)
-{
-    size_t h = n / 2, j;
-    double *lost = work, f_avg, e_avg, factor, wl;
-    block_albedo(ref0, n, w, 0, h, lost);
-    for (j = 0; j < h; ++j)
-        lost[j] = fmax(0.0, 1.0 - lost[j]);
-    wl = dot(w, lost, h);
-    if (!(wl > 0.0))
-        return;
-    f_avg = ll_fresnel_conductor_average(eta_re, eta_im);
-    e_avg = 1.0 - wl * LL_INV_PI; /* hemispherical albedo of the mirror */
-    factor = f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg));
-    block_add_outer(m0, n, 0, h, lost, lost, factor / wl);
-    block_add_outer(m0, n, h, 0, lost, lost, factor / wl);
+    for (q = 0; q < 4; ++q)
+        if (c.scale[q] != 0.0)
+            block_add_outer(job->order0, n, (q >> 1) * h, (q & 1) * h, c.u[q], c.v[q],
+                            c.scale[q]);
 }
 
 static ll_status check_arguments(const ll_layer *layer, double eta_re, double eta_im,
@@ -1057,11 +1002,8 @@ static ll_status finish_order0(void *ctx)
     ll_status s = LL_OK;
     if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
         return ll_watch_check(job->watch, "ll_layer_set_microfacet");
-    if (job->conserve_energy && job->eta_im == 0.0)
-        compensate_dielectric(job->order0, n, job->w, job->eta_re, job->work);
-    else if (job->conserve_energy)
-        compensate_conductor(job->order0, job->ref0, n, job->w, job->eta_re, job->eta_im,
-                             job->work);
+    if (job->conserve_energy)
+        compensate(job, n, job->work);
     for (col = 0; col < n && s == LL_OK; ++col) {
         double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
         size_t row;
@@ -1116,7 +1058,7 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
         return s;
     mu = ll_alloc_array(n, sizeof(double));
     w = ll_alloc_array(h, sizeof(double));
-    work = ll_alloc_array(h, 6 * sizeof(double));
+    work = ll_alloc_array(h, 8 * sizeof(double));
     order0 = ll_calloc_array(n, n * sizeof(double));
     if (eta_im > 0.0 && conserve_energy)
         ref0 = ll_calloc_array(n, n * sizeof(double));

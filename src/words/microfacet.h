@@ -16,6 +16,7 @@
 #include <stddef.h>
 #include "support/support.h"
 #include "support/watch.h"
+#include "layer/order.h"
 
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
@@ -69,5 +70,35 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o,
  * tan_theta for Beckmann roughness alpha, by the rational approximation of
  * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */
 LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
+
+/* The energy compensation (conserve_energy, words/microfacet_compensation.c):
+ * order 0 of block q of a layer with h positive nodes gains
+ * scale[q] u[q][i] v[q][j] at output node i, input node j, both indices
+ * into the magnitudes of their half (the layer's j and j + h are -x_j and
+ * x_j); scale[q] == 0: nothing. Blocks by the signs of (mu_o, mu_i) in
+ * ll_layer_eval's convention: reflection from above R^t (-, +), from below
+ * R^b (+, -), transmission down T^tb (+, +) and up T^bt (-, -). */
+/* (LL_BLOCK_* of layer/order.h: 2 [mu_o > 0] + [mu_i > 0].) */
+#define LL_BLOCK_OF(mu_o, mu_i) (2 * ((mu_o) > 0.0) + ((mu_i) > 0.0))
+typedef struct ll_microfacet_compensation {
+    const double *u[4], *v[4]; /* into the work array of the call          */
+    double scale[4];
+} ll_microfacet_compensation;
+
+/* A dielectric's terms from the albedos (indexed by block: column sums of
+ * the unweighted order 0 with the weights w[i] = 2 pi w_i mu_i of the
+ * positive nodes) of the single-scattering layer; work holds 4 h doubles
+ * and must outlive *out. */
+LL_INTERNAL void ll_microfacet_compensate_dielectric(size_t h, const double *w, double eta,
+                                                     const double *const albedo[4],
+                                                     double *work,
+                                                     ll_microfacet_compensation *out);
+/* A conductor's from the albedo of reflection from above of the same
+ * interface with F = 1 (ll_microfacet_series' ref0); work holds h doubles
+ * and must outlive *out. */
+LL_INTERNAL void ll_microfacet_compensate_conductor(size_t h, const double *w, double eta_re,
+                                                    double eta_im, const double *mirror_albedo,
+                                                    double *work,
+                                                    ll_microfacet_compensation *out);
 
 #endif /* LL_MICROFACET_H */

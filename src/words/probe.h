@@ -11,6 +11,8 @@
 #include <stddef.h>
 #include "support/support.h"
 #include "words/microfacet.h"
+#include "support/watch.h"
+#include "words/media.h"
 
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
@@ -65,12 +67,58 @@ LL_INTERNAL double ll_probe_error(const ll_probe_set *set, const double *v, cons
 LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
                                                ll_microfacet **out);
 
-/* What ll_layer_set_microfacet(compensate 0) on the Gauss-Lobatto nodes of
- * n and m orders followed by ll_layer_eval gives at the probes, from the
- * series at the spline stencils of the probes alone (no layer is built:
- * 16 series per pair). values holds LL_PROBE_VALUES(set). */
-LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf, size_t n, size_t m,
-                                              const ll_probe_set *set, double *values);
+/* No widening: the orders a "true" series may have (more than any layer
+ * holds: LL_MATERIAL_MAX_RESOLUTION is 100000). */
+#define LL_PROBE_TRUE_ORDERS ((size_t)1 << 20)
+
+/* The energy compensation of an interface layer at the probes: the terms
+ * that ll_layer_set_microfacet(conserve_energy 1) on the Gauss-Lobatto
+ * nodes of n adds to order 0, from the albedos of every node pair
+ * (O(n^2) order-0 series; words/interface_probe_compensation.c). They do
+ * not depend on the layer's orders (a widened lobe keeps the order 0 of
+ * the true one), so they are computed once per n from the true series'
+ * order 0, with a model of its own (ll_probe_compensation_model: maps of
+ * one order; the lobe's maps of every order at every B of n^2 pairs took
+ * 600 MB and most of a minute at alpha 0.02). watch (nullable) is polled
+ * per column. */
+LL_INTERNAL ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
+                                                  ll_microfacet **out);
+typedef struct ll_probe_compensation {
+    size_t h;
+    double *memory;
+    ll_microfacet_compensation terms;
+} ll_probe_compensation;
+LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double eta_im,
+                                                 size_t n, ll_watch *watch,
+                                                 ll_probe_compensation *out);
+/* The term of block (LL_BLOCK_*) at output node i, input node j (indices
+ * into the positive half); 0 for c == NULL. */
+LL_INTERNAL double ll_probe_compensation_at(const ll_probe_compensation *c, int block, size_t i,
+                                            size_t j);
+LL_INTERNAL void ll_probe_compensation_free(ll_probe_compensation *c);
+
+/* What ll_layer_set_microfacet of the model's interface on the
+ * Gauss-Lobatto nodes of n and m orders followed by ll_layer_eval gives at
+ * the probes, from the series at the spline stencils of the probes alone
+ * (no layer is built: 16 series per pair), plus the energy compensation's
+ * term there when compensation (made for the same n) is not NULL.
+ * values holds LL_PROBE_VALUES(set). watch (nullable) is polled per
+ * pair. */
+LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf,
+                                              const ll_probe_compensation *compensation,
+                                              size_t n, size_t m, const ll_probe_set *set,
+                                              ll_watch *watch, double *values);
+
+/* What ll_layer_set_henyey_greenstein / _von_mises_fisher (kind, shape:
+ * g or kappa; albedo 1) on the Gauss-Lobatto nodes of n and m orders
+ * followed by ll_layer_eval gives at the probes, read from each order as
+ * it is made and keeping none (words/medium_probe.c): O(n^2) memory per
+ * thread instead of the layer's O(n^2 m); without with_forward, less the
+ * delta-M forward term (a delta, not a lobe; the search compares the
+ * lobe). monitor: nullable. */
+LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, int with_forward,
+                                           size_t n, size_t m, const ll_probe_set *set,
+                                           const ll_monitor *monitor, double *values);
 
 /* The Fourier orders the lobes themselves need: at every probe pair, the
  * true series (no widening) truncated after L terms is within tolerance / 2
@@ -89,8 +137,16 @@ LL_INTERNAL size_t ll_probe_stencil(const double *half, size_t h, double mu, dou
 LL_INTERNAL void ll_probe_add_series(const double *c, size_t len, const double *phi,
                                      size_t n_phi, double weight, double *acc);
 
-/* What the layer of a word gives at the probes at n nodes and m orders. */
-typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, double *values);
+/* What the layer of a word gives at the probes at n nodes and m orders
+ * (polling the watch in its long loops: a cancel returns
+ * LL_ERROR_CANCELLED). */
+typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, ll_watch *watch,
+                                      double *values);
+
+/* Progress units of one search: each evaluation advances the watch's
+ * stage by one, up to this many (a caller's stage per search has this
+ * total). */
+#define LL_PROBE_SEARCH_UNITS 24
 
 /* The smallest resolution found, starting from (n, m), whose probe values
  * are within 0.6 of the tolerance of those at (2n, 2m) (a margin for the
@@ -99,11 +155,27 @@ typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, double *val
  * (2n, m) and (n, 2m) say, then shrink each (by 0.85, up to 3 times)
  * while it still holds. n stays even and
  * >= min_nodes; either beyond `limit` fails, naming the error reached.
- * *error receives the difference at the answer (nullable). */
+ * *error receives the difference at the answer (nullable). watch
+ * (nullable) is polled between and inside the evaluations: a cancel
+ * returns LL_ERROR_CANCELLED (with nothing left allocated). */
 LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval,
-                                      void *ctx, double tolerance, size_t min_nodes,
-                                      size_t limit, const char *what, size_t *n_nodes,
-                                      size_t *n_orders, double *error);
+                                      void *ctx, ll_watch *watch, double tolerance,
+                                      size_t min_nodes, size_t limit, const char *what,
+                                      size_t *n_nodes, size_t *n_orders, double *error);
+
+/* ll_heuristic_microfacet_ex and ll_heuristic_henyey_greenstein_ex
+ * (heuristics.c) with a watch (nullable: polled, and one stage's progress
+ * per search, LL_PROBE_SEARCH_UNITS) and, for the interface, whether the
+ * layer gets the energy compensation (ll_layer_set_microfacet's
+ * conserve_energy; the public call assumes it, as a build does by
+ * default). */
+LL_INTERNAL ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im,
+                                           int compensate, double tolerance, double mu_min,
+                                           ll_watch *watch, size_t *n_nodes, size_t *n_orders,
+                                           double *error);
+LL_INTERNAL ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
+                                                  ll_watch *watch, size_t *n_nodes,
+                                                  size_t *n_orders, double *error);
 
 /* The fits of the original layerlab (heuristics.c), the first guess of the
  * search: what ll_heuristic_microfacet and ll_heuristic_henyey_greenstein

@@ -27,6 +27,7 @@ typedef struct probe_cache {
     const ll_probe_set *set;
     ll_probe_eval_fn eval;
     void *ctx;
+    ll_watch *watch;
     size_t count;
     size_t n[MAX_EVALS], m[MAX_EVALS];
     double *values[MAX_EVALS];
@@ -52,10 +53,14 @@ static ll_status cached(probe_cache *c, size_t n, size_t m, const double **out)
         --c->count;
     }
     k = c->count;
+    s = ll_watch_check(c->watch, "resolution search");
+    if (s != LL_OK)
+        return s;
     c->values[k] = ll_alloc_array(LL_PROBE_VALUES(c->set) + 1, sizeof(double));
     if (!c->values[k])
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution search: out of memory");
-    s = c->eval(c->ctx, n, m, c->values[k]);
+    s = c->eval(c->ctx, n, m, c->watch, c->values[k]);
+    ll_watch_advance(c->watch, 1); /* (the stage's total caps it) */
     if (s != LL_OK) {
         ll_free(c->values[k]);
         return s;
@@ -102,8 +107,8 @@ static double growth(double e, double tolerance)
 }
 
 ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval, void *ctx,
-                          double tolerance, size_t min_nodes, size_t limit, const char *what,
-                          size_t *n_nodes, size_t *n_orders, double *error)
+                          ll_watch *watch, double tolerance, size_t min_nodes, size_t limit,
+                          const char *what, size_t *n_nodes, size_t *n_orders, double *error)
 {
     /* The probes accept at MARGIN of the tolerance: they are a sample of
      * the directions (tests/test_convergence.c measured up to 1.03% at
@@ -120,6 +125,7 @@ ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval, void *
     cache.set = set;
     cache.eval = eval;
     cache.ctx = ctx;
+    cache.watch = watch;
     cache.count = 0;
     min_nodes += min_nodes % 2;
     n = even_nodes((double)*n_nodes, min_nodes);

@@ -1,0 +1,155 @@
+/*
+ * The energy compensation of an interface layer at the probes
+ * (words/probe.h): the albedos of the single-scattering layer of n nodes
+ * (order 0 only, every node pair, as ll_layer_set_microfacet computes them:
+ * the same series, nodes, weights and order of summation), then the same
+ * rank-one terms (words/microfacet_compensation.c).
+ *
+ * Unlike the lobe, the term cannot be had from the stencils alone: it is
+ * made from every node's albedo, O(n^2) order-0 series per evaluation
+ * (O(n^2 / 4) for a conductor, whose term needs reflection from above
+ * only). That is still far below the layer's O(n^2 m): an order-0 series
+ * is 16 samples of the profile and one dot product.
+ */
+#include "words/probe.h"
+#include "words/microfacet.h"
+
+#include "layerlab/ll_quad.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct albedo_job {
+    const ll_microfacet *mf;
+    const double *x; /* the layer's nodes: x[j] = -x[j + h]          */
+    const double *w; /* [h] 2 pi w_j x_j of the positive nodes        */
+    size_t n;
+    int conductor;
+    double *albedo[4];
+    ll_watch *watch;
+} albedo_job;
+
+/* Column col's albedos: one per block it is the input column of. */
+static ll_status albedo_column(size_t col, void *ctx)
+{
+    const albedo_job *job = ctx;
+    size_t n = job->n, h = n / 2, row, len;
+    size_t j = col < h ? col : col - h;
+    double *scratch = ll_alloc_array(ll_microfacet_scratch_size(1), sizeof(double));
+    double up = 0.0, down = 0.0, v, ref;
+    ll_status s = LL_OK;
+    if (!scratch)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    if (ll_watch_poll(job->watch))
+        s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+    if (job->conductor && col < h)
+        goto done; /* (opaque: only reflection from above) */
+    /* Rows of the negative half first, then the positive, each summed in
+     * the order of ll_layer_set_microfacet's block_albedo. */
+    for (row = 0; row < (job->conductor ? h : n) && s == LL_OK; ++row) {
+        /* Depth grows opposite to the normal: the series takes -mu. */
+        s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &v, &len,
+                                 job->conductor ? &ref : NULL, scratch);
+        if (job->conductor)
+            v = ref; /* the mirror's (F = 1) */
+        else if (len == 0)
+            v = 0.0;
+        if (row < h)
+            up += job->w[row] * v;
+        else
+            down += job->w[row - h] * v;
+    }
+    if (s != LL_OK)
+        goto done;
+    if (job->conductor) {
+        job->albedo[LL_BLOCK_RT][j] = up;
+    } else if (col < h) {
+        job->albedo[LL_BLOCK_TBT][j] = up;
+        job->albedo[LL_BLOCK_RB][j] = down;
+    } else {
+        job->albedo[LL_BLOCK_RT][j] = up;
+        job->albedo[LL_BLOCK_TTB][j] = down;
+    }
+done:
+    ll_free(scratch);
+    return s;
+}
+
+ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
+                                      ll_microfacet **out)
+{
+    /* No widening, series of one term (maps of one order). */
+    return ll_microfacet_create(eta_re, eta_im, alpha, LL_PROBE_TRUE_ORDERS, 1, out);
+}
+
+ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double eta_im, size_t n,
+                                     ll_watch *watch, ll_probe_compensation *out)
+{
+    size_t h = n / 2, k, q;
+    double *rule = ll_alloc_array(n, 2 * sizeof(double));
+    double *x = ll_alloc_array(n, 3 * sizeof(double));
+    albedo_job job;
+    ll_status s = LL_OK;
+    memset(out, 0, sizeof *out);
+    out->h = h;
+    out->memory = ll_alloc_array(h + 1, 9 * sizeof(double));
+    if (!rule || !x || !out->memory) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
+        goto done;
+    }
+    s = ll_quad_gauss_lobatto(n, rule, rule + n);
+    if (s != LL_OK)
+        goto done;
+    /* (mf: ll_probe_compensation_model's. Order 0 of a widened lobe is
+     * that of the true one, ll_microfacet_series: the terms hold for
+     * every m.) */
+    /* The layer's order (ll_layer_create): the negative half reversed. */
+    for (k = 0; k < n; ++k)
+        x[k] = rule[k < h ? h - 1 - k : k];
+    for (k = 0; k < h; ++k)
+        x[n + k] = 2.0 * LL_PI * rule[n + h + k] * rule[h + k];
+    for (k = 0; k < n; ++k)
+        x[2 * n + k] = -x[k];
+    /* (Unwatched: ll_microfacet_prepare_watched would start a stage of its
+     * own over the search's; the maps it makes are kept by the model.) */
+    s = ll_watch_check(watch, "resolution search");
+    if (s == LL_OK)
+        s = ll_microfacet_prepare(mf, x + 2 * n, n);
+    job.mf = mf;
+    job.x = x;
+    job.w = x + n;
+    job.n = n;
+    job.conductor = eta_im > 0.0;
+    job.watch = watch;
+    for (q = 0; q < 4; ++q)
+        job.albedo[q] = out->memory + (4 + q) * h;
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(n, albedo_column, &job, watch);
+    if (s != LL_OK)
+        goto done;
+    if (job.conductor)
+        ll_microfacet_compensate_conductor(h, job.w, eta_re, eta_im, job.albedo[LL_BLOCK_RT],
+                                           out->memory, &out->terms);
+    else
+        ll_microfacet_compensate_dielectric(h, job.w, eta_re, (const double *const *)job.albedo,
+                                            out->memory, &out->terms);
+done:
+    ll_free(rule);
+    ll_free(x);
+    if (s != LL_OK)
+        ll_probe_compensation_free(out);
+    return s;
+}
+
+double ll_probe_compensation_at(const ll_probe_compensation *c, int block, size_t i, size_t j)
+{
+    if (!c || c->terms.scale[block] == 0.0)
+        return 0.0;
+    return c->terms.scale[block] * c->terms.u[block][i] * c->terms.v[block][j];
+}
+
+void ll_probe_compensation_free(ll_probe_compensation *c)
+{
+    ll_free(c->memory);
+    memset(c, 0, sizeof *c);
+}
