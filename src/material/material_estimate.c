@@ -347,7 +347,10 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
                 /* (At a one-word material's only level the stacks are
                  * clones of the words, counted with them.) */
                 if (top) {
-                    stream_write_channel(&st);
+                    size_t d;
+                    for (d = 0; d < nch; ++d) /* every channel whose stack it is */
+                        if (owner[d] == c)
+                            stream_write_channel(&st);
                     stream_replace(&st, c, 0.0, 0);
                 }
             }
