@@ -26,10 +26,14 @@
  * kink is), a dielectric's growing with its roughness, plus a little per
  * order and pair (less per pair at more nodes: 1.5e-9 (200 / n) s; the
  * coated-diffuse recipe's 1098 x 2103 coat took 2.1 s). Its stored values
- * come to about 12 + 5.7 ln(1/alpha) dense orders for a dielectric (measured
- * 34, 31, 24, 19 at alpha = 0.02, 0.05, 0.1, 0.3) and 8.6 ln(1/alpha) - 4.8
- * for a conductor (25, 23, 15, 9, 6 at 0.02, 0.05, 0.1, 0.2, 0.3), whatever
- * n and m; each thread
+ * come to about 14 + 5.7 ln(1/alpha) dense orders for a dielectric (measured
+ * 34, 31, 24, 19 at alpha = 0.02, 0.05, 0.1, 0.3; since, 26.75 at 0.1 with
+ * (442, 278) and 19.15 at 0.3 with (318, 101)) and 8.6 ln(1/alpha) - 3.3
+ * for a conductor (25, 23, 15, 9, 6 at 0.02, 0.05, 0.1, 0.2, 0.3; since,
+ * 23.9 at 0.02 with (400, 800), 16.25 at 0.1 with (442, 328), 9.29 at 0.2
+ * with (174, 190)), whatever n and m: an upper bound of what the layer
+ * holds, as the memory budget needs (the constants were 12 and -4.8, below
+ * the later measurements); each thread
  * keeps a column of every order, 12 doubles deep. About half of the time
  * does not gain from more threads (coated-gold, mostly interfaces: 0.66 s
  * on one thread, 0.50 s on two; plastic 0.16 s on both). */
@@ -79,8 +83,8 @@ void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, siz
     out->serial_seconds = out->parallel_seconds;
     out->items = n;
     out->orders_nonzero = (double)m;
-    out->dense_orders = eta_im > 0.0 ? fmax(2.0, 8.6 * log(1.0 / a) - 4.8)
-                                     : 12.0 + 5.7 * log(1.0 / fmin(a, 1.0));
+    out->dense_orders = eta_im > 0.0 ? fmax(2.0, 8.6 * log(1.0 / a) - 3.3)
+                                     : 14.0 + 5.7 * log(1.0 / fmin(a, 1.0));
     if (out->dense_orders > (double)m)
         out->dense_orders = (double)m;
     out->thread_bytes = 12.0 * 8.0 * (double)n * (double)m;
@@ -215,13 +219,16 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
  *
  * The layers' own sizes are layer_bytes of the words' modelled dense
  * orders, as in the held model above; what is not modelled (the C heap's
- * fragmentation, OpenBLAS's per-thread buffers) is the per-thread
- * allowance STREAM_THREAD_BYTES, measured (docs/material-language.md,
- * "Estimates": estimate / peak RSS on the examples and the dust on gold).
+ * fragmentation, OpenBLAS's and OpenMP's per-thread buffers) is the
+ * allowance STREAM_FIXED_BYTES + STREAM_THREAD_BYTES per thread, the least
+ * that kept every measured build under its estimate (docs/material-
+ * language.md, "Estimates": estimate / peak RSS on the examples and the
+ * dust on gold, 1 and 2 threads; frosted glass at one thread needed it).
  */
 #define WRITER_SPILL_BUFFER 1048576.0
 #define ADD_THREAD_BLOCKS 17.0
-#define STREAM_THREAD_BYTES (8.0 * 1048576.0)
+#define STREAM_FIXED_BYTES (8.0 * 1048576.0)
+#define STREAM_THREAD_BYTES (4.0 * 1048576.0)
 
 /* Sets of orders alive (a stack's, shared by its clones): at most one per
  * channel, and the one an adding is making. */
@@ -364,7 +371,7 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
     }
     /* The commit: the CDF and one column per channel from the spill. */
     stream_need(&st, 4.0 * nn * nn + (double)nch * 8.0 * (double)n * (double)m);
-    return st.peak + (double)st.t * STREAM_THREAD_BYTES;
+    return st.peak + STREAM_FIXED_BYTES + (double)st.t * STREAM_THREAD_BYTES;
 }
 
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
