@@ -221,9 +221,10 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
  * orders, as in the held model above; what is not modelled (the C heap's
  * fragmentation, OpenBLAS's and OpenMP's per-thread buffers) is the
  * allowance STREAM_FIXED_BYTES + STREAM_THREAD_BYTES per thread, the least
- * that kept every measured build under its estimate (docs/material-
- * language.md, "Estimates": estimate / peak RSS on the examples and the
- * dust on gold, 1 and 2 threads; frosted glass at one thread needed it).
+ * that kept every measured build under its estimate
+ * (docs/material-language.md, "Estimates": estimate / peak RSS on the
+ * examples and the dust on gold, 1 and 2 threads; frosted glass at one
+ * thread needed the fixed part).
  */
 #define WRITER_SPILL_BUFFER 1048576.0
 #define ADD_THREAD_BLOCKS 17.0
