@@ -187,7 +187,10 @@ typedef struct ll_build_estimate {
     size_t layers_built;  /* word layers built, after sharing between channels   */
     size_t additions;     /* adding steps (doubling steps not included)          */
     size_t doublings;     /* doubling steps of all media                         */
-    double peak_bytes;    /* estimated peak memory of the build, bytes           */
+    double peak_bytes;    /* estimated peak memory of the build, bytes: of
+                             ll_material_build, which streams its channels to
+                             the file (ll_material_build_layers, which keeps
+                             every channel's stack, is checked against more) */
     double seconds;       /* estimated wall time with opts->threads threads      */
     /* Appended in 1.x (filled only when struct_size covers them): */
     double cpu_seconds;   /* estimated CPU time, summed over the threads          */

@@ -170,6 +170,9 @@ typedef struct ll_cost_plan {
     size_t n, m, channels, threads;
     size_t layers_built, additions, doublings;
     double peak_bytes, seconds, cpu_seconds;
+    double held_peak_bytes;   /* a build that keeps every channel's stack to the
+                                 end (ll_material_build_layers), peak_bytes
+                                 being ll_material_build's streamed one     */
     double stored_values;     /* values the finished layers hold, all channels */
     double file_bytes;        /* the .bsdf file's estimated size              */
 } ll_cost_plan;

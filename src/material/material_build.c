@@ -341,9 +341,11 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
 }
 
 /* Resolution, budget, quadrature and per-channel parameters. share: a
- * distributed build's (nullable), whose ranks hold 1 / n_ranks each. */
+ * distributed build's (nullable), whose ranks hold 1 / n_ranks each;
+ * streamed: the budget is the streamed build's (ll_material_build). */
 static ll_status build_init(build *b, const ll_material *m, const ll_build_options *opts,
-                            const ll_monitor *monitor, const char *fn, ll_share *share)
+                            const ll_monitor *monitor, const char *fn, ll_share *share,
+                            int streamed)
 {
     ll_cost_plan cost;
     ll_status s = build_start(b, m, opts, monitor, fn);
@@ -361,6 +363,8 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     ll_material_params(m, b->nch, b->params);
     ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
                      b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
+    if (!streamed)
+        cost.peak_bytes = cost.held_peak_bytes; /* every stack kept to the end */
     if (share) {
         cost.peak_bytes /= (double)share->n_ranks;
         share->peak_bytes = cost.peak_bytes;
@@ -481,7 +485,7 @@ ll_status ll_material_build_layers_cached(const ll_material *material,
         if (s != LL_OK)
             return s;
     }
-    s = build_init(&b, material, opts, monitor, "ll_material_build_layers", NULL);
+    s = build_init(&b, material, opts, monitor, "ll_material_build_layers", NULL, 0);
     if (s != LL_OK)
         return s;
     b.cache = cache;
@@ -569,7 +573,7 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_build: out_path is NULL or empty");
     if (material && material->n_axes > 0)
         return ll_material_build_textured(material, opts, monitor, out_path);
-    s = build_init(&b, material, opts, monitor, "ll_material_build", NULL);
+    s = build_init(&b, material, opts, monitor, "ll_material_build", NULL, 1);
     if (s != LL_OK)
         return s;
     /* The writing's share of the progress bar. */
@@ -641,7 +645,7 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
                     "built with an ll_material_builder (llbuild-mpi does)",
                     fn, material->source, ll_material_basis_count(material));
     if (s == LL_OK)
-        s = build_init(&b, material, opts, monitor, fn, share);
+        s = build_init(&b, material, opts, monitor, fn, share, 0);
     if (s == LL_OK) {
         initialised = 1;
         s = run_build(&b, layers, 0.0);

@@ -26,10 +26,14 @@
  * kink is), a dielectric's growing with its roughness, plus a little per
  * order and pair (less per pair at more nodes: 1.5e-9 (200 / n) s; the
  * coated-diffuse recipe's 1098 x 2103 coat took 2.1 s). Its stored values
- * come to about 12 + 5.7 ln(1/alpha) dense orders for a dielectric (measured
- * 34, 31, 24, 19 at alpha = 0.02, 0.05, 0.1, 0.3) and 8.6 ln(1/alpha) - 4.8
- * for a conductor (25, 23, 15, 9, 6 at 0.02, 0.05, 0.1, 0.2, 0.3), whatever
- * n and m; each thread
+ * come to about 14 + 5.7 ln(1/alpha) dense orders for a dielectric (measured
+ * 34, 31, 24, 19 at alpha = 0.02, 0.05, 0.1, 0.3; since, 26.75 at 0.1 with
+ * (442, 278) and 19.15 at 0.3 with (318, 101)) and 8.6 ln(1/alpha) - 3.3
+ * for a conductor (25, 23, 15, 9, 6 at 0.02, 0.05, 0.1, 0.2, 0.3; since,
+ * 23.9 at 0.02 with (400, 800), 16.25 at 0.1 with (442, 328), 9.29 at 0.2
+ * with (174, 190)), whatever n and m: an upper bound of what the layer
+ * holds, as the memory budget needs (the constants were 12 and -4.8, below
+ * the later measurements); each thread
  * keeps a column of every order, 12 doubles deep. About half of the time
  * does not gain from more threads (coated-gold, mostly interfaces: 0.66 s
  * on one thread, 0.50 s on two; plastic 0.16 s on both). */
@@ -79,8 +83,8 @@ void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, siz
     out->serial_seconds = out->parallel_seconds;
     out->items = n;
     out->orders_nonzero = (double)m;
-    out->dense_orders = eta_im > 0.0 ? fmax(2.0, 8.6 * log(1.0 / a) - 4.8)
-                                     : 12.0 + 5.7 * log(1.0 / fmin(a, 1.0));
+    out->dense_orders = eta_im > 0.0 ? fmax(2.0, 8.6 * log(1.0 / a) - 3.3)
+                                     : 14.0 + 5.7 * log(1.0 / fmin(a, 1.0));
     if (out->dense_orders > (double)m)
         out->dense_orders = (double)m;
     out->thread_bytes = 12.0 * 8.0 * (double)n * (double)m;
@@ -185,6 +189,192 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
 }
 
 
+/*
+ * The peak of a streamed build (ll_material_build, material_build.c since
+ * issue 18), replayed step by step in the order the build makes and frees
+ * things, the bytes alive after each step and the transient ones during it:
+ *
+ * - The bottom word is not made with its level: each channel's is built
+ *   when the level above first needs it (ensure_bottom), so one channel's
+ *   (one gold layer) is alive at a time where the channels differ there.
+ * - A level's words are all built before its first adding (one layer per
+ *   distinct word, shared by the channels whose parameters agree) and are
+ *   freed after its last; a word under construction holds its builder's
+ *   scratch per thread and its table once (thread_bytes, build_bytes).
+ * - An adding holds the stack, the word and the whole result (the stack's
+ *   orders are replaced at the one commit point, ll_layer_commit_orders),
+ *   and per thread 17 h x h doubles (grammar/adding.c's workspace).
+ * - Channels that part from a shared stack start from a clone sharing its
+ *   orders: the old orders go only once the last holder has replaced them.
+ * - At the top, each channel's finished stack goes to the channel writer
+ *   and is freed: the writer keeps only n x n tables in memory (per channel
+ *   its order 0 and extents, 12 n^2 bytes; shared the lengths, offsets and
+ *   a channel's scratch lengths, 8 (n + 2)^2 + 12 n^2 bytes; a 1 MiB spill
+ *   buffer) and spills the stored values to disk beside the output; while
+ *   it takes a channel it stages one column of every order (8 n m bytes).
+ *   Its commit adds the CDF (4 (n + 2)^2 bytes) and one column per channel
+ *   read back from the spill (at most 8 n m bytes each).
+ * - A one-word material's words are its stacks (clones), so they stay
+ *   until that level ends.
+ *
+ * The layers' own sizes are layer_bytes of the words' modelled dense
+ * orders, as in the held model above; what is not modelled (the C heap's
+ * fragmentation, OpenBLAS's and OpenMP's per-thread buffers) is the
+ * allowance STREAM_FIXED_BYTES + STREAM_THREAD_BYTES per thread, the least
+ * that kept every measured build under its estimate
+ * (docs/material-language.md, "Estimates": estimate / peak RSS on the
+ * examples and the dust on gold, 1 and 2 threads; frosted glass at one
+ * thread needed the fixed part).
+ */
+#define WRITER_SPILL_BUFFER 1048576.0
+#define ADD_THREAD_BLOCKS 17.0
+#define STREAM_FIXED_BYTES (8.0 * 1048576.0)
+#define STREAM_THREAD_BYTES (4.0 * 1048576.0)
+
+/* Sets of orders alive (a stack's, shared by its clones): at most one per
+ * channel, and the one an adding is making. */
+#define STREAM_SETS 4
+
+typedef struct stream_state {
+    size_t n, m, t;
+    double alive;              /* bytes held between steps (layers, the writer) */
+    double peak;               /* the largest alive + transient seen            */
+    double set_bytes[STREAM_SETS];
+    int set_holders[STREAM_SETS]; /* stacks holding the set (0: free)          */
+    int set_of[3];             /* channel c's stack's set, -1: none             */
+    int writer_open;           /* a channel went to the writer                  */
+} stream_state;
+
+static void stream_need(stream_state *st, double transient)
+{
+    if (st->alive + transient > st->peak)
+        st->peak = st->alive + transient;
+}
+
+/* A word's layer is built: its scratch while it grows, its bytes after. */
+static double stream_word(stream_state *st, const ll_word_params *p)
+{
+    ll_word_cost wc;
+    double bytes;
+    word_cost(p, st->n, st->m, &wc);
+    bytes = layer_bytes(st->n, st->m, wc.dense_orders);
+    stream_need(st, bytes + (double)st->t * wc.thread_bytes + wc.build_bytes);
+    st->alive += bytes;
+    return bytes;
+}
+
+/* Channel c's stack lets go of its orders (freed once no clone shares
+ * them) and, with bytes > 0, holds new ones of that size (counted alive
+ * already when counted is set: a word layer that became the stack). */
+static void stream_replace(stream_state *st, size_t c, double bytes, int counted)
+{
+    int id = st->set_of[c], k;
+    if (id >= 0 && --st->set_holders[id] == 0)
+        st->alive -= st->set_bytes[id];
+    st->set_of[c] = -1;
+    if (bytes <= 0.0)
+        return;
+    for (k = 0; k < STREAM_SETS && st->set_holders[k] > 0; ++k)
+        ;
+    /* (Three stacks hold at most three sets: a free one is left.) */
+    st->set_of[c] = k;
+    st->set_holders[k] = 1;
+    st->set_bytes[k] = bytes;
+    if (!counted)
+        st->alive += bytes;
+}
+
+/* The bottom word of channel c, made when first needed (ensure_bottom). */
+static void stream_bottom(stream_state *st, const ll_word_params *p, size_t c, int pending)
+{
+    if (pending && st->set_of[c] < 0)
+        stream_replace(st, c, stream_word(st, p), 1);
+}
+
+/* A channel goes to the writer: its tables, those shared with the first. */
+static void stream_write_channel(stream_state *st)
+{
+    double n2 = (double)st->n * (double)st->n, nn = (double)st->n + 2.0;
+    double channel = 12.0 * n2;
+    if (!st->writer_open) {
+        st->alive += 8.0 * nn * nn + 12.0 * n2 + WRITER_SPILL_BUFFER;
+        st->writer_open = 1;
+    }
+    stream_need(st, channel + 8.0 * (double)st->n * (double)st->m);
+    st->alive += channel;
+}
+
+static double streamed_peak(const ll_material *mat, const ll_word_params (*params)[3],
+                            size_t n, size_t m, size_t nch, size_t t)
+{
+    stream_state st;
+    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, bottom_word = mat->count - 1;
+    double acc_dense[3] = { 0, 0, 0 }, h = (double)(n / 2), nn = (double)n + 2.0;
+    int pending = 0;
+
+    memset(&st, 0, sizeof st);
+    st.n = n;
+    st.m = m;
+    st.t = t ? t : 1;
+    for (c = 0; c < 3; ++c)
+        st.set_of[c] = -1;
+    for (w = mat->count; w-- > 0;) {
+        int bottom = w + 1 == mat->count, top = w == 0;
+        double words = 0.0, dense[3];
+        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
+        for (c = 0; c < nch; ++c) {
+            ll_word_cost wc;
+            word_cost(&params[w][c], n, m, &wc);
+            /* The stack keeps about the mean of what the two hold. */
+            dense[c] = bottom ? wc.dense_orders
+                              : 0.5 * (acc_dense[below[c]] + wc.dense_orders);
+        }
+        if (bottom && !top) {
+            pending = 1; /* made when the level above first needs it */
+        } else {
+            for (c = 0; c < nch; ++c)
+                if (owner[c] == c && ll_same_word_as(params, w, c) == c)
+                    words += stream_word(&st, &params[w][c]);
+            /* Parting channels start from a clone of the stack below. */
+            for (c = 0; c < nch && !bottom; ++c)
+                if (owner[c] == c && below[c] != c) {
+                    size_t b = below[c];
+                    stream_bottom(&st, &params[bottom_word][b], b, pending);
+                    st.set_of[c] = st.set_of[b];
+                    st.set_holders[st.set_of[b]]++;
+                }
+            for (c = 0; c < nch; ++c) {
+                if (owner[c] != c)
+                    continue;
+                if (!bottom) {
+                    double result = layer_bytes(n, m, dense[c]);
+                    stream_bottom(&st, &params[bottom_word][c], c, pending);
+                    stream_need(&st, result + (double)st.t * ADD_THREAD_BLOCKS * 8.0 * h * h);
+                    stream_replace(&st, c, result, 0);
+                }
+                /* (At a one-word material's only level the stacks are
+                 * clones of the words, counted with them.) */
+                if (top) {
+                    size_t d;
+                    for (d = 0; d < nch; ++d) /* every channel whose stack it is */
+                        if (owner[d] == c)
+                            stream_write_channel(&st);
+                    stream_replace(&st, c, 0.0, 0);
+                }
+            }
+            st.alive -= words;
+            if (!bottom)
+                pending = 0;
+        }
+        for (c = 0; c < nch; ++c)
+            acc_dense[c] = dense[c];
+        memcpy(below, owner, sizeof below);
+    }
+    /* The commit: the CDF and one column per channel from the spill. */
+    stream_need(&st, 4.0 * nn * nn + (double)nch * 8.0 * (double)n * (double)m);
+    return st.peak + STREAM_FIXED_BYTES + (double)st.t * STREAM_THREAD_BYTES;
+}
+
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
                       size_t m, size_t nch, size_t threads, ll_cost_plan *out)
 {
@@ -266,7 +456,8 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
     out->stored_values = stored;
     out->cpu_seconds += stored * COST_WRITE + PROCESS_SECONDS;
     out->seconds += stored * COST_WRITE + PROCESS_WALL_SECONDS;
-    out->peak_bytes = peak + PROCESS_BYTES;
+    out->held_peak_bytes = peak + PROCESS_BYTES;
+    out->peak_bytes = streamed_peak(mat, params, n, m, nch, t) + PROCESS_BYTES;
 }
 
 static void format_bytes(double bytes, char *buf, size_t cap)

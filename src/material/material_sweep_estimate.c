@@ -139,8 +139,9 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
             if (newer < LL_WORD_CACHE_IN_MEMORY)
                 cached += cache[k].bytes;
         }
-        if (one.peak_bytes + cached > peak)
-            peak = one.peak_bytes + cached;
+        /* (A builder's basis is built whole, not streamed.) */
+        if (one.held_peak_bytes + cached > peak)
+            peak = one.held_peak_bytes + cached;
     }
     for (a = 0; a < m->n_axes; ++a)
         values += m->axes[a].count;
