@@ -76,6 +76,46 @@ ll_status ll_wjob_read_options(write_job *job, const ll_bsdf_write_options *opts
     return LL_OK;
 }
 
+ll_status ll_wjob_keep_options(write_job *job, const ll_bsdf_write_options *opts,
+                               char **metadata_copy)
+{
+    size_t len;
+    ll_status s = ll_wjob_read_options(job, opts);
+    if (s != LL_OK || !job->opts.metadata)
+        return s;
+    len = strlen(job->opts.metadata);
+    *metadata_copy = ll_malloc(len + 1);
+    if (!*metadata_copy)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+    memcpy(*metadata_copy, job->opts.metadata, len + 1);
+    job->opts.metadata = *metadata_copy;
+    return LL_OK;
+}
+
+ll_status ll_wjob_take_shape(write_job *job, const ll_layer *l)
+{
+    size_t n = l->n, nn = n + 2, nn2, k;
+    job->n = n;
+    job->h = n / 2;
+    job->m = l->m;
+    job->nn = nn;
+    /* (Offsets and lengths are u32; the file's pair table is nn^2.) */
+    if (nn > UINT32_MAX / 2)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", job->fn, n);
+    if (!ll_size_mul(nn, nn, &nn2))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", job->fn);
+    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
+    job->length = ll_calloc_array(nn2, sizeof *job->length);
+    job->offset = ll_alloc_array(nn2, sizeof *job->offset);
+    if (!job->nodes || !job->length || !job->offset)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
+    for (k = 0; k < nn; ++k) {
+        size_t li = layer_index(k, job->h);
+        job->nodes[k] = li == (size_t)-1 ? 0.0f : (float)l->nodes[li];
+    }
+    return LL_OK;
+}
+
 ll_status ll_wjob_check_parameters(write_job *job)
 {
     size_t p, k, bases = 1, values = 0;

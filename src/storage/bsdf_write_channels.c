@@ -116,16 +116,8 @@ ll_status ll_channel_writer_open(const char *path, size_t n_channels,
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
         goto fail;
     }
-    if ((s = ll_wjob_read_options(&w->job, opts)) != LL_OK)
+    if ((s = ll_wjob_keep_options(&w->job, opts, &w->metadata_copy)) != LL_OK)
         goto fail;
-    if (w->job.opts.metadata) {
-        w->metadata_copy = copy_text(w->job.opts.metadata);
-        if (!w->metadata_copy) {
-            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-            goto fail;
-        }
-        w->job.opts.metadata = w->metadata_copy;
-    }
     if ((s = ll_spill_open(&w->spill, w->path, fn_open)) != LL_OK)
         goto fail;
     *out = w;
@@ -142,26 +134,19 @@ fail:
 static ll_status take_shape(ll_channel_writer *w, const ll_layer *l)
 {
     write_job *job = &w->job;
-    size_t n = l->n, nn = n + 2, n2, nn2, nm, k, c;
-    job->n = n;
-    job->h = n / 2;
-    job->m = l->m;
-    job->nn = nn;
-    if (nn > UINT32_MAX / 2)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", fn_add, n);
-    if (!ll_size_mul(n, n, &n2) || !ll_size_mul(nn, nn, &nn2) || !ll_size_mul(n, l->m, &nm))
+    size_t n = l->n, n2, nm, k, c;
+    ll_status s = ll_wjob_take_shape(job, l);
+    if (s != LL_OK)
+        return s;
+    if (!ll_size_mul(n, n, &n2) || !ll_size_mul(n, l->m, &nm))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", fn_add);
-    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
-    job->length = ll_calloc_array(nn2, sizeof *job->length);
-    job->offset = ll_alloc_array(nn2, sizeof *job->offset);
     w->nodes = ll_alloc_array(n, sizeof *w->nodes);
     w->weights = ll_alloc_array(n, sizeof *w->weights);
     w->factor = ll_alloc_array(n, 2 * sizeof *w->factor);
     w->len = ll_alloc_array(n2, sizeof *w->len);
     w->tail = ll_alloc_array(n2, sizeof *w->tail);
     w->stage = ll_calloc_array(nm, sizeof *w->stage);
-    if (!job->nodes || !job->length || !job->offset || !w->nodes || !w->weights ||
-        !w->factor || !w->len || !w->tail || !w->stage)
+    if (!w->nodes || !w->weights || !w->factor || !w->len || !w->tail || !w->stage)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
     for (c = 0; c < job->n_channels; ++c) {
         w->order0[c] = ll_alloc_array(n2, sizeof *w->order0[c]);
@@ -176,10 +161,6 @@ static ll_status take_shape(ll_channel_writer *w, const ll_layer *l)
     for (k = 0; k < n; ++k) {
         w->factor[k] = ll_layer_surface_factor(l, k, 0);
         w->factor[n + k] = ll_layer_surface_factor(l, k, 1);
-    }
-    for (k = 0; k < nn; ++k) {
-        size_t li = layer_index(k, job->h);
-        job->nodes[k] = li == (size_t)-1 ? 0.0f : (float)l->nodes[li];
     }
     return LL_OK;
 }

@@ -49,6 +49,14 @@ static inline size_t layer_index(size_t f, size_t h)
 /* Options (up to the caller's struct_size) and checks; parameters. */
 LL_INTERNAL ll_status ll_wjob_read_options(write_job *job, const ll_bsdf_write_options *opts);
 LL_INTERNAL ll_status ll_wjob_check_parameters(write_job *job);
+/* The streaming writers' open: the options read and checked, and the
+ * metadata (if any) copied into *metadata_copy, which job->opts then
+ * points at, so the caller's strings need not outlive the call. */
+LL_INTERNAL ll_status ll_wjob_keep_options(write_job *job, const ll_bsdf_write_options *opts,
+                                           char **metadata_copy);
+/* The streaming writers' shape from their first layer: n, h, m, nn, the
+ * file's nodes, and the length (zeroed) and offset tables of nn * nn. */
+LL_INTERNAL ll_status ll_wjob_take_shape(write_job *job, const ll_layer *l);
 /* Series lengths of one layer, col * n + row (layer indices); checks that
  * every value is finite. len, tail, ref0: n * n scratch each. */
 LL_INTERNAL ll_status ll_wjob_layer_lengths(const write_job *job, const ll_layer *l,

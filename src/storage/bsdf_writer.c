@@ -149,19 +149,9 @@ ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_para
         goto fail;
     }
     memcpy(w->path, path, len + 1);
-    if ((s = ll_wjob_read_options(&w->job, opts)) != LL_OK ||
+    if ((s = ll_wjob_keep_options(&w->job, opts, &w->metadata_copy)) != LL_OK ||
         (s = copy_parameters(w, n_parameters, param_counts, param_positions)) != LL_OK)
         goto fail;
-    if (w->job.opts.metadata) {
-        size_t m = strlen(w->job.opts.metadata);
-        w->metadata_copy = ll_malloc(m + 1);
-        if (!w->metadata_copy) {
-            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
-            goto fail;
-        }
-        memcpy(w->metadata_copy, w->job.opts.metadata, m + 1);
-        w->job.opts.metadata = w->metadata_copy;
-    }
     w->basis_at = ll_calloc_array(w->job.n_bases, sizeof *w->basis_at);
     if (!w->basis_at) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
@@ -182,20 +172,13 @@ fail:
 static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
 {
     write_job *job = &w->job;
-    size_t n = l->n, nn = n + 2, k, n2, nn2, per_layer;
-    ll_status s;
-    job->n = n;
-    job->h = n / 2;
-    job->m = l->m;
-    job->nn = nn;
-    if (nn > UINT32_MAX / 2)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", fn_add, n);
+    size_t n = l->n, nn = n + 2, n2, nn2, per_layer;
+    ll_status s = ll_wjob_take_shape(job, l);
+    if (s != LL_OK)
+        return s;
     if (!ll_size_mul(n, n, &n2) || !ll_size_mul(nn, nn, &nn2) ||
         !ll_size_mul(n, l->m, &per_layer) || !ll_size_mul(per_layer, job->n_channels, &per_layer))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", fn_add);
-    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
-    job->length = ll_calloc_array(nn2, sizeof *job->length);
-    job->offset = ll_alloc_array(nn2, sizeof *job->offset);
     w->len = ll_alloc_array(n2, sizeof *w->len);
     w->ext = ll_alloc_array(nn2, sizeof *w->ext);
     w->tail = ll_alloc_array(n2, sizeof *w->tail);
@@ -204,15 +187,10 @@ static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
     w->values = ll_alloc_array(nn, sizeof *w->values);
     w->row_cdf = ll_alloc_array(nn2, sizeof *w->row_cdf);
     w->row = ll_alloc_array(job->n_channels * l->m, sizeof *w->row);
-    if (!job->nodes || !job->length || !job->offset || !w->len || !w->ext || !w->tail ||
-        !w->ref0 || !w->stage || !w->values || !w->row_cdf || !w->row)
+    if (!w->len || !w->ext || !w->tail || !w->ref0 || !w->stage || !w->values || !w->row_cdf ||
+        !w->row)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
-    for (k = 0; k < nn; ++k) {
-        size_t li = layer_index(k, job->h);
-        job->nodes[k] = li == (size_t)-1 ? 0.0f : (float)l->nodes[li];
-    }
-    s = ll_layer_clone(l, &w->first);
-    return s;
+    return ll_layer_clone(l, &w->first);
 }
 
 /* Extent of every file pair of this basis into w->ext (i * nn + o): one
