@@ -19,7 +19,8 @@ static const double azimuths[] = { 0.0, 0.01, 0.03, 0.06, 0.1, 0.2, 0.3, 0.45,
                                    0.6, 0.8,  1.0,  1.3,  1.6, 2.0, 2.4, LL_PI };
 static const double offsets[] = { 0.0,   -0.01, 0.01,  -0.02, 0.02, -0.03, 0.03, -0.05,
                                    0.05,  -0.1,  0.1,   -0.15, 0.15, -0.25, 0.25 };
-static const double middle[] = { 0.35, 0.6, 0.85, 1.0 };
+static const double middle[] = { 0.35, 0.5, 0.6, 0.75, 0.85, 0.9, 0.95, 1.0 };
+#define MIDDLE_COUNT (sizeof middle / sizeof middle[0])
 
 #define RANDOM_INCIDENT 3
 #define RANDOM_OUTGOING 2
@@ -49,7 +50,7 @@ static ll_status add_pair(ll_probe_set *set, double mu_o, double mu_i, size_t gr
     return LL_OK;
 }
 
-/* The incident cosines (magnitudes), at most 3 + 4 + RANDOM_INCIDENT. */
+/* The incident cosines (magnitudes), at most 3 + MIDDLE_COUNT + RANDOM_INCIDENT. */
 static size_t incident_cosines(double mu_min, unsigned long long *state, double *out)
 {
     size_t count = 0, k;
@@ -95,7 +96,7 @@ static ll_status add_group(ll_probe_set *set, double centre, double sign, double
 ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min, ll_probe_set *out)
 {
     unsigned long long state = 14;
-    double incident[3 + 4 + RANDOM_INCIDENT];
+    double incident[3 + MIDDLE_COUNT + RANDOM_INCIDENT];
     size_t count, k;
     int side;
     ll_status s = LL_OK;
@@ -133,7 +134,7 @@ ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min, ll_pro
 ll_status ll_probe_medium(double mu_min, ll_probe_set *out)
 {
     unsigned long long state = 15;
-    double incident[3 + 4 + RANDOM_INCIDENT];
+    double incident[3 + MIDDLE_COUNT + RANDOM_INCIDENT];
     size_t count, k;
     ll_status s = LL_OK;
     start(out);
