@@ -43,8 +43,8 @@ typedef struct ll_probe_set {
 /* The probes of a rough interface of relative index eta_re + i eta_im
  * (conductor when eta_im > 0): incident cosines mu_min, 1.5 mu_min,
  * 2 mu_min (the grazing ones, where the azimuthal lobe is narrowest),
- * 0.35, 0.6, 0.85, 1 and three pseudo-random ones in [mu_min, 1], from
- * above and (dielectric) from below; outgoing: the mirror and the
+ * 0.35, 0.5, 0.6, 0.75, 0.85, 0.9, 0.95, 1 and three pseudo-random ones in
+ * [mu_min, 1], from above and (dielectric) from below; outgoing: the mirror and the
  * refracted direction, 14 offsets of 0.01 .. 0.25 in mu around them and two
  * pseudo-random ones; azimuths 0 .. pi, dense near 0. Deterministic. */
 LL_INTERNAL ll_status ll_probe_interface(double eta_re, double eta_im, double mu_min,
