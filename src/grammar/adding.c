@@ -596,8 +596,7 @@ typedef struct expand_job {
     workspace_pool pool;
 } expand_job;
 
-/* Is the block zero off its diagonal? */
-static int is_diagonal(const double *x, size_t h)
+int ll_block_is_diagonal(const double *x, size_t h)
 {
     size_t r, c;
     for (c = 0; c < h; ++c)
@@ -623,7 +622,7 @@ static ll_status slab_order(const expand_job *job, workspace *w, int *solved)
     size_t doubles;
 
     *solved = 0;
-    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(PT, h)) {
+    if (w->top.zero[LL_BLOCK_RT] && ll_block_is_diagonal(PT, h)) {
         memset(R, 0, h * h * sizeof(double));
         memset(T, 0, h * h * sizeof(double));
         for (c = 0; c < h; ++c)
@@ -737,7 +736,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
             T[c * h + r] = (r == c ? 1.0 : 0.0) + scale * (T[c * h + r] - (r == c ? 1.0 : 0.0));
         }
 
-    if (w->top.zero[LL_BLOCK_RT] && is_diagonal(T, h)) {
+    if (w->top.zero[LL_BLOCK_RT] && ll_block_is_diagonal(T, h)) {
         /* Nothing scatters sideways in this order (only the unscattered and
          * exactly-forward part): each doubling squares the diagonal. */
         for (c = 0; c < h; ++c)

@@ -59,4 +59,8 @@ LL_INTERNAL void ll_right_solve_lu(size_t h, const double *lu, const lapack_int 
  * dgetrf's info. */
 LL_INTERNAL lapack_int ll_lu_factor(size_t h, double *A, lapack_int *piv);
 
+/* Is the h x h column-major block zero off its diagonal? (Adding and the
+ * slab take a shortcut for the unscattered light of a forward-only order.) */
+LL_INTERNAL int ll_block_is_diagonal(const double *x, size_t h);
+
 #endif /* LL_GRAMMAR_GRAMMAR_H */

@@ -31,16 +31,6 @@ static int block_is_zero(const double *x, size_t count)
     return 1;
 }
 
-static int block_is_diagonal(const double *x, size_t h)
-{
-    size_t r, c;
-    for (c = 0; c < h; ++c)
-        for (r = 0; r < h; ++r)
-            if (r != c && x[c * h + r] != 0.0)
-                return 0;
-    return 1;
-}
-
 /* Only the unscattered light: T = exp(-tau (1 - d) / x) on the diagonal
  * (d: the phase matrix's forward diagonal), as ll_layer_expand's slab. */
 static ll_status straight_order(const slab_medium *m, double *d, ll_order **out)
@@ -89,7 +79,7 @@ static ll_status finish_order(void *user, size_t order, double *P, double forwar
             PT[c * h + r] = P[(h + c) * n + h + r];
             PR[c * h + r] = P[(h + c) * n + r];
         }
-    if (block_is_zero(PR, hh) && block_is_diagonal(PT, h)) {
+    if (block_is_zero(PR, hh) && ll_block_is_diagonal(PT, h)) {
         for (c = 0; c < h; ++c)
             PT[c] = PT[c * h + c];
         return straight_order(m, PT, out);
