@@ -82,12 +82,18 @@ static double peak_bytes(const ll_material *mat, size_t n, size_t m)
     return e.peak_bytes;
 }
 
+/* The azimuths of every outgoing cosine of a lobe (and one pseudo-random
+ * one each). */
+#define LOBE_PHIS 8
+static const double lobe_phis[LOBE_PHIS] = { 0.0, 0.02, 0.07, 0.2, 0.5, 1.2, 2.0,
+                                             3.14159265358979 };
+
 /* One lobe (group): around outgoing cosine `centre` (signed), incident
  * mu_i; mirror and off-mirror azimuths. */
 static void add_lobe(point_set *s, double mu_i, double centre, uint64_t *rng)
 {
     static const double offsets[] = { 0.0, -0.02, 0.02, -0.05, 0.05, -0.15, 0.15 };
-    static const double phis[] = { 0.0, 0.02, 0.07, 0.2, 0.5, 1.2, 2.0, 3.14159265358979 };
+    const double *phis = lobe_phis;
     double sign = centre < 0.0 ? -1.0 : 1.0, c = fabs(centre);
     size_t k, j;
     for (k = 0; k < sizeof offsets / sizeof offsets[0] + 2; ++k) {
@@ -95,11 +101,11 @@ static void add_lobe(point_set *s, double mu_i, double centre, uint64_t *rng)
                                                            : 0.1 + 0.9 * next_uniform(rng);
         if (mu < 0.1 || mu > 1.0)
             continue;
-        for (j = 0; j < sizeof phis / sizeof phis[0] + 1 && s->count < MAX_POINTS; ++j) {
+        for (j = 0; j < LOBE_PHIS + 1 && s->count < MAX_POINTS; ++j) {
             point *p = &s->p[s->count++];
             p->mu_o = sign * mu;
             p->mu_i = mu_i;
-            p->phi = j < sizeof phis / sizeof phis[0] ? phis[j] : 3.14159 * next_uniform(rng);
+            p->phi = j < LOBE_PHIS ? phis[j] : 3.14159 * next_uniform(rng);
             p->group = s->groups;
         }
     }
@@ -137,34 +143,171 @@ static void interface_points(point_set *s, double eta, int conductor)
     interface_points_of(s, eta, conductor, 7);
 }
 
+/* The worst relative difference of a against b (values at the points of
+ * s) where b is above 1% of its group's peak. */
+static double worst_of_values(const point_set *s, const double *va, const double *vb,
+                              size_t *where)
+{
+    double peak[256] = { 0 }, worst = 0.0;
+    size_t k;
+    assert_true(s->groups <= 256);
+    for (k = 0; k < s->count; ++k)
+        peak[s->p[k].group] = fmax(peak[s->p[k].group], vb[k]);
+    *where = 0;
+    for (k = 0; k < s->count; ++k)
+        if (vb[k] > 0.01 * peak[s->p[k].group] && vb[k] > 0.0 &&
+            fabs(va[k] - vb[k]) / vb[k] > worst) {
+            worst = fabs(va[k] - vb[k]) / vb[k];
+            *where = k;
+        }
+    return worst;
+}
+
+/* The values of layer l at the points of s (count of them). */
+static double *layer_values(const point_set *s, const ll_layer *l)
+{
+    double *v = malloc((s->count + 1) * sizeof *v);
+    size_t k;
+    assert_non_null(v);
+    for (k = 0; k < s->count; ++k)
+        v[k] = ll_layer_eval(l, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
+    return v;
+}
+
 /* The worst relative difference of a against b where b is above 1% of
  * its group's peak; *where the point. */
 static double worst_difference(const point_set *s, const ll_layer *a, const ll_layer *b,
                                size_t *where)
 {
-    double peak[256] = { 0 }, *va = malloc(s->count * sizeof *va),
-           *vb = malloc(s->count * sizeof *vb), worst = 0.0;
-    size_t k;
-    assert_true(s->groups <= 256);
-    assert_non_null(va);
-    assert_non_null(vb);
-    for (k = 0; k < s->count; ++k) {
-        va[k] = ll_layer_eval(a, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
-        vb[k] = ll_layer_eval(b, s->p[k].mu_o, s->p[k].mu_i, s->p[k].phi);
-        peak[s->p[k].group] = fmax(peak[s->p[k].group], vb[k]);
-    }
-    *where = 0;
-    for (k = 0; k < s->count; ++k)
-        if (vb[k] > 0.01 * peak[s->p[k].group] && vb[k] > 0.0) {
-            double d = fabs(va[k] - vb[k]) / vb[k];
-            if (d > worst) {
-                worst = d;
-                *where = k;
-            }
-        }
+    double *va = layer_values(s, a), *vb = layer_values(s, b);
+    double worst = worst_of_values(s, va, vb, where);
     free(va);
     free(vb);
     return worst;
+}
+
+/* An interface word's layer at n nodes, without building it (for the
+ * builds of the full grid too large for the machine, and the dense scan):
+ * what ll_layer_eval gives, from the 16 series of each point's spline
+ * stencil and the energy compensation made at n (words/interface_probe.c,
+ * the resolution search's own evaluation). probes_are_the_layer shows it
+ * is the layer to 1e-9, and check_interface shows it again at the
+ * chosen resolution wherever it builds the layers. */
+typedef struct lean_interface {
+    ll_microfacet *mf;
+    ll_probe_compensation compensation;
+    size_t n;
+} lean_interface;
+
+/* The monochrome parameters of the material's one interface word. */
+static void interface_params(const ll_material *mat, int conductor, double *eta_re,
+                             double *eta_im, double *alpha)
+{
+    ll_word_params p;
+    ll_word_params_above(mat, 0, 0, 1, 1.0, &p);
+    *eta_re = conductor ? p.v[LL_CONDUCTOR_ETA] : p.v[LL_DIELECTRIC_ETA];
+    *eta_im = conductor ? p.v[LL_CONDUCTOR_K] : 0.0;
+    *alpha = conductor ? p.v[LL_CONDUCTOR_ALPHA] : p.v[LL_DIELECTRIC_ALPHA];
+}
+
+static void lean_interface_make(const ll_material *mat, int conductor, size_t n,
+                                lean_interface *out)
+{
+    ll_microfacet *mf0 = NULL;
+    double eta_re, eta_im, alpha;
+    interface_params(mat, conductor, &eta_re, &eta_im, &alpha);
+    out->n = n;
+    assert_int_equal(ll_probe_interface_model(eta_re, eta_im, alpha, &out->mf), LL_OK);
+    assert_int_equal(ll_probe_compensation_model(eta_re, eta_im, alpha, &mf0), LL_OK);
+    assert_int_equal(ll_probe_compensation_make(mf0, eta_re, eta_im, n, NULL, &out->compensation),
+                     LL_OK);
+    ll_microfacet_destroy(mf0);
+}
+
+static void lean_interface_free(lean_interface *li)
+{
+    ll_probe_compensation_free(&li->compensation);
+    ll_microfacet_destroy(li->mf);
+}
+
+/* The lean layer at m orders on a probe set (values pair-major). */
+static void lean_interface_eval(lean_interface *li, size_t m, const ll_probe_set *set, double *v)
+{
+    assert_int_equal(ll_probe_interface_eval(li->mf, &li->compensation, li->n, m, set, NULL, v),
+                     LL_OK);
+}
+
+/* The lean layer at m orders on the points of s: the runs of points of one
+ * direction pair at the azimuths of add_lobe as one probe set, the others
+ * (one pseudo-random azimuth each) LL_PROBE_MAX_PHI pairs at a time, the
+ * diagonal of their values. */
+static double *lean_point_values(lean_interface *li, size_t m, const point_set *s)
+{
+    const double *fixed = lobe_phis;
+    ll_probe_set set;
+    size_t *pair_of = malloc((s->count + 1) * sizeof *pair_of), k, j, p;
+    double *v = malloc((s->count + 1) * sizeof *v), *values, *chunk;
+    memset(&set, 0, sizeof set);
+    set.pairs = malloc((s->count + 1) * sizeof *set.pairs);
+    assert_true(pair_of && v && set.pairs);
+    for (k = 0; k < s->count; ++k) {
+        if (set.n_pairs == 0 || set.pairs[set.n_pairs - 1].mu_o != s->p[k].mu_o ||
+            set.pairs[set.n_pairs - 1].mu_i != s->p[k].mu_i) {
+            set.pairs[set.n_pairs].mu_o = s->p[k].mu_o;
+            set.pairs[set.n_pairs].mu_i = s->p[k].mu_i;
+            set.pairs[set.n_pairs].group = 0;
+            ++set.n_pairs;
+        }
+        pair_of[k] = set.n_pairs - 1;
+    }
+    set.cap_pairs = set.n_pairs;
+    set.n_phi = LOBE_PHIS;
+    set.n_groups = 1;
+    for (j = 0; j < LOBE_PHIS; ++j)
+        set.phi[j] = fixed[j];
+    values = malloc((LL_PROBE_VALUES(&set) + 1) * sizeof *values);
+    assert_non_null(values);
+    lean_interface_eval(li, m, &set, values);
+    /* Points off the fixed azimuths, a chunk at a time. */
+    {
+        ll_probe_set c;
+        size_t idx[LL_PROBE_MAX_PHI], count = 0;
+        memset(&c, 0, sizeof c);
+        c.pairs = malloc(LL_PROBE_MAX_PHI * sizeof *c.pairs);
+        chunk = malloc(LL_PROBE_MAX_PHI * LL_PROBE_MAX_PHI * sizeof *chunk);
+        assert_true(c.pairs && chunk);
+        c.cap_pairs = LL_PROBE_MAX_PHI;
+        c.n_groups = 1;
+        for (k = 0; k <= s->count; ++k) {
+            int fixed_phi = 0;
+            if (k < s->count)
+                for (j = 0; j < LOBE_PHIS; ++j)
+                    if (s->p[k].phi == fixed[j]) {
+                        v[k] = values[pair_of[k] * LOBE_PHIS + j];
+                        fixed_phi = 1;
+                    }
+            if (k < s->count && !fixed_phi) {
+                c.pairs[count].mu_o = s->p[k].mu_o;
+                c.pairs[count].mu_i = s->p[k].mu_i;
+                c.pairs[count].group = 0;
+                c.phi[count] = s->p[k].phi;
+                idx[count++] = k;
+            }
+            if (count == LL_PROBE_MAX_PHI || (k == s->count && count > 0)) {
+                c.n_pairs = c.n_phi = count;
+                lean_interface_eval(li, m, &c, chunk);
+                for (p = 0; p < count; ++p)
+                    v[idx[p]] = chunk[p * count + p];
+                count = 0;
+            }
+        }
+        free(c.pairs);
+        free(chunk);
+    }
+    free(values);
+    free(set.pairs);
+    free(pair_of);
+    return v;
 }
 
 static ll_layer *build_one(const ll_material *mat, size_t n, size_t m)
@@ -180,39 +323,156 @@ static ll_layer *build_one(const ll_material *mat, size_t n, size_t m)
     return layers[0];
 }
 
+/* The largest relative difference of the lean layer from the built one at
+ * the points (the lean one's check wherever both are made). */
+static double lean_against_layer(const point_set *s, const double *lean, const ll_layer *l)
+{
+    double *v = layer_values(s, l), worst = 0.0;
+    size_t k;
+    for (k = 0; k < s->count; ++k)
+        worst = fmax(worst, fabs(lean[k] - v[k]) / fmax(fabs(v[k]), 1e-3));
+    free(v);
+    return worst;
+}
+
+static int dense(void)
+{
+    const char *v = getenv("LL_CONVERGENCE_DENSE");
+    return v && *v && strcmp(v, "0") != 0;
+}
+
+/* LL_CONVERGENCE_DENSE=1 (with the full grid): the worst difference at a
+ * dense scan of the lobes, not only at the test's points: incident cosines
+ * every 0.002 from 0.1 to 1, each side and block as interface_points, the
+ * outgoing cosines of add_lobe's offsets and 0.01, 0.03, 0.08 either side,
+ * add_lobe's azimuths. Printed, not checked: it shows how far the probes
+ * and the test's points, both samples, are from the worst (docs/method.md,
+ * "between the probes"). */
+static void dense_scan(const char *text, double eta, int conductor, lean_interface *la,
+                       lean_interface *lb, size_t m)
+{
+    static const double offsets[] = { 0.0,   -0.01, 0.01, -0.02, 0.02, -0.03, 0.03,
+                                      -0.05, 0.05,  -0.08, 0.08, -0.15, 0.15 };
+    ll_probe_set set;
+    double *va, *vb, *peak, worst = 0.0, at_o = 0.0, at_i = 0.0, at_phi = 0.0, at_ratio = 0.0;
+    size_t cap = 60000, k, p, j;
+    int side;
+    memset(&set, 0, sizeof set);
+    set.pairs = malloc(cap * sizeof *set.pairs);
+    assert_non_null(set.pairs);
+    set.cap_pairs = cap;
+    set.n_phi = LOBE_PHIS;
+    for (j = 0; j < LOBE_PHIS; ++j)
+        set.phi[j] = lobe_phis[j];
+    for (side = 0; side < (conductor ? 1 : 2); ++side)
+        for (k = 0; k <= 450; ++k) {
+            double sign = side ? -1.0 : 1.0, e = side ? 1.0 / eta : eta;
+            double mu = fmin(0.1 + 0.002 * (double)k, 1.0), sin_t = sqrt(1.0 - mu * mu) / e;
+            double centre[2];
+            size_t lobes = 0, b;
+            if (conductor || e > 1.0)
+                centre[lobes++] = -sign * mu;
+            if (!conductor && sin_t < 1.0)
+                centre[lobes++] = sign * sqrt(1.0 - sin_t * sin_t);
+            for (b = 0; b < lobes; ++b) {
+                for (j = 0; j < sizeof offsets / sizeof offsets[0]; ++j) {
+                    double c = fabs(centre[b]) + offsets[j];
+                    if (c < 0.1 || c > 1.0)
+                        continue;
+                    assert_true(set.n_pairs < cap);
+                    set.pairs[set.n_pairs].mu_o = centre[b] < 0.0 ? -c : c;
+                    set.pairs[set.n_pairs].mu_i = sign * mu;
+                    set.pairs[set.n_pairs].group = set.n_groups;
+                    ++set.n_pairs;
+                }
+                ++set.n_groups;
+            }
+        }
+    va = malloc(LL_PROBE_VALUES(&set) * sizeof *va);
+    vb = malloc(LL_PROBE_VALUES(&set) * sizeof *vb);
+    peak = calloc(set.n_groups, sizeof *peak);
+    assert_true(va && vb && peak);
+    lean_interface_eval(la, m, &set, va);
+    lean_interface_eval(lb, 2 * m, &set, vb);
+    for (p = 0; p < set.n_pairs; ++p)
+        for (j = 0; j < LOBE_PHIS; ++j)
+            peak[set.pairs[p].group] = fmax(peak[set.pairs[p].group], vb[p * LOBE_PHIS + j]);
+    for (p = 0; p < set.n_pairs; ++p)
+        for (j = 0; j < LOBE_PHIS; ++j) {
+            double b = vb[p * LOBE_PHIS + j], top = peak[set.pairs[p].group];
+            if (b > 0.01 * top && b > 0.0 && fabs(va[p * LOBE_PHIS + j] - b) / b > worst) {
+                worst = fabs(va[p * LOBE_PHIS + j] - b) / b;
+                at_o = set.pairs[p].mu_o;
+                at_i = set.pairs[p].mu_i;
+                at_phi = set.phi[j];
+                at_ratio = b / top;
+            }
+        }
+    printf("  %-40s dense scan (%zu pairs): worst %.4f at mu_o %.4f mu_i %.4f phi %.3f, "
+           "%.4f of its lobe's peak\n",
+           text, set.n_pairs, worst, at_o, at_i, at_phi, at_ratio);
+    free(va);
+    free(vb);
+    free(peak);
+    free(set.pairs);
+}
+
 /* The interface word `text` (one line), monochrome, at tolerance t:
  * whether it meets it (the full grid goes on past a failure, to report
- * every case). */
+ * every case). Where the build at twice the resolution would not fit
+ * (FULL_GRID_BYTES), both resolutions are evaluated lean (lean_interface),
+ * which is checked against the built layer at the chosen resolution
+ * wherever that one is built. */
 static int check_interface(const char *text, double eta, int conductor, double tolerance)
 {
     ll_material *mat = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
-    ll_layer *a, *b;
+    lean_interface la, lb;
     point_set *s = malloc(sizeof *s);
+    double *va, *vb, e, twice;
     size_t n, m, where;
-    double e;
+    int lean;
     assert_non_null(s);
     assert_int_equal(ll_material_parse(text, "convergence", &mat), LL_OK);
     o.n_channels = 1;
     o.tolerance = tolerance;
     assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
-    if (peak_bytes(mat, 2 * n, 2 * m) > FULL_GRID_BYTES) {
-        printf("  %-40s n %5zu m %5zu: skipped (twice it needs %.1f GB)\n", text, n, m,
-               peak_bytes(mat, 2 * n, 2 * m) / 1e9);
-        ll_material_destroy(mat);
-        free(s);
-        return 1;
-    }
-    a = build_one(mat, n, m);
-    b = build_one(mat, 2 * n, 2 * m);
+    twice = peak_bytes(mat, 2 * n, 2 * m);
+    lean = twice > FULL_GRID_BYTES;
     interface_points(s, eta, conductor);
-    e = worst_difference(s, a, b, &where);
+    lean_interface_make(mat, conductor, n, &la);
+    if (lean || dense())
+        lean_interface_make(mat, conductor, 2 * n, &lb);
+    va = lean_point_values(&la, m, s);
+    if (lean) {
+        vb = lean_point_values(&lb, 2 * m, s);
+    } else {
+        ll_layer *a = build_one(mat, n, m), *b = build_one(mat, 2 * n, 2 * m);
+        double d = lean_against_layer(s, va, a);
+        if (verbose() || d > 1e-9)
+            printf("  %-40s lean against the layer: %.2g\n", text, d);
+        assert_true(d <= 1e-9);
+        free(va);
+        va = layer_values(s, a);
+        vb = layer_values(s, b);
+        ll_layer_destroy(a);
+        ll_layer_destroy(b);
+    }
+    e = worst_of_values(s, va, vb, &where);
     if (verbose() || e > tolerance)
-        printf("  %-40s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n", text,
-               n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+        printf("  %-40s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f%s\n", text,
+               n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi,
+               lean ? " (lean)" : "");
+    if (lean && (verbose() || e > tolerance))
+        printf("  %-40s (lean: building twice it would take %.1f GB)\n", text, twice / 1e9);
+    if (dense())
+        dense_scan(text, eta, conductor, &la, &lb, m);
     fflush(stdout);
-    ll_layer_destroy(a);
-    ll_layer_destroy(b);
+    free(va);
+    free(vb);
+    lean_interface_free(&la);
+    if (lean || dense())
+        lean_interface_free(&lb);
     ll_material_destroy(mat);
     free(s);
     return e <= tolerance;
@@ -314,13 +574,7 @@ static void resolution_table(void **state)
         o.n_channels = 1;
         assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
         /* The fit of the layer's own index (gold: its monochrome channel). */
-        {
-            ll_word_params p;
-            ll_word_params_above(mat, 0, 0, 1, 1.0, &p);
-            eta_re = rows[r].conductor ? p.v[LL_CONDUCTOR_ETA] : p.v[LL_DIELECTRIC_ETA];
-            eta_im = rows[r].conductor ? p.v[LL_CONDUCTOR_K] : 0.0;
-            alpha = rows[r].conductor ? p.v[LL_CONDUCTOR_ALPHA] : p.v[LL_DIELECTRIC_ALPHA];
-        }
+        interface_params(mat, rows[r].conductor, &eta_re, &eta_im, &alpha);
         assert_int_equal(ll_fit_microfacet(alpha, eta_re, eta_im, &fn, &fm), LL_OK);
         fit = build_one(mat, fn, fm);
         chosen = build_one(mat, n, m);
@@ -536,26 +790,6 @@ static void lean_hg(double g, size_t n, size_t m, int with_forward, const point_
     free(e.at);
     free(e.per_order);
     ll_layer_destroy(layer);
-}
-
-/* The worst relative difference of a against b (values at the points of
- * s) where b is above 1% of its group's peak. */
-static double worst_of_values(const point_set *s, const double *va, const double *vb,
-                              size_t *where)
-{
-    double peak[256] = { 0 }, worst = 0.0;
-    size_t k;
-    assert_true(s->groups <= 256);
-    for (k = 0; k < s->count; ++k)
-        peak[s->p[k].group] = fmax(peak[s->p[k].group], vb[k]);
-    *where = 0;
-    for (k = 0; k < s->count; ++k)
-        if (vb[k] > 0.01 * peak[s->p[k].group] && vb[k] > 0.0 &&
-            fabs(va[k] - vb[k]) / vb[k] > worst) {
-            worst = fabs(va[k] - vb[k]) / vb[k];
-            *where = k;
-        }
-    return worst;
 }
 
 /* The medium points: incident 0.1, 0.15, 0.2 and three random cosines,
