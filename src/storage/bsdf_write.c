@@ -30,6 +30,7 @@
  */
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
+#include "storage/bsdf_write_commit.h"
 #include "storage/bsdf_write_job.h"
 #include "storage/bsdf_format.h"
 #include "support/parse_number.h"
@@ -411,6 +412,7 @@ ll_status ll_wjob_default_metadata(write_job *job)
 void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_size)
 {
     unsigned char h[LL_BSDF_HEADER_SIZE];
+    size_t k;
     memset(h, 0, sizeof h);
     memcpy(h, LL_BSDF_MAGIC, LL_BSDF_MAGIC_SIZE);
     h[LL_BSDF_AT_VERSION] = LL_BSDF_VERSION;
@@ -427,6 +429,12 @@ void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_
     ll_le_put_f32(h + LL_BSDF_AT_ALPHA, (float)job->opts.alpha[0]);
     ll_le_put_f32(h + LL_BSDF_AT_ALPHA + 4, (float)job->opts.alpha[1]);
     ll_bsdf_out_bytes(out, h, sizeof h);
+    for (k = 0; k < job->nn; ++k)
+        ll_bsdf_out_f32(out, job->nodes[k]);
+    for (k = 0; k < job->n_parameters; ++k)
+        ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
+    for (k = 0; k < job->n_parameter_values; ++k)
+        ll_bsdf_out_f32(out, (float)job->param_positions[k]);
 }
 
 /* The coefficient block, pair after pair in table order, each pair
@@ -519,19 +527,12 @@ static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
 
 static ll_status put_file(const write_job *job, const char *path)
 {
-    const char *metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
-    size_t nn = job->nn, k, metadata_size = strlen(metadata);
+    size_t nn = job->nn, k;
     ll_bsdf_out *out;
     ll_status s = ll_bsdf_out_begin(path, job->fn, &out);
     if (s != LL_OK)
         return s;
-    ll_wjob_put_header(out, job, metadata_size);
-    for (k = 0; k < nn; ++k)
-        ll_bsdf_out_f32(out, job->nodes[k]);
-    for (k = 0; k < job->n_parameters; ++k)
-        ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
-    for (k = 0; k < job->n_parameter_values; ++k)
-        ll_bsdf_out_f32(out, (float)job->param_positions[k]);
+    ll_wjob_put_header(out, job, strlen(ll_wjob_metadata(job)));
     /* The tables, polled once per node row (nn^2 entries each). */
     ll_watch_stage(job->watch, "writing", 0.45, 0.1, 2 * nn);
     for (k = 0; k < nn * nn * job->n_bases && s == LL_OK; ++k) {
@@ -541,26 +542,11 @@ static ll_status put_file(const write_job *job, const char *path)
         if (k % (nn * job->n_bases) == 0)
             ll_watch_advance(job->watch, 1);
     }
-    for (k = 0; k < nn * nn && s == LL_OK; ++k) {
-        if (k % nn == 0) {
-            ll_watch_advance(job->watch, 1);
-            if (ll_watch_poll(job->watch))
-                s = write_cancelled(job);
-        }
-        ll_bsdf_out_u32(out, job->offset[k]);
-        ll_bsdf_out_u32(out, job->length[k]);
-    }
+    if (s == LL_OK)
+        s = ll_wjob_put_pairs(out, job);
     if (s == LL_OK)
         s = put_coefficients(out, job);
-    /* The last report comes before the temporary file replaces the
-     * target: a cancel there still leaves no file. */
-    s = ll_watch_finish(job->watch, s, job->fn);
-    if (s != LL_OK) {
-        ll_bsdf_out_abort(out);
-        return s;
-    }
-    ll_bsdf_out_bytes(out, metadata, metadata_size);
-    return ll_bsdf_out_commit(out);
+    return ll_wjob_put_end(out, job, s);
 }
 
 /* ---------------------------------------------------------------- driver */

@@ -18,14 +18,15 @@
  * matrix (the CDF's), about 20 n^2 bytes a channel, against the layer's
  * 8 bytes per stored value plus 16 per column per order.
  *
- * Commit reads the spill back column by column and writes every value by
+ * Commit (ll_wjob_commit, bsdf_write_commit.c, as ll_bsdf_writer's: this
+ * file gives it the CDF, computed from the order-0 matrices, and each
+ * column) reads the spill back column by column and writes every value by
  * the expression bsdf_write.c uses (ll_wjob_staged_value on the same
  * doubles), so the file is byte for byte ll_bsdf_write's for the same
  * layers; the output itself is the atomic writer's (bsdf_file_out.c).
  */
 #include "storage/bsdf_write_channels.h"
-#include "storage/bsdf_write_job.h"
-#include "storage/bsdf_write_spill.h"
+#include "storage/bsdf_write_commit.h"
 #include "layer/layer.h"
 
 #include <float.h>
@@ -52,6 +53,9 @@ struct ll_channel_writer {
     uint32_t *len;                 /* [n * n] one channel's lengths (add)    */
     double *tail;                  /* [n * n] scratch of the lengths (add)   */
     double *stage;                 /* [n * m] one column's orders (add)      */
+    double *col[3];                /* commit: one spilled column a channel   */
+    size_t *row_at[3];             /* [n] commit: each row's place in col[c] */
+    double *row;                   /* [channels * m] commit: one pair's      */
     ll_spill spill;                /* bsdf_write_spill.h                     */
 };
 
@@ -66,7 +70,10 @@ static void writer_free(ll_channel_writer *w)
         ll_free(w->ext[c]);
         ll_free(w->col_at[c]);
         ll_free(w->col_values[c]);
+        ll_free(w->col[c]);
+        ll_free(w->row_at[c]);
     }
+    ll_free(w->row);
     ll_free(w->path);
     ll_free(w->metadata_copy);
     ll_free(w->nodes);
@@ -333,21 +340,49 @@ static ll_status compute_cdf(ll_channel_writer *w)
     return LL_OK;
 }
 
-/* File column i (layer column li): every channel's spilled column read
- * back into col[c] (rows at row_at[c][row]), then each pair's series. */
-static ll_status put_column(ll_channel_writer *w, ll_bsdf_out *out, size_t i, double *const *col,
-                            size_t *const *row_at, double *row)
+/* The commit's scratch and CDF (ll_wjob_source.prepare): the add's stage
+ * freed (the commit reads columns instead), job->cdf, and for each channel
+ * room for its longest spilled column and its rows' places in it, and one
+ * pair's doubles of every channel. */
+static ll_status prepare_commit(void *writer)
 {
+    ll_channel_writer *w = writer;
+    const write_job *job = &w->job;
+    size_t n = job->n, c, i;
+    ll_free(w->stage);
+    w->stage = NULL;
+    for (c = 0; c < job->n_channels; ++c) {
+        size_t most = 0;
+        for (i = 0; i < n; ++i)
+            most = w->col_values[c][i] > most ? w->col_values[c][i] : most;
+        w->col[c] = ll_alloc_array(most ? most : 1, sizeof *w->col[c]);
+        w->row_at[c] = ll_alloc_array(n, sizeof *w->row_at[c]);
+        if (!w->col[c] || !w->row_at[c])
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    }
+    w->row = ll_alloc_array(job->n_channels * job->m, sizeof *w->row);
+    if (!w->row)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    return compute_cdf(w);
+}
+
+/* File column i (layer column li) of the coefficient block
+ * (ll_wjob_source.put_column): every channel's spilled column read back
+ * into w->col[c] (rows at w->row_at[c][row]), then each pair's series. */
+static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
+{
+    ll_channel_writer *w = writer;
     const write_job *job = &w->job;
     size_t n = job->n, m = job->m, nn = job->nn, nch = job->n_channels, li, o, c, k, r;
+    double *row = w->row;
     ll_status s = LL_OK;
     li = layer_index(i, job->h);
     for (c = 0; c < nch && s == LL_OK; ++c) {
         size_t at = 0;
-        s = ll_spill_read(&w->spill, w->col_at[c][li], col[c],
+        s = ll_spill_read(&w->spill, w->col_at[c][li], w->col[c],
                           w->col_values[c][li] * sizeof(double), fn_commit);
         for (r = 0; r < n; ++r) {
-            row_at[c][r] = at;
+            w->row_at[c][r] = at;
             at += w->ext[c][li * n + r];
         }
     }
@@ -361,7 +396,7 @@ static ll_status put_column(ll_channel_writer *w, ll_bsdf_out *out, size_t i, do
         for (c = 0; c < nch; ++c) {
             size_t e = w->ext[c][li * n + lo];
             for (k = 0; k < len; ++k)
-                row[c * m + k] = k < e ? col[c][row_at[c][lo] + k] : 0.0;
+                row[c * m + k] = k < e ? w->col[c][w->row_at[c][lo] + k] : 0.0;
         }
         for (c = 0; c < nch && s == LL_OK; ++c)
             for (k = 0; k < len; ++k) {
@@ -380,49 +415,12 @@ static ll_status put_column(ll_channel_writer *w, ll_bsdf_out *out, size_t i, do
     return s;
 }
 
-static ll_status put_coefficients(ll_channel_writer *w, ll_bsdf_out *out)
-{
-    write_job *job = &w->job;
-    size_t n = job->n, nch = job->n_channels, nn = job->nn, c, i, most[3] = { 0, 0, 0 };
-    double *col[3] = { NULL, NULL, NULL }, *row = NULL;
-    size_t *row_at[3] = { NULL, NULL, NULL };
-    ll_status s = LL_OK;
-    for (c = 0; c < nch; ++c) {
-        for (i = 0; i < n; ++i)
-            most[c] = w->col_values[c][i] > most[c] ? w->col_values[c][i] : most[c];
-        col[c] = ll_alloc_array(most[c] ? most[c] : 1, sizeof(double));
-        row_at[c] = ll_alloc_array(n, sizeof(size_t));
-        if (!col[c] || !row_at[c])
-            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
-    }
-    row = ll_alloc_array(nch * job->m, sizeof *row);
-    if (!row)
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
-    ll_watch_stage(job->watch, "writing", 0.15, 0.85, nn);
-    for (i = 0; i < nn && s == LL_OK; ++i) {
-        ll_watch_advance(job->watch, 1);
-        if (ll_watch_poll(job->watch)) {
-            s = write_cancelled(job);
-            break;
-        }
-        if (layer_index(i, job->h) != (size_t)-1) /* mu = 0 holds no coefficients */
-            s = put_column(w, out, i, col, row_at, row);
-    }
-    for (c = 0; c < 3; ++c) {
-        ll_free(col[c]);
-        ll_free(row_at[c]);
-    }
-    ll_free(row);
-    return s;
-}
-
 static ll_status commit_file(ll_channel_writer *w, const ll_monitor *monitor)
 {
     write_job *job = &w->job;
+    ll_wjob_source src = { w, prepare_commit, NULL, put_column };
     ll_watch watch;
-    ll_bsdf_out *out = NULL;
-    const char *metadata;
-    size_t c, k, metadata_size;
+    size_t c;
     ll_status s;
 
     job->fn = fn_commit;
@@ -436,45 +434,7 @@ static ll_status commit_file(ll_channel_writer *w, const ll_monitor *monitor)
         if (!w->added[c])
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: channel %zu was not added",
                            fn_commit, c);
-    /* The stage is the add's scratch; the commit reads columns instead. */
-    ll_free(w->stage);
-    w->stage = NULL;
-    if ((s = ll_spill_flush(&w->spill, fn_commit)) != LL_OK ||
-        (s = ll_wjob_compute_offsets(job)) != LL_OK || (s = compute_cdf(w)) != LL_OK)
-        return s;
-    if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
-        return s;
-    metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
-    metadata_size = strlen(metadata);
-    if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
-        return s;
-    ll_wjob_put_header(out, job, metadata_size);
-    for (k = 0; k < job->nn; ++k)
-        ll_bsdf_out_f32(out, job->nodes[k]);
-    ll_watch_stage(job->watch, "writing", 0.1, 0.05, job->nn);
-    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
-        if (k % job->nn == 0) {
-            ll_watch_advance(job->watch, 1);
-            if (ll_watch_poll(job->watch))
-                s = write_cancelled(job);
-        }
-        ll_bsdf_out_f32(out, job->cdf[k]);
-    }
-    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
-        ll_bsdf_out_u32(out, job->offset[k]);
-        ll_bsdf_out_u32(out, job->length[k]);
-    }
-    if (s == LL_OK)
-        s = put_coefficients(w, out);
-    /* The last report comes before the temporary file replaces the
-     * target: a cancel there still leaves no file. */
-    s = ll_watch_finish(job->watch, s, fn_commit);
-    if (s != LL_OK) {
-        ll_bsdf_out_abort(out);
-        return s;
-    }
-    ll_bsdf_out_bytes(out, metadata, metadata_size);
-    return ll_bsdf_out_commit(out);
+    return ll_wjob_commit(job, &w->spill, w->path, &src);
 }
 
 ll_status ll_channel_writer_commit(ll_channel_writer *w, const ll_monitor *monitor)

@@ -71,6 +71,8 @@ LL_INTERNAL double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t 
 LL_INTERNAL void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n,
                                        float *cdf, size_t stride);
 LL_INTERNAL ll_status ll_wjob_default_metadata(write_job *job);
+/* The file's start, what comes before the CDF: the header, the nodes, the
+ * parameters' position counts and positions. */
 LL_INTERNAL void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job,
                                     size_t metadata_size);
 /* Column col of a layer's orders k < kmax into stage[row * m + k] (or

@@ -16,7 +16,8 @@
  *    to the spill: [CDF nn*nn floats][E nn*nn u32][pairs in table order:
  *    channel-major, E floats per channel]. The values are the floats the
  *    file will hold, computed by the same expression as bsdf_write.c's.
- *  - commit: offsets from the final lengths, then the file in order, the
+ *  - commit: offsets from the final lengths, then the file in order
+ *    (ll_wjob_commit, bsdf_write_commit.c, as the channel writer's), the
  *    interleaved parts read back in chunks of LL_WRITER_CHUNK floats, or
  *    of one row of every basis's longest series if that is more (per
  *    column of pairs: every basis's E of that column, then the rows that
@@ -32,8 +33,7 @@
  * ends, the space returns when the descriptor closes. The output itself is
  * the atomic writer's (bsdf_file_out.c).
  */
-#include "storage/bsdf_write_job.h"
-#include "storage/bsdf_write_spill.h"
+#include "storage/bsdf_write_commit.h"
 #include "layer/layer.h"
 #include "layerlab/ll_bsdf_write.h"
 
@@ -61,7 +61,11 @@ struct ll_bsdf_writer {
     ll_spill spill;              /* bsdf_write_spill.h                     */
     unsigned long long *basis_at;/* [n_bases] spill offset of each basis   */
     size_t chunk_floats;         /* commit's read-back chunk               */
+    float *chunk;                /* commit: [chunk_floats]                 */
     unsigned char *bytes;        /* commit: one series as file bytes (4 m) */
+    uint32_t *col_ext;           /* commit: [n_bases * nn] one column's E  */
+    unsigned long long *cursor;  /* commit: [n_bases] next row in the spill */
+    size_t *pos;                 /* commit: [n_bases] its place in chunk   */
     /* one basis's scratch, n * n unless said */
     uint32_t *len, *ext;
     double *tail, *ref0, *stage, *values;
@@ -81,7 +85,11 @@ static void writer_free(ll_bsdf_writer *w)
     ll_free(w->positions);
     ll_free(w->metadata_copy);
     ll_free(w->basis_at);
+    ll_free(w->chunk);
     ll_free(w->bytes);
+    ll_free(w->col_ext);
+    ll_free(w->cursor);
+    ll_free(w->pos);
     ll_free(w->len);
     ll_free(w->ext);
     ll_free(w->tail);
@@ -343,11 +351,40 @@ fail:
 
 /* ---------------------------------------------------------------- commit */
 
-/* The CDF table, [(i * nn + o) * n_bases + b], from each basis's block. */
-static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
+/* The commit's scratch (ll_wjob_source.prepare): the chunk of
+ * LL_WRITER_CHUNK floats, or one row of every basis's longest series if
+ * that is more (12 m bytes a basis), one series as file bytes, and per
+ * basis one column's extents, its spill cursor and its place in the
+ * chunk. */
+static ll_status prepare_commit(void *writer)
 {
-    write_job *job = &w->job;
+    ll_bsdf_writer *w = writer;
+    const write_job *job = &w->job;
+    size_t nn = job->nn, nb = job->n_bases, b;
+    if (!ll_size_mul(nb * job->n_channels, job->m, &w->chunk_floats))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    if (w->chunk_floats < LL_WRITER_CHUNK)
+        w->chunk_floats = LL_WRITER_CHUNK;
+    w->chunk = ll_alloc_array(w->chunk_floats, sizeof *w->chunk);
+    w->bytes = ll_alloc_array(job->m, 4);
+    w->col_ext = ll_alloc_array(nb * nn, sizeof *w->col_ext);
+    w->cursor = ll_alloc_array(nb, sizeof *w->cursor);
+    w->pos = ll_alloc_array(nb, sizeof *w->pos);
+    if (!w->chunk || !w->bytes || !w->col_ext || !w->cursor || !w->pos)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+    /* A basis's pairs follow its CDF and extents in the spill. */
+    for (b = 0; b < nb; ++b)
+        w->cursor[b] = w->basis_at[b] + nn * nn * (sizeof(float) + sizeof(uint32_t));
+    return LL_OK;
+}
+
+/* The CDF table, [(i * nn + o) * n_bases + b], from each basis's block. */
+static ll_status put_cdf(void *writer, ll_bsdf_out *out)
+{
+    ll_bsdf_writer *w = writer;
+    const write_job *job = &w->job;
     size_t nb = job->n_bases, pairs = job->nn * job->nn, per = w->chunk_floats / nb, at, b, k;
+    float *chunk = w->chunk;
     ll_status s = LL_OK;
     if (per == 0)
         per = 1;
@@ -386,17 +423,23 @@ static ll_status put_series(ll_bsdf_out *out, unsigned char *bytes, const float 
     return LL_OK;
 }
 
-/* Column i of the coefficient block: rows [o0, o1) at a time, as many as
- * fit in the chunk of w->chunk_floats (one row always does). ext:
- * [n_bases * nn] this column's extents; cursor: [n_bases] where each
- * basis's data of the next row starts in the spill; pos: [n_bases]
- * scratch. */
-static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const uint32_t *ext,
-                            unsigned long long *cursor, float *chunk, size_t *pos)
+/* Column i of the coefficient block (ll_wjob_source.put_column): every
+ * basis's extents of the column (w->col_ext, [n_bases * nn]), then rows
+ * [o0, o1) at a time, as many as fit in the chunk of w->chunk_floats (one
+ * row always does); w->cursor[b] is where basis b's data of the next row
+ * starts in the spill, w->pos[b] where it stands in the chunk. */
+static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
 {
+    ll_bsdf_writer *w = writer;
     const write_job *job = &w->job;
     size_t nn = job->nn, nb = job->n_bases, nch = job->n_channels, o0 = 0, o1, b, o, c;
+    const uint32_t *ext = w->col_ext;
+    float *chunk = w->chunk;
     ll_status s = LL_OK;
+    for (b = 0; b < nb && s == LL_OK; ++b)
+        s = ll_spill_read(&w->spill,
+                          w->basis_at[b] + nn * nn * sizeof(float) + i * nn * sizeof(uint32_t),
+                          w->col_ext + b * nn, nn * sizeof(uint32_t), fn_commit);
     while (o0 < nn && s == LL_OK) {
         size_t used = 0, at = 0;
         for (o1 = o0; o1 < nn; ++o1) {
@@ -411,10 +454,10 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             size_t floats = 0;
             for (o = o0; o < o1; ++o)
                 floats += ext[b * nn + o] * nch;
-            pos[b] = at;
-            s = ll_spill_read(&w->spill, cursor[b], chunk + at, floats * sizeof(float),
+            w->pos[b] = at;
+            s = ll_spill_read(&w->spill, w->cursor[b], chunk + at, floats * sizeof(float),
                               fn_commit);
-            cursor[b] += floats * sizeof(float);
+            w->cursor[b] += floats * sizeof(float);
             at += floats;
         }
         for (o = o0; o < o1 && s == LL_OK; ++o) {
@@ -422,62 +465,21 @@ static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i, const
             for (c = 0; c < nch && L > 0 && s == LL_OK; ++c)
                 for (b = 0; b < nb && s == LL_OK; ++b) {
                     size_t e = ext[b * nn + o];
-                    s = put_series(out, w->bytes, chunk + pos[b] + c * e, e, L, o, i);
+                    s = put_series(out, w->bytes, chunk + w->pos[b] + c * e, e, L, o, i);
                 }
             for (b = 0; b < nb; ++b)
-                pos[b] += ext[b * nn + o] * nch;
+                w->pos[b] += ext[b * nn + o] * nch;
         }
         o0 = o1;
     }
     return s;
 }
 
-static ll_status put_coefficients(ll_bsdf_writer *w, ll_bsdf_out *out, float *chunk)
-{
-    write_job *job = &w->job;
-    size_t nn = job->nn, nb = job->n_bases, i, b;
-    uint32_t *ext = ll_alloc_array(nb * nn, sizeof *ext);
-    unsigned long long *cursor = ll_alloc_array(nb, sizeof *cursor);
-    size_t *pos = ll_alloc_array(nb, sizeof *pos);
-    ll_status s = LL_OK;
-    if (!ext || !cursor || !pos) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
-        goto done;
-    }
-    for (b = 0; b < nb; ++b)
-        cursor[b] = w->basis_at[b] + nn * nn * (sizeof(float) + sizeof(uint32_t));
-    ll_watch_stage(job->watch, "writing", 0.15, 0.85, nn);
-    for (i = 0; i < nn && s == LL_OK; ++i) {
-        ll_watch_advance(job->watch, 1);
-        if (ll_watch_poll(job->watch)) {
-            s = write_cancelled(job);
-            break;
-        }
-        if (layer_index(i, job->h) == (size_t)-1)
-            continue; /* the mu = 0 nodes hold no coefficients */
-        for (b = 0; b < nb && s == LL_OK; ++b)
-            s = ll_spill_read(&w->spill,
-                              w->basis_at[b] + nn * nn * sizeof(float) +
-                                  i * nn * sizeof(uint32_t),
-                              ext + b * nn, nn * sizeof(uint32_t), fn_commit);
-        if (s == LL_OK)
-            s = put_column(w, out, i, ext, cursor, chunk, pos);
-    }
-done:
-    ll_free(ext);
-    ll_free(cursor);
-    ll_free(pos);
-    return s;
-}
-
 static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
 {
     write_job *job = &w->job;
+    ll_wjob_source src = { w, prepare_commit, put_cdf, put_column };
     ll_watch watch;
-    ll_bsdf_out *out = NULL;
-    float *chunk = NULL;
-    const char *metadata;
-    size_t k, metadata_size;
     ll_status s;
 
     job->fn = fn_commit;
@@ -491,59 +493,7 @@ static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
     if (w->added != job->n_bases)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu of the %zu bases were added",
                        fn_commit, w->added, job->n_bases);
-    if ((s = ll_spill_flush(&w->spill, fn_commit)) != LL_OK ||
-        (s = ll_wjob_compute_offsets(job)) != LL_OK)
-        return s;
-    if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
-        return s;
-    metadata = job->opts.metadata ? job->opts.metadata : job->metadata;
-    metadata_size = strlen(metadata);
-    /* The chunk: LL_WRITER_CHUNK floats, or one row of every basis's
-     * longest series if that is more (12 m bytes a basis). */
-    if (!ll_size_mul(job->n_bases * job->n_channels, job->m, &w->chunk_floats))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
-    if (w->chunk_floats < LL_WRITER_CHUNK)
-        w->chunk_floats = LL_WRITER_CHUNK;
-    chunk = ll_alloc_array(w->chunk_floats, sizeof *chunk);
-    w->bytes = ll_alloc_array(job->m, 4);
-    if (chunk && !w->bytes) {
-        ll_free(chunk);
-        chunk = NULL;
-    }
-    if (!chunk)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
-    if ((s = ll_bsdf_out_begin(w->path, fn_commit, &out)) != LL_OK)
-        goto done;
-    ll_wjob_put_header(out, job, metadata_size);
-    for (k = 0; k < job->nn; ++k)
-        ll_bsdf_out_f32(out, job->nodes[k]);
-    for (k = 0; k < job->n_parameters; ++k)
-        ll_bsdf_out_u32(out, (uint32_t)job->param_counts[k]);
-    for (k = 0; k < job->n_parameter_values; ++k)
-        ll_bsdf_out_f32(out, (float)job->param_positions[k]);
-    s = put_cdf(w, out, chunk);
-    ll_watch_stage(job->watch, "writing", 0.1, 0.05, job->nn);
-    for (k = 0; k < job->nn * job->nn && s == LL_OK; ++k) {
-        if (k % job->nn == 0) {
-            ll_watch_advance(job->watch, 1);
-            if (ll_watch_poll(job->watch))
-                s = write_cancelled(job);
-        }
-        ll_bsdf_out_u32(out, job->offset[k]);
-        ll_bsdf_out_u32(out, job->length[k]);
-    }
-    if (s == LL_OK)
-        s = put_coefficients(w, out, chunk);
-    s = ll_watch_finish(job->watch, s, fn_commit);
-    if (s != LL_OK) {
-        ll_bsdf_out_abort(out);
-        goto done;
-    }
-    ll_bsdf_out_bytes(out, metadata, metadata_size);
-    s = ll_bsdf_out_commit(out);
-done:
-    ll_free(chunk);
-    return s;
+    return ll_wjob_commit(job, &w->spill, w->path, &src);
 }
 
 ll_status ll_bsdf_writer_commit(ll_bsdf_writer *w, const ll_monitor *monitor)
