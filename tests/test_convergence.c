@@ -593,6 +593,53 @@ static void resolution_table(void **state)
     free(s);
 }
 
+/* LL_CONVERGENCE_SWEEP="ETA K ALPHA M N0 N1": the resolution search's own
+ * error (its probes, ll_probe_error against twice the resolution, the
+ * compensation on) of the interface ETA + i K, ALPHA at M orders for node
+ * counts from N0 to N1 in steps of 10%. Printed, not checked: how the
+ * criterion the search sees moves with n (docs/method.md, "between the
+ * probes"). */
+static void probe_error_against_nodes(void **state)
+{
+    const char *v = getenv("LL_CONVERGENCE_SWEEP");
+    double eta_re, eta_im, alpha, x, lo, hi, *a, *b;
+    ll_microfacet *mf = NULL, *mf0 = NULL;
+    ll_probe_set set;
+    size_t m;
+    (void)state;
+    if (!v || !*v)
+        return;
+    assert_int_equal(sscanf(v, "%lf %lf %lf %zu %lf %lf", &eta_re, &eta_im, &alpha, &m, &lo, &hi),
+                     6);
+    assert_int_equal(ll_probe_interface(eta_re, eta_im, 0.1, &set), LL_OK);
+    assert_int_equal(ll_probe_interface_model(eta_re, eta_im, alpha, &mf), LL_OK);
+    assert_int_equal(ll_probe_compensation_model(eta_re, eta_im, alpha, &mf0), LL_OK);
+    a = malloc(LL_PROBE_VALUES(&set) * sizeof *a);
+    b = malloc(LL_PROBE_VALUES(&set) * sizeof *b);
+    assert_true(a && b);
+    for (x = lo; x <= hi * 1.0001; x *= 1.1) {
+        size_t n = (size_t)ceil(x), k;
+        n += n % 2;
+        for (k = 0; k < 2; ++k) {
+            ll_probe_compensation c;
+            assert_int_equal(ll_probe_compensation_make(mf0, eta_re, eta_im, (k + 1) * n, NULL, &c),
+                             LL_OK);
+            assert_int_equal(ll_probe_interface_eval(mf, &c, (k + 1) * n, (k + 1) * m, &set, NULL,
+                                                     k ? b : a),
+                             LL_OK);
+            ll_probe_compensation_free(&c);
+        }
+        printf("  eta %g%+gi alpha %g: n %5zu m %5zu: the probes' error %.4f\n", eta_re, eta_im,
+               alpha, n, m, ll_probe_error(&set, a, b));
+        fflush(stdout);
+    }
+    free(a);
+    free(b);
+    ll_microfacet_destroy(mf);
+    ll_microfacet_destroy(mf0);
+    ll_probe_free(&set);
+}
+
 /* The issue's failure itself: eta 1.5, alpha 0.5 at mu_i 0.1 in the
  * mirror direction was 2.5 at the fit's 78 x 37 against 4.76 converged. */
 static void grazing_mirror_of_the_issue_is_fixed(void **state)
@@ -1120,6 +1167,7 @@ int main(void)
         cmocka_unit_test(media_meet_the_tolerance),
         cmocka_unit_test(slabs_meet_the_tolerance),
         cmocka_unit_test(resolution_table),
+        cmocka_unit_test(probe_error_against_nodes),
         cmocka_unit_test(search_is_cancelled_by_the_monitor),
         cmocka_unit_test(estimate_search_is_cancelled_by_the_flag),
     };
