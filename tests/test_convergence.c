@@ -341,15 +341,16 @@ static int dense(void)
     return v && *v && strcmp(v, "0") != 0;
 }
 
-/* LL_CONVERGENCE_DENSE=1 (with the full grid): the worst difference at a
+/* LL_CONVERGENCE_DENSE=1 (instead of the checks; LL_CONVERGENCE_CASES
+ * selects): the worst difference at a
  * dense scan of the lobes, not only at the test's points: incident cosines
  * every 0.002 from 0.1 to 1, each side and block as interface_points, the
  * outgoing cosines of add_lobe's offsets and 0.01, 0.03, 0.08 either side,
  * add_lobe's azimuths. Printed, not checked: it shows how far the probes
  * and the test's points, both samples, are from the worst (docs/method.md,
  * "between the probes"). */
-static void dense_scan(const char *text, double eta, int conductor, lean_interface *la,
-                       lean_interface *lb, size_t m)
+static void dense_scan(lean_interface *la, lean_interface *lb, size_t m, double eta,
+                       int conductor)
 {
     static const double offsets[] = { 0.0,   -0.01, 0.01, -0.02, 0.02, -0.03, 0.03,
                                       -0.05, 0.05,  -0.08, 0.08, -0.15, 0.15 };
@@ -408,13 +409,33 @@ static void dense_scan(const char *text, double eta, int conductor, lean_interfa
                 at_ratio = b / top;
             }
         }
-    printf("  %-40s dense scan (%zu pairs): worst %.4f at mu_o %.4f mu_i %.4f phi %.3f, "
-           "%.4f of its lobe's peak\n",
-           text, set.n_pairs, worst, at_o, at_i, at_phi, at_ratio);
+    printf(" dense scan (%zu pairs): worst %.4f at mu_o %.4f mu_i %.4f phi %.3f, %.4f of its "
+           "lobe's peak\n",
+           set.n_pairs, worst, at_o, at_i, at_phi, at_ratio);
     free(va);
     free(vb);
     free(peak);
     free(set.pairs);
+}
+
+/* The dense scan of one case at the resolution the search chooses. */
+static void dense_case(const char *text, double eta, int conductor)
+{
+    ll_material *mat = NULL;
+    ll_build_options o = LL_BUILD_OPTIONS_INIT;
+    lean_interface la, lb;
+    size_t n, m;
+    assert_int_equal(ll_material_parse(text, "convergence", &mat), LL_OK);
+    o.n_channels = 1;
+    assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
+    lean_interface_make(mat, conductor, n, &la);
+    lean_interface_make(mat, conductor, 2 * n, &lb);
+    printf("  %.*s at n %zu m %zu:", (int)strcspn(text, "\n"), text, n, m);
+    dense_scan(&la, &lb, m, eta, conductor);
+    fflush(stdout);
+    lean_interface_free(&la);
+    lean_interface_free(&lb);
+    ll_material_destroy(mat);
 }
 
 /* The interface word `text` (one line), monochrome, at tolerance t:
@@ -441,7 +462,7 @@ static int check_interface(const char *text, double eta, int conductor, double t
     lean = twice > FULL_GRID_BYTES;
     interface_points(s, eta, conductor);
     lean_interface_make(mat, conductor, n, &la);
-    if (lean || dense())
+    if (lean)
         lean_interface_make(mat, conductor, 2 * n, &lb);
     va = lean_point_values(&la, m, s);
     if (lean) {
@@ -465,13 +486,11 @@ static int check_interface(const char *text, double eta, int conductor, double t
                lean ? " (lean)" : "");
     if (lean && (verbose() || e > tolerance))
         printf("  %-40s (lean: building twice it would take %.1f GB)\n", text, twice / 1e9);
-    if (dense())
-        dense_scan(text, eta, conductor, &la, &lb, m);
     fflush(stdout);
     free(va);
     free(vb);
     lean_interface_free(&la);
-    if (lean || dense())
+    if (lean)
         lean_interface_free(&lb);
     ll_material_destroy(mat);
     free(s);
@@ -512,6 +531,15 @@ static void interfaces_meet_the_tolerance(void **state)
     char text[128];
     size_t c, a, failed = 0;
     (void)state;
+    if (dense()) {
+        for (c = 0; c < sizeof cases / sizeof cases[0]; ++c)
+            for (a = 0; a < sizeof alphas / sizeof alphas[0]; ++a) {
+                snprintf(text, sizeof text, "%s alpha=%g\n", cases[c].name, alphas[a]);
+                if (selected(text))
+                    dense_case(text, cases[c].eta, cases[c].conductor);
+            }
+        return;
+    }
     if (full_grid()) {
         for (c = 0; c < sizeof cases / sizeof cases[0]; ++c)
             for (a = 0; a < sizeof alphas / sizeof alphas[0]; ++a) {
