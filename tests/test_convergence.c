@@ -348,7 +348,7 @@ static int dense(void)
  * outgoing cosines of add_lobe's offsets and 0.01, 0.03, 0.08 either side,
  * add_lobe's azimuths. Printed, not checked: it shows how far the probes
  * and the test's points, both samples, are from the worst (docs/method.md,
- * "between the probes"). */
+ * "Between the probes"). */
 static void dense_scan(lean_interface *la, lean_interface *lb, size_t m, double eta,
                        int conductor)
 {
@@ -625,7 +625,7 @@ static void resolution_table(void **state)
  * error (its probes, ll_probe_error against twice the resolution, the
  * compensation on) of the interface ETA + i K, ALPHA at M orders for node
  * counts from N0 to N1 in steps of 10%. Printed, not checked: how the
- * criterion the search sees moves with n (docs/method.md, "between the
+ * criterion the search sees moves with n (docs/method.md, "Between the
  * probes"). */
 static void probe_error_against_nodes(void **state)
 {
