@@ -9,9 +9,8 @@
  * evaluated and sampled from any number of threads at once, and shared by
  * every object that uses the same file (ll_bsdf_retain / ll_bsdf_release;
  * retain and release are thread-safe too). Evaluation and sampling allocate
- * nothing; their stack use is bounded independently of the file (at most
- * about 72 KiB, in ll_bsdf_sample*: a series summed once for the Newton
- * steps; evaluation about 20 KiB).
+ * nothing; their stack use is bounded independently of the file (below
+ * 80 KiB in ll_bsdf_sample*, below 24 KiB in evaluation).
  *
  * Two conventions:
  *  - Layer convention (ll_bsdf_eval, ll_bsdf_pdf, ll_bsdf_sample), the
@@ -21,7 +20,7 @@
  *    azimuth between the two directions of travel (phi_d = 0 with
  *    mu_o = -mu_i is the mirror direction). For the layer L a file was
  *    written from,
- *        ll_bsdf_eval(b, mu_i, mu_o, phi_d) == ll_layer_eval(L, mu_o, mu_i, phi_d)
+ *        ll_bsdf_eval(b, mu_i, mu_o, phi_d) == ll_layer_eval(L, mu_i, mu_o, phi_d)
  *    at the layer's nodes to float precision and the series truncation.
  *    Between nodes both interpolate with Catmull-Rom splines, the file over
  *    f |mu_o| with two extra nodes at mu = 0 where it is pinned to 0 (the
@@ -47,6 +46,15 @@
  *    below, as pbrt-v3's FourierBSDF::f does for camera paths;
  *    LL_TRANSPORT_IMPORTANCE (light paths) omits the factor. eta is the
  *    file's eta(bottom) / eta(top). The layer-convention calls never scale.
+ * Both conventions name the given direction first (mu_i, wo) and the
+ * other second (mu_o, wi); the samplers pick the second.
+ * Values: f is always the BSDF without the cosine factor, and the pdf a
+ * density per solid angle of the second direction. The samplers return
+ * both f and the pdf of the direction they pick (never their ratio); a
+ * Monte Carlo estimator's weight is f |cos| / pdf, with |cos| = |mu_o| in
+ * the layer convention and |wi.z| / |wi| in the renderer convention.
+ * Failures: the calls return an ll_status; their outputs are then 0 (and a
+ * sampled direction the normal), as ll_common.h says for every call.
  * rgb outputs are (R, G, B); one-channel files give three equal values;
  * three-channel files store Y, R, B and rebuild G = 1.39829 Y - 0.100913 B
  * - 0.297375 R (pbrt-v3). Negative values clamp to 0.
@@ -69,35 +77,7 @@ typedef enum { LL_TRANSPORT_RADIANCE = 0, LL_TRANSPORT_IMPORTANCE = 1 } ll_trans
 
 /* ------------------------------------------------------------- reading */
 
-/* Open and fully validate a file: identifier and version (version 2 files
- * of the later "Layer Laboratory", which reuse the identifier with another
- * layout, are refused by name), flags, every count against the real file
- * size with overflow-checked arithmetic (before anything sized by the
- * header is allocated), nodes finite and ascending (one value at most
- * twice), parameters, CDF rows (finite, from 0, non-decreasing up to
- * rounding: a dip of at most 2^-20 of the row's total, as the original
- * layerlab's float32 running sums have, is accepted and stored flat), every
- * offset-table entry inside the coefficients with length <= nMaxOrder (and
- * nMaxOrder the longest), the blocks adding up to nCoeffs, every
- * coefficient finite and of magnitude <= 2^100, eta in [1e-3, 1e3], alpha
- * finite and >= 0; then the default limits of ll_open_options (below).
- * Every problem yields LL_ERROR_FORMAT with a message naming the file
- * ("<path>" or <memory>) and the field; harmonic extrapolation (flags
- * bit 1) or a file beyond a limit LL_ERROR_UNSUPPORTED; I/O problems
- * (missing file; a FIFO, device or directory, refused without blocking and
- * named) LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure.
- * Memory: about the file's size (coefficients are kept as the file's
- * floats, which halves what evaluation reads; it computes in double) plus
- * 16 bytes per node pair and basis; the file's bytes are not held beside
- * them. A file that opens gives finite
- * results for every direction (f is the stored f |mu_o| over |mu_o|, with
- * |mu_o| taken as at least 1e-6). */
-LL_API ll_status ll_bsdf_open(const char *path, ll_bsdf **out);
-
-/* The same from memory (the bytes are copied; data may be freed after). */
-LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out);
-
-/* Limits on what ll_bsdf_open_ex / ll_bsdf_open_memory_ex accept from an
+/* Limits on what ll_bsdf_open / ll_bsdf_open_memory accept from an
  * untrusted file, checked on the header before anything it sizes is
  * allocated or read (as OpenEXR's maximum image size and zstd's
  * windowLogMax). Set struct_size = sizeof(ll_open_options) (the INIT macro
@@ -111,8 +91,9 @@ LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **ou
  *  max_nodes: zenith-cosine nodes (default LL_OPEN_DEFAULT_MAX_NODES, 8192;
  *    tables grow as its square).
  * A file beyond a limit gives LL_ERROR_UNSUPPORTED with a message naming
- * the field, its value and the limit. ll_bsdf_open and ll_bsdf_open_memory
- * apply the defaults. */
+ * the field, its value and the limit. opts NULL applies the defaults;
+ * LL_ERROR_INVALID_ARGUMENT for a struct_size smaller than the first
+ * field's end. */
 typedef struct ll_open_options {
     size_t struct_size;
     size_t max_bytes;
@@ -125,12 +106,33 @@ typedef struct ll_open_options {
 #define LL_OPEN_DEFAULT_MAX_NODES ((size_t)8192)
 #define LL_OPEN_OPTIONS_INIT { sizeof(ll_open_options), 0, 0, 0 }
 
-/* ll_bsdf_open / ll_bsdf_open_memory with limits; opts may be NULL (the
- * defaults). LL_ERROR_INVALID_ARGUMENT for a struct_size smaller than
- * the first field's end. */
-LL_API ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf **out);
-LL_API ll_status ll_bsdf_open_memory_ex(const void *data, size_t size,
-                                        const ll_open_options *opts, ll_bsdf **out);
+/* Open and fully validate a file: identifier and version (version 2 files
+ * of the later "Layer Laboratory", which reuse the identifier with another
+ * layout, are refused by name), flags, every count against the real file
+ * size with overflow-checked arithmetic (before anything sized by the
+ * header is allocated), nodes finite and ascending (one value at most
+ * twice), parameters, CDF rows (finite, from 0, non-decreasing up to
+ * rounding: a dip of at most 2^-20 of the row's total, as the original
+ * layerlab's float32 running sums have, is accepted and stored flat), every
+ * offset-table entry inside the coefficients with length <= nMaxOrder (and
+ * nMaxOrder the longest), the blocks adding up to nCoeffs, every
+ * coefficient finite and of magnitude <= 2^100, eta in [1e-3, 1e3], alpha
+ * finite and >= 0; then the limits of opts (above).
+ * Every problem yields LL_ERROR_FORMAT with a message naming the file
+ * ("<path>" or <memory>) and the field; harmonic extrapolation (flags
+ * bit 1) or a file beyond a limit LL_ERROR_UNSUPPORTED; I/O problems
+ * (missing file; a FIFO, device or directory, refused without blocking and
+ * named) LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY. *out is NULL on failure.
+ * Memory: about the file's size (coefficients are kept as the file's
+ * floats, which halves what evaluation reads; it computes in double) plus
+ * 16 bytes per node pair and basis; the file's bytes are not held beside
+ * them. A file that opens gives finite results for every direction (f is the stored f |mu_o| over |mu_o|, with
+ * |mu_o| taken as at least 1e-6). */
+LL_API ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_bsdf **out);
+
+/* The same from memory (the bytes are copied; data may be freed after). */
+LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, const ll_open_options *opts,
+                                     ll_bsdf **out);
 
 /* Add a reference; returns b. */
 LL_API ll_bsdf *ll_bsdf_retain(ll_bsdf *b);
@@ -176,23 +178,118 @@ LL_API ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count
  * LL_ERROR_INVALID_ARGUMENT for NULL arguments or p out of range. */
 LL_API ll_status ll_bsdf_get_parameter_name(const ll_bsdf *b, size_t p, const char **name);
 
-/* The weights are products of 1-D linear (hat) weights over each parameter's positions: >= 0,
- * at most two non-zero per parameter, summing to 1, so f stays >= 0 and sampling is exact;
- * evaluation and sampling visit only the non-zero ones. Chosen over Catmull-Rom after measuring
- * both (docs/bsdf-format.md, "Weights for a point of parameter space"): on a rough conductor and
- * a dielectric textured over alpha at 0.05, 0.1, 0.2, 0.3, 0.4, the relative error of f against
- * a direct build (where f > 1% of its peak) is max 0.18 .. 0.90, mean 0.04 .. 0.27 between
- * samples for linear; Catmull-Rom's mean is 25-50% lower and its max higher in 2 of 8 cases, and
- * its negative weights can make f and the sampling CDF rows negative or decreasing, which the
- * sampler does not handle (not seen above 1% of the peak in these files). */
 /* Weights of the file's bases for one point of parameter space: params holds one value per
  * textured parameter, in the file's order; coeffs receives info.n_bases floats, to be passed as
  * basis_coeffs to ll_bsdf_eval / _pdf / _sample and their _dir forms. Values outside a parameter's
- * sampled range are clamped to it. NULL params is valid only for an untextured file. */
+ * sampled range are clamped to it. NULL params is valid only for an untextured file.
+ * The weights are products of 1-D linear (hat) weights over each parameter's positions: >= 0,
+ * at most two non-zero per parameter, summing to 1, so f stays >= 0 and sampling is exact;
+ * evaluation and sampling visit only the non-zero ones (docs/bsdf-format.md, "Weights for a
+ * point of parameter space", compares them with Catmull-Rom weights). */
 LL_API ll_status ll_bsdf_basis_coefficients(const ll_bsdf *b, const double *params, float *coeffs);
 
 /* The file's nodes (n_nodes floats, ascending, owned by b). */
 LL_API const float *ll_bsdf_nodes(const ll_bsdf *b);
+
+/* ------------------------------------------------- layer convention */
+
+/* f(mu_i -> mu_o, phi_d) without cosine into f_rgb, as ll_layer_eval (see
+ * the top of this file). Cosines are clamped into [-1, 1].
+ * LL_ERROR_INVALID_ARGUMENT for NULL b or f_rgb, non-finite arguments, or
+ * missing basis weights of a textured file. */
+LL_API ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                              const float *basis_coeffs, double f_rgb[3]);
+
+/* Probability density (per solid angle, d mu_o d phi_d) that
+ * ll_bsdf_sample picks (mu_o, phi_d) given mu_i, into *pdf: the luminance
+ * f |mu_o| over the luminance albedo (0 where that is not positive).
+ * Errors as ll_bsdf_eval (NULL pdf too). */
+LL_API ll_status ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                             const float *basis_coeffs, double *pdf);
+
+/* Sample an outgoing direction for light arriving along mu_i, from the
+ * uniform numbers u[0], u[1] in [0, 1], both ends included (as pbrt-v3's
+ * Sample_f: u[1] picks mu_o by inverting the luminance's spline CDF, u[0]
+ * picks phi_d in [0, 2 pi) from the Fourier series, u[0] >= 1/2 the
+ * mirrored half): writes mu_o, phi_d, the pdf (equal to ll_bsdf_pdf there)
+ * and f (equal to ll_bsdf_eval there). A pdf and f of 0 mean no direction
+ * (no light is scattered from mu_i); wherever light is scattered, every u
+ * gives a direction of positive pdf. The inversions are Newton-bisection
+ * with a bounded number of steps. LL_ERROR_INVALID_ARGUMENT for NULL
+ * pointers, non-finite mu_i, u outside [0, 1]. */
+LL_API ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
+                                const float *basis_coeffs, double *mu_o, double *phi_d,
+                                double *pdf, double f_rgb[3]);
+
+/* ---------------------------------------------- renderer convention */
+
+/* f(wo, wi) without cosine into f_rgb (pbrt-v3's FourierBSDF::f; mapping
+ * and the transport mode's eta^2 at the top of this file).
+ * LL_ERROR_INVALID_ARGUMENT for NULL pointers, zero or non-finite
+ * directions, an unknown mode or missing basis weights. */
+LL_API ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
+                                  ll_transport mode, const float *basis_coeffs,
+                                  double f_rgb[3]);
+
+/* The density of sampling wi given wo (per solid angle of wi) into *pdf, as
+ * pbrt-v3's Pdf(wo, wi). Errors as ll_bsdf_eval_dir but for the mode. */
+LL_API ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
+                                 const float *basis_coeffs, double *pdf);
+
+/* Sample wi given wo as pbrt-v3's FourierBSDF::Sample_f does (same u gives
+ * the same direction, to the solver's precision; u in [0, 1], both ends
+ * included, as ll_bsdf_sample); writes wi (unit length, also when wo is
+ * the normal: its azimuth is then taken from +x), its pdf (equal to
+ * ll_bsdf_pdf_dir(wo, wi)) and f(wo, wi) (equal to ll_bsdf_eval_dir). pdf 0
+ * and f 0 mean no direction (wi is then the normal). Errors as
+ * ll_bsdf_eval_dir, and u outside [0, 1]. */
+LL_API ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double u[2],
+                                    ll_transport mode, const float *basis_coeffs,
+                                    double wi[3], double *pdf, double f_rgb[3]);
+
+/* ------------------------------------------- renderer convention, batches */
+
+/* The _dir calls over arrays, for wavefront renderers (one call per
+ * wavefront). wo, wi, wi_out and rgb_out hold count packed 3-vectors
+ * (element k at [3k, 3k + 3)), u count packed 2-vectors, pdf_out count
+ * doubles. basis_coeffs: NULL (untextured file), or coeff_stride floats
+ * per element (element k's weights at basis_coeffs + k * coeff_stride), or
+ * coeff_stride 0 for one set of weights shared by all elements.
+ *
+ * Element k's outputs are bit-identical to the scalar call on element k
+ * (ll_bsdf_eval_dir, ll_bsdf_pdf_dir, ll_bsdf_sample_dir), whatever the
+ * thread count. An invalid element gets what the scalar call gives it
+ * (zeros; wi_out the normal); the other elements are still computed, and
+ * the batch then returns the status of the invalid element with the lowest
+ * index, with that element's message in ll_last_error_message.
+ * Before any element: LL_ERROR_INVALID_ARGUMENT for a NULL b, a NULL array
+ * with count > 0, or sizes that overflow (nothing is written then).
+ * count 0 is LL_OK. The calls allocate nothing on the heap.
+ *
+ * Threads: a batch of count >= 2048 is split into contiguous ranges of at
+ * least 1024 elements over up to one POSIX thread per online processor
+ * (the calling thread takes one range), or LAYERLAB_BATCH_THREADS (1..64)
+ * threads if that environment variable is set. The calls are safe from any
+ * number of threads at once, like the scalar calls. */
+LL_API ll_status ll_bsdf_eval_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                        const double *wi, ll_transport mode,
+                                        const float *basis_coeffs, size_t coeff_stride,
+                                        double *rgb_out);
+LL_API ll_status ll_bsdf_pdf_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                       const double *wi, const float *basis_coeffs,
+                                       size_t coeff_stride, double *pdf_out);
+LL_API ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
+                                          const double *u, ll_transport mode,
+                                          const float *basis_coeffs, size_t coeff_stride,
+                                          double *wi_out, double *pdf_out, double *rgb_out);
+
+/* ------------------------------------------------------------ experimental
+ * Declared only when the program defines LL_EXPERIMENTAL before including
+ * this header. Not frozen: these declarations may change or go in a minor
+ * release (their symbols are in the version node
+ * LAYERLAB_READER_EXPERIMENTAL_1.0, and LAYERLAB_EXPERIMENTAL_1.0 in
+ * liblayerlab), so a program that uses them is built against one release. */
+#ifdef LL_EXPERIMENTAL
 
 /* The validated tables of an opened file, as the evaluator reads them, for
  * renderers that evaluate the format themselves (e.g. traced into a GPU or
@@ -239,96 +336,7 @@ typedef struct ll_bsdf_tables {
  * arguments or a struct_size smaller than the first field's end. */
 LL_API ll_status ll_bsdf_get_tables(const ll_bsdf *b, ll_bsdf_tables *out);
 
-/* ------------------------------------------------- layer convention */
-
-/* f(mu_i -> mu_o, phi_d) without cosine, as ll_layer_eval (see the top of
- * this file). Cosines are clamped into [-1, 1]. LL_ERROR_INVALID_ARGUMENT
- * for NULL b or rgb, non-finite arguments, or missing basis weights of a
- * textured file (rgb is then 0). */
-LL_API ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
-                              const float *basis_coeffs, double rgb[3]);
-
-/* Probability density (per solid angle, d mu_o d phi_d) that
- * ll_bsdf_sample picks (mu_o, phi_d) given mu_i: the luminance f |mu_o|
- * over the luminance albedo (0 where that is not positive). 0 for invalid
- * arguments. */
-LL_API double ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
-                          const float *basis_coeffs);
-
-/* Sample an outgoing direction for light arriving along mu_i, from the
- * uniform numbers u[0], u[1] in [0, 1] (as pbrt-v3's Sample_f: u[1] picks
- * mu_o by inverting the luminance's spline CDF, u[0] picks phi_d in
- * [0, 2 pi) from the Fourier series, u[0] >= 1/2 the mirrored half):
- * writes mu_o, phi_d, the pdf (equal to ll_bsdf_pdf there) and the weight
- * f * |mu_o| / pdf. A zero weight and pdf mean no direction (e.g. no light
- * is scattered from mu_i). The inversions are Newton-bisection with a
- * bounded number of steps. LL_ERROR_INVALID_ARGUMENT for NULL pointers,
- * non-finite mu_i, u outside [0, 1]. */
-LL_API ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
-                                const float *basis_coeffs, double *mu_o, double *phi_d,
-                                double *pdf, double weight_rgb[3]);
-
-/* ---------------------------------------------- renderer convention */
-
-/* f(wo, wi) without cosine (pbrt-v3's FourierBSDF::f; mapping and the
- * transport mode's eta^2 at the top of this file).
- * LL_ERROR_INVALID_ARGUMENT for NULL pointers, zero or non-finite
- * directions, an unknown mode or missing basis weights (rgb is then 0). */
-LL_API ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
-                                  ll_transport mode, const float *basis_coeffs,
-                                  double rgb[3]);
-
-/* pdf of sampling wi given wo (per solid angle of wi), as pbrt-v3's
- * Pdf(wo, wi); 0 for invalid arguments. */
-LL_API double ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
-                              const float *basis_coeffs);
-
-/* Sample wi given wo as pbrt-v3's FourierBSDF::Sample_f does (same u gives
- * the same direction, to the solver's precision); writes wi (unit length,
- * also when wo is the normal: its azimuth is then taken from +x), its pdf
- * (equal to ll_bsdf_pdf_dir(wo, wi)) and f(wo, wi) (equal to
- * ll_bsdf_eval_dir). pdf 0 and f 0 mean no direction (wi is then the
- * normal). Errors as ll_bsdf_eval_dir, and u outside [0, 1]. */
-LL_API ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double u[2],
-                                    ll_transport mode, const float *basis_coeffs,
-                                    double wi[3], double *pdf, double rgb[3]);
-
-/* ------------------------------------------- renderer convention, batches */
-
-/* The _dir calls over arrays, for wavefront renderers (one call per
- * wavefront). wo, wi, wi_out and rgb_out hold count packed 3-vectors
- * (element k at [3k, 3k + 3)), u count packed 2-vectors, pdf_out count
- * doubles. basis_coeffs: NULL (untextured file), or coeff_stride floats
- * per element (element k's weights at basis_coeffs + k * coeff_stride), or
- * coeff_stride 0 for one set of weights shared by all elements.
- *
- * Element k's outputs are bit-identical to the scalar call on element k
- * (ll_bsdf_eval_dir, ll_bsdf_pdf_dir, ll_bsdf_sample_dir), whatever the
- * thread count. An invalid element gets what the scalar call gives it
- * (zeros; wi_out the normal); the other elements are still computed, and
- * the batch then returns the status of the invalid element with the lowest
- * index, with that element's message in ll_last_error_message. The pdf
- * batch's elements cannot fail (invalid ones give 0, as ll_bsdf_pdf_dir).
- * Before any element: LL_ERROR_INVALID_ARGUMENT for a NULL b, a NULL array
- * with count > 0, or sizes that overflow (nothing is written then).
- * count 0 is LL_OK. The calls allocate nothing on the heap.
- *
- * Threads: a batch of count >= 2048 is split into contiguous ranges of at
- * least 1024 elements over up to one POSIX thread per online processor
- * (the calling thread takes one range), or LAYERLAB_BATCH_THREADS (1..64)
- * threads if that environment variable is set. The calls are safe from any
- * number of threads at once, like the scalar calls. */
-LL_API ll_status ll_bsdf_eval_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
-                                        const double *wi, ll_transport mode,
-                                        const float *basis_coeffs, size_t coeff_stride,
-                                        double *rgb_out);
-LL_API ll_status ll_bsdf_pdf_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
-                                       const double *wi, const float *basis_coeffs,
-                                       size_t coeff_stride, double *pdf_out);
-LL_API ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
-                                          const double *u, ll_transport mode,
-                                          const float *basis_coeffs, size_t coeff_stride,
-                                          double *wi_out, double *pdf_out, double *rgb_out);
+#endif /* LL_EXPERIMENTAL */
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
 /*
- * layerlab — common definitions: export macro, versions, status codes,
- * error messages and the per-thread worker count.
+ * layerlab — common definitions: export macros, versions, status codes,
+ * error messages, the progress monitor and the allocator. Both libraries
+ * (liblayerlab and liblayerlab_reader) export everything declared here.
  *
  * Part of the public API; include <layerlab.h> rather than this file.
  */
@@ -28,12 +29,22 @@ extern "C" {
 #  define LL_API
 #endif
 
+/* LL_DEPRECATED(msg) marks a declaration that is kept but should no longer
+ * be used: the compiler warns at each use with msg. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define LL_DEPRECATED(msg) __attribute__((deprecated(msg)))
+#elif defined(_MSC_VER)
+#  define LL_DEPRECATED(msg) __declspec(deprecated(msg))
+#else
+#  define LL_DEPRECATED(msg)
+#endif
+
 /* ---------------------------------------------------------------- versions
  * The numbers live here and nowhere else: the Makefile reads them from this
  * header. The soname (liblayerlab.so.LL_ABI_VERSION) changes only when the
  * ABI changes incompatibly, never for a release. */
-#define LL_VERSION_MAJOR 0
-#define LL_VERSION_MINOR 1
+#define LL_VERSION_MAJOR 1
+#define LL_VERSION_MINOR 0
 #define LL_VERSION_PATCH 0
 #define LL_ABI_VERSION 1
 
@@ -52,12 +63,16 @@ extern "C" {
 
 /* The version of the library actually loaded (may differ from the headers'). */
 LL_API int ll_version_number(void);
-/* Static text such as "0.1.0"; never NULL. */
+/* Static text such as "1.0.0"; never NULL. */
 LL_API const char *ll_version_string(void);
 
 /* ------------------------------------------------------------ status codes
- * Every fallible call returns an ll_status. 0 is success; codes are only
- * ever appended, never renumbered. */
+ * Every call that can fail returns an ll_status (0 is success; codes are
+ * only ever appended, never renumbered) and hands its values back through
+ * out-parameters; on failure those are set to 0 (never NaN) unless the
+ * call's documentation says it leaves them unchanged, and
+ * ll_last_error_message() says why. Plain getters that can fail only for a
+ * NULL argument return their value directly (0 or NULL for NULL). */
 typedef int32_t ll_status;
 
 #define LL_OK                      0
@@ -68,7 +83,7 @@ typedef int32_t ll_status;
 #define LL_ERROR_NUMERICAL         5  /* a factorisation or series failed     */
 #define LL_ERROR_UNSUPPORTED       6  /* valid, but not supported by this build */
 #define LL_ERROR_PARSE             7  /* a material description has an error  */
-#define LL_ERROR_CANCELLED         8  /* the caller's cancel flag was raised  */
+#define LL_ERROR_CANCELLED         8  /* the caller's monitor cancelled the call */
 
 /* Static English text for a status ("invalid argument", ...); never NULL. */
 LL_API const char *ll_status_string(ll_status status);
@@ -79,20 +94,15 @@ LL_API const char *ll_status_string(ll_status status);
  * call has failed yet. Successful calls do not clear it. */
 LL_API const char *ll_last_error_message(void);
 
-/* ----------------------------------------------------------------- threads
- * The number of worker threads that layerlab calls made *from the calling
- * thread* may use (adding, doubling, building interfaces). 0 means all
- * processors (the default). Results never depend on this number: they are
- * bit-identical for any thread count. The setting is per calling thread, so
- * two renderer threads can use different counts without locking. */
-LL_API ll_status ll_set_thread_count(size_t n_threads);
-/* The effective count for the calling thread (>= 1). */
-LL_API size_t ll_get_thread_count(void);
-
 /* ----------------------------------------------------------------- monitor
- * Progress of a long call, as Embree's progress monitor: called on the calling thread with the
- * fraction done in [0, 1] and a short stage name; a non-zero return cancels the call, which then
- * returns LL_ERROR_CANCELLED and leaves its output unchanged.
+ * The one way to watch a long call: every call that can take long has a
+ * `const ll_monitor *monitor` as its last argument (NULL: not watched).
+ * The callback receives the monitor's user pointer first, the fraction done
+ * in [0, 1] and a short stage name; it returns 0 to let the call continue
+ * and non-zero to cancel it, which then returns LL_ERROR_CANCELLED and
+ * leaves its output unchanged. Why 0 continues: a monitor that only
+ * watches returns 0, the same "nothing wrong" value as LL_OK, and the zero
+ * of an unset or forgotten flag can never cancel a call by accident.
  *
  * The callback is only ever called from the thread that made the call (never from a worker
  * thread: workers poll an internal flag that the calling thread raises when the callback
@@ -101,7 +111,7 @@ LL_API size_t ll_get_thread_count(void);
  * between as the work advances (fractions never decrease), while the calling thread waits for
  * workers too. Stage names are static strings such as "quadrature", "interface", "phase
  * function", "doubling", "adding", "measured", "writing". The callback must not call layerlab
- * on the layer being computed. A monitor may be passed to several calls, also at once from
+ * on the object being computed. A monitor may be passed to several calls, also at once from
  * several threads if its callback is thread-safe. */
 typedef int (*ll_monitor_fn)(void *user, double fraction, const char *stage);
 typedef struct ll_monitor {
@@ -110,6 +120,37 @@ typedef struct ll_monitor {
     void *user;
 } ll_monitor;
 #define LL_MONITOR_INIT { sizeof(ll_monitor), NULL, NULL }
+
+/* --------------------------------------------------------------- allocator
+ * Every block of memory the library allocates (objects, tables, scratch,
+ * file buffers) comes from one allocator: malloc, realloc and free by
+ * default, or the caller's, as zstd's ZSTD_customMem and OpenEXR's
+ * alloc_fn. Outside it: what other libraries allocate for themselves
+ * (OpenBLAS's buffers, the OpenMP runtime, the C library's thread stacks and
+ * FILE buffers).
+ *  alloc: as malloc (size is never 0); NULL on failure.
+ *  realloc: as realloc (ptr is never NULL, size never 0); NULL on failure,
+ *    ptr then still valid.
+ *  free: as free; ptr is never NULL.
+ *  user: passed first to the three.
+ * Blocks need the alignment malloc gives (the library asks for no stricter
+ * one). The setting is process-wide and not
+ * synchronised: set it before the library allocates anything (before any
+ * object exists, and before any other thread calls layerlab), and change it
+ * back only when every object made with it is gone. NULL restores malloc.
+ * Set struct_size = sizeof(ll_allocator) (the INIT macro does).
+ * LL_ERROR_INVALID_ARGUMENT for a struct_size smaller than the first
+ * field's end or a NULL function pointer (the allocator is then unchanged). */
+typedef struct ll_allocator {
+    size_t struct_size;                                   /* sizeof(ll_allocator) */
+    void *(*alloc)(void *user, size_t size);              /* as malloc; NULL on failure */
+    void *(*realloc)(void *user, void *ptr, size_t size); /* as realloc */
+    void (*free)(void *user, void *ptr);                  /* as free; never given NULL */
+    void *user;
+} ll_allocator;
+#define LL_ALLOCATOR_INIT { sizeof(ll_allocator), NULL, NULL, NULL, NULL }
+
+LL_API ll_status ll_set_allocator(const ll_allocator *allocator);
 
 #ifdef __cplusplus
 }

@@ -35,6 +35,16 @@
 extern "C" {
 #endif
 
+/* ----------------------------------------------------------------- threads
+ * The number of worker threads that layerlab calls made *from the calling
+ * thread* may use (adding, doubling, building interfaces). 0 means all
+ * processors (the default). Results never depend on this number: they are
+ * bit-identical for any thread count. The setting is per calling thread, so
+ * two renderer threads can use different counts without locking. */
+LL_API ll_status ll_set_thread_count(size_t n_threads);
+/* The effective count for the calling thread (>= 1). */
+LL_API size_t ll_get_thread_count(void);
+
 typedef struct ll_layer ll_layer;
 
 /* ------------------------------------------------------------ life cycle */

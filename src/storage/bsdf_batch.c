@@ -63,8 +63,7 @@ static ll_status run_element(const batch_job *job, size_t k)
         return ll_bsdf_eval_dir(job->b, job->wo + 3 * k, job->wi + 3 * k, job->mode, basis,
                                 job->rgb_out + 3 * k);
     case BATCH_PDF:
-        job->pdf_out[k] = ll_bsdf_pdf_dir(job->b, job->wo + 3 * k, job->wi + 3 * k, basis);
-        return LL_OK;
+        return ll_bsdf_pdf_dir(job->b, job->wo + 3 * k, job->wi + 3 * k, basis, job->pdf_out + k);
     default:
         return ll_bsdf_sample_dir(job->b, job->wo + 3 * k, job->u + 2 * k, job->mode, basis,
                                   job->wi_out + 3 * k, job->pdf_out + k, job->rgb_out + 3 * k);

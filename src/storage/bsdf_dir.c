@@ -87,16 +87,22 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
     return LL_OK;
 }
 
-double ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
-                       const float *basis_coeffs)
+ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
+                          const float *basis_coeffs, double *pdf)
 {
     const float *basis;
     double mu_i, mu_o, cos_phi;
-    if (!b || !wo || !wi ||
-        ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf_dir", &basis) != LL_OK ||
-        !to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
-        return 0.0;
-    return ll_bsdf_pdf_cos(b, mu_i, mu_o, cos_phi, basis);
+    ll_status s;
+    if (!b || !wo || !wi || !pdf)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_pdf_dir: a required pointer is NULL");
+    *pdf = 0.0;
+    if ((s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf_dir", &basis)) != LL_OK)
+        return s;
+    if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
+    *pdf = ll_bsdf_pdf_cos(b, mu_i, mu_o, cos_phi, basis);
+    return LL_OK;
 }
 
 ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double u[2],

@@ -202,7 +202,7 @@ ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
     const float *basis;
     ll_status s;
     if (!b || !rgb)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_eval: bsdf or rgb is NULL");
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_eval: bsdf or f_rgb is NULL");
     rgb[0] = rgb[1] = rgb[2] = 0.0;
     if (!ll_is_finite(mu_i) || !ll_is_finite(mu_o) || !ll_is_finite(phi_d))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
@@ -215,12 +215,21 @@ ll_status ll_bsdf_eval(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
     return LL_OK;
 }
 
-double ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
-                   const float *basis_coeffs)
+ll_status ll_bsdf_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                      const float *basis_coeffs, double *pdf)
 {
     const float *basis;
-    if (!b || !ll_is_finite(mu_i) || !ll_is_finite(mu_o) || !ll_is_finite(phi_d) ||
-        ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf", &basis) != LL_OK)
-        return 0.0;
-    return ll_bsdf_pdf_cos(b, clamp_cosine(mu_i), clamp_cosine(mu_o), cos(phi_d), basis);
+    ll_status s;
+    if (!b || !pdf)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_pdf: bsdf or pdf is NULL");
+    *pdf = 0.0;
+    if (!ll_is_finite(mu_i) || !ll_is_finite(mu_o) || !ll_is_finite(phi_d))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_pdf: mu_i = %g, mu_o = %g, phi_d = %g must be finite", mu_i,
+                       mu_o, phi_d);
+    s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf", &basis);
+    if (s != LL_OK)
+        return s;
+    *pdf = ll_bsdf_pdf_cos(b, clamp_cosine(mu_i), clamp_cosine(mu_o), cos(phi_d), basis);
+    return LL_OK;
 }

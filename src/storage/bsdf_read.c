@@ -552,8 +552,8 @@ static ll_status resolve_limits(const ll_open_options *opts, const char *fn, bsd
     return LL_OK;
 }
 
-ll_status ll_bsdf_open_memory_ex(const void *data, size_t size, const ll_open_options *opts,
-                                 ll_bsdf **out)
+ll_status ll_bsdf_open_memory(const void *data, size_t size, const ll_open_options *opts,
+                              ll_bsdf **out)
 {
     bsdf_source src = { NULL, -1 };
     bsdf_limits lim;
@@ -579,14 +579,9 @@ ll_status ll_bsdf_open_memory_ex(const void *data, size_t size, const ll_open_op
     return parse_body(data, &h, &l, &src, "<memory>", out);
 }
 
-ll_status ll_bsdf_open_memory(const void *data, size_t size, ll_bsdf **out)
-{
-    return ll_bsdf_open_memory_ex(data, size, NULL, out);
-}
-
 /* ---------------------------------------------------------------- files */
 
-ll_status ll_bsdf_open_ex(const char *path, const ll_open_options *opts, ll_bsdf **out)
+ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_bsdf **out)
 {
     char file[600];
     unsigned char head[LL_BSDF_HEADER_SIZE], *front = NULL;
@@ -646,9 +641,4 @@ done:
     ll_free(front);
     close(src.fd);
     return s;
-}
-
-ll_status ll_bsdf_open(const char *path, ll_bsdf **out)
-{
-    return ll_bsdf_open_ex(path, NULL, out);
 }

@@ -25,15 +25,21 @@
 #define LL_BSDF_ALL_CHANNELS_FROM 128
 #define LL_BSDF_MU_ITERATIONS 64
 
-/* pbrt-v3's FindInterval over the interpolated CDF row: the largest index
- * in [0, n - 2] whose value is <= target (the row is non-decreasing). */
+/* The segment of the interpolated CDF row (non-decreasing) in which it
+ * reaches target: the largest index in [0, n - 2] whose value is below
+ * target, or, for target 0, the last one still at 0. pbrt-v3's
+ * FindInterval takes the largest index whose value is <= target, which
+ * for target = the row's total (u = 1) is the last segment even where the
+ * row has long stopped rising, so u = 1 landed in a segment of no mass
+ * (e.g. transmission through a conductor) and gave no direction. */
 static size_t find_cdf_interval(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
                                 const float *basis, double target)
 {
     size_t first = 0, len = b->n_nodes;
     while (len > 0) {
         size_t half = len >> 1, middle = first + half;
-        if (ll_bsdf_row_value(b, b->cdf, off_i, w_i, middle, basis) <= target) {
+        double value = ll_bsdf_row_value(b, b->cdf, off_i, w_i, middle, basis);
+        if (value < target || value <= 0.0) {
             first = middle + 1;
             len -= half + 1;
         } else {
@@ -43,6 +49,12 @@ static size_t find_cdf_interval(const ll_bsdf *b, ptrdiff_t off_i, const double 
     if (first == 0)
         return 0;
     return first - 1 > b->n_nodes - 2 ? b->n_nodes - 2 : first - 1;
+}
+
+/* The density of the segment's cubic Hermite at t. */
+static double segment_density(double f0, double f1, double d0, double d1, double t)
+{
+    return f0 + t * (d0 + t * (-2.0 * d0 - d1 + 3.0 * (f1 - f0) + t * (d0 + d1 + 2.0 * (f0 - f1))));
 }
 
 /* Pick mu_o from u: the CDF row interpolated over the incident weights,
@@ -100,8 +112,7 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
         /* F and its derivative p in Horner form. */
         F = t * (f0 + t * (0.5 * d0 + t * ((1.0 / 3.0) * (-2.0 * d0 - d1) + f1 - f0 +
                                           t * (0.25 * (d0 + d1) + 0.5 * (f0 - f1)))));
-        f = f0 + t * (d0 + t * (-2.0 * d0 - d1 + 3.0 * (f1 - f0) +
-                                t * (d0 + d1 + 2.0 * (f0 - f1))));
+        f = segment_density(f0, f1, d0, d1, t);
         if (fabs(F - r) <= tolerance || hi - lo <= 1e-12 || it + 1 == LL_BSDF_MU_ITERATIONS)
             break;
         if (F - r < 0.0)
@@ -109,6 +120,26 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
         else
             hi = t;
         t -= (F - r) / f;
+    }
+    /* u = 0 or 1 (or a u on a flat stretch of the CDF) maps to an end of
+     * the mass, where the density is 0: the file pins f |mu_o| to 0 at
+     * mu = 0, where reflection ends. Such a u has probability 0, so any
+     * direction of positive density is right for it as long as the pdf
+     * returned is its own: step inside the segment, from 2^-20 of it in
+     * doubling steps, to the first point of positive density. */
+    if (!(f > 0.0)) {
+        double toward = t < 0.5 ? 1.0 : -1.0, step;
+        for (step = 0x1p-20; step <= 0.5; step *= 2.0) {
+            double moved = t + toward * step, density;
+            if (!(moved >= 0.0 && moved <= 1.0))
+                break;
+            density = segment_density(f0, f1, d0, d1, moved);
+            if (density > 0.0) {
+                t = moved;
+                f = density;
+                break;
+            }
+        }
     }
     *mu_o = x0 + width * t;
     *pdf_mu = f / maximum;
@@ -164,15 +195,15 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
 
 ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
                          const float *basis_coeffs, double *mu_o, double *phi_d, double *pdf,
-                         double weight_rgb[3])
+                         double f_rgb[3])
 {
     const float *basis;
     double sums[3];
     ll_status st;
-    if (!b || !u || !mu_o || !phi_d || !pdf || !weight_rgb)
+    if (!b || !u || !mu_o || !phi_d || !pdf || !f_rgb)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_sample: a required pointer is NULL");
     *mu_o = *phi_d = *pdf = 0.0;
-    weight_rgb[0] = weight_rgb[1] = weight_rgb[2] = 0.0;
+    f_rgb[0] = f_rgb[1] = f_rgb[2] = 0.0;
     if (!ll_is_finite(mu_i) || !(u[0] >= 0.0 && u[0] <= 1.0) || !(u[1] >= 0.0 && u[1] <= 1.0))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_sample: mu_i = %g must be finite and u = (%g, %g) in [0, 1]",
@@ -182,8 +213,8 @@ ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],
         return st;
     if (mu_i > 1.0) mu_i = 1.0;
     if (mu_i < -1.0) mu_i = -1.0;
-    /* weight = f |mu_o| / pdf, and the stored sums are f |mu_o| already. */
+    /* The stored sums are f |mu_o|: f is them over |mu_o|, as ll_bsdf_eval. */
     if (ll_bsdf_sample_core(b, mu_i, u, basis, mu_o, phi_d, pdf, sums))
-        ll_bsdf_to_rgb(b, sums, 1.0 / *pdf, weight_rgb);
+        ll_bsdf_to_rgb(b, sums, ll_bsdf_cosine_scale(*mu_o), f_rgb);
     return LL_OK;
 }

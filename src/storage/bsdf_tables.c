@@ -4,6 +4,8 @@
  * path, which uploads them once as Dr.Jit arrays) reads exactly what the C
  * evaluator reads and never parses a file a second time.
  */
+/* ll_bsdf_get_tables is declared for experimental use only (ll_bsdf.h). */
+#define LL_EXPERIMENTAL
 #include "storage/bsdf_internal.h"
 
 #include <string.h>

@@ -1,7 +1,13 @@
 /*
  * Overflow-checked size arithmetic, and the one allocator of the library:
  * every allocation in src/ comes through here (tests/alloc_check.sh keeps it
- * so), which lets the tests fail any chosen allocation.
+ * so), which lets a program supply its own allocator (ll_set_allocator) and
+ * the tests fail any chosen allocation.
+ *
+ * The caller's allocator (ll_common.h) replaces malloc, realloc and free
+ * for every block; calloc becomes alloc and a memset. It is a process-wide
+ * setting that ll_common.h tells the caller to make before the library
+ * allocates, so it is read without synchronisation.
  *
  * Failure injection (tests only; the functions are hidden, not in any public
  * header): ll_alloc_fail_after(k) arms a counter of allocations shared by
@@ -13,7 +19,8 @@
  * thread, in index order). While armed, the hook also counts the blocks
  * allocated minus the blocks freed, so a test sees a leak without a leak
  * checker. Unarmed, each allocation costs one relaxed atomic load of the
- * flag: this is the only mutable global of the library, and it is written
+ * flag. The hook and the caller's allocator are the only mutable globals of
+ * the library besides the thread-local error message; the hook is written
  * only by tests.
  */
 #define _XOPEN_SOURCE 700 /* realpath (ll_realpath) */
@@ -99,14 +106,61 @@ static void note_block(long long delta)
         FETCH_ADD(hook.live, delta);
 }
 
-/* ------------------------------------------------------------- allocation */
+/* ------------------------------------------------------- the allocator */
+
+/* The caller's allocator (ll_set_allocator); all NULL: the C library's. */
+static ll_allocator user_allocator;
+
+ll_status ll_set_allocator(const ll_allocator *allocator)
+{
+    ll_allocator a = LL_ALLOCATOR_INIT;
+    ll_status s;
+    if (!allocator) {
+        memset(&user_allocator, 0, sizeof user_allocator);
+        return LL_OK;
+    }
+    s = ll_struct_read(&a, sizeof a, allocator, "ll_set_allocator", "ll_allocator");
+    if (s != LL_OK)
+        return s;
+    if (!a.alloc || !a.realloc || !a.free)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_set_allocator: alloc, realloc and free must all be given");
+    user_allocator = a;
+    return LL_OK;
+}
+
+/* The three primitives, through the caller's allocator when one is set.
+ * bytes is never 0 here. */
+static void *raw_alloc(size_t bytes)
+{
+    if (user_allocator.alloc)
+        return user_allocator.alloc(user_allocator.user, bytes);
+    return malloc(bytes);
+}
+
+static void *raw_realloc(void *block, size_t bytes)
+{
+    if (!block)
+        return raw_alloc(bytes);
+    if (user_allocator.realloc)
+        return user_allocator.realloc(user_allocator.user, block, bytes);
+    return realloc(block, bytes);
+}
+
+static void raw_free(void *block)
+{
+    if (user_allocator.free)
+        user_allocator.free(user_allocator.user, block);
+    else
+        free(block);
+}
 
 void *ll_malloc(size_t bytes)
 {
     void *p;
     if (injected_failure())
         return NULL;
-    p = malloc(bytes ? bytes : 1);
+    p = raw_alloc(bytes ? bytes : 1);
     if (p)
         note_block(1);
     return p;
@@ -120,7 +174,15 @@ void *ll_calloc(size_t count, size_t size)
         return NULL;
     if (injected_failure())
         return NULL;
-    p = bytes ? calloc(count, size) : calloc(1, 1);
+    if (!bytes)
+        bytes = 1;
+    if (user_allocator.alloc) {
+        p = user_allocator.alloc(user_allocator.user, bytes);
+        if (p)
+            memset(p, 0, bytes);
+    } else {
+        p = calloc(bytes, 1);
+    }
     if (p)
         note_block(1);
     return p;
@@ -131,7 +193,7 @@ void *ll_realloc(void *block, size_t bytes)
     void *p;
     if (injected_failure())
         return NULL;
-    p = realloc(block, bytes ? bytes : 1);
+    p = raw_realloc(block, bytes ? bytes : 1);
     if (p && !block)
         note_block(1);
     return p;
@@ -141,7 +203,7 @@ void ll_free(void *block)
 {
     if (block) {
         note_block(-1);
-        free(block);
+        raw_free(block);
     }
 }
 

@@ -1,9 +1,10 @@
 /*
  * Status codes, versions and the error message of the calling thread.
  *
- * The only mutable state in the library is per thread: the last error
- * message (here) and the worker-thread count requested by the calling
- * thread (threads.c).
+ * The library's mutable state is per thread -- the last error message
+ * (here) and the worker-thread count requested by the calling thread
+ * (threads.c) -- but for the process-wide allocator that the caller sets
+ * before anything is allocated (alloc.c).
  */
 #include "support/support.h"
 

@@ -5,6 +5,7 @@
  */
 #include "support/support.h"
 #include "support/watch.h"
+#include "layerlab/ll_layer.h" /* ll_set_thread_count, ll_get_thread_count */
 
 #include <stdint.h>
 #include <string.h>
