@@ -129,10 +129,10 @@ int main(int argc, char **argv)
         layers[k] = l[k % SIDE];
     snprintf(path, sizeof path, "%s/basis64.bsdf", dir);
     check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL), "write");
-    check(ll_bsdf_open(path, &b64), "open");
+    check(ll_bsdf_open(path, NULL, &b64), "open");
     snprintf(path, sizeof path, "%s/basis1.bsdf", dir);
     check(ll_bsdf_write(path, layers, 1, NULL), "write");
-    check(ll_bsdf_open(path, &b1), "open");
+    check(ll_bsdf_open(path, NULL, &b1), "open");
     check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
     for (k = 0; k < SIDE * SIDE; ++k)
         active += coeffs[k] != 0.0f;

@@ -55,7 +55,7 @@ static ll_bsdf *write_open(const char *path, const ll_layer *const *layers, size
 {
     ll_bsdf *b = NULL;
     check(ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, NULL), "write");
-    check(ll_bsdf_open(path, &b), "open");
+    check(ll_bsdf_open(path, NULL, &b), "open");
     return b;
 }
 

@@ -102,7 +102,7 @@ int main(int argc, char **argv)
         bench_die("batch: CALLS and BATCH must be positive");
     snprintf(threads[0], sizeof threads[0], "1");
     snprintf(threads[1], sizeof threads[1], "%ld", cores > 0 ? cores : 1);
-    bench_check(ll_bsdf_open(argv[1], &b), "ll_bsdf_open");
+    bench_check(ll_bsdf_open(argv[1], NULL, &b), "ll_bsdf_open");
     workload_make(&w, calls, batch);
     for (t = 0; t < 2; ++t) {
         if (setenv("LAYERLAB_BATCH_THREADS", threads[t], 1) != 0)

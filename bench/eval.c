@@ -117,7 +117,7 @@ int main(int argc, char **argv)
     if (calls == 0)
         bench_die("eval: CALLS must be positive");
     bench_check(ll_set_thread_count(1), "ll_set_thread_count");
-    bench_check(ll_bsdf_open(argv[1], &b), "ll_bsdf_open");
+    bench_check(ll_bsdf_open(argv[1], NULL, &b), "ll_bsdf_open");
     workload_make(&w, calls);
     scale = 1e9 / (double)calls;
 

@@ -200,7 +200,7 @@ int main(int argc, char **argv)
      * separate file. */
     open_opts.max_bytes = SIZE_MAX;
     snprintf(out, sizeof out, "%s/grid.bsdf", work);
-    bench_check(ll_bsdf_open_ex(out, &open_opts, &b), "open grid");
+    bench_check(ll_bsdf_open(out, &open_opts, &b), "open grid");
     time_calls(b, 1, &ev_grid, &sa_grid);
     ll_bsdf_release(b);
     /* Untextured files of the sharpest and the smoothest corner: every
@@ -217,7 +217,7 @@ int main(int argc, char **argv)
         write_text(path, text);
         snprintf(out, sizeof out, "%s/corner.bsdf", work);
         run_llbuild(llbuild, path, out, &r);
-        bench_check(ll_bsdf_open(out, &b), "open corner");
+        bench_check(ll_bsdf_open(out, NULL, &b), "open corner");
         time_calls(b, 0, k == 0 ? &ev_one : &ev_smooth, k == 0 ? &sa_one : &sa_smooth);
         ll_bsdf_release(b);
     }

@@ -95,8 +95,8 @@ static void compare(const char *ref_path, const char *path)
      * above the reader's default limit of 512 MiB (the row was missing). */
     ll_open_options limits = LL_OPEN_OPTIONS_INIT;
     limits.max_bytes = SIZE_MAX;
-    bench_check(ll_bsdf_open_ex(ref_path, &limits, &ref), "ll_bsdf_open (reference)");
-    bench_check(ll_bsdf_open_ex(path, &limits, &file), "ll_bsdf_open");
+    bench_check(ll_bsdf_open(ref_path, &limits, &ref), "ll_bsdf_open (reference)");
+    bench_check(ll_bsdf_open(path, &limits, &file), "ll_bsdf_open");
     bench_check(ll_bsdf_get_info(ref, &info), "ll_bsdf_get_info");
     bench_rng_seed(&rng, 14);
     for (i = 0; i < 8; ++i) {

@@ -454,12 +454,15 @@ static ll_status call_write_textured(world *w)
     const double positions[2] = { 0.0, 1.0 };
     return ll_bsdf_write_textured(out_path, l, 1, 1, counts, positions, NULL);
 }
-static ll_status call_open(world *w) { return ll_bsdf_open(bsdf_path, &w->bsdf); }
-static ll_status call_open_rgb(world *w) { return ll_bsdf_open(rgb_path, &w->bsdf); }
-static ll_status call_open_textured(world *w) { return ll_bsdf_open(textured_path, &w->bsdf); }
+static ll_status call_open(world *w) { return ll_bsdf_open(bsdf_path, NULL, &w->bsdf); }
+static ll_status call_open_rgb(world *w) { return ll_bsdf_open(rgb_path, NULL, &w->bsdf); }
+static ll_status call_open_textured(world *w)
+{
+    return ll_bsdf_open(textured_path, NULL, &w->bsdf);
+}
 static ll_status call_open_memory(world *w)
 {
-    return ll_bsdf_open_memory(bsdf_bytes, bsdf_size, &w->bsdf);
+    return ll_bsdf_open_memory(bsdf_bytes, bsdf_size, NULL, &w->bsdf);
 }
 
 /* -- the material language */

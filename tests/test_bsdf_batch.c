@@ -81,7 +81,7 @@ static void check_against_scalar(const ll_bsdf *b, const batch_data *d, const fl
         const float *w = weights ? weights + k * stride : NULL;
         double e[3], p, swi[3], sp, sf[3];
         assert_int_equal(ll_bsdf_eval_dir(b, d->wo + 3 * k, d->wi + 3 * k, mode, w, e), LL_OK);
-        p = ll_bsdf_pdf_dir(b, d->wo + 3 * k, d->wi + 3 * k, w);
+        assert_int_equal(ll_bsdf_pdf_dir(b, d->wo + 3 * k, d->wi + 3 * k, w, &p), LL_OK);
         assert_int_equal(ll_bsdf_sample_dir(b, d->wo + 3 * k, d->u + 2 * k, mode, w, swi, &sp,
                                             sf),
                          LL_OK);
@@ -101,7 +101,7 @@ static void check_against_scalar(const ll_bsdf *b, const batch_data *d, const fl
 static ll_bsdf *open_golden(void)
 {
     ll_bsdf *b = NULL;
-    if (ll_bsdf_open(LL_TEST_GOLDEN, &b) != LL_OK)
+    if (ll_bsdf_open(LL_TEST_GOLDEN, NULL, &b) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     return b;
 }
@@ -135,7 +135,7 @@ static ll_bsdf *open_textured(void)
         fail_msg("%s", ll_last_error_message());
     for (k = 0; k < N_BASES; ++k)
         ll_layer_destroy(l[k]);
-    if (ll_bsdf_open(path, &b) != LL_OK)
+    if (ll_bsdf_open(path, NULL, &b) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     return b;
 }
@@ -207,9 +207,19 @@ static void invalid_elements(void **state)
                          LL_OK);
         assert_same_bits(rgb + 3 * (N_ELEMENTS - 1), e, 3, "eval after the invalid ones",
                          N_ELEMENTS - 1);
+        memset(pdf, 0xff, N_ELEMENTS * sizeof *pdf);
         assert_int_equal(ll_bsdf_pdf_dir_batch(b, N_ELEMENTS, d->wo, d->wi, NULL, 0, pdf),
-                         LL_OK);
+                         LL_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(ll_last_error_message(), "ll_bsdf_pdf_dir"));
         assert_true(pdf[bad1] == 0.0 && pdf[bad2] == 0.0);
+        {
+            double p;
+            assert_int_equal(ll_bsdf_pdf_dir(b, d->wo + 3 * (N_ELEMENTS - 1),
+                                             d->wi + 3 * (N_ELEMENTS - 1), NULL, &p),
+                             LL_OK);
+            assert_same_bits(pdf + N_ELEMENTS - 1, &p, 1, "pdf after the invalid ones",
+                             N_ELEMENTS - 1);
+        }
         assert_int_equal(ll_bsdf_sample_dir_batch(b, N_ELEMENTS, d->wo, d->u,
                                                   LL_TRANSPORT_RADIANCE, NULL, 0, wi, pdf, rgb),
                          LL_ERROR_INVALID_ARGUMENT);

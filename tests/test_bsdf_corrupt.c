@@ -55,7 +55,7 @@ static void expect_status(const unsigned char *d, size_t n, ll_status status, co
 {
     static char sentinel;
     ll_bsdf *b = (ll_bsdf *)(void *)&sentinel; /* must be overwritten with NULL */
-    ll_status s = ll_bsdf_open_memory(d, n, &b);
+    ll_status s = ll_bsdf_open_memory(d, n, NULL, &b);
     if (s != status)
         fail_msg("status %d (wanted %d): %s", (int)s, (int)status, ll_last_error_message());
     assert_null(b);
@@ -76,7 +76,7 @@ static void expect_ok(const unsigned char *d, size_t n)
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     double wo[3] = { 0.3, 0.2, 0.9 }, wi[3] = { -0.2, -0.3, 0.9 }, rgb[3];
     float basis[8] = { 0.25f, 0.25f, 0.25f, 0.25f, 0.25f, 0.25f, 0.25f, 0.25f };
-    if (ll_bsdf_open_memory(d, n, &b) != LL_OK)
+    if (ll_bsdf_open_memory(d, n, NULL, &b) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     assert_true(info.n_bases <= 8);
@@ -101,7 +101,7 @@ static void every_truncation(void **state)
      * the real size before anything is allocated, so this is quick). */
     for (n = 0; n < g_size; ++n) {
         ll_bsdf *b = NULL;
-        ll_status s = ll_bsdf_open_memory(d, n, &b);
+        ll_status s = ll_bsdf_open_memory(d, n, NULL, &b);
         if (s != LL_ERROR_FORMAT || b)
             fail_msg("length %zu: status %d", n, (int)s);
     }
@@ -126,14 +126,14 @@ static void truncated_files(void **state)
     for (k = 0; k < sizeof cuts / sizeof cuts[0]; ++k) {
         ll_bsdf *b = (ll_bsdf *)(void *)path;
         ll_test_write_file(path, g_gold, cuts[k]);
-        assert_int_equal(ll_bsdf_open(path, &b), LL_ERROR_FORMAT);
+        assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_ERROR_FORMAT);
         assert_null(b);
         assert_non_null(strstr(ll_last_error_message(), path));
     }
     ll_test_write_file(path, g_gold, g_size);
     {
         ll_bsdf *b = NULL;
-        assert_int_equal(ll_bsdf_open(path, &b), LL_OK);
+        assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
         ll_bsdf_release(b);
     }
 }
@@ -399,16 +399,16 @@ static void io_and_arguments(void **state)
     char path[600];
     (void)state;
     snprintf(path, sizeof path, "%s/does-not-exist.bsdf", g_dir);
-    assert_int_equal(ll_bsdf_open(path, &b), LL_ERROR_IO);
+    assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_ERROR_IO);
     assert_null(b);
     assert_non_null(strstr(ll_last_error_message(), "does-not-exist.bsdf"));
-    assert_int_equal(ll_bsdf_open(g_dir, &b), LL_ERROR_IO);
+    assert_int_equal(ll_bsdf_open(g_dir, NULL, &b), LL_ERROR_IO);
     assert_non_null(strstr(ll_last_error_message(), "not a regular file"));
-    assert_int_equal(ll_bsdf_open(NULL, &b), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_open(path, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_open_memory(NULL, 10, &b), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_open_memory(g_gold, g_size, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_open_memory(NULL, 0, &b), LL_ERROR_FORMAT);
+    assert_int_equal(ll_bsdf_open(NULL, NULL, &b), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_open(path, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_open_memory(NULL, 10, NULL, &b), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_open_memory(g_gold, g_size, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_open_memory(NULL, 0, NULL, &b), LL_ERROR_FORMAT);
 }
 
 int main(void)

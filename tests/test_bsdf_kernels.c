@@ -11,7 +11,7 @@
 static ll_bsdf *open_golden(void)
 {
     ll_bsdf *b = NULL;
-    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &b), LL_OK);
     return b;
 }
 

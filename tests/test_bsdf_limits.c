@@ -1,6 +1,6 @@
 /*
  * Reader limits and what is not a regular file (issue 13):
- *  - ll_bsdf_open_ex / ll_bsdf_open_memory_ex with ll_open_options:
+ *  - ll_bsdf_open / ll_bsdf_open_memory with ll_open_options:
  *    defaults, each limit, struct_size of an older caller;
  *  - a sparse .bsdf file (4 KB on disk, 960 MB apparent, one series of
  *    240 M zeros) opened with 4.6 GB of RSS and 1 s per eval: now refused
@@ -60,29 +60,29 @@ static void options(void **state)
     char path[600];
     (void)state;
     /* Defaults (NULL or zeros) open the golden file. */
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, NULL, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, NULL, &b), LL_OK, NULL);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     ll_bsdf_release(b);
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     /* Each limit just at and just below the file's value. */
     o.max_bytes = g_size;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     o.max_bytes = g_size - 1;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
            "exceed the limit of");
     assert_null(b);
     o.max_bytes = 0;
     o.max_order = info.max_order;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     o.max_order = info.max_order - 1;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
            "ll_open_options.max_order");
     o.max_order = 0;
     o.max_nodes = info.n_nodes - 1;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_ERROR_UNSUPPORTED,
            "ll_open_options.max_nodes");
     /* An older caller's struct (only max_bytes): the rest are defaults,
      * whatever lies beyond its size. */
@@ -90,23 +90,23 @@ static void options(void **state)
     o.max_bytes = 0;
     o.max_order = 1;
     o.max_nodes = 1;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     /* The struct_size field alone is the oldest struct (every limit its
      * default); less than that is not a struct at all. */
     o.struct_size = sizeof o.struct_size;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_OK, NULL);
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     o.struct_size = sizeof o.struct_size - 1;
-    expect(ll_bsdf_open_memory_ex(g_gold, g_size, &o, &b), LL_ERROR_INVALID_ARGUMENT,
+    expect(ll_bsdf_open_memory(g_gold, g_size, &o, &b), LL_ERROR_INVALID_ARGUMENT,
            "struct_size");
     /* The same through a file, with the path in the message. */
     snprintf(path, sizeof path, "%s/gold.bsdf", ll_test_dir());
     ll_test_write_file(path, g_gold, g_size);
     o = (ll_open_options)LL_OPEN_OPTIONS_INIT;
     o.max_bytes = 1000;
-    expect(ll_bsdf_open_ex(path, &o, &b), LL_ERROR_UNSUPPORTED, path);
-    expect(ll_bsdf_open_ex(path, NULL, &b), LL_OK, NULL);
+    expect(ll_bsdf_open(path, &o, &b), LL_ERROR_UNSUPPORTED, path);
+    expect(ll_bsdf_open(path, NULL, &b), LL_OK, NULL);
     ll_bsdf_release(b);
     assert_int_equal(LL_OPEN_DEFAULT_MAX_BYTES, (size_t)512 << 20);
 }
@@ -146,16 +146,16 @@ static void sparse_bsdf_refused_before_allocating(void **state)
     snprintf(path, sizeof path, "%s/sparse.bsdf", ll_test_dir());
     write_sparse_bsdf(path, 240000000u);
     before = peak_rss_kb();
-    expect(ll_bsdf_open(path, &b), LL_ERROR_UNSUPPORTED, "960000120 bytes exceed the limit");
+    expect(ll_bsdf_open(path, NULL, &b), LL_ERROR_UNSUPPORTED, "960000120 bytes exceed the limit");
     assert_null(b);
     /* Below the byte limit, the series length is refused. */
     write_sparse_bsdf(path, 2000000u);
-    expect(ll_bsdf_open(path, &b), LL_ERROR_UNSUPPORTED, "nMaxOrder = 2000000");
+    expect(ll_bsdf_open(path, NULL, &b), LL_ERROR_UNSUPPORTED, "nMaxOrder = 2000000");
     /* Nothing sized by the header was allocated (4.6 GB before). */
     assert_true(peak_rss_kb() - before < 32 * 1024);
     /* Within the limits it opens and evaluates to 0. */
     write_sparse_bsdf(path, 1000u);
-    expect(ll_bsdf_open(path, &b), LL_OK, NULL);
+    expect(ll_bsdf_open(path, NULL, &b), LL_OK, NULL);
     {
         double rgb[3];
         assert_int_equal(ll_bsdf_eval(b, 0.5, -0.5, 0.0, NULL, rgb), LL_OK);
@@ -210,7 +210,7 @@ static void refused_everywhere(const char *path, const char *kind)
     ll_bsdf *b = NULL;
     ll_material *m = NULL;
     ll_merl *merl = NULL;
-    expect(ll_bsdf_open(path, &b), LL_ERROR_IO, kind);
+    expect(ll_bsdf_open(path, NULL, &b), LL_ERROR_IO, kind);
     assert_non_null(strstr(ll_last_error_message(), path));
     expect(ll_merl_load(path, &merl), LL_ERROR_IO, kind);
     assert_non_null(strstr(ll_last_error_message(), path));

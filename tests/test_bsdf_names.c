@@ -32,7 +32,7 @@ static ll_bsdf *open_with(const char *text, size_t len)
     memcpy(bytes, g_file, g_body);
     memcpy(bytes + g_body, text, len);
     put_u32(bytes + 32, len);
-    if (ll_bsdf_open_memory(bytes, g_body + len, &b) != LL_OK)
+    if (ll_bsdf_open_memory(bytes, g_body + len, NULL, &b) != LL_OK)
         fail_msg("open with metadata of %zu bytes: %s", len, ll_last_error_message());
     free(bytes);
     return b;
@@ -102,7 +102,7 @@ static void names_from_the_written_file(void **state)
     const char *name = NULL;
     (void)state;
     snprintf(path, sizeof path, "%s/named.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_open(path, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_parameter_name(b, 0, &name), LL_OK);
     assert_string_equal(name, "coat.alpha");
     assert_int_equal(ll_bsdf_get_parameter_name(b, 1, &name), LL_OK);
@@ -125,7 +125,7 @@ static void default_writer_gives_default_names(void **state)
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     (void)state;
     snprintf(path, sizeof path, "%s/default.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_open(path, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     assert_non_null(strstr(info.metadata, "\"parameters\": 2"));
     assert_int_equal(ll_bsdf_get_parameter_name(b, 0, &name), LL_OK);
@@ -140,7 +140,7 @@ static void untextured_file_has_no_names(void **state)
     ll_bsdf *b = NULL;
     const char *name = NULL;
     (void)state;
-    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_parameter_name(b, 0, &name), LL_ERROR_INVALID_ARGUMENT);
     assert_null(name);
     ll_bsdf_release(b);

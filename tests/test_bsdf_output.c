@@ -50,7 +50,7 @@ static void fresh_dir(const char *name, char *path, size_t size)
 static void opens(const char *path)
 {
     ll_bsdf *b = NULL;
-    if (ll_bsdf_open(path, &b) != LL_OK)
+    if (ll_bsdf_open(path, NULL, &b) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     ll_bsdf_release(b);
 }

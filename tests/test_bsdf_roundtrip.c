@@ -21,7 +21,7 @@ static ll_bsdf *write_and_open(const char *name, const ll_layer *const *layers, 
     path_in_dir(path, sizeof path, name);
     if (ll_bsdf_write(path, layers, channels, opts) != LL_OK)
         fail_msg("write: %s", ll_last_error_message());
-    if (ll_bsdf_open(path, &b) != LL_OK)
+    if (ll_bsdf_open(path, NULL, &b) != LL_OK)
         fail_msg("open: %s", ll_last_error_message());
     return b;
 }
@@ -227,7 +227,7 @@ static void textured_round_trip(void **state)
     path_in_dir(path, sizeof path, "textured.bsdf");
     if (ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, &opts) != LL_OK)
         fail_msg("%s", ll_last_error_message());
-    assert_int_equal(ll_bsdf_open(path, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     assert_int_equal(info.n_bases, 6);
     assert_int_equal(info.n_parameters, 2);
@@ -513,7 +513,7 @@ static void rough_gold_matches_original(void **state)
     ours = write_and_open("gold.bsdf", layers, 3, NULL);
     opts.error_goal = 0.0;
     exact = write_and_open("gold_exact.bsdf", layers, 3, &opts);
-    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, &golden), LL_OK);
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &golden), LL_OK);
     {
         const float *a = ll_bsdf_nodes(ours), *g = ll_bsdf_nodes(golden);
         assert_memory_equal(a, g, 58 * sizeof(float));

@@ -12,6 +12,24 @@
 #define LL_TEST_GOLDEN LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf"
 #define LL_TEST_PI 3.14159265358979323846
 
+/* ll_bsdf_pdf and ll_bsdf_pdf_dir as values, for arguments that must be
+ * valid (the call must return LL_OK). */
+static inline double ll_test_pdf(const ll_bsdf *b, double mu_i, double mu_o, double phi_d,
+                                 const float *basis_coeffs)
+{
+    double pdf = -1.0;
+    assert_int_equal(ll_bsdf_pdf(b, mu_i, mu_o, phi_d, basis_coeffs, &pdf), LL_OK);
+    return pdf;
+}
+
+static inline double ll_test_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[3],
+                                     const float *basis_coeffs)
+{
+    double pdf = -1.0;
+    assert_int_equal(ll_bsdf_pdf_dir(b, wo, wi, basis_coeffs, &pdf), LL_OK);
+    return pdf;
+}
+
 /* f_k(mu_o, mu_i): the BSDF's order-k coefficient (without weights) for
  * outgoing mu_o and incident mu_i, in the layer convention. */
 typedef double (*ll_test_bsdf_fn)(size_t k, double mu_o, double mu_i, const void *ctx);

@@ -181,7 +181,7 @@ static void replaces_atomically(void **state)
     one[0] = b;
     assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
     assert_int_equal(ll_test_count_entries(ll_test_dir()), 1);
-    assert_int_equal(ll_bsdf_open(path, &f), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_eval(f, 0.8, -0.8, 0.0, NULL, rgb), LL_OK);
     assert_true(fabs(rgb[0] - 0.75 / LL_TEST_PI) < 1e-6);
     ll_bsdf_release(f);
@@ -217,7 +217,7 @@ static void short_options(void **state)
     opts.struct_size = offsetof(ll_bsdf_write_options, alpha);
     opts.eta = 1.25;
     assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_OK);
-    assert_int_equal(ll_bsdf_open(path, &f), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_get_info(f, &info), LL_OK);
     assert_true(info.eta == 1.25 && info.alpha[0] == 0.0 && info.alpha[1] == 0.0);
     assert_non_null(strstr(info.metadata, "\"generator\": \"layerlab"));

@@ -169,8 +169,8 @@ static void rough_gold_matches_the_original_file(void **state)
     o.n_orders = 172;
     snprintf(path, sizeof path, "%s/roughgold.bsdf", tmpdir);
     assert_int_equal(ll_material_build(m, &o, path), LL_OK);
-    assert_int_equal(ll_bsdf_open(path, &ours), LL_OK);
-    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", &ref),
+    assert_int_equal(ll_bsdf_open(path, NULL, &ours), LL_OK);
+    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", NULL, &ref),
                      LL_OK);
     assert_int_equal(ll_bsdf_get_info(ours, &info), LL_OK);
     assert_int_equal(info.n_nodes, 58);
@@ -252,8 +252,8 @@ static void coated_gold_is_darker_than_bare_gold(void **state)
     snprintf(bare_path, sizeof bare_path, "%s/bare.bsdf", tmpdir);
     assert_int_equal(ll_material_build(coated, &o, coated_path), LL_OK);
     assert_int_equal(ll_material_build(bare, &o, bare_path), LL_OK);
-    assert_int_equal(ll_bsdf_open(coated_path, &bc), LL_OK);
-    assert_int_equal(ll_bsdf_open(bare_path, &bb), LL_OK);
+    assert_int_equal(ll_bsdf_open(coated_path, NULL, &bc), LL_OK);
+    assert_int_equal(ll_bsdf_open(bare_path, NULL, &bb), LL_OK);
     assert_int_equal(ll_bsdf_get_info(bc, &info), LL_OK);
     assert_int_equal(info.n_channels, 3);
     assert_int_equal(info.n_nodes, 102);

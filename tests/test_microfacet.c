@@ -461,7 +461,7 @@ static void rough_gold_matches_original_file(void **state)
         l[c] = make_layer(n, m, NULL, NULL);
         assert_int_equal(ll_layer_set_microfacet(l[c], eta[c], k[c], 0.2, 1, 0), LL_OK);
     }
-    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", &b),
+    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", NULL, &b),
                      LL_OK);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     assert_int_equal(info.n_nodes, n + 2);

@@ -146,7 +146,7 @@ static void test_stack_vs_monte_carlo(void **state)
     ll_test_mkdtemp(dir, sizeof dir);
     snprintf(path, sizeof path, "%s/coated-gold-medium.bsdf", dir);
     assert_int_equal(ll_bsdf_write(path, (const ll_layer *const *)channels, 3, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_open(path, &b), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
 
     for (j = 0; j < N_MU; ++j) {
         double from_layer[3], from_file[3];

@@ -220,7 +220,7 @@ static void info_written_to_struct_size(void **state)
     one[0] = l;
     snprintf(path, sizeof path, "%s/info.bsdf", ll_test_dir());
     assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_open(path, &f), LL_OK);
+    assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_get_info(f, caller_init(&full_c, sizeof(ll_bsdf_info))), LL_OK);
     assert_canary_from(&full_c, sizeof(ll_bsdf_info), "ll_bsdf_get_info");
     for (i = 0; i < COUNT(info_ends); ++i) {
@@ -534,9 +534,9 @@ static void open_options_read_to_struct_size(void **state)
             given.max_nodes = field == 2 ? 4 : 0;
             caller_init(&c, b);
             caller_take(&c, &given, b);
-            s = ll_bsdf_open_ex(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
-                                (const ll_open_options *)(const void *)c.bytes, &f);
-            assert_canary_from(&c, b, "ll_bsdf_open_ex options");
+            s = ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
+                             (const ll_open_options *)(const void *)c.bytes, &f);
+            assert_canary_from(&c, b, "ll_bsdf_open options");
             if (b >= end) {
                 assert_int_equal(s, LL_ERROR_UNSUPPORTED);
                 assert_null(f);
@@ -546,9 +546,9 @@ static void open_options_read_to_struct_size(void **state)
             }
         }
     }
-    assert_int_equal(ll_bsdf_open_ex(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
-                                     (const ll_open_options *)(const void *)caller_init(&c, 0),
-                                     &(ll_bsdf *){ NULL }),
+    assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf",
+                                  (const ll_open_options *)(const void *)caller_init(&c, 0),
+                                  &(ll_bsdf *){ NULL }),
                      LL_ERROR_INVALID_ARGUMENT);
 }
 

@@ -212,7 +212,7 @@ class TableCache {
         ll_bsdf *bsdf = nullptr;
         if (path.empty()) {
             reason = "no \"bsdffile\" parameter was given";
-        } else if (ll_bsdf_open(path.c_str(), &bsdf) != LL_OK) {
+        } else if (ll_bsdf_open(path.c_str(), NULL, &bsdf) != LL_OK) {
             /* Read at once: the message is per thread and per failure. */
             reason = ll_last_error_message();
         } else {

@@ -61,9 +61,11 @@ static double segment_density(double f0, double f1, double d0, double d1, double
  * then the exact position inside the chosen spline segment by inverting the
  * segment's integral, the quartic
  *   F(t) = int_0^t p(s) ds, p the cubic Hermite of (f0, f1, d0, d1),
- * (pbrt-v3's SampleCatmullRom2D). Writes the density in mu_o. */
+ * (pbrt-v3's SampleCatmullRom2D). Writes the density in mu_o, and whether
+ * the point was moved off a zero of the density (below), by at least
+ * first_step of the segment. */
 static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], const float *basis,
-                     double u, double *mu_o, double *pdf_mu)
+                     double u, double first_step, double *mu_o, double *pdf_mu, int *moved)
 {
     const double *x = b->nodes;
     size_t n = b->n_nodes, idx;
@@ -71,6 +73,7 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
     double F = 0.0, f = 0.0, tolerance;
     int it;
 
+    *moved = 0;
     maximum = ll_bsdf_row_value(b, b->cdf, off_i, w_i, n - 1, basis);
     if (!(maximum > 0.0))
         return 0;
@@ -122,20 +125,22 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
         t -= (F - r) / f;
     }
     /* u = 0 or 1 (or a u on a flat stretch of the CDF) maps to an end of
-     * the mass, where the density is 0: the file pins f |mu_o| to 0 at
-     * mu = 0, where reflection ends. Such a u has probability 0, so any
-     * direction of positive density is right for it as long as the pdf
-     * returned is its own: step inside the segment, from 2^-20 of it in
-     * doubling steps, to the first point of positive density. */
-    if (!(f > 0.0)) {
+     * the mass, where the density is 0 (to rounding): the file pins
+     * f |mu_o| to 0 at mu = 0, where reflection ends. Such a u has
+     * probability 0, so any direction of positive density is right for it
+     * as long as the pdf returned is its own: step inside the segment, from
+     * first_step of it in doubling steps, to the first point of a density
+     * above rounding. */
+    if (!(f > tolerance)) {
         double toward = t < 0.5 ? 1.0 : -1.0, step;
-        for (step = 0x1p-20; step <= 0.5; step *= 2.0) {
-            double moved = t + toward * step, density;
-            if (!(moved >= 0.0 && moved <= 1.0))
+        *moved = 1;
+        for (step = first_step; step <= 0.5; step *= 2.0) {
+            double at = t + toward * step, density;
+            if (!(at >= 0.0 && at <= 1.0))
                 break;
-            density = segment_density(f0, f1, d0, d1, moved);
-            if (density > 0.0) {
-                t = moved;
+            density = segment_density(f0, f1, d0, d1, at);
+            if (density > tolerance) {
+                t = at;
                 f = density;
                 break;
             }
@@ -146,23 +151,20 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
     return 1;
 }
 
-int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const float *basis,
-                        double *mu_o, double *phi_d, double *pdf, double sums[3])
+/* The azimuth for u0 at the chosen mu_o, and the direction's pdf and sums
+ * (the luminance's and the other channels' series at it); 0 if the density
+ * there is not a positive number. */
+static int sample_phi(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], const float *basis,
+                      double u0, double mu_o, double pdf_mu, double *phi_d, double *pdf,
+                      double sums[3])
 {
     double dense[LL_BSDF_DENSE_VALUES];
     ll_bsdf_series s, d;
     const ll_bsdf_series *luminance = &s, *value = &s;
-    ptrdiff_t off_i;
-    double w_i[4], pdf_mu = 0.0, a0;
+    double a0;
     size_t stride;
 
-    *mu_o = 0.0;
-    *phi_d = 0.0;
-    *pdf = 0.0;
-    sums[0] = sums[1] = sums[2] = 0.0;
-    if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
-        !sample_mu(b, off_i, w_i, basis, u[1], mu_o, &pdf_mu) ||
-        !ll_bsdf_gather_weighted(b, off_i, w_i, *mu_o, basis, &s) || s.count == 0)
+    if (!ll_bsdf_gather_weighted(b, off_i, w_i, mu_o, basis, &s) || s.count == 0)
         return 0;
     stride = (s.max_length + 3) & ~(size_t)3;
     if (stride >= LL_BSDF_ALL_CHANNELS_FROM && b->n_channels * stride <= LL_BSDF_DENSE_VALUES) {
@@ -172,7 +174,7 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
         ll_bsdf_series_densify(&s, dense, &d);
         luminance = &d;
     }
-    if (!ll_bsdf_series_sample(luminance, b->recip, u[0], phi_d))
+    if (!ll_bsdf_series_sample(luminance, b->recip, u0, phi_d))
         return 0;
     /* The value and density at the sampled phi from the series itself (not
      * the Newton iterate's last evaluation), so that they equal what eval
@@ -184,13 +186,39 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
     /* No direction where the density is not a positive number or where
      * the weight f |mu_o| / pdf would overflow (a density that underflows
      * next to a non-zero value: a file that cancels to nothing there). */
-    if (!(*pdf > 0.0) || !ll_is_finite(*pdf) || !ll_is_finite(sums[0] / *pdf) ||
-        !ll_is_finite(sums[1] / *pdf) || !ll_is_finite(sums[2] / *pdf)) {
-        *pdf = 0.0;
-        sums[0] = sums[1] = sums[2] = 0.0;
+    return *pdf > 0.0 && ll_is_finite(*pdf) && ll_is_finite(sums[0] / *pdf) &&
+           ll_is_finite(sums[1] / *pdf) && ll_is_finite(sums[2] / *pdf);
+}
+
+int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const float *basis,
+                        double *mu_o, double *phi_d, double *pdf, double sums[3])
+{
+    ptrdiff_t off_i;
+    double w_i[4], pdf_mu = 0.0, first_step;
+    int moved;
+
+    *mu_o = 0.0;
+    *phi_d = 0.0;
+    *pdf = 0.0;
+    sums[0] = sums[1] = sums[2] = 0.0;
+    if (!ll_bsdf_weights(b, mu_i, &off_i, w_i))
         return 0;
+    /* A point moved off a zero of the density (sample_mu) is so close to
+     * it that the series there may round to nothing: then it moves further
+     * in, up to 1/16 of the segment. */
+    for (first_step = 0x1p-20; first_step <= 0x1p-4; first_step *= 16.0) {
+        if (!sample_mu(b, off_i, w_i, basis, u[1], first_step, mu_o, &pdf_mu, &moved))
+            break;
+        if (sample_phi(b, off_i, w_i, basis, u[0], *mu_o, pdf_mu, phi_d, pdf, sums))
+            return 1;
+        if (!moved)
+            break;
     }
-    return 1;
+    *mu_o = 0.0;
+    *phi_d = 0.0;
+    *pdf = 0.0;
+    sums[0] = sums[1] = sums[2] = 0.0;
+    return 0;
 }
 
 ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2],

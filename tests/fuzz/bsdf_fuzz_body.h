@@ -88,21 +88,22 @@ static void ll_fuzz_bsdf_random(const ll_bsdf *b, const float *basis, const uint
     for (k = 0; k < 64; ++k) {
         double mu_i = ll_fuzz_cosine(&state), mu_o = ll_fuzz_cosine(&state);
         double phi = 6.283185307179586 * ll_fuzz_uniform(&state);
-        double u[2], rgb[3], weight[3], p, mu_s, phi_s, wo[3], wi[3];
+        double u[2], rgb[3], f_sampled[3], p, mu_s, phi_s, wo[3], wi[3];
         u[0] = ll_fuzz_uniform(&state);
         u[1] = ll_fuzz_uniform(&state);
         ll_fuzz_require(ll_bsdf_eval(b, mu_i, mu_o, phi, basis, rgb) == LL_OK);
         ll_fuzz_check_rgb(rgb);
-        p = ll_bsdf_pdf(b, mu_i, mu_o, phi, basis);
+        ll_fuzz_require(ll_bsdf_pdf(b, mu_i, mu_o, phi, basis, &p) == LL_OK);
         ll_fuzz_require(isfinite(p) && p >= 0.0);
-        ll_fuzz_require(ll_bsdf_sample(b, mu_i, u, basis, &mu_s, &phi_s, &p, weight) == LL_OK);
+        ll_fuzz_require(ll_bsdf_sample(b, mu_i, u, basis, &mu_s, &phi_s, &p, f_sampled) ==
+                        LL_OK);
         ll_fuzz_require(isfinite(p) && p >= 0.0);
-        ll_fuzz_check_rgb(weight);
+        ll_fuzz_check_rgb(f_sampled);
         ll_fuzz_direction(&state, mu_i, wo);
         ll_fuzz_direction(&state, mu_o, wi);
         ll_fuzz_require(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, basis, rgb) == LL_OK);
         ll_fuzz_check_rgb(rgb);
-        p = ll_bsdf_pdf_dir(b, wo, wi, basis);
+        ll_fuzz_require(ll_bsdf_pdf_dir(b, wo, wi, basis, &p) == LL_OK);
         ll_fuzz_require(isfinite(p) && p >= 0.0);
         ll_fuzz_require(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, basis, wi, &p,
                                            rgb) == LL_OK);
@@ -124,7 +125,7 @@ static int ll_fuzz_bsdf_one(const uint8_t *data, size_t size)
     float *basis = NULL;
     size_t i, o, k;
 
-    if (ll_bsdf_open_memory(data, size, &b) != LL_OK) {
+    if (ll_bsdf_open_memory(data, size, NULL, &b) != LL_OK) {
         ll_fuzz_require(b == NULL);
         return 0;
     }
@@ -153,7 +154,7 @@ static int ll_fuzz_bsdf_one(const uint8_t *data, size_t size)
             double wo[3], wi[3];
             ll_fuzz_require(ll_bsdf_eval(b, mus[i], mus[o], phi, basis, rgb) == LL_OK);
             ll_fuzz_check_rgb(rgb);
-            p = ll_bsdf_pdf(b, mus[i], mus[o], phi, basis);
+            ll_fuzz_require(ll_bsdf_pdf(b, mus[i], mus[o], phi, basis, &p) == LL_OK);
             ll_fuzz_require(isfinite(p) && p >= 0.0);
             wo[0] = sqrt(1.0 - mus[i] * mus[i]);
             wo[1] = 0.0;
@@ -164,15 +165,15 @@ static int ll_fuzz_bsdf_one(const uint8_t *data, size_t size)
             ll_fuzz_require(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, basis, rgb) ==
                             LL_OK);
             ll_fuzz_check_rgb(rgb);
-            p = ll_bsdf_pdf_dir(b, wo, wi, basis);
+            ll_fuzz_require(ll_bsdf_pdf_dir(b, wo, wi, basis, &p) == LL_OK);
             ll_fuzz_require(isfinite(p) && p >= 0.0);
         }
         for (k = 0; k < n_u; ++k) {
-            double mu_o, phi, p, weight[3], wo[3], wi[3], rgb[3];
-            ll_fuzz_require(ll_bsdf_sample(b, mus[i], us[k], basis, &mu_o, &phi, &p, weight) ==
+            double mu_o, phi, p, f_sampled[3], wo[3], wi[3], rgb[3];
+            ll_fuzz_require(ll_bsdf_sample(b, mus[i], us[k], basis, &mu_o, &phi, &p, f_sampled) ==
                             LL_OK);
             ll_fuzz_require(isfinite(p) && p >= 0.0);
-            ll_fuzz_check_rgb(weight);
+            ll_fuzz_check_rgb(f_sampled);
             if (p > 0.0)
                 ll_fuzz_require(mu_o >= -1.0 && mu_o <= 1.0 && phi >= 0.0 &&
                                 phi <= 6.283185307179587);

@@ -429,7 +429,7 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
 {
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
-    if (ll_bsdf_open(a->output, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
+    if (ll_bsdf_open(a->output, NULL, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
         fprintf(stderr, "llbuild: cannot read back %s: %s\n", a->output,
                 ll_last_error_message());
         ll_bsdf_release(b);
@@ -455,7 +455,7 @@ static void print_textured_summary(const args *a, const ll_material *m,
 {
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
-    if (ll_bsdf_open(a->output, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
+    if (ll_bsdf_open(a->output, NULL, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
         fprintf(stderr, "llbuild: cannot read back %s: %s\n", a->output,
                 ll_last_error_message());
         ll_bsdf_release(b);

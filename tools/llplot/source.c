@@ -78,7 +78,7 @@ static int open_compiled_file(const llplot_options *o, llplot_source *s,
     snprintf(path, sizeof path, "%s/preview.bsdf", dir);
     st = ll_bsdf_write(path, (const ll_layer *const *)s->layers, s->n_layers, header);
     if (st == LL_OK)
-        st = ll_bsdf_open(path, &s->bsdf);
+        st = ll_bsdf_open(path, NULL, &s->bsdf);
     if (st != LL_OK)
         code = llplot_fail_ll(st, o->input);
     unlink(path);
@@ -109,7 +109,7 @@ static int build_swept_file(const llplot_options *o, const ll_material *material
     if (opts->progress)
         fputc('\n', stderr);
     if (st == LL_OK)
-        st = ll_bsdf_open(path, &s->bsdf);
+        st = ll_bsdf_open(path, NULL, &s->bsdf);
     code = st == LL_OK ? choose_basis(o, s) : llplot_fail_ll(st, o->input);
     unlink(path);
     rmdir(dir);
@@ -203,7 +203,7 @@ int llplot_source_open(const llplot_options *o, int need_sampling, llplot_source
                                o->input);
         code = compile_material(o, need_sampling, s);
     } else {
-        st = ll_bsdf_open(o->input, &s->bsdf);
+        st = ll_bsdf_open(o->input, NULL, &s->bsdf);
         code = st == LL_OK ? choose_basis(o, s) : llplot_fail_ll(st, o->input);
     }
     if (code != LLPLOT_EXIT_OK)
