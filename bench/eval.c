@@ -79,8 +79,12 @@ static double time_pdf(const ll_bsdf *b, const workload *w, double *sum)
 {
     double start = bench_wall_seconds(), acc = 0.0;
     size_t k;
-    for (k = 0; k < w->calls; ++k)
-        acc += ll_bsdf_pdf_dir(b, w->wo + 3 * k, w->wi + 3 * k, NULL);
+    for (k = 0; k < w->calls; ++k) {
+        double pdf;
+        bench_check(ll_bsdf_pdf_dir(b, w->wo + 3 * k, w->wi + 3 * k, NULL, &pdf),
+                    "ll_bsdf_pdf_dir");
+        acc += pdf;
+    }
     start = bench_wall_seconds() - start;
     *sum += acc;
     return start;

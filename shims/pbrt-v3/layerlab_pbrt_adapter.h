@@ -212,7 +212,7 @@ class TableCache {
         ll_bsdf *bsdf = nullptr;
         if (path.empty()) {
             reason = "no \"bsdffile\" parameter was given";
-        } else if (ll_bsdf_open(path.c_str(), NULL, &bsdf) != LL_OK) {
+        } else if (ll_bsdf_open(path.c_str(), nullptr, &bsdf) != LL_OK) {
             /* Read at once: the message is per thread and per failure. */
             reason = ll_last_error_message();
         } else {
@@ -276,11 +276,12 @@ class Lobe {
     double pdf(const Vec3 &wo, const Vec3 &wi) const {
         double o[3], i[3];
         if (!bsdf_ || !normalize_into(wo, o) || !normalize_into(wi, i)) return 0.0;
-        double p = ll_bsdf_pdf_dir(bsdf_, o, i, coeffs_);
+        double p = 0.0;
+        if (ll_bsdf_pdf_dir(bsdf_, o, i, coeffs_, &p) != LL_OK) return 0.0;
         return p > 0.0 && std::isfinite(p) ? p : 0.0;
     }
 
-    /* Sample wi given wo from u = (u0, u1) in [0, 1)^2, the way pbrt-v3's
+    /* Sample wi given wo from u = (u0, u1) in [0, 1]^2, the way pbrt-v3's
      * FourierBSDF::Sample_f uses its Point2f. Writes wi, its pdf and f(wo,
      * wi) (RGB, no cosine). false, a zero pdf and black when nothing can be
      * sampled; then wi is left as it was. */
