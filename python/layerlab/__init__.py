@@ -32,7 +32,7 @@ from .layer import (Layer, fresnelConductor, fresnelConductorIntegral, fresnelDi
 from .material import CancelFlag, Material
 from .storage import BSDFStorage
 
-__version__ = "0.1.0"
+__version__ = "1.0.0"
 
 __all__ = ["quad", "Layer", "BSDFStorage", "Material", "CancelFlag",
            "parameterHeuristicMicrofacet", "parameterHeuristicHG",
@@ -44,7 +44,7 @@ __all__ = ["quad", "Layer", "BSDFStorage", "Material", "CancelFlag",
 
 
 def libraryVersion():
-    """The version string of the loaded liblayerlab, e.g. "0.1.0"."""
+    """The version string of the loaded liblayerlab, e.g. "1.0.0"."""
     return _lib.ll_version_string().decode("ascii")
 
 

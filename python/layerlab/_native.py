@@ -26,8 +26,8 @@ from ._errors import UnsupportedError, error_for_status
 # The soname tracks the ABI (liblayerlab.so.ABI_VERSION); the package speaks
 # ABI 1 and needs at least the release that introduced every function below.
 ABI_VERSION = 1
-REQUIRED_MAJOR = 0
-MINIMUM_VERSION = (0, 1, 0)
+REQUIRED_MAJOR = 1
+MINIMUM_VERSION = (1, 0, 0)
 
 # ------------------------------------------------------------ C types
 
@@ -192,8 +192,9 @@ PROTOTYPES = {
     # ll_bsdf.h
     "ll_bsdf_write": (_S, [ctypes.c_char_p, ctypes.POINTER(layer_p), _Z,
                            ctypes.POINTER(BsdfWriteOptions)]),
-    "ll_bsdf_open": (_S, [ctypes.c_char_p, ctypes.POINTER(bsdf_p)]),
-    "ll_bsdf_open_memory": (_S, [ctypes.c_void_p, _Z, ctypes.POINTER(bsdf_p)]),
+    # options: const ll_open_options * (None: the default limits)
+    "ll_bsdf_open": (_S, [ctypes.c_char_p, ctypes.c_void_p, ctypes.POINTER(bsdf_p)]),
+    "ll_bsdf_open_memory": (_S, [ctypes.c_void_p, _Z, ctypes.c_void_p, ctypes.POINTER(bsdf_p)]),
     "ll_bsdf_release": (None, [bsdf_p]),
     "ll_bsdf_get_info": (_S, [bsdf_p, ctypes.POINTER(BsdfInfo)]),
     "ll_bsdf_get_parameter": (_S, [bsdf_p, _Z, c_size_t_p, ctypes.POINTER(c_float_p)]),
@@ -203,11 +204,11 @@ PROTOTYPES = {
                                     c_double_p, ctypes.POINTER(BsdfWriteOptions)]),
     "ll_bsdf_nodes": (c_float_p, [bsdf_p]),
     "ll_bsdf_eval": (_S, [bsdf_p, _D, _D, _D, c_float_p, _P3]),
-    "ll_bsdf_pdf": (_D, [bsdf_p, _D, _D, _D, c_float_p]),
+    "ll_bsdf_pdf": (_S, [bsdf_p, _D, _D, _D, c_float_p, c_double_p]),
     "ll_bsdf_sample": (_S, [bsdf_p, _D, ctypes.c_double * 2, c_float_p, c_double_p, c_double_p,
                             c_double_p, _P3]),
     "ll_bsdf_eval_dir": (_S, [bsdf_p, _P3, _P3, _I, c_float_p, _P3]),
-    "ll_bsdf_pdf_dir": (_D, [bsdf_p, _P3, _P3, c_float_p]),
+    "ll_bsdf_pdf_dir": (_S, [bsdf_p, _P3, _P3, c_float_p, c_double_p]),
     "ll_bsdf_sample_dir": (_S, [bsdf_p, _P3, ctypes.c_double * 2, _I, c_float_p, _P3,
                                 c_double_p, _P3]),
     # batch calls of the renderer convention (arrays of packed 3- and 2-vectors)

@@ -559,8 +559,14 @@ class TracedBSDF:
         n = self.n
         maximum = self.row_value(self.cdf, off_i, w_i, n - 1, corners)
         target = u * maximum
-        first = dr.binary_search(
-            0, n - 1, lambda o: self.row_value(self.cdf, off_i, w_i, o, corners) <= target)
+        # The segment in which the row reaches the target: after the last
+        # node below it (for target 0, the last still at 0), as the C reader.
+
+        def below(o):
+            v = self.row_value(self.cdf, off_i, w_i, o, corners)
+            return (v < target) | (v <= 0.0)
+
+        first = dr.binary_search(0, n - 1, below)
         idx = dr.clip(Int32(first) - 1, 0, n - 2)
         x0 = dr.gather(Float, self.nodes, UInt32(idx))
         x1 = dr.gather(Float, self.nodes, UInt32(idx + 1))

@@ -137,7 +137,7 @@ def _vector3(v, name):
 def _uniform_pair(sample):
     a = np.asarray(sample, dtype=np.float64)
     if a.shape != (2,):
-        raise InvalidArgumentError("sample must be two uniform numbers in [0, 1), got shape %s"
+        raise InvalidArgumentError("sample must be two uniform numbers in [0, 1], got shape %s"
                                    % (a.shape,))
     return (ctypes.c_double * 2)(*a)
 
@@ -179,7 +179,7 @@ class BSDFStorage:
             raise UnsupportedError("BSDFStorage: opened files are immutable; write a new file "
                                    "with fromLayer()/fromLayerRGB()", 6)
         handle = bsdf_p()
-        check(lib.ll_bsdf_open(fspath(filename), ctypes.byref(handle)))
+        check(lib.ll_bsdf_open(fspath(filename), None, ctypes.byref(handle)))
         self._init(handle, os.fspath(filename))
 
     @classmethod
@@ -187,7 +187,7 @@ class BSDFStorage:
         """Open a ``.bsdf`` file held in memory (``bytes`` or any buffer)."""
         data = bytes(data)
         handle = bsdf_p()
-        check(lib.ll_bsdf_open_memory(data, len(data), ctypes.byref(handle)))
+        check(lib.ll_bsdf_open_memory(data, len(data), None, ctypes.byref(handle)))
         self = cls.__new__(cls)
         self._init(handle, name)
         return self
@@ -518,26 +518,33 @@ class BSDFStorage:
         _keep, coeffs = self._basis(basisCoeffs, params)
         shape, points = _broadcast_points(mu_i, mu_o, phi_d)
         fn = lib.ll_bsdf_pdf
-        out = np.array([fn(handle, mi, mo, ph, coeffs) for mi, mo, ph in zip(*points)],
-                       dtype=np.float64).reshape(shape)
+        out = np.empty(len(points[0]))
+        value = ctypes.c_double()
+        for k, (mi, mo, ph) in enumerate(zip(*points)):
+            check(fn(handle, mi, mo, ph, coeffs, ctypes.byref(value)))
+            out[k] = value.value
+        out = out.reshape(shape)
         return float(out) if out.ndim == 0 else out
 
     def sample(self, mu_i, sample, basisCoeffs=None, params=None):
         """sample(mu_i, sample, basisCoeffs=None, params=None) -> (weight, mu_o, phi_d, pdf)
 
         Importance sample the model for light arriving along ``mu_i``, from
-        two uniform numbers ``sample`` in [0, 1). Returns the weight
+        two uniform numbers ``sample`` in [0, 1]. Returns the weight
         f * |mu_o| / pdf (R, G, B array), the sampled mu_o and phi_d, and the
         pdf. A zero weight and pdf mean that no direction was found.
         """
         handle = self._live()
         _keep, coeffs = self._basis(basisCoeffs, params)
         mu_o, phi_d, pdf = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
-        weight = (ctypes.c_double * 3)()
+        f = (ctypes.c_double * 3)()
         check(lib.ll_bsdf_sample(handle, real_argument(mu_i, "mu_i"), _uniform_pair(sample),
                                  coeffs, ctypes.byref(mu_o), ctypes.byref(phi_d),
-                                 ctypes.byref(pdf), weight))
-        return np.array(weight), mu_o.value, phi_d.value, pdf.value
+                                 ctypes.byref(pdf), f))
+        # The library returns f; this method keeps the original layerlab's
+        # weight.
+        weight = np.array(f) * abs(mu_o.value) / pdf.value if pdf.value > 0.0 else np.zeros(3)
+        return weight, mu_o.value, phi_d.value, pdf.value
 
     def evalDir(self, wo, wi, mode="radiance", basisCoeffs=None, params=None):
         """evalDir(wo, wi, mode="radiance", basisCoeffs=None, params=None) -> numpy array (3,)
@@ -560,9 +567,10 @@ class BSDFStorage:
         pbrt-v3's ``Pdf(wo, wi)``.
         """
         _keep, coeffs = self._basis(basisCoeffs, params)
-        value = lib.ll_bsdf_pdf_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"),
-                                    coeffs)
-        return value
+        value = ctypes.c_double()
+        check(lib.ll_bsdf_pdf_dir(self._live(), _vector3(wo, "wo"), _vector3(wi, "wi"), coeffs,
+                                  ctypes.byref(value)))
+        return value.value
 
     def sampleDir(self, wo, sample, mode="radiance", basisCoeffs=None, params=None):
         """sampleDir(wo, sample, mode="radiance", basisCoeffs=None, params=None) -> (f, wi, pdf)

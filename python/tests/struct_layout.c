@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#define LL_EXPERIMENTAL /* the experimental structs too */
 #include <layerlab.h>
 
 static void print_struct(const char *name, size_t size, const void *init)
@@ -52,6 +53,24 @@ int main(void)
     FIELD(ll_bsdf_info, metadata_size);
     FIELD(ll_bsdf_info, file_size);
     FIELD(ll_bsdf_info, flags);
+
+    STRUCT(ll_bsdf_tables, LL_BSDF_TABLES_INIT);
+    FIELD(ll_bsdf_tables, struct_size);
+    FIELD(ll_bsdf_tables, n_nodes);
+    FIELD(ll_bsdf_tables, n_channels);
+    FIELD(ll_bsdf_tables, n_bases);
+    FIELD(ll_bsdf_tables, max_order);
+    FIELD(ll_bsdf_tables, n_coeffs);
+    FIELD(ll_bsdf_tables, n_parameters);
+    FIELD(ll_bsdf_tables, n_parameter_values);
+    FIELD(ll_bsdf_tables, eta);
+    FIELD(ll_bsdf_tables, nodes);
+    FIELD(ll_bsdf_tables, pairs);
+    FIELD(ll_bsdf_tables, coeffs);
+    FIELD(ll_bsdf_tables, cdf);
+    FIELD(ll_bsdf_tables, a0);
+    FIELD(ll_bsdf_tables, parameter_counts);
+    FIELD(ll_bsdf_tables, parameter_positions);
 
     STRUCT(ll_build_options, LL_BUILD_OPTIONS_INIT);
     FIELD(ll_build_options, struct_size);

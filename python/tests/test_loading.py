@@ -74,7 +74,7 @@ def test_found_through_pkg_config(tmp_path):
         libdir=%s
         Name: layerlab
         Description: test
-        Version: 0.1.0
+        Version: 1.0.0
         Libs: -L${libdir} -llayerlab
         """ % libdir))
     out = run_python("import layerlab as ll; print(ll.libraryPath())",
@@ -93,7 +93,7 @@ def test_wrong_version_is_refused(tmp_path):
     subprocess.run([cc, "-shared", "-fPIC", "-o", str(library), str(source)], check=True)
     out = run_python("import layerlab", {"LAYERLAB_LIBRARY": str(library)})
     assert out.returncode != 0
-    assert "version 2.3.4" in out.stderr and "needs 0.x" in out.stderr
+    assert "version 2.3.4" in out.stderr and "needs 1.x" in out.stderr
 
 
 def test_not_a_layerlab_library_is_refused():

@@ -27,6 +27,12 @@ STRUCTS = {
     "ll_build_options": _native.BuildOptions,
     "ll_build_estimate": _native.BuildEstimate,
 }
+try:
+    # The traced Mitsuba path's view of ll_bsdf_tables (it needs Mitsuba 3).
+    from layerlab.mitsuba_traced import Tables
+    STRUCTS["ll_bsdf_tables"] = Tables
+except ImportError:
+    pass
 
 
 @pytest.fixture(scope="module")
