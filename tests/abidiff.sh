@@ -8,14 +8,18 @@
 #     removed or retyped, a parameter changed) fails too, with the report:
 #     review it, and only if it is compatible (a field appended to a
 #     size-tagged struct) rewrite the baseline with `make abi-baseline`;
-#   - added functions pass (they are listed).
+#   - added functions pass (they are listed);
+#   - functions of the experimental version nodes (*EXPERIMENTAL*, declared
+#     under LL_EXPERIMENTAL) are left out of the comparison
+#     (tests/abidiff_experimental.suppr): they may change in a minor release.
 # Both sides are abidw's description of the public types (--headers-dir
 # include/layerlab --drop-private-types: the structs behind the opaque
 # handles ll_bsdf, ll_layer, ll_material are internal and left out), without
 # paths and locations, so that a baseline written twice from the same
 # sources is the same file.
-# First a check of the check: an edited copy of a baseline without one
-# function must be reported as incompatible.
+# First the checks of the check: an edited copy of a baseline without one
+# function must be reported as incompatible, unless the function is an
+# experimental one.
 # Run by `make test` with BUILD set; prints one line per check and
 # "N passed, N failed"; exits non-zero when a check fails.
 #   sh tests/abidiff.sh --write-baseline   (make abi-baseline) rewrites abi/*.abi
@@ -37,6 +41,7 @@ fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
 show() { sed -n "1,${2:-40}p" "$1" | sed 's/^/    /'; }
 
 LIBS="liblayerlab liblayerlab_reader"
+SUPPRESS=$SRC/tests/abidiff_experimental.suppr
 # abidw of one library, run in the source tree (the DWARF names the headers
 # relative to it).
 describe() {
@@ -67,21 +72,49 @@ fi
 # The summary lines ("Functions changes summary: ...") of a report.
 summary() { grep 'changes summary' "$1" | sed 's/^ *//' | tr '\n' ' '; }
 
+# Copy $1 to $3 without function $2: its ELF symbol and its (multi-line)
+# declaration.
+drop_function() {
+    awk "/<elf-symbol name='$2'/ { next }
+         /<function-decl name='$2'/ { skip = 1 }
+         skip { if (/<\/function-decl>/ || /\/>\$/ && /<function-decl/) skip = 0; next }
+         { print }" "$1" > "$3"
+}
+
 # ---------------------------------------------------- the check of the check
 baseline=$SRC/abi/liblayerlab_reader.abi
 if [ -f "$baseline" ]; then
-    # Drop ll_bsdf_nodes: its ELF symbol and its (multi-line) declaration.
-    awk "/<elf-symbol name='ll_bsdf_nodes'/ { next }
-         /<function-decl name='ll_bsdf_nodes'/ { skip = 1 }
-         skip { if (/<\/function-decl>/ || /\/>\$/ && /<function-decl/) skip = 0; next }
-         { print }" "$baseline" > "$tmp/edited.abi"
-    abidiff --no-show-locs "$baseline" "$tmp/edited.abi" > "$tmp/self.log" 2>&1
+    drop_function "$baseline" ll_bsdf_nodes "$tmp/edited.abi"
+    abidiff --no-show-locs --suppressions "$SUPPRESS" "$baseline" "$tmp/edited.abi" \
+        > "$tmp/self.log" 2>&1
     rc=$?
     if [ $((rc & 8)) -ne 0 ] && grep -q 'll_bsdf_nodes' "$tmp/self.log"; then
         pass "abidiff reports a removed function as incompatible (exit $rc on an edited baseline)"
     else
         fail "abidiff does not report a function removed from a baseline (exit $rc)"
         show "$tmp/self.log"
+    fi
+fi
+
+# An experimental function of the reader just built, removed from its
+# description: the suppression must leave it out.
+reader_so=$BUILD_DIR/lib/liblayerlab_reader.so.$ABI_VERSION
+if [ -e "$reader_so" ] && describe "$reader_so" "$tmp/fresh.abi" > /dev/null 2>&1; then
+    experimental=$(sed -n "s/.*<elf-symbol name='\(ll_[a-z0-9_]*\)' version='[A-Z_]*EXPERIMENTAL[^']*'.*/\1/p" \
+        "$tmp/fresh.abi" | head -n 1)
+    if [ -z "$experimental" ]; then
+        fail "liblayerlab_reader.so.$ABI_VERSION has no function in an *EXPERIMENTAL* version node to check the suppression with"
+    else
+        drop_function "$tmp/fresh.abi" "$experimental" "$tmp/fresh-edited.abi"
+        abidiff --no-show-locs --suppressions "$SUPPRESS" "$tmp/fresh.abi" "$tmp/fresh-edited.abi" \
+            > "$tmp/self-experimental.log" 2>&1
+        rc=$?
+        if [ "$rc" -eq 0 ]; then
+            pass "abidiff ignores a removed experimental function ($experimental; tests/abidiff_experimental.suppr)"
+        else
+            fail "abidiff reports a change to the experimental function $experimental (exit $rc)"
+            show "$tmp/self-experimental.log"
+        fi
     fi
 fi
 
@@ -103,7 +136,8 @@ for lib in $LIBS; do
         continue
     fi
     # Additions are allowed: left out of the verdict, counted below.
-    abidiff --no-added-syms --no-show-locs "$baseline" "$tmp/$lib.abi" > "$tmp/$lib.log" 2>&1
+    abidiff --no-added-syms --no-show-locs --suppressions "$SUPPRESS" "$baseline" "$tmp/$lib.abi" \
+        > "$tmp/$lib.log" 2>&1
     rc=$?
     if [ $((rc & 3)) -ne 0 ]; then
         fail "abidiff could not compare abi/$lib.abi with $BUILD/lib/$lib.so.$ABI_VERSION (exit $rc)"
@@ -115,7 +149,8 @@ for lib in $LIBS; do
         fail "$lib: ABI change against abi/$lib.abi; if it is compatible (a field appended to a size-tagged struct), run make abi-baseline: $(summary "$tmp/$lib.log")"
         show "$tmp/$lib.log"
     else
-        abidiff --no-show-locs "$baseline" "$tmp/$lib.abi" > "$tmp/$lib.added.log" 2>&1
+        abidiff --no-show-locs --suppressions "$SUPPRESS" "$baseline" "$tmp/$lib.abi" \
+            > "$tmp/$lib.added.log" 2>&1
         added=$(sed -n 's/^Functions changes summary:.* \([0-9][0-9]*\) Added.*/\1/p' \
             "$tmp/$lib.added.log")
         pass "$lib.so.$ABI_VERSION has the ABI of abi/$lib.abi (abidiff: no removal, no change; ${added:-0} function(s) added)"
