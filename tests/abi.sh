@@ -93,11 +93,11 @@ fi
 # ------------------------------------------------------ (b) exported symbols
 if [ -f "$LIB" ]; then
     # Symbol versions (name@@LAYERLAB_1) are stripped; the version nodes
-    # themselves are listed as absolute symbols LAYERLAB_<n>[.<m>], which are
-    # not exports.
+    # themselves are listed as absolute symbols LAYERLAB_[<TIER>_]<n>[.<m>]
+    # (LAYERLAB_1.1, LAYERLAB_EXPERIMENTAL_1.0), which are not exports.
     if nm -D --defined-only "$LIB" > "$tmp/nm.txt" 2> "$tmp/nm.log"; then
         stray=$(awk '{ name = $NF; sub(/@.*/, "", name);
-                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_[0-9]+(\.[0-9]+)?$/) next;
+                       if ($(NF-1) == "A" && name ~ /^LAYERLAB_([A-Z]+_)*[0-9]+(\.[0-9]+)?$/) next;
                        if (name !~ /^ll_/) print name }' "$tmp/nm.txt" | sort -u)
         count=$(awk '{ name = $NF; sub(/@.*/, "", name); if (name ~ /^ll_/) n++ }
                      END { print n + 0 }' "$tmp/nm.txt")
@@ -252,7 +252,7 @@ int main(void)
 {
     static const char junk[] = "not a .bsdf file";
     ll_bsdf *b = NULL;
-    ll_status s = ll_bsdf_open_memory(junk, sizeof junk, &b);
+    ll_status s = ll_bsdf_open_memory(junk, sizeof junk, NULL, &b);
     if (s != LL_ERROR_FORMAT || b != NULL || strlen(ll_last_error_message()) == 0 ||
         ll_version_number() != LL_VERSION_NUMBER)
         return 1;
