@@ -179,7 +179,10 @@ def _c_call(what, storage, a, b, mode, coeffs):
         lib.ll_bsdf_eval_dir(h, wo, (ctypes.c_double * 3)(*map(float, b)), m, c, out)
         return np.array(out[:])
     if what == "pdf":
-        return lib.ll_bsdf_pdf_dir(h, wo, (ctypes.c_double * 3)(*map(float, b)), c)
+        pdf = ctypes.c_double()
+        _native.check(lib.ll_bsdf_pdf_dir(h, wo, (ctypes.c_double * 3)(*map(float, b)), c,
+                                          ctypes.byref(pdf)))
+        return pdf.value
     wi, pdf, rgb = (ctypes.c_double * 3)(), ctypes.c_double(), (ctypes.c_double * 3)()
     lib.ll_bsdf_sample_dir(h, wo, (ctypes.c_double * 2)(*map(float, b)), m, c, wi,
                            ctypes.byref(pdf), rgb)
