@@ -126,8 +126,8 @@ typedef struct ll_open_options {
  * Memory: about the file's size (coefficients are kept as the file's
  * floats, which halves what evaluation reads; it computes in double) plus
  * 16 bytes per node pair and basis; the file's bytes are not held beside
- * them. A file that opens gives finite results for every direction (f is the stored f |mu_o| over |mu_o|, with
- * |mu_o| taken as at least 1e-6). */
+ * them. A file that opens gives finite results for every direction (f is
+ * the stored f |mu_o| over |mu_o|, with |mu_o| taken as at least 1e-6). */
 LL_API ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_bsdf **out);
 
 /* The same from memory (the bytes are copied; data may be freed after). */
