@@ -211,7 +211,7 @@ static double worst_difference(const point_set *s, const ll_layer *a, const ll_l
  * is the layer to 1e-9, and check_interface shows it again at the
  * chosen resolution wherever it builds the layers. */
 typedef struct lean_interface {
-    ll_microfacet *mf;
+    ll_microfacet_model *mf;
     ll_probe_compensation compensation;
     size_t n;
 } lean_interface;
@@ -230,7 +230,7 @@ static void interface_params(const ll_material *mat, int conductor, double *eta_
 static void lean_interface_of(double eta_re, double eta_im, double alpha, size_t n,
                               lean_interface *out)
 {
-    ll_microfacet *mf0 = NULL;
+    ll_microfacet_model *mf0 = NULL;
     out->n = n;
     assert_int_equal(ll_probe_interface_model(eta_re, eta_im, alpha, &out->mf), LL_OK);
     assert_int_equal(ll_probe_compensation_model(eta_re, eta_im, alpha, &mf0), LL_OK);
@@ -718,7 +718,7 @@ static void probe_matches_layer(double eta_re, double eta_im, double alpha, int 
 {
     ll_probe_set set;
     ll_probe_compensation c;
-    ll_microfacet *mf = NULL, *mf0 = NULL;
+    ll_microfacet_model *mf = NULL, *mf0 = NULL;
     ll_layer *l = ll_test_layer(64, 40);
     double *v, worst = 0.0;
     size_t p, k;

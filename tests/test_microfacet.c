@@ -175,7 +175,7 @@ static double peak_sharpness(const series_case *c, double mu_o, double mu_i)
 /* The worst error of the pair's series (relative to the BSDF's peak over
  * phi), comparing with coefficients computed by composite Simpson from the
  * closed form; returns -1 for pairs that scatter negligibly. */
-static double series_error(ll_microfacet *mf, const series_case *c, double mu_o, double mu_i,
+static double series_error(ll_microfacet_model *mf, const series_case *c, double mu_o, double mu_i,
                            double *f, double *ref, double *ours, double *scratch)
 {
     double mu[2], peak = 0.0, h = LL_PI / (REF_POINTS - 1), worst = 0.0;
@@ -250,7 +250,7 @@ static void series_matches_direct_integration(void **state)
     assert_non_null(scratch);
     for (ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
         const series_case *c = &cases[ci];
-        ll_microfacet *mf;
+        ll_microfacet_model *mf;
         assert_int_equal(ll_microfacet_create(c->eta_re, c->eta_im, c->alpha, MAX_ORDERS,
                                               MAX_ORDERS, &mf),
                          LL_OK);

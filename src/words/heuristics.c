@@ -191,8 +191,8 @@ static ll_status read_goal(const char *fn, double *tolerance, double *mu_min)
 #define MAX_COMPENSATIONS 64
 
 typedef struct interface_ctx {
-    ll_microfacet *mf;
-    ll_microfacet *mf0; /* the compensation's: order 0 only */
+    ll_microfacet_model *mf;
+    ll_microfacet_model *mf0; /* the compensation's: order 0 only */
     double eta_re, eta_im;
     int compensate;
     const ll_probe_set *set;

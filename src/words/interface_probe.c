@@ -69,7 +69,7 @@ void ll_probe_add_series(const double *c, size_t len, const double *phi, size_t 
 }
 
 ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
-                                   ll_microfacet **out)
+                                   ll_microfacet_model **out)
 {
     return ll_microfacet_create(eta_re, eta_im, alpha, TRUE_ORDERS, TRUE_MAX_LEN, out);
 }
@@ -82,7 +82,7 @@ typedef struct pair_stencil {
 } pair_stencil;
 
 typedef struct eval_job {
-    const ll_microfacet *mf;
+    const ll_microfacet_model *mf;
     const ll_probe_set *set;
     const pair_stencil *stencils;
     const ll_probe_compensation *compensation; /* nullable */
@@ -131,7 +131,7 @@ static ll_status eval_pair(size_t p, void *ctx)
     return s;
 }
 
-ll_status ll_probe_interface_eval(ll_microfacet *mf, const ll_probe_compensation *compensation,
+ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compensation *compensation,
                                   size_t n, size_t m, const ll_probe_set *set, ll_watch *watch,
                                   double *values)
 {
@@ -182,7 +182,7 @@ done:
 }
 
 /* The true series of a pair into c (*len terms). */
-static ll_status true_series(ll_microfacet *mf, const ll_probe_pair *pair, double *c,
+static ll_status true_series(ll_microfacet_model *mf, const ll_probe_pair *pair, double *c,
                              size_t *len, double *scratch)
 {
     double mu[2];
@@ -223,7 +223,7 @@ static size_t needed_length(const double *c, size_t len, const double *phi, size
     return needed < len ? needed : len;
 }
 
-ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
+ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
                                     const ll_probe_set *set, size_t *n_orders)
 {
     double *c = ll_alloc_array(TRUE_MAX_LEN, sizeof(double));
