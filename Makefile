@@ -59,8 +59,10 @@ WARN     := -Wall -Wextra -pedantic -Wshadow -Wmissing-prototypes -Wstrict-proto
 ifneq ($(filter 1,$(DEV))$(filter true,$(CI)),)
 WARN     += -Werror
 endif
+# The library implements the experimental tier too (LL_EXPERIMENTAL: the
+# declarations that may change in a minor release).
 CFLAGS_LIB := -std=c99 $(OPT) -g $(WARN) -fPIC -fvisibility=hidden \
-              -D_POSIX_C_SOURCE=200809L -DLL_BUILDING_LIBRARY -Iinclude -Isrc
+              -D_POSIX_C_SOURCE=200809L -DLL_BUILDING_LIBRARY -DLL_EXPERIMENTAL -Iinclude -Isrc
 ifeq ($(SANITIZE),1)
 SAN      := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 BUILD    := build-san

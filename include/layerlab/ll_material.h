@@ -197,7 +197,7 @@ LL_API size_t ll_material_basis_count(const ll_material *material);
  * (resolution, words, channels: no quadrature, no allocation that grows
  * with the resolution), so it is instant once the resolution is given;
  * choosing it by the tolerance runs the resolution searches first
- * (ll_material_resolution). Memory: an upper bound of the build's peak
+ * (ll_material_resolution; monitor, nullable, as there). Memory: an upper bound of the build's peak
  * (the layers alive at once and the adding's workspace), the bound the
  * budget is checked against. Time: not estimated here; the counts of work
  * below are what a time model multiplies by its machine's rates (llbuild
@@ -248,7 +248,7 @@ typedef struct ll_build_estimate {
 
 LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,
-                                      ll_build_estimate *estimate);
+                                      ll_build_estimate *estimate, const ll_monitor *monitor);
 
 /* A builder makes the bases of a (swept or plain) material one at a time,
  * all at one resolution: the largest any basis's heuristics ask for, unless

@@ -145,11 +145,11 @@ static ll_status exchange_columns(ll_share *sh, ll_status s, ll_order_builder **
     return s;
 }
 
-ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns, size_t first_column,
-                                       ll_status (*column)(size_t col, void *ctx),
-                                       ll_status (*finish)(void *ctx), void *ctx,
-                                       ll_order_builder ***builders_slot, double *const *dense,
-                                       size_t n_dense, ll_watch *watch, const char *fn)
+ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns, size_t first_column,
+                                    ll_status (*column)(size_t col, void *ctx),
+                                    ll_status (*finish)(void *ctx), void *ctx,
+                                    ll_order_builder ***builders_slot, double *const *dense,
+                                    size_t n_dense, ll_watch *watch, const char *fn)
 {
     size_t k, m = layer->m;
     ll_share *sh = layer->share;
@@ -194,14 +194,4 @@ ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns, size_t
     }
     ll_free(builders);
     return s;
-}
-
-ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
-                                    ll_status (*column)(size_t col, void *ctx),
-                                    ll_status (*finish)(void *ctx), void *ctx,
-                                    ll_order_builder ***builders_slot, ll_watch *watch,
-                                    const char *fn)
-{
-    return ll_layer_build_by_columns_ex(layer, n_columns, 0, column, finish, ctx, builders_slot,
-                                        NULL, 0, watch, fn);
 }

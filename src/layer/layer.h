@@ -99,31 +99,25 @@ LL_INTERNAL double ll_layer_surface_factor(const ll_layer *l, size_t col, size_t
 LL_INTERNAL ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_builder **builders);
 /* Fill a layer column by column (columns.c): one builder per order is made
  * and stored in *builders_slot (a field of ctx, where `column` finds it),
- * column(i, ctx) runs for i in [0, n_columns) on the worker threads,
- * finish(ctx) (nullable) once after them on the calling thread, then the
- * layer is set from the builders; on failure the layer is unchanged.
- * *builders_slot is NULL again on return. The columns run under watch
- * (nullable; support/watch.h): they poll it, and its last report, which
- * may still cancel, comes before the layer is set (fn names the call in the
- * cancel message). */
+ * column(i, ctx) runs for i in [0, n_columns) on the worker threads and
+ * writes builder column first_column + i, and also column i of the dense
+ * n x n column-major arrays dense[0..n_dense) (nullable; e.g. an
+ * interface's unweighted order 0) that finish reads; finish(ctx)
+ * (nullable) runs once after them on the calling thread, then the layer is
+ * set from the builders; on failure the layer is unchanged. *builders_slot
+ * is NULL again on return. The columns run under watch (nullable;
+ * support/watch.h): they poll it, and its last report, which may still
+ * cancel, comes before the layer is set (fn names the call in the cancel
+ * message). In a distributed build (layer->share) each rank computes the
+ * items i mod n_ranks == rank, one all-to-all gives every rank its orders
+ * of every column and the dense columns to the owner of order 0, and
+ * finish runs there only (it may write only builder 0). */
 LL_INTERNAL ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
+                                                size_t first_column,
                                                 ll_status (*column)(size_t col, void *ctx),
                                                 ll_status (*finish)(void *ctx), void *ctx,
                                                 ll_order_builder ***builders_slot,
+                                                double *const *dense, size_t n_dense,
                                                 ll_watch *watch, const char *fn);
-/* The same, when column(i, ctx) writes builder column first_column + i and
- * also column i of dense n x n column-major arrays (dense[0..n_dense),
- * e.g. an interface's unweighted order 0) that finish reads. In a
- * distributed build (layer->share) each rank computes the items
- * i mod n_ranks == rank, one all-to-all gives every rank its orders of
- * every column and the dense columns to the owner of order 0, and finish
- * runs there only (it may write only builder 0). */
-LL_INTERNAL ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns,
-                                                   size_t first_column,
-                                                   ll_status (*column)(size_t col, void *ctx),
-                                                   ll_status (*finish)(void *ctx), void *ctx,
-                                                   ll_order_builder ***builders_slot,
-                                                   double *const *dense, size_t n_dense,
-                                                   ll_watch *watch, const char *fn);
 
 #endif /* LL_LAYER_LAYER_H */

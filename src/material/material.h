@@ -128,15 +128,13 @@ LL_INTERNAL const char *ll_word_name(const ll_word *w);
  * (max_memory_bytes: half of the physical memory when 0). */
 LL_INTERNAL ll_status ll_build_options_read(const ll_build_options *in, ll_build_options *out,
                                             const char *fn);
-/* Resolution and channels for a build (options > settings > heuristics),
- * checked against the smallest meaningful resolution. */
+/* Resolution and channels for a build (options > settings > searches),
+ * checked against the smallest meaningful resolution. With a monitor
+ * (nullable; ll_common.h), as a build's stage: the searches of the
+ * resolution (up to 5-18 s for a measured table) poll it, a cancel returns
+ * LL_ERROR_CANCELLED with nothing allocated, and the progress goes through
+ * the words (stage "resolution"). */
 LL_INTERNAL ll_status ll_material_plan(const ll_material *m, const ll_build_options *o,
-                                       size_t *n_nodes, size_t *n_orders, size_t *n_channels);
-/* The same with a monitor (nullable; ll_common.h), as a build's stage: the
- * searches of the resolution (up to 5-18 s for a measured table) poll it,
- * a cancel returns LL_ERROR_CANCELLED with nothing allocated, and the
- * progress goes through the words (stage "resolution"). */
-LL_INTERNAL ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
                                           const ll_monitor *monitor, size_t *n_nodes,
                                           size_t *n_orders, size_t *n_channels);
 /* The words' answers so far, so that a word probed once (in one channel,
@@ -148,7 +146,7 @@ typedef struct ll_resolution_memo {
     double *error;
     size_t count, capacity;
     /* Nullable: polled by the searches, one stage ("resolution") per
-     * word and channel (see ll_material_plan_ex). */
+     * word and channel (see ll_material_plan). */
     struct ll_watch *watch;
 } ll_resolution_memo;
 #define LL_RESOLUTION_MEMO_INIT { NULL, NULL, NULL, 0, 0, NULL }
@@ -219,9 +217,10 @@ LL_INTERNAL void ll_basis_indices(const ll_material *m, size_t basis, size_t *in
 LL_INTERNAL void ll_material_basis_view(const ll_material *m, size_t basis, ll_word *words,
                                         ll_material *out);
 /* ll_material_plan over every basis: the largest resolution any asks for
- * (all bases of a file share nodes and orders). */
+ * (all bases of a file share nodes and orders). watch (nullable): polled
+ * by the searches. */
 LL_INTERNAL ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
-                                             size_t *n_nodes, size_t *n_orders,
+                                             struct ll_watch *watch, size_t *n_nodes, size_t *n_orders,
                                              size_t *n_channels, double *error);
 
 /* ---- material_sweep_cache.c: the builder's cache of word layers: LRU

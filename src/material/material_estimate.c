@@ -492,9 +492,11 @@ static size_t build_threads(const ll_build_options *o)
 }
 
 ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
-                               ll_build_estimate *estimate)
+                               ll_build_estimate *estimate, const ll_monitor *monitor)
 {
+    static const char fn[] = "ll_material_estimate";
     ll_build_options o;
+    ll_watch watch;
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_word_params(*params)[3] = NULL;
     ll_cost_plan plan;
@@ -509,9 +511,12 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
         return s;
     if (!material)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
-    s = ll_build_options_read(opts, &o, "ll_material_estimate");
+    s = ll_build_options_read(opts, &o, fn);
     if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &n, &m, &nch, &resolution_error);
+        s = ll_watch_begin(&watch, monitor, fn);
+    if (s == LL_OK)
+        s = ll_material_plan_bases(material, &o, &watch, &n, &m, &nch, &resolution_error);
+    s = s == LL_OK ? ll_watch_finish(&watch, s, fn) : s;
     if (s != LL_OK)
         return s;
     if (material->n_axes > 0) {
@@ -539,8 +544,7 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     e.additions = plan.additions;
     e.doublings = plan.doublings;
     e.peak_bytes = plan.peak_bytes;
-    e.seconds = plan.seconds;
-    e.cpu_seconds = plan.cpu_seconds;
+    e.threads = build_threads(&o);
     e.max_memory_bytes = o.max_memory_bytes;
     e.over_budget = plan.peak_bytes > (double)o.max_memory_bytes;
     return ll_struct_write(estimate, &e, sizeof e, "ll_material_estimate", "ll_build_estimate");

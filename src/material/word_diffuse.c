@@ -45,7 +45,7 @@ static ll_status diffuse_build(const ll_word_build_ctx *ctx, const ll_word *w,
                                const ll_word_params *p, ll_layer *layer)
 {
     (void)w;
-    return ll_layer_set_diffuse_ex(layer, p->v[0], ctx->monitor(ctx->user, 1.0));
+    return ll_layer_set_diffuse(layer, p->v[0], ctx->monitor(ctx->user, 1.0));
 }
 
 static void diffuse_metadata(ll_text *b, const ll_word *w)

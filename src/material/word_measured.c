@@ -151,10 +151,10 @@ static ll_status measured_build(const ll_word_build_ctx *ctx, const ll_word *w,
      * one, with the same monitor. */
     for (c = 0; c < 3; ++c)
         if (weights[c] == 1.0 && weights[(c + 1) % 3] == 0.0 && weights[(c + 2) % 3] == 0.0)
-            return ll_layer_set_matusik_ex(layer, w->file, c, 0, monitor);
+            return ll_layer_set_matusik(layer, w->file, c, 0, monitor);
     s = ll_merl_load(w->file, &merl);
     if (s == LL_OK)
-        s = ll_merl_set_layer_ex(layer, merl, weights, 0, monitor);
+        s = ll_merl_set_layer(layer, merl, weights, 0, monitor);
     ll_merl_free(merl);
     return s;
 }

@@ -92,7 +92,7 @@ struct ll_param_desc {
  * public layer call (credited with `share` of the word's modelled cost; it
  * carries the build's progress and cancellation; share 0 shows the call
  * under its own stage name, e.g. "phase function"), and the doubling of a
- * medium with the build's progress (ll_layer_expand_ex). The builder uses
+ * medium with the build's progress (ll_layer_expand). The builder uses
  * only public calls (ll_layer.h). */
 typedef struct ll_word_build_ctx {
     const ll_monitor *(*monitor)(void *user, double share);

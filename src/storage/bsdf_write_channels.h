@@ -29,7 +29,7 @@ LL_INTERNAL ll_status ll_channel_writer_add(ll_channel_writer *w, size_t channel
                                             const ll_layer *layer, const ll_monitor *monitor);
 
 /* Write the file (every channel added) and free the writer, whatever the
- * outcome; monitor as for ll_bsdf_write_ex (stage "writing"; a cancel,
+ * outcome; monitor as for ll_bsdf_write (stage "writing"; a cancel,
  * also at the last report, leaves no file). */
 LL_INTERNAL ll_status ll_channel_writer_commit(ll_channel_writer *w, const ll_monitor *monitor);
 

@@ -148,7 +148,7 @@ ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compen
     }
     /* The widening of a layer of m orders (ll_layer_set_microfacet). */
     ll_microfacet_set_orders(mf, m);
-    s = ll_quad_gauss_lobatto(n, nodes, weights);
+    s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
         pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);

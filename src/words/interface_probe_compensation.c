@@ -97,7 +97,7 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
         goto done;
     }
-    s = ll_quad_gauss_lobatto(n, rule, rule + n);
+    s = ll_quad_gauss_lobatto(n, rule, rule + n, NULL);
     if (s != LL_OK)
         goto done;
     /* (mf: ll_probe_compensation_model's. Order 0 of a widened lobe is

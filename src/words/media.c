@@ -289,11 +289,6 @@ static ll_status isotropic(ll_layer *layer, double albedo, const ll_medium_finis
     return s;
 }
 
-ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
-{
-    return ll_layer_set_isotropic_ex(layer, albedo, NULL);
-}
-
 static ll_status henyey_greenstein(ll_layer *layer, double albedo, double g,
                                    const ll_medium_finish *finish, const ll_monitor *monitor)
 {
@@ -319,11 +314,6 @@ static ll_status henyey_greenstein(ll_layer *layer, double albedo, double g,
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", finish, &watch);
     ll_free(chi);
     return s;
-}
-
-ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g)
-{
-    return ll_layer_set_henyey_greenstein_ex(layer, albedo, g, NULL);
 }
 
 static ll_status von_mises_fisher(ll_layer *layer, double albedo, double kappa,
@@ -373,24 +363,19 @@ static ll_status von_mises_fisher(ll_layer *layer, double albedo, double kappa,
     return s;
 }
 
-ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa)
-{
-    return ll_layer_set_von_mises_fisher_ex(layer, albedo, kappa, NULL);
-}
-
-ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
+ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo, const ll_monitor *monitor)
 {
     return isotropic(layer, albedo, NULL, monitor);
 }
 
-ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
-                                            const ll_monitor *monitor)
+ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g,
+                                         const ll_monitor *monitor)
 {
     return henyey_greenstein(layer, albedo, g, NULL, monitor);
 }
 
-ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
-                                           const ll_monitor *monitor)
+ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa,
+                                        const ll_monitor *monitor)
 {
     return von_mises_fisher(layer, albedo, kappa, NULL, monitor);
 }

@@ -743,7 +743,7 @@ static ll_status make_marked(ll_microfacet_model *mf, const unsigned char *need,
             job.grid[n_items++] = k;
     job.mf = mf;
     job.watch = watch;
-    s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w) : LL_OK;
+    s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w, NULL) : LL_OK;
     if (s == LL_OK)
         s = ll_watch_stage(watch, "interface", 0.05, 0.05, n_items)
                 ? ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled")
@@ -1017,24 +1017,50 @@ static ll_status finish_order0(void *ctx)
     return s;
 }
 
-ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
-                                  int conserve_energy, size_t n_orders_internal)
+ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out, const char *fn)
 {
-    return ll_layer_set_microfacet_ex(layer, eta_re, eta_im, alpha, conserve_energy,
-                                      n_orders_internal, NULL);
+    ll_microfacet defaults = LL_MICROFACET_INIT;
+    ll_status s;
+    *out = defaults;
+    if (!in)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: microfacet is NULL", fn);
+    s = ll_struct_read(out, sizeof *out, in, fn, "ll_microfacet");
+    if (s != LL_OK)
+        return s;
+    if (out->distribution == LL_MICROFACET_GGX)
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       "%s: the GGX distribution is not implemented yet; "
+                       "LL_MICROFACET_BECKMANN is",
+                       fn);
+    if (out->distribution != LL_MICROFACET_BECKMANN)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: distribution = %d is not an ll_microfacet_distribution", fn,
+                       out->distribution);
+    return LL_OK;
 }
 
-ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_im,
-                                     double alpha, int conserve_energy,
-                                     size_t n_orders_internal, const ll_monitor *monitor)
+ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfacet,
+                                  const ll_monitor *monitor)
 {
     static const char fn[] = "ll_layer_set_microfacet";
-    size_t n, m, h, k;
+    size_t n, m, h, k, n_orders_internal;
     ll_microfacet_model *mf = NULL;
     double *mu = NULL, *order0 = NULL, *ref0 = NULL, *w = NULL, *work = NULL;
+    double eta_re, eta_im, alpha;
+    int conserve_energy;
     layer_job job;
     ll_watch watch;
-    ll_status s = check_arguments(layer, eta_re, eta_im, alpha);
+    ll_microfacet in;
+    ll_status s = layer ? ll_microfacet_read(microfacet, &in, fn)
+                        : ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layer is NULL", fn);
+    if (s != LL_OK)
+        return s;
+    eta_re = in.eta_re;
+    eta_im = in.eta_im;
+    alpha = in.alpha;
+    conserve_energy = in.compensate;
+    n_orders_internal = in.n_orders_internal;
+    s = check_arguments(layer, eta_re, eta_im, alpha);
     if (s == LL_OK)
         s = ll_watch_begin(&watch, monitor, fn);
     if (s != LL_OK)
@@ -1094,8 +1120,8 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
         double *dense[2];
         dense[0] = order0;
         dense[1] = ref0;
-        s = ll_layer_build_by_columns_ex(layer, n, 0, layer_column, finish_order0, &job,
-                                         &job.builders, dense, ref0 ? 2 : 1, &watch, fn);
+        s = ll_layer_build_by_columns(layer, n, 0, layer_column, finish_order0, &job,
+                                      &job.builders, dense, ref0 ? 2 : 1, &watch, fn);
     }
     goto done;
 oom:

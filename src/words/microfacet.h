@@ -17,12 +17,19 @@
 #include "support/support.h"
 #include "support/watch.h"
 #include "layer/order.h"
+#include "layerlab/ll_layer.h"
 
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
 #define LL_MICROFACET_RELERR 1e-3
 
 typedef struct ll_microfacet_model ll_microfacet_model;
+
+/* The caller's ll_microfacet read up to its struct_size (defaults after),
+ * the distribution checked: GGX is LL_ERROR_UNSUPPORTED. The other fields
+ * are checked by their users. */
+LL_INTERNAL ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out,
+                                         const char *fn);
 
 /* The model: complex relative index, Beckmann roughness, the number of
  * Fourier orders n_orders it is resolved with (a lobe too sharp for them is

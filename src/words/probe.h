@@ -163,12 +163,11 @@ LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn 
                                       size_t min_nodes, size_t limit, const char *what,
                                       size_t *n_nodes, size_t *n_orders, double *error);
 
-/* ll_heuristic_microfacet_ex and ll_heuristic_henyey_greenstein_ex
- * (heuristics.c) with a watch (nullable: polled, and one stage's progress
- * per search, LL_PROBE_SEARCH_UNITS) and, for the interface, whether the
- * layer gets the energy compensation (ll_layer_set_microfacet's
- * conserve_energy; the public call assumes it, as a build does by
- * default). */
+/* ll_resolution_search_microfacet and ll_resolution_search_henyey_greenstein
+ * (heuristics.c) on the parameters themselves, with a watch (nullable:
+ * polled, and one stage's progress per search, LL_PROBE_SEARCH_UNITS) and,
+ * for the interface, whether the layer gets the energy compensation
+ * (ll_microfacet.compensate). */
 LL_INTERNAL ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im,
                                            int compensate, double tolerance, double mu_min,
                                            ll_watch *watch, size_t *n_nodes, size_t *n_orders,
