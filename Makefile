@@ -224,7 +224,7 @@ LLBUILD_MPI_SRC := $(wildcard tools/llbuild-mpi/*.c)
 $(BUILD)/bin/llbuild-mpi: $(LLBUILD_MPI_SRC) $(wildcard tools/llbuild-mpi/*.h tools/llbuild/*.c \
                           tools/llbuild/*.h) $(SHARED) | deps-tools
 	@mkdir -p $(dir $@)
-	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c \
+	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c tools/llbuild/time_model.c \
 	    -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' -llayerlab -lm
 
 $(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | deps-test

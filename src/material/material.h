@@ -164,10 +164,27 @@ LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 #define LL_MATERIAL_MAX_RESOLUTION 100000
 
 /* ---- material_estimate.c: the cost model, from counts alone */
+/* Work by kind, the counts of ll_build_estimate: what a time model
+ * multiplies by its machine's rates (llbuild --dry-run has one). */
+typedef struct ll_work {
+    double dielectric_pairs;  /* node pairs of dielectric interfaces, x alpha / 0.1 */
+    double conductor_pairs;   /* node pairs of conductors                          */
+    double pair_orders;       /* the interfaces' pairs x orders                    */
+    double measured_lookups, measured_files;
+    double phase_entries;     /* n^2 per order holding a phase function            */
+    double diffuse_entries;   /* n^2 per diffuse word                              */
+    double add_entries;       /* n^2 per order holding values, per adding or
+                                 doubling step                                     */
+    double add_empty_entries; /* n^2 per order empty in an operand, likewise       */
+} ll_work;
+/* acc += times * w, field by field. */
+LL_INTERNAL void ll_work_add(ll_work *acc, const ll_work *w, double times);
+
 typedef struct ll_cost_plan {
     size_t n, m, channels, threads;
     size_t layers_built, additions, doublings;
-    double peak_bytes, seconds, cpu_seconds;
+    double peak_bytes;
+    ll_work work;             /* every step, after sharing                        */
     double held_peak_bytes;   /* a build that keeps every channel's stack to the
                                  end (ll_material_build_layers), peak_bytes
                                  being ll_material_build's streamed one     */
@@ -178,16 +195,17 @@ typedef struct ll_cost_plan {
 LL_INTERNAL void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                                   size_t n, size_t m, size_t channels, size_t threads,
                                   ll_cost_plan *out);
-/* Wall seconds of one word's layer, of one adding step and of writing. */
+/* The progress weights of a build (material_build.c): the relative cost
+ * of one word's layer, of one adding step and of writing, in the units of
+ * the rates measured on the development machine (only their ratios matter
+ * here; the time of a build is llbuild's model, from the counts). */
 LL_INTERNAL double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_add(size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_write(size_t n, size_t m, size_t n_channels);
-/* One word's CPU and wall seconds, doublings and the bytes its layer keeps;
- * and a process's fixed CPU, wall seconds and resident bytes. */
+/* One word's work (its doublings included), doublings and the bytes its
+ * layer keeps. */
 LL_INTERNAL void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m,
-                                     size_t threads, double *cpu, double *wall,
-                                     size_t *doublings, double *bytes);
-LL_INTERNAL void ll_cost_process(double *cpu, double *wall, double *bytes);
+                                     ll_work *work, size_t *doublings, double *bytes);
 /* material_sweep_estimate.c: the cost of every basis of a swept material
  * built by a builder (its cache of word layers simulated), and a file's
  * size from the values its layers hold (stored_values per basis). */

@@ -37,6 +37,7 @@ static void diffuse_cost(const ll_word_params *p, size_t n, size_t m, ll_word_co
     (void)p;
     (void)m;
     out->serial_seconds = (double)n * (double)n * COST_DIFFUSE;
+    out->work.diffuse_entries = (double)n * (double)n;
     out->orders_nonzero = 1.0;
     out->dense_orders = 0.25; /* order 0's R^t block only */
 }

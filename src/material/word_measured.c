@@ -132,6 +132,8 @@ static void measured_cost(const ll_word_params *p, size_t n, size_t m, ll_word_c
                             ((double)m / RATE_MERL + COST_MERL_SAMPLE);
     out->items = n / 2;
     out->serial_seconds = COST_MERL_LOAD;
+    out->work.measured_lookups = h * h * 4.0 * (double)m;
+    out->work.measured_files = 1.0;
     out->build_bytes = 2.0 * p->v[3];
     out->orders_nonzero = (double)m;
     out->dense_orders = 0.25 * (double)m; /* R^t blocks only */

@@ -150,6 +150,7 @@ static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cos
     if (dense > nonzero)
         dense = nonzero;
     out->parallel_seconds = (double)n * (double)n * nonzero * COST_PHASE;
+    out->work.phase_entries = (double)n * (double)n * nonzero;
     out->items = (size_t)nonzero;
     out->doublings = p->v[TAU] > 0.0 ? ll_doubling_count(p->v[TAU], 1.0) : 0;
     out->orders_nonzero = nonzero;

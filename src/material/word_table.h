@@ -101,14 +101,16 @@ typedef struct ll_word_build_ctx {
 } ll_word_build_ctx;
 
 /* What one word's layer costs to build at n nodes and m orders, one
- * channel, as measured (docs/material-language.md, "Estimates"): CPU
- * seconds of the part that runs in parallel over `items` (columns or
- * orders) and of the serial part, the doublings after it, the orders that
- * hold anything (what an adding step with it works on), its stored values
- * in units of n x n (dense_orders; what its layer keeps), the scratch
- * bytes of each thread while it is built and what it holds once while it
- * is built (a measured table). */
+ * channel: its work by kind (its doublings not included), and, as
+ * measured (docs/material-language.md, "Estimates"), the CPU seconds of
+ * the part that runs in parallel over `items` (columns or orders) and of
+ * the serial part (the progress weights), the doublings after it, the
+ * orders that hold anything (what an adding step with it works on), its
+ * stored values in units of n x n (dense_orders; what its layer keeps),
+ * the scratch bytes of each thread while it is built and what it holds
+ * once while it is built (a measured table). */
 typedef struct ll_word_cost {
+    ll_work work;
     double parallel_seconds;
     size_t items;
     double serial_seconds;
