@@ -116,8 +116,10 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # can reach internal functions too.
 TEST_SRC := $(sort $(wildcard tests/test_*.c))
 TESTS    := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+# The tests reach into the library (its internal headers use the
+# experimental tier) and test the experimental calls too.
 TEST_CFLAGS := -std=c99 $(OPT) -g $(WARN) -Wno-unused-parameter -D_POSIX_C_SOURCE=200809L \
-               -Iinclude -Isrc -Itests -fopenmp $(SAN) \
+               -DLL_EXPERIMENTAL -Iinclude -Isrc -Itests -fopenmp $(SAN) \
                -DLL_SOURCE_DIR='"$(CURDIR)"' -DLL_BUILD_DIR='"$(CURDIR)/$(BUILD)"'
 TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 

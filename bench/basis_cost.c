@@ -116,10 +116,10 @@ int main(int argc, char **argv)
     check(ll_heuristic_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
     if (n > 64)
         n = 64;
-    check(ll_quad_gauss_lobatto(n, x, w), "nodes");
+    check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     for (k = 0; k < SIDE; ++k) {
         check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
-        check(ll_layer_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0), "fill");
+        check(ll_test_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
         positions[k] = 0.2 + 0.05 * (double)k;
         positions[SIDE + k] = (double)k / (SIDE - 1);
     }
@@ -128,10 +128,10 @@ int main(int argc, char **argv)
     for (k = 0; k < SIDE * SIDE; ++k)
         layers[k] = l[k % SIDE];
     snprintf(path, sizeof path, "%s/basis64.bsdf", dir);
-    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL), "write");
+    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL, NULL), "write");
     check(ll_bsdf_open(path, &b64), "open");
     snprintf(path, sizeof path, "%s/basis1.bsdf", dir);
-    check(ll_bsdf_write(path, layers, 1, NULL), "write");
+    check(ll_bsdf_write(path, layers, 1, NULL, NULL), "write");
     check(ll_bsdf_open(path, &b1), "open");
     check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
     for (k = 0; k < SIDE * SIDE; ++k)

@@ -42,9 +42,9 @@ static ll_layer *build(const material *m, double alpha, size_t n, size_t orders)
 {
     double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
     ll_layer *l = NULL;
-    check(ll_quad_gauss_lobatto(n, x, w), "nodes");
+    check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     check(ll_layer_create(x, w, n, orders, &l), "layer");
-    check(ll_layer_set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0), "microfacet");
+    check(ll_test_set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0, NULL), "microfacet");
     free(x);
     free(w);
     return l;
@@ -54,7 +54,7 @@ static ll_bsdf *write_open(const char *path, const ll_layer *const *layers, size
                            const size_t *counts, const double *positions)
 {
     ll_bsdf *b = NULL;
-    check(ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, NULL), "write");
+    check(ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, NULL, NULL), "write");
     check(ll_bsdf_open(path, &b), "open");
     return b;
 }

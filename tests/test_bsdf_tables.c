@@ -35,7 +35,7 @@ static int setup(void **state)
         layers[k] = synthetic[k];
     }
     snprintf(path, sizeof path, "%s/grid.bsdf", ll_test_dir());
-    if (ll_bsdf_write_textured(path, layers, 1, 2, counts, g_grid_positions, NULL) != LL_OK ||
+    if (ll_bsdf_write_textured(path, layers, 1, 2, counts, g_grid_positions, NULL, NULL) != LL_OK ||
         ll_bsdf_open(path, &g_grid) != LL_OK)
         fail_msg("grid.bsdf: %s", ll_last_error_message());
     for (k = 0; k < 6; ++k)

@@ -30,14 +30,15 @@
  * defined before the include, and may change in a minor release (the
  * symbols are in the version node LAYERLAB_EXPERIMENTAL_1.0).
  */
+/* (The guard is inside the condition, so that a file included once
+ * without LL_EXPERIMENTAL and then again with it gets the declarations.) */
+#ifdef LL_EXPERIMENTAL
 #ifndef LAYERLAB_LL_DISTRIBUTION_H
 #define LAYERLAB_LL_DISTRIBUTION_H
 
 #include "ll_common.h"
 #include "ll_layer.h"
 #include "ll_material.h"
-
-#ifdef LL_EXPERIMENTAL
 
 #ifdef __cplusplus
 extern "C" {
@@ -116,5 +117,5 @@ LL_API ll_status ll_layer_unpack(const void *buffer, size_t size, ll_layer **out
 #ifdef __cplusplus
 }
 #endif
-#endif /* LL_EXPERIMENTAL */
 #endif /* LAYERLAB_LL_DISTRIBUTION_H */
+#endif /* LL_EXPERIMENTAL */

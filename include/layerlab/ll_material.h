@@ -187,11 +187,23 @@ LL_API ll_status ll_material_get_axis(const ll_material *material, size_t axis,
  * untextured material (0 for NULL). */
 LL_API size_t ll_material_basis_count(const ll_material *material);
 
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_MATERIAL_H */
+
 /* ------------------------------------------------------ experimental
  * Declared only when LL_EXPERIMENTAL is defined before the include: these
  * may change in a minor release (their symbols are in the version node
- * LAYERLAB_EXPERIMENTAL_1.0, not in the stable one). */
-#ifdef LL_EXPERIMENTAL
+ * LAYERLAB_EXPERIMENTAL_1.0, not in the stable one). The block has its own
+ * guard, so that a file included once without LL_EXPERIMENTAL and then
+ * again with it gets these declarations. */
+#if defined(LL_EXPERIMENTAL) && !defined(LAYERLAB_LL_MATERIAL_EXPERIMENTAL_H)
+#define LAYERLAB_LL_MATERIAL_EXPERIMENTAL_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* What a build with these options would take, from counts alone
  * (resolution, words, channels: no quadrature, no allocation that grows
@@ -297,9 +309,7 @@ LL_API size_t ll_material_builder_additions(const ll_material_builder *builder);
 /* Frees the builder and its cache; NULL is fine. */
 LL_API void ll_material_builder_destroy(ll_material_builder *builder);
 
-#endif /* LL_EXPERIMENTAL */
-
 #ifdef __cplusplus
 }
 #endif
-#endif /* LAYERLAB_LL_MATERIAL_H */
+#endif /* LL_EXPERIMENTAL */

@@ -206,6 +206,8 @@ LL_INTERNAL double ll_cost_write(size_t n, size_t m, size_t n_channels);
  * layer keeps. */
 LL_INTERNAL void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m,
                                      ll_work *work, size_t *doublings, double *bytes);
+/* The resident bytes of a process before any layer. */
+LL_INTERNAL double ll_cost_process_bytes(void);
 /* material_sweep_estimate.c: the cost of every basis of a swept material
  * built by a builder (its cache of word layers simulated), and a file's
  * size from the values its layers hold (stored_values per basis). */

@@ -164,6 +164,11 @@ static void word_work(const ll_word_cost *c, size_t n, size_t m, ll_work *out)
              ll_expand_order_steps(n / 2, c->doublings));
 }
 
+double ll_cost_process_bytes(void)
+{
+    return PROCESS_BYTES;
+}
+
 void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, ll_work *work,
                          size_t *doublings, double *bytes)
 {
