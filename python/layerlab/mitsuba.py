@@ -35,9 +35,8 @@ CUDA variants are refused: "batch" would move the directions to the CPU and
 back at every bounce, and "traced" is not tested there.
 
 Textured files (more than one basis function): one property per textured
-parameter, by the parameter's name (ll_bsdf_get_parameter_name when the
-library has it, else the metadata's top-level "parameters" array, else p0,
-p1, ...; a "." in a name may be written "_"), a float or any Mitsuba texture
+parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
+name may be written "_"), a float or any Mitsuba texture
 (so a bitmap drives the roughness). Its value at the shading point gives the
 basis weights: the tensor product of linear hat weights over the
 parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
@@ -53,8 +52,6 @@ import ctypes
 import math
 
 import numpy as np
-
-import json
 
 from . import _native
 from ._native import c_double_p, c_float_p, lib
@@ -141,28 +138,13 @@ class _Table:
         self.names = self._parameter_names()
 
     def _parameter_names(self):
-        """ll_bsdf_get_parameter_name when the library exports it; else the
-        same rule read here: the metadata's top-level "parameters" array of
-        n_parameters distinct non-empty strings, else p0, p1, ..."""
-        n = self.n_parameters
-        fn = getattr(lib._cdll, "ll_bsdf_get_parameter_name", None)
-        if fn is not None:
-            fn.restype = ctypes.c_int
-            fn.argtypes = [_native.bsdf_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_char_p)]
-            names = []
-            for p in range(n):
-                name = ctypes.c_char_p()
-                _native.check(fn(self.handle, p, ctypes.byref(name)))
-                names.append(name.value.decode("utf-8"))
-            return names
-        try:
-            listed = json.loads(self.metadata).get("parameters")
-        except (ValueError, AttributeError):
-            listed = None
-        if (isinstance(listed, list) and len(listed) == n and len(set(listed)) == n
-                and all(isinstance(x, str) and 0 < len(x.encode()) <= 255 for x in listed)):
-            return list(listed)
-        return ["p%d" % p for p in range(n)]
+        """The parameters' names (ll_bsdf_get_parameter_name)."""
+        names = []
+        for p in range(self.n_parameters):
+            name = ctypes.c_char_p()
+            _native.check(lib.ll_bsdf_get_parameter_name(self.handle, p, ctypes.byref(name)))
+            names.append(name.value.decode("utf-8"))
+        return names
 
     def coefficients(self, params):
         """Per-element basis weights for parameter values params (list of
