@@ -185,9 +185,9 @@ static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_lay
 /*
  * A channel's stack is final once the top word is on it: with a sink, it
  * goes to the file at once (for every channel whose stack it is) and is
- * freed, so that the next channel's adding runs without it (issue 18: the
- * dust on gold held three finished stacks of about 0.45 GB each beside the
- * third channel's adding). The order of the calls changes no byte of the
+ * freed, so that the next channel's adding runs without it (kept, the dust
+ * on gold's three finished stacks of about 0.45 GB each were alive beside
+ * the third channel's adding). The order of the calls changes no byte of the
  * file (bsdf_write_channels.c).
  */
 static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_layer *acc[3])

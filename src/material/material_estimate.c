@@ -221,8 +221,8 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
 
 
 /*
- * The peak of a streamed build (ll_material_build, material_build.c since
- * issue 18), replayed step by step in the order the build makes and frees
+ * The peak of a streamed build (ll_material_build, material_build.c),
+ * replayed step by step in the order the build makes and frees
  * things, the bytes alive after each step and the transient ones during it:
  *
  * - The bottom word is not made with its level: each channel's is built

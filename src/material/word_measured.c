@@ -1,6 +1,6 @@
 /*
  * measured file=PATH: a MERL measured BRDF as an opaque base
- * (ll_layer_set_matusik_ex, or ll_merl_set_layer_ex for a mix of channels;
+ * (ll_layer_set_matusik, or ll_merl_set_layer for a mix of channels;
  * the file format in docs/material-language.md).
  */
 #include "material/word_table.h"
@@ -14,7 +14,7 @@
 /* The search's first guess (words/merl_probe.c searches from it): 100
  * nodes (about 1.8 degrees between nodes near the horizon, finer near the
  * pole) and 180 orders (azimuthal detail of 1 degree, the database's step
- * in phi_diff), the fixed resolution before issue 14. */
+ * in phi_diff), the original's fixed resolution. */
 #define MEASURED_NODES 100
 #define MEASURED_ORDERS 180
 
@@ -102,7 +102,7 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
 }
 
 /* The resolution at which the projected table is within the tolerance of
- * twice it (issue 14; words/merl_probe.c): the file is read once more for
+ * twice it (words/merl_probe.c): the file is read once more for
  * the search, which costs what docs/method.md "Resolution" measures (5 to
  * 18 s for a table of the database's size). One search per file, on the
  * luminance mix, for every channel (resolution_reads: the file alone): the

@@ -142,7 +142,7 @@ struct ll_word_desc {
     void (*channel)(const ll_word *w, size_t c, size_t n_channels, double above,
                    ll_word_params *out);
     /* Nodes and orders it needs to be within `tolerance` (relative) of the
-     * converged layer at |mu| >= mu_min (the ll_heuristic_*_ex of
+     * converged layer at |mu| >= mu_min (the ll_resolution_search_* of
      * ll_layer.h); *error receives the largest relative error measured
      * against twice that resolution (0 for words exact at any resolution,
      * HUGE_VAL when it is beyond the search's reach and not verified); may
@@ -212,7 +212,7 @@ LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, s
       NULL, NULL }
 
 /* compensate=0|1 of the interfaces: whether the paper's energy
- * compensation term is added (ll_layer_set_microfacet's conserve_energy;
+ * compensation term is added (ll_microfacet.compensate;
  * default 1). 0 gives the single-scattering interface that renderers'
  * microfacet BSDFs are, for comparisons with them. */
 LL_INTERNAL ll_status ll_check_compensate(const ll_parser *p, const ll_word *w,

@@ -1,6 +1,6 @@
 /*
  * Writing one untextured .bsdf file channel by channel (internal; the
- * material builder's streaming write, issue 18): each channel's finished
+ * material builder's streaming write): each channel's finished
  * layer is handed over as soon as it is complete and may be freed at once,
  * so a build never holds every channel's stack and the writer's staging at
  * the same time. The file is byte for byte what ll_bsdf_write writes for

@@ -11,7 +11,7 @@
  * makes the convergence search (twice the resolution, repeatedly)
  * affordable even for the n ~ 1000, m ~ 2000 of alpha = 0.02.
  *
- * With compensate, the energy compensation (conserve_energy, a rank-one
+ * With compensate, the energy compensation (ll_microfacet.compensate, a rank-one
  * term of order 0 per block, Jakob et al. 2014, sec. 6.2) is added at the
  * same stencils: it is made from the albedos of every node, so it is
  * computed whole at each resolution (words/interface_probe_compensation.c),

@@ -1,7 +1,7 @@
 /*
- * The resolution of a measured BRDF by the tolerance (issue 14, words/
- * probe.h): the projected lobe at (n, m) against (2n, 2m) on the probes of
- * an opaque surface, searched by ll_probe_search as the interfaces are.
+ * The resolution of a measured BRDF by the tolerance (words/probe.h): the
+ * projected lobe at (n, m) against (2n, 2m) on the probes of an opaque
+ * surface, searched by ll_probe_search as the interfaces are.
  *
  * As for an interface (interface_probe.c), the layer's value at a probe is
  * the Catmull-Rom spline over the 4 x 4 node pairs around it of the series

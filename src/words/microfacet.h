@@ -78,7 +78,7 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double
  * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */
 LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
 
-/* The energy compensation (conserve_energy, words/microfacet_compensation.c):
+/* The energy compensation (ll_microfacet.compensate, words/microfacet_compensation.c):
  * order 0 of block q of a layer with h positive nodes gains
  * scale[q] u[q][i] v[q][j] at output node i, input node j, both indices
  * into the magnitudes of their half (the layer's j and j + h are -x_j and

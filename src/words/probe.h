@@ -1,5 +1,5 @@
 /*
- * Choosing a resolution by a stated tolerance (issue 14): a fixed set of
+ * Choosing a resolution by a stated tolerance: a fixed set of
  * probe directions, what a layer of n nodes and m Fourier orders gives
  * there, and the search for the smallest (n, m) that agrees with twice the
  * resolution within the tolerance where the BSDF is above 1% of its peak.
@@ -72,7 +72,7 @@ LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, dou
 #define LL_PROBE_TRUE_ORDERS ((size_t)1 << 20)
 
 /* The energy compensation of an interface layer at the probes: the terms
- * that ll_layer_set_microfacet(conserve_energy 1) on the Gauss-Lobatto
+ * that ll_layer_set_microfacet (compensate = 1) on the Gauss-Lobatto
  * nodes of n adds to order 0, from the albedos of every node pair
  * (O(n^2) order-0 series; words/interface_probe_compensation.c). They do
  * not depend on the layer's orders (a widened lobe keeps the order 0 of
