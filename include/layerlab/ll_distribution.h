@@ -30,15 +30,15 @@
  * defined before the include, and may change in a minor release (the
  * symbols are in the version node LAYERLAB_EXPERIMENTAL_1.0).
  */
+#include "ll_common.h"
+#include "ll_layer.h"
+#include "ll_material.h"
+
 /* (The guard is inside the condition, so that a file included once
  * without LL_EXPERIMENTAL and then again with it gets the declarations.) */
 #ifdef LL_EXPERIMENTAL
 #ifndef LAYERLAB_LL_DISTRIBUTION_H
 #define LAYERLAB_LL_DISTRIBUTION_H
-
-#include "ll_common.h"
-#include "ll_layer.h"
-#include "ll_material.h"
 
 #ifdef __cplusplus
 extern "C" {
