@@ -587,6 +587,7 @@ typedef struct expand_job {
     double tau;
     ll_order **result;
     ll_watch *watch;
+    const ll_split *split; /* the calling thread's (layer/split.h) */
     workspace_pool pool;
 } expand_job;
 
@@ -692,7 +693,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
 
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
-    if (!ll_layer_owns_order(l, k)) {
+    if (!ll_split_owns(job->split, k)) {
         /* Another rank's order of a distributed build: not computed, NULL. */
         ll_watch_advance(job->watch, job->doublings + 1);
         return LL_OK;
@@ -814,6 +815,7 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method me
         if (fabs(layer->nodes[i]) < min_mu)
             min_mu = fabs(layer->nodes[i]);
     job.layer = layer;
+    job.split = ll_split_current();
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
     job.tau = tau;
     /* The cost model depends on n and the doublings alone: the same pick

@@ -148,7 +148,6 @@ ll_status ll_layer_clone(const ll_layer *src, ll_layer **out)
     memcpy(l->weights, src->weights, src->n * sizeof(double));
     for (k = 0; k < src->m; ++k)
         l->orders[k] = ll_order_retain(src->orders[k]);
-    l->share = src->share;
     *out = l;
     return LL_OK;
 oom:
@@ -189,11 +188,12 @@ size_t ll_layer_stored_count(const ll_layer *layer)
 
 void ll_layer_replace_orders(ll_layer *layer, ll_order **new_orders)
 {
+    const ll_split *split = ll_split_current();
     size_t k;
     for (k = 0; k < layer->m; ++k) {
         ll_order_release(layer->orders[k]);
         layer->orders[k] = new_orders[k];
-        if (!ll_layer_owns_order(layer, k)) {
+        if (!ll_split_owns(split, k)) {
             /* A distributed build keeps only this rank's orders (a clear
              * layer's identity, a diffuse order 0 of another rank). */
             ll_order_release(layer->orders[k]);

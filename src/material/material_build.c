@@ -12,7 +12,7 @@
 #include "layer/layer.h"
 #include "storage/bsdf_write_channels.h"
 #include "layerlab/ll_quad.h"
-#include "layerlab/ll_distribution.h"
+#include "distribution/share.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -146,7 +146,6 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
-    l->share = b->share; /* the word builds only this rank's orders */
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
@@ -580,7 +579,8 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
 
 /* ------------------------------------------------- distributed builds
  * (layerlab/ll_distribution.h): the same build on every rank, each word
- * layer keeping only the rank's orders (layer/distribution.c), and the
+ * layer keeping only the rank's orders (the split of layer/split.h, the
+ * exchanges of distribution/share.c), and the
  * finished stack gathered on rank 0. Every path through here makes the
  * same sequence of agreements and exchanges on every rank. */
 
@@ -621,8 +621,13 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
     if (s == LL_OK)
         s = build_init(&b, material, opts, monitor, fn, share, 0);
     if (s == LL_OK) {
+        /* Every layer call of the build computes this rank's orders only
+         * (layer/split.h), its interfaces exchanging their columns. */
+        ll_split split = ll_share_split(share);
+        const ll_split *previous = ll_split_enter(&split);
         initialised = 1;
         s = run_build(&b, layers, 0.0);
+        ll_split_leave(previous);
     }
     if (!share->settled)
         s = ll_share_agree(share, s);
