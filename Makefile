@@ -59,8 +59,10 @@ WARN     := -Wall -Wextra -pedantic -Wshadow -Wmissing-prototypes -Wstrict-proto
 ifneq ($(filter 1,$(DEV))$(filter true,$(CI)),)
 WARN     += -Werror
 endif
+# The library implements the experimental tier too (LL_EXPERIMENTAL: the
+# declarations that may change in a minor release).
 CFLAGS_LIB := -std=c99 $(OPT) -g $(WARN) -fPIC -fvisibility=hidden \
-              -D_POSIX_C_SOURCE=200809L -DLL_BUILDING_LIBRARY -Iinclude -Isrc
+              -D_POSIX_C_SOURCE=200809L -DLL_BUILDING_LIBRARY -DLL_EXPERIMENTAL -Iinclude -Isrc
 ifeq ($(SANITIZE),1)
 SAN      := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 BUILD    := build-san
@@ -114,8 +116,10 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # can reach internal functions too.
 TEST_SRC := $(sort $(wildcard tests/test_*.c))
 TESTS    := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+# The tests reach into the library (its internal headers use the
+# experimental tier) and test the experimental calls too.
 TEST_CFLAGS := -std=c99 $(OPT) -g $(WARN) -Wno-unused-parameter -D_POSIX_C_SOURCE=200809L \
-               -Iinclude -Isrc -Itests -fopenmp $(SAN) \
+               -DLL_EXPERIMENTAL -Iinclude -Isrc -Itests -fopenmp $(SAN) \
                -DLL_SOURCE_DIR='"$(CURDIR)"' -DLL_BUILD_DIR='"$(CURDIR)/$(BUILD)"'
 TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
@@ -222,7 +226,7 @@ LLBUILD_MPI_SRC := $(wildcard tools/llbuild-mpi/*.c)
 $(BUILD)/bin/llbuild-mpi: $(LLBUILD_MPI_SRC) $(wildcard tools/llbuild-mpi/*.h tools/llbuild/*.c \
                           tools/llbuild/*.h) $(SHARED) | deps-tools
 	@mkdir -p $(dir $@)
-	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c \
+	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c tools/llbuild/time_model.c \
 	    -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' -llayerlab -lm
 
 $(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | deps-test

@@ -65,10 +65,10 @@ static ll_layer *make_slab(size_t n, size_t m)
 {
     double *nodes = bench_alloc(n, sizeof(double)), *weights = bench_alloc(n, sizeof(double));
     ll_layer *layer = NULL;
-    bench_check(ll_quad_gauss_legendre(n, nodes, weights), "ll_quad_gauss_legendre");
+    bench_check(ll_quad_gauss_legendre(n, nodes, weights, NULL), "ll_quad_gauss_legendre");
     bench_check(ll_layer_create(nodes, weights, n, m, &layer), "ll_layer_create");
-    bench_check(ll_layer_set_henyey_greenstein(layer, 0.9, 0.5), "ll_layer_set_henyey_greenstein");
-    bench_check(ll_layer_expand(layer, 1e-6), "ll_layer_expand");
+    bench_check(ll_layer_set_henyey_greenstein(layer, 0.9, 0.5, NULL), "ll_layer_set_henyey_greenstein");
+    bench_check(ll_layer_expand(layer, 1e-6, NULL), "ll_layer_expand");
     free(nodes);
     free(weights);
     return layer;
@@ -80,7 +80,7 @@ static double time_add(const ll_layer *top, const ll_layer *bottom, ll_layer *ou
     size_t calls = 0;
     double start = bench_wall_seconds(), elapsed;
     do {
-        bench_check(ll_layer_add(top, bottom, out, 0), "ll_layer_add");
+        bench_check(ll_layer_add(top, bottom, out, 0, NULL), "ll_layer_add");
         ++calls;
         elapsed = bench_wall_seconds() - start;
     } while (elapsed < MIN_SAMPLE_SECONDS);

@@ -19,6 +19,31 @@
 #include <stdlib.h>
 #include <time.h>
 
+/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
+static ll_status set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
+                                int compensate, size_t n_orders_internal,
+                                const ll_monitor *monitor)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    mf.compensate = compensate;
+    mf.n_orders_internal = n_orders_internal;
+    return ll_layer_set_microfacet(layer, &mf, monitor);
+}
+
+/* The resolution a build chooses for a compensated Beckmann interface. */
+static ll_status search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
+                                   size_t *n_orders)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    return ll_resolution_search_microfacet(&mf, 0.0, 0.0, NULL, n_nodes, n_orders, NULL);
+}
+
 #define SIDE 8
 #define CALLS 200000
 
@@ -113,13 +138,13 @@ int main(int argc, char **argv)
     char path[512];
     ll_bsdf *b64 = NULL, *b1 = NULL;
     size_t active = 0;
-    check(ll_heuristic_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
+    check(search_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
     if (n > 64)
         n = 64;
-    check(ll_quad_gauss_lobatto(n, x, w), "nodes");
+    check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     for (k = 0; k < SIDE; ++k) {
         check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
-        check(ll_layer_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0), "fill");
+        check(set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
         positions[k] = 0.2 + 0.05 * (double)k;
         positions[SIDE + k] = (double)k / (SIDE - 1);
     }
@@ -128,10 +153,10 @@ int main(int argc, char **argv)
     for (k = 0; k < SIDE * SIDE; ++k)
         layers[k] = l[k % SIDE];
     snprintf(path, sizeof path, "%s/basis64.bsdf", dir);
-    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL), "write");
+    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL, NULL), "write");
     check(ll_bsdf_open(path, NULL, &b64), "open");
     snprintf(path, sizeof path, "%s/basis1.bsdf", dir);
-    check(ll_bsdf_write(path, layers, 1, NULL), "write");
+    check(ll_bsdf_write(path, layers, 1, NULL, NULL), "write");
     check(ll_bsdf_open(path, NULL, &b1), "open");
     check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
     for (k = 0; k < SIDE * SIDE; ++k)

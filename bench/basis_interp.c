@@ -21,6 +21,31 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
+static ll_status set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
+                                int compensate, size_t n_orders_internal,
+                                const ll_monitor *monitor)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    mf.compensate = compensate;
+    mf.n_orders_internal = n_orders_internal;
+    return ll_layer_set_microfacet(layer, &mf, monitor);
+}
+
+/* The resolution a build chooses for a compensated Beckmann interface. */
+static ll_status search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
+                                   size_t *n_orders)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    return ll_resolution_search_microfacet(&mf, 0.0, 0.0, NULL, n_nodes, n_orders, NULL);
+}
+
 #define N_SAMPLES 5
 static const double alphas[N_SAMPLES] = { 0.05, 0.1, 0.2, 0.3, 0.4 };
 static const double between[4] = { 0.075, 0.15, 0.25, 0.35 };
@@ -42,9 +67,9 @@ static ll_layer *build(const material *m, double alpha, size_t n, size_t orders)
 {
     double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
     ll_layer *l = NULL;
-    check(ll_quad_gauss_lobatto(n, x, w), "nodes");
+    check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     check(ll_layer_create(x, w, n, orders, &l), "layer");
-    check(ll_layer_set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0), "microfacet");
+    check(set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0, NULL), "microfacet");
     free(x);
     free(w);
     return l;
@@ -54,7 +79,7 @@ static ll_bsdf *write_open(const char *path, const ll_layer *const *layers, size
                            const size_t *counts, const double *positions)
 {
     ll_bsdf *b = NULL;
-    check(ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, NULL), "write");
+    check(ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, NULL, NULL), "write");
     check(ll_bsdf_open(path, NULL, &b), "open");
     return b;
 }
@@ -155,7 +180,7 @@ int main(int argc, char **argv)
         char path[512];
         ll_bsdf *textured;
         /* One resolution for every build: what the sharpest sample needs. */
-        check(ll_heuristic_microfacet(alphas[0], mats[mi].eta_re, mats[mi].eta_im, &n, &orders),
+        check(search_microfacet(alphas[0], mats[mi].eta_re, mats[mi].eta_im, &n, &orders),
               "heuristic");
         printf("%s: %zu nodes, %zu orders\n", mats[mi].name, n, orders);
         for (k = 0; k < N_SAMPLES; ++k) {

@@ -102,3 +102,26 @@ size_t bench_parse_size(const char *text, const char *what)
         bench_die("%s: \"%s\" is not a non-negative integer", what, text);
     return (size_t)v;
 }
+
+ll_status bench_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
+                               int compensate, size_t n_orders_internal,
+                               const ll_monitor *monitor)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    mf.compensate = compensate;
+    mf.n_orders_internal = n_orders_internal;
+    return ll_layer_set_microfacet(layer, &mf, monitor);
+}
+
+ll_status bench_search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
+                                  size_t *n_orders)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    return ll_resolution_search_microfacet(&mf, 0.0, 0.0, NULL, n_nodes, n_orders, NULL);
+}

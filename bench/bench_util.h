@@ -18,6 +18,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#ifndef LL_EXPERIMENTAL
+#define LL_EXPERIMENTAL /* ll_material_estimate, ll_layer_pack */
+#endif
 #include <layerlab.h>
 
 /* Seconds on a monotonic wall clock. */
@@ -54,5 +57,14 @@ double bench_rng_uniform(bench_rng *rng);
 
 /* Parse a non-negative integer argument or exit naming it. */
 size_t bench_parse_size(const char *text, const char *what);
+
+/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
+ll_status bench_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
+                               int compensate, size_t n_orders_internal,
+                               const ll_monitor *monitor);
+/* ll_resolution_search_microfacet of a compensated Beckmann interface at
+ * the default tolerance (what a build chooses). */
+ll_status bench_search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
+                                  size_t *n_orders);
 
 #endif /* BENCH_UTIL_H */

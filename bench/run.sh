@@ -58,7 +58,7 @@ build() { # name, sources and extra flags
     # shellcheck disable=SC2086
     $CC $CFLAGS -o "$BIN/$name" "$@" $LIBS || echo "bench: $name did not build" >&2
 }
-build recipe bench/recipe.c bench/bench_util.c
+build recipe bench/recipe.c bench/bench_util.c tools/llbuild/time_model.c -Itools/llbuild
 # shellcheck disable=SC2086
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
 # The slab against doubling needs the internal method choice: the static

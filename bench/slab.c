@@ -36,7 +36,7 @@ static double time_method(const double *x, const double *w, size_t n, ll_expand_
         ll_layer *l = NULL;
         double t0;
         bench_check(ll_layer_create(x, w, n, 1, &l), "ll_layer_create");
-        bench_check(ll_layer_set_henyey_greenstein(l, 0.9, 0.9), "ll_layer_set_henyey_greenstein");
+        bench_check(ll_layer_set_henyey_greenstein(l, 0.9, 0.9, NULL), "ll_layer_set_henyey_greenstein");
         t0 = bench_wall_seconds();
         bench_check(ll_layer_expand_by(l, 4.0, method), "ll_layer_expand_by");
         spent += bench_wall_seconds() - t0;
@@ -57,7 +57,7 @@ int main(int argc, char **argv)
         size_t n = bench_parse_size(argv[a], "N"), h = n / 2, k, i;
         double *x = bench_alloc(n, sizeof(double)), *w = bench_alloc(n, sizeof(double));
         double min_mu = 1.0, tau0, doubling, slab, h3 = (double)h * (double)h * (double)h;
-        bench_check(ll_quad_gauss_lobatto(n, x, w), "ll_quad_gauss_lobatto");
+        bench_check(ll_quad_gauss_lobatto(n, x, w, NULL), "ll_quad_gauss_lobatto");
         for (i = 0; i < n; ++i)
             min_mu = fmin(min_mu, fabs(x[i]));
         ll_expand_schedule(4.0, min_mu, &tau0, &k);

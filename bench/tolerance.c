@@ -66,7 +66,7 @@ static void build(const char *name, double tolerance, const char *out, size_t th
     o.threads = threads;
     bench_check(ll_set_thread_count(threads), "ll_set_thread_count");
     start = bench_wall_seconds();
-    bench_check(ll_material_resolution(m, &o, &n, &k, &c), "ll_material_resolution");
+    bench_check(ll_material_resolution(m, &o, NULL, &n, &k, &c), "ll_material_resolution");
     bench_metric("choose", "s", bench_wall_seconds() - start);
     snprintf(text, sizeof text, "%zu", n);
     bench_info("n_nodes", text);
@@ -76,7 +76,7 @@ static void build(const char *name, double tolerance, const char *out, size_t th
      * llbuild does (ll_material_build would choose again). */
     o.n_nodes = n;
     o.n_orders = k;
-    bench_check(ll_material_build(m, &o, out), "ll_material_build");
+    bench_check(ll_material_build(m, &o, NULL, out), "ll_material_build");
     if (stat(out, &st) == 0)
         bench_metric("file", "MB", (double)st.st_size / 1e6);
     ll_material_destroy(m);

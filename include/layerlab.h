@@ -9,6 +9,9 @@
  *   ll_bsdf.h     .bsdf files: open, evaluate, sample (the reader library)
  *   ll_bsdf_write.h .bsdf files: write them from layers
  *   ll_material.h the material language and its compiler
+ *   ll_distribution.h one build over several processes (experimental)
+ * Experimental declarations, which may change in a minor release, are seen
+ * only with LL_EXPERIMENTAL defined before the include.
  */
 #ifndef LAYERLAB_H
 #define LAYERLAB_H

@@ -1,7 +1,9 @@
 #!/bin/sh
 # ABI and header checks (see docs/style.md, items 1-4):
 #   (a) every public header compiles alone as pedantic C99 and as C++11,
-#       includes only <stddef.h>/<stdint.h> and other layerlab headers;
+#       with and without LL_EXPERIMENTAL (the tier that may change in a
+#       minor release), includes only <stddef.h>/<stdint.h> and other
+#       layerlab headers;
 #       a C++ program links against the library (extern "C" guards work);
 #   (b) the shared library exports ll_* symbols only;
 #   (c) its soname is liblayerlab.so.<LL_ABI_VERSION>;
@@ -51,21 +53,23 @@ fi
 for header in "$SRC"/include/layerlab.h "$SRC"/include/layerlab/ll_*.h; do
     name=${header#"$SRC"/include/}
     printf '#include <%s>\n' "$name" > "$tmp/alone.c"
-    if $CC -std=c99 -pedantic -Wall -Wextra -Werror -Wstrict-prototypes \
-        -I"$SRC/include" -c "$tmp/alone.c" -o "$tmp/alone.o" > "$tmp/cc.log" 2>&1; then
-        pass "$name compiles alone as C99 ($CC -std=c99 -pedantic -Wall -Wextra -Werror)"
-    else
-        fail "$name does not compile alone as C99"
-        show "$tmp/cc.log"
-    fi
     cp "$tmp/alone.c" "$tmp/alone.cpp"
-    if $CXX -std=c++11 -pedantic -Wall -Wextra -Werror \
-        -I"$SRC/include" -c "$tmp/alone.cpp" -o "$tmp/alone.o" > "$tmp/cxx.log" 2>&1; then
-        pass "$name compiles alone as C++11 ($CXX -std=c++11 -pedantic -Wall -Wextra -Werror)"
-    else
-        fail "$name does not compile alone as C++11"
-        show "$tmp/cxx.log"
-    fi
+    for tier in "" -DLL_EXPERIMENTAL; do
+        if $CC -std=c99 -pedantic -Wall -Wextra -Werror -Wstrict-prototypes $tier \
+            -I"$SRC/include" -c "$tmp/alone.c" -o "$tmp/alone.o" > "$tmp/cc.log" 2>&1; then
+            pass "$name compiles alone as C99 ($CC -std=c99 -pedantic -Wall -Wextra -Werror $tier)"
+        else
+            fail "$name does not compile alone as C99 $tier"
+            show "$tmp/cc.log"
+        fi
+        if $CXX -std=c++11 -pedantic -Wall -Wextra -Werror $tier \
+            -I"$SRC/include" -c "$tmp/alone.cpp" -o "$tmp/alone.o" > "$tmp/cxx.log" 2>&1; then
+            pass "$name compiles alone as C++11 ($CXX -std=c++11 -pedantic -Wall -Wextra -Werror $tier)"
+        else
+            fail "$name does not compile alone as C++11 $tier"
+            show "$tmp/cxx.log"
+        fi
+    done
     others=$(grep '^[[:space:]]*#[[:space:]]*include' "$header" |
         grep -v -e '<stddef\.h>' -e '<stdint\.h>' -e '"ll_[a-z_]*\.h"' -e '"layerlab/ll_[a-z_]*\.h"')
     if [ -z "$others" ]; then
@@ -92,9 +96,9 @@ fi
 
 # ------------------------------------------------------ (b) exported symbols
 if [ -f "$LIB" ]; then
-    # Symbol versions (name@@LAYERLAB_1) are stripped; the version nodes
+    # Symbol versions (name@@LAYERLAB_1.0) are stripped; the version nodes
     # themselves are listed as absolute symbols LAYERLAB_[<TIER>_]<n>[.<m>]
-    # (LAYERLAB_1.1, LAYERLAB_EXPERIMENTAL_1.0), which are not exports.
+    # (LAYERLAB_1.0, LAYERLAB_EXPERIMENTAL_1.0), which are not exports.
     if nm -D --defined-only "$LIB" > "$tmp/nm.txt" 2> "$tmp/nm.log"; then
         stray=$(awk '{ name = $NF; sub(/@.*/, "", name);
                        if ($(NF-1) == "A" && name ~ /^LAYERLAB_([A-Z]+_)*[0-9]+(\.[0-9]+)?$/) next;

@@ -11,7 +11,7 @@
 #   - added functions pass (they are listed);
 #   - functions of the experimental version nodes (*EXPERIMENTAL*, declared
 #     under LL_EXPERIMENTAL) are left out of the comparison
-#     (tests/abidiff_experimental.suppr): they may change in a minor release.
+#     (abi/experimental.suppr): they may change in a minor release.
 # Both sides are abidw's description of the public types (--headers-dir
 # include/layerlab --drop-private-types: the structs behind the opaque
 # handles ll_bsdf, ll_layer, ll_material are internal and left out), without
@@ -41,7 +41,7 @@ fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
 show() { sed -n "1,${2:-40}p" "$1" | sed 's/^/    /'; }
 
 LIBS="liblayerlab liblayerlab_reader"
-SUPPRESS=$SRC/tests/abidiff_experimental.suppr
+SUPPRESS=$SRC/abi/experimental.suppr
 # abidw of one library, run in the source tree (the DWARF names the headers
 # relative to it).
 describe() {
@@ -110,7 +110,7 @@ if [ -e "$reader_so" ] && describe "$reader_so" "$tmp/fresh.abi" > /dev/null 2>&
             > "$tmp/self-experimental.log" 2>&1
         rc=$?
         if [ "$rc" -eq 0 ]; then
-            pass "abidiff ignores a removed experimental function ($experimental; tests/abidiff_experimental.suppr)"
+            pass "abidiff ignores a removed experimental function ($experimental; abi/experimental.suppr)"
         else
             fail "abidiff reports a change to the experimental function $experimental (exit $rc)"
             show "$tmp/self-experimental.log"

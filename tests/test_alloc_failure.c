@@ -179,22 +179,22 @@ static ll_layer *layer(void)
 static ll_layer *slab(void)
 {
     ll_layer *l = layer();
-    assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.6), LL_OK);
-    assert_int_equal(ll_layer_expand(l, 1.0), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.6, NULL), LL_OK);
+    assert_int_equal(ll_layer_expand(l, 1.0, NULL), LL_OK);
     return l;
 }
 
 static ll_layer *coat(void)
 {
     ll_layer *l = layer();
-    assert_int_equal(ll_layer_set_microfacet(l, 1.5, 0.0, 0.3, 1, 0), LL_OK);
+    assert_int_equal(ll_test_set_microfacet(l, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     return l;
 }
 
 static ll_layer *base(double albedo)
 {
     ll_layer *l = layer();
-    assert_int_equal(ll_layer_set_diffuse(l, albedo), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, albedo, NULL), LL_OK);
     return l;
 }
 
@@ -251,11 +251,11 @@ static void put_material(blob *b, const ll_material *m)
     if (!m)
         return;
     put_size(b, ll_material_word_count(m));
-    assert_int_equal(ll_material_resolution(m, NULL, &n, &o, &c), LL_OK);
+    assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &o, &c), LL_OK);
     put_size(b, n);
     put_size(b, o);
     put_size(b, c);
-    assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
+    assert_int_equal(ll_material_estimate(m, NULL, &e, NULL), LL_OK);
     put(b, &e, sizeof e);
     if (ll_material_axis_count(m) > 0) {
         /* a swept material: its axes, and its first basis */
@@ -272,7 +272,7 @@ static void put_material(blob *b, const ll_material *m)
                          LL_OK);
         ll_material_builder_destroy(builder);
     } else {
-        assert_int_equal(ll_material_build_layers(m, NULL, layers, &nch, &header), LL_OK);
+        assert_int_equal(ll_material_build_layers(m, NULL, NULL, layers, &nch, &header), LL_OK);
     }
     put_text(b, header.metadata);
     header.metadata = NULL;
@@ -342,7 +342,7 @@ static void prep_slab_in(world *w) { w->in[0] = slab(); }
 static void prep_phase_out(world *w)
 {
     w->out = layer();
-    assert_int_equal(ll_layer_set_henyey_greenstein(w->out, 0.95, 0.7), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(w->out, 0.95, 0.7, NULL), LL_OK);
 }
 static void prep_add(world *w)
 {
@@ -377,27 +377,27 @@ static ll_status call_create(world *w)
     return ll_layer_create(nodes, weights, N_NODES, N_ORDERS, &w->out);
 }
 static ll_status call_clone(world *w) { return ll_layer_clone(w->in[0], &w->out); }
-static ll_status call_diffuse(world *w) { return ll_layer_set_diffuse(w->out, 0.3); }
-static ll_status call_isotropic(world *w) { return ll_layer_set_isotropic(w->out, 0.8); }
-static ll_status call_hg(world *w) { return ll_layer_set_henyey_greenstein(w->out, 0.7, -0.3); }
-static ll_status call_vmf(world *w) { return ll_layer_set_von_mises_fisher(w->out, 0.8, 5.0); }
+static ll_status call_diffuse(world *w) { return ll_layer_set_diffuse(w->out, 0.3, NULL); }
+static ll_status call_isotropic(world *w) { return ll_layer_set_isotropic(w->out, 0.8, NULL); }
+static ll_status call_hg(world *w) { return ll_layer_set_henyey_greenstein(w->out, 0.7, -0.3, NULL); }
+static ll_status call_vmf(world *w) { return ll_layer_set_von_mises_fisher(w->out, 0.8, 5.0, NULL); }
 static ll_status call_dielectric(world *w)
 {
-    return ll_layer_set_microfacet(w->out, 1.33, 0.0, 0.2, 1, 0);
+    return ll_test_set_microfacet(w->out, 1.33, 0.0, 0.2, 1, 0, NULL);
 }
 static ll_status call_conductor(world *w)
 {
-    return ll_layer_set_microfacet(w->out, 0.2, 3.9, 0.25, 1, 2 * N_ORDERS);
+    return ll_test_set_microfacet(w->out, 0.2, 3.9, 0.25, 1, 2 * N_ORDERS, NULL);
 }
-static ll_status call_matusik(world *w) { return ll_layer_set_matusik(w->out, merl_path, 1, 0); }
-static ll_status call_add(world *w) { return ll_layer_add(w->in[0], w->in[1], w->out, 0); }
+static ll_status call_matusik(world *w) { return ll_layer_set_matusik(w->out, merl_path, 1, 0, NULL); }
+static ll_status call_add(world *w) { return ll_layer_add(w->in[0], w->in[1], w->out, 0, NULL); }
 static ll_status call_add_homogeneous(world *w)
 {
-    return ll_layer_add(w->in[0], w->in[0], w->out, 1);
+    return ll_layer_add(w->in[0], w->in[0], w->out, 1, NULL);
 }
 static ll_status call_add_to_top(world *w) { return ll_layer_add_to_top(w->out, w->in[0]); }
 static ll_status call_add_to_bottom(world *w) { return ll_layer_add_to_bottom(w->out, w->in[0]); }
-static ll_status call_expand(world *w) { return ll_layer_expand(w->out, 3.0); }
+static ll_status call_expand(world *w) { return ll_layer_expand(w->out, 3.0, NULL); }
 static ll_status call_reverse(world *w) { return ll_layer_reverse(w->out); }
 static ll_status call_clear(world *w) { return ll_layer_clear(w->out); }
 static ll_status call_matrix(world *w) { return ll_layer_matrix(w->in[0], 1, w->values); }
@@ -408,7 +408,7 @@ static ll_status call_albedo(world *w)
 static ll_status call_eval_many(world *w)
 {
     double mu_o[4] = { -0.9, -0.5, 0.3, 0.8 }, mu_i[4] = { 0.2, 0.5, 0.7, 1.0 };
-    return ll_layer_eval_many(w->in[0], 4, mu_o, mu_i, NULL, w->values);
+    return ll_layer_eval_many(w->in[0], 4, mu_i, mu_o, NULL, w->values);
 }
 
 /* -- files */
@@ -438,21 +438,21 @@ static void prep_write_textured(world *w)
 static ll_status call_write_one(world *w)
 {
     const ll_layer *const l[1] = { w->in[0] };
-    return ll_bsdf_write(out_path, l, 1, NULL);
+    return ll_bsdf_write(out_path, l, 1, NULL, NULL);
 }
 static ll_status call_write_rgb(world *w)
 {
     const ll_layer *const l[3] = { w->in[0], w->in[1], w->in[2] };
     ll_bsdf_write_options o = LL_BSDF_WRITE_OPTIONS_INIT;
     o.metadata = "three channels";
-    return ll_bsdf_write(out_path, l, 3, &o);
+    return ll_bsdf_write(out_path, l, 3, &o, NULL);
 }
 static ll_status call_write_textured(world *w)
 {
     const ll_layer *const l[2] = { w->in[0], w->in[1] };
     const size_t counts[1] = { 2 };
     const double positions[2] = { 0.0, 1.0 };
-    return ll_bsdf_write_textured(out_path, l, 1, 1, counts, positions, NULL);
+    return ll_bsdf_write_textured(out_path, l, 1, 1, counts, positions, NULL, NULL);
 }
 static ll_status call_open(world *w) { return ll_bsdf_open(bsdf_path, NULL, &w->bsdf); }
 static ll_status call_open_rgb(world *w) { return ll_bsdf_open(rgb_path, NULL, &w->bsdf); }
@@ -501,7 +501,7 @@ static void prep_material_write(world *w)
 {
     size_t c;
     prep_material_out(w);
-    assert_int_equal(ll_material_build_layers(w->material, NULL, w->layers, &w->n_channels, NULL),
+    assert_int_equal(ll_material_build_layers(w->material, NULL, NULL, w->layers, &w->n_channels, NULL),
                      LL_OK);
     for (c = 0; c < 3; ++c) {
         w->in[c] = w->layers[c];
@@ -510,17 +510,17 @@ static void prep_material_write(world *w)
 }
 static ll_status call_resolution(world *w)
 {
-    return ll_material_resolution(w->material, NULL, &w->sizes[0], &w->sizes[1], &w->sizes[2]);
+    return ll_material_resolution(w->material, NULL, NULL, &w->sizes[0], &w->sizes[1], &w->sizes[2]);
 }
-static ll_status call_estimate(world *w) { return ll_material_estimate(w->material, NULL, &w->estimate); }
+static ll_status call_estimate(world *w) { return ll_material_estimate(w->material, NULL, &w->estimate, NULL); }
 static ll_status call_build_layers(world *w)
 {
-    return ll_material_build_layers(w->material, NULL, w->layers, &w->n_channels, &w->header);
+    return ll_material_build_layers(w->material, NULL, NULL, w->layers, &w->n_channels, &w->header);
 }
-static ll_status call_build(world *w) { return ll_material_build(w->material, NULL, out_path); }
+static ll_status call_build(world *w) { return ll_material_build(w->material, NULL, NULL, out_path); }
 static ll_status call_material_write(world *w)
 {
-    return ll_material_write(w->material, NULL, w->in, 3, out_path);
+    return ll_material_write(w->material, NULL, w->in, 3, out_path, NULL);
 }
 static ll_status call_parse_sweep(world *w)
 {
@@ -535,7 +535,7 @@ static void prep_sweep_out(world *w)
 }
 static ll_status call_sweep_estimate(world *w)
 {
-    return ll_material_estimate(w->material, NULL, &w->estimate);
+    return ll_material_estimate(w->material, NULL, &w->estimate, NULL);
 }
 /* The streaming writer: open, two bases, commit. */
 static ll_status call_writer(world *w)
@@ -743,10 +743,10 @@ static void write_input_files(void)
     size_t i;
     for (i = 0; i < 3; ++i)
         l[i] = coated_base(0.2 + 0.3 * (double)i);
-    assert_int_equal(ll_bsdf_write(bsdf_path, (const ll_layer *const *)l, 1, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_write(rgb_path, (const ll_layer *const *)l, 3, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(bsdf_path, (const ll_layer *const *)l, 1, NULL, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(rgb_path, (const ll_layer *const *)l, 3, NULL, NULL), LL_OK);
     assert_int_equal(ll_bsdf_write_textured(textured_path, (const ll_layer *const *)l, 1, 1,
-                                            counts, positions, NULL),
+                                            counts, positions, NULL, NULL),
                      LL_OK);
     for (i = 0; i < 3; ++i)
         ll_layer_destroy(l[i]);
@@ -759,7 +759,7 @@ static int group_setup(void **state)
     /* One thread: the allocations come in one order, so the k-th is one
      * deterministic allocation (see support/alloc.c). */
     assert_int_equal(ll_set_thread_count(1), LL_OK);
-    assert_int_equal(ll_quad_gauss_lobatto(N_NODES, nodes, weights), LL_OK);
+    assert_int_equal(ll_quad_gauss_lobatto(N_NODES, nodes, weights, NULL), LL_OK);
     ll_test_mkdtemp(scratch_dir, sizeof scratch_dir);
     snprintf(out_dir, sizeof out_dir, "%s/out", scratch_dir);
     snprintf(out_path, sizeof out_path, "%s/out.bsdf", out_dir);

@@ -98,9 +98,9 @@ static void build_write_open_eval(const char *dir)
     double rgb[3], pdf, mu_o, phi, f[3];
     const double u[2] = { 0.25, 0.75 };
     layers[0] = l;
-    assert_int_equal(ll_layer_set_diffuse(l, 0.5), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, 0.5, NULL), LL_OK);
     snprintf(path, sizeof path, "%s/diffuse.bsdf", dir);
-    assert_int_equal(ll_bsdf_write(path, layers, 1, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, layers, 1, NULL, NULL), LL_OK);
     ll_layer_destroy(l);
     assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_eval(b, 0.6, -0.5, 0.3, NULL, rgb), LL_OK);

@@ -36,7 +36,7 @@ static ll_bsdf *write_open_ex(const char *name, const ll_layer *const *layers, s
     if (error_goal >= 0.0)
         opts.error_goal = error_goal;
     path_in_dir(path, sizeof path, name);
-    if (ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, &opts) != LL_OK)
+    if (ll_bsdf_write_textured(path, layers, 1, n_params, counts, positions, &opts, NULL) != LL_OK)
         fail_msg("write %s: %s", name, ll_last_error_message());
     if (ll_bsdf_open(path, NULL, &b) != LL_OK)
         fail_msg("open %s: %s", name, ll_last_error_message());
@@ -52,7 +52,7 @@ static ll_bsdf *write_open(const char *name, const ll_layer *const *layers, size
 static ll_layer *conductor_layer(double alpha)
 {
     ll_layer *l = ll_test_layer(g_n, g_orders);
-    assert_int_equal(ll_layer_set_microfacet(l, 0.2, 3.0, alpha, 1, 0), LL_OK);
+    assert_int_equal(ll_test_set_microfacet(l, 0.2, 3.0, alpha, 1, 0, NULL), LL_OK);
     return l;
 }
 

@@ -131,7 +131,7 @@ static ll_bsdf *open_textured(void)
     }
     opts.eta = 1.5;
     snprintf(path, sizeof path, "%s/textured.bsdf", ll_test_dir());
-    if (ll_bsdf_write_textured(path, layers, 1, 1, counts, positions, &opts) != LL_OK)
+    if (ll_bsdf_write_textured(path, layers, 1, 1, counts, positions, &opts, NULL) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     for (k = 0; k < N_BASES; ++k)
         ll_layer_destroy(l[k]);

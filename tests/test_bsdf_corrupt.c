@@ -362,11 +362,11 @@ static void textured_parameters(void **state)
     unsigned char *d;
     size_t size, k, at_counts, at_positions;
     (void)state;
-    assert_int_equal(ll_layer_set_diffuse(l, 0.5), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, 0.5, NULL), LL_OK);
     for (k = 0; k < 4; ++k)
         layers[k] = l;
     snprintf(path, sizeof path, "%s/textured.bsdf", g_dir);
-    assert_int_equal(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL, NULL), LL_OK);
     d = ll_test_read_file(path, &size);
     at_counts = 64 + 4 * 6;
     at_positions = at_counts + 8;

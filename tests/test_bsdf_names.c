@@ -66,12 +66,12 @@ static int setup(void **state)
     ll_test_dir_setup(state);
     for (k = 0; k < N_BASES; ++k) {
         layers[k] = ll_test_layer(6, 1);
-        assert_int_equal(ll_layer_set_diffuse(layers[k], 0.1 + 0.1 * (double)k), LL_OK);
+        assert_int_equal(ll_layer_set_diffuse(layers[k], 0.1 + 0.1 * (double)k, NULL), LL_OK);
     }
     opts.metadata = "{\"parameters\": [\"coat.alpha\", \"base.alpha\"]}";
     snprintf(path, sizeof path, "%s/named.bsdf", ll_test_dir());
     assert_int_equal(ll_bsdf_write_textured(path, (const ll_layer *const *)layers, 1, 2, counts,
-                                            positions, &opts),
+                                            positions, &opts, NULL),
                      LL_OK);
     bytes = ll_test_read_file(path, &size);
     meta = (size_t)bytes[32] | (size_t)bytes[33] << 8 | (size_t)bytes[34] << 16 |
@@ -82,7 +82,7 @@ static int setup(void **state)
     /* The default writer's metadata ("parameters": 2, a count). */
     snprintf(path, sizeof path, "%s/default.bsdf", ll_test_dir());
     assert_int_equal(ll_bsdf_write_textured(path, (const ll_layer *const *)layers, 1, 2, counts,
-                                            positions, NULL),
+                                            positions, NULL, NULL),
                      LL_OK);
     for (k = 0; k < N_BASES; ++k)
         ll_layer_destroy(layers[k]);

@@ -23,7 +23,7 @@ static int setup(void **state)
 {
     ll_test_dir_setup(state);
     g_layer = ll_test_layer(8, 1);
-    return ll_layer_set_diffuse(g_layer, 0.5) == LL_OK ? 0 : -1;
+    return ll_layer_set_diffuse(g_layer, 0.5, NULL) == LL_OK ? 0 : -1;
 }
 
 static int teardown(void **state)
@@ -36,7 +36,7 @@ static ll_status write_to(const char *path)
 {
     const ll_layer *one[1];
     one[0] = g_layer;
-    return ll_bsdf_write(path, one, 1, NULL);
+    return ll_bsdf_write(path, one, 1, NULL, NULL);
 }
 
 /* A fresh, empty scratch folder "<dir>/<name>" in path. */
@@ -251,7 +251,7 @@ static void disk_full_names_target(void **state)
     mounted = mount("tmpfs", dir, "tmpfs", 0, "size=64k") == 0;
     snprintf(path, sizeof path, "%s/t.bsdf", dir);
     if (mounted) {
-        assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_IO);
+        assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_IO);
         assert_non_null(strstr(ll_last_error_message(), strerror(ENOSPC)));
     } else {
         pid_t pid;
@@ -266,7 +266,7 @@ static void disk_full_names_target(void **state)
             signal(SIGXFSZ, SIG_IGN);
             limit.rlim_cur = limit.rlim_max = 65536;
             setrlimit(RLIMIT_FSIZE, &limit);
-            s = ll_bsdf_write(path, one, 1, &opts);
+            s = ll_bsdf_write(path, one, 1, &opts, NULL);
             _exit(s == LL_ERROR_IO && strstr(ll_last_error_message(), path) &&
                           !strstr(ll_last_error_message(), ".tmp")
                       ? 0

@@ -33,7 +33,7 @@ static ll_bsdf *write_open(const char *name, const ll_layer *l, double goal)
     layers[0] = l;
     opts.error_goal = goal;
     snprintf(path, sizeof path, "%s/%s", g_dir, name);
-    if (ll_bsdf_write(path, layers, 1, &opts) != LL_OK || ll_bsdf_open(path, NULL, &b) != LL_OK)
+    if (ll_bsdf_write(path, layers, 1, &opts, NULL) != LL_OK || ll_bsdf_open(path, NULL, &b) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     return b;
 }
@@ -49,7 +49,7 @@ static int setup(void **state)
     g_lobe = write_open("lobe.bsdf", l, 1e-3);
     ll_layer_destroy(l);
     l = ll_test_layer(16, 1);
-    assert_int_equal(ll_layer_set_diffuse(l, 1.0), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, 1.0, NULL), LL_OK);
     g_white = write_open("white.bsdf", l, 1e-3);
     ll_layer_destroy(l);
     assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &g_golden), LL_OK);

@@ -35,7 +35,7 @@ static void assert_untouched(const char *path)
 static ll_layer *diffuse_layer(size_t n, size_t m, double albedo)
 {
     ll_layer *l = ll_test_layer(n, m);
-    assert_int_equal(ll_layer_set_diffuse(l, albedo), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, albedo, NULL), LL_OK);
     return l;
 }
 
@@ -60,46 +60,46 @@ static void invalid_arguments(void **state)
     mixed[0] = a;
     mixed[1] = other;
     mixed[2] = a;
-    assert_int_equal(ll_bsdf_write(NULL, one, 1, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_write("", one, 1, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_write(path, NULL, 1, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_write(path, one, 2, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_write(path, one, 0, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_bsdf_write(path, mixed, 3, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(NULL, one, 1, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write("", one, 1, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, NULL, 1, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 2, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 0, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, mixed, 3, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
     {
         const ll_layer *with_null[3] = { a, NULL, a };
-        assert_int_equal(ll_bsdf_write(path, with_null, 3, NULL), LL_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(ll_bsdf_write(path, with_null, 3, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
     }
     opts.eta = 0.0;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_INVALID_ARGUMENT);
     opts.eta = NAN;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_INVALID_ARGUMENT);
     opts.eta = 1.5;
     opts.alpha[1] = -0.1;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_INVALID_ARGUMENT);
     opts.alpha[1] = 0.0;
     opts.error_goal = -1.0;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_INVALID_ARGUMENT);
     opts.error_goal = 1e-3;
     opts.struct_size = 0;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_ERROR_INVALID_ARGUMENT);
     /* Textured: counts and positions. */
     {
         const size_t zero[1] = { 0 }, two[1] = { 2 };
         const double same[2] = { 0.5, 0.5 }, good[2] = { 0.0, 1.0 };
         const ll_layer *pair[2] = { a, a };
-        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, zero, good, NULL),
+        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, zero, good, NULL, NULL),
                          LL_ERROR_INVALID_ARGUMENT);
-        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, two, same, NULL),
+        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, two, same, NULL, NULL),
                          LL_ERROR_INVALID_ARGUMENT);
-        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, two, NULL, NULL),
+        assert_int_equal(ll_bsdf_write_textured(path, pair, 1, 1, two, NULL, NULL, NULL),
                          LL_ERROR_INVALID_ARGUMENT);
     }
     /* An invalid layer: a NaN in its matrices. */
     bad = ll_test_layer(8, 4);
     ll_test_fill(bad, nan_fn, NULL);
     one[0] = bad;
-    assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_bsdf_write(path, one, 1, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(ll_last_error_message(), "non-finite"));
     assert_untouched(path);
     ll_layer_destroy(a);
@@ -117,15 +117,15 @@ static void bad_paths(void **state)
     fresh_target(path, sizeof path);
     /* A directory that does not exist. */
     snprintf(dir_as_file, sizeof dir_as_file, "%s/missing/sub/x.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
+    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL, NULL), LL_ERROR_IO);
     assert_non_null(strstr(ll_last_error_message(), "missing/sub/x.bsdf"));
     /* A path naming a directory. */
     snprintf(dir_as_file, sizeof dir_as_file, "%s/", ll_test_dir());
-    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
+    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL, NULL), LL_ERROR_IO);
     /* An existing directory as the target: the rename fails. */
     snprintf(dir_as_file, sizeof dir_as_file, "%s/adir", ll_test_dir());
     assert_int_equal(mkdir(dir_as_file, 0700), 0);
-    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL), LL_ERROR_IO);
+    assert_int_equal(ll_bsdf_write(dir_as_file, one, 1, NULL, NULL), LL_ERROR_IO);
     assert_int_equal(rmdir(dir_as_file), 0);
     assert_untouched(path);
     ll_layer_destroy(a);
@@ -156,7 +156,7 @@ static void disk_full(void **state)
         limit.rlim_cur = limit.rlim_max = 100000; /* the file needs ~1 MB */
         if (setrlimit(RLIMIT_FSIZE, &limit) != 0)
             _exit(3);
-        s = ll_bsdf_write(path, one, 1, &opts);
+        s = ll_bsdf_write(path, one, 1, &opts, NULL);
         ll_layer_destroy(l);
         _exit(s == LL_ERROR_IO && strstr(ll_last_error_message(), "writing failed") ? 0 : 1);
     }
@@ -177,9 +177,9 @@ static void replaces_atomically(void **state)
     (void)state;
     fresh_target(path, sizeof path);
     one[0] = a;
-    assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, one, 1, NULL, NULL), LL_OK);
     one[0] = b;
-    assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, one, 1, NULL, NULL), LL_OK);
     assert_int_equal(ll_test_count_entries(ll_test_dir()), 1);
     assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_eval(f, 0.8, -0.8, 0.0, NULL, rgb), LL_OK);
@@ -193,7 +193,7 @@ static void replaces_atomically(void **state)
         char cwd[1024];
         assert_non_null(getcwd(cwd, sizeof cwd));
         assert_int_equal(chdir(ll_test_dir()), 0);
-        assert_int_equal(ll_bsdf_write("relative.bsdf", one, 1, NULL), LL_OK);
+        assert_int_equal(ll_bsdf_write("relative.bsdf", one, 1, NULL, NULL), LL_OK);
         assert_int_equal(chdir(cwd), 0);
         assert_int_equal(ll_test_count_entries(ll_test_dir()), 2);
     }
@@ -216,7 +216,7 @@ static void short_options(void **state)
     memset(&opts, 0xFF, sizeof opts); /* garbage beyond the declared size */
     opts.struct_size = offsetof(ll_bsdf_write_options, alpha);
     opts.eta = 1.25;
-    assert_int_equal(ll_bsdf_write(path, one, 1, &opts), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, one, 1, &opts, NULL), LL_OK);
     assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_get_info(f, &info), LL_OK);
     assert_true(info.eta == 1.25 && info.alpha[0] == 0.0 && info.alpha[1] == 0.0);

@@ -67,7 +67,7 @@ static void test_status_strings(void **state)
 static ll_status fail_with_zero_nodes(void)
 {
     double x[1], w[1];
-    return ll_quad_gauss_legendre(0, x, w);
+    return ll_quad_gauss_legendre(0, x, w, NULL);
 }
 
 /* What a second thread saw: its message before and after its own failure. */
@@ -100,7 +100,7 @@ static void test_last_error_message(void **state)
     snprintf(mine, sizeof mine, "%s", ll_last_error_message());
 
     /* Success does not clear the message. */
-    assert_int_equal(ll_quad_gauss_legendre(4, x, w), LL_OK);
+    assert_int_equal(ll_quad_gauss_legendre(4, x, w, NULL), LL_OK);
     assert_string_equal(ll_last_error_message(), mine);
 
     /* A fresh thread starts with "", its failure is its own, and ours is

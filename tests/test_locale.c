@@ -128,7 +128,7 @@ static void material_and_spectra_under_comma_locale(void **state)
     /* The JSON description written into files keeps its decimal points. */
     if (!strstr(m->metadata, "\"tau\": 0.75") || !strstr(m->metadata, "\"g\": 0.5"))
         fail_msg("metadata: %s", m->metadata);
-    assert_int_equal(ll_material_estimate(m, NULL, &est), LL_OK);
+    assert_int_equal(ll_material_estimate(m, NULL, &est, NULL), LL_OK);
     assert_int_equal(est.n_channels, 3);
     ll_material_destroy(m);
     unsetenv("LAYERLAB_IOR_DIR");

@@ -64,7 +64,7 @@ static size_t build(const ll_material *m, size_t nodes, size_t orders, size_t ch
     o.n_nodes = nodes;
     o.n_orders = orders;
     o.n_channels = channels;
-    s = ll_material_build_layers(m, &o, layers, &n, NULL);
+    s = ll_material_build_layers(m, &o, NULL, layers, &n, NULL);
     if (s != LL_OK)
         fail_msg("build: %s", ll_last_error_message());
     return n;
@@ -168,7 +168,7 @@ static void rough_gold_matches_the_original_file(void **state)
     o.n_nodes = 56;
     o.n_orders = 172;
     snprintf(path, sizeof path, "%s/roughgold.bsdf", tmpdir);
-    assert_int_equal(ll_material_build(m, &o, path), LL_OK);
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_OK);
     assert_int_equal(ll_bsdf_open(path, NULL, &ours), LL_OK);
     assert_int_equal(ll_bsdf_open(LL_SOURCE_DIR "/tests/data/roughgold_alpha_0.2.bsdf", NULL, &ref),
                      LL_OK);
@@ -250,8 +250,8 @@ static void coated_gold_is_darker_than_bare_gold(void **state)
     o.n_orders = 150;
     snprintf(coated_path, sizeof coated_path, "%s/coated.bsdf", tmpdir);
     snprintf(bare_path, sizeof bare_path, "%s/bare.bsdf", tmpdir);
-    assert_int_equal(ll_material_build(coated, &o, coated_path), LL_OK);
-    assert_int_equal(ll_material_build(bare, &o, bare_path), LL_OK);
+    assert_int_equal(ll_material_build(coated, &o, NULL, coated_path), LL_OK);
+    assert_int_equal(ll_material_build(bare, &o, NULL, bare_path), LL_OK);
     assert_int_equal(ll_bsdf_open(coated_path, NULL, &bc), LL_OK);
     assert_int_equal(ll_bsdf_open(bare_path, NULL, &bb), LL_OK);
     assert_int_equal(ll_bsdf_get_info(bc, &info), LL_OK);
@@ -378,7 +378,7 @@ static void header_is_returned(void **state)
     o.n_nodes = 16;
     o.n_orders = 8;
     o.error_goal = 1e-4;
-    assert_int_equal(ll_material_build_layers(m, &o, layers, &n, &h), LL_OK);
+    assert_int_equal(ll_material_build_layers(m, &o, NULL, layers, &n, &h), LL_OK);
     assert_int_equal(n, 1);
     assert_float_equal(h.eta, 1.5, 0.0);
     assert_float_equal(h.alpha[0], 0.3, 0.0);
@@ -393,10 +393,11 @@ static void header_is_returned(void **state)
 typedef struct progress_log {
     double last;
     int calls, monotone, saw_adding, saw_writing, saw_medium, done;
-    volatile int *cancel_after; /* raise this after the first stage */
+    volatile int *cancel_after; /* raised when the medium starts; returned */
 } progress_log;
 
-static void on_progress(double f, const char *stage, void *user)
+/* The build's monitor: records the reports and returns the cancel flag. */
+static int on_progress(void *user, double f, const char *stage)
 {
     progress_log *p = user;
     if (f < p->last || f < 0.0 || f > 1.0)
@@ -409,6 +410,15 @@ static void on_progress(double f, const char *stage, void *user)
     p->done |= strcmp(stage, "done") == 0 && f == 1.0;
     if (p->cancel_after && strcmp(stage, "medium") == 0)
         *p->cancel_after = 1;
+    return p->cancel_after ? *p->cancel_after : 0;
+}
+
+static ll_monitor log_monitor(progress_log *log)
+{
+    ll_monitor monitor = LL_MONITOR_INIT;
+    monitor.progress = on_progress;
+    monitor.user = log;
+    return monitor;
 }
 
 static void progress_is_monotone_and_complete(void **state)
@@ -416,17 +426,17 @@ static void progress_is_monotone_and_complete(void **state)
     ll_material *m = parse_file(EXAMPLES "coated-gold-with-scatmedium.layers");
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
     progress_log log = { 0.0, 0, 1, 0, 0, 0, 0, NULL };
+    ll_monitor monitor = log_monitor(&log);
     char path[128];
     (void)state;
     o.n_nodes = 16;
     o.n_orders = 8;
-    o.progress = on_progress;
-    o.progress_user = &log;
     snprintf(path, sizeof path, "%s/progress.bsdf", tmpdir);
-    assert_int_equal(ll_material_build(m, &o, path), LL_OK);
+    assert_int_equal(ll_material_build(m, &o, &monitor, path), LL_OK);
     assert_true(log.monotone);
     assert_true(log.calls > 5);
-    assert_true(log.saw_adding && log.saw_writing && log.saw_medium && log.done);
+    /* Complete: the writer's last report, 1, is the build's last. */
+    assert_true(log.saw_adding && log.saw_writing && log.saw_medium && log.last == 1.0);
     ll_material_destroy(m);
 }
 
@@ -451,6 +461,7 @@ static void cancel_leaves_no_file(void **state)
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
     volatile int cancel = 0;
     progress_log log = { 0.0, 0, 1, 0, 0, 0, 0, &cancel };
+    ll_monitor monitor = log_monitor(&log);
     char dir[128], path[160], old[16] = "";
     FILE *f;
     int before;
@@ -460,11 +471,10 @@ static void cancel_leaves_no_file(void **state)
     snprintf(path, sizeof path, "%s/out.bsdf", dir);
     o.n_nodes = 16;
     o.n_orders = 8;
-    o.cancel = &cancel;
 
     /* Raised before the start. */
     cancel = 1;
-    assert_int_equal(ll_material_build(m, &o, path), LL_ERROR_CANCELLED);
+    assert_int_equal(ll_material_build(m, &o, &monitor, path), LL_ERROR_CANCELLED);
     assert_int_equal(count_files(dir), 0);
 
     /* Raised in the middle (when the medium starts), over an old file. */
@@ -474,9 +484,8 @@ static void cancel_leaves_no_file(void **state)
     fclose(f);
     before = count_files(dir);
     cancel = 0;
-    o.progress = on_progress;
-    o.progress_user = &log;
-    assert_int_equal(ll_material_build(m, &o, path), LL_ERROR_CANCELLED);
+    log.saw_medium = log.saw_writing = 0;
+    assert_int_equal(ll_material_build(m, &o, &monitor, path), LL_ERROR_CANCELLED);
     assert_true(log.saw_medium);
     assert_false(log.saw_writing);
     assert_int_equal(count_files(dir), before);
@@ -491,8 +500,7 @@ static void cancel_leaves_no_file(void **state)
         ll_layer *layers[3] = { (ll_layer *)1, NULL, NULL };
         size_t n = 7;
         cancel = 1;
-        o.progress = NULL;
-        assert_int_equal(ll_material_build_layers(m, &o, layers, &n, NULL),
+        assert_int_equal(ll_material_build_layers(m, &o, &monitor, layers, &n, NULL),
                          LL_ERROR_CANCELLED);
         assert_null(layers[0]);
         assert_int_equal(n, 0);
@@ -512,7 +520,7 @@ static void thread_count_is_restored(void **state)
     o.threads = 2;
     o.n_nodes = 10;
     o.n_orders = 1;
-    assert_int_equal(ll_material_build_layers(m, &o, layers, &n, NULL), LL_OK);
+    assert_int_equal(ll_material_build_layers(m, &o, NULL, layers, &n, NULL), LL_OK);
     assert_int_equal(ll_get_thread_count(), 1);
     assert_int_equal(ll_set_thread_count(0), LL_OK);
     destroy3(layers);
@@ -529,8 +537,8 @@ static void estimate_counts_the_work(void **state)
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     size_t n, k, c;
     (void)state;
-    assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
-    assert_int_equal(ll_material_resolution(m, NULL, &n, &k, &c), LL_OK);
+    assert_int_equal(ll_material_estimate(m, NULL, &e, NULL), LL_OK);
+    assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &k, &c), LL_OK);
     assert_int_equal(e.n_nodes, n);
     assert_int_equal(e.n_orders, k);
     assert_int_equal(e.n_channels, 3);
@@ -539,13 +547,18 @@ static void estimate_counts_the_work(void **state)
     /* tau 0.5 from 2^-15: 14 doublings per channel. */
     assert_int_equal(e.doublings, 42);
     assert_true(e.peak_bytes > 8.0 * 1048576.0 && e.peak_bytes < 8.0 * n * n * k * 7);
-    assert_true(e.seconds > 0.0);
+    /* The work: two interfaces (the coat, the gold) in three channels... */
+    assert_true(e.dielectric_pairs > 0.0 && e.conductor_pairs > 0.0 && e.pair_orders > 0.0);
+    /* ... the media, the addings and doublings, the writing. */
+    assert_true(e.phase_entries > 0.0 && e.add_entries > 0.0 && e.stored_values > 0.0);
+    assert_true(e.measured_lookups == 0.0 && e.diffuse_entries == 0.0);
+    assert_int_equal(e.threads, ll_get_thread_count());
     o.n_channels = 1;
-    assert_int_equal(ll_material_estimate(m, &o, &e), LL_OK);
+    assert_int_equal(ll_material_estimate(m, &o, &e, NULL), LL_OK);
     assert_int_equal(e.layers_built, 3);
     assert_int_equal(e.additions, 2);
     e.struct_size = 0;
-    assert_int_equal(ll_material_estimate(m, &o, &e), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_estimate(m, &o, &e, NULL), LL_ERROR_INVALID_ARGUMENT);
     ll_material_destroy(m);
 }
 
@@ -558,21 +571,21 @@ static void bad_arguments_are_rejected(void **state)
     char path[128];
     (void)state;
     snprintf(path, sizeof path, "%s/x.bsdf", tmpdir);
-    assert_int_equal(ll_material_build(NULL, NULL, path), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_material_build(m, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_material_build(m, NULL, ""), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_material_build_layers(m, NULL, NULL, &n, NULL),
+    assert_int_equal(ll_material_build(NULL, NULL, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_build(m, NULL, NULL, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_build(m, NULL, NULL, ""), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_build_layers(m, NULL, NULL, NULL, &n, NULL),
                      LL_ERROR_INVALID_ARGUMENT);
     o.n_channels = 2;
-    assert_int_equal(ll_material_build_layers(m, &o, layers, &n, NULL),
+    assert_int_equal(ll_material_build_layers(m, &o, NULL, layers, &n, NULL),
                      LL_ERROR_INVALID_ARGUMENT);
     o.n_channels = 0;
     o.error_goal = 2.0;
-    assert_int_equal(ll_material_build(m, &o, path), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_material_write(m, NULL, layers, 2, path), LL_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(ll_material_write(m, NULL, layers, 1, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_write(m, NULL, layers, 2, path, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_write(m, NULL, layers, 1, path, NULL), LL_ERROR_INVALID_ARGUMENT);
     /* A directory that does not exist: an I/O error naming it. */
-    assert_int_equal(ll_material_build(m, NULL, "/nonexistent/dir/x.bsdf"), LL_ERROR_IO);
+    assert_int_equal(ll_material_build(m, NULL, NULL, "/nonexistent/dir/x.bsdf"), LL_ERROR_IO);
     assert_non_null(strstr(ll_last_error_message(), "/nonexistent/dir/x.bsdf"));
     ll_material_destroy(m);
 }

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include <layerlab.h>
+#include "test_util.h"
 
 /* The first channel's layer of a one-word material at a small resolution. */
 static ll_layer *build_word(const char *text)
@@ -30,7 +31,7 @@ static ll_layer *build_word(const char *text)
     opts.threads = 1;
     if (ll_material_parse(text, "<test>", &m) != LL_OK)
         fail_msg("%s: %s", text, ll_last_error_message());
-    if (ll_material_build_layers(m, &opts, layers, &channels, NULL) != LL_OK)
+    if (ll_material_build_layers(m, &opts, NULL, layers, &channels, NULL) != LL_OK)
         fail_msg("%s: %s", text, ll_last_error_message());
     for (c = 1; c < channels; ++c)
         ll_layer_destroy(layers[c]);
@@ -49,7 +50,7 @@ static ll_layer *direct(const ll_layer *like, double eta_re, double eta_im, doub
     assert_non_null(w);
     assert_int_equal(ll_layer_get_nodes(like, x, w), LL_OK);
     assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
-    assert_int_equal(ll_layer_set_microfacet(l, eta_re, eta_im, alpha, conserve, 0), LL_OK);
+    assert_int_equal(ll_test_set_microfacet(l, eta_re, eta_im, alpha, conserve, 0, NULL), LL_OK);
     free(x);
     free(w);
     return l;
@@ -65,8 +66,8 @@ static double max_difference(const ll_layer *a, const ll_layer *b, double *peak)
         for (o = 0; o < 9; ++o)
             for (p = 0; p < 3; ++p) {
                 double mu_i = 0.1 + 0.1125 * i, mu_o = -(0.1 + 0.1125 * o) * (o % 2 ? 1 : -1);
-                double fa = ll_layer_eval(a, mu_o, mu_i, 1.3 * p);
-                double fb = ll_layer_eval(b, mu_o, mu_i, 1.3 * p);
+                double fa = ll_test_layer_eval(a, mu_i, mu_o, 1.3 * p);
+                double fb = ll_test_layer_eval(b, mu_i, mu_o, 1.3 * p);
                 worst = fmax(worst, fabs(fa - fb));
                 *peak = fmax(*peak, fabs(fa));
             }

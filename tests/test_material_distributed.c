@@ -208,7 +208,7 @@ static void check_identical(const char *text, size_t channels)
     snprintf(ref, sizeof ref, "%s/ref.bsdf", ll_test_dir());
     snprintf(out, sizeof out, "%s/ranks.bsdf", ll_test_dir());
     opts[0] = small_options(channels);
-    assert_int_equal(ll_material_build(m, &opts[0], ref), LL_OK);
+    assert_int_equal(ll_material_build(m, &opts[0], NULL, ref), LL_OK);
     for (n = 1; n <= MAX_RANKS; ++n) {
         for (r = 0; r < n; ++r)
             opts[r] = small_options(channels);
@@ -407,7 +407,7 @@ static void packed_layers_round_trip(void **state)
                                        "orders=12\n",
                                        "pack.layers", &m),
                      LL_OK);
-    assert_int_equal(ll_material_build_layers(m, &o, layers, &nch, NULL), LL_OK);
+    assert_int_equal(ll_material_build_layers(m, &o, NULL, layers, &nch, NULL), LL_OK);
     for (c = 0; c < nch; ++c) {
         size = ll_layer_pack_size(layers[c]);
         bytes = malloc(size);
@@ -431,8 +431,8 @@ static void packed_layers_round_trip(void **state)
     }
     snprintf(a, sizeof a, "%s/pack.a.bsdf", ll_test_dir());
     snprintf(b, sizeof b, "%s/pack.b.bsdf", ll_test_dir());
-    assert_int_equal(ll_material_write(m, NULL, layers, nch, a), LL_OK);
-    assert_int_equal(ll_material_write(m, NULL, copy, nch, b), LL_OK);
+    assert_int_equal(ll_material_write(m, NULL, layers, nch, a, NULL), LL_OK);
+    assert_int_equal(ll_material_write(m, NULL, copy, nch, b, NULL), LL_OK);
     assert_same_file(a, b);
     unlink(a);
     unlink(b);

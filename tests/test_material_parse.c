@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <layerlab.h>
+#include "test_util.h"
 #include "material/word_table.h"
 
 /* Parse text that must fail with LL_ERROR_PARSE and a message that starts
@@ -125,7 +126,7 @@ static void word_table_is_complete(void **state)
         if (s != LL_OK)
             fail_msg("%s: %s", d->example, ll_last_error_message());
         assert_ptr_equal(m->words[0].desc, d);
-        assert_int_equal(ll_material_resolution(m, NULL, &n, &o, &c), LL_OK);
+        assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &o, &c), LL_OK);
         assert_true(n >= 10 && o >= 1);
         ll_material_destroy(m);
     }
@@ -200,7 +201,7 @@ static void settings_are_read(void **state)
     assert_int_equal(m->orders, 12);
     assert_int_equal(m->channels, 3);
     assert_float_equal(m->error_goal, 1e-4, 0.0);
-    assert_int_equal(ll_material_resolution(m, NULL, &n, &k, &c), LL_OK);
+    assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &k, &c), LL_OK);
     assert_int_equal(n, 40);
     assert_int_equal(k, 12);
     assert_int_equal(c, 3);
@@ -208,28 +209,29 @@ static void settings_are_read(void **state)
     o.n_nodes = 20;
     o.n_orders = 4;
     o.n_channels = 1;
-    assert_int_equal(ll_material_resolution(m, &o, &n, &k, &c), LL_OK);
+    assert_int_equal(ll_material_resolution(m, &o, NULL, &n, &k, &c), LL_OK);
     assert_int_equal(n, 20);
     assert_int_equal(k, 4);
     assert_int_equal(c, 1);
     o.n_nodes = 21;
-    assert_int_equal(ll_material_resolution(m, &o, &n, &k, &c), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_resolution(m, &o, NULL, &n, &k, &c), LL_ERROR_INVALID_ARGUMENT);
     o.n_nodes = 20;
     o.struct_size = 3;
-    assert_int_equal(ll_material_resolution(m, &o, &n, &k, &c), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_material_resolution(m, &o, NULL, &n, &k, &c), LL_ERROR_INVALID_ARGUMENT);
     ll_material_destroy(m);
 }
 
-/* Without settings: the largest resolution any word's heuristic asks for. */
+/* Without settings: the largest resolution any word's search asks for. */
 static void resolution_defaults_to_the_heuristics(void **state)
 {
     ll_material *m = parse_ok("dielectric eta=1.5 alpha=0.1\nmedium albedo=0.5 g=0.8 tau=1\n"
                               "diffuse albedo=0.5");
     size_t n, k, c, hn, hk, gn, gk;
     (void)state;
-    assert_int_equal(ll_heuristic_microfacet(0.1, 1.5, 0.0, &hn, &hk), LL_OK);
-    assert_int_equal(ll_heuristic_henyey_greenstein(0.8, &gn, &gk), LL_OK);
-    assert_int_equal(ll_material_resolution(m, NULL, &n, &k, &c), LL_OK);
+    assert_int_equal(ll_test_search_microfacet(0.1, 1.5, 0.0, 0.0, 0.0, &hn, &hk, NULL), LL_OK);
+    assert_int_equal(ll_resolution_search_henyey_greenstein(0.8, 0.0, 0.0, NULL, &gn, &gk, NULL),
+                     LL_OK);
+    assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &k, &c), LL_OK);
     assert_int_equal(n, hn > gn ? hn : gn);
     assert_int_equal(k, hk > gk ? hk : gk);
     assert_int_equal(c, 1);

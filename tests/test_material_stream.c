@@ -65,11 +65,11 @@ static void same_bytes(const char *text, size_t nodes, size_t orders, size_t thr
     o.threads = threads;
     o.channel_done = on_channel;
     o.channel_done_user = &s;
-    if (ll_material_build(m, &o, a) != LL_OK)
+    if (ll_material_build(m, &o, NULL, a) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     o.channel_done = NULL;
-    assert_int_equal(ll_material_build_layers(m, &o, layers, &n_channels, NULL), LL_OK);
-    assert_int_equal(ll_material_write(m, &o, layers, n_channels, b), LL_OK);
+    assert_int_equal(ll_material_build_layers(m, &o, NULL, layers, &n_channels, NULL), LL_OK);
+    assert_int_equal(ll_material_write(m, &o, layers, n_channels, b, NULL), LL_OK);
     for (c = 0; c < 3; ++c) {
         assert_int_equal(s.count[c], c < n_channels ? 1 : 0);
         ll_layer_destroy(layers[c]);
@@ -160,7 +160,7 @@ static void cancel_while_streaming_leaves_nothing(void **state)
     mon.progress = stop_in_writing;
     mon.user = &counter;
     counter.stop_at = -1;
-    assert_int_equal(ll_material_build_ex(m, &o, &mon, path), LL_OK);
+    assert_int_equal(ll_material_build(m, &o, &mon, path), LL_OK);
     reports = counter.writing_reports;
     assert_true(reports >= 3);
     for (at = 1; at <= reports; at += reports - 1) {
@@ -168,7 +168,7 @@ static void cancel_while_streaming_leaves_nothing(void **state)
         s.stop_at = at;
         ll_test_write_file(path, "old file", 8);
         mon.user = &s;
-        assert_int_equal(ll_material_build_ex(m, &o, &mon, path), LL_ERROR_CANCELLED);
+        assert_int_equal(ll_material_build(m, &o, &mon, path), LL_ERROR_CANCELLED);
         assert_true(s.stopped);
         assert_int_equal(ll_test_count_entries(ll_test_dir()), 1);
         old = ll_test_read_file(path, &size);
@@ -194,7 +194,7 @@ static void unwritable_directory_fails_first(void **state)
     o.channel_done = on_channel;
     o.channel_done_user = &s;
     snprintf(path, sizeof path, "%s/no/such/dir/out.bsdf", ll_test_dir());
-    assert_int_equal(ll_material_build(m, &o, path), LL_ERROR_IO);
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_IO);
     assert_non_null(strstr(ll_last_error_message(), "spill"));
     assert_int_equal(s.count[0] + s.count[1] + s.count[2], 0);
     ll_material_destroy(m);

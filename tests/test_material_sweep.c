@@ -122,7 +122,7 @@ static void metadata_names_the_axes(void **state)
                  "dielectric name=coat eta=1.5 alpha=[0.1 0.2]\n"
                  "conductor eta=2+3i alpha=[0.1 0.3 0.5]\n");
     path_in_dir(path, sizeof path, "meta.bsdf");
-    if (ll_material_build(m, NULL, path) != LL_OK)
+    if (ll_material_build(m, NULL, NULL, path) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
@@ -161,7 +161,7 @@ static void words_shared_between_bases(void **state)
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     size_t k, n_ch;
     (void)state;
-    assert_int_equal(ll_material_estimate(m, NULL, &e), LL_OK);
+    assert_int_equal(ll_material_estimate(m, NULL, &e, NULL), LL_OK);
     assert_int_equal(e.n_bases, 64);
     assert_int_equal(e.layers_built, 16);
     assert_int_equal(e.additions, 64);
@@ -193,12 +193,12 @@ static void words_shared_between_bases(void **state)
                      "conductor eta=Au alpha=%.17g\n",
                      coat.positions[k % 8], gold.positions[k / 8]);
             one = parse_ok(text);
-            assert_int_equal(ll_material_build_layers(one, NULL, direct, &n_direct, NULL), LL_OK);
+            assert_int_equal(ll_material_build_layers(one, NULL, NULL, direct, &n_direct, NULL), LL_OK);
             path_in_dir(path_a, sizeof path_a, "basis.bsdf");
             path_in_dir(path_b, sizeof path_b, "direct.bsdf");
-            assert_int_equal(ll_bsdf_write(path_a, (const ll_layer *const *)layers, 1, NULL),
+            assert_int_equal(ll_bsdf_write(path_a, (const ll_layer *const *)layers, 1, NULL, NULL),
                              LL_OK);
-            assert_int_equal(ll_bsdf_write(path_b, (const ll_layer *const *)direct, 1, NULL),
+            assert_int_equal(ll_bsdf_write(path_b, (const ll_layer *const *)direct, 1, NULL, NULL),
                              LL_OK);
             a = ll_test_read_file(path_a, &size_a);
             b = ll_test_read_file(path_b, &size_b);
@@ -219,7 +219,7 @@ static void words_shared_between_bases(void **state)
     {
         ll_layer *layers[3];
         size_t n;
-        assert_int_equal(ll_material_build_layers(m, NULL, layers, &n, NULL),
+        assert_int_equal(ll_material_build_layers(m, NULL, NULL, layers, &n, NULL),
                          LL_ERROR_INVALID_ARGUMENT);
         assert_non_null(strstr(ll_last_error_message(), "ll_material_builder_build_basis"));
     }
@@ -261,7 +261,7 @@ static void stream_equals_in_memory(size_t channels, size_t nodes, size_t orders
         assert_int_equal(n_ch, channels);
     }
     assert_int_equal(ll_bsdf_write_textured(path_a, (const ll_layer *const *)all, channels, 2,
-                                            counts, positions, &header),
+                                            counts, positions, &header, NULL),
                      LL_OK);
     assert_int_equal(ll_bsdf_writer_open(path_b, channels, 2, counts, positions, &header, &w),
                      LL_OK);
@@ -278,7 +278,7 @@ static void stream_equals_in_memory(size_t channels, size_t nodes, size_t orders
     free(a);
     free(b);
     /* Untextured (n_parameters 0) too: ll_bsdf_write's bytes. */
-    assert_int_equal(ll_bsdf_write(path_a, (const ll_layer *const *)all, channels, &header),
+    assert_int_equal(ll_bsdf_write(path_a, (const ll_layer *const *)all, channels, &header, NULL),
                      LL_OK);
     assert_int_equal(ll_bsdf_writer_open(path_b, channels, 0, NULL, NULL, &header, &w), LL_OK);
     assert_int_equal(ll_bsdf_writer_add_basis(w, (const ll_layer *const *)all), LL_OK);
@@ -301,6 +301,15 @@ static void streaming_writer_same_bytes(void **state)
     stream_equals_in_memory(1, 24, 30);
     stream_equals_in_memory(3, 24, 30);
     stream_equals_in_memory(3, 110, 80);
+}
+
+/* A monitor whose flag is raised already. */
+static int cancel_always(void *user, double fraction, const char *stage)
+{
+    (void)user;
+    (void)fraction;
+    (void)stage;
+    return 1;
 }
 
 static int cancel_now(void *user, double fraction, const char *stage)
@@ -356,16 +365,15 @@ static void no_file_after_abort_or_cancel(void **state)
     /* a build cancelled by its monitor, at every stage the count reaches */
     monitor.progress = cancel_now;
     monitor.user = &calls;
-    assert_int_equal(ll_material_build_ex(m, NULL, &monitor, path), LL_ERROR_CANCELLED);
+    assert_int_equal(ll_material_build(m, NULL, &monitor, path), LL_ERROR_CANCELLED);
     assert_int_equal(ll_test_count_entries(dir), 0);
     /* an existing file is kept by a cancelled build */
     ll_test_write_file(path, "old", 3);
     calls = -1000000; /* cancel at the writer's very last report */
     {
-        ll_build_options o = LL_BUILD_OPTIONS_INIT;
-        volatile int flag = 1;
-        o.cancel = &flag;
-        assert_int_equal(ll_material_build(m, &o, path), LL_ERROR_CANCELLED);
+        ll_monitor raised = LL_MONITOR_INIT;
+        raised.progress = cancel_always;
+        assert_int_equal(ll_material_build(m, NULL, &raised, path), LL_ERROR_CANCELLED);
     }
     assert_int_equal(ll_test_count_entries(dir), 1);
     {
@@ -414,7 +422,7 @@ static void progress_per_basis(void **state)
     monitor.progress = log_progress;
     monitor.user = &log;
     path_in_dir(path, sizeof path, "progress.bsdf");
-    assert_int_equal(ll_material_build_ex(m, NULL, &monitor, path), LL_OK);
+    assert_int_equal(ll_material_build(m, NULL, &monitor, path), LL_OK);
     assert_int_equal(log.last_basis, 4);
     assert_true(log.writing > 0);
     assert_false(log.back);
@@ -480,7 +488,7 @@ static ll_bsdf *build_open(const char *text, const char *name)
     ll_material *m = parse_ok(text);
     ll_bsdf *b = NULL;
     path_in_dir(path, sizeof path, name);
-    if (ll_material_build(m, NULL, path) != LL_OK)
+    if (ll_material_build(m, NULL, NULL, path) != LL_OK)
         fail_msg("build %s: %s", name, ll_last_error_message());
     ll_material_destroy(m);
     assert_int_equal(ll_bsdf_open(path, NULL, &b), LL_OK);
@@ -542,7 +550,7 @@ static void between_samples_within_documented_error(void **state)
      * the sharpest sample, 98 x 1331), not the one the tolerance chooses. */
     m = parse_ok("set nodes=98 orders=1331\n"
                  "conductor eta=0.2+3i alpha=[0.05 0.1 0.2 0.3 0.4]\n");
-    assert_int_equal(ll_material_resolution(m, NULL, &n, &orders, &ch), LL_OK);
+    assert_int_equal(ll_material_resolution(m, NULL, NULL, &n, &orders, &ch), LL_OK);
     ll_material_destroy(m);
     assert_int_equal(n, 98);
     textured = build_open("set nodes=98 orders=1331\n"
@@ -716,12 +724,12 @@ static int peak_child(size_t coats, size_t golds, const char *dir)
     snprintf(path, sizeof path, "%s/warm.bsdf", dir);
     if (ll_material_parse("set nodes=60 orders=60 channels=1\nconductor eta=Au alpha=0.3\n",
                           "warm", &warm) != LL_OK ||
-        ll_material_build(warm, NULL, path) != LL_OK ||
+        ll_material_build(warm, NULL, NULL, path) != LL_OK ||
         ll_material_parse(grid_text(coats, golds, 60, ""), "grid", &m) != LL_OK)
         return 2;
     before = status_kb("VmHWM");
     snprintf(path, sizeof path, "%s/peak.bsdf", dir);
-    if (ll_material_build(m, NULL, path) != LL_OK)
+    if (ll_material_build(m, NULL, NULL, path) != LL_OK)
         return 3;
     after = status_kb("VmHWM");
     printf("%ld\n", after - before);

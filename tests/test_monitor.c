@@ -1,10 +1,11 @@
 /*
- * The public monitor (ll_monitor) and the _ex calls: the results with a
- * monitor equal those without, bit for bit; progress is called on the
- * calling thread only, never decreases, starts at 0 and ends at 1; a cancel
- * from the callback at the first, a middle and the last report returns
- * LL_ERROR_CANCELLED and leaves the output exactly as it was (layers,
- * quadrature buffers, files); a deprecated cancel flag stops doubling; a
+ * The public monitor (ll_monitor), the last argument of every long call:
+ * the results with a monitor equal those without (NULL), bit for bit;
+ * progress is called on the calling thread only, never decreases, starts
+ * at 0 and ends at 1; a cancel from the callback at the first, a middle and
+ * the last report returns LL_ERROR_CANCELLED and leaves the output exactly
+ * as it was (layers, quadrature buffers, files); a callback returning a
+ * flag raised from outside (as a signal handler would) stops doubling; a
  * monitor with a bad struct_size is refused.
  */
 #include "test_util.h"
@@ -118,54 +119,54 @@ typedef struct operation {
 static ll_layer *other_layer(void)
 {
     ll_layer *t = ll_test_layer(N, M);
-    assert_int_equal(ll_layer_set_microfacet(t, 1.5, 0.0, 0.3, 1, 0), LL_OK);
+    assert_int_equal(ll_test_set_microfacet(t, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     return t;
 }
 
 static void prep_hg(ll_layer *l)
 {
-    assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.6), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.6, NULL), LL_OK);
 }
-static void prep_diffuse(ll_layer *l) { assert_int_equal(ll_layer_set_diffuse(l, 0.4), LL_OK); }
+static void prep_diffuse(ll_layer *l) { assert_int_equal(ll_layer_set_diffuse(l, 0.4, NULL), LL_OK); }
 
 static ll_status run_expand(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_expand_ex(l, 2.0, m);
+    return ll_layer_expand(l, 2.0, m);
 }
 static ll_status run_add(ll_layer *l, const ll_monitor *m)
 {
     ll_layer *top = other_layer();
-    ll_status s = ll_layer_add_ex(top, l, l, 0, m);
+    ll_status s = ll_layer_add(top, l, l, 0, m);
     ll_layer_destroy(top);
     return s;
 }
 static ll_status run_dielectric(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_microfacet_ex(l, 1.5, 0.0, 0.2, 1, 0, m);
+    return ll_test_set_microfacet(l, 1.5, 0.0, 0.2, 1, 0, m);
 }
 static ll_status run_conductor(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_microfacet_ex(l, 0.2, 3.0, 0.4, 1, 0, m);
+    return ll_test_set_microfacet(l, 0.2, 3.0, 0.4, 1, 0, m);
 }
 static ll_status run_isotropic(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_isotropic_ex(l, 0.8, m);
+    return ll_layer_set_isotropic(l, 0.8, m);
 }
 static ll_status run_hg(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_henyey_greenstein_ex(l, 0.8, -0.4, m);
+    return ll_layer_set_henyey_greenstein(l, 0.8, -0.4, m);
 }
 static ll_status run_vmf(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_von_mises_fisher_ex(l, 0.8, 5.0, m);
+    return ll_layer_set_von_mises_fisher(l, 0.8, 5.0, m);
 }
 static ll_status run_diffuse(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_diffuse_ex(l, 0.3, m);
+    return ll_layer_set_diffuse(l, 0.3, m);
 }
 static ll_status run_matusik(ll_layer *l, const ll_monitor *m)
 {
-    return ll_layer_set_matusik_ex(l, merl_path, 1, 0, m);
+    return ll_layer_set_matusik(l, merl_path, 1, 0, m);
 }
 
 static const operation operations[] = {
@@ -320,13 +321,11 @@ static void any_thread_count_gives_the_same_bits(void **state)
     ll_set_thread_count(saved);
 }
 
-typedef ll_status (*rule_ex)(size_t, double *, double *, const ll_monitor *);
-typedef ll_status (*rule)(size_t, double *, double *);
+typedef ll_status (*rule)(size_t, double *, double *, const ll_monitor *);
 
 static void quadrature_with_a_monitor(void **state)
 {
-    static const rule_ex ex[2] = { ll_quad_gauss_legendre_ex, ll_quad_gauss_lobatto_ex };
-    static const rule plain[2] = { ll_quad_gauss_legendre, ll_quad_gauss_lobatto };
+    static const rule rules[2] = { ll_quad_gauss_legendre, ll_quad_gauss_lobatto };
     static const when moments[] = { AT_FIRST, AT_MIDDLE, AT_LAST };
     const size_t n = 3000;
     double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
@@ -338,8 +337,8 @@ static void quadrature_with_a_monitor(void **state)
     for (k = 0; k < 2; ++k) {
         recorder r;
         ll_monitor m = recorder_monitor(&r, NEVER);
-        assert_int_equal(plain[k](n, x0, w0), LL_OK);
-        assert_int_equal(ex[k](n, x, w, &m), LL_OK);
+        assert_int_equal(rules[k](n, x0, w0, NULL), LL_OK);
+        assert_int_equal(rules[k](n, x, w, &m), LL_OK);
         assert_memory_equal(x, x0, n * sizeof *x);
         assert_memory_equal(w, w0, n * sizeof *w);
         assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
@@ -349,7 +348,7 @@ static void quadrature_with_a_monitor(void **state)
             m = recorder_monitor(&r, moments[j]);
             for (i = 0; i < n; ++i)
                 x[i] = w[i] = -7.0;
-            assert_int_equal(ex[k](n, x, w, &m), LL_ERROR_CANCELLED);
+            assert_int_equal(rules[k](n, x, w, &m), LL_ERROR_CANCELLED);
             for (i = 0; i < n; ++i)
                 if (x[i] != -7.0 || w[i] != -7.0)
                     fail_msg("rule %zu, cancel %zu: buffer entry %zu was written", k, j, i);
@@ -375,8 +374,8 @@ static void writer_with_a_monitor(void **state)
     layers[0] = l;
     snprintf(plain_path, sizeof plain_path, "%s/plain.bsdf", ll_test_dir());
     snprintf(path, sizeof path, "%s/watched.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_write(plain_path, layers, 1, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_write_ex(path, layers, 1, NULL, &m), LL_OK);
+    assert_int_equal(ll_bsdf_write(plain_path, layers, 1, NULL, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, layers, 1, NULL, &m), LL_OK);
     assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
     assert_false(r.wrong_thread);
     a = ll_test_read_file(plain_path, &size_a);
@@ -390,14 +389,14 @@ static void writer_with_a_monitor(void **state)
     for (j = 0; j < 3; ++j) {
         char fresh[720];
         m = recorder_monitor(&r, moments[j]);
-        assert_int_equal(ll_bsdf_write_ex(path, layers, 1, NULL, &m), LL_ERROR_CANCELLED);
+        assert_int_equal(ll_bsdf_write(path, layers, 1, NULL, &m), LL_ERROR_CANCELLED);
         b = ll_test_read_file(path, &size_b);
         assert_int_equal(size_a, size_b);
         assert_memory_equal(a, b, size_a);
         free(b);
         snprintf(fresh, sizeof fresh, "%s/fresh%zu.bsdf", ll_test_dir(), j);
         m = recorder_monitor(&r, moments[j]);
-        assert_int_equal(ll_bsdf_write_ex(fresh, layers, 1, NULL, &m), LL_ERROR_CANCELLED);
+        assert_int_equal(ll_bsdf_write(fresh, layers, 1, NULL, &m), LL_ERROR_CANCELLED);
         assert_int_equal(access(fresh, F_OK), -1);
         assert_int_equal(ll_test_count_entries(ll_test_dir()), entries);
     }
@@ -405,44 +404,39 @@ static void writer_with_a_monitor(void **state)
     ll_layer_destroy(l);
 }
 
-/* The internal adapter the material builder used: a raised flag stops the
- * doublings and leaves the phase function. Through the public monitor too. */
+/* A callback that returns a flag raised from outside (as llbuild's signal
+ * handler raises one): the doublings stop and leave the phase function. */
 static int flag_from_callback(void *user, double fraction, const char *stage)
 {
     (void)fraction;
     (void)stage;
-    return *(const int *)user;
+    return *(const volatile int *)user;
 }
 
-static void deprecated_cancel_flag_and_bad_monitors(void **state)
+static void a_raised_flag_and_bad_monitors(void **state)
 {
     ll_layer *l = ll_test_layer(N, M);
-    volatile int flag = 1;  /* the deprecated flag is polled, hence volatile */
-    int answer = 1;         /* what the callback returns: cancel */
-    ll_expand_monitor legacy = { &flag, NULL, NULL };
+    volatile int answer = 1; /* what the callback returns: cancel */
     ll_monitor m = LL_MONITOR_INIT, bad = LL_MONITOR_INIT, old = LL_MONITOR_INIT;
     snapshot before;
     (void)state;
     prep_hg(l);
     before = take(l);
-    assert_int_equal(ll_layer_expand_monitored(l, 3.0, &legacy), LL_ERROR_CANCELLED);
-    assert_same(&before, l, "legacy flag");
     m.progress = flag_from_callback;
-    m.user = &answer;
-    assert_int_equal(ll_layer_expand_ex(l, 3.0, &m), LL_ERROR_CANCELLED);
+    m.user = (void *)(uintptr_t)&answer;
+    assert_int_equal(ll_layer_expand(l, 3.0, &m), LL_ERROR_CANCELLED);
     assert_same(&before, l, "monitor");
     /* struct_size 0 is an uninitialised monitor. */
     bad.struct_size = 0;
     bad.progress = flag_from_callback;
-    assert_int_equal(ll_layer_expand_ex(l, 3.0, &bad), LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ll_layer_expand(l, 3.0, &bad), LL_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(ll_last_error_message(), "LL_MONITOR_INIT"));
     assert_same(&before, l, "bad monitor");
     /* An older, smaller struct without progress: no callback, no cancel. */
     old.struct_size = sizeof(size_t);
     old.progress = flag_from_callback;
-    old.user = &answer;
-    assert_int_equal(ll_layer_expand_ex(l, 3.0, &old), LL_OK);
-    flag = 0;
+    old.user = (void *)(uintptr_t)&answer;
+    assert_int_equal(ll_layer_expand(l, 3.0, &old), LL_OK);
     free(before.values);
     ll_layer_destroy(l);
 }
@@ -469,20 +463,20 @@ static void material_builds_with_a_monitor(void **state)
     (void)state;
     assert_int_equal(ll_set_thread_count(1), LL_OK);
     assert_int_equal(ll_material_parse(text, "monitor.layers", &mat), LL_OK);
-    assert_int_equal(ll_material_build_layers(mat, NULL, plain, &nch, NULL), LL_OK);
-    assert_int_equal(ll_material_build_layers_ex(mat, NULL, &m, watched, &nch2, NULL), LL_OK);
+    assert_int_equal(ll_material_build_layers(mat, NULL, NULL, plain, &nch, NULL), LL_OK);
+    assert_int_equal(ll_material_build_layers(mat, NULL, &m, watched, &nch2, NULL), LL_OK);
     assert_int_equal(nch, nch2);
     want = take(plain[0]);
-    assert_same(&want, watched[0], "ll_material_build_layers_ex");
+    assert_same(&want, watched[0], "ll_material_build_layers with a monitor");
     free(want.values);
     assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
     assert_true(r.saw_middle);
     assert_false(r.wrong_thread);
     snprintf(plain_path, sizeof plain_path, "%s/material-plain.bsdf", ll_test_dir());
     snprintf(path, sizeof path, "%s/material.bsdf", ll_test_dir());
-    assert_int_equal(ll_material_build(mat, NULL, plain_path), LL_OK);
+    assert_int_equal(ll_material_build(mat, NULL, NULL, plain_path), LL_OK);
     m = recorder_monitor(&r, NEVER);
-    assert_int_equal(ll_material_build_ex(mat, NULL, &m, path), LL_OK);
+    assert_int_equal(ll_material_build(mat, NULL, &m, path), LL_OK);
     assert_true(r.calls >= 3 && r.monotone && r.first == 0.0 && r.last == 1.0);
     assert_string_equal(r.stage, "writing");
     a = ll_test_read_file(plain_path, &size_a);
@@ -495,18 +489,18 @@ static void material_builds_with_a_monitor(void **state)
         ll_layer *none[3] = { NULL, NULL, NULL };
         char fresh[720];
         m = recorder_monitor(&r, moments[j]);
-        assert_int_equal(ll_material_build_layers_ex(mat, NULL, &m, none, &nch2, NULL),
+        assert_int_equal(ll_material_build_layers(mat, NULL, &m, none, &nch2, NULL),
                          LL_ERROR_CANCELLED);
         assert_true(none[0] == NULL && none[1] == NULL && none[2] == NULL);
         m = recorder_monitor(&r, moments[j]);
-        assert_int_equal(ll_material_build_ex(mat, NULL, &m, path), LL_ERROR_CANCELLED);
+        assert_int_equal(ll_material_build(mat, NULL, &m, path), LL_ERROR_CANCELLED);
         b = ll_test_read_file(path, &size_b);
         assert_int_equal(size_a, size_b);
         assert_memory_equal(a, b, size_a);
         free(b);
         snprintf(fresh, sizeof fresh, "%s/material-fresh%zu.bsdf", ll_test_dir(), j);
         m = recorder_monitor(&r, moments[j]);
-        assert_int_equal(ll_material_build_ex(mat, NULL, &m, fresh), LL_ERROR_CANCELLED);
+        assert_int_equal(ll_material_build(mat, NULL, &m, fresh), LL_ERROR_CANCELLED);
         assert_int_equal(access(fresh, F_OK), -1);
         assert_int_equal(ll_test_count_entries(ll_test_dir()), entries);
     }
@@ -527,7 +521,7 @@ int main(void)
         cmocka_unit_test(any_thread_count_gives_the_same_bits),
         cmocka_unit_test(quadrature_with_a_monitor),
         cmocka_unit_test(writer_with_a_monitor),
-        cmocka_unit_test(deprecated_cancel_flag_and_bad_monitors),
+        cmocka_unit_test(a_raised_flag_and_bad_monitors),
         cmocka_unit_test(material_builds_with_a_monitor),
     };
     return cmocka_run_group_tests(tests, setup, ll_test_dir_teardown);

@@ -67,8 +67,8 @@ static void build_pair(const slab_case *c, ll_layer **doubled, ll_layer **slab)
 {
     *doubled = ll_test_layer(c->n, c->m);
     *slab = ll_test_layer(c->n, c->m);
-    assert_int_equal(ll_layer_set_henyey_greenstein(*doubled, c->albedo, c->g), LL_OK);
-    assert_int_equal(ll_layer_set_henyey_greenstein(*slab, c->albedo, c->g), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(*doubled, c->albedo, c->g, NULL), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(*slab, c->albedo, c->g, NULL), LL_OK);
     assert_int_equal(ll_layer_expand_by(*doubled, c->tau, LL_EXPAND_DOUBLING), LL_OK);
     assert_int_equal(ll_layer_expand_by(*slab, c->tau, LL_EXPAND_SLAB), LL_OK);
 }
@@ -99,9 +99,9 @@ static void slab_matches_doubling(void **state)
         double albedo, semigroup;
         build_pair(c, &doubled, &slab);
         albedo = largest_albedo_difference(doubled, slab);
-        assert_int_equal(ll_layer_set_henyey_greenstein(half, c->albedo, c->g), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(half, c->albedo, c->g, NULL), LL_OK);
         assert_int_equal(ll_layer_expand_by(half, c->tau / 2, LL_EXPAND_SLAB), LL_OK);
-        assert_int_equal(ll_layer_add(half, half, half, 1), LL_OK);
+        assert_int_equal(ll_layer_add(half, half, half, 1, NULL), LL_OK);
         semigroup = largest_difference(half, slab);
         if (!(albedo < 5e-5) || !(semigroup < 1e-9))
             fail_msg("n %zu albedo %g g %g tau %g: albedos differ from doubling's by %.3g, "
@@ -125,12 +125,12 @@ static void doubling_converges_to_slab(void **state)
         ll_layer *thin = ll_test_layer(16, 4), *slab = ll_test_layer(16, 4);
         size_t d;
         double diff;
-        assert_int_equal(ll_layer_set_henyey_greenstein(thin, 0.9, 0.5), LL_OK);
-        assert_int_equal(ll_layer_set_henyey_greenstein(slab, 0.9, 0.5), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(thin, 0.9, 0.5, NULL), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(slab, 0.9, 0.5, NULL), LL_OK);
         assert_int_equal(
             ll_layer_expand_by(thin, ldexp(1.0, -(int)steps), LL_EXPAND_DOUBLING), LL_OK);
         for (d = 0; d < steps; ++d)
-            assert_int_equal(ll_layer_add(thin, thin, thin, 1), LL_OK);
+            assert_int_equal(ll_layer_add(thin, thin, thin, 1, NULL), LL_OK);
         assert_int_equal(ll_layer_expand_by(slab, 1.0, LL_EXPAND_SLAB), LL_OK);
         diff = largest_albedo_difference(thin, slab);
         if (steps > 15 && !(diff < previous / 8.0))
@@ -169,7 +169,7 @@ static void conservative_slabs_keep_energy(void **state)
     (void)state;
     for (i = 0; i < 5; ++i) {
         ll_layer *l = ll_test_layer(32, 4);
-        assert_int_equal(ll_layer_set_henyey_greenstein(l, 1.0, 0.6), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(l, 1.0, 0.6, NULL), LL_OK);
         assert_int_equal(ll_layer_expand_by(l, taus[i], LL_EXPAND_SLAB), LL_OK);
         assert_energy_conserved(l, 1e-9);
         assert_int_equal(ll_layer_albedo(l, 1.0, NULL, &T[i]), LL_OK);
@@ -180,8 +180,8 @@ static void conservative_slabs_keep_energy(void **state)
     /* A nearly conservative slab lies next to the conservative one. */
     {
         ll_layer *a = ll_test_layer(32, 4), *b = ll_test_layer(32, 4);
-        assert_int_equal(ll_layer_set_henyey_greenstein(a, 1.0, 0.6), LL_OK);
-        assert_int_equal(ll_layer_set_henyey_greenstein(b, 0.999999, 0.6), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(a, 1.0, 0.6, NULL), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(b, 0.999999, 0.6, NULL), LL_OK);
         assert_int_equal(ll_layer_expand_by(a, 10.0, LL_EXPAND_SLAB), LL_OK);
         assert_int_equal(ll_layer_expand_by(b, 10.0, LL_EXPAND_SLAB), LL_OK);
         assert_true(largest_albedo_difference(a, b) < 1e-4);
@@ -200,7 +200,7 @@ static void slab_does_not_depend_on_thread_count(void **state)
     for (t = 0; t < 3; ++t) {
         assert_int_equal(ll_set_thread_count(t + 1), LL_OK);
         l[t] = ll_test_layer(40, 24);
-        assert_int_equal(ll_layer_set_henyey_greenstein(l[t], 0.95, 0.8), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(l[t], 0.95, 0.8, NULL), LL_OK);
         assert_int_equal(ll_layer_expand_by(l[t], 3.0, LL_EXPAND_SLAB), LL_OK);
     }
     assert_int_equal(ll_set_thread_count(0), LL_OK);
@@ -216,9 +216,9 @@ static void expand_uses_the_cheaper_method(void **state)
 {
     ll_layer *a = ll_test_layer(64, 8), *b = ll_test_layer(64, 8);
     (void)state;
-    assert_int_equal(ll_layer_set_henyey_greenstein(a, 0.9, 0.5), LL_OK);
-    assert_int_equal(ll_layer_set_henyey_greenstein(b, 0.9, 0.5), LL_OK);
-    assert_int_equal(ll_layer_expand(a, 2.0), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(a, 0.9, 0.5, NULL), LL_OK);
+    assert_int_equal(ll_layer_set_henyey_greenstein(b, 0.9, 0.5, NULL), LL_OK);
+    assert_int_equal(ll_layer_expand(a, 2.0, NULL), LL_OK);
     assert_int_equal(ll_layer_expand_by(b, 2.0, LL_EXPAND_SLAB), LL_OK);
     assert_true(largest_difference(a, b) == 0.0);
     ll_layer_destroy(a);

@@ -7,7 +7,8 @@
  * pointer, not a valid one), so reading them makes the call fail or crash,
  * and writing them shows in the canary check.
  *  - Read structs (ll_bsdf_write_options into ll_bsdf_write,
- *    ll_build_options into the material calls): a truncated struct behaves
+ *    ll_build_options into the material calls, ll_microfacet into
+ *    ll_layer_set_microfacet): a truncated struct behaves
  *    exactly like the full struct with the defaults beyond struct_size, and
  *    each field changes the outcome (so the comparison can fail).
  *  - Written structs (ll_bsdf_info, ll_build_estimate, the header of
@@ -44,13 +45,10 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, n_orders),
     offsetof(ll_build_options, n_channels),
     offsetof(ll_build_options, threads),
-    offsetof(ll_build_options, error_goal),
-    offsetof(ll_build_options, progress),
-    offsetof(ll_build_options, progress_user),
-    offsetof(ll_build_options, cancel),
-    offsetof(ll_build_options, max_memory_bytes),
     offsetof(ll_build_options, tolerance),
     offsetof(ll_build_options, mu_min),
+    offsetof(ll_build_options, error_goal),
+    offsetof(ll_build_options, max_memory_bytes),
     offsetof(ll_build_options, channel_done),
     offsetof(ll_build_options, channel_done_user),
     sizeof(ll_build_options),
@@ -59,18 +57,36 @@ static const size_t estimate_ends[] = {
     sizeof(size_t),
     offsetof(ll_build_estimate, n_orders),
     offsetof(ll_build_estimate, n_channels),
+    offsetof(ll_build_estimate, n_bases),
+    offsetof(ll_build_estimate, threads),
+    offsetof(ll_build_estimate, resolution_error),
+    offsetof(ll_build_estimate, peak_bytes),
+    offsetof(ll_build_estimate, file_bytes),
+    offsetof(ll_build_estimate, max_memory_bytes),
+    offsetof(ll_build_estimate, over_budget),
     offsetof(ll_build_estimate, layers_built),
     offsetof(ll_build_estimate, additions),
     offsetof(ll_build_estimate, doublings),
-    offsetof(ll_build_estimate, peak_bytes),
-    offsetof(ll_build_estimate, seconds),
-    offsetof(ll_build_estimate, cpu_seconds),
-    offsetof(ll_build_estimate, max_memory_bytes),
-    offsetof(ll_build_estimate, over_budget),
-    offsetof(ll_build_estimate, n_bases),
-    offsetof(ll_build_estimate, file_bytes),
-    offsetof(ll_build_estimate, resolution_error),
+    offsetof(ll_build_estimate, dielectric_pairs),
+    offsetof(ll_build_estimate, conductor_pairs),
+    offsetof(ll_build_estimate, pair_orders),
+    offsetof(ll_build_estimate, measured_lookups),
+    offsetof(ll_build_estimate, measured_files),
+    offsetof(ll_build_estimate, phase_entries),
+    offsetof(ll_build_estimate, diffuse_entries),
+    offsetof(ll_build_estimate, add_entries),
+    offsetof(ll_build_estimate, add_empty_entries),
+    offsetof(ll_build_estimate, stored_values),
     sizeof(ll_build_estimate),
+};
+static const size_t microfacet_ends[] = {
+    sizeof(size_t),
+    offsetof(ll_microfacet, eta_im),
+    offsetof(ll_microfacet, alpha),
+    offsetof(ll_microfacet, distribution),
+    offsetof(ll_microfacet, compensate),
+    offsetof(ll_microfacet, n_orders_internal),
+    sizeof(ll_microfacet),
 };
 static const size_t monitor_ends[] = {
     sizeof(size_t),
@@ -126,8 +142,8 @@ static void merge(void *out, const void *defaults, const void *given, size_t siz
 static ll_layer *coated(double albedo)
 {
     ll_layer *l = ll_test_layer(8, 4), *c = ll_test_layer(8, 4);
-    assert_int_equal(ll_layer_set_diffuse(l, albedo), LL_OK);
-    assert_int_equal(ll_layer_set_microfacet(c, 1.5, 0.0, 0.3, 1, 0), LL_OK);
+    assert_int_equal(ll_layer_set_diffuse(l, albedo, NULL), LL_OK);
+    assert_int_equal(ll_test_set_microfacet(c, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     assert_int_equal(ll_layer_add_to_top(l, c), LL_OK);
     ll_layer_destroy(c);
     return l;
@@ -143,7 +159,7 @@ static unsigned char *write_and_read(const ll_layer *l, const ll_bsdf_write_opti
     unsigned char *data;
     one[0] = l;
     snprintf(path, sizeof path, "%s/w.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_write(path, one, 1, o), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, one, 1, o, NULL), LL_OK);
     data = ll_test_read_file(path, size);
     unlink(path);
     return data;
@@ -199,7 +215,7 @@ static void write_options_below_struct_size_field(void **state)
     snprintf(path, sizeof path, "%s/never.bsdf", ll_test_dir());
     for (b = 0; b < sizeof(size_t); b += 4) {
         ll_bsdf_write_options *opts = caller_init(&c, b);
-        assert_int_equal(ll_bsdf_write(path, one, 1, opts), LL_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(ll_bsdf_write(path, one, 1, opts, NULL), LL_ERROR_INVALID_ARGUMENT);
         assert_non_null(strstr(ll_last_error_message(), "struct_size"));
         assert_int_equal(access(path, F_OK), -1);
     }
@@ -219,7 +235,7 @@ static void info_written_to_struct_size(void **state)
     (void)state;
     one[0] = l;
     snprintf(path, sizeof path, "%s/info.bsdf", ll_test_dir());
-    assert_int_equal(ll_bsdf_write(path, one, 1, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, one, 1, NULL, NULL), LL_OK);
     assert_int_equal(ll_bsdf_open(path, NULL, &f), LL_OK);
     assert_int_equal(ll_bsdf_get_info(f, caller_init(&full_c, sizeof(ll_bsdf_info))), LL_OK);
     assert_canary_from(&full_c, sizeof(ll_bsdf_info), "ll_bsdf_get_info");
@@ -246,8 +262,9 @@ static const char material_text[] = "set nodes=10 orders=4\n"
                                     "medium albedo=0.9 g=0.5 tau=0.5\n"
                                     "diffuse albedo=0.5\n";
 
-/* What the progress callback saw (whether it was called, not how often:
- * with several threads that depends on which thread finishes which order). */
+/* What the build's monitor saw (whether it was called, not how often:
+ * with several threads that depends on which thread finishes which order):
+ * the thread count the options set for the build. */
 typedef struct seen {
     size_t called;
     size_t threads;
@@ -255,13 +272,14 @@ typedef struct seen {
 } seen;
 static seen progress_seen;
 
-static void on_progress(double fraction, const char *stage, void *user)
+static int on_progress(void *user, double fraction, const char *stage)
 {
     (void)fraction;
     (void)stage;
     progress_seen.called = 1;
     progress_seen.threads = ll_get_thread_count();
     progress_seen.user = user;
+    return 0;
 }
 
 /* Everything the options change, in one comparable record. */
@@ -275,13 +293,10 @@ typedef struct outcome {
     ll_status goal_status;     /* ll_material_goal: the resolution's goal */
     double tolerance, mu_min;
     int chosen;
-    ll_status file_status;     /* ll_material_build, with the cancel flag down */
+    ll_status file_status;     /* ll_material_build */
     seen channels;             /* what channel_done saw there */
 } outcome;
 
-/* The flag given as opts->cancel: raised, except while run_material writes
- * a file, whose streamed channels channel_done sees. */
-static volatile int raised = 1;
 static seen channels_seen;
 
 static void on_channel_done(void *user, size_t channel, const ll_layer *layer)
@@ -294,15 +309,20 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
 {
     ll_layer *layers[3] = { NULL, NULL, NULL };
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_monitor monitor = LL_MONITOR_INIT;
+    static int monitor_tag;
     size_t c;
+    monitor.progress = on_progress;
+    monitor.user = &monitor_tag;
     memset(out, 0, sizeof *out);
     out->estimate.struct_size = sizeof out->estimate;
     out->resolution_status =
-        ll_material_resolution(m, o, &out->n_nodes, &out->n_orders, &out->n_channels);
-    out->estimate_status = ll_material_estimate(m, o, &out->estimate);
+        ll_material_resolution(m, o, NULL, &out->n_nodes, &out->n_orders, &out->n_channels);
+    out->estimate_status = ll_material_estimate(m, o, &out->estimate, NULL);
     out->goal_status = ll_material_goal(m, o, &out->tolerance, &out->mu_min, &out->chosen);
     memset(&progress_seen, 0, sizeof progress_seen);
-    out->build_status = ll_material_build_layers(m, o, layers, &out->built_channels, &header);
+    out->build_status =
+        ll_material_build_layers(m, o, &monitor, layers, &out->built_channels, &header);
     out->progress = progress_seen;
     if (out->build_status == LL_OK) {
         out->built_nodes = ll_layer_node_count(layers[0]);
@@ -316,9 +336,7 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
         ll_test_mkdtemp(dir, sizeof dir);
         snprintf(path, sizeof path, "%s/out.bsdf", dir);
         memset(&channels_seen, 0, sizeof channels_seen);
-        raised = 0;
-        out->file_status = ll_material_build(m, o, path);
-        raised = 1;
+        out->file_status = ll_material_build(m, o, NULL, path);
         out->channels = channels_seen;
         ll_test_rmdir(dir);
     }
@@ -326,7 +344,7 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
 
 static void build_options_read_to_struct_size(void **state)
 {
-    static int tag, channel_tag;
+    static int channel_tag;
     ll_build_options defaults = LL_BUILD_OPTIONS_INIT, given = LL_BUILD_OPTIONS_INIT, full;
     ll_material *m = NULL;
     outcome got, want, previous;
@@ -342,9 +360,6 @@ static void build_options_read_to_struct_size(void **state)
     given.n_channels = 3;
     given.threads = 3;
     given.error_goal = 0.25;
-    given.progress = on_progress;
-    given.progress_user = &tag;
-    given.cancel = &raised;
     /* A budget that the build fits in, unlike no other: the estimate
      * reports it. */
     given.max_memory_bytes = (size_t)1 << 40;
@@ -368,9 +383,7 @@ static void build_options_read_to_struct_size(void **state)
                      "struct with defaults beyond it", b);
         assert_int_equal(got.resolution_status, LL_OK);
         assert_int_equal(got.estimate_status, LL_OK);
-        assert_int_equal(got.build_status, b > offsetof(ll_build_options, cancel)
-                                               ? LL_ERROR_CANCELLED
-                                               : LL_OK);
+        assert_int_equal(got.build_status, LL_OK);
         if (i > 0 && memcmp(&got, &previous, sizeof got) == 0)
             fail_msg("build options: the field ending at %zu made no difference", b);
         previous = got;
@@ -378,7 +391,7 @@ static void build_options_read_to_struct_size(void **state)
     assert_int_equal(ll_get_thread_count(), 1);
     for (i = 0; i < sizeof(size_t); i += 4) {
         size_t n, o, ch;
-        assert_int_equal(ll_material_resolution(m, caller_init(&c, i), &n, &o, &ch),
+        assert_int_equal(ll_material_resolution(m, caller_init(&c, i), NULL, &n, &o, &ch),
                          LL_ERROR_INVALID_ARGUMENT);
         assert_non_null(strstr(ll_last_error_message(), "struct_size"));
     }
@@ -397,36 +410,36 @@ static void estimate_and_header_written_to_struct_size(void **state)
     (void)state;
     assert_int_equal(ll_material_parse(material_text, "sizes.layers", &m), LL_OK);
     /* ll_build_estimate: every older, smaller struct is accepted. */
-    assert_int_equal(ll_material_estimate(m, NULL, caller_init(&full_c, sizeof(ll_build_estimate))),
+    assert_int_equal(ll_material_estimate(m, NULL, caller_init(&full_c, sizeof(ll_build_estimate)), NULL),
                      LL_OK);
     for (i = 0; i < COUNT(estimate_ends); ++i) {
         size_t b = estimate_ends[i];
-        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, b)), LL_OK);
+        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, b), NULL), LL_OK);
         assert_memory_equal(c.bytes, &b, sizeof b);
         assert_memory_equal(c.bytes + sizeof b, full_c.bytes + sizeof b, b - sizeof b);
         assert_canary_from(&c, b, "ll_material_estimate");
     }
     for (i = 0; i < sizeof(size_t); i += 4) {
-        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, i)),
+        assert_int_equal(ll_material_estimate(m, NULL, caller_init(&c, i), NULL),
                          LL_ERROR_INVALID_ARGUMENT);
         assert_canary_from(&c, sizeof(size_t), "ll_material_estimate");
     }
     /* The header of ll_material_build_layers. */
-    assert_int_equal(ll_material_build_layers(m, NULL, layers, &n,
+    assert_int_equal(ll_material_build_layers(m, NULL, NULL, layers, &n,
                                               caller_init(&full_c, sizeof(ll_bsdf_write_options))),
                      LL_OK);
     for (k = 0; k < n; ++k)
         ll_layer_destroy(layers[k]);
     for (i = 0; i < COUNT(write_options_ends); ++i) {
         size_t b = write_options_ends[i];
-        assert_int_equal(ll_material_build_layers(m, NULL, layers, &n, caller_init(&c, b)), LL_OK);
+        assert_int_equal(ll_material_build_layers(m, NULL, NULL, layers, &n, caller_init(&c, b)), LL_OK);
         for (k = 0; k < n; ++k)
             ll_layer_destroy(layers[k]);
         assert_memory_equal(c.bytes, &b, sizeof b);
         assert_memory_equal(c.bytes + sizeof b, full_c.bytes + sizeof b, b - sizeof b);
         assert_canary_from(&c, b, "ll_material_build_layers header");
     }
-    assert_int_equal(ll_material_build_layers(m, NULL, layers, &n, caller_init(&c, 4)),
+    assert_int_equal(ll_material_build_layers(m, NULL, NULL, layers, &n, caller_init(&c, 4)),
                      LL_ERROR_INVALID_ARGUMENT);
     ll_material_destroy(m);
 }
@@ -439,8 +452,9 @@ static void every_field_is_listed(void **state)
     (void)state;
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 13);
-    assert_int_equal(COUNT(build_options_ends), 14);
-    assert_int_equal(COUNT(estimate_ends), 15);
+    assert_int_equal(COUNT(build_options_ends), 11);
+    assert_int_equal(COUNT(estimate_ends), 24);
+    assert_int_equal(COUNT(microfacet_ends), 7);
     assert_int_equal(COUNT(monitor_ends), 3);
     assert_int_equal(COUNT(open_options_ends), 4);
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
@@ -448,15 +462,86 @@ static void every_field_is_listed(void **state)
     assert_int_equal(offsetof(ll_build_options, channel_done_user) + sizeof(void *),
                      sizeof(ll_build_options));
     assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
-                    offsetof(ll_build_estimate, n_bases) &&
-                offsetof(ll_build_estimate, over_budget) + 8 >= offsetof(ll_build_estimate, n_bases));
-    assert_int_equal(offsetof(ll_build_estimate, resolution_error) + sizeof(double),
+                    offsetof(ll_build_estimate, layers_built) &&
+                offsetof(ll_build_estimate, over_budget) + 8 >=
+                    offsetof(ll_build_estimate, layers_built));
+    assert_int_equal(offsetof(ll_build_estimate, stored_values) + sizeof(double),
                      sizeof(ll_build_estimate));
+    assert_int_equal(offsetof(ll_microfacet, n_orders_internal) + sizeof(size_t),
+                     sizeof(ll_microfacet));
     assert_int_equal(offsetof(ll_monitor, user) + sizeof(void *), sizeof(ll_monitor));
     assert_int_equal(offsetof(ll_open_options, max_nodes) + sizeof(size_t),
                      sizeof(ll_open_options));
     assert_true(offsetof(ll_bsdf_info, flags) + sizeof(uint32_t) <= sizeof(ll_bsdf_info) &&
                 offsetof(ll_bsdf_info, flags) + 8 >= sizeof(ll_bsdf_info));
+}
+
+/* ------------------------------------------------------- ll_microfacet */
+
+/* Every matrix entry of the interface a microfacet makes, and the status. */
+#define MF_NODES 12
+#define MF_ORDERS 4
+typedef struct interface_outcome {
+    ll_status status;
+    double f[MF_ORDERS][MF_NODES * MF_NODES];
+} interface_outcome;
+
+static void run_interface(const ll_microfacet *mf, interface_outcome *out)
+{
+    ll_layer *l = ll_test_layer(MF_NODES, MF_ORDERS);
+    size_t k;
+    memset(out, 0, sizeof *out);
+    out->status = ll_layer_set_microfacet(l, mf, NULL);
+    for (k = 0; k < MF_ORDERS; ++k)
+        assert_int_equal(ll_layer_matrix(l, k, out->f[k]), LL_OK);
+    ll_layer_destroy(l);
+}
+
+static void microfacet_read_to_struct_size(void **state)
+{
+    ll_microfacet defaults = LL_MICROFACET_INIT, given = LL_MICROFACET_INIT, full;
+    static interface_outcome got, want, previous;
+    caller c;
+    size_t i;
+    (void)state;
+    /* Every given value but the distribution (Beckmann is the one there
+     * is) differs from the default: a conductor, rough, uncompensated,
+     * resolved with more orders than the layer's. */
+    given.eta_re = 1.3;
+    given.eta_im = 0.5;
+    given.alpha = 0.5;
+    given.compensate = 0;
+    given.n_orders_internal = 40;
+    for (i = 0; i < COUNT(microfacet_ends); ++i) {
+        size_t b = microfacet_ends[i];
+        ll_microfacet *mf = caller_init(&c, b);
+        caller_take(&c, &given, b);
+        run_interface(mf, &got);
+        assert_canary_from(&c, b, "ll_layer_set_microfacet");
+        merge(&full, &defaults, &given, b, sizeof full);
+        run_interface(&full, &want);
+        assert_int_equal(got.status, LL_OK);
+        if (memcmp(&got, &want, sizeof got) != 0)
+            fail_msg("microfacet: struct_size %zu changed the layer against the full struct "
+                     "with defaults beyond it", b);
+        if (i > 0 && b != offsetof(ll_microfacet, compensate) &&
+            memcmp(&got, &previous, sizeof got) == 0)
+            fail_msg("microfacet: the field ending at %zu made no difference", b);
+        previous = got;
+    }
+    /* GGX is not implemented: unsupported, the layer as it was. */
+    full = given;
+    full.distribution = LL_MICROFACET_GGX;
+    run_interface(&full, &got);
+    assert_int_equal(got.status, LL_ERROR_UNSUPPORTED);
+    assert_non_null(strstr(ll_last_error_message(), "GGX"));
+    full.distribution = 7;
+    run_interface(&full, &got);
+    assert_int_equal(got.status, LL_ERROR_INVALID_ARGUMENT);
+    for (i = 0; i < sizeof(size_t); i += 4) {
+        run_interface(caller_init(&c, i), &got);
+        assert_int_equal(got.status, LL_ERROR_INVALID_ARGUMENT);
+    }
 }
 
 /* ---------------------------------------------------------- ll_monitor */
@@ -491,8 +576,8 @@ static void monitor_read_to_struct_size(void **state)
         ll_monitor *m = caller_init(&c, b);
         caller_take(&c, &given, b);
         calls = calls_without_user = 0;
-        assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.5), LL_OK);
-        assert_int_equal(ll_layer_expand_ex(l, 1.0, m), LL_OK);
+        assert_int_equal(ll_layer_set_henyey_greenstein(l, 0.9, 0.5, NULL), LL_OK);
+        assert_int_equal(ll_layer_expand(l, 1.0, m), LL_OK);
         assert_canary_from(&c, b, "ll_layer_expand_ex monitor");
         if (b < offsetof(ll_monitor, user)) {
             assert_int_equal(calls + calls_without_user, 0);
@@ -507,7 +592,7 @@ static void monitor_read_to_struct_size(void **state)
     }
     {
         ll_layer *l = ll_test_layer(8, 4);
-        assert_int_equal(ll_layer_expand_ex(l, 1.0, caller_init(&c, 4)), LL_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(ll_layer_expand(l, 1.0, caller_init(&c, 4)), LL_ERROR_INVALID_ARGUMENT);
         assert_non_null(strstr(ll_last_error_message(), "LL_MONITOR_INIT"));
         ll_layer_destroy(l);
     }
@@ -562,6 +647,7 @@ int main(void)
         cmocka_unit_test(build_options_read_to_struct_size),
         cmocka_unit_test(estimate_and_header_written_to_struct_size),
         cmocka_unit_test(monitor_read_to_struct_size),
+        cmocka_unit_test(microfacet_read_to_struct_size),
         cmocka_unit_test(open_options_read_to_struct_size),
     };
     return cmocka_run_group_tests_name("struct_size", tests, ll_test_dir_setup,

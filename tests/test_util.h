@@ -22,6 +22,44 @@
 #include <layerlab.h>
 #include "layer/layer.h"
 
+/* f(mu_i, mu_o, phi_d) of a layer as a value (0 when ll_layer_eval fails). */
+static inline double ll_test_layer_eval(const ll_layer *l, double mu_i, double mu_o,
+                                        double phi_d)
+{
+    double f = 0.0;
+    return ll_layer_eval(l, mu_i, mu_o, phi_d, &f) == LL_OK ? f : 0.0;
+}
+
+/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
+static inline ll_status ll_test_set_microfacet(ll_layer *l, double eta_re, double eta_im,
+                                               double alpha, int compensate,
+                                               size_t n_orders_internal,
+                                               const ll_monitor *monitor)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    mf.compensate = compensate;
+    mf.n_orders_internal = n_orders_internal;
+    return ll_layer_set_microfacet(l, &mf, monitor);
+}
+
+/* ll_resolution_search_microfacet of a compensated Beckmann interface (the
+ * layer a build makes by default). */
+static inline ll_status ll_test_search_microfacet(double alpha, double eta_re, double eta_im,
+                                                  double tolerance, double mu_min,
+                                                  size_t *n_nodes, size_t *n_orders,
+                                                  double *error)
+{
+    ll_microfacet mf = LL_MICROFACET_INIT;
+    mf.eta_re = eta_re;
+    mf.eta_im = eta_im;
+    mf.alpha = alpha;
+    return ll_resolution_search_microfacet(&mf, tolerance, mu_min, NULL, n_nodes, n_orders,
+                                           error);
+}
+
 /* A clear layer on n Gauss-Lobatto nodes (as files are made: the nodes
  * include +-1, so the file covers every direction) with m orders. */
 static inline ll_layer *ll_test_layer(size_t n, size_t m)
@@ -30,7 +68,7 @@ static inline ll_layer *ll_test_layer(size_t n, size_t m)
     ll_layer *l = NULL;
     assert_non_null(x);
     assert_non_null(w);
-    assert_int_equal(ll_quad_gauss_lobatto(n, x, w), LL_OK);
+    assert_int_equal(ll_quad_gauss_lobatto(n, x, w, NULL), LL_OK);
     assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
     free(x);
     free(w);

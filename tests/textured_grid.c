@@ -149,7 +149,7 @@ int main(int argc, char **argv)
         ll_material *mat = parse_point(argv[2], axes, n_axes, b);
         if (!mat)
             return fail("the template does not parse", ll_last_error_message());
-        if (ll_material_resolution(mat, NULL, &n, &m, &c) != LL_OK) {
+        if (ll_material_resolution(mat, NULL, NULL, &n, &m, &c) != LL_OK) {
             ll_material_destroy(mat);
             return fail("resolution", ll_last_error_message());
         }
@@ -167,7 +167,7 @@ int main(int argc, char **argv)
         size_t c = 0;
         ll_material *mat = parse_point(argv[2], axes, n_axes, b);
         ll_layer *out[3] = { NULL, NULL, NULL };
-        ll_status s = mat ? ll_material_build_layers(mat, &opts, out, &c,
+        ll_status s = mat ? ll_material_build_layers(mat, &opts, NULL, out, &c,
                                                      b == 0 ? &header : NULL)
                           : LL_ERROR_INVALID_ARGUMENT;
         ll_material_destroy(mat);
@@ -192,7 +192,7 @@ int main(int argc, char **argv)
     memcpy(metadata + at, "]}", 3);
     header.metadata = metadata;
     if (ll_bsdf_write_textured(argv[1], (const ll_layer *const *)layers, n_channels, n_axes,
-                               counts, positions, &header) != LL_OK) {
+                               counts, positions, &header, NULL) != LL_OK) {
         fail("write", ll_last_error_message());
         goto done;
     }

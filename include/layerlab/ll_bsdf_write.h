@@ -52,9 +52,16 @@ typedef struct ll_bsdf_write_options {
  * written through: the file it points to is replaced, the link stays. Returns LL_ERROR_IO (message names the path and
  * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
  * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
- * LL_ERROR_OUT_OF_MEMORY. */
+ * LL_ERROR_OUT_OF_MEMORY.
+ *
+ * monitor (ll_common.h; nullable): stage "writing": series lengths,
+ * offsets, CDF, then the bytes. The writer uses no other thread and polls
+ * once per column or node row of every pass; LL_ERROR_CANCELLED (also at
+ * the last report, which comes before the temporary file is renamed)
+ * leaves no file and keeps an existing one. */
 LL_API ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers,
-                               size_t n_channels, const ll_bsdf_write_options *opts);
+                               size_t n_channels, const ll_bsdf_write_options *opts,
+                               const ll_monitor *monitor);
 
 /* Textured file: n_parameters parameters, parameter p sampled at
  * param_counts[p] >= 1 positions (the param_positions array holds them
@@ -63,22 +70,13 @@ LL_API ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers,
  * layers, basis-major (layers[basis * n_channels + ch]), with the basis
  * index running over parameter 0 fastest. Each basis gets its own CDF.
  * n_parameters = 0 writes an untextured file (as ll_bsdf_write). Same
- * statuses and atomicity as ll_bsdf_write. */
+ * statuses, atomicity and monitor as ll_bsdf_write. */
 LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
                                         size_t n_channels, size_t n_parameters,
                                         const size_t *param_counts,
                                         const double *param_positions,
-                                        const ll_bsdf_write_options *opts);
-
-/* ll_bsdf_write with a monitor (ll_common.h; NULL = the plain call). Stage
- * "writing": series lengths, offsets, CDF, then the bytes. Progress runs on
- * the calling thread (the writer uses no other); the writer polls once per
- * column or node row of every pass, and LL_ERROR_CANCELLED (also at the
- * last report, which comes before the temporary file is renamed) leaves no
- * file and keeps an existing one. */
-LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers,
-                                  size_t n_channels, const ll_bsdf_write_options *opts,
-                                  const ll_monitor *monitor);
+                                        const ll_bsdf_write_options *opts,
+                                        const ll_monitor *monitor);
 
 /* A streaming writer of textured files: the bases are added one at a time,
  * in order 0 .. n_bases - 1, and the writer never holds more than one
@@ -87,7 +85,7 @@ LL_API ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layer
  * path (".NAME.spill.XXXXXX", unlinked right after it is created, so it has
  * no name while the writer works and its space returns when the process
  * ends, however it ends; it needs room on that
- * file system too: 0.55 of the output's size, measured on an 8 x 8 grid),
+ * file system too: about half of the output's size),
  * and commit writes the file from it, so memory does
  * not grow with n_bases beyond a few bytes per basis, node and order
  * (4 nn + 12 m + 16). The file is byte for byte what
@@ -114,7 +112,7 @@ LL_API ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *writer,
                                           const ll_layer *const *layers);
 
 /* Write the file (all bases must have been added) and free the writer,
- * whatever the outcome. monitor (nullable) as for ll_bsdf_write_ex: stage
+ * whatever the outcome. monitor (nullable) as for ll_bsdf_write: stage
  * "writing", and a cancel leaves no file. */
 LL_API ll_status ll_bsdf_writer_commit(ll_bsdf_writer *writer, const ll_monitor *monitor);
 

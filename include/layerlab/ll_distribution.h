@@ -21,24 +21,31 @@
  * n_ranks.
  *
  * Failure: every rank agrees on the outcome. A rank that fails (bad
- * options, out of memory, a cancel through its monitor or opts->cancel)
+ * options, out of memory, a cancel through its monitor)
  * stops its own work and says so at the next exchange; then every rank
  * returns the same status. On rank 0 the message is the failing rank's own,
  * prefixed "rank R of N: "; on the others it says which rank failed.
+ *
+ * Experimental: everything here is declared only when LL_EXPERIMENTAL is
+ * defined before the include, and may change in a minor release (the
+ * symbols are in the version node LAYERLAB_EXPERIMENTAL_1.0).
  */
-#ifndef LAYERLAB_LL_DISTRIBUTION_H
-#define LAYERLAB_LL_DISTRIBUTION_H
-
 #include "ll_common.h"
 #include "ll_layer.h"
 #include "ll_material.h"
+
+/* (The guard is inside the condition, so that a file included once
+ * without LL_EXPERIMENTAL and then again with it gets the declarations.) */
+#ifdef LL_EXPERIMENTAL
+#ifndef LAYERLAB_LL_DISTRIBUTION_H
+#define LAYERLAB_LL_DISTRIBUTION_H
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* The caller's collective, size-tagged (struct_size = sizeof, fields may be
- * appended later). alltoallv is called by every rank in the same order
+/* The caller's collective, size-tagged (struct_size = sizeof). alltoallv
+ * is called by every rank in the same order
  * (the library's sequence of calls is the same on every rank, whatever
  * fails): rank r sends send_bytes[d] bytes to each rank d, taken one
  * after the other from send in rank order, and receives recv_bytes[s] bytes
@@ -66,12 +73,12 @@ typedef struct ll_distribution {
 
 #define LL_DISTRIBUTION_INIT { sizeof(ll_distribution), 0, 1, NULL, NULL, NULL }
 
-/* ll_material_build_layers_ex across the ranks of dist; every rank calls it
+/* ll_material_build_layers across the ranks of dist; every rank calls it
  * with the same material and options. On rank 0, layers receives the
  * n_channels finished layers (caller frees each) and header (nullable) the
  * file's eta and alpha; on the other ranks layers stay NULL, and
  * *n_channels is set on every rank. The memory budget applies per rank, to
- * the estimate divided by n_ranks. monitor and opts->progress are called
+ * the estimate divided by n_ranks. The monitor is called
  * on every rank (a tool shows rank 0's); a cancel on any rank stops all.
  * A file written from rank 0's layers with ll_material_write is byte for
  * byte the one ll_material_build writes. */
@@ -82,7 +89,7 @@ LL_API ll_status ll_material_build_layers_distributed(const ll_material *materia
                                                       ll_layer *layers[3], size_t *n_channels,
                                                       ll_bsdf_write_options *header);
 
-/* Build and write: ll_material_build_ex across the ranks. Rank 0 writes
+/* Build and write: ll_material_build across the ranks. Rank 0 writes
  * out_path atomically (the other ranks ignore out_path, which may be NULL
  * there); every rank returns the outcome of the whole, the write included.
  * A failure anywhere leaves no file and no temporary. */
@@ -111,3 +118,4 @@ LL_API ll_status ll_layer_unpack(const void *buffer, size_t size, ll_layer **out
 }
 #endif
 #endif /* LAYERLAB_LL_DISTRIBUTION_H */
+#endif /* LL_EXPERIMENTAL */

@@ -13,10 +13,16 @@
  *    horizontal components point the same way. So a mirror sends mu_i to
  *    mu_o = -mu_i at phi_d = 0, light passing straight through keeps
  *    phi_d = 0, and phi_d = pi is backscattering.
- *  - f(mu_o, mu_i, phi) = sum_l f_l(mu_o, mu_i) cos(l phi); each order l is an
- *    n x n matrix with four h x h blocks (h = n / 2): rows = outgoing,
+ *  - Arguments name the known direction first: (mu_i, mu_o, phi_d), light
+ *    arriving along mu_i and leaving along mu_o, as ll_bsdf_eval.
+ *  - f(mu_i, mu_o, phi) = sum_l f_l(mu_i, mu_o) cos(l phi); each order l is
+ *    an n x n matrix with four h x h blocks (h = n / 2): rows = outgoing,
  *    columns = incident, R^t (lit from above, reflected up), R^b, T^tb
  *    (lit from above, transmitted down) and T^bt.
+ *  - Long calls take a monitor (ll_common.h) as their last argument,
+ *    nullable: stage names and what a cancel leaves are stated per call; a
+ *    cancelled call returns LL_ERROR_CANCELLED and leaves its output layer
+ *    exactly as it was.
  *
  * Ownership and threads: an ll_layer is created by ll_layer_create or
  * ll_layer_clone and freed by ll_layer_destroy. A layer may be read (eval,
@@ -83,19 +89,18 @@ LL_API size_t ll_layer_stored_count(const ll_layer *layer);
 
 /* Lambertian reflector with the given albedo in [0, 1] on both sides:
  * f = albedo / pi on the reflection blocks, Fourier order 0 only, no
- * transmission. */
-LL_API ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo);
+ * transmission. O(n^2). Stage "diffuse", one unit per column. */
+LL_API ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo, const ll_monitor *monitor);
 
-/* ll_layer_set_diffuse with a monitor (ll_common.h; NULL = the plain call):
- * O(n^2), seconds at n = 30000. Stage "diffuse", one unit per column, on
- * the calling thread; LL_ERROR_CANCELLED leaves the layer as it was. */
-LL_API ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo,
-                                         const ll_monitor *monitor);
-
-/* Phase function of an infinitesimally thin isotropic medium with single-
- * scattering albedo in [0, 1]: p = albedo / (4 pi). Use ll_layer_expand to
- * give it a thickness. */
-LL_API ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo);
+/* The media: phase functions of an infinitesimally thin medium with
+ * single-scattering albedo in [0, 1]; ll_layer_expand gives one a
+ * thickness. Stage "phase function", one unit per Fourier order; every
+ * worker polls within one node row of an order's construction and between
+ * its BLAS products.
+ *
+ * Isotropic: p = albedo / (4 pi). */
+LL_API ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo,
+                                        const ll_monitor *monitor);
 
 /* Henyey-Greenstein phase function with asymmetry g in (-1, 1).
  * The phase matrices are built from the Legendre expansion of the phase
@@ -105,100 +110,93 @@ LL_API ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo);
  * discrete scattering conserve energy exactly and matches discrete-ordinate
  * codes such as DISORT, where pointwise sampling of a peaked phase function
  * would lose energy. */
-LL_API ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g);
+LL_API ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g,
+                                                const ll_monitor *monitor);
 
 /* von Mises-Fisher phase function p ~ exp(kappa cos theta), kappa >= 0
  * (kappa = 0 is isotropic); same construction as Henyey-Greenstein. */
-LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa);
+LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa,
+                                               const ll_monitor *monitor);
 
-/* The three media setters with a monitor (ll_common.h; NULL = the plain
- * call). Stage "phase function", one unit per Fourier order; progress is
- * called on the calling thread only, cancel is seen by every worker within
- * one node row of an order's construction (and between its BLAS products)
- * and returns LL_ERROR_CANCELLED with the layer exactly as it was. */
-LL_API ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo,
-                                           const ll_monitor *monitor);
-LL_API ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
-                                                   const ll_monitor *monitor);
-LL_API ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
-                                                  const ll_monitor *monitor);
-
-/* Rough interface with a Beckmann microfacet distribution (Walter et al.
- * 2007) between the medium above and one of relative index
+/* A rough interface between the medium above and one of relative index
  * eta = eta_re + i eta_im below. eta_im > 0: a conductor (opaque, reflects
  * on both sides as seen from above); eta_im == 0: a dielectric (reflects and
  * transmits; eta_re < 1 is allowed; eta_re == 1 is no interface at all and
- * makes the layer clear).
+ * makes the layer clear). Light from below sees the relative index 1/eta.
  *
- * The BSDF is the original layerlab's (microfacet.cpp), in the layer's
- * conventions above: Beckmann D with roughness alpha, Smith shadowing by
- * Walter's rational approximation of G1, unpolarised Fresnel reflectance
- * (ll_fresnel_dielectric / ll_fresnel_conductor at the microfacet), and
- * Walter's refraction Jacobian including eta^2, so that the transmission
- * blocks obey f_bt(a, b) = f_tb(b, a) / eta^2 (radiance, not importance).
- * Light from below sees the relative index 1/eta.
+ * distribution: the microfacet distribution. LL_MICROFACET_BECKMANN
+ * (Walter et al. 2007) is the one implemented; LL_MICROFACET_GGX returns
+ * LL_ERROR_UNSUPPORTED.
  *
- * alpha > 0 is the Beckmann roughness; alpha below LL_MICROFACET_MIN_ALPHA
- * is rejected: the Fourier series of a smoother interface would need more
- * orders than any layer can hold. conserve_energy != 0 adds the paper's
- * multiple-scattering compensation to order 0 (recommended: on): the energy
- * that single scattering loses to shadowing returns as a low-rank term,
- * split between reflection and transmission by their current ratio (and
- * eta^2-reciprocal) for a dielectric, scaled by the hemispherical Fresnel
- * average for a conductor; a non-absorbing dielectric then conserves energy
- * (R + T = 1 per incident direction).
+ * alpha is the roughness; alpha below LL_MICROFACET_MIN_ALPHA is rejected:
+ * the Fourier series of a smoother interface would need more orders than
+ * any layer can hold.
+ *
+ * compensate != 0 adds the paper's multiple-scattering compensation to
+ * order 0 (recommended: on): the energy that single scattering loses to
+ * shadowing returns as a low-rank term, split between reflection and
+ * transmission by their current ratio (and eta^2-reciprocal) for a
+ * dielectric, scaled by the hemispherical Fresnel average for a conductor;
+ * a non-absorbing dielectric then conserves energy (R + T = 1 per incident
+ * direction) wherever its lobes are resolved.
  *
  * n_orders_internal: the Fourier orders the lobes are resolved with, at
  * least the layer's (0 = the layer's). A lobe sharper than that many orders
- * can hold (grazing angles) is widened as in the original, but keeping the
- * true lobe's energy (the original's widening adds up to 10% there).
+ * can hold (grazing angles) is widened as in the original layerlab, but
+ * keeping the true lobe's energy. */
+typedef enum ll_microfacet_distribution {
+    LL_MICROFACET_BECKMANN = 0,
+    LL_MICROFACET_GGX = 1
+} ll_microfacet_distribution;
+
+#define LL_MICROFACET_MIN_ALPHA 1e-3
+
+typedef struct ll_microfacet {
+    size_t struct_size;       /* sizeof(ll_microfacet)                              */
+    double eta_re, eta_im;    /* relative index below / above; eta_im > 0: conductor */
+    double alpha;             /* roughness, >= LL_MICROFACET_MIN_ALPHA               */
+    int distribution;         /* an ll_microfacet_distribution                       */
+    int compensate;           /* non-zero: the multiple-scattering compensation      */
+    size_t n_orders_internal; /* 0: the layer's                                      */
+} ll_microfacet;
+
+#define LL_MICROFACET_INIT \
+    { sizeof(ll_microfacet), 1.5, 0.0, 0.1, LL_MICROFACET_BECKMANN, 1, 0 }
+
+/* The interface of *microfacet on the layer's nodes. The BSDF is the
+ * original layerlab's (microfacet.cpp), in the layer's conventions: the
+ * distribution D with roughness alpha, Smith shadowing by Walter's rational
+ * approximation of G1, unpolarised Fresnel reflectance (ll_fresnel_* at the
+ * microfacet), and Walter's refraction Jacobian including eta^2, so that
+ * the transmission blocks obey f_bt(a, b) = f_tb(b, a) / eta^2 (radiance,
+ * not importance).
  *
  * Resolution: in mu the lobes are sampled at the nodes. A lobe narrower
  * than the node spacing (alpha too small for n, or a refracted lobe of
- * width ~ alpha |eta - 1| / eta for eta within a few % of 1) is not
- * resolved, and directional albedos can then exceed 1 by any amount, most
- * at the nodes mu = +-1 (as in the original). At the resolution of the
- * original's fits (what ll_heuristic_microfacet returned before it chose
- * by a tolerance; coarser than its answer now) a non-absorbing dielectric with conserve_energy
- * keeps R + T = 1 to 1e-15 for eta = 1.5 (measured for alpha 0.05 .. 10;
- * also for eta = 0.95 and 1.05 at alpha 0.3 .. 10), and within 2e-3 for
- * eta = 0.5 and 10.
+ * width ~ alpha |eta - 1| / eta for eta near 1) is not resolved, and
+ * directional albedos can then exceed 1 by any amount, most at the nodes
+ * mu = +-1. ll_resolution_search_microfacet chooses a resolution that
+ * resolves them.
  *
- * The azimuthal series are accurate to a few 1e-4 of each lobe's peak
- * (measured against direct integration of the BSDF; the original's to
- * 1e-3..2e-2) and truncated after the last term above 1e-3 of the first.
- * Interfaces are built in parallel over incident directions. Returns
- * LL_ERROR_INVALID_ARGUMENT (NULL layer, alpha or eta out of range) or
- * LL_ERROR_OUT_OF_MEMORY; on failure the layer is unchanged. */
-#define LL_MICROFACET_MIN_ALPHA 1e-3
-LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im,
-                                         double alpha, int conserve_energy,
-                                         size_t n_orders_internal);
-
-/* ll_layer_set_microfacet with a monitor (ll_common.h; NULL = the plain
- * call). Stage "interface": the fits of the series (a tenth), the columns
- * (most of it, one unit per incident node), the energy compensation.
- * Progress runs on the calling thread only; every worker polls once per
- * node pair of its column, so a cancel stops the call within one pair's
- * series, and LL_ERROR_CANCELLED leaves the layer exactly as it was. */
-LL_API ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_im,
-                                            double alpha, int conserve_energy,
-                                            size_t n_orders_internal,
-                                            const ll_monitor *monitor);
+ * The azimuthal series are truncated after the last term above 1e-3 of
+ * the first. Interfaces are built in parallel over incident directions.
+ * Stage "interface": the fits of the series (a tenth), the columns (most
+ * of it, one unit per incident node), the energy compensation; every
+ * worker polls once per node pair of its column. Returns
+ * LL_ERROR_INVALID_ARGUMENT (NULL layer or microfacet, a field out of
+ * range), LL_ERROR_UNSUPPORTED (GGX) or LL_ERROR_OUT_OF_MEMORY; on failure
+ * the layer is unchanged. */
+LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfacet,
+                                         const ll_monitor *monitor);
 
 /* A measured isotropic BRDF in the MERL format ("Matusik et al. 2003",
  * .binary files), colour channel 0, 1 or 2 (R, G, B). The file's values are
  * multiplied by the MERL scale factors (1/1500, 1.15/1500, 1.66/1500) which
- * give reflectance in units of 1/sr. n_orders_internal as above. */
+ * give reflectance in units of 1/sr. n_orders_internal as for
+ * ll_microfacet. Stage "measured": reading the file, then one unit per
+ * incident node; workers poll once per outgoing node. */
 LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
-                                      size_t n_orders_internal);
-
-/* ll_layer_set_matusik with a monitor (ll_common.h; NULL = the plain call).
- * Stage "measured": reading the file, then one unit per incident node.
- * Progress runs on the calling thread only; workers poll once per outgoing
- * node, and LL_ERROR_CANCELLED leaves the layer exactly as it was. */
-LL_API ll_status ll_layer_set_matusik_ex(ll_layer *layer, const char *path, int channel,
-                                         size_t n_orders_internal, const ll_monitor *monitor);
+                                      size_t n_orders_internal, const ll_monitor *monitor);
 
 /* ------------------------------------------------------------- grammar */
 
@@ -207,20 +205,15 @@ LL_API ll_status ll_layer_set_matusik_ex(ll_layer *layer, const char *path, int 
  * top or bottom (or both). homogeneous != 0 promises that top and bottom are
  * the same symmetric slab (R^t = R^b, T^tb = T^bt), which halves the work.
  * Each Fourier order: one LU factorisation per gain matrix, then solves and
- * products (LAPACK getrf/getrs, BLAS gemm), orders in parallel. */
+ * products (LAPACK getrf/getrs, BLAS gemm), orders in parallel. Stage
+ * "adding", one unit per Fourier order; workers poll between the O(h^3)
+ * BLAS/LAPACK calls of each order (h = n / 2). */
 LL_API ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
-                              int homogeneous);
+                              int homogeneous, const ll_monitor *monitor);
 
-/* ll_layer_add with a monitor (ll_common.h; NULL = the plain call). Stage
- * "adding", one unit per Fourier order. Progress runs on the calling thread
- * only; workers poll between the O(h^3) BLAS/LAPACK calls of each order
- * (h = n / 2), and LL_ERROR_CANCELLED leaves out exactly as it was. */
-LL_API ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
-                                 int homogeneous, const ll_monitor *monitor);
-
-/* layer = top stacked on layer. */
+/* layer = top stacked on layer (ll_layer_add without a monitor). */
 LL_API ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top);
-/* layer = layer stacked on bottom. */
+/* layer = layer stacked on bottom (ll_layer_add without a monitor). */
 LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom);
 
 /* Thickness: the layer holds a phase function (set_isotropic, set_henyey_
@@ -231,17 +224,11 @@ LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
  * to (one symmetric eigendecomposition per Fourier order, the
  * discrete-ordinate method of DISORT), whichever costs less for the node
  * count and k: the same choice for any data and thread count (method.md,
- * "Thickening a medium: the slab or doubling"). */
-LL_API ll_status ll_layer_expand(ll_layer *layer, double tau);
-
-/* ll_layer_expand with a monitor (ll_common.h; NULL = the plain call).
- * Stage "doubling", one unit per doubling step of each Fourier order.
- * Progress runs on the calling thread only; workers poll before every
+ * "Thickening a medium: the slab or doubling"). Stage "doubling", one unit
+ * per doubling step of each Fourier order; workers poll before every
  * doubling step and between its BLAS/LAPACK calls (the closed form: before
- * every order), and LL_ERROR_CANCELLED
- * leaves the layer exactly as it was (the phase function, not a partial
- * slab). */
-LL_API ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *monitor);
+ * every order). A cancel leaves the phase function, not a partial slab. */
+LL_API ll_status ll_layer_expand(ll_layer *layer, double tau, const ll_monitor *monitor);
 
 /* Turn the layer upside down (swap top and bottom). */
 LL_API ll_status ll_layer_reverse(ll_layer *layer);
@@ -251,16 +238,17 @@ LL_API ll_status ll_layer_clear(ll_layer *layer);
 
 /* ------------------------------------------------------------- reading */
 
-/* The BSDF value f(mu_o, mu_i, phi_d) without cosine factor, interpolated
- * between nodes with Catmull-Rom splines in mu and summed over Fourier
- * orders; negative results clamp to 0. Argument order and conventions are
- * the original layerlab's Layer::eval. Returns 0 for NULL or NaN input. */
-LL_API double ll_layer_eval(const ll_layer *layer, double mu_o, double mu_i, double phi_d);
+/* *f = the BSDF value f(mu_i, mu_o, phi_d) without cosine factor,
+ * interpolated between nodes with Catmull-Rom splines in mu and summed over
+ * Fourier orders; negative results clamp to 0. LL_ERROR_INVALID_ARGUMENT
+ * for a NULL layer or f, or a NaN argument (then *f = 0). */
+LL_API ll_status ll_layer_eval(const ll_layer *layer, double mu_i, double mu_o, double phi_d,
+                               double *f);
 
-/* Vectorised ll_layer_eval: out[k] = eval(mu_o[k], mu_i[k], phi_d[k]) for
+/* Vectorised ll_layer_eval: out[k] = f(mu_i[k], mu_o[k], phi_d[k]) for
  * k < count. phi_d may be NULL (0 everywhere). */
-LL_API ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_o,
-                                    const double *mu_i, const double *phi_d, double *out);
+LL_API ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_i,
+                                    const double *mu_o, const double *phi_d, double *out);
 
 /* The n x n BSDF matrix of Fourier order `order`, integration weights and
  * cosine factors removed (values of f_l), rows (outgoing) and columns
@@ -275,20 +263,17 @@ LL_API ll_status ll_layer_matrix(const ll_layer *layer, size_t order, double *ou
 LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *reflectance,
                                  double *transmittance);
 
-/* ---------------------------------------------------------- heuristics */
+/* ---------------------------------------------------------- resolution
+ * The resolution (even node count n, Fourier orders m) a word needs. Two
+ * kinds of call: the heuristics are instant fits; the resolution searches
+ * measure the convergence and take up to seconds. */
 
-/* The resolution (even node count n, Fourier orders m) that a Henyey-
- * Greenstein medium with asymmetry g in (-1, 1) needs: since 1.x (issue 14)
- * ll_heuristic_henyey_greenstein_ex at the default tolerance (below). Its
- * first guess, and the answer before, is the original layerlab's
- * parameterHeuristicHG: n = 8.6 / (1 - |g|) - 0.2, m = 5.4 / (1 - |g|) -
- * 1.3. */
+/* Fit for a Henyey-Greenstein medium with asymmetry g in (-1, 1): the
+ * original layerlab's parameterHeuristicHG, n = 8.6 / (1 - |g|) - 0.2,
+ * m = 5.4 / (1 - |g|) - 1.3. Instant. */
 LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
-/* The resolution (even node count n, Fourier orders m) that a rough
- * interface needs: since 1.x (issue 14) ll_heuristic_microfacet_ex at the
- * default tolerance (below). Its first guess of n, and the answer before,
- * is the paper's fits (the original's
+/* Fit for a rough interface: the paper's fits (the original's
  * parameterHeuristicMicrofacet), n or m = max(A + B ln(alpha)^4 alpha,
  * C + D alpha^-1.2), alpha clamped to 1, extended to every eta:
  *  - conductors (eta_im > 0) use the generic conductor fit;
@@ -297,21 +282,23 @@ LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_
  *    linearly in eta (the original takes the larger neighbour);
  *  - above 1.7 the 1.7 fit holds: a denser medium widens the refracted
  *    lobe, and the reflected lobe, now the narrowest, does not change;
- *  - below 1.1 the refracted lobe narrows like (eta - 1) / eta (which the
- *    four fits follow within 10%), so the 1.1 fit is evaluated at alpha
- *    times (eta - 1) / eta / (0.1 / 1.1), with eta taken as at least 1.05
- *    (a narrower lobe exceeds any practical resolution and is widened by
- *    ll_layer_set_microfacet); eta = 1 exactly is no interface: (2, 1).
- * alpha >= LL_MICROFACET_MIN_ALPHA. LL_ERROR_INVALID_ARGUMENT also when the
- * result would exceed what a layer can hold. */
+ *  - below 1.1 the refracted lobe narrows like (eta - 1) / eta, so the 1.1
+ *    fit is evaluated at alpha times (eta - 1) / eta / (0.1 / 1.1), with
+ *    eta taken as at least 1.05 (a narrower lobe exceeds any practical
+ *    resolution and is widened by ll_layer_set_microfacet); eta = 1
+ *    exactly is no interface: (2, 1).
+ * The fits do not see the narrow azimuthal lobes of grazing pairs: a first
+ * guess, which ll_resolution_search_microfacet verifies. Instant. alpha >=
+ * LL_MICROFACET_MIN_ALPHA. LL_ERROR_INVALID_ARGUMENT also when the result
+ * would exceed what a layer can hold. */
 LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im,
                                          size_t *n_nodes, size_t *n_orders);
 
 /* Resolution chosen by a stated tolerance (docs/method.md, "Resolution").
- * The _ex heuristics return the smallest (n, m) found whose layer agrees
- * with the same layer at (2n, 2m) within `tolerance` (relative) wherever
- * the BSDF there is above 1% of the peak of its lobe (one incident
- * direction and one block: reflection or transmission), measured with
+ * The searches return the smallest (n, m) found whose layer agrees with
+ * the same layer at (2n, 2m) within `tolerance` (relative) wherever the
+ * BSDF there is above 1% of the peak of its lobe (one incident direction
+ * and one block: reflection or transmission), measured with
  * ll_layer_eval's interpolation on fixed probe directions with |mu| >=
  * mu_min: the grazing cosines mu_min, 1.5 mu_min, 2 mu_min, mirror and
  * refracted directions and offsets around them, azimuths 0 .. pi, and
@@ -319,49 +306,43 @@ LL_API ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta
  * lies in [LL_MIN_TOLERANCE, 1); mu_min 0 means LL_DEFAULT_MU_MIN,
  * otherwise it lies in (0, 1]. The probes accept at 0.6 of the tolerance,
  * a margin for the directions between them. error (nullable) receives the
- * difference measured at the answer (<= 0.6 tolerance). Deterministic; the same answer
- * for any thread count. Costs a fraction of a second to a few seconds of
- * CPU (measured: conductors 0.3 to 1.8 s, dielectrics 2.6 to 4.6 s at
- * alpha 0.5 to 0.8, most of it the compensation's albedos): the series are
- * evaluated at the probes' spline stencils only. Fails with
- * LL_ERROR_INVALID_ARGUMENT (and the error reached) when the tolerance is
- * not met within 100000 nodes or orders. */
+ * difference measured at the answer (<= 0.6 tolerance), or HUGE_VAL when
+ * the answer is the fit, unverified (stated per search below).
+ * Deterministic; the same answer for any thread count. Stage "resolution".
+ * The series are evaluated at the probes' spline stencils only, yet a
+ * search takes up to seconds of CPU. LL_ERROR_INVALID_ARGUMENT (and the
+ * error reached) when the tolerance is not met within the search's limit. */
 #define LL_DEFAULT_TOLERANCE 0.01
 #define LL_DEFAULT_MU_MIN 0.1
 #define LL_MIN_TOLERANCE 1e-3
 
-/* Rough interface (arguments as ll_heuristic_microfacet). The fit above is
- * the first guess of n only; m starts at what the probes' own azimuthal
- * series need (the most grazing pair that matters sets it), then both are
- * grown until the comparison with (2n, 2m) passes and shrunk while it
- * still does. The layer compared is the one a build makes by default:
- * ll_layer_set_microfacet with conserve_energy = 1 (the compensation term
- * is made from every node's albedo, and copper, alpha 0.8 converged more
- * slowly with it: 1.32% off at a resolution that met 1% without it); a
- * material's `compensate=0` is searched without it. Where the fit asks
- * for more than 8000 nodes (alpha below about 0.02 for eta 1.1, 0.007 for
- * eta 1.5, 0.002 for conductors) the fit
- * is returned unverified (*error = HUGE_VAL): probing would take minutes. */
+/* Rough interface *microfacet (its n_orders_internal is not used). The
+ * fit is the first guess of n only; m starts at what the probes' own
+ * azimuthal series need (the most grazing pair that matters sets it), then
+ * both are grown until the comparison with (2n, 2m) passes and shrunk
+ * while it still does. The layer compared is ll_layer_set_microfacet's
+ * with microfacet->compensate. Limit: 100000 nodes or orders. Where the fit
+ * asks for more than 8000 nodes the fit is returned unverified. */
+LL_API ll_status ll_resolution_search_microfacet(const ll_microfacet *microfacet,
+                                                 double tolerance, double mu_min,
+                                                 const ll_monitor *monitor, size_t *n_nodes,
+                                                 size_t *n_orders, double *error);
+
 /* Henyey-Greenstein medium, g in (-1, 1): the convergence of the phase
  * function's own layer (ll_layer_set_henyey_greenstein, the single-
- * scattering lobe; a slab's multiple scattering is smoother), the fit
- * above the first guess of both n and m, compared without the delta-M
- * forward term (a delta, not a lobe: docs/method.md, "Resolution"). Not
- * met within 4000 nodes or orders: LL_ERROR_INVALID_ARGUMENT. Beyond
- * |g| = 0.95 the fit is returned unverified (*error = HUGE_VAL): the
- * probes would cost minutes there (g = -0.95 takes 86 s of CPU). */
-LL_API ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
-                                                   size_t *n_nodes, size_t *n_orders,
-                                                   double *error);
-
-LL_API ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
-                                            double tolerance, double mu_min,
-                                            size_t *n_nodes, size_t *n_orders,
-                                            double *error);
+ * scattering lobe; a slab's multiple scattering is smoother), the fit the
+ * first guess of both n and m, compared without the delta-M forward term
+ * (a delta, not a lobe: docs/method.md, "Resolution"). Limit: 4000 nodes
+ * or orders. Beyond |g| = 0.95 the fit is returned unverified. */
+LL_API ll_status ll_resolution_search_henyey_greenstein(double g, double tolerance,
+                                                        double mu_min,
+                                                        const ll_monitor *monitor,
+                                                        size_t *n_nodes, size_t *n_orders,
+                                                        double *error);
 
 /* ------------------------------------------------------------- Fresnel
- * These return a reflectance, so an invalid argument (NaN, out of range)
- * gives NaN and a message for ll_last_error_message(). Thread-safe. */
+ * Thread-safe. LL_ERROR_INVALID_ARGUMENT for an argument out of range or
+ * NaN, or a NULL output; the outputs are then 0. */
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric boundary with
  * relative index eta > 0 (transmitted side / incident side) for light
@@ -369,21 +350,23 @@ LL_API ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double 
  * cos_theta_i < 0 means the light arrives from the other side, where the
  * relative index is 1/eta). cos_theta_t (nullable) receives the cosine of
  * the refracted direction with the sign of the side it leaves into (the
- * opposite of cos_theta_i), 0 under total internal reflection (which
- * returns 1). */
-LL_API double ll_fresnel_dielectric(double cos_theta_i, double eta, double *cos_theta_t);
+ * opposite of cos_theta_i), 0 under total internal reflection (reflectance
+ * 1). */
+LL_API ll_status ll_fresnel_dielectric(double cos_theta_i, double eta, double *reflectance,
+                                       double *cos_theta_t);
 
 /* Unpolarised Fresnel reflectance of a conductor of complex relative index
  * eta_re + i eta_im (both >= 0, not both 0; eta_im = 0 is a dielectric),
  * cos_theta_i in [0, 1]. */
-LL_API double ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im);
+LL_API ll_status ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im,
+                                      double *reflectance);
 
 /* Hemispherical averages 2 * integral_0^1 F(mu) mu dmu: the fraction of
  * uniformly diffuse light that the boundary reflects (accurate to about
  * 1e-14, by tanh-sinh quadrature). For a dielectric, light arriving from
  * the side where the relative index is eta. */
-LL_API double ll_fresnel_dielectric_average(double eta);
-LL_API double ll_fresnel_conductor_average(double eta_re, double eta_im);
+LL_API ll_status ll_fresnel_dielectric_average(double eta, double *average);
+LL_API ll_status ll_fresnel_conductor_average(double eta_re, double eta_im, double *average);
 
 #ifdef __cplusplus
 }

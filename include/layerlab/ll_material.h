@@ -45,66 +45,56 @@ LL_API ll_status ll_material_parse(const char *text, const char *source_name,
 LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
 LL_API void ll_material_destroy(ll_material *material);
 
-/* Progress: fraction in [0, 1] of the whole build, a short stage name
- * ("dielectric interface", "medium", "adding", "writing"). Called on the
- * thread that called the build. */
-typedef void (*ll_progress_fn)(double fraction, const char *stage, void *user);
-
+/* Options of a build. Every field's zero is its default. */
 typedef struct ll_build_options {
-    size_t struct_size;        /* sizeof(ll_build_options)                         */
-    size_t n_nodes;            /* 0: the material's setting, else the heuristic     */
-    size_t n_orders;           /* 0: likewise                                       */
-    size_t n_channels;         /* 0: from the material; 1 or 3 forces               */
-    size_t threads;            /* 0: all processors                                 */
-    double error_goal;         /* 0: the material's setting, else 1e-3              */
-    ll_progress_fn progress;   /* nullable                                          */
-    void *progress_user;
-    const volatile int *cancel;/* nullable; nonzero stops with LL_ERROR_CANCELLED
-                                  (deprecated: prefer an ll_monitor, *_ex below)  */
-    /* Memory budget (appended in 1.x; callers whose struct_size ends before
-     * it get the default). A build whose estimated peak (ll_material_estimate)
-     * is above it is refused before anything is allocated, with
-     * LL_ERROR_OUT_OF_MEMORY. 0: half of the physical memory. */
-    size_t max_memory_bytes;
-    /* The resolution's goal (appended in 1.x, issue 14; callers whose
-     * struct_size ends before them get the defaults): the resolution that
-     * the heuristics choose is within `tolerance` (relative) of the
-     * converged layers where the BSDF is above 1% of its peak, at every
-     * |mu| >= mu_min (ll_heuristic_microfacet_ex, ll_layer.h).
+    size_t struct_size;       /* sizeof(ll_build_options)                          */
+    size_t n_nodes;           /* 0: the material's setting, else chosen (below)     */
+    size_t n_orders;          /* 0: likewise                                        */
+    size_t n_channels;        /* 0: from the material; 1 or 3 forces                */
+    size_t threads;           /* 0: all processors                                  */
+    /* The resolution's goal: the resolution chosen is within `tolerance`
+     * (relative) of the converged layers where the BSDF is above 1% of its
+     * peak, at every |mu| >= mu_min (ll_resolution_search_*, ll_layer.h).
      * 0: the material's `set tolerance= mu_min=`, else LL_DEFAULT_TOLERANCE
-     * (0.01) and LL_DEFAULT_MU_MIN (0.1). Ignored where the resolution is
-     * given (n_nodes and n_orders, or the material's set nodes= orders=). */
+     * and LL_DEFAULT_MU_MIN. Ignored where the resolution is given
+     * (n_nodes and n_orders, or the material's set nodes= orders=). */
     double tolerance;
     double mu_min;
-    /* Each channel's finished layer (appended in 1.x, issue 18; callers
-     * whose struct_size ends before them get NULL): ll_material_build and
-     * ll_material_build_ex hand every channel's stack to the file as soon
-     * as it is complete and free it, so that no two channels' stacks are
-     * alive at once; channel_done (nullable) sees the layer just before
-     * that, on the calling thread (channel 0 = R or mono, 1 = G, 2 = B, in
-     * the order the build finishes them), e.g. to report its albedo. The
-     * layer is valid only during the call. Not called by the other builds,
-     * which return the layers. */
+    double error_goal;        /* series truncation; 0: the material's, else 1e-3  */
+    /* Memory budget: a build whose estimated peak is above it is refused
+     * before anything is allocated, with LL_ERROR_OUT_OF_MEMORY. 0: half of
+     * the physical memory. */
+    size_t max_memory_bytes;
+    /* Each channel's finished layer: ll_material_build hands every
+     * channel's stack to the file as soon as it is complete and frees it,
+     * so that no two channels' stacks are alive at once; channel_done
+     * (nullable) sees the layer just before that, on the calling thread
+     * (channel 0 = R or mono, 1 = G, 2 = B, in the order the build finishes
+     * them), e.g. to report its albedo. The layer is valid only during the
+     * call. Not called by the other builds, which return the layers. */
     void (*channel_done)(void *user, size_t channel, const ll_layer *layer);
     void *channel_done_user;
 } ll_build_options;
 
-#define LL_BUILD_OPTIONS_INIT                                                               \
-    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, NULL, NULL, NULL, 0, 0.0, 0.0, NULL, NULL }
+#define LL_BUILD_OPTIONS_INIT \
+    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, NULL, NULL }
 
 /* The resolution's goal of a build with these options: the tolerance and
  * mu_min in effect (opts, else the material's set, else the defaults) and
- * whether the heuristics choose the resolution by them (*chosen = 0 when
- * both nodes and orders are given by opts or the material). Instant. Any
- * output may be NULL. */
+ * whether the resolution is chosen by them (*chosen = 0 when both nodes
+ * and orders are given by opts or the material). Instant. Any output may
+ * be NULL. */
 LL_API ll_status ll_material_goal(const ll_material *material, const ll_build_options *opts,
                                   double *tolerance, double *mu_min, int *chosen);
 
 /* The resolution and channel count a build with these options would use.
- * Choosing it by the tolerance probes every interface and medium (about a
- * second for the examples; ll_heuristic_microfacet_ex). */
+ * Choosing it by the tolerance runs the resolution search of every
+ * distinct interface and medium (ll_resolution_search_*: up to seconds
+ * each). monitor (nullable): stage "resolution"; a cancel returns
+ * LL_ERROR_CANCELLED. */
 LL_API ll_status ll_material_resolution(const ll_material *material,
-                                        const ll_build_options *opts, size_t *n_nodes,
+                                        const ll_build_options *opts,
+                                        const ll_monitor *monitor, size_t *n_nodes,
                                         size_t *n_orders, size_t *n_channels);
 
 /* Build and write a .bsdf file (atomically; a failed or cancelled build
@@ -113,117 +103,51 @@ LL_API ll_status ll_material_resolution(const ll_material *material,
  * freed (opts->channel_done sees it first): its stored values wait in an
  * unlinked spill file beside out_path, which needs room for them there, and
  * the file is written from the spill at the end, byte for byte what
- * ll_material_build_layers then ll_material_write give.
+ * ll_material_build_layers then ll_material_write give. A swept material
+ * (below) is written as a textured file.
+ *
+ * monitor (nullable): the fraction of the whole build (weighted by the
+ * work of each step) and the stage ("resolution", "quadrature",
+ * "dielectric interface", "medium", "adding", "writing", ...), on the
+ * calling thread only. A non-zero return stops the build within one step
+ * of the inner loops of whatever stage runs (every layer call polls) with
+ * LL_ERROR_CANCELLED. A program that stops on a signal lets its handler
+ * raise a flag that the monitor's callback returns: the callback is called
+ * at least every 20 ms while the build runs.
+ *
  * Errors: LL_ERROR_INVALID_ARGUMENT (options), LL_ERROR_CANCELLED,
  * LL_ERROR_NUMERICAL, LL_ERROR_OUT_OF_MEMORY (also when the estimated peak
  * is above opts->max_memory_bytes: refused before anything is allocated,
  * with the estimate and the budget in the message), LL_ERROR_IO
- * (writing). The
- * worker-thread count of the calling thread (ll_set_thread_count) is
- * opts->threads during the build and restored after it. */
+ * (writing). The worker-thread count of the calling thread
+ * (ll_set_thread_count) is opts->threads during the build and restored
+ * after it. */
 LL_API ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
-                                   const char *out_path);
+                                   const ll_monitor *monitor, const char *out_path);
 
 /* Build in memory: layers receives n_channels layers (caller frees each with
  * ll_layer_destroy); header (nullable) receives the eta and alpha that a
- * file of this stack carries. The memory budget applies as to
- * ll_material_build. */
+ * file of this stack carries. The memory budget and the monitor as for
+ * ll_material_build; a cancel returns no layers. A swept material is
+ * refused (LL_ERROR_INVALID_ARGUMENT). */
 LL_API ll_status ll_material_build_layers(const ll_material *material,
                                           const ll_build_options *opts,
-                                          ll_layer *layers[3], size_t *n_channels,
-                                          ll_bsdf_write_options *header);
-
-/* The two builds with a monitor (ll_common.h; NULL = the plain call): the
- * fraction of the whole build (cost-weighted, as opts->progress, which is
- * still called too) and the stage ("quadrature", "dielectric interface",
- * "medium", "adding", "writing", ...), on the calling thread only. A
- * non-zero return stops the build within one step of the inner loops of
- * whatever stage runs (every layer call polls) with LL_ERROR_CANCELLED: no
- * file is written and an existing one is kept; no layers are returned.
- * opts->cancel, a flag that may be raised from a signal handler, works the
- * same way and is kept as a deprecated alias of a monitor that returns
- * non-zero: the calling thread reads it at least every 20 ms while a layer
- * call runs (also while it waits for workers), and the workers stop at
- * their next poll. */
-LL_API ll_status ll_material_build_ex(const ll_material *material, const ll_build_options *opts,
-                                      const ll_monitor *monitor, const char *out_path);
-LL_API ll_status ll_material_build_layers_ex(const ll_material *material,
-                                             const ll_build_options *opts,
-                                             const ll_monitor *monitor, ll_layer *layers[3],
-                                             size_t *n_channels,
-                                             ll_bsdf_write_options *header);
+                                          const ll_monitor *monitor, ll_layer *layers[3],
+                                          size_t *n_channels, ll_bsdf_write_options *header);
 
 /* Write layers that ll_material_build_layers returned (n_channels of them,
  * 1 or 3) to out_path as a .bsdf file with this material's header (eta,
  * alpha), its JSON description as metadata and the truncation error of
- * opts or the material. Atomic, like ll_material_build: opts->cancel is
- * checked once the file is complete and before it replaces out_path, so a
- * cancelled or failed write leaves no file and keeps an existing one.
- * opts may be NULL; only error_goal and cancel are read. */
+ * opts or the material. opts may be NULL; only error_goal is read.
+ * Atomic, like ll_material_build; monitor (nullable) as for ll_bsdf_write:
+ * a cancel, also at the last report before the file replaces out_path,
+ * leaves no file and keeps an existing one. */
 LL_API ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
                                    ll_layer *const *layers, size_t n_channels,
-                                   const char *out_path);
+                                   const char *out_path, const ll_monitor *monitor);
 
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
-
-/* What a build with these options would take, estimated from counts
- * alone (resolution, words, channels: no quadrature, no allocation that
- * grows with the resolution), so it is instant for any input once the
- * resolution is given (llbuild --dry-run); choosing it by the tolerance
- * probes each distinct word first (ll_material_resolution: about a second
- * each). Memory: the layers alive at once and the adding's
- * workspace, as stored compactly; time: per-stage operation counts times
- * rates measured on a 2-core x86-64 machine with OpenBLAS
- * (docs/material-language.md, "Estimates", gives the model and its error
- * on the examples). The estimate may have the struct_size of an older
- * version of this struct (ending at `seconds`); the fields past it are
- * then not written. */
-typedef struct ll_build_estimate {
-    size_t struct_size;   /* set by the caller: sizeof(ll_build_estimate)       */
-    size_t n_nodes;       /* resolution and channels the build would use         */
-    size_t n_orders;
-    size_t n_channels;
-    size_t layers_built;  /* word layers built, after sharing between channels   */
-    size_t additions;     /* adding steps (doubling steps not included)          */
-    size_t doublings;     /* doubling steps of all media                         */
-    double peak_bytes;    /* estimated peak memory of the build, bytes: of
-                             ll_material_build, which streams its channels to
-                             the file (ll_material_build_layers, which keeps
-                             every channel's stack, is checked against more) */
-    double seconds;       /* estimated wall time with opts->threads threads      */
-    /* Appended in 1.x (filled only when struct_size covers them): */
-    double cpu_seconds;   /* estimated CPU time, summed over the threads          */
-    size_t max_memory_bytes; /* the budget in effect (opts or half the RAM)      */
-    int over_budget;      /* nonzero: peak_bytes > max_memory_bytes, so a build
-                             with these options is refused                       */
-    /* Appended in 1.x (sweeps): for a swept material layers_built, additions,
-     * doublings, seconds and cpu_seconds count every basis (a word layer
-     * shared between bases counted once), peak_bytes is the builder's (a few
-     * bases at once, never all). */
-    size_t n_bases;       /* ll_material_basis_count: 1 for an untextured build  */
-    double file_bytes;    /* estimated size of the .bsdf file                    */
-    /* Appended in 1.x (the tolerance): the largest relative error, where the
-     * BSDF is above 1% of its peak at |mu| >= mu_min, that the chosen
-     * resolution was measured to against twice itself, over every word (0
-     * for words exact at any resolution); HUGE_VAL when some word is beyond
-     * the search's reach (ll_heuristic_*_ex: e.g. |g| > 0.95, a MERL table
-     * sharper than its own cells) and its resolution is not verified; -1
-     * when the resolution is given (set nodes= orders=, opts), not chosen. */
-    double resolution_error;
-} ll_build_estimate;
-
-#define LL_BUILD_ESTIMATE_INIT \
-    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0.0, 0.0 }
-
-/* estimate->struct_size may be the sizeof of an older, smaller
- * ll_build_estimate: only the fields it covers are written (the least
- * accepted is sizeof(size_t), the struct_size field itself, as for every
- * size-tagged struct). */
-
-LL_API ll_status ll_material_estimate(const ll_material *material,
-                                      const ll_build_options *opts,
-                                      ll_build_estimate *estimate);
 
 /* ------------------------------------------------------------ sweeps
  *
@@ -231,11 +155,9 @@ LL_API ll_status ll_material_estimate(const ll_material *material,
  * `alpha=[0.05..0.4:8]` (docs/material-language.md, "Sweeps"), is one axis
  * of a textured .bsdf file: the file holds one basis per point of the
  * tensor product of the axes, axis 0 (the first sweep in the text, top
- * word first, left to right) fastest. ll_material_build / _ex write such a
- * file (through the builder and the streaming writer below);
- * ll_material_build_layers / _ex and ll_material_write, which hold one
- * stack, refuse a swept material (LL_ERROR_INVALID_ARGUMENT): build its
- * bases one at a time with a builder. */
+ * word first, left to right) fastest. ll_material_build writes such a
+ * file; ll_material_build_layers and ll_material_write, which hold one
+ * stack, refuse a swept material (LL_ERROR_INVALID_ARGUMENT). */
 
 /* Number of swept parameters (axes): 0 for an untextured material. */
 LL_API size_t ll_material_axis_count(const ll_material *material);
@@ -265,6 +187,81 @@ LL_API ll_status ll_material_get_axis(const ll_material *material, size_t axis,
  * untextured material (0 for NULL). */
 LL_API size_t ll_material_basis_count(const ll_material *material);
 
+#ifdef __cplusplus
+}
+#endif
+#endif /* LAYERLAB_LL_MATERIAL_H */
+
+/* ------------------------------------------------------ experimental
+ * Declared only when LL_EXPERIMENTAL is defined before the include: these
+ * may change in a minor release (their symbols are in the version node
+ * LAYERLAB_EXPERIMENTAL_1.0, not in the stable one). The block has its own
+ * guard, so that a file included once without LL_EXPERIMENTAL and then
+ * again with it gets these declarations. */
+#if defined(LL_EXPERIMENTAL) && !defined(LAYERLAB_LL_MATERIAL_EXPERIMENTAL_H)
+#define LAYERLAB_LL_MATERIAL_EXPERIMENTAL_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What a build with these options would take, from counts alone
+ * (resolution, words, channels: no quadrature, no allocation that grows
+ * with the resolution), so it is instant once the resolution is given;
+ * choosing it by the tolerance runs the resolution searches first
+ * (ll_material_resolution; monitor, nullable, as there). Memory: an upper bound of the build's peak
+ * (the layers alive at once and the adding's workspace), the bound the
+ * budget is checked against. Time: not estimated here; the counts of work
+ * below are what a time model multiplies by its machine's rates (llbuild
+ * --dry-run has one). For a swept material the counts cover every basis
+ * (a word layer shared between bases counted once) and peak_bytes is the
+ * builder's (a few bases at once, never all). */
+typedef struct ll_build_estimate {
+    size_t struct_size;       /* set by the caller: sizeof(ll_build_estimate)       */
+    size_t n_nodes;           /* resolution and channels the build would use         */
+    size_t n_orders;
+    size_t n_channels;
+    size_t n_bases;           /* ll_material_basis_count: 1 for an untextured build  */
+    size_t threads;           /* worker threads the build would use                  */
+    /* The largest relative error, where the BSDF is above 1% of its peak at
+     * |mu| >= mu_min, that the chosen resolution was measured to against
+     * twice itself, over every word (0 for words exact at any resolution);
+     * HUGE_VAL when some word's resolution is the unverified fit
+     * (ll_resolution_search_*); -1 when the resolution is given, not chosen. */
+    double resolution_error;
+    double peak_bytes;        /* upper bound of ll_material_build's peak memory      */
+    double file_bytes;        /* the .bsdf file's size                               */
+    size_t max_memory_bytes;  /* the budget in effect (opts or half the RAM)         */
+    int over_budget;          /* non-zero: peak_bytes > max_memory_bytes, so a build
+                                 with these options is refused                       */
+    /* Work, after sharing between channels (and bases): */
+    size_t layers_built;      /* word layers built                                   */
+    size_t additions;         /* adding steps (doubling steps not included)          */
+    size_t doublings;         /* doubling steps of all media                         */
+    double dielectric_pairs;  /* node pairs (mu_i, mu_o) whose azimuthal series the
+                                 dielectric interfaces compute, times their
+                                 roughness in units of 0.1 (a rougher lobe takes
+                                 more samples)                                      */
+    double conductor_pairs;   /* the same for conductors (not weighted)              */
+    double pair_orders;       /* those pairs times the orders they fill              */
+    double measured_lookups;  /* table lookups of the measured words                 */
+    double measured_files;    /* measured files read                                 */
+    double phase_entries;     /* phase-matrix entries of the media (n^2 per order)   */
+    double diffuse_entries;   /* matrix entries of the diffuse words                 */
+    double add_entries;       /* n^2 per order holding values, over every adding and
+                                 doubling step                                       */
+    double add_empty_entries; /* n^2 per order that is zero in one of the operands   */
+    double stored_values;     /* values the finished layers hold (the writing's work) */
+} ll_build_estimate;
+
+#define LL_BUILD_ESTIMATE_INIT                                                              \
+    { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0, 0,              \
+      0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 }
+
+LL_API ll_status ll_material_estimate(const ll_material *material,
+                                      const ll_build_options *opts,
+                                      ll_build_estimate *estimate, const ll_monitor *monitor);
+
 /* A builder makes the bases of a (swept or plain) material one at a time,
  * all at one resolution: the largest any basis's heuristics ask for, unless
  * the options or `set` give it. Word layers are shared between bases: a
@@ -281,7 +278,7 @@ LL_API size_t ll_material_basis_count(const ll_material *material);
  * monitor (nullable): the progress of each build_basis call as a whole
  * (stages "basis 3/64: adding", ...); a non-zero return cancels the call
  * in progress with LL_ERROR_CANCELLED, and the builder may be used again.
- * opts->progress and opts->cancel are honoured likewise. create fails
+ * create fails
  * (LL_ERROR_INVALID_ARGUMENT) when bases would need different file
  * headers' eta (the format stores one relative index: sweep indices only
  * in opaque stacks) or the options are bad; LL_ERROR_OUT_OF_MEMORY over
@@ -299,7 +296,7 @@ LL_API ll_status ll_material_builder_create(const ll_material *material,
  * header: the eta and alpha of basis 0 (one per file), the material's
  * metadata, the error goal. Every basis has the same nodes and order count,
  * ready for ll_bsdf_writer_add_basis. Same statuses as
- * ll_material_build_layers_ex. */
+ * ll_material_build_layers. */
 LL_API ll_status ll_material_builder_build_basis(ll_material_builder *builder, size_t basis,
                                                  ll_layer *layers[3], size_t *n_channels,
                                                  ll_bsdf_write_options *header);
@@ -315,4 +312,4 @@ LL_API void ll_material_builder_destroy(ll_material_builder *builder);
 #ifdef __cplusplus
 }
 #endif
-#endif /* LAYERLAB_LL_MATERIAL_H */
+#endif /* LL_EXPERIMENTAL */

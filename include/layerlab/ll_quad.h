@@ -17,28 +17,26 @@
 extern "C" {
 #endif
 
-/* Gauss-Legendre: n >= 1 nodes, exact for polynomials of degree 2n-1.
+/* The Gauss rules cost O(n) per node (n = 30000 takes seconds), so they
+ * take a monitor (ll_common.h; nullable): stage "quadrature", one unit per
+ * node pair, polled once per node (per Newton sweep), on the calling
+ * thread (the rules use no other). With a monitor the rule is computed
+ * into scratch memory (16 n bytes, so LL_ERROR_OUT_OF_MEMORY is possible)
+ * and copied out at the end: LL_ERROR_CANCELLED leaves both buffers
+ * exactly as they were.
+ *
+ * Gauss-Legendre: n >= 1 nodes, exact for polynomials of degree 2n-1.
  * No node is at +-1; for odd n one node is 0 (not usable for layers).
  * Returns LL_ERROR_INVALID_ARGUMENT for n == 0 or NULL buffers. */
-LL_API ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights);
+LL_API ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights,
+                                        const ll_monitor *monitor);
 
 /* Gauss-Lobatto: n >= 2 nodes including both end points -1 and 1, exact
  * for polynomials of degree 2n-3. ll_quad_gauss_lobatto(10, ...) gives
  * -1, -0.91953391, -0.73877387, -0.47792495, -0.16527896, 0.16527896, ...
  * with weights 0.02222222, 0.13330599, 0.22488934, 0.29204268, 0.32753976, ... */
-LL_API ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights);
-
-/* The Gauss rules with a monitor (ll_common.h; NULL = the plain call). Each
- * node costs O(n) (n = 30000 takes seconds), so these report stage
- * "quadrature", one unit per node pair, and poll once per node (per
- * Newton sweep). progress is called on the calling thread (the rules use no
- * other). With a callback the rule is computed into scratch memory (16 n
- * bytes, so LL_ERROR_OUT_OF_MEMORY is possible) and copied out at the end:
- * LL_ERROR_CANCELLED leaves both buffers exactly as they were. */
-LL_API ll_status ll_quad_gauss_legendre_ex(size_t n, double *nodes, double *weights,
-                                           const ll_monitor *monitor);
-LL_API ll_status ll_quad_gauss_lobatto_ex(size_t n, double *nodes, double *weights,
-                                          const ll_monitor *monitor);
+LL_API ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights,
+                                       const ll_monitor *monitor);
 
 /* Composite Simpson: odd n >= 3 equidistant nodes (n-1 even intervals),
  * exact for cubics. */

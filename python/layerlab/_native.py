@@ -90,7 +90,43 @@ class BsdfInfo(ctypes.Structure):
         self.struct_size = ctypes.sizeof(BsdfInfo)
 
 
-progress_fn = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_char_p, ctypes.c_void_p)
+# int (*)(void *user, double fraction, const char *stage): 0 continues.
+monitor_fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_char_p)
+
+
+class Monitor(ctypes.Structure):
+    """``ll_monitor`` (size-tagged): the last argument of every long call."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("progress", monitor_fn),
+                ("user", ctypes.c_void_p)]
+
+    def __init__(self):
+        super().__init__()
+        self.struct_size = ctypes.sizeof(Monitor)
+
+
+monitor_p = ctypes.POINTER(Monitor)
+
+# ll_microfacet_distribution
+MICROFACET_BECKMANN = 0
+MICROFACET_GGX = 1
+
+
+class Microfacet(ctypes.Structure):
+    """``ll_microfacet`` (size-tagged): a rough interface."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t),
+                ("eta_re", ctypes.c_double),
+                ("eta_im", ctypes.c_double),
+                ("alpha", ctypes.c_double),
+                ("distribution", ctypes.c_int),
+                ("compensate", ctypes.c_int),
+                ("n_orders_internal", ctypes.c_size_t)]
+
+    def __init__(self):
+        # The values of LL_MICROFACET_INIT.
+        super().__init__(ctypes.sizeof(Microfacet), 1.5, 0.0, 0.1, MICROFACET_BECKMANN, 1, 0)
 
 
 class BuildOptions(ctypes.Structure):
@@ -101,13 +137,10 @@ class BuildOptions(ctypes.Structure):
                 ("n_orders", ctypes.c_size_t),
                 ("n_channels", ctypes.c_size_t),
                 ("threads", ctypes.c_size_t),
-                ("error_goal", ctypes.c_double),
-                ("progress", progress_fn),
-                ("progress_user", ctypes.c_void_p),
-                ("cancel", ctypes.POINTER(ctypes.c_int)),
-                ("max_memory_bytes", ctypes.c_size_t),
                 ("tolerance", ctypes.c_double),
                 ("mu_min", ctypes.c_double),
+                ("error_goal", ctypes.c_double),
+                ("max_memory_bytes", ctypes.c_size_t),
                 # void (*)(void *user, size_t channel, const ll_layer *layer)
                 ("channel_done", ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_size_t,
                                                   ctypes.c_void_p)),
@@ -119,23 +152,32 @@ class BuildOptions(ctypes.Structure):
 
 
 class BuildEstimate(ctypes.Structure):
-    """``ll_build_estimate`` (size-tagged)."""
+    """``ll_build_estimate`` (size-tagged; experimental in C)."""
 
     _fields_ = [("struct_size", ctypes.c_size_t),
                 ("n_nodes", ctypes.c_size_t),
                 ("n_orders", ctypes.c_size_t),
                 ("n_channels", ctypes.c_size_t),
+                ("n_bases", ctypes.c_size_t),
+                ("threads", ctypes.c_size_t),
+                ("resolution_error", ctypes.c_double),
+                ("peak_bytes", ctypes.c_double),
+                ("file_bytes", ctypes.c_double),
+                ("max_memory_bytes", ctypes.c_size_t),
+                ("over_budget", ctypes.c_int),
                 ("layers_built", ctypes.c_size_t),
                 ("additions", ctypes.c_size_t),
                 ("doublings", ctypes.c_size_t),
-                ("peak_bytes", ctypes.c_double),
-                ("seconds", ctypes.c_double),
-                ("cpu_seconds", ctypes.c_double),
-                ("max_memory_bytes", ctypes.c_size_t),
-                ("over_budget", ctypes.c_int),
-                ("n_bases", ctypes.c_size_t),
-                ("file_bytes", ctypes.c_double),
-                ("resolution_error", ctypes.c_double)]
+                ("dielectric_pairs", ctypes.c_double),
+                ("conductor_pairs", ctypes.c_double),
+                ("pair_orders", ctypes.c_double),
+                ("measured_lookups", ctypes.c_double),
+                ("measured_files", ctypes.c_double),
+                ("phase_entries", ctypes.c_double),
+                ("diffuse_entries", ctypes.c_double),
+                ("add_entries", ctypes.c_double),
+                ("add_empty_entries", ctypes.c_double),
+                ("stored_values", ctypes.c_double)]
 
     def __init__(self):
         super().__init__()
@@ -155,8 +197,8 @@ PROTOTYPES = {
     "ll_set_thread_count": (_S, [_Z]),
     "ll_get_thread_count": (_Z, []),
     # ll_quad.h
-    "ll_quad_gauss_legendre": (_S, [_Z, c_double_p, c_double_p]),
-    "ll_quad_gauss_lobatto": (_S, [_Z, c_double_p, c_double_p]),
+    "ll_quad_gauss_legendre": (_S, [_Z, c_double_p, c_double_p, monitor_p]),
+    "ll_quad_gauss_lobatto": (_S, [_Z, c_double_p, c_double_p, monitor_p]),
     "ll_quad_composite_simpson": (_S, [_Z, c_double_p, c_double_p]),
     "ll_quad_composite_simpson38": (_S, [_Z, c_double_p, c_double_p]),
     # ll_layer.h
@@ -167,31 +209,36 @@ PROTOTYPES = {
     "ll_layer_order_count": (_Z, [layer_p]),
     "ll_layer_get_nodes": (_S, [layer_p, c_double_p, c_double_p]),
     "ll_layer_stored_count": (_Z, [layer_p]),
-    "ll_layer_set_diffuse": (_S, [layer_p, _D]),
-    "ll_layer_set_isotropic": (_S, [layer_p, _D]),
-    "ll_layer_set_henyey_greenstein": (_S, [layer_p, _D, _D]),
-    "ll_layer_set_von_mises_fisher": (_S, [layer_p, _D, _D]),
-    "ll_layer_set_microfacet": (_S, [layer_p, _D, _D, _D, _I, _Z]),
-    "ll_layer_set_matusik": (_S, [layer_p, ctypes.c_char_p, _I, _Z]),
-    "ll_layer_add": (_S, [layer_p, layer_p, layer_p, _I]),
+    "ll_layer_set_diffuse": (_S, [layer_p, _D, monitor_p]),
+    "ll_layer_set_isotropic": (_S, [layer_p, _D, monitor_p]),
+    "ll_layer_set_henyey_greenstein": (_S, [layer_p, _D, _D, monitor_p]),
+    "ll_layer_set_von_mises_fisher": (_S, [layer_p, _D, _D, monitor_p]),
+    "ll_layer_set_microfacet": (_S, [layer_p, ctypes.POINTER(Microfacet), monitor_p]),
+    "ll_layer_set_matusik": (_S, [layer_p, ctypes.c_char_p, _I, _Z, monitor_p]),
+    "ll_layer_add": (_S, [layer_p, layer_p, layer_p, _I, monitor_p]),
     "ll_layer_add_to_top": (_S, [layer_p, layer_p]),
     "ll_layer_add_to_bottom": (_S, [layer_p, layer_p]),
-    "ll_layer_expand": (_S, [layer_p, _D]),
+    "ll_layer_expand": (_S, [layer_p, _D, monitor_p]),
     "ll_layer_reverse": (_S, [layer_p]),
     "ll_layer_clear": (_S, [layer_p]),
-    "ll_layer_eval": (_D, [layer_p, _D, _D, _D]),
+    # (mu_i, mu_o, phi_d): the known direction first
+    "ll_layer_eval": (_S, [layer_p, _D, _D, _D, c_double_p]),
     "ll_layer_eval_many": (_S, [layer_p, _Z, c_double_p, c_double_p, c_double_p, c_double_p]),
     "ll_layer_matrix": (_S, [layer_p, _Z, c_double_p]),
     "ll_layer_albedo": (_S, [layer_p, _D, c_double_p, c_double_p]),
     "ll_heuristic_henyey_greenstein": (_S, [_D, c_size_t_p, c_size_t_p]),
     "ll_heuristic_microfacet": (_S, [_D, _D, _D, c_size_t_p, c_size_t_p]),
-    "ll_fresnel_dielectric": (_D, [_D, _D, c_double_p]),
-    "ll_fresnel_conductor": (_D, [_D, _D, _D]),
-    "ll_fresnel_dielectric_average": (_D, [_D]),
-    "ll_fresnel_conductor_average": (_D, [_D, _D]),
+    "ll_resolution_search_henyey_greenstein": (_S, [_D, _D, _D, monitor_p, c_size_t_p, c_size_t_p,
+                                                    c_double_p]),
+    "ll_resolution_search_microfacet": (_S, [ctypes.POINTER(Microfacet), _D, _D, monitor_p,
+                                             c_size_t_p, c_size_t_p, c_double_p]),
+    "ll_fresnel_dielectric": (_S, [_D, _D, c_double_p, c_double_p]),
+    "ll_fresnel_conductor": (_S, [_D, _D, _D, c_double_p]),
+    "ll_fresnel_dielectric_average": (_S, [_D, c_double_p]),
+    "ll_fresnel_conductor_average": (_S, [_D, _D, c_double_p]),
     # ll_bsdf.h
     "ll_bsdf_write": (_S, [ctypes.c_char_p, ctypes.POINTER(layer_p), _Z,
-                           ctypes.POINTER(BsdfWriteOptions)]),
+                           ctypes.POINTER(BsdfWriteOptions), monitor_p]),
     # options: const ll_open_options * (None: the default limits)
     "ll_bsdf_open": (_S, [ctypes.c_char_p, ctypes.c_void_p, ctypes.POINTER(bsdf_p)]),
     "ll_bsdf_open_memory": (_S, [ctypes.c_void_p, _Z, ctypes.c_void_p, ctypes.POINTER(bsdf_p)]),
@@ -201,7 +248,7 @@ PROTOTYPES = {
     "ll_bsdf_get_parameter_name": (_S, [bsdf_p, _Z, ctypes.POINTER(ctypes.c_char_p)]),
     "ll_bsdf_basis_coefficients": (_S, [bsdf_p, c_double_p, c_float_p]),
     "ll_bsdf_write_textured": (_S, [ctypes.c_char_p, ctypes.POINTER(layer_p), _Z, _Z, c_size_t_p,
-                                    c_double_p, ctypes.POINTER(BsdfWriteOptions)]),
+                                    c_double_p, ctypes.POINTER(BsdfWriteOptions), monitor_p]),
     "ll_bsdf_nodes": (c_float_p, [bsdf_p]),
     "ll_bsdf_eval": (_S, [bsdf_p, _D, _D, _D, c_float_p, _P3]),
     "ll_bsdf_pdf": (_S, [bsdf_p, _D, _D, _D, c_float_p, c_double_p]),
@@ -222,16 +269,18 @@ PROTOTYPES = {
     "ll_material_parse": (_S, [ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(material_p)]),
     "ll_material_parse_file": (_S, [ctypes.c_char_p, ctypes.POINTER(material_p)]),
     "ll_material_destroy": (None, [material_p]),
-    "ll_material_resolution": (_S, [material_p, ctypes.POINTER(BuildOptions), c_size_t_p,
-                                    c_size_t_p, c_size_t_p]),
-    "ll_material_build": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.c_char_p]),
-    "ll_material_build_layers": (_S, [material_p, ctypes.POINTER(BuildOptions), layer_p * 3,
-                                      c_size_t_p, ctypes.POINTER(BsdfWriteOptions)]),
+    "ll_material_resolution": (_S, [material_p, ctypes.POINTER(BuildOptions), monitor_p,
+                                    c_size_t_p, c_size_t_p, c_size_t_p]),
+    "ll_material_build": (_S, [material_p, ctypes.POINTER(BuildOptions), monitor_p,
+                               ctypes.c_char_p]),
+    "ll_material_build_layers": (_S, [material_p, ctypes.POINTER(BuildOptions), monitor_p,
+                                      layer_p * 3, c_size_t_p, ctypes.POINTER(BsdfWriteOptions)]),
     "ll_material_write": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.POINTER(layer_p),
-                               _Z, ctypes.c_char_p]),
+                               _Z, ctypes.c_char_p, monitor_p]),
     "ll_material_word_count": (_Z, [material_p]),
+    # experimental in C (LL_EXPERIMENTAL)
     "ll_material_estimate": (_S, [material_p, ctypes.POINTER(BuildOptions),
-                                  ctypes.POINTER(BuildEstimate)]),
+                                  ctypes.POINTER(BuildEstimate), monitor_p]),
 }
 
 

@@ -8,7 +8,7 @@ import weakref
 import numpy as np
 
 from ._errors import InvalidArgumentError
-from ._native import check, fspath, layer_p, lib
+from ._native import Microfacet, check, fspath, layer_p, lib
 from ._util import count_argument, double_ptr, real_argument, vector_argument
 
 __all__ = ["Layer", "parameterHeuristicMicrofacet", "parameterHeuristicHG",
@@ -114,7 +114,7 @@ class Layer:
             The layer's diffuse reflectance (in ``[0, 1]``); the BSDF is
             albedo / pi on both sides, with no transmission
         """
-        check(lib.ll_layer_set_diffuse(self._handle, real_argument(albedo, "albedo")))
+        check(lib.ll_layer_set_diffuse(self._handle, real_argument(albedo, "albedo"), None))
 
     def setIsotropic(self, albedo):
         """Initialize the layer with an isotropic phase function
@@ -125,7 +125,7 @@ class Layer:
         Parameter ``albedo``:
             The medium's single scattering albedo (in ``[0, 1]``)
         """
-        check(lib.ll_layer_set_isotropic(self._handle, real_argument(albedo, "albedo")))
+        check(lib.ll_layer_set_isotropic(self._handle, real_argument(albedo, "albedo"), None))
 
     def setHenyeyGreenstein(self, albedo, g):
         """Initialize the layer with a Henyey-Greenstein phase function
@@ -138,7 +138,7 @@ class Layer:
             positive values scatter forward)
         """
         check(lib.ll_layer_set_henyey_greenstein(self._handle, real_argument(albedo, "albedo"),
-                                                 real_argument(g, "g")))
+                                                 real_argument(g, "g"), None))
 
     def setVonMisesFisher(self, albedo, kappa):
         """Initialize the layer with a von Mises-Fisher phase function
@@ -151,7 +151,7 @@ class Layer:
             forward-peaked)
         """
         check(lib.ll_layer_set_von_mises_fisher(self._handle, real_argument(albedo, "albedo"),
-                                                real_argument(kappa, "kappa")))
+                                                real_argument(kappa, "kappa"), None))
 
     def setMicrofacet(self, eta, alpha, conserveEnergy=True, fourierOrders=0):
         """Initialize the layer with a rough (Beckmann) interface, dielectric
@@ -174,11 +174,12 @@ class Layer:
             Number of Fourier orders used internally in the computation.
             Default (0): the layer's own :attr:`fourierOrders`
         """
-        eta_re, eta_im = complex_argument(eta, "eta")
-        check(lib.ll_layer_set_microfacet(self._handle, eta_re, eta_im,
-                                          real_argument(alpha, "alpha"),
-                                          1 if conserveEnergy else 0,
-                                          count_argument(fourierOrders, "fourierOrders")))
+        mf = Microfacet()
+        mf.eta_re, mf.eta_im = complex_argument(eta, "eta")
+        mf.alpha = real_argument(alpha, "alpha")
+        mf.compensate = 1 if conserveEnergy else 0
+        mf.n_orders_internal = count_argument(fourierOrders, "fourierOrders")
+        check(lib.ll_layer_set_microfacet(self._handle, ctypes.byref(mf), None))
 
     def setMatusik(self, filename, channel, fourierOrders=0):
         """Initialize the layer with a measured BRDF in the MERL (Matusik et
@@ -196,7 +197,7 @@ class Layer:
         """
         channel = count_argument(channel, "channel")
         check(lib.ll_layer_set_matusik(self._handle, fspath(filename), min(channel, 2 ** 30),
-                                       count_argument(fourierOrders, "fourierOrders")))
+                                       count_argument(fourierOrders, "fourierOrders"), None))
 
     # ------------------------------------------------------------ grammar
 
@@ -223,7 +224,7 @@ class Layer:
         """
         top, bottom = _handle_of(l1, "l1"), _handle_of(l2, "l2")
         out = Layer(l1)
-        check(lib.ll_layer_add(top, bottom, out._handle, 1 if homogeneous else 0))
+        check(lib.ll_layer_add(top, bottom, out._handle, 1 if homogeneous else 0, None))
         return out
 
     def addToTop(self, l, homogeneous=False):
@@ -237,7 +238,7 @@ class Layer:
             As in :meth:`add`. Default: ``False``
         """
         check(lib.ll_layer_add(_handle_of(l, "l"), self._handle, self._handle,
-                               1 if homogeneous else 0))
+                               1 if homogeneous else 0, None))
 
     def addToBottom(self, l, homogeneous=False):
         """Put a layer below this one
@@ -249,7 +250,7 @@ class Layer:
             As in :meth:`add`. Default: ``False``
         """
         check(lib.ll_layer_add(self._handle, _handle_of(l, "l"), self._handle,
-                               1 if homogeneous else 0))
+                               1 if homogeneous else 0, None))
 
     def expand(self, tau):
         """Turn a phase-function layer (:meth:`setIsotropic`,
@@ -259,7 +260,7 @@ class Layer:
         Parameter ``tau``:
             Optical thickness (>= 0)
         """
-        check(lib.ll_layer_expand(self._handle, real_argument(tau, "tau")))
+        check(lib.ll_layer_expand(self._handle, real_argument(tau, "tau"), None))
 
     def reverse(self):
         """Turn the layer upside down (swap its top and bottom)"""
@@ -299,7 +300,8 @@ class Layer:
         mo = np.ascontiguousarray(mo).reshape(-1)
         mi = np.ascontiguousarray(mi).reshape(-1)
         out = np.empty(mo.size)
-        check(lib.ll_layer_eval_many(self._handle, mo.size, double_ptr(mo), double_ptr(mi),
+        # (The C call takes the incident cosine first.)
+        check(lib.ll_layer_eval_many(self._handle, mo.size, double_ptr(mi), double_ptr(mo),
                                      None if ph is None else double_ptr(ph), double_ptr(out)))
         if scalar:
             return float(out[0])
@@ -421,10 +423,11 @@ def fresnelDielectric(cosThetaI, eta):
     reflection). ``cosThetaI < 0`` means light arriving from the other side,
     where the relative index is ``1/eta``.
     """
-    cos_t = ctypes.c_double()
-    f = lib.ll_fresnel_dielectric(real_argument(cosThetaI, "cosThetaI"),
-                                  real_argument(eta, "eta"), ctypes.byref(cos_t))
-    return f, cos_t.value
+    f, cos_t = ctypes.c_double(), ctypes.c_double()
+    check(lib.ll_fresnel_dielectric(real_argument(cosThetaI, "cosThetaI"),
+                                    real_argument(eta, "eta"), ctypes.byref(f),
+                                    ctypes.byref(cos_t)))
+    return f.value, cos_t.value
 
 
 def fresnelConductor(cosThetaI, eta):
@@ -434,7 +437,10 @@ def fresnelConductor(cosThetaI, eta):
     index ``eta`` (``n + k*1j``), for ``cosThetaI`` in [0, 1].
     """
     eta_re, eta_im = complex_argument(eta, "eta")
-    return lib.ll_fresnel_conductor(real_argument(cosThetaI, "cosThetaI"), eta_re, eta_im)
+    f = ctypes.c_double()
+    check(lib.ll_fresnel_conductor(real_argument(cosThetaI, "cosThetaI"), eta_re, eta_im,
+                                   ctypes.byref(f)))
+    return f.value
 
 
 def fresnelDielectricIntegral(eta):
@@ -443,7 +449,9 @@ def fresnelDielectricIntegral(eta):
     Fraction of uniformly diffuse light that a smooth dielectric boundary
     reflects: 2 * integral of F(mu) mu over [0, 1].
     """
-    return lib.ll_fresnel_dielectric_average(real_argument(eta, "eta"))
+    average = ctypes.c_double()
+    check(lib.ll_fresnel_dielectric_average(real_argument(eta, "eta"), ctypes.byref(average)))
+    return average.value
 
 
 def fresnelConductorIntegral(eta):
@@ -453,4 +461,6 @@ def fresnelConductorIntegral(eta):
     index ``eta`` reflects: 2 * integral of F(mu) mu over [0, 1].
     """
     eta_re, eta_im = complex_argument(eta, "eta")
-    return lib.ll_fresnel_conductor_average(eta_re, eta_im)
+    average = ctypes.c_double()
+    check(lib.ll_fresnel_conductor_average(eta_re, eta_im, ctypes.byref(average)))
+    return average.value

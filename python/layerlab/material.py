@@ -6,8 +6,8 @@ import ctypes
 import weakref
 
 from ._errors import CancelledError
-from ._native import (BsdfWriteOptions, BuildEstimate, BuildOptions, check, fspath, layer_p, lib, material_p,
-                      progress_fn)
+from ._native import (BsdfWriteOptions, BuildEstimate, BuildOptions, Monitor, check, fspath,
+                      layer_p, lib, material_p, monitor_fn)
 from ._util import count_argument, real_argument
 from .layer import Layer
 from .storage import BSDFStorage
@@ -18,7 +18,8 @@ __all__ = ["Material", "CancelFlag"]
 class CancelFlag:
     """A flag that stops a running build: pass it as ``cancel=`` to
     :meth:`Material.build` and call :meth:`set` from another thread (the
-    library releases the GIL while it builds). The build then raises
+    library releases the GIL while it builds, and its monitor reads the
+    flag at least every 20 ms). The build then raises
     :class:`layerlab.CancelledError` and leaves no output file."""
 
     def __init__(self):
@@ -35,8 +36,10 @@ class CancelFlag:
 
 
 class _Build:
-    """The ll_build_options of one build, with the Python callback kept
-    alive and any exception it raised kept for re-raising."""
+    """The ll_build_options and the ll_monitor of one build, with the
+    Python callback kept alive and any exception it raised kept for
+    re-raising. The monitor shows the progress (if asked for) and returns
+    the cancel flag, which stops the build."""
 
     def __init__(self, nodes, orders, channels, threads, error_goal, progress, cancel,
                  tolerance=0.0, mu_min=0.0):
@@ -53,23 +56,23 @@ class _Build:
         # kept, the cancel flag raised, and the exception re-raised after C
         # returns (so Ctrl-C inside a progress callback stops the build).
         self.flag = cancel if cancel is not None else CancelFlag()
-        self.opts.cancel = ctypes.pointer(self.flag._value)
-        self.callback = None
-        if progress is not None:
-            def trampoline(fraction, stage, _user):
-                if self.error is not None:
-                    return
+
+        def trampoline(_user, fraction, stage):
+            if progress is not None and self.error is None:
                 try:
                     progress(fraction, stage.decode("utf-8", "replace") if stage else "")
                 except BaseException as e:  # noqa: B902 - re-raised after the C call
                     self.error = e
                     self.flag.set()
-            self.callback = progress_fn(trampoline)
-            self.opts.progress = self.callback
+            return 1 if self.flag.is_set() else 0
+        self.callback = monitor_fn(trampoline)
+        self.monitor = Monitor()
+        self.monitor.progress = self.callback
 
     def run(self, call):
+        """call(opts, monitor) -> ll_status"""
         try:
-            check(call(ctypes.byref(self.opts)))
+            check(call(ctypes.byref(self.opts), ctypes.byref(self.monitor)))
         except CancelledError:
             if self.error is not None:
                 raise self.error from None
@@ -142,8 +145,8 @@ class Material:
         build = _Build(nodes, orders, channels, threads, error_goal, None, None,
                        tolerance, mu_min)
         n, m, c = ctypes.c_size_t(), ctypes.c_size_t(), ctypes.c_size_t()
-        build.run(lambda opts: lib.ll_material_resolution(self._handle, opts, ctypes.byref(n),
-                                                          ctypes.byref(m), ctypes.byref(c)))
+        build.run(lambda opts, monitor: lib.ll_material_resolution(
+            self._handle, opts, monitor, ctypes.byref(n), ctypes.byref(m), ctypes.byref(c)))
         return n.value, m.value, c.value
 
     def estimate(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
@@ -153,20 +156,26 @@ class Material:
         What a build with these keywords would take, estimated without
         building (as ``llbuild --dry-run``): ``nodes``, ``orders``,
         ``channels``, ``layers_built``, ``additions``, ``doublings``,
-        ``peak_bytes`` (an upper bound), ``seconds`` (wall time; within a
-        factor of about 2 on machines like the one it was calibrated on) and
-        ``resolution_error`` (the largest relative error the chosen
-        resolution was measured to against twice itself; ``inf`` when a word
-        could not be verified, -1 when the resolution is given).
+        ``peak_bytes`` (an upper bound), ``file_bytes``, ``resolution_error``
+        (the largest relative error the chosen resolution was measured to
+        against twice itself; ``inf`` when a word could not be verified, -1
+        when the resolution is given) and ``work``, the counts of work by
+        kind that a time model multiplies by its machine's rates (the
+        library gives no seconds; ``llbuild --dry-run`` has a model).
         """
         build = _Build(nodes, orders, channels, threads, error_goal, None, None,
                        tolerance, mu_min)
         est = BuildEstimate()
-        build.run(lambda opts: lib.ll_material_estimate(self._handle, opts, ctypes.byref(est)))
+        build.run(lambda opts, monitor: lib.ll_material_estimate(self._handle, opts,
+                                                                 ctypes.byref(est), monitor))
+        work = ("dielectric_pairs", "conductor_pairs", "pair_orders", "measured_lookups",
+                "measured_files", "phase_entries", "diffuse_entries", "add_entries",
+                "add_empty_entries", "stored_values")
         return {"nodes": est.n_nodes, "orders": est.n_orders, "channels": est.n_channels,
                 "layers_built": est.layers_built, "additions": est.additions,
                 "doublings": est.doublings, "peak_bytes": est.peak_bytes,
-                "seconds": est.seconds, "resolution_error": est.resolution_error}
+                "file_bytes": est.file_bytes, "resolution_error": est.resolution_error,
+                "work": {name: getattr(est, name) for name in work}}
 
     def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
               progress=None, cancel=None, tolerance=0.0, mu_min=0.0):
@@ -179,7 +188,8 @@ class Material:
         build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel,
                        tolerance, mu_min)
         target = fspath(path)
-        build.run(lambda opts: lib.ll_material_build(self._handle, opts, target))
+        build.run(lambda opts, monitor: lib.ll_material_build(self._handle, opts, monitor,
+                                                              target))
         return BSDFStorage(path)
 
     def build_layers(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
@@ -196,9 +206,8 @@ class Material:
         handles = (layer_p * 3)()
         count = ctypes.c_size_t()
         header = BsdfWriteOptions()
-        build.run(lambda opts: lib.ll_material_build_layers(self._handle, opts, handles,
-                                                            ctypes.byref(count),
-                                                            ctypes.byref(header)))
+        build.run(lambda opts, monitor: lib.ll_material_build_layers(
+            self._handle, opts, monitor, handles, ctypes.byref(count), ctypes.byref(header)))
         layers = []
         for k in range(3):
             if not handles[k]:
@@ -226,8 +235,8 @@ class Material:
         build = _Build(0, 0, 0, 0, error_goal, None, cancel)
         handles = (layer_p * max(len(layers), 1))(*[layer._handle for layer in layers])
         target = fspath(path)
-        build.run(lambda opts: lib.ll_material_write(self._handle, opts, handles, len(layers),
-                                                     target))
+        build.run(lambda opts, monitor: lib.ll_material_write(self._handle, opts, handles,
+                                                              len(layers), target, monitor))
         return BSDFStorage(path)
 
     def __repr__(self):

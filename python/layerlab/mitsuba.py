@@ -35,9 +35,8 @@ CUDA variants are refused: "batch" would move the directions to the CPU and
 back at every bounce, and "traced" is not tested there.
 
 Textured files (more than one basis function): one property per textured
-parameter, by the parameter's name (ll_bsdf_get_parameter_name when the
-library has it, else the metadata's top-level "parameters" array, else p0,
-p1, ...; a "." in a name may be written "_"), a float or any Mitsuba texture
+parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
+name may be written "_"), a float or any Mitsuba texture
 (so a bitmap drives the roughness). Its value at the shading point gives the
 basis weights: the tensor product of linear hat weights over the
 parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
@@ -53,7 +52,6 @@ import ctypes
 import math
 
 import numpy as np
-
 
 from . import _native
 from ._native import c_double_p, c_float_p, lib

@@ -15,11 +15,12 @@ from ._util import count_argument
 __all__ = ["gaussLegendre", "gaussLobatto", "compositeSimpson", "compositeSimpson38"]
 
 
-def _rule(fn, n):
+def _rule(fn, n, *monitor):
+    """monitor: (None,) for the Gauss rules, which take one last."""
     n = count_argument(n, "n")
     nodes = np.empty(n)
     weights = np.empty(n)
-    check(fn(n, nodes.ctypes.data_as(c_double_p), weights.ctypes.data_as(c_double_p)))
+    check(fn(n, nodes.ctypes.data_as(c_double_p), weights.ctypes.data_as(c_double_p), *monitor))
     return nodes, weights
 
 
@@ -44,7 +45,7 @@ def gaussLegendre(n):
         A tuple ``(nodes, weights)`` of two length-``n`` arrays, nodes
         ascending
     """
-    return _rule(lib.ll_quad_gauss_legendre, n)
+    return _rule(lib.ll_quad_gauss_legendre, n, None)
 
 
 def gaussLobatto(n):
@@ -66,7 +67,7 @@ def gaussLobatto(n):
         A tuple ``(nodes, weights)`` of two length-``n`` arrays, nodes
         ascending
     """
-    return _rule(lib.ll_quad_gauss_lobatto, n)
+    return _rule(lib.ll_quad_gauss_lobatto, n, None)
 
 
 def compositeSimpson(n):

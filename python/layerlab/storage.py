@@ -54,7 +54,7 @@ def _write(filename, layers, eta, alpha, metadata, errorGoal):
     opts.metadata = None if metadata is None else str(metadata).encode("utf-8")
     opts.error_goal = real_argument(errorGoal, "errorGoal")
     handles = (layer_p * len(layers))(*[layer._handle for layer in layers])
-    check(lib.ll_bsdf_write(fspath(filename), handles, len(layers), ctypes.byref(opts)))
+    check(lib.ll_bsdf_write(fspath(filename), handles, len(layers), ctypes.byref(opts), None))
 
 
 def _parameter_grid(nBases, nParameters, paramSampleCounts, paramSamplePositions):
@@ -320,7 +320,7 @@ class BSDFStorage:
         c_counts = (ctypes.c_size_t * max(1, len(counts)))(*counts)
         c_positions = (ctypes.c_double * max(1, len(positions)))(*positions)
         check(lib.ll_bsdf_write_textured(fspath(filename), handles, nChannels, len(counts),
-                                         c_counts, c_positions, ctypes.byref(opts)))
+                                         c_counts, c_positions, ctypes.byref(opts), None))
         return cls(filename)
 
     # ------------------------------------------------------------ header

@@ -137,14 +137,9 @@ def build_textured_conductor(path, alphas, reference_path=None, reference_alpha=
     opts.eta = header["eta"]
     opts.alpha[0], opts.alpha[1] = header["alpha"]
     opts.metadata = b'{"generator": "python/tests/mitsuba_scenes.py", "parameters": ["alpha"]}'
-    fn = lib._cdll.ll_bsdf_write_textured
-    fn.restype = ctypes.c_int
-    fn.argtypes = [ctypes.c_char_p, ctypes.POINTER(_native.layer_p), ctypes.c_size_t,
-                   ctypes.c_size_t, ctypes.POINTER(ctypes.c_size_t),
-                   ctypes.POINTER(ctypes.c_double), ctypes.POINTER(_native.BsdfWriteOptions)]
     array = (_native.layer_p * len(handles))(*handles)
     counts = (ctypes.c_size_t * 1)(len(alphas))
     positions = (ctypes.c_double * len(alphas))(*alphas)
-    _native.check(fn(os.fsencode(path), array, len(keep[0]), 1, counts, positions,
-                     ctypes.byref(opts)))
+    _native.check(lib.ll_bsdf_write_textured(os.fsencode(path), array, len(keep[0]), 1, counts,
+                                             positions, ctypes.byref(opts), None))
     return path

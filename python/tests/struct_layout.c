@@ -78,13 +78,10 @@ int main(void)
     FIELD(ll_build_options, n_orders);
     FIELD(ll_build_options, n_channels);
     FIELD(ll_build_options, threads);
-    FIELD(ll_build_options, error_goal);
-    FIELD(ll_build_options, progress);
-    FIELD(ll_build_options, progress_user);
-    FIELD(ll_build_options, cancel);
-    FIELD(ll_build_options, max_memory_bytes);
     FIELD(ll_build_options, tolerance);
     FIELD(ll_build_options, mu_min);
+    FIELD(ll_build_options, error_goal);
+    FIELD(ll_build_options, max_memory_bytes);
     FIELD(ll_build_options, channel_done);
     FIELD(ll_build_options, channel_done_user);
 
@@ -93,16 +90,39 @@ int main(void)
     FIELD(ll_build_estimate, n_nodes);
     FIELD(ll_build_estimate, n_orders);
     FIELD(ll_build_estimate, n_channels);
+    FIELD(ll_build_estimate, n_bases);
+    FIELD(ll_build_estimate, threads);
+    FIELD(ll_build_estimate, resolution_error);
+    FIELD(ll_build_estimate, peak_bytes);
+    FIELD(ll_build_estimate, file_bytes);
+    FIELD(ll_build_estimate, max_memory_bytes);
+    FIELD(ll_build_estimate, over_budget);
     FIELD(ll_build_estimate, layers_built);
     FIELD(ll_build_estimate, additions);
     FIELD(ll_build_estimate, doublings);
-    FIELD(ll_build_estimate, peak_bytes);
-    FIELD(ll_build_estimate, seconds);
-    FIELD(ll_build_estimate, cpu_seconds);
-    FIELD(ll_build_estimate, max_memory_bytes);
-    FIELD(ll_build_estimate, over_budget);
-    FIELD(ll_build_estimate, n_bases);
-    FIELD(ll_build_estimate, file_bytes);
-    FIELD(ll_build_estimate, resolution_error);
+    FIELD(ll_build_estimate, dielectric_pairs);
+    FIELD(ll_build_estimate, conductor_pairs);
+    FIELD(ll_build_estimate, pair_orders);
+    FIELD(ll_build_estimate, measured_lookups);
+    FIELD(ll_build_estimate, measured_files);
+    FIELD(ll_build_estimate, phase_entries);
+    FIELD(ll_build_estimate, diffuse_entries);
+    FIELD(ll_build_estimate, add_entries);
+    FIELD(ll_build_estimate, add_empty_entries);
+    FIELD(ll_build_estimate, stored_values);
+
+    STRUCT(ll_microfacet, LL_MICROFACET_INIT);
+    FIELD(ll_microfacet, struct_size);
+    FIELD(ll_microfacet, eta_re);
+    FIELD(ll_microfacet, eta_im);
+    FIELD(ll_microfacet, alpha);
+    FIELD(ll_microfacet, distribution);
+    FIELD(ll_microfacet, compensate);
+    FIELD(ll_microfacet, n_orders_internal);
+
+    STRUCT(ll_monitor, LL_MONITOR_INIT);
+    FIELD(ll_monitor, struct_size);
+    FIELD(ll_monitor, progress);
+    FIELD(ll_monitor, user);
     return 0;
 }

@@ -30,7 +30,10 @@ def test_parse_and_build_layers_in_memory():
     est = material.estimate(nodes=40, orders=20)
     assert (est["nodes"], est["orders"], est["channels"]) == (40, 20, 1)
     assert est["layers_built"] == 2 and est["additions"] == 1 and est["doublings"] == 0
-    assert est["peak_bytes"] > 0 and est["seconds"] > 0
+    assert est["peak_bytes"] > 0 and est["file_bytes"] > 0
+    # A coat over a diffuse base: one interface's pairs, one adding, the writing.
+    assert est["work"]["dielectric_pairs"] > 0 and est["work"]["conductor_pairs"] == 0
+    assert est["work"]["add_entries"] > 0 and est["work"]["stored_values"] > 0
     layers, header = material.build_layers(nodes=40, orders=20)
     assert len(layers) == 1 and layers[0].resolution == 40 and layers[0].fourierOrders == 20
     assert header["eta"] == 1.0  # an opaque stack

@@ -26,6 +26,8 @@ STRUCTS = {
     "ll_bsdf_info": _native.BsdfInfo,
     "ll_build_options": _native.BuildOptions,
     "ll_build_estimate": _native.BuildEstimate,
+    "ll_microfacet": _native.Microfacet,
+    "ll_monitor": _native.Monitor,
 }
 try:
     # The traced Mitsuba path's view of ll_bsdf_tables (it needs Mitsuba 3).

@@ -530,8 +530,8 @@ static ll_status add_order(size_t k, add_job *job)
     return s;
 }
 
-ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
-                          int homogeneous, const ll_monitor *monitor)
+ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
+                       int homogeneous, const ll_monitor *monitor)
 {
     static const char fn[] = "ll_layer_add";
     add_job job;
@@ -566,20 +566,14 @@ ll_status ll_layer_add_ex(const ll_layer *top, const ll_layer *bottom, ll_layer 
     return ll_layer_commit_orders(out, job.result, s);
 }
 
-ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
-                       int homogeneous)
-{
-    return ll_layer_add_ex(top, bottom, out, homogeneous, NULL);
-}
-
 ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top)
 {
-    return ll_layer_add(top, layer, layer, 0);
+    return ll_layer_add(top, layer, layer, 0, NULL);
 }
 
 ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
 {
-    return ll_layer_add(layer, bottom, layer, 0);
+    return ll_layer_add(layer, bottom, layer, 0, NULL);
 }
 
 /* --------------------------------------------------------------- doubling */
@@ -593,6 +587,7 @@ typedef struct expand_job {
     double tau;
     ll_order **result;
     ll_watch *watch;
+    const ll_split *split; /* the calling thread's (layer/split.h) */
     workspace_pool pool;
 } expand_job;
 
@@ -698,7 +693,7 @@ static ll_status expand_one_order(size_t k, void *ctx)
 
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "ll_layer_expand: cancelled");
-    if (!ll_layer_owns_order(l, k)) {
+    if (!ll_split_owns(job->split, k)) {
         /* Another rank's order of a distributed build: not computed, NULL. */
         ll_watch_advance(job->watch, job->doublings + 1);
         return LL_OK;
@@ -820,6 +815,7 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method me
         if (fabs(layer->nodes[i]) < min_mu)
             min_mu = fabs(layer->nodes[i]);
     job.layer = layer;
+    job.split = ll_split_current();
     ll_expand_schedule(tau, min_mu, &job.tau0, &job.doublings);
     job.tau = tau;
     /* The cost model depends on n and the doublings alone: the same pick
@@ -846,40 +842,11 @@ static ll_status expand_watched(ll_layer *layer, double tau, ll_expand_method me
     return ll_layer_commit_orders(layer, job.result, s);
 }
 
-ll_status ll_layer_expand_ex(ll_layer *layer, double tau, const ll_monitor *monitor)
+ll_status ll_layer_expand(ll_layer *layer, double tau, const ll_monitor *monitor)
 {
     ll_watch watch;
     ll_status s = ll_watch_begin(&watch, monitor, "ll_layer_expand");
     return s == LL_OK ? expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch) : s;
-}
-
-ll_status ll_layer_expand(ll_layer *layer, double tau)
-{
-    return ll_layer_expand_ex(layer, tau, NULL);
-}
-
-/* The internal monitor's progress, called through the watch. */
-static int report_to_expand_monitor(void *user, double fraction, const char *stage)
-{
-    ll_expand_monitor *monitor = user;
-    (void)stage;
-    monitor->progress(fraction, monitor->user);
-    return 0;
-}
-
-ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
-                                    const ll_expand_monitor *monitor)
-{
-    ll_watch watch;
-    ll_expand_monitor copy;
-    if (monitor) {
-        copy = *monitor;
-        ll_watch_begin_raw(&watch, copy.progress ? report_to_expand_monitor : NULL, &copy,
-                           copy.cancel);
-    } else {
-        ll_watch_begin_raw(&watch, NULL, NULL, NULL);
-    }
-    return expand_watched(layer, tau, LL_EXPAND_CHEAPEST, &watch);
 }
 
 ll_status ll_layer_expand_by(ll_layer *layer, double tau, ll_expand_method method)

@@ -11,21 +11,6 @@
 
 #include <lapacke.h>
 
-/* ---- doubling with progress and cancellation (for long builds) */
-typedef struct ll_expand_monitor {
-    const volatile int *cancel;                       /* nullable; nonzero stops */
-    void (*progress)(double fraction, void *user);    /* nullable; calling thread */
-    void *user;
-} ll_expand_monitor;
-
-/* ll_layer_expand with a monitor (kept for the material builder; a thin
- * adapter over ll_layer_expand_ex's watch): progress reports the fraction of
- * the doubling steps done, on the calling thread; a raised cancel flag is
- * seen by every thread between BLAS calls and stops with LL_ERROR_CANCELLED,
- * leaving the layer unchanged. */
-LL_INTERNAL ll_status ll_layer_expand_monitored(ll_layer *layer, double tau,
-                                                const ll_expand_monitor *monitor);
-
 /* The doubling schedule of ll_layer_expand for nodes whose smallest |mu| is
  * min_mu: the initial thickness tau0 and the count k with tau0 2^k = tau. */
 LL_INTERNAL void ll_expand_schedule(double tau, double min_mu, double *tau0, size_t *doublings);

@@ -6,7 +6,8 @@
  * thread count), an optional serial step, and the layer set from the
  * builders at its single commit point.
  *
- * In a distributed build (layer->share) the columns are what splits: rank
+ * In a distributed build (the calling thread's split, layer/split.h) the
+ * columns are what splits: rank
  * r computes the columns i mod N == r of every order, then one all-to-all
  * moves each order's columns to the order's owner (round robin), which
  * then holds that order whole, byte for byte what one process would have
@@ -42,19 +43,19 @@ static size_t items_of(size_t rank, size_t n_ranks, size_t n_items)
 
 /* The bytes this rank sends to rank d: its columns of d's orders, and to
  * the owner of order 0 its columns of the dense arrays. */
-static size_t bytes_for(const ll_share *sh, size_t d, ll_order_builder *const *builders,
+static size_t bytes_for(const ll_split *sh, size_t d, ll_order_builder *const *builders,
                         size_t m, size_t n_items, size_t first, size_t n, size_t n_dense)
 {
     size_t k, i, total = 0;
     for (k = d; k < m; k += sh->n_ranks)
         for (i = sh->rank; i < n_items; i += sh->n_ranks)
             total += ll_order_builder_column_bytes(builders[k], first + i);
-    if (d == ll_share_owner(sh, 0))
+    if (d == 0) /* the owner of order 0 */
         total += items_of(sh->rank, sh->n_ranks, n_items) * n_dense * n * sizeof(double);
     return total;
 }
 
-static unsigned char *pack_for(const ll_share *sh, size_t d, ll_order_builder *const *builders,
+static unsigned char *pack_for(const ll_split *sh, size_t d, ll_order_builder *const *builders,
                                size_t m, size_t n_items, size_t first, size_t n,
                                double *const *dense, size_t n_dense, unsigned char *p)
 {
@@ -62,7 +63,7 @@ static unsigned char *pack_for(const ll_share *sh, size_t d, ll_order_builder *c
     for (k = d; k < m; k += sh->n_ranks)
         for (i = sh->rank; i < n_items; i += sh->n_ranks)
             p = ll_order_builder_pack_column(builders[k], first + i, p);
-    if (d == ll_share_owner(sh, 0))
+    if (d == 0) /* the owner of order 0 */
         for (a = 0; a < n_dense; ++a)
             for (i = sh->rank; i < n_items; i += sh->n_ranks) {
                 memcpy(p, dense[a] + i * n, n * sizeof(double));
@@ -71,7 +72,7 @@ static unsigned char *pack_for(const ll_share *sh, size_t d, ll_order_builder *c
     return p;
 }
 
-static ll_status unpack_from(const ll_share *sh, size_t src, ll_order_builder *const *builders,
+static ll_status unpack_from(const ll_split *sh, size_t src, ll_order_builder *const *builders,
                              size_t m, size_t n_items, size_t first, size_t n,
                              double *const *dense, size_t n_dense, const unsigned char *p,
                              const unsigned char *end)
@@ -81,7 +82,7 @@ static ll_status unpack_from(const ll_share *sh, size_t src, ll_order_builder *c
     for (k = sh->rank; k < m && s == LL_OK; k += sh->n_ranks)
         for (i = src; i < n_items && s == LL_OK; i += sh->n_ranks)
             s = ll_order_builder_unpack_column(builders[k], first + i, &p, end);
-    if (s == LL_OK && sh->rank == ll_share_owner(sh, 0))
+    if (s == LL_OK && sh->rank == 0) /* the owner of order 0 */
         for (a = 0; a < n_dense && s == LL_OK; ++a)
             for (i = src; i < n_items && s == LL_OK; i += sh->n_ranks) {
                 if ((size_t)(end - p) < n * sizeof(double))
@@ -98,7 +99,7 @@ static ll_status unpack_from(const ll_share *sh, size_t src, ll_order_builder *c
  * outcome on this rank, agreed first): after it, builders[k]
  * holds every column of each order k this rank owns (the others are
  * destroyed: NULL) and the owner of order 0 the dense arrays whole. */
-static ll_status exchange_columns(ll_share *sh, ll_status s, ll_order_builder **builders,
+static ll_status exchange_columns(const ll_split *sh, ll_status s, ll_order_builder **builders,
                                   size_t m, size_t n_items, size_t first, size_t n,
                                   double *const *dense, size_t n_dense)
 {
@@ -125,13 +126,13 @@ static ll_status exchange_columns(ll_share *sh, ll_status s, ll_order_builder **
             p = pack_for(sh, d, builders, m, n_items, first, n, dense, n_dense, p);
     /* The orders this rank does not own are in the buffer now. */
     for (k = 0; k < m && s == LL_OK; ++k)
-        if (ll_share_owner(sh, k) != sh->rank) {
+        if (!ll_split_owns(sh, k)) {
             ll_order_builder_destroy(builders[k]);
             builders[k] = NULL;
         }
-    s = ll_share_agree(sh, s);
+    s = sh->agree(sh->ctx, s);
     if (s == LL_OK)
-        s = ll_share_exchange(sh, send, bytes, &recv, bytes + N);
+        s = sh->exchange(sh->ctx, send, bytes, &recv, bytes + N);
     ll_free(send);
     p = recv;
     for (d = 0; d < N && s == LL_OK; ++d) {
@@ -145,14 +146,14 @@ static ll_status exchange_columns(ll_share *sh, ll_status s, ll_order_builder **
     return s;
 }
 
-ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns, size_t first_column,
-                                       ll_status (*column)(size_t col, void *ctx),
-                                       ll_status (*finish)(void *ctx), void *ctx,
-                                       ll_order_builder ***builders_slot, double *const *dense,
-                                       size_t n_dense, ll_watch *watch, const char *fn)
+ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns, size_t first_column,
+                                    ll_status (*column)(size_t col, void *ctx),
+                                    ll_status (*finish)(void *ctx), void *ctx,
+                                    ll_order_builder ***builders_slot, double *const *dense,
+                                    size_t n_dense, ll_watch *watch, const char *fn)
 {
     size_t k, m = layer->m;
-    ll_share *sh = layer->share;
+    const ll_split *sh = ll_split_current();
     ll_order_builder **builders = ll_calloc_array(m, sizeof *builders);
     ll_status s = LL_OK;
     if (!builders)
@@ -178,9 +179,9 @@ ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns, size_t
             s = exchange_columns(sh, s, builders, m, n_columns, first_column, layer->n, dense,
                                  n_dense);
         else
-            s = ll_share_agree(sh, s);
+            s = sh->agree(sh->ctx, s);
     }
-    if (s == LL_OK && finish && ll_layer_owns_order(layer, 0))
+    if (s == LL_OK && finish && ll_split_owns(sh, 0))
         s = finish(ctx);
     /* The last report comes before the layer changes: a cancel there still
      * leaves it as it was. */
@@ -194,14 +195,4 @@ ll_status ll_layer_build_by_columns_ex(ll_layer *layer, size_t n_columns, size_t
     }
     ll_free(builders);
     return s;
-}
-
-ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
-                                    ll_status (*column)(size_t col, void *ctx),
-                                    ll_status (*finish)(void *ctx), void *ctx,
-                                    ll_order_builder ***builders_slot, ll_watch *watch,
-                                    const char *fn)
-{
-    return ll_layer_build_by_columns_ex(layer, n_columns, 0, column, finish, ctx, builders_slot,
-                                        NULL, 0, watch, fn);
 }

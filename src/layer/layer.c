@@ -148,7 +148,6 @@ ll_status ll_layer_clone(const ll_layer *src, ll_layer **out)
     memcpy(l->weights, src->weights, src->n * sizeof(double));
     for (k = 0; k < src->m; ++k)
         l->orders[k] = ll_order_retain(src->orders[k]);
-    l->share = src->share;
     *out = l;
     return LL_OK;
 oom:
@@ -189,11 +188,12 @@ size_t ll_layer_stored_count(const ll_layer *layer)
 
 void ll_layer_replace_orders(ll_layer *layer, ll_order **new_orders)
 {
+    const ll_split *split = ll_split_current();
     size_t k;
     for (k = 0; k < layer->m; ++k) {
         ll_order_release(layer->orders[k]);
         layer->orders[k] = new_orders[k];
-        if (!ll_layer_owns_order(layer, k)) {
+        if (!ll_split_owns(split, k)) {
             /* A distributed build keeps only this rank's orders (a clear
              * layer's identity, a diffuse order 0 of another rank). */
             ll_order_release(layer->orders[k]);
@@ -378,9 +378,10 @@ static double eval_point(const ll_layer *l, double mu_o, double mu_i, double phi
     return result > 0.0 ? result : 0.0;
 }
 
-double ll_layer_eval(const ll_layer *layer, double mu_o, double mu_i, double phi_d)
+/* f at one point, arguments clamped; 0 for a NaN argument. */
+static double eval_clamped(const ll_layer *layer, double mu_i, double mu_o, double phi_d)
 {
-    if (!layer || mu_o != mu_o || mu_i != mu_i || phi_d != phi_d)
+    if (mu_o != mu_o || mu_i != mu_i || phi_d != phi_d)
         return 0.0;
     if (mu_o > 1.0) mu_o = 1.0;
     if (mu_o < -1.0) mu_o = -1.0;
@@ -389,15 +390,32 @@ double ll_layer_eval(const ll_layer *layer, double mu_o, double mu_i, double phi
     return eval_point(layer, mu_o, mu_i, phi_d);
 }
 
-ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_o,
-                             const double *mu_i, const double *phi_d, double *out)
+ll_status ll_layer_eval(const ll_layer *layer, double mu_i, double mu_o, double phi_d,
+                        double *f)
+{
+    static const char fn[] = "ll_layer_eval";
+    if (!f)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: f is NULL", fn);
+    *f = 0.0;
+    if (!layer)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layer is NULL", fn);
+    if (mu_o != mu_o || mu_i != mu_i || phi_d != phi_d)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: an argument is NaN (mu_i %g, mu_o %g, phi_d %g)", fn, mu_i, mu_o,
+                       phi_d);
+    *f = eval_clamped(layer, mu_i, mu_o, phi_d);
+    return LL_OK;
+}
+
+ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_i,
+                             const double *mu_o, const double *phi_d, double *out)
 {
     long long k, n = (long long)count;
     if (!layer || (count && (!mu_o || !mu_i || !out)))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_layer_eval_many: a required pointer is NULL");
 #pragma omp parallel for schedule(static) num_threads((int)ll_get_thread_count()) if (count > 4096)
     for (k = 0; k < n; ++k)
-        out[k] = ll_layer_eval(layer, mu_o[k], mu_i[k], phi_d ? phi_d[k] : 0.0);
+        out[k] = eval_clamped(layer, mu_i[k], mu_o[k], phi_d ? phi_d[k] : 0.0);
     return LL_OK;
 }
 

@@ -1,5 +1,5 @@
 /*
- * Compact storage of one Fourier order (see layer_internal.h): per column
+ * Compact storage of one Fourier order (see order.h): per column
  * and half, one run of stored rows.
  */
 #include "layer/layer.h"

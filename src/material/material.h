@@ -128,15 +128,13 @@ LL_INTERNAL const char *ll_word_name(const ll_word *w);
  * (max_memory_bytes: half of the physical memory when 0). */
 LL_INTERNAL ll_status ll_build_options_read(const ll_build_options *in, ll_build_options *out,
                                             const char *fn);
-/* Resolution and channels for a build (options > settings > heuristics),
- * checked against the smallest meaningful resolution. */
+/* Resolution and channels for a build (options > settings > searches),
+ * checked against the smallest meaningful resolution. With a monitor
+ * (nullable; ll_common.h), as a build's stage: the searches of the
+ * resolution (up to 5-18 s for a measured table) poll it, a cancel returns
+ * LL_ERROR_CANCELLED with nothing allocated, and the progress goes through
+ * the words (stage "resolution"). */
 LL_INTERNAL ll_status ll_material_plan(const ll_material *m, const ll_build_options *o,
-                                       size_t *n_nodes, size_t *n_orders, size_t *n_channels);
-/* The same with a monitor (nullable; ll_common.h), as a build's stage: the
- * searches of the resolution (up to 5-18 s for a measured table) poll it,
- * a cancel returns LL_ERROR_CANCELLED with nothing allocated, and the
- * progress goes through the words (stage "resolution"). */
-LL_INTERNAL ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
                                           const ll_monitor *monitor, size_t *n_nodes,
                                           size_t *n_orders, size_t *n_channels);
 /* The words' answers so far, so that a word probed once (in one channel,
@@ -148,7 +146,7 @@ typedef struct ll_resolution_memo {
     double *error;
     size_t count, capacity;
     /* Nullable: polled by the searches, one stage ("resolution") per
-     * word and channel (see ll_material_plan_ex). */
+     * word and channel (see ll_material_plan). */
     struct ll_watch *watch;
 } ll_resolution_memo;
 #define LL_RESOLUTION_MEMO_INIT { NULL, NULL, NULL, 0, 0, NULL }
@@ -166,10 +164,27 @@ LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 #define LL_MATERIAL_MAX_RESOLUTION 100000
 
 /* ---- material_estimate.c: the cost model, from counts alone */
+/* Work by kind, the counts of ll_build_estimate: what a time model
+ * multiplies by its machine's rates (llbuild --dry-run has one). */
+typedef struct ll_work {
+    double dielectric_pairs;  /* node pairs of dielectric interfaces, x alpha / 0.1 */
+    double conductor_pairs;   /* node pairs of conductors                          */
+    double pair_orders;       /* the interfaces' pairs x orders                    */
+    double measured_lookups, measured_files;
+    double phase_entries;     /* n^2 per order holding a phase function            */
+    double diffuse_entries;   /* n^2 per diffuse word                              */
+    double add_entries;       /* n^2 per order holding values, per adding or
+                                 doubling step                                     */
+    double add_empty_entries; /* n^2 per order empty in an operand, likewise       */
+} ll_work;
+/* acc += times * w, field by field. */
+LL_INTERNAL void ll_work_add(ll_work *acc, const ll_work *w, double times);
+
 typedef struct ll_cost_plan {
     size_t n, m, channels, threads;
     size_t layers_built, additions, doublings;
-    double peak_bytes, seconds, cpu_seconds;
+    double peak_bytes;
+    ll_work work;             /* every step, after sharing                        */
     double held_peak_bytes;   /* a build that keeps every channel's stack to the
                                  end (ll_material_build_layers), peak_bytes
                                  being ll_material_build's streamed one     */
@@ -180,16 +195,19 @@ typedef struct ll_cost_plan {
 LL_INTERNAL void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                                   size_t n, size_t m, size_t channels, size_t threads,
                                   ll_cost_plan *out);
-/* Wall seconds of one word's layer, of one adding step and of writing. */
+/* The progress weights of a build (material_build.c): the relative cost
+ * of one word's layer, of one adding step and of writing, in the units of
+ * the rates measured on the development machine (only their ratios matter
+ * here; the time of a build is llbuild's model, from the counts). */
 LL_INTERNAL double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_add(size_t n, size_t m, size_t threads);
 LL_INTERNAL double ll_cost_write(size_t n, size_t m, size_t n_channels);
-/* One word's CPU and wall seconds, doublings and the bytes its layer keeps;
- * and a process's fixed CPU, wall seconds and resident bytes. */
+/* One word's work (its doublings included), doublings and the bytes its
+ * layer keeps. */
 LL_INTERNAL void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m,
-                                     size_t threads, double *cpu, double *wall,
-                                     size_t *doublings, double *bytes);
-LL_INTERNAL void ll_cost_process(double *cpu, double *wall, double *bytes);
+                                     ll_work *work, size_t *doublings, double *bytes);
+/* The resident bytes of a process before any layer. */
+LL_INTERNAL double ll_cost_process_bytes(void);
 /* material_sweep_estimate.c: the cost of every basis of a swept material
  * built by a builder (its cache of word layers simulated), and a file's
  * size from the values its layers hold (stored_values per basis). */
@@ -219,9 +237,10 @@ LL_INTERNAL void ll_basis_indices(const ll_material *m, size_t basis, size_t *in
 LL_INTERNAL void ll_material_basis_view(const ll_material *m, size_t basis, ll_word *words,
                                         ll_material *out);
 /* ll_material_plan over every basis: the largest resolution any asks for
- * (all bases of a file share nodes and orders). */
+ * (all bases of a file share nodes and orders). watch (nullable): polled
+ * by the searches. */
 LL_INTERNAL ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
-                                             size_t *n_nodes, size_t *n_orders,
+                                             struct ll_watch *watch, size_t *n_nodes, size_t *n_orders,
                                              size_t *n_channels, double *error);
 
 /* ---- material_sweep_cache.c: the builder's cache of word layers: LRU

@@ -12,7 +12,7 @@
 #include "layer/layer.h"
 #include "storage/bsdf_write_channels.h"
 #include "layerlab/ll_quad.h"
-#include "layerlab/ll_distribution.h"
+#include "distribution/share.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -46,11 +46,11 @@ typedef struct build {
 
 static int cancel_raised(const build *b)
 {
-    return b->stopped || (b->o.cancel && *b->o.cancel);
+    return b->stopped;
 }
 
-/* The build's progress to opts->progress and the caller's monitor (whose
- * non-zero return stops the build); fractions never go back. */
+/* The build's progress to the caller's monitor (whose non-zero return
+ * stops the build); fractions never go back. */
 static void report(build *b, const char *stage)
 {
     double f = b->total > 0.0 ? b->done / b->total : 0.0;
@@ -58,8 +58,6 @@ static void report(build *b, const char *stage)
     if (f < b->shown)
         f = b->shown;
     b->shown = f;
-    if (b->o.progress)
-        b->o.progress(f, stage, b->o.progress_user);
     if (b->monitor_fn && b->monitor_fn(b->monitor_user, f, stage) != 0)
         b->stopped = 1;
 }
@@ -72,9 +70,9 @@ static ll_status check_cancel(const build *b)
 }
 
 /* The monitor of every layer call: its fraction is the share call_cost of
- * the build from call_start on; it stops the call when the build's cancel
- * flag (polled here on the calling thread, and so seen by the call's
- * workers at their next poll) or the caller's monitor says so. */
+ * the build from call_start on; it stops the call when the caller's
+ * monitor says so (asked here on the calling thread, and so seen by the
+ * call's workers at their next poll). */
 static int on_call_progress(void *user, double fraction, const char *stage)
 {
     build *b = user;
@@ -128,12 +126,12 @@ static const ll_monitor *word_monitor(void *user, double share)
     return next_call(b, share > 0.0 ? b->word_stage : NULL, share * b->word_cost);
 }
 
-/* ll_layer_expand_ex for a medium (a word builder's ctx->expand): the
+/* ll_layer_expand for a medium (a word builder's ctx->expand): the
  * doublings are nearly all of a medium's modelled cost. */
 static ll_status expand_medium(void *user, ll_layer *l, double tau)
 {
     build *b = user;
-    return ll_layer_expand_ex(l, tau, next_call(b, "medium", b->word_cost));
+    return ll_layer_expand(l, tau, next_call(b, "medium", b->word_cost));
 }
 
 static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
@@ -148,7 +146,6 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     s = ll_layer_create(b->nodes, b->weights, b->n, b->orders, &l);
     if (s != LL_OK)
         return s;
-    l->share = b->share; /* the word builds only this rank's orders */
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
@@ -187,9 +184,9 @@ static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_lay
 /*
  * A channel's stack is final once the top word is on it: with a sink, it
  * goes to the file at once (for every channel whose stack it is) and is
- * freed, so that the next channel's adding runs without it (issue 18: the
- * dust on gold held three finished stacks of about 0.45 GB each beside the
- * third channel's adding). The order of the calls changes no byte of the
+ * freed, so that the next channel's adding runs without it (kept, the dust
+ * on gold's three finished stacks of about 0.45 GB each were alive beside
+ * the third channel's adding). The order of the calls changes no byte of the
  * file (bsdf_write_channels.c).
  */
 static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_layer *acc[3])
@@ -266,7 +263,7 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
             report(b, "adding");
             start = b->done;
             /* word[c] on top of acc[c] (ll_layer_add_to_top, with a monitor) */
-            s = ll_layer_add_ex(word[c], acc[c], acc[c], 0, next_call(b, "adding", cost));
+            s = ll_layer_add(word[c], acc[c], acc[c], 0, next_call(b, "adding", cost));
             if (b->cache && s == LL_OK)
                 ll_word_cache_count_addition(b->cache);
             if (s != LL_OK)
@@ -351,8 +348,8 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     ll_status s = build_start(b, m, opts, monitor, fn);
     b->share = share;
     if (s == LL_OK)
-        s = ll_material_plan_ex(m, &b->o, next_call(b, "resolution", 0.0), &b->n, &b->orders,
-                                &b->nch);
+        s = ll_material_plan(m, &b->o, next_call(b, "resolution", 0.0), &b->n, &b->orders,
+                             &b->nch);
     if (s != LL_OK)
         return s;
     /* The parameters (as many as the words), then the budget: nothing
@@ -382,7 +379,7 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     }
     /* Gauss-Lobatto nodes, as the original recipes use (O(n^2): seconds at
      * n = 30000, so polled like every other stage). */
-    s = ll_quad_gauss_lobatto_ex(b->n, b->nodes, b->weights, next_call(b, "quadrature", 0.0));
+    s = ll_quad_gauss_lobatto(b->n, b->nodes, b->weights, next_call(b, "quadrature", 0.0));
     if (s != LL_OK)
         build_free(b);
     return s;
@@ -438,16 +435,8 @@ static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
 }
 
 ll_status ll_material_build_layers(const ll_material *material, const ll_build_options *opts,
-                                   ll_layer *layers[3], size_t *n_channels,
-                                   ll_bsdf_write_options *header)
-{
-    return ll_material_build_layers_ex(material, opts, NULL, layers, n_channels, header);
-}
-
-ll_status ll_material_build_layers_ex(const ll_material *material,
-                                      const ll_build_options *opts, const ll_monitor *monitor,
-                                      ll_layer *layers[3], size_t *n_channels,
-                                      ll_bsdf_write_options *header)
+                                   const ll_monitor *monitor, ll_layer *layers[3],
+                                   size_t *n_channels, ll_bsdf_write_options *header)
 {
     if (material && material->n_axes > 0) {
         if (layers)
@@ -511,24 +500,16 @@ ll_status ll_material_build_layers_cached(const ll_material *material,
     return s;
 }
 
-/* Write through the writer's own atomic write (a hidden temporary beside
- * out_path, renamed over it). Its monitor answers the build's cancel flag
- * and the caller's monitor, and its last report comes before the rename,
- * so a cancel that arrives while the writer runs still leaves no file. */
-static ll_status write_layers(const ll_material *m, const ll_build_options *o,
-                              ll_layer *const *layers, size_t n_channels, const char *out_path,
-                              const ll_monitor *monitor)
+/* Written through the writer's own atomic write (a hidden temporary beside
+ * out_path, renamed over it), the caller's monitor its monitor: its last
+ * report comes before the rename, so a cancel that arrives while the writer
+ * runs still leaves no file. */
+ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
+                            ll_layer *const *layers, size_t n_channels, const char *out_path,
+                            const ll_monitor *monitor)
 {
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
-    fill_header(m, o, n_channels, &header);
-    return ll_bsdf_write_ex(out_path, (const ll_layer *const *)layers, n_channels, &header,
-                            monitor);
-}
-
-ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
-                            ll_layer *const *layers, size_t n_channels, const char *out_path)
-{
-    build b;
+    ll_build_options o;
     size_t c;
     ll_status s;
     if (!material || !layers || !out_path || !*out_path)
@@ -546,22 +527,16 @@ ll_status ll_material_write(const ll_material *material, const ll_build_options 
         if (!layers[c])
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_write: layers[%zu] is NULL",
                            c);
-    s = build_start(&b, material, opts, NULL, "ll_material_write");
+    s = ll_build_options_read(opts, &o, "ll_material_write");
     if (s != LL_OK)
         return s;
-    b.o.progress = NULL; /* only error_goal and cancel are read */
-    return write_layers(material, &b.o, layers, n_channels, out_path,
-                        next_call(&b, "writing", 0.0));
+    fill_header(material, &o, n_channels, &header);
+    return ll_bsdf_write(out_path, (const ll_layer *const *)layers, n_channels, &header,
+                         monitor);
 }
 
 ll_status ll_material_build(const ll_material *material, const ll_build_options *opts,
-                            const char *out_path)
-{
-    return ll_material_build_ex(material, opts, NULL, out_path);
-}
-
-ll_status ll_material_build_ex(const ll_material *material, const ll_build_options *opts,
-                               const ll_monitor *monitor, const char *out_path)
+                            const ll_monitor *monitor, const char *out_path)
 {
     build b;
     ll_layer *layers[3] = { NULL, NULL, NULL };
@@ -596,8 +571,6 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
         b.sink = NULL;
     }
     ll_channel_writer_abort(b.sink);
-    if (s == LL_OK && b.o.progress)
-        b.o.progress(1.0, "done", b.o.progress_user);
     for (c = 0; c < 3; ++c)
         ll_layer_destroy(layers[c]);
     build_free(&b);
@@ -606,7 +579,8 @@ ll_status ll_material_build_ex(const ll_material *material, const ll_build_optio
 
 /* ------------------------------------------------- distributed builds
  * (layerlab/ll_distribution.h): the same build on every rank, each word
- * layer keeping only the rank's orders (layer/distribution.c), and the
+ * layer keeping only the rank's orders (the split of layer/split.h, the
+ * exchanges of distribution/share.c), and the
  * finished stack gathered on rank 0. Every path through here makes the
  * same sequence of agreements and exchanges on every rank. */
 
@@ -647,8 +621,13 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
     if (s == LL_OK)
         s = build_init(&b, material, opts, monitor, fn, share, 0);
     if (s == LL_OK) {
+        /* Every layer call of the build computes this rank's orders only
+         * (layer/split.h), its interfaces exchanging their columns. */
+        ll_split split = ll_share_split(share);
+        const ll_split *previous = ll_split_enter(&split);
         initialised = 1;
         s = run_build(&b, layers, 0.0);
+        ll_split_leave(previous);
     }
     if (!share->settled)
         s = ll_share_agree(share, s);
@@ -720,9 +699,11 @@ ll_status ll_material_build_distributed(const ll_material *material,
         s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out_path is NULL or empty", fn);
     s = build_shared(material, opts, monitor, &share, s, layers, &n_channels, NULL, fn);
     if (s == LL_OK) {
-        /* Rank 0 writes (atomically) while the others wait for the outcome. */
+        /* Rank 0 writes (atomically) while the others wait for the outcome.
+         * (The monitor has seen the build's 1 already: the writing is not
+         * watched.) */
         if (share.rank == 0)
-            s = ll_material_write(material, opts, layers, n_channels, out_path);
+            s = ll_material_write(material, opts, layers, n_channels, out_path, NULL);
         for (c = 0; c < 3; ++c)
             ll_layer_destroy(layers[c]);
         s = ll_share_agree(&share, s);

@@ -6,10 +6,13 @@
  *
  * The model follows the build of material_build.c step by step (the same
  * sharing between channels): each word's layer (its descriptor's cost),
- * each adding step, each doubling of a medium, the writing. The rates
- * below were measured stage by stage on the development machine (x86-64,
- * 2 cores, OpenBLAS; docs/material-language.md, "Estimates", has the
- * measurements and the model's error on every example).
+ * each adding step, each doubling of a medium, the writing. It gives the
+ * peak memory (an upper bound, which the budget is checked against) and
+ * the work by kind (ll_work): counts, not seconds. The rates below were
+ * measured stage by stage on the development machine (x86-64, 2 cores,
+ * OpenBLAS; docs/material-language.md, "Estimates") and serve only as the
+ * relative weights of the build's progress; the time a build takes is
+ * llbuild's model (tools/llbuild/time_model.c), from the counts.
  */
 #include "material/word_table.h"
 #include "grammar/grammar.h"
@@ -44,11 +47,7 @@
 
 /* Writing: seconds per stored value (spline fits, float conversion). */
 #define COST_WRITE 3e-8
-/* A process: start, parse, the OpenBLAS set-up (CPU seconds; the wall
- * time adds loading and thread start-up), and the resident memory of the
- * library before any layer. */
-#define PROCESS_SECONDS 0.01
-#define PROCESS_WALL_SECONDS 0.03
+/* A process: the resident memory of the library before any layer. */
 #define PROCESS_BYTES (7.5 * 1048576.0)
 /* Per stored order: its segment table. */
 #define ORDER_BYTES(n) (16.0 * (2.0 * (double)(n) + 1.0) + 64.0)
@@ -78,6 +77,9 @@ void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, siz
                                    : COST_PAIR_DIELECTRIC * pow((double)n / 200.0, 0.33) *
                                          (a / 0.1);
     (void)eta_re;
+    out->work.dielectric_pairs = eta_im > 0.0 ? 0.0 : 0.5 * pairs * (a / 0.1);
+    out->work.conductor_pairs = eta_im > 0.0 ? 0.5 * pairs : 0.0;
+    out->work.pair_orders = 0.5 * pairs * (double)m;
     out->parallel_seconds =
         0.5 * pairs * (per_pair + COST_PAIR_ORDER * (200.0 / (double)n) * (double)m);
     out->serial_seconds = out->parallel_seconds;
@@ -88,6 +90,29 @@ void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n, siz
     if (out->dense_orders > (double)m)
         out->dense_orders = (double)m;
     out->thread_bytes = 12.0 * 8.0 * (double)n * (double)m;
+}
+
+void ll_work_add(ll_work *acc, const ll_work *w, double times)
+{
+    acc->dielectric_pairs += times * w->dielectric_pairs;
+    acc->conductor_pairs += times * w->conductor_pairs;
+    acc->pair_orders += times * w->pair_orders;
+    acc->measured_lookups += times * w->measured_lookups;
+    acc->measured_files += times * w->measured_files;
+    acc->phase_entries += times * w->phase_entries;
+    acc->diffuse_entries += times * w->diffuse_entries;
+    acc->add_entries += times * w->add_entries;
+    acc->add_empty_entries += times * w->add_empty_entries;
+}
+
+/* The work of `steps` adding steps between layers holding a_orders and
+ * b_orders of the m orders. */
+static void add_work(ll_work *w, size_t n, double a_orders, double b_orders, size_t m,
+                     double steps)
+{
+    double both = fmin(a_orders, b_orders), pairs = (double)n * (double)n;
+    w->add_entries += steps * pairs * both;
+    w->add_empty_entries += steps * pairs * ((double)m - both);
 }
 
 /* CPU seconds (one thread) of one adding step between layers holding
@@ -131,21 +156,27 @@ static void word_seconds(const ll_word_cost *c, size_t n, size_t m, size_t threa
             parallel(d, (size_t)c->orders_nonzero, threads);
 }
 
-void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, size_t threads,
-                         double *cpu, double *wall, size_t *doublings, double *bytes)
+/* One word's work with its thickness (as word_seconds). */
+static void word_work(const ll_word_cost *c, size_t n, size_t m, ll_work *out)
+{
+    *out = c->work;
+    add_work(out, n, c->orders_nonzero, c->orders_nonzero, m,
+             ll_expand_order_steps(n / 2, c->doublings));
+}
+
+double ll_cost_process_bytes(void)
+{
+    return PROCESS_BYTES;
+}
+
+void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, ll_work *work,
+                         size_t *doublings, double *bytes)
 {
     ll_word_cost c;
     word_cost(p, n, m, &c);
-    word_seconds(&c, n, m, threads, cpu, wall);
+    word_work(&c, n, m, work);
     *doublings = c.doublings;
     *bytes = layer_bytes(n, m, c.dense_orders);
-}
-
-void ll_cost_process(double *cpu, double *wall, double *bytes)
-{
-    *cpu = PROCESS_SECONDS;
-    *wall = PROCESS_WALL_SECONDS;
-    *bytes = PROCESS_BYTES;
 }
 
 double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
@@ -190,8 +221,8 @@ void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
 
 
 /*
- * The peak of a streamed build (ll_material_build, material_build.c since
- * issue 18), replayed step by step in the order the build makes and frees
+ * The peak of a streamed build (ll_material_build, material_build.c),
+ * replayed step by step in the order the build makes and frees
  * things, the bytes alive after each step and the transient ones during it:
  *
  * - The bottom word is not made with its level: each channel's is built
@@ -404,12 +435,11 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                 continue;
             word_cost(p, n, m, &wc);
             if (ll_same_word_as(params, w, c) == c) {
-                double cpu, wall;
-                word_seconds(&wc, n, m, threads, &cpu, &wall);
+                ll_work ww;
+                word_work(&wc, n, m, &ww);
                 ++out->layers_built;
                 out->doublings += wc.doublings;
-                out->cpu_seconds += cpu;
-                out->seconds += wall;
+                ll_work_add(&out->work, &ww, 1.0);
                 words += layer_bytes(n, m, wc.dense_orders);
                 if (wc.thread_bytes > scratch)
                     scratch = wc.thread_bytes;
@@ -420,10 +450,9 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                 nz[c] = wc.orders_nonzero;
                 dense[c] = wc.dense_orders;
             } else {
-                double a = acc_nz[below[c]], cpu = add_cpu(n, a, wc.orders_nonzero, m);
+                double a = acc_nz[below[c]];
                 ++out->additions;
-                out->cpu_seconds += cpu;
-                out->seconds += parallel(cpu, m, threads);
+                add_work(&out->work, n, a, wc.orders_nonzero, m, 1.0);
                 /* The stack keeps about the mean of what the two hold. */
                 nz[c] = fmax(a, wc.orders_nonzero);
                 dense[c] = fmin(0.5 * (acc_dense[below[c]] + wc.dense_orders), nz[c]);
@@ -454,8 +483,6 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
     if (16.0 * stored > peak)
         peak = 16.0 * stored;
     out->stored_values = stored;
-    out->cpu_seconds += stored * COST_WRITE + PROCESS_SECONDS;
-    out->seconds += stored * COST_WRITE + PROCESS_WALL_SECONDS;
     out->held_peak_bytes = peak + PROCESS_BYTES;
     out->peak_bytes = streamed_peak(mat, params, n, m, nch, t) + PROCESS_BYTES;
 }
@@ -492,9 +519,11 @@ static size_t build_threads(const ll_build_options *o)
 }
 
 ll_status ll_material_estimate(const ll_material *material, const ll_build_options *opts,
-                               ll_build_estimate *estimate)
+                               ll_build_estimate *estimate, const ll_monitor *monitor)
 {
+    static const char fn[] = "ll_material_estimate";
     ll_build_options o;
+    ll_watch watch;
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_word_params(*params)[3] = NULL;
     ll_cost_plan plan;
@@ -509,9 +538,12 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
         return s;
     if (!material)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_estimate: material is NULL");
-    s = ll_build_options_read(opts, &o, "ll_material_estimate");
+    s = ll_build_options_read(opts, &o, fn);
     if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &n, &m, &nch, &resolution_error);
+        s = ll_watch_begin(&watch, monitor, fn);
+    if (s == LL_OK)
+        s = ll_material_plan_bases(material, &o, &watch, &n, &m, &nch, &resolution_error);
+    s = s == LL_OK ? ll_watch_finish(&watch, s, fn) : s;
     if (s != LL_OK)
         return s;
     if (material->n_axes > 0) {
@@ -539,8 +571,17 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     e.additions = plan.additions;
     e.doublings = plan.doublings;
     e.peak_bytes = plan.peak_bytes;
-    e.seconds = plan.seconds;
-    e.cpu_seconds = plan.cpu_seconds;
+    e.threads = build_threads(&o);
+    e.dielectric_pairs = plan.work.dielectric_pairs;
+    e.conductor_pairs = plan.work.conductor_pairs;
+    e.pair_orders = plan.work.pair_orders;
+    e.measured_lookups = plan.work.measured_lookups;
+    e.measured_files = plan.work.measured_files;
+    e.phase_entries = plan.work.phase_entries;
+    e.diffuse_entries = plan.work.diffuse_entries;
+    e.add_entries = plan.work.add_entries;
+    e.add_empty_entries = plan.work.add_empty_entries;
+    e.stored_values = plan.stored_values;
     e.max_memory_bytes = o.max_memory_bytes;
     e.over_budget = plan.peak_bytes > (double)o.max_memory_bytes;
     return ll_struct_write(estimate, &e, sizeof e, "ll_material_estimate", "ll_build_estimate");

@@ -5,8 +5,8 @@
  *
  * Resolution: an explicit option wins, then the material's `set` line, then
  * the largest that any word's heuristic asks for (its descriptor's
- * resolution: ll_heuristic_microfacet_ex / ll_heuristic_henyey_greenstein_ex
- * at the build's tolerance and mu_min, capped by the words; each distinct
+ * resolution: the searches of ll_resolution_search_microfacet /
+ * ll_resolution_search_henyey_greenstein at the build's tolerance and mu_min, capped by the words; each distinct
  * word is probed once, however many channels share it). Below
  * LL_MATERIAL_MIN_NODES nodes the quadrature itself is too coarse: the
  * albedo of `diffuse albedo=0.5` computed with n Gauss-Lobatto nodes was
@@ -246,16 +246,7 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
     return LL_OK;
 }
 
-ll_status ll_material_plan(const ll_material *m, const ll_build_options *o, size_t *n_nodes,
-                           size_t *n_orders, size_t *n_channels)
-{
-    ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
-    ll_status s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, NULL);
-    ll_resolution_memo_free(&memo);
-    return s;
-}
-
-ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
+ll_status ll_material_plan(const ll_material *m, const ll_build_options *o,
                               const ll_monitor *monitor, size_t *n_nodes, size_t *n_orders,
                               size_t *n_channels)
 {
@@ -272,16 +263,22 @@ ll_status ll_material_plan_ex(const ll_material *m, const ll_build_options *o,
 }
 
 ll_status ll_material_resolution(const ll_material *material, const ll_build_options *opts,
-                                 size_t *n_nodes, size_t *n_orders, size_t *n_channels)
+                                 const ll_monitor *monitor, size_t *n_nodes, size_t *n_orders,
+                                 size_t *n_channels)
 {
+    static const char fn[] = "ll_material_resolution";
     ll_build_options o;
+    ll_watch watch;
     size_t n, m, c;
     ll_status s;
     if (!material)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_material_resolution: material is NULL");
-    s = ll_build_options_read(opts, &o, "ll_material_resolution");
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: material is NULL", fn);
+    s = ll_build_options_read(opts, &o, fn);
     if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &n, &m, &c, NULL);
+        s = ll_watch_begin(&watch, monitor, fn);
+    if (s == LL_OK)
+        s = ll_material_plan_bases(material, &o, &watch, &n, &m, &c, NULL);
+    s = s == LL_OK ? ll_watch_finish(&watch, s, fn) : s;
     if (s != LL_OK)
         return s;
     if (n_nodes)

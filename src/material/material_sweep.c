@@ -329,19 +329,15 @@ void ll_material_basis_view(const ll_material *m, size_t basis, ll_word *words,
 }
 
 ll_status ll_material_plan_bases(const ll_material *m, const ll_build_options *o,
-                                 size_t *n_nodes, size_t *n_orders, size_t *n_channels,
-                                 double *error)
+                                 ll_watch *watch, size_t *n_nodes, size_t *n_orders,
+                                 size_t *n_channels, double *error)
 {
     size_t bases = ll_material_basis_count(m), b, n = 0, orders = 0, nch = 0;
     ll_resolution_memo memo = LL_RESOLUTION_MEMO_INIT;
     ll_word *words;
-    ll_watch watch;
     ll_status s = LL_OK;
     double worst = -1.0;
-    /* The searches stop at the options' cancel flag (llbuild raises it on
-     * Ctrl-C while it estimates: a measured table's search takes 5-18 s). */
-    ll_watch_begin_raw(&watch, NULL, NULL, o->cancel);
-    memo.watch = &watch;
+    memo.watch = watch;
     if (m->n_axes == 0) {
         s = ll_material_plan_memo(m, o, &memo, n_nodes, n_orders, n_channels, error);
         ll_resolution_memo_free(&memo);

@@ -63,6 +63,17 @@ static ll_status check_headers(ll_material_builder *b)
     return LL_OK;
 }
 
+/* The caller's monitor while the builder chooses the resolution: polled
+ * for a cancel at the start of the builder's share (the searches' own
+ * fractions would run ahead of the bases' that follow). */
+static int on_plan_progress(void *user, double fraction, const char *stage)
+{
+    const ll_material_builder *b = user;
+    (void)fraction;
+    (void)stage;
+    return b->monitor_fn ? b->monitor_fn(b->monitor_user, b->start, "resolution") != 0 : 0;
+}
+
 ll_status ll_material_builder_create(const ll_material *m, const ll_build_options *opts,
                                      const ll_monitor *monitor, ll_material_builder **out)
 {
@@ -89,9 +100,15 @@ ll_status ll_material_builder_create(const ll_material *m, const ll_build_option
         b->monitor_fn = caller.progress;
         b->monitor_user = caller.user;
     }
-    if ((s = ll_build_options_read(opts, &b->o, fn)) != LL_OK ||
-        (s = ll_material_plan_bases(m, &b->o, &b->n, &b->orders, &b->nch, NULL)) != LL_OK)
+    if ((s = ll_build_options_read(opts, &b->o, fn)) != LL_OK)
         goto fail;
+    {
+        ll_watch watch;
+        ll_watch_begin_raw(&watch, b->monitor_fn ? on_plan_progress : NULL, b, NULL);
+        s = ll_material_plan_bases(m, &b->o, &watch, &b->n, &b->orders, &b->nch, NULL);
+        if (s != LL_OK)
+            goto fail;
+    }
     b->words = ll_alloc_array(m->count, sizeof *b->words);
     b->cache = ll_word_cache_create();
     if (!b->words || !b->cache) {
@@ -120,20 +137,16 @@ fail:
     return s;
 }
 
-/* The monitor of one basis's build: the caller's progress and monitor,
- * with the fraction mapped to the builder's share and the stage named by
- * the basis. */
+/* The monitor of one basis's build: the caller's monitor, with the
+ * fraction mapped to the builder's share and the stage named by the
+ * basis. */
 static int on_basis_progress(void *user, double fraction, const char *stage)
 {
     ll_material_builder *b = user;
     double f = b->start + b->span * (b->basis + fraction) / (double)b->bases;
     snprintf(b->stage, sizeof b->stage, "basis %zu/%zu: %s", b->basis + 1, b->bases,
              stage ? stage : "");
-    if (b->o.progress)
-        b->o.progress(f, b->stage, b->o.progress_user);
-    if (b->monitor_fn && b->monitor_fn(b->monitor_user, f, b->stage) != 0)
-        return 1;
-    return b->o.cancel && *b->o.cancel;
+    return b->monitor_fn ? b->monitor_fn(b->monitor_user, f, b->stage) != 0 : 0;
 }
 
 ll_status ll_material_builder_build_basis(ll_material_builder *b, size_t basis,
@@ -158,13 +171,11 @@ ll_status ll_material_builder_build_basis(ll_material_builder *b, size_t basis,
         return s;
     ll_material_basis_view(b->m, basis, b->words, &view);
     /* Every basis at the common resolution; progress and cancel through
-     * the basis monitor (which also reads the caller's cancel flag). */
+     * the basis monitor. */
     o = b->o;
     o.n_nodes = b->n;
     o.n_orders = b->orders;
     o.n_channels = b->nch;
-    o.progress = NULL;
-    o.progress_user = NULL;
     monitor.progress = on_basis_progress;
     monitor.user = b;
     b->basis = basis;
@@ -210,11 +221,7 @@ static int on_write_progress(void *user, double fraction, const char *stage)
     ll_material_builder *b = user;
     double f = 1.0 - LL_TEXTURED_WRITE_SHARE + LL_TEXTURED_WRITE_SHARE * fraction;
     (void)stage;
-    if (b->o.progress)
-        b->o.progress(f, "writing", b->o.progress_user);
-    if (b->monitor_fn && b->monitor_fn(b->monitor_user, f, "writing") != 0)
-        return 1;
-    return b->o.cancel && *b->o.cancel;
+    return b->monitor_fn ? b->monitor_fn(b->monitor_user, f, "writing") != 0 : 0;
 }
 
 static ll_status write_bases(ll_material_builder *b, const char *out_path)
@@ -274,8 +281,6 @@ ll_status ll_material_build_textured(const ll_material *m, const ll_build_option
         s = ll_set_thread_count(b->o.threads);
     if (s == LL_OK)
         s = write_bases(b, out_path);
-    if (s == LL_OK && b->o.progress)
-        b->o.progress(1.0, "done", b->o.progress_user);
     if (b->o.threads)
         ll_set_thread_count(saved_threads);
     ll_material_builder_destroy(b);

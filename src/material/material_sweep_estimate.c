@@ -79,7 +79,7 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
     unsigned long long clock = 0;
     ll_word *words = ll_alloc_array(m->count, sizeof *words);
     ll_word_params(*params)[3] = ll_calloc_array(m->count, sizeof *params);
-    double proc_cpu, proc_wall, proc_bytes, stored = 0.0, peak = 0.0, nn = (double)n + 2.0;
+    double stored = 0.0, peak = 0.0, nn = (double)n + 2.0;
     ll_status s = LL_OK;
 
     memset(out, 0, sizeof *out);
@@ -88,7 +88,6 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_material_estimate: out of memory");
         goto done;
     }
-    ll_cost_process(&proc_cpu, &proc_wall, &proc_bytes);
     for (b = 0; b < bases; ++b) {
         ll_material view;
         ll_cost_plan one;
@@ -101,8 +100,7 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
         out->layers_built += one.layers_built;
         out->additions += one.additions;
         out->doublings += one.doublings;
-        out->seconds += one.seconds - (b > 0 ? proc_wall : 0.0);
-        out->cpu_seconds += one.cpu_seconds - (b > 0 ? proc_cpu : 0.0);
+        ll_work_add(&out->work, &one.work, 1.0);
         /* Every basis's series are as long as the longest over the bases
          * (the writer's rule): the file holds about bases x the basis that
          * holds the most. */
@@ -114,17 +112,17 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
             ll_stack_owners((const ll_word_params(*)[3])params, w, nch, bottom ? NULL : below,
                             owner);
             for (c = 0; c < nch; ++c) {
-                double cpu, wall, bytes;
+                ll_work work;
+                double bytes;
                 size_t doublings;
                 const ll_word_params *p = &params[w][c];
                 if (owner[c] != c || ll_same_word_as((const ll_word_params(*)[3])params, w, c) != c)
                     continue;
-                ll_cost_word_detail(p, n, orders, threads, &cpu, &wall, &doublings, &bytes);
+                ll_cost_word_detail(p, n, orders, &work, &doublings, &bytes);
                 if (sim_lookup(cache, &clock, w, p, bytes)) {
                     out->layers_built--;
                     out->doublings -= doublings;
-                    out->seconds -= wall;
-                    out->cpu_seconds -= cpu;
+                    ll_work_add(&out->work, &work, -1.0);
                 }
             }
             memcpy(below, owner, sizeof below);

@@ -192,10 +192,13 @@ static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_
 static ll_status conductor_build(const ll_word_build_ctx *ctx, const ll_word *w,
                                  const ll_word_params *p, ll_layer *layer)
 {
+    ll_microfacet mf = LL_MICROFACET_INIT;
     (void)w;
-    return ll_layer_set_microfacet_ex(layer, p->v[ETA], p->v[K], p->v[ALPHA],
-                                      p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, 0,
-                                      ctx->monitor(ctx->user, 1.0));
+    mf.eta_re = p->v[ETA];
+    mf.eta_im = p->v[K];
+    mf.alpha = p->v[ALPHA];
+    mf.compensate = p->v[LL_CONDUCTOR_COMPENSATE] != 0.0;
+    return ll_layer_set_microfacet(layer, &mf, ctx->monitor(ctx->user, 1.0));
 }
 
 static void conductor_metadata(ll_text *b, const ll_word *w)

@@ -55,9 +55,13 @@ static void dielectric_cost(const ll_word_params *p, size_t n, size_t m, ll_word
 static ll_status dielectric_build(const ll_word_build_ctx *ctx, const ll_word *w,
                                   const ll_word_params *p, ll_layer *layer)
 {
+    ll_microfacet mf = LL_MICROFACET_INIT;
     (void)w;
-    return ll_layer_set_microfacet_ex(layer, p->v[0], 0.0, p->v[1], p->v[2] != 0.0, 0,
-                                      ctx->monitor(ctx->user, 1.0));
+    mf.eta_re = p->v[0];
+    mf.eta_im = 0.0;
+    mf.alpha = p->v[1];
+    mf.compensate = p->v[2] != 0.0;
+    return ll_layer_set_microfacet(layer, &mf, ctx->monitor(ctx->user, 1.0));
 }
 
 static void dielectric_metadata(ll_text *b, const ll_word *w)

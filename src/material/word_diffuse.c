@@ -37,6 +37,7 @@ static void diffuse_cost(const ll_word_params *p, size_t n, size_t m, ll_word_co
     (void)p;
     (void)m;
     out->serial_seconds = (double)n * (double)n * COST_DIFFUSE;
+    out->work.diffuse_entries = (double)n * (double)n;
     out->orders_nonzero = 1.0;
     out->dense_orders = 0.25; /* order 0's R^t block only */
 }
@@ -45,7 +46,7 @@ static ll_status diffuse_build(const ll_word_build_ctx *ctx, const ll_word *w,
                                const ll_word_params *p, ll_layer *layer)
 {
     (void)w;
-    return ll_layer_set_diffuse_ex(layer, p->v[0], ctx->monitor(ctx->user, 1.0));
+    return ll_layer_set_diffuse(layer, p->v[0], ctx->monitor(ctx->user, 1.0));
 }
 
 static void diffuse_metadata(ll_text *b, const ll_word *w)

@@ -1,7 +1,7 @@
 /*
  * What the two interface words (dielectric, conductor) share beyond their
  * cost model: the compensate key, which says whether the interface gets the
- * paper's energy compensation (ll_layer_set_microfacet's conserve_energy).
+ * paper's energy compensation (ll_microfacet.compensate).
  * 1, the default, is the physical interface that keeps the energy lost to
  * shadowing in single scattering; 0 is single scattering only, which is what
  * renderers' microfacet BSDFs (Mitsuba's roughconductor / roughdielectric,

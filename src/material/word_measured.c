@@ -1,6 +1,6 @@
 /*
  * measured file=PATH: a MERL measured BRDF as an opaque base
- * (ll_layer_set_matusik_ex, or ll_merl_set_layer_ex for a mix of channels;
+ * (ll_layer_set_matusik, or ll_merl_set_layer for a mix of channels;
  * the file format in docs/material-language.md).
  */
 #include "material/word_table.h"
@@ -14,7 +14,7 @@
 /* The search's first guess (words/merl_probe.c searches from it): 100
  * nodes (about 1.8 degrees between nodes near the horizon, finer near the
  * pole) and 180 orders (azimuthal detail of 1 degree, the database's step
- * in phi_diff), the fixed resolution before issue 14. */
+ * in phi_diff), the original's fixed resolution. */
 #define MEASURED_NODES 100
 #define MEASURED_ORDERS 180
 
@@ -102,7 +102,7 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
 }
 
 /* The resolution at which the projected table is within the tolerance of
- * twice it (issue 14; words/merl_probe.c): the file is read once more for
+ * twice it (words/merl_probe.c): the file is read once more for
  * the search, which costs what docs/method.md "Resolution" measures (5 to
  * 18 s for a table of the database's size). One search per file, on the
  * luminance mix, for every channel (resolution_reads: the file alone): the
@@ -132,6 +132,8 @@ static void measured_cost(const ll_word_params *p, size_t n, size_t m, ll_word_c
                             ((double)m / RATE_MERL + COST_MERL_SAMPLE);
     out->items = n / 2;
     out->serial_seconds = COST_MERL_LOAD;
+    out->work.measured_lookups = h * h * 4.0 * (double)m;
+    out->work.measured_files = 1.0;
     out->build_bytes = 2.0 * p->v[3];
     out->orders_nonzero = (double)m;
     out->dense_orders = 0.25 * (double)m; /* R^t blocks only */
@@ -151,10 +153,10 @@ static ll_status measured_build(const ll_word_build_ctx *ctx, const ll_word *w,
      * one, with the same monitor. */
     for (c = 0; c < 3; ++c)
         if (weights[c] == 1.0 && weights[(c + 1) % 3] == 0.0 && weights[(c + 2) % 3] == 0.0)
-            return ll_layer_set_matusik_ex(layer, w->file, c, 0, monitor);
+            return ll_layer_set_matusik(layer, w->file, c, 0, monitor);
     s = ll_merl_load(w->file, &merl);
     if (s == LL_OK)
-        s = ll_merl_set_layer_ex(layer, merl, weights, 0, monitor);
+        s = ll_merl_set_layer(layer, merl, weights, 0, monitor);
     ll_merl_free(merl);
     return s;
 }

@@ -150,6 +150,7 @@ static void medium_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cos
     if (dense > nonzero)
         dense = nonzero;
     out->parallel_seconds = (double)n * (double)n * nonzero * COST_PHASE;
+    out->work.phase_entries = (double)n * (double)n * nonzero;
     out->items = (size_t)nonzero;
     out->doublings = p->v[TAU] > 0.0 ? ll_doubling_count(p->v[TAU], 1.0) : 0;
     out->orders_nonzero = nonzero;
@@ -183,11 +184,11 @@ static ll_status medium_build(const ll_word_build_ctx *ctx, const ll_word *w,
     }
     phase = ctx->monitor(ctx->user, 0.0);
     if (p->choice == LL_PHASE_HG)
-        s = ll_layer_set_henyey_greenstein_ex(layer, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE], phase);
+        s = ll_layer_set_henyey_greenstein(layer, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE], phase);
     else if (p->choice == LL_PHASE_VMF)
-        s = ll_layer_set_von_mises_fisher_ex(layer, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE], phase);
+        s = ll_layer_set_von_mises_fisher(layer, p->v[ALBEDO], p->v[LL_MEDIUM_SHAPE], phase);
     else
-        s = ll_layer_set_isotropic_ex(layer, p->v[ALBEDO], phase);
+        s = ll_layer_set_isotropic(layer, p->v[ALBEDO], phase);
     if (s == LL_OK)
         s = ctx->expand(ctx->user, layer, p->v[TAU]);
     return s;

@@ -92,7 +92,7 @@ struct ll_param_desc {
  * public layer call (credited with `share` of the word's modelled cost; it
  * carries the build's progress and cancellation; share 0 shows the call
  * under its own stage name, e.g. "phase function"), and the doubling of a
- * medium with the build's progress (ll_layer_expand_ex). The builder uses
+ * medium with the build's progress (ll_layer_expand). The builder uses
  * only public calls (ll_layer.h). */
 typedef struct ll_word_build_ctx {
     const ll_monitor *(*monitor)(void *user, double share);
@@ -101,14 +101,16 @@ typedef struct ll_word_build_ctx {
 } ll_word_build_ctx;
 
 /* What one word's layer costs to build at n nodes and m orders, one
- * channel, as measured (docs/material-language.md, "Estimates"): CPU
- * seconds of the part that runs in parallel over `items` (columns or
- * orders) and of the serial part, the doublings after it, the orders that
- * hold anything (what an adding step with it works on), its stored values
- * in units of n x n (dense_orders; what its layer keeps), the scratch
- * bytes of each thread while it is built and what it holds once while it
- * is built (a measured table). */
+ * channel: its work by kind (its doublings not included), and, as
+ * measured (docs/material-language.md, "Estimates"), the CPU seconds of
+ * the part that runs in parallel over `items` (columns or orders) and of
+ * the serial part (the progress weights), the doublings after it, the
+ * orders that hold anything (what an adding step with it works on), its
+ * stored values in units of n x n (dense_orders; what its layer keeps),
+ * the scratch bytes of each thread while it is built and what it holds
+ * once while it is built (a measured table). */
 typedef struct ll_word_cost {
+    ll_work work;
     double parallel_seconds;
     size_t items;
     double serial_seconds;
@@ -140,7 +142,7 @@ struct ll_word_desc {
     void (*channel)(const ll_word *w, size_t c, size_t n_channels, double above,
                    ll_word_params *out);
     /* Nodes and orders it needs to be within `tolerance` (relative) of the
-     * converged layer at |mu| >= mu_min (the ll_heuristic_*_ex of
+     * converged layer at |mu| >= mu_min (the ll_resolution_search_* of
      * ll_layer.h); *error receives the largest relative error measured
      * against twice that resolution (0 for words exact at any resolution,
      * HUGE_VAL when it is beyond the search's reach and not verified); may
@@ -210,7 +212,7 @@ LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, s
       NULL, NULL }
 
 /* compensate=0|1 of the interfaces: whether the paper's energy
- * compensation term is added (ll_layer_set_microfacet's conserve_energy;
+ * compensation term is added (ll_microfacet.compensate;
  * default 1). 0 gives the single-scattering interface that renderers'
  * microfacet BSDFs are, for comparisons with them. */
 LL_INTERNAL ll_status ll_check_compensate(const ll_parser *p, const ll_word *w,

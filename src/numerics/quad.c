@@ -272,27 +272,17 @@ static ll_status watched_rule(const char *fn, rule_fn rule, size_t n, size_t min
     return s;
 }
 
-ll_status ll_quad_gauss_legendre_ex(size_t n, double *nodes, double *weights,
-                                    const ll_monitor *monitor)
+ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights,
+                                 const ll_monitor *monitor)
 {
     return watched_rule("ll_quad_gauss_legendre", legendre_rule, n, 1, nodes, weights,
                         monitor);
 }
 
-ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights)
-{
-    return ll_quad_gauss_legendre_ex(n, nodes, weights, NULL);
-}
-
-ll_status ll_quad_gauss_lobatto_ex(size_t n, double *nodes, double *weights,
-                                   const ll_monitor *monitor)
+ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights,
+                                const ll_monitor *monitor)
 {
     return watched_rule("ll_quad_gauss_lobatto", lobatto_rule, n, 2, nodes, weights, monitor);
-}
-
-ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights)
-{
-    return ll_quad_gauss_lobatto_ex(n, nodes, weights, NULL);
 }
 
 /* Composite closed Newton-Cotes rule: n equidistant nodes split into panels

@@ -4,8 +4,11 @@
  * path, which uploads them once as Dr.Jit arrays) reads exactly what the C
  * evaluator reads and never parses a file a second time.
  */
-/* ll_bsdf_get_tables is declared for experimental use only (ll_bsdf.h). */
+/* ll_bsdf_get_tables is declared for experimental use only (ll_bsdf.h);
+ * the library's own build defines LL_EXPERIMENTAL for every file. */
+#ifndef LL_EXPERIMENTAL
 #define LL_EXPERIMENTAL
+#endif
 #include "storage/bsdf_internal.h"
 
 #include <string.h>

@@ -606,13 +606,7 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
 }
 
 ll_status ll_bsdf_write(const char *path, const ll_layer *const *layers, size_t n_channels,
-                        const ll_bsdf_write_options *opts)
-{
-    return ll_bsdf_write_ex(path, layers, n_channels, opts, NULL);
-}
-
-ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers, size_t n_channels,
-                           const ll_bsdf_write_options *opts, const ll_monitor *monitor)
+                        const ll_bsdf_write_options *opts, const ll_monitor *monitor)
 {
     return write_general("ll_bsdf_write", path, layers, n_channels, 0, NULL, NULL, opts,
                          monitor);
@@ -621,8 +615,8 @@ ll_status ll_bsdf_write_ex(const char *path, const ll_layer *const *layers, size
 ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const *layers,
                                  size_t n_channels, size_t n_parameters,
                                  const size_t *param_counts, const double *param_positions,
-                                 const ll_bsdf_write_options *opts)
+                                 const ll_bsdf_write_options *opts, const ll_monitor *monitor)
 {
     return write_general("ll_bsdf_write_textured", path, layers, n_channels, n_parameters,
-                         param_counts, param_positions, opts, NULL);
+                         param_counts, param_positions, opts, monitor);
 }

@@ -1,6 +1,6 @@
 /*
  * Writing one untextured .bsdf file channel by channel (internal; the
- * material builder's streaming write, issue 18): each channel's finished
+ * material builder's streaming write): each channel's finished
  * layer is handed over as soon as it is complete and may be freed at once,
  * so a build never holds every channel's stack and the writer's staging at
  * the same time. The file is byte for byte what ll_bsdf_write writes for
@@ -29,7 +29,7 @@ LL_INTERNAL ll_status ll_channel_writer_add(ll_channel_writer *w, size_t channel
                                             const ll_layer *layer, const ll_monitor *monitor);
 
 /* Write the file (every channel added) and free the writer, whatever the
- * outcome; monitor as for ll_bsdf_write_ex (stage "writing"; a cancel,
+ * outcome; monitor as for ll_bsdf_write (stage "writing"; a cancel,
  * also at the last report, leaves no file). */
 LL_INTERNAL ll_status ll_channel_writer_commit(ll_channel_writer *w, const ll_monitor *monitor);
 

@@ -7,12 +7,7 @@
 
 #include <stdlib.h>
 
-ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo)
-{
-    return ll_layer_set_diffuse_ex(layer, albedo, NULL);
-}
-
-ll_status ll_layer_set_diffuse_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
+ll_status ll_layer_set_diffuse(ll_layer *layer, double albedo, const ll_monitor *monitor)
 {
     static const char fn[] = "ll_layer_set_diffuse";
     size_t n, h, c;

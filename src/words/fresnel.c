@@ -9,43 +9,57 @@
 
 #include <math.h>
 
-/* The functions return a double, so an invalid argument gives NaN (which
- * cannot be mistaken for a reflectance) and a message for
- * ll_last_error_message(). */
-static double invalid(const char *fn, const char *what, double value)
+/* An invalid argument: LL_ERROR_INVALID_ARGUMENT with a message, and the
+ * outputs 0 (set by the callers first). */
+static ll_status invalid(const char *fn, const char *what, double value)
 {
-    ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %s (got %g)", fn, what, value);
-    return NAN;
+    return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %s (got %g)", fn, what, value);
 }
 
-double ll_fresnel_dielectric(double cos_theta_i, double eta, double *cos_theta_t)
+ll_status ll_fresnel_dielectric(double cos_theta_i, double eta, double *reflectance,
+                                double *cos_theta_t)
 {
+    static const char fn[] = "ll_fresnel_dielectric";
     double unused;
+    if (cos_theta_t)
+        *cos_theta_t = 0.0;
+    if (!reflectance)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: reflectance is NULL", fn);
+    *reflectance = 0.0;
     if (!(cos_theta_i >= -1.0 && cos_theta_i <= 1.0))
-        return invalid("ll_fresnel_dielectric", "cos_theta_i must be in [-1, 1]", cos_theta_i);
+        return invalid(fn, "cos_theta_i must be in [-1, 1]", cos_theta_i);
     if (!(eta > 0.0) || !ll_is_finite(eta))
-        return invalid("ll_fresnel_dielectric", "eta must be positive and finite", eta);
-    return ll_fresnel_dielectric_kernel(cos_theta_i, eta, cos_theta_t ? cos_theta_t : &unused);
+        return invalid(fn, "eta must be positive and finite", eta);
+    *reflectance =
+        ll_fresnel_dielectric_kernel(cos_theta_i, eta, cos_theta_t ? cos_theta_t : &unused);
+    return LL_OK;
 }
 
-static int conductor_args_ok(const char *fn, double eta_re, double eta_im)
+static ll_status conductor_args(const char *fn, double eta_re, double eta_im)
 {
     if (!(eta_re >= 0.0) || !ll_is_finite(eta_re))
-        return invalid(fn, "eta_re must be finite and >= 0", eta_re), 0;
+        return invalid(fn, "eta_re must be finite and >= 0", eta_re);
     if (!(eta_im >= 0.0) || !ll_is_finite(eta_im))
-        return invalid(fn, "eta_im must be finite and >= 0", eta_im), 0;
+        return invalid(fn, "eta_im must be finite and >= 0", eta_im);
     if (eta_re == 0.0 && eta_im == 0.0)
-        return invalid(fn, "eta must not be 0", 0.0), 0;
-    return 1;
+        return invalid(fn, "eta must not be 0", 0.0);
+    return LL_OK;
 }
 
-double ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im)
+ll_status ll_fresnel_conductor(double cos_theta_i, double eta_re, double eta_im,
+                               double *reflectance)
 {
+    static const char fn[] = "ll_fresnel_conductor";
+    ll_status s;
+    if (!reflectance)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: reflectance is NULL", fn);
+    *reflectance = 0.0;
     if (!(cos_theta_i >= 0.0 && cos_theta_i <= 1.0))
-        return invalid("ll_fresnel_conductor", "cos_theta_i must be in [0, 1]", cos_theta_i);
-    if (!conductor_args_ok("ll_fresnel_conductor", eta_re, eta_im))
-        return NAN;
-    return ll_fresnel_conductor_kernel(cos_theta_i, eta_re, eta_im);
+        return invalid(fn, "cos_theta_i must be in [0, 1]", cos_theta_i);
+    s = conductor_args(fn, eta_re, eta_im);
+    if (s == LL_OK)
+        *reflectance = ll_fresnel_conductor_kernel(cos_theta_i, eta_re, eta_im);
+    return s;
 }
 
 /* ------------------------------------------------------------ averages
@@ -100,10 +114,9 @@ static double dielectric_flux_inside(double eta)
     return tanh_sinh_flux(dielectric_at, &eta, mu_c, 1.0);
 }
 
-double ll_fresnel_dielectric_average(double eta)
+/* Both averages, arguments checked. */
+static double dielectric_average(double eta)
 {
-    if (!(eta > 0.0) || !ll_is_finite(eta))
-        return invalid("ll_fresnel_dielectric_average", "eta must be positive and finite", eta);
     if (eta == 1.0)
         return 0.0;
     if (eta < 1.0)
@@ -114,14 +127,35 @@ double ll_fresnel_dielectric_average(double eta)
     return eta * eta * dielectric_flux_inside(1.0 / eta);
 }
 
-double ll_fresnel_conductor_average(double eta_re, double eta_im)
+ll_status ll_fresnel_dielectric_average(double eta, double *average)
 {
+    static const char fn[] = "ll_fresnel_dielectric_average";
+    if (!average)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: average is NULL", fn);
+    *average = 0.0;
+    if (!(eta > 0.0) || !ll_is_finite(eta))
+        return invalid(fn, "eta must be positive and finite", eta);
+    *average = dielectric_average(eta);
+    return LL_OK;
+}
+
+ll_status ll_fresnel_conductor_average(double eta_re, double eta_im, double *average)
+{
+    static const char fn[] = "ll_fresnel_conductor_average";
     double param[2];
-    if (!conductor_args_ok("ll_fresnel_conductor_average", eta_re, eta_im))
-        return NAN;
-    if (eta_im == 0.0)
-        return ll_fresnel_dielectric_average(eta_re);
+    ll_status s;
+    if (!average)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: average is NULL", fn);
+    *average = 0.0;
+    s = conductor_args(fn, eta_re, eta_im);
+    if (s != LL_OK)
+        return s;
+    if (eta_im == 0.0) {
+        *average = dielectric_average(eta_re);
+        return LL_OK;
+    }
     param[0] = eta_re;
     param[1] = eta_im;
-    return tanh_sinh_flux(conductor_at, param, 0.0, 1.0);
+    *average = tanh_sinh_flux(conductor_at, param, 0.0, 1.0);
+    return LL_OK;
 }

@@ -1,13 +1,13 @@
 /*
- * Resolution heuristics: how many zenith-cosine nodes n and Fourier orders
- * m a Henyey-Greenstein medium or a rough interface needs to be within a
- * stated tolerance of the converged answer (issue 14; words/probe.h: a
- * measured convergence on probe directions). The fits of the original
- * layerlab (parameterHeuristicHG and parameterHeuristicMicrofacet, from
- * convergence studies of Jakob et al. 2014), extended to every index of
- * refraction, are the first guess of n only: they do not see the narrow
- * azimuthal lobes of grazing pairs (eta 1.5, alpha 0.5: 37 orders gave 2.5
- * instead of 4.76 at mu = 0.1 in the mirror direction).
+ * Resolution: how many zenith-cosine nodes n and Fourier orders m a
+ * Henyey-Greenstein medium or a rough interface needs. The heuristics are
+ * the fits of the original layerlab (parameterHeuristicHG and
+ * parameterHeuristicMicrofacet, from convergence studies of Jakob et al.
+ * 2014), extended to every index of refraction; the resolution searches
+ * measure the convergence on probe directions (words/probe.h) to a stated
+ * tolerance, the fits their first guess of n only: the fits do not see the
+ * narrow azimuthal lobes of grazing pairs (eta 1.5, alpha 0.5: 37 orders
+ * gave 2.5 instead of 4.76 at mu = 0.1 in the mirror direction).
  */
 #include "support/support.h"
 #include "words/probe.h"
@@ -191,8 +191,8 @@ static ll_status read_goal(const char *fn, double *tolerance, double *mu_min)
 #define MAX_COMPENSATIONS 64
 
 typedef struct interface_ctx {
-    ll_microfacet *mf;
-    ll_microfacet *mf0; /* the compensation's: order 0 only */
+    ll_microfacet_model *mf;
+    ll_microfacet_model *mf0; /* the compensation's: order 0 only */
     double eta_re, eta_im;
     int compensate;
     const ll_probe_set *set;
@@ -234,20 +234,29 @@ static ll_status interface_eval(void *ctx, size_t n, size_t m, ll_watch *watch, 
                : s;
 }
 
-ll_status ll_heuristic_microfacet_ex(double alpha, double eta_re, double eta_im,
-                                     double tolerance, double mu_min, size_t *n_nodes,
-                                     size_t *n_orders, double *error)
+ll_status ll_resolution_search_microfacet(const ll_microfacet *microfacet, double tolerance,
+                                          double mu_min, const ll_monitor *monitor,
+                                          size_t *n_nodes, size_t *n_orders, double *error)
 {
-    /* The layer a build makes by default: with the energy compensation. */
-    return ll_search_microfacet(alpha, eta_re, eta_im, 1, tolerance, mu_min, NULL, n_nodes,
-                                n_orders, error);
+    static const char fn[] = "ll_resolution_search_microfacet";
+    ll_microfacet in;
+    ll_watch watch;
+    ll_status s = ll_microfacet_read(microfacet, &in, fn);
+    if (s == LL_OK)
+        s = ll_watch_begin(&watch, monitor, fn);
+    if (s != LL_OK)
+        return s;
+    ll_watch_stage(&watch, "resolution", 0.0, 1.0, LL_PROBE_SEARCH_UNITS);
+    s = ll_search_microfacet(in.alpha, in.eta_re, in.eta_im, in.compensate != 0, tolerance,
+                             mu_min, &watch, n_nodes, n_orders, error);
+    return ll_watch_finish(&watch, s, fn);
 }
 
 ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int compensate,
                                double tolerance, double mu_min, ll_watch *watch,
                                size_t *n_nodes, size_t *n_orders, double *error)
 {
-    static const char fn[] = "ll_heuristic_microfacet_ex";
+    static const char fn[] = "ll_resolution_search_microfacet";
     ll_probe_set set;
     interface_ctx ctx;
     size_t n, m;
@@ -311,10 +320,7 @@ ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int c
 ll_status ll_heuristic_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
                                   size_t *n_orders)
 {
-    if (!n_nodes || !n_orders)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_heuristic_microfacet: n_nodes or n_orders is NULL");
-    return ll_heuristic_microfacet_ex(alpha, eta_re, eta_im, 0.0, 0.0, n_nodes, n_orders, NULL);
+    return ll_fit_microfacet(alpha, eta_re, eta_im, n_nodes, n_orders);
 }
 
 /* The largest |g| whose resolution is searched (see below). */
@@ -352,17 +358,25 @@ static ll_status medium_eval(void *ctx, size_t n, size_t m, ll_watch *watch, dou
                                 values);
 }
 
-ll_status ll_heuristic_henyey_greenstein_ex(double g, double tolerance, double mu_min,
-                                            size_t *n_nodes, size_t *n_orders, double *error)
+ll_status ll_resolution_search_henyey_greenstein(double g, double tolerance, double mu_min,
+                                                 const ll_monitor *monitor, size_t *n_nodes,
+                                                 size_t *n_orders, double *error)
 {
-    return ll_search_henyey_greenstein(g, tolerance, mu_min, NULL, n_nodes, n_orders, error);
+    static const char fn[] = "ll_resolution_search_henyey_greenstein";
+    ll_watch watch;
+    ll_status s = ll_watch_begin(&watch, monitor, fn);
+    if (s != LL_OK)
+        return s;
+    ll_watch_stage(&watch, "resolution", 0.0, 1.0, LL_PROBE_SEARCH_UNITS);
+    s = ll_search_henyey_greenstein(g, tolerance, mu_min, &watch, n_nodes, n_orders, error);
+    return ll_watch_finish(&watch, s, fn);
 }
 
 ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
                                       ll_watch *watch, size_t *n_nodes, size_t *n_orders,
                                       double *error)
 {
-    static const char fn[] = "ll_heuristic_henyey_greenstein_ex";
+    static const char fn[] = "ll_resolution_search_henyey_greenstein";
     ll_probe_set set;
     medium_ctx ctx;
     size_t n, m;
@@ -404,8 +418,5 @@ ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
 
 ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders)
 {
-    if (!n_nodes || !n_orders)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_heuristic_henyey_greenstein: n_nodes or n_orders is NULL");
-    return ll_heuristic_henyey_greenstein_ex(g, 0.0, 0.0, n_nodes, n_orders, NULL);
+    return ll_fit_henyey_greenstein(g, n_nodes, n_orders);
 }

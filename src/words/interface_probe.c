@@ -11,7 +11,7 @@
  * makes the convergence search (twice the resolution, repeatedly)
  * affordable even for the n ~ 1000, m ~ 2000 of alpha = 0.02.
  *
- * With compensate, the energy compensation (conserve_energy, a rank-one
+ * With compensate, the energy compensation (ll_microfacet.compensate, a rank-one
  * term of order 0 per block, Jakob et al. 2014, sec. 6.2) is added at the
  * same stencils: it is made from the albedos of every node, so it is
  * computed whole at each resolution (words/interface_probe_compensation.c),
@@ -69,7 +69,7 @@ void ll_probe_add_series(const double *c, size_t len, const double *phi, size_t 
 }
 
 ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
-                                   ll_microfacet **out)
+                                   ll_microfacet_model **out)
 {
     return ll_microfacet_create(eta_re, eta_im, alpha, TRUE_ORDERS, TRUE_MAX_LEN, out);
 }
@@ -82,7 +82,7 @@ typedef struct pair_stencil {
 } pair_stencil;
 
 typedef struct eval_job {
-    const ll_microfacet *mf;
+    const ll_microfacet_model *mf;
     const ll_probe_set *set;
     const pair_stencil *stencils;
     const ll_probe_compensation *compensation; /* nullable */
@@ -131,7 +131,7 @@ static ll_status eval_pair(size_t p, void *ctx)
     return s;
 }
 
-ll_status ll_probe_interface_eval(ll_microfacet *mf, const ll_probe_compensation *compensation,
+ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compensation *compensation,
                                   size_t n, size_t m, const ll_probe_set *set, ll_watch *watch,
                                   double *values)
 {
@@ -148,7 +148,7 @@ ll_status ll_probe_interface_eval(ll_microfacet *mf, const ll_probe_compensation
     }
     /* The widening of a layer of m orders (ll_layer_set_microfacet). */
     ll_microfacet_set_orders(mf, m);
-    s = ll_quad_gauss_lobatto(n, nodes, weights);
+    s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
         pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);
@@ -182,7 +182,7 @@ done:
 }
 
 /* The true series of a pair into c (*len terms). */
-static ll_status true_series(ll_microfacet *mf, const ll_probe_pair *pair, double *c,
+static ll_status true_series(ll_microfacet_model *mf, const ll_probe_pair *pair, double *c,
                              size_t *len, double *scratch)
 {
     double mu[2];
@@ -223,7 +223,7 @@ static size_t needed_length(const double *c, size_t len, const double *phi, size
     return needed < len ? needed : len;
 }
 
-ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
+ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
                                     const ll_probe_set *set, size_t *n_orders)
 {
     double *c = ll_alloc_array(TRUE_MAX_LEN, sizeof(double));

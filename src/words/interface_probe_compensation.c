@@ -20,7 +20,7 @@
 #include <string.h>
 
 typedef struct albedo_job {
-    const ll_microfacet *mf;
+    const ll_microfacet_model *mf;
     const double *x; /* the layer's nodes: x[j] = -x[j + h]          */
     const double *w; /* [h] 2 pi w_j x_j of the positive nodes        */
     size_t n;
@@ -76,13 +76,13 @@ done:
 }
 
 ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
-                                      ll_microfacet **out)
+                                      ll_microfacet_model **out)
 {
     /* No widening, series of one term (maps of one order). */
     return ll_microfacet_create(eta_re, eta_im, alpha, LL_PROBE_TRUE_ORDERS, 1, out);
 }
 
-ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double eta_im, size_t n,
+ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im, size_t n,
                                      ll_watch *watch, ll_probe_compensation *out)
 {
     size_t h = n / 2, k, q;
@@ -97,7 +97,7 @@ ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double et
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
         goto done;
     }
-    s = ll_quad_gauss_lobatto(n, rule, rule + n);
+    s = ll_quad_gauss_lobatto(n, rule, rule + n, NULL);
     if (s != LL_OK)
         goto done;
     /* (mf: ll_probe_compensation_model's. Order 0 of a widened lobe is

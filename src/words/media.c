@@ -44,6 +44,7 @@ typedef struct medium_job {
     size_t slots;
     ll_order **result;
     ll_watch *watch;         /* one unit per order; polled per node          */
+    const ll_split *split;   /* the calling thread's (layer/split.h)         */
     const char *fn;
 } medium_job;
 
@@ -75,11 +76,11 @@ static ll_status medium_order(size_t order, void *ctx)
     ll_status s;
     if (ll_watch_poll(job->watch))
         return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
-    /* Another rank's order in a distributed build (layer/distribution.c):
+    /* Another rank's order in a distributed build (layer/split.h):
      * not computed, NULL. Beyond the kept moments an order is the forward
      * term alone, the same for all of them: one shared order, no n x n
      * matrix (order 0 always has a moment, K >= 1). */
-    if (!ll_layer_owns_order(job->layer, order)) {
+    if (!ll_split_owns(job->split, order)) {
         s = LL_OK;
     } else if (order >= job->K && job->finish) {
         s = job->finish->order(job->finish->user, order, NULL, job->forward,
@@ -227,6 +228,7 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     while (K > 1 && !(fabs(moment[K - 1]) > 1e-12 * fabs(moment[0])))
         --K;
     job.layer = layer;
+    job.split = ll_split_current();
     job.K = K;
     job.moment = moment;
     job.forward = albedo * chi[K];
@@ -289,11 +291,6 @@ static ll_status isotropic(ll_layer *layer, double albedo, const ll_medium_finis
     return s;
 }
 
-ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo)
-{
-    return ll_layer_set_isotropic_ex(layer, albedo, NULL);
-}
-
 static ll_status henyey_greenstein(ll_layer *layer, double albedo, double g,
                                    const ll_medium_finish *finish, const ll_monitor *monitor)
 {
@@ -319,11 +316,6 @@ static ll_status henyey_greenstein(ll_layer *layer, double albedo, double g,
     s = set_medium(layer, albedo, chi, K, "ll_layer_set_henyey_greenstein", finish, &watch);
     ll_free(chi);
     return s;
-}
-
-ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g)
-{
-    return ll_layer_set_henyey_greenstein_ex(layer, albedo, g, NULL);
 }
 
 static ll_status von_mises_fisher(ll_layer *layer, double albedo, double kappa,
@@ -373,24 +365,19 @@ static ll_status von_mises_fisher(ll_layer *layer, double albedo, double kappa,
     return s;
 }
 
-ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa)
-{
-    return ll_layer_set_von_mises_fisher_ex(layer, albedo, kappa, NULL);
-}
-
-ll_status ll_layer_set_isotropic_ex(ll_layer *layer, double albedo, const ll_monitor *monitor)
+ll_status ll_layer_set_isotropic(ll_layer *layer, double albedo, const ll_monitor *monitor)
 {
     return isotropic(layer, albedo, NULL, monitor);
 }
 
-ll_status ll_layer_set_henyey_greenstein_ex(ll_layer *layer, double albedo, double g,
-                                            const ll_monitor *monitor)
+ll_status ll_layer_set_henyey_greenstein(ll_layer *layer, double albedo, double g,
+                                         const ll_monitor *monitor)
 {
     return henyey_greenstein(layer, albedo, g, NULL, monitor);
 }
 
-ll_status ll_layer_set_von_mises_fisher_ex(ll_layer *layer, double albedo, double kappa,
-                                           const ll_monitor *monitor)
+ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, double kappa,
+                                        const ll_monitor *monitor)
 {
     return von_mises_fisher(layer, albedo, kappa, NULL, monitor);
 }

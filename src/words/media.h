@@ -20,7 +20,7 @@ typedef struct ll_medium_finish {
     void *user;
 } ll_medium_finish;
 
-/* ll_layer_set_isotropic_ex / _henyey_greenstein_ex / _von_mises_fisher_ex
+/* ll_layer_set_isotropic / _henyey_greenstein / _von_mises_fisher
  * (shape: unused, g, kappa) with every order passed through finish (NULL:
  * stored as the phase matrix, as those do). */
 LL_INTERNAL ll_status ll_layer_set_medium_finished(ll_layer *layer, ll_medium_kind kind,

@@ -91,7 +91,7 @@ ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, int with_forwa
                     m);
         goto done;
     }
-    s = ll_quad_gauss_lobatto(n, rule, rule + n);
+    s = ll_quad_gauss_lobatto(n, rule, rule + n, NULL);
     if (s == LL_OK)
         s = ll_layer_create(rule, rule + n, n, m, &layer);
     if (s != LL_OK)

@@ -370,7 +370,7 @@ done:
     return s;
 }
 
-ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl, const double weights[3],
+ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl, const double weights[3],
                                size_t n_orders_internal, const ll_monitor *monitor)
 {
     ll_watch watch;
@@ -410,20 +410,14 @@ ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,
     s = ll_watch_stage(watch, "measured", 0.1, 0.9, layer->n / 2) ? ll_watch_check(watch, fn)
                                                                    : LL_OK;
     if (s == LL_OK)
-        s = ll_layer_build_by_columns_ex(layer, layer->n / 2, layer->n / 2, merl_column, NULL,
+        s = ll_layer_build_by_columns(layer, layer->n / 2, layer->n / 2, merl_column, NULL,
                                          &job, &job.builders, NULL, 0, watch, fn);
     ll_free(cos_table);
     return s;
 }
 
 ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
-                               size_t n_orders_internal)
-{
-    return ll_layer_set_matusik_ex(layer, path, channel, n_orders_internal, NULL);
-}
-
-ll_status ll_layer_set_matusik_ex(ll_layer *layer, const char *path, int channel,
-                                  size_t n_orders_internal, const ll_monitor *monitor)
+                               size_t n_orders_internal, const ll_monitor *monitor)
 {
     double weights[3] = { 0.0, 0.0, 0.0 };
     ll_merl *merl;

@@ -50,9 +50,9 @@ LL_INTERNAL double ll_merl_eval(const ll_merl *merl, const double wi[3], const d
  * cosine transform (DCT-I) of 4 * max(n_orders_internal, the layer's orders)
  * azimuth samples on [0, pi]. With a public monitor (stage "measured";
  * nullable), or with a begun watch (support/watch.h; nullable): the one code
- * path of both and of ll_layer_set_matusik_ex. A cancel leaves the layer
+ * path of both and of ll_layer_set_matusik. A cancel leaves the layer
  * unchanged. */
-LL_INTERNAL ll_status ll_merl_set_layer_ex(ll_layer *layer, const ll_merl *merl,
+LL_INTERNAL ll_status ll_merl_set_layer(ll_layer *layer, const ll_merl *merl,
                                            const double weights[3], size_t n_orders_internal,
                                            const ll_monitor *monitor);
 LL_INTERNAL ll_status ll_merl_set_layer_watched(ll_layer *layer, const ll_merl *merl,

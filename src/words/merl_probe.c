@@ -1,7 +1,7 @@
 /*
- * The resolution of a measured BRDF by the tolerance (issue 14, words/
- * probe.h): the projected lobe at (n, m) against (2n, 2m) on the probes of
- * an opaque surface, searched by ll_probe_search as the interfaces are.
+ * The resolution of a measured BRDF by the tolerance (words/probe.h): the
+ * projected lobe at (n, m) against (2n, 2m) on the probes of an opaque
+ * surface, searched by ll_probe_search as the interfaces are.
  *
  * As for an interface (interface_probe.c), the layer's value at a probe is
  * the Catmull-Rom spline over the 4 x 4 node pairs around it of the series
@@ -84,7 +84,7 @@ ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3], size_
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "measured resolution: out of memory for %zu nodes", n);
         goto done;
     }
-    s = ll_quad_gauss_lobatto(n, nodes, qw);
+    s = ll_quad_gauss_lobatto(n, nodes, qw, NULL);
     if (s == LL_OK)
         s = ll_merl_cos_table(m, &job.N, &cos_table);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
@@ -183,7 +183,7 @@ ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3], doubl
     ll_probe_free(&set);
     if (s == LL_ERROR_INVALID_ARGUMENT) {
         /* Not met below twice the cap: the table's resolution, its error
-         * unverified (as ll_heuristic_microfacet_ex's beyond what it can
+         * unverified (as ll_resolution_search_microfacet's beyond what it can
          * probe). */
         n = n_cap;
         m = m_cap;

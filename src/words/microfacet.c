@@ -100,7 +100,7 @@ typedef struct grid_entry {
     double *matrix;      /* CHEB x len, point-major: matrix[i * len + l]   */
 } grid_entry;
 
-struct ll_microfacet {
+struct ll_microfacet_model {
     double eta_re, eta_im, alpha;
     int conductor;
     double b_max;        /* lobes sharper than this are widened            */
@@ -200,7 +200,7 @@ static void note_branch_point(pair_plan *p, double u, double delta)
  *  - refraction: t = -1 / eta_denser, where wi.m or wo.m changes sign and
  *    refraction ends (no light beyond it), and t = -(1 + eta^2) / (2 eta),
  *    where |H| vanishes. */
-static int classify_window(const ll_microfacet *mf, pair_plan *p)
+static int classify_window(const ll_microfacet_model *mf, pair_plan *p)
 {
     double delta = window_delta(p->b), t0 = -p->sin_prod - p->mu_prod;
     double span = p->sin_prod * delta;
@@ -227,7 +227,7 @@ static int classify_window(const ll_microfacet *mf, pair_plan *p)
 
 /* Plan a pair, its lobe widened to at most B = b_limit; returns 0 if it
  * does not scatter at all (or negligibly). */
-static int plan_pair(const ll_microfacet *mf, double mu_o, double mu_i, double b_limit,
+static int plan_pair(const ll_microfacet_model *mf, double mu_o, double mu_i, double b_limit,
                      pair_plan *p)
 {
     double si, so, eta_h, h_z, lateral, inv, e0, tan_i, tan_o;
@@ -300,7 +300,7 @@ static int plan_pair(const ll_microfacet *mf, double mu_o, double mu_i, double b
  *                 (wi.H)(wo.H) / (wi.H + eta wo.H)^2 = (wi.H)(wo.H)/|H|^4,
  *                 g = scale (1 - F) |(1 + eta t)(t + eta)|
  *                 where both directions see the front of the facet. */
-static void sample_profile(const ll_microfacet *mf, const pair_plan *p, const double *cos_phi,
+static void sample_profile(const ll_microfacet_model *mf, const pair_plan *p, const double *cos_phi,
                            size_t count, double *g, double *no_fresnel)
 {
     size_t k;
@@ -358,7 +358,7 @@ enum { FILON_SCR_F = 0, FILON_SCR_COS = FILON_SAMPLES, FILON_SCR_FILON = 2 * FIL
 
 /* Add the Filon moments of f = exp(A + B cos phi) g over [a, b] to out
  * (with F = 1 in g for the reference). */
-static void add_piece(const ll_microfacet *mf, const pair_plan *p, int reference, double a,
+static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
                       double b, size_t samples, size_t n_out, double *out, double *scratch)
 {
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
@@ -377,7 +377,7 @@ static void add_piece(const ll_microfacet *mf, const pair_plan *p, int reference
  * branch point the first panel pair is replaced by pieces shrinking by 4
  * towards it: Fresnel's square root there would cost O(h^1/2) on uniform
  * panels; graded, only the last tiny piece errs. */
-static void add_graded(const ll_microfacet *mf, const pair_plan *p, int reference, double a,
+static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
                        double b, int grade_a, int grade_b, size_t n_out, double *out,
                        double *scratch)
 {
@@ -401,7 +401,7 @@ static void add_graded(const ll_microfacet *mf, const pair_plan *p, int referenc
 /* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
  * dphi, l < n_out, over the window (f is below 1e-12 of its peak beyond),
  * split at a kink. */
-static void filon_series(const ll_microfacet *mf, const pair_plan *p, int reference,
+static void filon_series(const ll_microfacet_model *mf, const pair_plan *p, int reference,
                          size_t n_out, double *out, double *scratch)
 {
     size_t l;
@@ -430,7 +430,7 @@ size_t ll_microfacet_scratch_size(size_t max_len)
 
 /* The series of a planned pair, n_out <= max_len terms (*n_out), and the
  * order 0 of its reference (F = 1) if ref0 is not NULL. */
-static ll_status pair_series(const ll_microfacet *mf, const pair_plan *p, size_t max_len,
+static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, size_t max_len,
                              double *out, size_t *n_out, double *ref0, double *scratch)
 {
     const grid_entry *e;
@@ -475,7 +475,7 @@ static ll_status pair_series(const ll_microfacet *mf, const pair_plan *p, size_t
     return LL_OK;
 }
 
-ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o, double mu_i,
+ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
                                size_t max_len, double *out, size_t *len, double *ref0,
                                double *scratch)
 {
@@ -529,9 +529,9 @@ ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o, double mu_i
 /* -------------------------------------------------------- life cycle */
 
 ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_t n_orders,
-                               size_t max_len, ll_microfacet **out)
+                               size_t max_len, ll_microfacet_model **out)
 {
-    ll_microfacet *mf = ll_calloc(1, sizeof *mf);
+    ll_microfacet_model *mf = ll_calloc(1, sizeof *mf);
     *out = NULL;
     if (!mf)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory");
@@ -546,7 +546,7 @@ ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_
     return LL_OK;
 }
 
-void ll_microfacet_set_orders(ll_microfacet *mf, size_t n_orders)
+void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders)
 {
     mf->b_max = fmin(max_b(n_orders), mf->map_b_max);
 }
@@ -558,7 +558,7 @@ static void grid_entry_free(grid_entry *e)
     ll_free(e);
 }
 
-void ll_microfacet_destroy(ll_microfacet *mf)
+void ll_microfacet_destroy(ll_microfacet_model *mf)
 {
     size_t k;
     if (!mf)
@@ -588,7 +588,7 @@ static void chebyshev_values(double y, double *t)
  *              cos(l phi) dphi,
  * by Gauss-Legendre quadrature (the integrand is smooth; beyond the window
  * it is below 1e-12 and dropped). */
-static ll_status make_entry(const ll_microfacet *mf, size_t k, const double *x,
+static ll_status make_entry(const ll_microfacet_model *mf, size_t k, const double *x,
                             const double *w, grid_entry **out)
 {
     grid_entry *e = ll_calloc(1, sizeof *e);
@@ -667,7 +667,7 @@ oom:
 }
 
 typedef struct prepare_job {
-    ll_microfacet *mf;
+    ll_microfacet_model *mf;
     ll_watch *watch;        /* nullable; one unit per entry     */
     size_t *grid;           /* the grid points to compute       */
     double x[GAUSS_NODES];  /* Gauss-Legendre rule on [-1, 1]   */
@@ -686,14 +686,14 @@ static ll_status prepare_one(size_t index, void *ctx)
     return s;
 }
 
-ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t count)
+ll_status ll_microfacet_prepare(ll_microfacet_model *mf, const double *mu, size_t count)
 {
     return ll_microfacet_prepare_watched(mf, mu, count, NULL);
 }
 
 /* Room for every B a double holds (4 points per octave: ~4100), in
  * mf->grid; and the bytes of a "needed" mark per grid point. */
-static ll_status grow_grid(ll_microfacet *mf, size_t *n_grid, unsigned char **need)
+static ll_status grow_grid(ll_microfacet_model *mf, size_t *n_grid, unsigned char **need)
 {
     size_t k;
     *n_grid = grid_index(DBL_MAX) + 1;
@@ -717,7 +717,7 @@ static ll_status grow_grid(ll_microfacet *mf, size_t *n_grid, unsigned char **ne
 
 /* Mark the grid points that the pair uses: its (widened) lobe, and the
  * true lobe of a widened one (ll_microfacet_series). */
-static void mark_pair(const ll_microfacet *mf, double mu_o, double mu_i, unsigned char *need)
+static void mark_pair(const ll_microfacet_model *mf, double mu_o, double mu_i, unsigned char *need)
 {
     pair_plan p;
     if (!plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p))
@@ -729,7 +729,7 @@ static void mark_pair(const ll_microfacet *mf, double mu_o, double mu_i, unsigne
 }
 
 /* Compute the marked maps that are missing (in parallel). */
-static ll_status make_marked(ll_microfacet *mf, const unsigned char *need, size_t n_grid,
+static ll_status make_marked(ll_microfacet_model *mf, const unsigned char *need, size_t n_grid,
                              ll_watch *watch)
 {
     size_t k, n_items = 0;
@@ -743,7 +743,7 @@ static ll_status make_marked(ll_microfacet *mf, const unsigned char *need, size_
             job.grid[n_items++] = k;
     job.mf = mf;
     job.watch = watch;
-    s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w) : LL_OK;
+    s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w, NULL) : LL_OK;
     if (s == LL_OK)
         s = ll_watch_stage(watch, "interface", 0.05, 0.05, n_items)
                 ? ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled")
@@ -754,7 +754,7 @@ static ll_status make_marked(ll_microfacet *mf, const unsigned char *need, size_
     return s;
 }
 
-ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu, size_t count,
+ll_status ll_microfacet_prepare_watched(ll_microfacet_model *mf, const double *mu, size_t count,
                                         ll_watch *watch)
 {
     size_t a, b, n_grid;
@@ -780,7 +780,7 @@ done:
     return s;
 }
 
-ll_status ll_microfacet_prepare_pairs(ll_microfacet *mf, const double *mu_o,
+ll_status ll_microfacet_prepare_pairs(ll_microfacet_model *mf, const double *mu_o,
                                       const double *mu_i, size_t count)
 {
     size_t k, n_grid;
@@ -799,7 +799,7 @@ ll_status ll_microfacet_prepare_pairs(ll_microfacet *mf, const double *mu_o,
 
 typedef struct layer_job {
     const ll_layer *layer;
-    const ll_microfacet *mf;
+    const ll_microfacet_model *mf;
     size_t column_doubles;       /* scratch of one column               */
     double **column_memory;      /* [slots]: each thread's, reused      */
     size_t slots;
@@ -1017,24 +1017,50 @@ static ll_status finish_order0(void *ctx)
     return s;
 }
 
-ll_status ll_layer_set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
-                                  int conserve_energy, size_t n_orders_internal)
+ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out, const char *fn)
 {
-    return ll_layer_set_microfacet_ex(layer, eta_re, eta_im, alpha, conserve_energy,
-                                      n_orders_internal, NULL);
+    ll_microfacet defaults = LL_MICROFACET_INIT;
+    ll_status s;
+    *out = defaults;
+    if (!in)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: microfacet is NULL", fn);
+    s = ll_struct_read(out, sizeof *out, in, fn, "ll_microfacet");
+    if (s != LL_OK)
+        return s;
+    if (out->distribution == LL_MICROFACET_GGX)
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       "%s: the GGX distribution is not implemented yet; "
+                       "LL_MICROFACET_BECKMANN is",
+                       fn);
+    if (out->distribution != LL_MICROFACET_BECKMANN)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: distribution = %d is not an ll_microfacet_distribution", fn,
+                       out->distribution);
+    return LL_OK;
 }
 
-ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_im,
-                                     double alpha, int conserve_energy,
-                                     size_t n_orders_internal, const ll_monitor *monitor)
+ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfacet,
+                                  const ll_monitor *monitor)
 {
     static const char fn[] = "ll_layer_set_microfacet";
-    size_t n, m, h, k;
-    ll_microfacet *mf = NULL;
+    size_t n, m, h, k, n_orders_internal;
+    ll_microfacet_model *mf = NULL;
     double *mu = NULL, *order0 = NULL, *ref0 = NULL, *w = NULL, *work = NULL;
+    double eta_re, eta_im, alpha;
+    int conserve_energy;
     layer_job job;
     ll_watch watch;
-    ll_status s = check_arguments(layer, eta_re, eta_im, alpha);
+    ll_microfacet in;
+    ll_status s = layer ? ll_microfacet_read(microfacet, &in, fn)
+                        : ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layer is NULL", fn);
+    if (s != LL_OK)
+        return s;
+    eta_re = in.eta_re;
+    eta_im = in.eta_im;
+    alpha = in.alpha;
+    conserve_energy = in.compensate;
+    n_orders_internal = in.n_orders_internal;
+    s = check_arguments(layer, eta_re, eta_im, alpha);
     if (s == LL_OK)
         s = ll_watch_begin(&watch, monitor, fn);
     if (s != LL_OK)
@@ -1094,8 +1120,8 @@ ll_status ll_layer_set_microfacet_ex(ll_layer *layer, double eta_re, double eta_
         double *dense[2];
         dense[0] = order0;
         dense[1] = ref0;
-        s = ll_layer_build_by_columns_ex(layer, n, 0, layer_column, finish_order0, &job,
-                                         &job.builders, dense, ref0 ? 2 : 1, &watch, fn);
+        s = ll_layer_build_by_columns(layer, n, 0, layer_column, finish_order0, &job,
+                                      &job.builders, dense, ref0 ? 2 : 1, &watch, fn);
     }
     goto done;
 oom:

@@ -17,12 +17,19 @@
 #include "support/support.h"
 #include "support/watch.h"
 #include "layer/order.h"
+#include "layerlab/ll_layer.h"
 
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
 #define LL_MICROFACET_RELERR 1e-3
 
-typedef struct ll_microfacet ll_microfacet;
+typedef struct ll_microfacet_model ll_microfacet_model;
+
+/* The caller's ll_microfacet read up to its struct_size (defaults after),
+ * the distribution checked: GGX is LL_ERROR_UNSUPPORTED. The other fields
+ * are checked by their users. */
+LL_INTERNAL ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out,
+                                         const char *fn);
 
 /* The model: complex relative index, Beckmann roughness, the number of
  * Fourier orders n_orders it is resolved with (a lobe too sharp for them is
@@ -30,26 +37,26 @@ typedef struct ll_microfacet ll_microfacet;
  * be asked for. Arguments are not checked here. */
 LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha,
                                            size_t n_orders, size_t max_len,
-                                           ll_microfacet **out);
-LL_INTERNAL void ll_microfacet_destroy(ll_microfacet *mf);
+                                           ll_microfacet_model **out);
+LL_INTERNAL void ll_microfacet_destroy(ll_microfacet_model *mf);
 
 /* Resolve the lobes with n_orders (at most the n_orders of creation) from
  * now on: the series are then those of a model created with n_orders,
  * while the maps already prepared stay valid (they hold the orders of the
  * creation's). The resolution search (words/probe.h) so shares one model,
  * and its maps, between the order counts it tries. Not thread-safe. */
-LL_INTERNAL void ll_microfacet_set_orders(ll_microfacet *mf, size_t n_orders);
+LL_INTERNAL void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders);
 
 /* Precompute the least-squares fits that the pairs (mu[a], mu[b]),
  * a, b < count, will use (in parallel). Required before ll_microfacet_series
  * for those pairs. */
-LL_INTERNAL ll_status ll_microfacet_prepare(ll_microfacet *mf, const double *mu, size_t count);
+LL_INTERNAL ll_status ll_microfacet_prepare(ll_microfacet_model *mf, const double *mu, size_t count);
 /* The same, reporting to and polling a watch (nullable). */
-LL_INTERNAL ll_status ll_microfacet_prepare_watched(ll_microfacet *mf, const double *mu,
+LL_INTERNAL ll_status ll_microfacet_prepare_watched(ll_microfacet_model *mf, const double *mu,
                                                     size_t count, ll_watch *watch);
 
 /* The same for the pairs (mu_o[k], mu_i[k]), k < count, alone. */
-LL_INTERNAL ll_status ll_microfacet_prepare_pairs(ll_microfacet *mf, const double *mu_o,
+LL_INTERNAL ll_status ll_microfacet_prepare_pairs(ll_microfacet_model *mf, const double *mu_o,
                                                   const double *mu_i, size_t count);
 
 /* Doubles of scratch that ll_microfacet_series needs for max_len terms. */
@@ -62,7 +69,7 @@ LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);
  * reflects; the conductor's energy compensation needs it). scratch holds
  * ll_microfacet_scratch_size(max_len) doubles. Thread-safe for a prepared
  * mf; fails (LL_ERROR_INVALID_ARGUMENT) for a pair that was not prepared. */
-LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o, double mu_i,
+LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
                                            size_t max_len, double *out, size_t *len,
                                            double *ref0, double *scratch);
 
@@ -71,7 +78,7 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o,
  * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */
 LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
 
-/* The energy compensation (conserve_energy, words/microfacet_compensation.c):
+/* The energy compensation (ll_microfacet.compensate, words/microfacet_compensation.c):
  * order 0 of block q of a layer with h positive nodes gains
  * scale[q] u[q][i] v[q][j] at output node i, input node j, both indices
  * into the magnitudes of their half (the layer's j and j + h are -x_j and

@@ -110,7 +110,8 @@ void ll_microfacet_compensate_conductor(size_t h, const double *w, double eta_re
     wl = dot(w, lost, h);
     if (!(wl > 0.0))
         return;
-    f_avg = ll_fresnel_conductor_average(eta_re, eta_im);
+    /* (The interface's index was checked: this cannot fail.) */
+    (void)ll_fresnel_conductor_average(eta_re, eta_im, &f_avg);
     e_avg = 1.0 - wl * LL_INV_PI; /* hemispherical albedo of the mirror */
     factor = f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg));
     out->u[LL_BLOCK_RT] = out->v[LL_BLOCK_RT] = lost;

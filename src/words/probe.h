@@ -1,5 +1,5 @@
 /*
- * Choosing a resolution by a stated tolerance (issue 14): a fixed set of
+ * Choosing a resolution by a stated tolerance: a fixed set of
  * probe directions, what a layer of n nodes and m Fourier orders gives
  * there, and the search for the smallest (n, m) that agrees with twice the
  * resolution within the tolerance where the BSDF is above 1% of its peak.
@@ -65,14 +65,14 @@ LL_INTERNAL double ll_probe_error(const ll_probe_set *set, const double *v, cons
 /* The interface model that the evaluations of one search share (with
  * the maps of its series): every order, no widening (words/microfacet.h). */
 LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
-                                               ll_microfacet **out);
+                                               ll_microfacet_model **out);
 
 /* No widening: the orders a "true" series may have (more than any layer
  * holds: LL_MATERIAL_MAX_RESOLUTION is 100000). */
 #define LL_PROBE_TRUE_ORDERS ((size_t)1 << 20)
 
 /* The energy compensation of an interface layer at the probes: the terms
- * that ll_layer_set_microfacet(conserve_energy 1) on the Gauss-Lobatto
+ * that ll_layer_set_microfacet (compensate = 1) on the Gauss-Lobatto
  * nodes of n adds to order 0, from the albedos of every node pair
  * (O(n^2) order-0 series; words/interface_probe_compensation.c). They do
  * not depend on the layer's orders (a widened lobe keeps the order 0 of
@@ -82,13 +82,13 @@ LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, dou
  * 600 MB and most of a minute at alpha 0.02). watch (nullable) is polled
  * per column. */
 LL_INTERNAL ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
-                                                  ll_microfacet **out);
+                                                  ll_microfacet_model **out);
 typedef struct ll_probe_compensation {
     size_t h;
     double *memory;
     ll_microfacet_compensation terms;
 } ll_probe_compensation;
-LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet *mf, double eta_re, double eta_im,
+LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im,
                                                  size_t n, ll_watch *watch,
                                                  ll_probe_compensation *out);
 /* The term of block (LL_BLOCK_*) at output node i, input node j (indices
@@ -104,7 +104,7 @@ LL_INTERNAL void ll_probe_compensation_free(ll_probe_compensation *c);
  * term there when compensation (made for the same n) is not NULL.
  * values holds LL_PROBE_VALUES(set). watch (nullable) is polled per
  * pair. */
-LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet *mf,
+LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet_model *mf,
                                               const ll_probe_compensation *compensation,
                                               size_t n, size_t m, const ll_probe_set *set,
                                               ll_watch *watch, double *values);
@@ -124,7 +124,7 @@ LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, in
  * true series (no widening) truncated after L terms is within tolerance / 2
  * of the whole series at every azimuth where it is above LL_PROBE_FLOOR of
  * its group's peak; the largest such L over the pairs. */
-LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet *mf, double tolerance,
+LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
                                                 const ll_probe_set *set, size_t *n_orders);
 
 /* The Catmull-Rom stencil of ll_layer_eval for the cosine mu on the
@@ -163,12 +163,11 @@ LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn 
                                       size_t min_nodes, size_t limit, const char *what,
                                       size_t *n_nodes, size_t *n_orders, double *error);
 
-/* ll_heuristic_microfacet_ex and ll_heuristic_henyey_greenstein_ex
- * (heuristics.c) with a watch (nullable: polled, and one stage's progress
- * per search, LL_PROBE_SEARCH_UNITS) and, for the interface, whether the
- * layer gets the energy compensation (ll_layer_set_microfacet's
- * conserve_energy; the public call assumes it, as a build does by
- * default). */
+/* ll_resolution_search_microfacet and ll_resolution_search_henyey_greenstein
+ * (heuristics.c) on the parameters themselves, with a watch (nullable:
+ * polled, and one stage's progress per search, LL_PROBE_SEARCH_UNITS) and,
+ * for the interface, whether the layer gets the energy compensation
+ * (ll_microfacet.compensate). */
 LL_INTERNAL ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im,
                                            int compensate, double tolerance, double mu_min,
                                            ll_watch *watch, size_t *n_nodes, size_t *n_orders,

@@ -58,7 +58,7 @@ static int ll_fuzz_material_run(const uint8_t *data, size_t size, int choose)
         opts.n_nodes = 12;
         opts.n_orders = 4;
     }
-    s = ll_material_resolution(m, &opts, &n_nodes, &n_orders, &n_channels);
+    s = ll_material_resolution(m, &opts, NULL, &n_nodes, &n_orders, &n_channels);
     if (s == LL_OK)
         ll_fuzz_material_require(n_nodes >= 2 && n_orders >= 1 &&
                                  (n_channels == 1 || n_channels == 3));
@@ -70,10 +70,11 @@ static int ll_fuzz_material_run(const uint8_t *data, size_t size, int choose)
         opts.n_nodes = n_nodes;
         opts.n_orders = n_orders;
     }
-    s = ll_material_estimate(m, &opts, &est);
+    s = ll_material_estimate(m, &opts, &est, NULL);
     if (s == LL_OK)
         ll_fuzz_material_require(isfinite(est.peak_bytes) && est.peak_bytes >= 0.0 &&
-                                 isfinite(est.seconds) && est.seconds >= 0.0 &&
+                                 isfinite(est.add_entries) && est.add_entries >= 0.0 &&
+                                 isfinite(est.stored_values) && est.stored_values >= 0.0 &&
                                  (est.n_channels == 1 || est.n_channels == 3));
     else
         ll_fuzz_material_require(ll_last_error_message()[0] != '\0');

@@ -47,7 +47,7 @@ if ! command -v "$CLANG" >/dev/null 2>&1 ||
 fi
 
 # FUZZ_CFLAGS: extra compiler flags for both fuzzers (e.g. -O2)
-FLAGS="${FUZZ_CFLAGS:-} -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -Iinclude -Isrc -Itests/fuzz \
+FLAGS="${FUZZ_CFLAGS:-} -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -DLL_EXPERIMENTAL -Iinclude -Isrc -Itests/fuzz \
     -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined"
 LIMITS="-timeout=5 -rss_limit_mb=2048 -print_final_stats=1"
 

@@ -42,7 +42,8 @@ static void silence_other_ranks(int rank)
 static int refused_per_rank(const ll_material *m, const ll_build_options *o, int ranks)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    return ll_material_estimate(m, o, &e) == LL_OK &&
+    ll_monitor signals = monitor_for(NULL);
+    return ll_material_estimate(m, o, &e, &signals) == LL_OK &&
            e.peak_bytes / (double)ranks > (double)e.max_memory_bytes;
 }
 
@@ -62,6 +63,7 @@ int main(int argc, char **argv)
     ll_distribution dist;
     size_t n_channels = 0, c;
     ll_progress bar;
+    ll_monitor monitor = monitor_for(&bar);
     mpi_job job;
     char message[MESSAGE_SIZE];
     double start = now_seconds(), sent = 0.0;
@@ -107,25 +109,23 @@ int main(int argc, char **argv)
     }
 
     ll_progress_init(&bar, stderr, a.quiet || job.rank != 0, start);
-    o.progress = ll_progress_update;
-    o.progress_user = &bar;
     bar.scale = 0.97;
     mpi_distribution(&job, &dist);
     /* Every rank chooses the same resolution (the search is deterministic). */
     built = o;
-    ll_progress_update(0.0, "choosing the resolution", &bar);
+    ll_progress_update(&bar, 0.0, "choosing the resolution");
     choose_resolution(m, &built, &plan);
     if (textured) {
         /* Bases across the ranks (textured.c); the bar shows the bases
          * written, not each basis's own progress. */
-        built.progress = NULL;
         bar.scale = 1.0;
         s = textured_build(&job, m, &built, a.output, &cancel_flag,
-                           job.rank == 0 ? ll_progress_update : NULL, &bar, message,
-                           sizeof message);
+                           job.rank == 0 ? &monitor : NULL, message, sizeof message);
     } else {
-        s = ll_material_build_layers_distributed(m, &built, NULL, &dist, layers, &n_channels,
-                                                 NULL);
+        /* (Each rank's monitor sees its signal flag: a cancel on any rank
+         * stops all.) */
+        s = ll_material_build_layers_distributed(m, &built, &monitor, &dist, layers,
+                                                 &n_channels, NULL);
         snprintf(message, sizeof message, "%s", ll_last_error_message());
     }
     /* The bytes all ranks sent, for the summary. */
@@ -133,9 +133,9 @@ int main(int argc, char **argv)
     MPI_Reduce(&job.calls, &transfers, 1, MPI_UNSIGNED_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
     if (s == LL_OK && !textured) {
         bar.scale = 1.0;
-        ll_progress_update(0.97, "writing", &bar);
+        ll_progress_update(&bar, 0.97, "writing");
         if (job.rank == 0)
-            s = ll_material_write(m, &built, layers, n_channels, a.output);
+            s = ll_material_write(m, &built, layers, n_channels, a.output, &monitor);
         s = mpi_agree(&job, s, NULL, message, sizeof message);
     }
     if (s == LL_OK)

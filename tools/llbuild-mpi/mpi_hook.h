@@ -6,6 +6,7 @@
 #ifndef LLBUILD_MPI_HOOK_H
 #define LLBUILD_MPI_HOOK_H
 
+#define LL_EXPERIMENTAL /* ll_distribution */
 #include <layerlab.h>
 
 typedef struct mpi_job {

@@ -54,9 +54,29 @@ typedef struct queue {
     size_t n_channels;
     ll_status status;              /* the first failure, or LL_OK       */
     char text[2 * TEXT_BYTES];     /* its message                       */
-    ll_progress_fn progress;
-    void *progress_user;
+    const ll_monitor *shown;       /* the bases written (nullable)      */
 } queue;
+
+/* Show the bases written so far. */
+static void show_written(const queue *q)
+{
+    if (q->shown && q->shown->progress)
+        (void)q->shown->progress(q->shown->user, 0.97 * (double)q->written / (double)q->bases,
+                                 "bases");
+}
+
+/* A worker's builder stops at the signal flag. */
+typedef struct cancel_watch {
+    const volatile sig_atomic_t *cancel;
+} cancel_watch;
+
+static int cancel_from_flag(void *user, double fraction, const char *stage)
+{
+    const cancel_watch *c = user;
+    (void)fraction;
+    (void)stage;
+    return *c->cancel != 0;
+}
 
 static void send_bytes(const unsigned char *p, size_t size, int to)
 {
@@ -168,9 +188,7 @@ static void write_ready(queue *q)
             return;
         }
         q->written++;
-        if (q->progress)
-            q->progress(0.97 * (double)q->written / (double)q->bases, "bases",
-                        q->progress_user);
+        show_written(q);
     }
 }
 
@@ -285,9 +303,7 @@ static void build_own(queue *q, ll_material_builder *b, size_t basis)
         s = ll_bsdf_writer_add_basis(q->writer, (const ll_layer *const *)layers);
         if (s == LL_OK) {
             q->written++;
-            if (q->progress)
-                q->progress(0.97 * (double)q->written / (double)q->bases, "bases",
-                            q->progress_user);
+            show_written(q);
         }
     } else if (s == LL_OK) {
         s = pack_basis(layers, n_channels, &data, &size);
@@ -389,8 +405,7 @@ static ll_status run_worker(mpi_job *job, ll_material_builder *b, char *text, si
 
 ll_status textured_build(mpi_job *job, const ll_material *m, const ll_build_options *o,
                          const char *out_path, const volatile sig_atomic_t *cancel,
-                         ll_progress_fn progress, void *progress_user, char *message,
-                         size_t size)
+                         const ll_monitor *shown, char *message, size_t size)
 {
     ll_material_builder *b = NULL;
     char text[TEXT_BYTES];
@@ -399,6 +414,7 @@ ll_status textured_build(mpi_job *job, const ll_material *m, const ll_build_opti
     ll_status s;
 
     ll_monitor serving = LL_MONITOR_INIT;
+    cancel_watch flag;
 
     memset(&q, 0, sizeof q);
     text[0] = '\0';
@@ -408,8 +424,7 @@ ll_status textured_build(mpi_job *job, const ll_material *m, const ll_build_opti
         q.cancel = cancel;
         q.path = out_path;
         q.bases = ll_material_basis_count(m);
-        q.progress = progress;
-        q.progress_user = progress_user;
+        q.shown = shown;
         q.outstanding = calloc((size_t)job->size, sizeof *q.outstanding);
         q.stopped = calloc((size_t)job->size, sizeof *q.stopped);
         q.early = calloc(q.bases, sizeof *q.early);
@@ -421,9 +436,13 @@ ll_status textured_build(mpi_job *job, const ll_material *m, const ll_build_opti
         /* Rank 0 answers the workers from inside its own bases. */
         serving.progress = serve_from_monitor;
         serving.user = &q;
+    } else {
+        flag.cancel = cancel;
+        serving.progress = cancel_from_flag;
+        serving.user = &flag;
     }
     /* Every rank's builder (the options, the budget), agreed. */
-    s = mpi_agree(job, ll_material_builder_create(m, o, job->rank == 0 ? &serving : NULL, &b),
+    s = mpi_agree(job, ll_material_builder_create(m, o, &serving, &b),
                   NULL, message, size);
     if (s != LL_OK || job->rank != 0) {
         if (s == LL_OK)

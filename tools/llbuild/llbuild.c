@@ -4,11 +4,12 @@
  *     llbuild [options] MATERIAL.layers -o OUT.bsdf
  *
  * A thin program over the public API: ll_material_parse_file, then
- * ll_material_build_layers (progress on stderr, Ctrl-C cancels),
- * ll_material_write (atomic), and a summary read back from the file.
+ * ll_material_build (progress on stderr, Ctrl-C cancels; the file is
+ * written atomically), and a summary read back from the file.
  * Exit codes: 0 done, 1 bad input, 2 I/O, 3 numerical failure or out of
  * memory; an interrupted build ends by its signal and leaves no file.
  */
+#define LL_EXPERIMENTAL /* ll_material_estimate */
 #include <layerlab.h>
 
 #include <errno.h>
@@ -21,16 +22,36 @@
 #include <unistd.h>
 
 #include "progress.h"
+#include "time_model.h"
 
 #define EXIT_BAD_INPUT 1
 #define EXIT_IO 2
 #define EXIT_NUMERICAL 3
 
-/* Raised by SIGINT / SIGTERM; the library polls it inside the long loops
- * of every stage, on every thread (sig_atomic_t is int here, the type the
- * build options point to), so a build ends within about a second. */
+/* Raised by SIGINT / SIGTERM and returned by the monitor of every library
+ * call (below), which the library calls at least every 20 ms while it
+ * works; its workers then stop at their next poll, so a build ends within
+ * about a second. */
 static volatile sig_atomic_t cancel_flag;
 static volatile sig_atomic_t cancel_signal;
+
+/* The monitor's callback: the progress bar (user, nullable) and the
+ * signal flag, which cancels the call. */
+static int watch_build(void *user, double fraction, const char *stage)
+{
+    if (user)
+        ll_progress_update(user, fraction, stage);
+    return cancel_flag != 0;
+}
+
+/* A monitor showing its progress on bar (NULL: only the signal flag). */
+static ll_monitor monitor_for(ll_progress *bar)
+{
+    ll_monitor monitor = LL_MONITOR_INIT;
+    monitor.progress = watch_build;
+    monitor.user = bar;
+    return monitor;
+}
 
 static void on_signal(int sig)
 {
@@ -326,7 +347,8 @@ static double choose_resolution(const ll_material *m, ll_build_options *o,
                                 ll_build_estimate *plan)
 {
     double start = now_seconds();
-    if (ll_material_estimate(m, o, plan) == LL_OK) {
+    ll_monitor signals = monitor_for(NULL);
+    if (ll_material_estimate(m, o, plan, &signals) == LL_OK) {
         o->n_nodes = plan->n_nodes;
         o->n_orders = plan->n_orders;
     } else {
@@ -339,8 +361,9 @@ static double choose_resolution(const ll_material *m, ll_build_options *o,
 static int print_resolution(const ll_material *m, const ll_build_options *o)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    double start = now_seconds();
-    ll_status s = ll_material_estimate(m, o, &e);
+    ll_monitor signals = monitor_for(NULL);
+    double start = now_seconds(), wall, cpu;
+    ll_status s = ll_material_estimate(m, o, &e, &signals);
     if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
         return exit_code_for(s);
@@ -358,10 +381,10 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
            e.doublings, e.doublings == 1 ? "" : "s");
     printf("memory       about %.0f MiB at its peak (budget %.0f MiB)\n",
            e.peak_bytes / 1048576.0, (double)e.max_memory_bytes / 1048576.0);
+    llbuild_time(&e, &wall, &cpu);
     printf("time         about %.2f s on %zu thread%s, %.2f s of CPU (rates of a 2-core "
            "x86-64 with OpenBLAS)\n",
-           e.seconds, o->threads ? o->threads : ll_get_thread_count(),
-           (o->threads ? o->threads : ll_get_thread_count()) == 1 ? "" : "s", e.cpu_seconds);
+           wall, e.threads, e.threads == 1 ? "" : "s", cpu);
     if (e.over_budget) {
         fprintf(stderr,
                 "llbuild: a build would be refused: it needs more than the memory budget "
@@ -376,7 +399,8 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
 static int refused_by_budget(const ll_material *m, const ll_build_options *o)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
-    return ll_material_estimate(m, o, &e) == LL_OK && e.over_budget;
+    ll_monitor signals = monitor_for(NULL);
+    return ll_material_estimate(m, o, &e, &signals) == LL_OK && e.over_budget;
 }
 
 /* Directional albedo of the built layers at a few incident angles. */
@@ -509,7 +533,6 @@ static void options_from_args(const args *a, ll_build_options *o)
     o->n_channels = a->channels;
     o->threads = a->threads;
     o->error_goal = a->error;
-    o->cancel = &cancel_flag;
     o->max_memory_bytes = a->max_memory;
     o->tolerance = a->tolerance;
     o->mu_min = a->mu_min;
@@ -524,6 +547,7 @@ int main(int argc, char **argv)
     ll_build_estimate plan = LL_BUILD_ESTIMATE_INIT;
     channel_summary summary;
     ll_progress bar;
+    ll_monitor monitor = monitor_for(&bar);
     double start = now_seconds();
     ll_status s;
     int code;
@@ -551,18 +575,16 @@ int main(int argc, char **argv)
     }
 
     ll_progress_init(&bar, stderr, a.quiet, start);
-    o.progress = ll_progress_update;
-    o.progress_user = &bar;
     /* Writing a file takes a few percent of a build. */
     bar.scale = 0.97;
     built = o;
-    ll_progress_update(0.0, "choosing the resolution", &bar);
+    ll_progress_update(&bar, 0.0, "choosing the resolution");
     choose_resolution(m, &built, &plan);
     if (ll_material_axis_count(m) > 0) {
         /* A swept material: its bases one at a time into one textured file
          * (the bar shows "basis 3/64: ..."); the library writes it. */
         bar.scale = 1.0;
-        s = ll_material_build(m, &built, a.output);
+        s = ll_material_build(m, &built, &monitor, a.output);
     } else {
         /* Each channel goes to the file as soon as its stack is complete
          * (the summary's albedo is taken from it on the way). */
@@ -570,7 +592,7 @@ int main(int argc, char **argv)
         built.channel_done = remember_channel;
         built.channel_done_user = &summary;
         bar.scale = 1.0;
-        s = ll_material_build(m, &built, a.output);
+        s = ll_material_build(m, &built, &monitor, a.output);
     }
     if (s == LL_OK)
         file_is_complete();

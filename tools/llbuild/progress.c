@@ -31,9 +31,8 @@ void ll_progress_init(ll_progress *p, FILE *out, int quiet, double start)
     p->scale = 1.0;
 }
 
-void ll_progress_update(double fraction, const char *stage, void *user)
+void ll_progress_update(ll_progress *p, double fraction, const char *stage)
 {
-    ll_progress *p = user;
     double now = now_seconds(), elapsed = now - p->start;
     int changed, percent, decile;
     char el[32], eta[32];

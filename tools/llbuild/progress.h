@@ -21,9 +21,9 @@ typedef struct ll_progress {
 } ll_progress;
 
 void ll_progress_init(ll_progress *p, FILE *out, int quiet, double start);
-/* An ll_progress_fn: user is the ll_progress. The library's final "done"
- * is not shown (writing follows). */
-void ll_progress_update(double fraction, const char *stage, void *user);
+/* Show the fraction done and the stage (a monitor's report). The
+ * library's final "done" is not shown (writing follows). */
+void ll_progress_update(ll_progress *p, double fraction, const char *stage);
 /* Clear the terminal line (or print the final plain line). */
 void ll_progress_finish(ll_progress *p, int ok);
 

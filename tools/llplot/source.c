@@ -76,7 +76,7 @@ static int open_compiled_file(const llplot_options *o, llplot_source *s,
         return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot create a temporary directory: %s", dir,
                            strerror(errno));
     snprintf(path, sizeof path, "%s/preview.bsdf", dir);
-    st = ll_bsdf_write(path, (const ll_layer *const *)s->layers, s->n_layers, header);
+    st = ll_bsdf_write(path, (const ll_layer *const *)s->layers, s->n_layers, header, NULL);
     if (st == LL_OK)
         st = ll_bsdf_open(path, NULL, &s->bsdf);
     if (st != LL_OK)
@@ -91,7 +91,8 @@ static int open_compiled_file(const llplot_options *o, llplot_source *s,
  * file in a private temporary directory, opened, and removed at once; the
  * source then is that file, drawn like a textured .bsdf. */
 static int build_swept_file(const llplot_options *o, const ll_material *material,
-                            const ll_build_options *opts, llplot_source *s)
+                            const ll_build_options *opts, const ll_monitor *shown,
+                            llplot_source *s)
 {
     const char *tmp = getenv("TMPDIR");
     char dir[4096], path[4200];
@@ -105,8 +106,8 @@ static int build_swept_file(const llplot_options *o, const ll_material *material
         return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot create a temporary directory: %s", dir,
                            strerror(errno));
     snprintf(path, sizeof path, "%s/swept.bsdf", dir);
-    st = ll_material_build(material, opts, path);
-    if (opts->progress)
+    st = ll_material_build(material, opts, shown, path);
+    if (shown)
         fputc('\n', stderr);
     if (st == LL_OK)
         st = ll_bsdf_open(path, NULL, &s->bsdf);
@@ -118,18 +119,19 @@ static int build_swept_file(const llplot_options *o, const ll_material *material
 
 /* Compiling a glossy stack takes seconds: show how far it got when stderr
  * is a terminal (one line, rewritten in place). */
-/* What show_progress prints: the progress callback's user pointer is not
- * const, the input name is, so it travels inside this. */
+/* What show_progress prints: the monitor's user pointer is not const, the
+ * input name is, so it travels inside this. */
 typedef struct progress_label {
     const char *input;
 } progress_label;
 
-static void show_progress(double fraction, const char *stage, void *user)
+static int show_progress(void *user, double fraction, const char *stage)
 {
     const progress_label *label = user;
     fprintf(stderr, "\rllplot: compiling %s: %3.0f%% %-24s", label->input,
             100.0 * fraction, stage ? stage : "");
     fflush(stderr);
+    return 0;
 }
 
 static int compile_material(const llplot_options *o, int need_sampling, llplot_source *s)
@@ -138,6 +140,8 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     ll_build_options opts = LL_BUILD_OPTIONS_INIT;
     ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
     progress_label label;
+    ll_monitor monitor = LL_MONITOR_INIT;
+    const ll_monitor *shown = NULL;
     size_t n_nodes = 0, n_orders = 0, n_channels = 0;
     ll_status st = ll_material_parse_file(o->input, &material);
     int code = LLPLOT_EXIT_OK;
@@ -147,11 +151,12 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     opts.n_orders = o->orders;
     opts.threads = o->threads;
     if (isatty(STDERR_FILENO)) {
-        opts.progress = show_progress;
         label.input = o->input;
-        opts.progress_user = &label;
+        monitor.progress = show_progress;
+        monitor.user = &label;
+        shown = &monitor;
     }
-    st = ll_material_resolution(material, &opts, &n_nodes, &n_orders, &n_channels);
+    st = ll_material_resolution(material, &opts, NULL, &n_nodes, &n_orders, &n_channels);
     if (st != LL_OK) {
         code = llplot_fail_ll(st, o->input);
         goto done;
@@ -169,11 +174,11 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     if (ll_material_basis_count(material) > 1) {
         /* A swept material is one textured file, not one set of layers:
          * build it and draw the file (its bases at the resolution above). */
-        code = build_swept_file(o, material, &opts, s);
+        code = build_swept_file(o, material, &opts, shown, s);
         goto done;
     }
-    st = ll_material_build_layers(material, &opts, s->layers, &s->n_layers, &header);
-    if (opts.progress)
+    st = ll_material_build_layers(material, &opts, shown, s->layers, &s->n_layers, &header);
+    if (shown)
         fputc('\n', stderr);
     if (st != LL_OK) {
         code = llplot_fail_ll(st, o->input);
@@ -228,7 +233,9 @@ void llplot_source_eval(const llplot_source *s, double mu_i, double mu_o, double
     if (s->n_layers > 0) {
         /* The layers themselves: exact node values, no series truncation. */
         for (c = 0; c < 3; ++c)
-            rgb[c] = ll_layer_eval(s->layers[c < s->n_layers ? c : 0], mu_o, mu_i, phi_d);
+            if (ll_layer_eval(s->layers[c < s->n_layers ? c : 0], mu_i, mu_o, phi_d, &rgb[c]) !=
+                LL_OK)
+                rgb[c] = 0.0;
         return;
     }
     if (ll_bsdf_eval(s->bsdf, mu_i, mu_o, phi_d, s->basis_coeffs, rgb) != LL_OK)

@@ -132,12 +132,12 @@ static void write_diffuse_bsdf(const char *path)
     double nodes[DIFFUSE_NODES], weights[DIFFUSE_NODES];
     ll_layer *layers[3];
     int k;
-    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights), LL_OK);
+    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights, NULL), LL_OK);
     for (k = 0; k < 3; ++k) {
         assert_int_equal(ll_layer_create(nodes, weights, DIFFUSE_NODES, 1, &layers[k]), LL_OK);
-        assert_int_equal(ll_layer_set_diffuse(layers[k], albedo[k]), LL_OK);
+        assert_int_equal(ll_layer_set_diffuse(layers[k], albedo[k], NULL), LL_OK);
     }
-    assert_int_equal(ll_bsdf_write(path, (const ll_layer *const *)layers, 3, NULL), LL_OK);
+    assert_int_equal(ll_bsdf_write(path, (const ll_layer *const *)layers, 3, NULL, NULL), LL_OK);
     for (k = 0; k < 3; ++k)
         ll_layer_destroy(layers[k]);
 }
@@ -151,7 +151,7 @@ static void write_diffuse_bsdf(const char *path)
 static double diffuse_grazing_limit(void)
 {
     double nodes[DIFFUSE_NODES], weights[DIFFUSE_NODES];
-    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights), LL_OK);
+    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights, NULL), LL_OK);
     return nodes[DIFFUSE_NODES / 2 + 1];
 }
 
@@ -181,13 +181,13 @@ static void textured_path(char *out, size_t size)
     if (file_exists(out))
         return;
     opts.metadata = "{\"parameters\": [\"albedo\", \"dim\"]}";
-    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights), LL_OK);
+    assert_int_equal(ll_quad_gauss_lobatto(DIFFUSE_NODES, nodes, weights, NULL), LL_OK);
     for (k = 0; k < 4; ++k) { /* parameter 0 fastest */
         assert_int_equal(ll_layer_create(nodes, weights, DIFFUSE_NODES, 1, &layers[k]), LL_OK);
-        assert_int_equal(ll_layer_set_diffuse(layers[k], textured_albedo(k % 2, k / 2)), LL_OK);
+        assert_int_equal(ll_layer_set_diffuse(layers[k], textured_albedo(k % 2, k / 2), NULL), LL_OK);
     }
     assert_int_equal(ll_bsdf_write_textured(out, (const ll_layer *const *)layers, 1, 2, counts,
-                                            positions, &opts),
+                                            positions, &opts, NULL),
                      LL_OK);
     for (k = 0; k < 4; ++k)
         ll_layer_destroy(layers[k]);

@@ -9,6 +9,7 @@
  * before it allocates, as the .bsdf reader does with a file.
  */
 #include "layer/layer.h"
+#include "layerlab/ll_distribution.h"
 
 #include <string.h>
 
@@ -33,9 +34,6 @@ ll_status ll_layer_pack(const ll_layer *layer, void *buffer, size_t size)
     size_t k;
     if (!layer || !buffer)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_layer_pack: layer or buffer is NULL");
-    if (layer->share)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_layer_pack: the layer holds one rank's orders only");
     if (size < ll_layer_pack_size(layer))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_layer_pack: the buffer holds %zu bytes; the layer needs %zu", size,

@@ -9,7 +9,7 @@
  * once a failure is agreed no rank makes any further call. So the calls
  * match one for one on every rank whatever fails where.
  */
-#include "layer/layer.h"
+#include "distribution/share.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -19,12 +19,27 @@
 #define MESSAGE_BYTES 1024
 #define STATUS_BYTES sizeof(int32_t)
 
-int ll_layer_owns_order(const ll_layer *layer, size_t k)
+static ll_status split_agree(void *ctx, ll_status local)
 {
-    return !layer->share || ll_share_owner(layer->share, k) == layer->share->rank;
+    return ll_share_agree(ctx, local);
 }
 
-size_t ll_share_owner(const ll_share *share, size_t k) { return k % share->n_ranks; }
+static ll_status split_exchange(void *ctx, const unsigned char *send, const size_t *send_bytes,
+                                unsigned char **recv, size_t *recv_bytes)
+{
+    return ll_share_exchange(ctx, send, send_bytes, recv, recv_bytes);
+}
+
+ll_split ll_share_split(ll_share *share)
+{
+    ll_split split;
+    split.rank = share->rank;
+    split.n_ranks = share->n_ranks;
+    split.ctx = share;
+    split.agree = split_agree;
+    split.exchange = split_exchange;
+    return split;
+}
 
 static ll_status call_alltoallv(ll_share *share, const void *send, const size_t *send_bytes,
                                 void *recv, const size_t *recv_bytes)
@@ -236,9 +251,6 @@ ll_status ll_share_gather_layers(ll_share *share, ll_layer *const *layers, size_
         if (s == LL_OK && p != end)
             s = ll_fail(LL_ERROR_FORMAT, "rank %zu sent more than its orders", r);
     }
-    if (s == LL_OK && share->rank == 0)
-        for (c = 0; c < n_channels; ++c)
-            layers[c]->share = NULL;
     ll_free(recv);
     return s;
 }
