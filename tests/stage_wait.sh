@@ -4,7 +4,8 @@
 # progress lines, "llbuild:  40% adding (...)") goes to a fifo that this
 # shell reads line by line as the lines are written; stage_wait returns as
 # soon as a line names the stage. A watchdog ends the build after
-# STAGE_TIMEOUT seconds (default 300), far beyond any of these builds, so
+# STAGE_TIMEOUT seconds (default 300), far beyond any of these builds (its
+# children first: an MPI build's ranks under mpirun), so
 # that a build that never reports the stage, or ignores a signal, fails the
 # test with a message instead of hanging it.
 #
@@ -43,6 +44,7 @@ stage_start() {
         nap=$!
         wait $nap
         : >"$stage_dir/timed_out"
+        pkill -9 -P "$stage_pid" 2>/dev/null
         kill -9 "$stage_pid" 2>/dev/null
     ) 2>/dev/null &
     stage_dog=$!
@@ -59,7 +61,8 @@ stage_wait() {
 }
 
 stage_finish() {
-    cat <&3 >>"$stage_log"
+    # Until every writer is gone (an MPI build's ranks too), bounded.
+    timeout "$STAGE_TIMEOUT" cat <&3 >>"$stage_log"
     exec 3<&-
     # (The braces keep the shell's "Terminated" for a signalled job quiet.)
     { wait "$stage_pid"; } 2>/dev/null
