@@ -10,7 +10,7 @@ tmp=$(mktemp -d /tmp/llbuild_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
 passed=0
 failed=0
-. "$(dirname "$0")/stage_wait.sh"
+. "$(dirname "$0")/lib/stage_wait.sh"
 
 ok() { passed=$((passed + 1)); }
 bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
@@ -144,7 +144,7 @@ contains "$tmp/out" "16 nodes x 8 Fourier orders, 1 channel" "--mono"
 
 # --- interrupted builds leave no file. A thick forward-scattering medium
 # (about 0.5 s of doubling on 300 nodes, idle): signalled as soon as its
-# progress names the medium (tests/stage_wait.sh), not after a sleep.
+# progress names the medium (tests/lib/stage_wait.sh), not after a sleep.
 printf 'medium albedo=0.99 g=0.9 tau=1e9\n' >"$tmp/slow.layers"
 mkdir -p "$tmp/slow"
 for sig in INT TERM; do

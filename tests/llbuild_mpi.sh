@@ -105,13 +105,13 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 
 # --- a rank killed (SIGKILL, no chance to clean up) and an interrupt to
 # mpirun: no file, no temporary. The kill and the interrupt follow rank 0's
-# progress line naming a stage (tests/stage_wait.sh), not a sleep: the
+# progress line naming a stage (tests/lib/stage_wait.sh), not a sleep: the
 # first layer's ("conductor interface", 0.6 s into a 4.4 s build on 3 ranks
 # of an idle 2-core machine; mpirun takes up to a second to pass an
 # interrupt on), and for the textured build the first "bases" line (the
 # writer open, one of 8 bases in it; the rest come within 1.3 s) for the
 # kill and its first line for the interrupt.
-. "$(dirname "$0")/stage_wait.sh"
+. "$(dirname "$0")/lib/stage_wait.sh"
 mkdir -p "$tmp/run"
 cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1

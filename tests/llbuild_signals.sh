@@ -1,7 +1,7 @@
 #!/bin/sh
 # llbuild under SIGINT / SIGTERM at every stage of a build: quadrature,
 # diffuse, interface, phase function, doubling, adding, writing. The test
-# reads llbuild's progress as it is written (tests/stage_wait.sh) and
+# reads llbuild's progress as it is written (tests/lib/stage_wait.sh) and
 # signals it as soon as a line names the stage, then checks the exit status
 # (130 for SIGINT, 143 for SIGTERM: death by the signal), the message, that
 # no file and no temporary is left, and that the last progress line is
@@ -17,7 +17,7 @@ tmp=$(mktemp -d /tmp/llbuild_signals.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
 passed=0
 failed=0
-. "$(dirname "$0")/stage_wait.sh"
+. "$(dirname "$0")/lib/stage_wait.sh"
 
 ok() { passed=$((passed + 1)); }
 bad() { failed=$((failed + 1)); echo "FAIL: $*"; }

@@ -1,13 +1,14 @@
 # Sourced by the tests that signal or kill a running build (llbuild.sh,
-# llbuild_signals.sh, llbuild_mpi.sh): the signal follows the build's own
-# report of the stage, never a sleep. The build's stderr (llbuild's plain
-# progress lines, "llbuild:  40% adding (...)") goes to a fifo that this
-# shell reads line by line as the lines are written; stage_wait returns as
-# soon as a line names the stage. A watchdog ends the build after
-# STAGE_TIMEOUT seconds (default 300), far beyond any of these builds (its
-# children first: an MPI build's ranks under mpirun), so
-# that a build that never reports the stage, or ignores a signal, fails the
-# test with a message instead of hanging it.
+# llbuild_signals.sh, llbuild_mpi.sh; kept out of tests/*.sh, which the
+# suite runs): the signal follows the build's own report of the stage,
+# never a sleep. The build's stderr (llbuild's plain progress lines,
+# "llbuild:  40% adding (...)") goes to a fifo that this shell reads line
+# by line as the lines are written; stage_wait returns as soon as a line
+# names the stage. A watchdog ends the build (its children first: an MPI
+# build's ranks under mpirun) after STAGE_TIMEOUT seconds (default 300),
+# far beyond any of these builds, so that a build that never reports the
+# stage, or ignores a signal, fails the test with a message instead of
+# hanging it.
 #
 #   stage_start DIR CMD ARGS...  run CMD in the background, stdout to
 #                                DIR/stdout, stderr through DIR/fifo; sets
