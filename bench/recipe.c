@@ -188,6 +188,20 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
     free(weights);
 }
 
+/* x in the fewest significant digits that read back as x (the material
+ * text shows 0.1, not 0.10000000000000001, and stays exact). */
+static const char *exact(double x, char buf[32])
+{
+    int digits;
+    for (digits = 1; digits < 17; ++digits) {
+        snprintf(buf, 32, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x)
+            return buf;
+    }
+    snprintf(buf, 32, "%.17g", x);
+    return buf;
+}
+
 /* The recipe's stack in the material language, at its resolution: what
  * the report names as the benchmark's material, and what the estimate
  * reads (the same layers; the estimate does not depend on the metal's
@@ -195,28 +209,31 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
  * line per word. */
 static void material_text(const recipe *r, char *text, size_t size)
 {
+    char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
     size_t len;
     len = (size_t)snprintf(text, size, "set nodes=%zu orders=%zu channels=3\n", r->n_nodes,
                            r->n_orders);
     if (r->coat_alpha > 0.0 && len < size)
-        len += (size_t)snprintf(text + len, size - len, "dielectric eta=%.17g alpha=%.17g\n",
-                                coat_eta, r->coat_alpha);
+        len += (size_t)snprintf(text + len, size - len, "dielectric eta=%s alpha=%s\n",
+                                exact(coat_eta, a), exact(r->coat_alpha, b));
     if (r->medium && len < size)
-        len += (size_t)snprintf(text + len, size - len,
-                                "medium albedo=%.17g,%.17g,%.17g g=%.17g tau=%.17g\n",
-                                r->medium->albedo[0], r->medium->albedo[1],
-                                r->medium->albedo[2], r->medium->g, r->medium->tau);
+        len += (size_t)snprintf(text + len, size - len, "medium albedo=%s,%s,%s g=%s tau=%s\n",
+                                exact(r->medium->albedo[0], a), exact(r->medium->albedo[1], b),
+                                exact(r->medium->albedo[2], c), exact(r->medium->g, d),
+                                exact(r->medium->tau, e));
     if (len >= size)
         bench_die("recipe: the material text of %s is too long", r->name);
     if (r->base == BASE_GOLD)
         len += (size_t)snprintf(text + len, size - len,
-                                "conductor eta=%.17g+%.17gi,%.17g+%.17gi,%.17g+%.17gi "
-                                "alpha=%.17g\n",
-                                gold_eta[0], gold_k[0], gold_eta[1], gold_k[1], gold_eta[2],
-                                gold_k[2], r->base_alpha);
+                                "conductor eta=%s+%si,%s+%si,%s+%si alpha=%s\n",
+                                exact(gold_eta[0], a), exact(gold_k[0], b),
+                                exact(gold_eta[1], c), exact(gold_k[1], d),
+                                exact(gold_eta[2], e), exact(gold_k[2], f),
+                                exact(r->base_alpha, g));
     else
-        len += (size_t)snprintf(text + len, size - len, "diffuse albedo=%.17g,%.17g,%.17g\n",
-                                diffuse_albedo[0], diffuse_albedo[1], diffuse_albedo[2]);
+        len += (size_t)snprintf(text + len, size - len, "diffuse albedo=%s,%s,%s\n",
+                                exact(diffuse_albedo[0], a), exact(diffuse_albedo[1], b),
+                                exact(diffuse_albedo[2], c));
     if (len >= size)
         bench_die("recipe: the material text of %s is too long", r->name);
 }

@@ -318,6 +318,10 @@ static void print_scaling(FILE *out, const bench_store *s)
     char a[128], b[128], c[32];
     fprintf(out, "\n4. Scaling: coated-gold (library, OpenMP and OpenBLAS limited to the "
                  "thread count)\n");
+    if (stats_of(s, "scaling.coated-gold.t%zu.wall", (size_t)1).count == 0) {
+        fprintf(out, "not run (make bench-full runs it)\n");
+        return;
+    }
     fprintf(out, "%-8s %-24s %-24s %-10s\n", "threads", "wall s", "CPU s", "speedup");
     for (t = 1; t <= 4096; ++t) {
         bench_stats w = stats_of(s, "scaling.coated-gold.t%zu.wall", t);
@@ -354,6 +358,20 @@ static void print_tolerance(FILE *out, const bench_store *s)
                  "(one run each; error: worst relative difference from the %g build where "
                  "it is above 1%% of its peak, reflection at mu 0.1 .. 1)\n",
             bench_tolerances[BENCH_TOLERANCE_COUNT - 1]);
+    for (r = 0, t = 0; r < BENCH_RECIPE_COUNT; ++r) {
+        char key[160];
+        snprintf(key, sizeof key, "tolerance.%s.%g.material", bench_recipes[r].name,
+                 bench_tolerances[0]);
+        if (bench_store_info_get(s, key)) {
+            fprintf(out, "%-20s material: %s\n", bench_recipes[r].name,
+                    bench_store_info_get(s, key));
+            ++t;
+        }
+    }
+    if (t == 0) {
+        fprintf(out, "not run (make bench-full runs it)\n");
+        return;
+    }
     fprintf(out, "%-20s %-9s %-14s %-9s %-9s %-9s %-9s %-9s\n", "recipe", "tolerance",
             "nodes x orders", "choose s", "wall s", "peak MiB", "file MB", "error");
     for (r = 0; r < BENCH_RECIPE_COUNT; ++r)
