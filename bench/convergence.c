@@ -4,8 +4,9 @@
  * resolution table of docs/method.md and the scans behind its section
  * "Between the probes". Run by `make bench-full` (bench/run.sh --full);
  * shares its points, lean layers and checks with the test through
- * tests/convergence_util.h. Every case names its material (the word's
- * text) in its line.
+ * tests/convergence_util.h. Every line names what it built: the word's
+ * text (interfaces, slabs), HG's asymmetry (a phase function alone,
+ * albedo 1), the table's row.
  *
  * usage: convergence full      the grid: 8 interfaces x 6 roughnesses at
  *                              the tolerance 1% against twice the chosen
@@ -175,16 +176,17 @@ static size_t slabs_grid(void)
         o.n_channels = 1;
         assert_int_equal(ll_material_resolution(mat, &o, &n, &m, NULL), LL_OK);
         if (peak_bytes(mat, 2 * n, 2 * m) > FULL_GRID_BYTES) {
-            printf("  slab g=%g n %zu m %zu: skipped (twice it needs %.1f GB)\n", gs[gi], n, m,
-                   peak_bytes(mat, 2 * n, 2 * m) / 1e9);
+            printf("  %.*s n %zu m %zu: skipped (twice it needs %.1f GB)\n",
+                   (int)strcspn(text, "\n"), text, n, m, peak_bytes(mat, 2 * n, 2 * m) / 1e9);
             ll_material_destroy(mat);
             continue;
         }
         a = build_one(mat, n, m);
         b = build_one(mat, 2 * n, 2 * m);
         e = worst_difference(s, a, b, &where);
-        printf("  slab g=%g tau 1 n %zu m %zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n",
-               gs[gi], n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi);
+        printf("  %.*s n %zu m %zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f\n",
+               (int)strcspn(text, "\n"), text, n, m, e, s->p[where].mu_o, s->p[where].mu_i,
+               s->p[where].phi);
         fflush(stdout);
         if (e > 0.01)
             ++failed;
