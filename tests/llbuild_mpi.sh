@@ -108,9 +108,10 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 # progress line naming a stage (tests/lib/stage_wait.sh), not a sleep: the
 # first layer's ("conductor interface", 0.6 s into a 4.4 s build on 3 ranks
 # of an idle 2-core machine; mpirun takes up to a second to pass an
-# interrupt on), and for the textured build the first "bases" line (the
-# writer open, one of 8 bases in it; the rest come within 1.3 s) for the
-# kill and its first line for the interrupt.
+# interrupt on), and for the textured build its first line ("choosing the
+# resolution": its shared words take 5 s before the first basis is written,
+# and the 8 bases then follow within 1.3 s, too close to the end for a
+# kill to land before the file is committed).
 . "$(dirname "$0")/lib/stage_wait.sh"
 mkdir -p "$tmp/run"
 cat >"$tmp/long.layers" <<'LAYERS'
@@ -122,6 +123,7 @@ LAYERS
 # start_until LAYERS PATTERN: start a build of LAYERS on 3 ranks; return
 # once rank 0's progress matches PATTERN (1: it never did).
 start_until() {
+    rm -f "${1%.layers}.bsdf"
     stage_start "$tmp/run" mpirun --oversubscribe -n 3 "$mpi" --threads 1 "$1" \
         -o "${1%.layers}.bsdf"
     launcher=$stage_pid
@@ -161,7 +163,7 @@ medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=[0.1 0.2]
 set nodes=200 orders=400
 LAYERS
-if start_until "$tmp/longtex.layers" "*% bases (*"; then
+if start_until "$tmp/longtex.layers" "*% choosing the resolution (*"; then
     victim=$(pgrep -P "$launcher" | sed -n 3p)
     [ -n "$victim" ] && kill -9 "$victim"
 fi
