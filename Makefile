@@ -6,7 +6,7 @@
 #   make test TSAN=1   the concurrent reader tests under ThreadSanitizer (build-tsan/)
 #   make abi-baseline  rewrite abi/*.abi from the libraries just built (see abi/README.md)
 #   DEV=1 (or CI=true) turns warnings into errors
-#   make bench         benchmarks (never part of `make test`)
+#   make bench         the headline benchmarks (make bench-full: all); never in `make test`
 #   make install PREFIX=/usr/local
 #   make deps          install missing Debian packages (run by the others)
 
@@ -124,7 +124,7 @@ TEST_CFLAGS := -std=c99 $(OPT) -g $(WARN) -Wno-unused-parameter -D_POSIX_C_SOURC
 TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz lib tools test test-c test-python \
-        test-tsan bench install uninstall clean fuzz demo abi-baseline print-reader-src
+        test-tsan bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src
 all: deps-tools lib tools
 
 # The Debian packages, by who needs them (scripts/deps.sh): `make lib`
@@ -283,14 +283,16 @@ endif
 abi-baseline: lib
 	@BUILD=$(BUILD) sh tests/abidiff.sh --write-baseline
 
+# The headline figures (under 10 minutes on 2 cores) and everything
+# (hours: the full-size dust on gold, the tolerance's cost, MPI scaling, the
+# convergence grid); results in build-bench/bench/results.json.
 bench:
 	@$(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
-	@if [ -f bench/run.sh ]; then BUILD=build-bench sh bench/run.sh; fi
-	@# The whole convergence grid of issue 14 (CI runs a subset); LL_BENCH_CONVERGENCE=0 skips it.
-	@if [ "$${LL_BENCH_CONVERGENCE:-1}" != 0 ]; then \
-	  $(MAKE) --no-print-directory BUILD=build-bench OPT='-O3 -march=x86-64-v2' \
-	    build-bench/tests/test_convergence && \
-	  LL_CONVERGENCE_FULL=1 LL_CONVERGENCE_VERBOSE=1 build-bench/tests/test_convergence; fi
+	@BUILD=build-bench sh bench/run.sh
+
+bench-full:
+	@$(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
+	@BUILD=build-bench sh bench/run.sh --full
 
 fuzz:
 	@if [ -f tests/fuzz/run.sh ]; then BUILD=$(BUILD) sh tests/fuzz/run.sh "$(FUZZ_SECONDS)" $(FUZZ_TARGET); fi

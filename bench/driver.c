@@ -4,8 +4,16 @@
  * times, collects the samples, prints the table and writes the JSON file.
  *
  * usage: driver --bin DIR --work DIR --testdata DIR --json PATH
- *               [--runs N] [--original DIR] [--commit TEXT] [--compiler TEXT]
+ *               [--runs N] [--full 0|1] [--original DIR] [--llbuild PATH]
+ *               [--commit TEXT] [--compiler TEXT]
  *
+ *   --full 0    (`make bench`) the headline figures: the three recipes, the
+ *               dust on gold at (400, 1600) (recipe and llbuild), adding
+ *               against dgemm, evaluation and sampling per call
+ *   --full 1    (`make bench-full`) also the dust at (400, 800) and at its
+ *               own (1098, 4194), the slab against doubling, coated gold at
+ *               1, 2, ... threads, batched evaluation and the tolerance's
+ *               cost
  *   --bin       where run.sh put the programs recipe, adding and eval
  *   --work      scratch directory for the recipes' .bsdf files
  *   --testdata  the folder of the golden file roughgold_alpha_0.2.bsdf (tests/data)
@@ -32,7 +40,7 @@
 typedef struct config {
     const char *bin_dir, *work_dir, *testdata_dir, *json_path, *original_dir;
     size_t runs, cores;
-    int dust_full;       /* also the dust on gold at (1098, 4194)          */
+    int full;            /* the full run (--full 1)                        */
     const char *llbuild; /* tools/llbuild, for the dust as a material      */
     size_t threads[8];   /* scaling: 1, 2, 4, ... and the core count */
     size_t thread_count;
@@ -107,6 +115,27 @@ static void child_failed(bench_store *store, const char *what, const bench_child
     bench_store_error(store, message);
 }
 
+/* The material file of a benchmark, as one info line (its lines joined
+ * by "; ") under PREFIXmaterial, and its path under PREFIXmaterial_file. */
+static void record_material(bench_store *store, const char *prefix, const char *path)
+{
+    char key[256], text[1200], line[512];
+    size_t len = 0;
+    FILE *f = fopen(path, "r");
+    snprintf(key, sizeof key, "%smaterial_file", prefix);
+    bench_store_info(store, key, path);
+    if (!f)
+        return;
+    text[0] = '\0';
+    while (fgets(line, sizeof line, f) && len + 3 < sizeof text) {
+        line[strcspn(line, "\n")] = '\0';
+        len += (size_t)snprintf(text + len, sizeof text - len, "%s%s", len ? "; " : "", line);
+    }
+    fclose(f);
+    snprintf(key, sizeof key, "%smaterial", prefix);
+    bench_store_info(store, key, text);
+}
+
 /* A child's wall and CPU seconds (and, with memory, its peak resident
  * size) under PREFIXwall, PREFIXcpu, PREFIXpeak_rss. */
 static void store_costs(bench_store *store, const char *prefix, const bench_child_result *res,
@@ -164,9 +193,9 @@ static void run_recipes(const config *cfg, bench_store *store)
         }
 }
 
-/* 1b. The dust on gold (issue 18), stage by stage, and the per-order cost
- * of the slab against doubling. The full resolution takes minutes: one
- * run, and only with --dust-full 1. */
+/* 1b. The dust on gold, stage by stage, and (full run) the per-order cost
+ * of the slab against doubling. The seed's resolution takes minutes: one
+ * run, and only in the full run. */
 static void run_dust(const config *cfg, bench_store *store)
 {
     char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128], prefix[128];
@@ -179,8 +208,8 @@ static void run_dust(const config *cfg, bench_store *store)
     path_join(slab_bin, sizeof slab_bin, cfg->bin_dir, "slab");
     for (r = 0; r < BENCH_DUST_COUNT; ++r) {
         const char *name = bench_dust[r].name;
-        size_t runs = bench_dust[r].opt_in ? 1 : cfg->runs;
-        if (bench_dust[r].opt_in && !cfg->dust_full)
+        size_t runs = bench_dust[r].one_run ? 1 : cfg->runs;
+        if (bench_dust[r].full_only && !cfg->full)
             continue;
         for (run = 0; run < runs; ++run) {
             snprintf(out_name, sizeof out_name, "%s.bsdf", name);
@@ -200,6 +229,13 @@ static void run_dust(const config *cfg, bench_store *store)
             store_costs(store, id, &res, 1);
         }
         /* The same stack as a material (WORK/NAME.layers, from run.sh). */
+        if (cfg->llbuild) {
+            char layers[1024];
+            snprintf(out_name, sizeof out_name, "%s.layers", name);
+            path_join(layers, sizeof layers, cfg->work_dir, out_name);
+            snprintf(id, sizeof id, "dust.%s.llbuild.", name);
+            record_material(store, id, layers);
+        }
         for (run = 0; cfg->llbuild && run < runs; ++run) {
             char layers[1024];
             snprintf(out_name, sizeof out_name, "%s.layers", name);
@@ -221,6 +257,8 @@ static void run_dust(const config *cfg, bench_store *store)
             store_costs(store, id, &res, 1);
         }
     }
+    if (!cfg->full)
+        return;
     argv[0] = slab_bin;
     for (i = 0; i < BENCH_SLAB_SIZE_COUNT; ++i) {
         snprintf(sizes[i], sizeof sizes[i], "%zu", bench_slab_sizes[i]);
@@ -488,8 +526,8 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
             cfg->original_dir = value[0] ? value : NULL;
         else if (strcmp(key, "--llbuild") == 0)
             cfg->llbuild = value[0] ? value : NULL;
-        else if (strcmp(key, "--dust-full") == 0)
-            cfg->dust_full = strcmp(value, "1") == 0;
+        else if (strcmp(key, "--full") == 0)
+            cfg->full = strcmp(value, "1") == 0;
         else if (strcmp(key, "--runs") == 0)
             cfg->runs = bench_parse_size(value, "--runs");
         else if (strcmp(key, "--commit") == 0)
@@ -501,7 +539,9 @@ static void parse_args(int argc, char **argv, config *cfg, bench_store *store)
     }
     if (a != argc || !cfg->bin_dir || !cfg->work_dir || !cfg->testdata_dir || !cfg->json_path)
         bench_die("usage: %s --bin DIR --work DIR --testdata DIR --json PATH [--runs N] "
-                  "[--original DIR] [--dust-full 0|1] [--llbuild PATH] [--commit TEXT] [--compiler TEXT]", argv[0]);
+                  "[--full 0|1] [--original DIR] [--llbuild PATH] [--commit TEXT] "
+                  "[--compiler TEXT]",
+                  argv[0]);
     if (cfg->runs < 3)
         bench_die("driver: --runs %zu: every figure is a median of at least 3 runs", cfg->runs);
     cfg->cores = cores > 0 ? (size_t)cores : 1;
@@ -519,16 +559,21 @@ int main(int argc, char **argv)
     bench_store_init(&store);
     parse_args(argc, argv, &cfg, &store);
     record_machine(&cfg, &store);
+    bench_store_info(&store, "mode",
+                     cfg.full ? "full (make bench-full)" : "headline (make bench)");
     record_load(&store, "start");
 
     run_recipes(&cfg, &store);
     run_dust(&cfg, &store);
     run_original(&cfg, &store);
-    run_scaling(&cfg, &store);
+    if (cfg.full)
+        run_scaling(&cfg, &store);
     run_adding(&cfg, &store);
     run_eval(&cfg, &store);
-    run_batch(&cfg, &store);
-    run_tolerance(&cfg, &store);
+    if (cfg.full) {
+        run_batch(&cfg, &store);
+        run_tolerance(&cfg, &store);
+    }
 
     record_load(&store, "end");
     bench_report_table(stdout, &store);

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The MPI section of `make bench` (docs/mpi.md): llbuild-mpi on this
+# The MPI section of `make bench-full` (docs/mpi.md): llbuild-mpi on this
 # machine, oversubscribed where it has fewer cores than ranks.
 #  - speed: the coated-gold-with-medium recipe on 1 and 2 ranks of one
 #    thread each, against llbuild on 1 and 2 threads (best of LL_BENCH_RUNS),

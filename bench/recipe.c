@@ -63,11 +63,13 @@ static const medium_recipe dust = { { 0.9, 0.9, 0.9 }, 0.9, 4.0 };
 
 /* Resolutions as the original recipes compute them (n = max over the two
  * interfaces, m = the coating's), quoted in issue 7; the dust on gold at
- * the seed's own resolution (1098, 4194) and at a reduced one. */
+ * the seed's own resolution (1098, 4194) and at two reduced ones: (400,
+ * 1600), the seed's ratio of orders to nodes, and (400, 800). */
 static const recipe recipes[] = {
     { "coated-gold", 196, 267, 0.1, BASE_GOLD, NULL, 0.1 },
     { "coated-gold-medium", 196, 267, 0.1, BASE_GOLD, &original_medium, 0.1 },
     { "coated-diffuse", 1098, 2103, 0.02, BASE_DIFFUSE, NULL, 0.1 },
+    { "dust-on-gold-400x1600", 400, 1600, 0.0, BASE_GOLD, &dust, 0.02 },
     { "dust-on-gold-400", 400, 800, 0.0, BASE_GOLD, &dust, 0.02 },
     { "dust-on-gold", 1098, 4194, 0.0, BASE_GOLD, &dust, 0.02 },
 };
@@ -187,35 +189,80 @@ static void run_recipe(const recipe *r, const char *out_path, stage_clock *clk)
     free(weights);
 }
 
-/* The recipe as a material: the same layers at the same resolution (the
- * estimate does not depend on the metal's index, which the material
- * language takes relative to the coat). */
-static void report_estimate(const recipe *r)
+/* x in the fewest significant digits that read back as x (the material
+ * text shows 0.1, not 0.10000000000000001, and stays exact). */
+static const char *exact(double x, char buf[32])
 {
-    char text[1024];
-    int len;
+    int digits;
+    for (digits = 1; digits < 17; ++digits) {
+        snprintf(buf, 32, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x)
+            return buf;
+    }
+    snprintf(buf, 32, "%.17g", x);
+    return buf;
+}
+
+/* The recipe's stack in the material language, at its resolution: what
+ * the report names as the benchmark's material, and what the estimate
+ * reads (the same layers; the estimate does not depend on the metal's
+ * index, which the material language takes relative to the coat). One
+ * line per word. */
+static void material_text(const recipe *r, char *text, size_t size)
+{
+    char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
+    size_t len;
+    len = (size_t)snprintf(text, size, "set nodes=%zu orders=%zu channels=3\n", r->n_nodes,
+                           r->n_orders);
+    if (r->coat_alpha > 0.0 && len < size)
+        len += (size_t)snprintf(text + len, size - len, "dielectric eta=%s alpha=%s\n",
+                                exact(coat_eta, a), exact(r->coat_alpha, b));
+    if (r->medium && len < size)
+        len += (size_t)snprintf(text + len, size - len, "medium albedo=%s,%s,%s g=%s tau=%s\n",
+                                exact(r->medium->albedo[0], a), exact(r->medium->albedo[1], b),
+                                exact(r->medium->albedo[2], c), exact(r->medium->g, d),
+                                exact(r->medium->tau, e));
+    if (len >= size)
+        bench_die("recipe: the material text of %s is too long", r->name);
+    if (r->base == BASE_GOLD)
+        len += (size_t)snprintf(text + len, size - len,
+                                "conductor eta=%s+%si,%s+%si,%s+%si alpha=%s\n",
+                                exact(gold_eta[0], a), exact(gold_k[0], b),
+                                exact(gold_eta[1], c), exact(gold_k[1], d),
+                                exact(gold_eta[2], e), exact(gold_k[2], f),
+                                exact(r->base_alpha, g));
+    else
+        len += (size_t)snprintf(text + len, size - len, "diffuse albedo=%s,%s,%s\n",
+                                exact(diffuse_albedo[0], a), exact(diffuse_albedo[1], b),
+                                exact(diffuse_albedo[2], c));
+    if (len >= size)
+        bench_die("recipe: the material text of %s is too long", r->name);
+}
+
+/* The material as one info line: its lines joined by "; ". Energy
+ * compensation is off in the recipe, as in the original. */
+static void report_material(const char *text)
+{
+    char line[1200];
+    size_t i, k = 0;
+    for (i = 0; text[i] && k + 3 < sizeof line; ++i) {
+        if (text[i] != '\n') {
+            line[k++] = text[i];
+        } else if (text[i + 1]) {
+            line[k++] = ';';
+            line[k++] = ' ';
+        }
+    }
+    line[k] = '\0';
+    bench_info("material", line);
+}
+
+static void report_estimate(const recipe *r, const char *text)
+{
     ll_material *m = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     double wall, cpu;
-    len = snprintf(text, sizeof text, "set nodes=%zu orders=%zu channels=3\n", r->n_nodes,
-                   r->n_orders);
-    if (r->coat_alpha > 0.0)
-        len += snprintf(text + len, sizeof text - (size_t)len,
-                        "dielectric eta=%.17g alpha=%.17g\n", coat_eta, r->coat_alpha);
-    if (r->medium)
-        len += snprintf(text + len, sizeof text - (size_t)len,
-                        "medium albedo=%.17g,%.17g,%.17g g=%.17g tau=%.17g\n",
-                        r->medium->albedo[0], r->medium->albedo[1], r->medium->albedo[2],
-                        r->medium->g, r->medium->tau);
-    if (r->base == BASE_GOLD)
-        snprintf(text + len, sizeof text - (size_t)len,
-                 "conductor eta=%.17g+%.17gi,%.17g+%.17gi,%.17g+%.17gi alpha=%.17g\n",
-                 gold_eta[0], gold_k[0], gold_eta[1], gold_k[1], gold_eta[2], gold_k[2],
-                 r->base_alpha);
-    else
-        snprintf(text + len, sizeof text - (size_t)len, "diffuse albedo=%.17g,%.17g,%.17g\n",
-                 diffuse_albedo[0], diffuse_albedo[1], diffuse_albedo[2]);
     bench_check(ll_material_parse(text, r->name, &m), "ll_material_parse");
     o.threads = ll_get_thread_count();
     bench_check(ll_material_estimate(m, &o, &e, NULL), "ll_material_estimate");
@@ -231,13 +278,14 @@ int main(int argc, char **argv)
 {
     const recipe *r = NULL;
     stage_clock clk;
-    char id[64];
+    char id[64], text[1024];
     size_t i, threads;
     int s;
 
     if (argc != 4)
         bench_die("usage: %s NAME OUT.bsdf THREADS (NAME: coated-gold, coated-gold-medium, "
-                  "coated-diffuse, dust-on-gold-400, dust-on-gold)", argv[0]);
+                  "coated-diffuse, dust-on-gold-400x1600, dust-on-gold-400, dust-on-gold)",
+                  argv[0]);
     for (i = 0; i < sizeof recipes / sizeof recipes[0]; ++i)
         if (strcmp(argv[1], recipes[i].name) == 0)
             r = &recipes[i];
@@ -261,6 +309,8 @@ int main(int argc, char **argv)
     bench_info("n_orders", id);
     snprintf(id, sizeof id, "%zu", ll_get_thread_count());
     bench_info("threads", id);
-    report_estimate(r);
+    material_text(r, text, sizeof text);
+    report_material(text);
+    report_estimate(r, text);
     return 0;
 }

@@ -75,6 +75,20 @@ static void print_header(FILE *out, const bench_store *s)
     fprintf(out, "load average (1/5/15 min): start %s, end %s\n", info_or(s, "load.start", "?"),
             info_or(s, "load.end", "?"));
     fprintf(out, "every figure: median [min..max] of %s runs\n", info_or(s, "runs", "?"));
+    fprintf(out, "run: %s\n", info_or(s, "mode", "?"));
+}
+
+/* What a benchmark built (the material, its file), from the info key
+ * PREFIX.NAME.SUFFIX (one line), labelled. */
+static void print_material(FILE *out, const bench_store *s, const char *label,
+                           const char *prefix, const char *name, const char *suffix)
+{
+    char key[200];
+    const char *text;
+    snprintf(key, sizeof key, "%s.%s.%s", prefix, name, suffix);
+    text = bench_store_info_get(s, key);
+    if (text)
+        fprintf(out, "%-20s %s: %s\n", "", label, text);
 }
 
 static void print_recipes(FILE *out, const bench_store *s)
@@ -93,6 +107,7 @@ static void print_recipes(FILE *out, const bench_store *s)
                 format_stats(b, sizeof b, stats_of(s, "recipe.%s.cpu", name)),
                 format_stats(c, sizeof c, stats_of(s, "recipe.%s.peak_rss", name)),
                 format_stats(d, sizeof d, stats_of(s, "recipe.%s.output", name)));
+        print_material(out, s, "material", "recipe", name, "material");
         fprintf(out, "%-20s stages, wall s:", "");
         for (k = 0; k < BENCH_STAGE_COUNT; ++k) {
             char id[160];
@@ -141,27 +156,28 @@ static void print_recipes(FILE *out, const bench_store *s)
     }
 }
 
-/* Issue 18: the dust on gold, per stage, next to the figures before; and
+/* The dust on gold, per stage, next to the figures before; and (full run)
  * the slab against doubling per order. */
 static void print_dust(FILE *out, const bench_store *s)
 {
     size_t r, k, i;
     char a[128], b[128], c[128];
-    fprintf(out, "\n1b. Dust on gold (issue 18: HG g 0.9, tau 4, albedo 0.9 over gold alpha "
-                 "0.02; whole process, all cores)\n");
+    fprintf(out, "\n1b. Dust on gold (HG g 0.9, tau 4, albedo 0.9 over gold alpha 0.02, "
+                 "gold's RGB index as in 1.; whole process, all cores)\n");
     fprintf(out, "%-20s %-24s %-24s %-24s\n", "recipe", "wall s", "CPU s", "peak MiB");
     for (r = 0; r < BENCH_DUST_COUNT; ++r) {
         const char *name = bench_dust[r].name;
         bench_stats w = stats_of(s, "dust.%s.wall", name);
         if (w.count == 0) {
             fprintf(out, "%-20s %s\n", name,
-                    bench_dust[r].opt_in ? "not run (LL_BENCH_DUST_FULL=1 make bench runs it)"
-                                         : "not measured");
+                    bench_dust[r].full_only ? "not run (make bench-full runs it)"
+                                            : "not measured");
             continue;
         }
         fprintf(out, "%-20s %-24s %-24s %-24s\n", name, format_stats(a, sizeof a, w),
                 format_stats(b, sizeof b, stats_of(s, "dust.%s.cpu", name)),
                 format_stats(c, sizeof c, stats_of(s, "dust.%s.peak_rss", name)));
+        print_material(out, s, "material", "dust", name, "material");
         fprintf(out, "%-20s stages, CPU s:", "");
         for (k = 0; k < BENCH_STAGE_COUNT; ++k) {
             format_value(a, sizeof a,
@@ -176,6 +192,8 @@ static void print_dust(FILE *out, const bench_store *s)
                     format_stats(b, sizeof b, stats_of(s, "dust.%s.llbuild.cpu", name)));
             fprintf(out, "  peak MiB %s\n",
                     format_stats(c, sizeof c, stats_of(s, "dust.%s.llbuild.peak_rss", name)));
+            print_material(out, s, "llbuild's file", "dust", name, "llbuild.material_file");
+            print_material(out, s, "llbuild's material", "dust", name, "llbuild.material");
         }
         if (bench_dust[r].before_wall_s > 0.0) {
             format_value(a, sizeof a, bench_dust[r].before_wall_s);
@@ -185,6 +203,8 @@ static void print_dust(FILE *out, const bench_store *s)
                     bench_dust[r].before_source, a, b, c);
         }
     }
+    if (stats_of(s, "slab.%zu.slab", bench_slab_sizes[0]).count == 0)
+        return;
     fprintf(out, "\n1c. One order (order 0, HG g 0.9, tau 4), 1 thread: doubling vs the "
                  "closed-form slab, s\n");
     fprintf(out, "%-6s %-24s %-24s %-24s\n", "n", "doubling", "slab", "speedup");
@@ -298,6 +318,10 @@ static void print_scaling(FILE *out, const bench_store *s)
     char a[128], b[128], c[32];
     fprintf(out, "\n4. Scaling: coated-gold (library, OpenMP and OpenBLAS limited to the "
                  "thread count)\n");
+    if (stats_of(s, "scaling.coated-gold.t%zu.wall", (size_t)1).count == 0) {
+        fprintf(out, "not run (make bench-full runs it)\n");
+        return;
+    }
     fprintf(out, "%-8s %-24s %-24s %-10s\n", "threads", "wall s", "CPU s", "speedup");
     for (t = 1; t <= 4096; ++t) {
         bench_stats w = stats_of(s, "scaling.coated-gold.t%zu.wall", t);
@@ -334,6 +358,20 @@ static void print_tolerance(FILE *out, const bench_store *s)
                  "(one run each; error: worst relative difference from the %g build where "
                  "it is above 1%% of its peak, reflection at mu 0.1 .. 1)\n",
             bench_tolerances[BENCH_TOLERANCE_COUNT - 1]);
+    for (r = 0, t = 0; r < BENCH_RECIPE_COUNT; ++r) {
+        char key[160];
+        snprintf(key, sizeof key, "tolerance.%s.%g.material", bench_recipes[r].name,
+                 bench_tolerances[0]);
+        if (bench_store_info_get(s, key)) {
+            fprintf(out, "%-20s material: %s\n", bench_recipes[r].name,
+                    bench_store_info_get(s, key));
+            ++t;
+        }
+    }
+    if (t == 0) {
+        fprintf(out, "not run (make bench-full runs it)\n");
+        return;
+    }
     fprintf(out, "%-20s %-9s %-14s %-9s %-9s %-9s %-9s %-9s\n", "recipe", "tolerance",
             "nodes x orders", "choose s", "wall s", "peak MiB", "file MB", "error");
     for (r = 0; r < BENCH_RECIPE_COUNT; ++r)

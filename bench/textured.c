@@ -15,7 +15,7 @@
  *   fewer are spread over the grid (every coat and gold value as evenly as
  *   possible) and the total is extrapolated by 64 / runs, which the report
  *   says.
- * Run by bench/run.sh (`make bench`); prints a table and `metric` lines.
+ * Run by bench/run.sh --full (`make bench-full`); prints a table and `metric` lines.
  */
 #include "bench_util.h"
 #include "child.h"

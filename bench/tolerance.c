@@ -53,6 +53,31 @@ static const char *recipe_text(const char *name)
     bench_die("tolerance: unknown recipe \"%s\"", name);
 }
 
+/* The material built, as one info line: its lines joined by "; ", after
+ * the tolerance as a `set` line would give it. */
+static void report_material(const char *text, double tolerance)
+{
+    char line[1200];
+    size_t i, k;
+    k = (size_t)snprintf(line, sizeof line, "set tolerance=%g", tolerance);
+    for (i = 0; text[i] && k + 3 < sizeof line; ++i) {
+        if (text[i] == '\n') {
+            if (text[i + 1]) {
+                line[k++] = ';';
+                line[k++] = ' ';
+            }
+        } else {
+            if (i == 0) {
+                line[k++] = ';';
+                line[k++] = ' ';
+            }
+            line[k++] = text[i];
+        }
+    }
+    line[k] = '\0';
+    bench_info("material", line);
+}
+
 static void build(const char *name, double tolerance, const char *out, size_t threads)
 {
     ll_material *m = NULL;
@@ -61,6 +86,7 @@ static void build(const char *name, double tolerance, const char *out, size_t th
     double start;
     char text[64];
     struct stat st;
+    report_material(recipe_text(name), tolerance);
     bench_check(ll_material_parse(recipe_text(name), name, &m), "ll_material_parse");
     o.tolerance = tolerance;
     o.threads = threads;

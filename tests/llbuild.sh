@@ -10,6 +10,7 @@ tmp=$(mktemp -d /tmp/llbuild_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
 passed=0
 failed=0
+. "$(dirname "$0")/lib/stage_wait.sh"
 
 ok() { passed=$((passed + 1)); }
 bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
@@ -142,24 +143,26 @@ expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orde
 contains "$tmp/out" "16 nodes x 8 Fourier orders, 1 channel" "--mono"
 
 # --- interrupted builds leave no file. A thick forward-scattering medium
-# on 400 nodes doubles for about 2 s on an idle machine (120 nodes took
-# 0.1 s, and the build could end before the signal); signal it once it runs.
+# (about 0.5 s of doubling on 300 nodes, idle): signalled as soon as its
+# progress names the medium (tests/lib/stage_wait.sh), not after a sleep.
 printf 'medium albedo=0.99 g=0.9 tau=1e9\n' >"$tmp/slow.layers"
+mkdir -p "$tmp/slow"
 for sig in INT TERM; do
-    rm -f "$tmp/slow.bsdf" "$tmp/slow.err"
-    "$llbuild" --nodes 400 --orders 40 "$tmp/slow.layers" -o "$tmp/slow.bsdf" \
-        >/dev/null 2>"$tmp/slow.err" &
-    pid=$!
-    i=0
-    while [ $i -lt 100 ] && ! grep -q "medium" "$tmp/slow.err" 2>/dev/null; do
-        sleep 0.1; i=$((i + 1))
-    done
-    kill -s $sig $pid
-    wait $pid 2>/dev/null
-    status=$?
-    if [ $status -gt 128 ]; then ok; else bad "SIG$sig: exit $status, expected death by signal"; fi
+    rm -f "$tmp/slow.bsdf"
+    stage_start "$tmp/slow" "$llbuild" --nodes 300 --orders 40 "$tmp/slow.layers" \
+        -o "$tmp/slow.bsdf"
+    if ! stage_wait "*% medium (*"; then
+        stage_finish
+        bad "SIG$sig: llbuild never reported the medium (exit $stage_status)"
+        continue
+    fi
+    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
+    stage_finish
+    status=$stage_status
+    if [ $status -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
+        bad "SIG$sig: exit $status, expected death by signal"; fi
     if ls "$tmp" | grep -q '^slow\.bsdf'; then bad "SIG$sig left $(ls "$tmp" | grep slow.bsdf)"; else ok; fi
-    contains "$tmp/slow.err" "interrupted; no file written" "SIG$sig message"
+    contains "$stage_log" "interrupted; no file written" "SIG$sig message"
 done
 
 # --- a swept material: --dry-run names the axes, the bases and the file's

@@ -104,45 +104,56 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
     { bad "over budget: no rank and estimate in the message"; cat "$tmp/err"; }
 
 # --- a rank killed (SIGKILL, no chance to clean up) and an interrupt to
-# mpirun: no file, no temporary. The build is long enough (tens of seconds
-# on one thread; 9 s on 3 ranks of an idle 2-core machine, so the interrupt
-# a second after the ranks start comes while it runs: at 300 x 600 the
-# build was done first) that the signal comes while it runs.
+# mpirun: no file, no temporary. The kill and the interrupt follow rank 0's
+# progress line naming a stage (tests/lib/stage_wait.sh), not a sleep: the
+# first layer's ("conductor interface", 0.6 s into a 4.4 s build on 3 ranks
+# of an idle 2-core machine; mpirun takes up to a second to pass an
+# interrupt on), and for the textured build its first line ("choosing the
+# resolution": its shared words take 5 s before the first basis is written,
+# and the 8 bases then follow within 1.3 s, too close to the end for a
+# kill to land before the file is committed).
+. "$(dirname "$0")/lib/stage_wait.sh"
+mkdir -p "$tmp/run"
 cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1
 medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=0.1
-set nodes=600 orders=2000
+set nodes=300 orders=600
 LAYERS
-# Start a build in the background; wait for its ranks (children of mpirun).
-start_long() {
-    mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/long.layers" \
-        -o "$tmp/long.bsdf" >"$tmp/out" 2>"$tmp/err" &
-    launcher=$!
+# start_until LAYERS PATTERN: start a build of LAYERS on 3 ranks; return
+# once rank 0's progress matches PATTERN (1: it never did).
+start_until() {
+    rm -f "${1%.layers}.bsdf"
+    stage_start "$tmp/run" mpirun --oversubscribe -n 3 "$mpi" --threads 1 "$1" \
+        -o "${1%.layers}.bsdf"
+    launcher=$stage_pid
+    stage_wait "$2" && return 0
+    bad "$1: the build never reported '$2'"
+    sed 's/^/  | /' "$stage_log" | tail -5
+    return 1
+}
+leftovers() { ls -A "$tmp" | grep -c "$1\.bsdf"; }
+# No rank outlives mpirun: wait (bounded) until none is left.
+ranks_gone() {
     tries=0
-    while [ "$(pgrep -P "$launcher" | wc -l)" -lt 3 ] && [ $tries -lt 100 ]; do
+    while pgrep -f "$1" >/dev/null && [ $tries -lt 300 ]; do
         sleep 0.1
         tries=$((tries + 1))
     done
-    sleep 1
+    ! pgrep -f "$1" >/dev/null
 }
-leftovers() { ls -A "$tmp" | grep -c 'long\.bsdf'; }
-start_long
-victim=$(pgrep -P "$launcher" | sed -n 2p)
-[ -n "$victim" ] && kill -9 "$victim"
-wait "$launcher"
-code=$?
-[ "$code" -ne 0 ] && ok || bad "a killed rank: mpirun exited 0"
-[ "$(leftovers)" -eq 0 ] && ok || { bad "a killed rank left:"; ls -A "$tmp"; }
-start_long
-kill -INT "$launcher"
-wait "$launcher"
-code=$?
-[ "$code" -ne 0 ] && ok || bad "interrupted mpirun exited 0"
-[ "$(leftovers)" -eq 0 ] && ok || { bad "an interrupt left:"; ls -A "$tmp"; }
-# (No rank is left behind either.)
-sleep 0.5
-pgrep -f "$tmp/long.layers" >/dev/null && bad "ranks still running after the interrupt" || ok
+if start_until "$tmp/long.layers" "*% conductor interface (*"; then
+    victim=$(pgrep -P "$launcher" | sed -n 2p)
+    [ -n "$victim" ] && kill -9 "$victim"
+fi
+stage_finish
+[ "$stage_status" -ne 0 ] && ok || bad "a killed rank: mpirun exited 0"
+[ "$(leftovers long)" -eq 0 ] && ok || { bad "a killed rank left:"; ls -A "$tmp"; }
+start_until "$tmp/long.layers" "*% conductor interface (*" && kill -INT "$launcher"
+stage_finish
+[ "$stage_status" -ne 0 ] && ok || bad "interrupted mpirun exited 0"
+[ "$(leftovers long)" -eq 0 ] && ok || { bad "an interrupt left:"; ls -A "$tmp"; }
+ranks_gone "$tmp/long.layers" && ok || bad "ranks still running after the interrupt"
 
 # A textured build with a worker killed, and with an interrupt: no file and
 # no temporary (the writer's spill is unlinked once open; rank 0 aborts it).
@@ -150,31 +161,19 @@ cat >"$tmp/longtex.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=[0.1..0.4:4]
 medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=[0.1 0.2]
-set nodes=300 orders=800
+set nodes=200 orders=400
 LAYERS
-start_tex() {
-    mpirun --oversubscribe -n 3 "$mpi" -q --threads 1 "$tmp/longtex.layers" \
-        -o "$tmp/longtex.bsdf" >"$tmp/out" 2>"$tmp/err" &
-    launcher=$!
-    tries=0
-    while [ "$(pgrep -P "$launcher" | wc -l)" -lt 3 ] && [ $tries -lt 100 ]; do
-        sleep 0.1
-        tries=$((tries + 1))
-    done
-    sleep 2
-}
-start_tex
-victim=$(pgrep -P "$launcher" | sed -n 3p)
-[ -n "$victim" ] && kill -9 "$victim"
-wait "$launcher"
-code=$?
-[ "$code" -ne 0 ] && ok || bad "textured, a killed rank: mpirun exited 0"
-[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+if start_until "$tmp/longtex.layers" "*% choosing the resolution (*"; then
+    victim=$(pgrep -P "$launcher" | sed -n 3p)
+    [ -n "$victim" ] && kill -9 "$victim"
+fi
+stage_finish
+[ "$stage_status" -ne 0 ] && ok || bad "textured, a killed rank: mpirun exited 0"
+[ "$(leftovers longtex)" -eq 0 ] && ok ||
     { bad "textured, a killed rank left:"; ls -A "$tmp"; }
-start_tex
-kill -INT "$launcher"
-wait "$launcher"
-[ "$(ls -A "$tmp" | grep -c 'longtex\.bsdf')" -eq 0 ] && ok ||
+start_until "$tmp/longtex.layers" "*% choosing the resolution (*" && kill -INT "$launcher"
+stage_finish
+[ "$(leftovers longtex)" -eq 0 ] && ok ||
     { bad "textured, an interrupt left:"; ls -A "$tmp"; }
 
 echo "$passed passed, $failed failed"

@@ -14,7 +14,7 @@
 /* Between 0.3 and pi the steps stay under 0.5 rad: a series truncated
  * after m terms ripples with a period of about 2 pi / m, and with 0.3,
  * 0.6, 1.0 alone the eta 1.5, alpha 0.8 transmission at mu_i 0.1 passed
- * the probes and was 1.04% off at phi 0.5 (LL_CONVERGENCE_FULL). */
+ * the probes and was 1.04% off at phi 0.5 (bench/convergence.c full). */
 static const double azimuths[] = { 0.0, 0.01, 0.03, 0.06, 0.1, 0.2, 0.3, 0.45,
                                    0.6, 0.8,  1.0,  1.3,  1.6, 2.0, 2.4, LL_PI };
 static const double offsets[] = { 0.0,   -0.01, 0.01,  -0.02, 0.02, -0.03, 0.03, -0.05,
