@@ -1,5 +1,5 @@
 /*
- * The azimuthal Fourier series of the rough (Beckmann microfacet) interface
+ * The azimuthal Fourier series of the rough (Beckmann or GGX microfacet) interface
  * for one pair of zenith cosines: the engine of ll_layer_set_microfacet,
  * exposed internally for tests.
  *
@@ -17,12 +17,18 @@
 #include "support/support.h"
 #include "support/watch.h"
 #include "layer/order.h"
+#include "layerlab/ll_layer.h"
 
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
 #define LL_MICROFACET_RELERR 1e-3
 
 typedef struct ll_microfacet ll_microfacet;
+
+/* The microfacet distributions (the values of the public
+ * ll_microfacet_distribution). */
+#define LL_DISTRIBUTION_BECKMANN 0
+#define LL_DISTRIBUTION_GGX 1
 
 /* The model: complex relative index, Beckmann roughness, the number of
  * Fourier orders n_orders it is resolved with (a lobe too sharp for them is
@@ -31,6 +37,11 @@ typedef struct ll_microfacet ll_microfacet;
 LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha,
                                            size_t n_orders, size_t max_len,
                                            ll_microfacet **out);
+/* The same for a distribution (LL_DISTRIBUTION_*; alpha is its roughness). */
+LL_INTERNAL ll_status ll_microfacet_create_distribution(double eta_re, double eta_im,
+                                                        double alpha, int distribution,
+                                                        size_t n_orders, size_t max_len,
+                                                        ll_microfacet **out);
 LL_INTERNAL void ll_microfacet_destroy(ll_microfacet *mf);
 
 /* Resolve the lobes with n_orders (at most the n_orders of creation) from
@@ -70,6 +81,14 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet *mf, double mu_o,
  * tan_theta for Beckmann roughness alpha, by the rational approximation of
  * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */
 LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
+
+/* ll_layer_set_microfacet_ex with a distribution (LL_DISTRIBUTION_*): the
+ * rough interface as a layer. */
+LL_INTERNAL ll_status ll_layer_set_microfacet_distribution(ll_layer *layer, double eta_re,
+                                                           double eta_im, double alpha,
+                                                           int distribution, int conserve_energy,
+                                                           size_t n_orders_internal,
+                                                           const ll_monitor *monitor);
 
 /* The energy compensation (conserve_energy, words/microfacet_compensation.c):
  * order 0 of block q of a layer with h positive nodes gains
