@@ -91,11 +91,15 @@
                                * the window from it spoils the Chebyshev form  */
 #define ANGLE_EPS 1e-7        /* azimuths this close count as equal            */
 #define NEGLIGIBLE 1e-10      /* skip pairs whose peak series starts below     */
-#define GGX_FILON_SAMPLES 65  /* Filon samples of each of GGX's pieces (odd),
+#define GGX_FILON_SAMPLES 33  /* Filon samples of each of GGX's pieces (odd),
                                * which double in width away from the peak      */
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
-#define GGX_KINK_LEVELS 10    /* ... this many times                           */
+#define GGX_KINK_LEVELS 8     /* ... this many times                           */
+#define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
+                               * terms below 1e-4 (a tenth of what the layer
+                               * keeps, LL_MICROFACET_RELERR) would double the
+                               * orders of TAIL_GOAL's 1e-6 for nothing        */
 
 /* The largest B whose exp(B cos phi) series a layer with n orders holds at
  * relative error 1e-3 (the original's fit, Bmax(n, 1e-3)). A sharper lobe
@@ -255,13 +259,10 @@ static double pair_scale(const ll_microfacet *mf, const pair_plan *p, double g1_
 static int plan_ggx(const ll_microfacet *mf, pair_plan *p, double b_limit, double mu_i,
                     double si, double so, double h_z)
 {
-    double x0 = -p->a_plus_b, e0;
+    double x0 = -p->a_plus_b, e0, gmax;
     p->b /= 1.0 + x0;
     p->a_plus_b = -2.0 * log1p(x0);
     e0 = exp(p->a_plus_b);
-    /* No pair is negligible by its peak factor alone: the tails fall like
-     * X^-2 ~ h_z^4, which the scale's h_z^-4 makes up for (a grazing pair
-     * whose factor is 1e-12 can still have f ~ 1). */
     if (!(p->b < HUGE_VAL) || !(e0 > 0.0))
         return 0;
     p->widened = p->b > b_limit;
@@ -277,7 +278,14 @@ static int plan_ggx(const ll_microfacet *mf, pair_plan *p, double b_limit, doubl
     p->sign_h = h_z > 0.0 ? 1.0 : -1.0;
     p->scale = pair_scale(mf, p, ll_ggx_smith_g1(si / fabs(mu_i), mf->alpha),
                           ll_ggx_smith_g1(so / fabs(p->mu_o), mf->alpha), h_z);
-    return 1;
+    /* Negligible when f's mean over phi is, in absolute terms: unlike
+     * Beckmann's, the peak factor alone says nothing, as its tails fall
+     * like X^-2 ~ h_z^4, which the scale's h_z^-4 makes up for (a grazing
+     * pair whose factor is 1e-12 can have f ~ 1). g / scale is at most
+     * (1 + t)^2 <= 4 for reflection, |wi.H wo.H| <= (1 + eta)^2 for
+     * refraction. */
+    gmax = p->reflect ? 4.0 : (1.0 + p->eta) * (1.0 + p->eta);
+    return exp(p->a_plus_b) * ll_ggx_peak_mean(p->b) * p->scale * gmax >= NEGLIGIBLE;
 }
 
 /* Plan a pair, its lobe widened to at most B = b_limit; returns 0 if it
@@ -513,7 +521,10 @@ static void ggx_filon(const ll_microfacet *mf, const pair_plan *p, int reference
             b = end;
         if (p->split > a && p->split < b)
             b = p->split;
-        grade_b = b == p->split || (b == LL_PI && p->grade_end);
+        /* Reflection's kink is total internal reflection, which holds
+         * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
+         * there, and Fresnel's square root is on the far side alone. */
+        grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
         add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch);
         a = b;
     }
@@ -559,7 +570,7 @@ static ll_status ggx_pair_series(const ll_microfacet *mf, const pair_plan *p, si
 {
     double *g = scratch, *g_ref = scratch + LL_GGX_CHEB, *rest = scratch + 2 * LL_GGX_CHEB;
     double peak = exp(p->a_plus_b);
-    size_t i, len = ll_ggx_peak_length(p->b, TAIL_GOAL, max_len) + LL_GGX_CHEB;
+    size_t i, len = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len) + LL_GGX_CHEB;
     sample_profile(mf, p, mf->ggx_basis.cos_phi, LL_GGX_CHEB, g, ref0 ? g_ref : NULL);
     for (i = 0; i < LL_GGX_CHEB; ++i) {
         g[i] *= peak;
@@ -583,7 +594,7 @@ static ll_status pair_series(const ll_microfacet *mf, const pair_plan *p, size_t
     if (mf->ggx && !p->filon)
         return ggx_pair_series(mf, p, max_len, out, n_out, ref0, scratch);
     if (p->filon) {
-        len = (mf->ggx ? ll_ggx_peak_length(p->b, TAIL_GOAL, max_len)
+        len = (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
                        : ll_expcos_length(p->b, TAIL_GOAL)) +
               FILON_EXTRA;
         *n_out = len < max_len ? len : max_len;
