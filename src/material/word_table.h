@@ -224,4 +224,14 @@ LL_INTERNAL ll_status ll_check_compensate(const ll_parser *p, const ll_word *w,
 /* The value of a word's compensate in its parameters: 1 unless given. */
 LL_INTERNAL double ll_compensate_value(const ll_number *x);
 
+/* dist=beckmann|ggx of the interfaces: the microfacet distribution, the
+ * word's choice (LL_DISTRIBUTION_* of words/microfacet.h; Beckmann unless
+ * given), which the parameters carry as their choice. */
+LL_INTERNAL ll_status ll_parse_distribution(const ll_parser *p, ll_word *w, const ll_token *key,
+                                            const ll_token *v);
+#define LL_PARAM_DISTRIBUTION { "dist", 0, -1, 0, 0, 0, 0, NULL, ll_parse_distribution, NULL }
+/* , "dist": "ggx" when dist= is given (a file without it describes the
+ * Beckmann interface it always did). */
+LL_INTERNAL void ll_distribution_metadata(ll_text *b, const ll_word *w);
+
 #endif /* LL_MATERIAL_WORD_TABLE_H */
