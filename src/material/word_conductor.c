@@ -187,7 +187,7 @@ static ll_status conductor_resolution(const ll_word_params *p, double tolerance,
 
 static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
 {
-    ll_interface_cost(p->v[ALPHA], p->v[ETA], p->v[K], n, m, out);
+    ll_interface_cost(p->v[ALPHA], p->v[ETA], p->v[K], p->choice, n, m, out);
 }
 
 static ll_status conductor_build(const ll_word_build_ctx *ctx, const ll_word *w,

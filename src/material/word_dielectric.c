@@ -50,7 +50,7 @@ static ll_status dielectric_resolution(const ll_word_params *p, double tolerance
 
 static void dielectric_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
 {
-    ll_interface_cost(p->v[1], p->v[0], 0.0, n, m, out);
+    ll_interface_cost(p->v[1], p->v[0], 0.0, p->choice, n, m, out);
 }
 
 static ll_status dielectric_build(const ll_word_build_ctx *ctx, const ll_word *w,
