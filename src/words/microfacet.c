@@ -96,6 +96,8 @@
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
 #define GGX_KINK_LEVELS 8     /* ... this many times                           */
+#define GGX_NEGLIGIBLE 1e-8   /* Filon pieces of GGX below this fraction of the
+                               * pair's peak add nothing (ggx_piece)           */
 #define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
                                * terms below 1e-4 (a tenth of what the layer
                                * keeps, LL_MICROFACET_RELERR) would double the
@@ -433,16 +435,36 @@ static void add_piece(const ll_microfacet *mf, const pair_plan *p, int reference
         return;
     azimuth_cosines(a, b, samples, cos_phi);
     sample_profile(mf, p, cos_phi, samples, reference ? NULL : f, reference ? f : NULL);
-    if (mf->ggx) {
-        double peak = exp(p->a_plus_b);
-        for (k = 0; k < samples; ++k) {
-            double c = 1.0 + p->b * (1.0 - cos_phi[k]);
-            f[k] *= peak / (c * c);
-        }
-    } else {
-        for (k = 0; k < samples; ++k)
-            f[k] *= exp(p->a_plus_b + p->b * (cos_phi[k] - 1.0));
+    for (k = 0; k < samples; ++k)
+        f[k] *= exp(p->a_plus_b + p->b * (cos_phi[k] - 1.0));
+    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+}
+
+/* add_piece for GGX, with its peak factor; *seen is the largest f of the
+ * pair's pieces so far. A piece whose samples all stay below
+ * GGX_NEGLIGIBLE of it adds no moments: its share of f at any azimuth, of
+ * the series' partial sums too, is below that fraction of the peak (the
+ * tails of a sharp lobe and the kinks far out in them cost most of the
+ * samples otherwise). */
+static void ggx_piece(const ll_microfacet *mf, const pair_plan *p, int reference, double a,
+                      double b, size_t samples, size_t n_out, double *out, double *scratch,
+                      double *seen)
+{
+    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
+    double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
+    size_t k;
+    if (!(b > a))
+        return;
+    azimuth_cosines(a, b, samples, cos_phi);
+    sample_profile(mf, p, cos_phi, samples, reference ? NULL : f, reference ? f : NULL);
+    for (k = 0; k < samples; ++k) {
+        double c = 1.0 + p->b * (1.0 - cos_phi[k]);
+        f[k] *= peak / (c * c);
+        largest = fmax(largest, fabs(f[k]));
     }
+    *seen = fmax(*seen, largest);
+    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
+        return;
     ll_filon_moments(f, samples, a, b, n_out, out, filon);
 }
 
@@ -483,7 +505,7 @@ static void add_graded(const ll_microfacet *mf, const pair_plan *p, int referenc
  * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
 static void add_towards(const ll_microfacet *mf, const pair_plan *p, int reference, double a,
                         double b, int at_a, int at_b, size_t n_out, double *out,
-                        double *scratch)
+                        double *scratch, double *seen)
 {
     double d = b - a;
     int level;
@@ -491,20 +513,22 @@ static void add_towards(const ll_microfacet *mf, const pair_plan *p, int referen
         return;
     if (at_a && at_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch);
-        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch);
+        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch, seen);
+        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch, seen);
         return;
     }
     if (!at_a && !at_b) {
-        add_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch);
+        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch, seen);
         return;
     }
     for (level = 0; level < GGX_KINK_LEVELS; ++level) {
         double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
         if (at_a)
-            add_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch);
+            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
         else
-            add_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch);
+            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
         d = near;
     }
 }
@@ -513,7 +537,7 @@ static void ggx_filon(const ll_microfacet *mf, const pair_plan *p, int reference
                       size_t n_out, double *out, double *scratch)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
-    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
+    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
     while (a < end) {
         double b = a == 0.0 ? first : 2.0 * a;
         int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
@@ -525,7 +549,7 @@ static void ggx_filon(const ll_microfacet *mf, const pair_plan *p, int reference
          * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
          * there, and Fresnel's square root is on the far side alone. */
         grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
-        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch);
+        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch, &seen);
         a = b;
     }
 }
