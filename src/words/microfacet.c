@@ -493,10 +493,6 @@ static void add_graded(const ll_microfacet *mf, const pair_plan *p, int referenc
     }
 }
 
-/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
- * width from the peak's half width beta^-1/2 on (the tails fall like
- * phi^-4, so each piece spans the same relative change of f), cut at the
- * kink and graded towards it and towards near branch points. */
 /* [a, b] for GGX, graded towards a singular end over its whole length:
  * pieces at distances [d / 4, d] from it, d = b - a, b - a / 4, ..., each
  * with the same samples, so that every piece resolves the square root of
@@ -533,6 +529,10 @@ static void add_towards(const ll_microfacet *mf, const pair_plan *p, int referen
     }
 }
 
+/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
+ * width from the peak's half width beta^-1/2 on (the tails fall like
+ * phi^-4, so each piece spans the same relative change of f), cut at the
+ * kink and graded towards it and towards near branch points. */
 static void ggx_filon(const ll_microfacet *mf, const pair_plan *p, int reference,
                       size_t n_out, double *out, double *scratch)
 {

@@ -37,7 +37,8 @@ typedef struct ll_microfacet ll_microfacet;
 LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha,
                                            size_t n_orders, size_t max_len,
                                            ll_microfacet **out);
-/* The same for a distribution (LL_DISTRIBUTION_*; alpha is its roughness). */
+/* The same for a distribution (LL_DISTRIBUTION_*; alpha is its roughness;
+ * ll_microfacet_create's is Beckmann). */
 LL_INTERNAL ll_status ll_microfacet_create_distribution(double eta_re, double eta_im,
                                                         double alpha, int distribution,
                                                         size_t n_orders, size_t max_len,
