@@ -91,7 +91,7 @@
                                * the window from it spoils the Chebyshev form  */
 #define ANGLE_EPS 1e-7        /* azimuths this close count as equal            */
 #define NEGLIGIBLE 1e-10      /* skip pairs whose peak series starts below     */
-#define GGX_FILON_SAMPLES 33  /* Filon samples of each of GGX's pieces (odd),
+#define GGX_FILON_SAMPLES 17  /* Filon samples of each of GGX's pieces (odd),
                                * which double in width away from the peak      */
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
