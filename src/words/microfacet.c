@@ -96,7 +96,7 @@
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
 #define GGX_KINK_LEVELS 8     /* ... this many times                           */
-#define GGX_NEGLIGIBLE 1e-8   /* Filon pieces of GGX below this fraction of the
+#define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
                                * terms below 1e-4 (a tenth of what the layer
