@@ -166,9 +166,9 @@ static double series_error(ll_microfacet *mf, const series_case *c, double mu_o,
     return worst;
 }
 
-/* The azimuth where the pair's g has a kink, if any, as mu_i for a given
- * mu_o: pairs built so that the kink (critical angle of total internal
- * reflection, end of refraction) falls inside [0, pi]. */
+/* Fixed pairs: with a kink (critical azimuth of total internal reflection,
+ * end of refraction) inside [0, pi], grazing on one or both sides, and near
+ * normal incidence. */
 static void kink_pairs(double *pairs, size_t *count)
 {
     static const double fixed[][2] = {
