@@ -17,6 +17,7 @@
 #include <layerlab.h>
 #include "test_util.h"
 #include "material/word_table.h"
+#include "words/microfacet.h"
 
 /* Parse text that must fail with LL_ERROR_PARSE and a message that starts
  * with `where` and contains `what`. */
@@ -84,6 +85,54 @@ static void every_word_parses(void **state)
     assert_int_equal(m->words[3].choice, LL_PHASE_HG);
     assert_false(ll_material_is_opaque(m));
     ll_material_destroy(m);
+}
+
+/* dist=beckmann|ggx on the interfaces: the word's choice, carried by its
+ * parameters (which tell two words apart by it), and in the metadata only
+ * when given, so a file without it describes what it always did. */
+static void interface_distribution(void **state)
+{
+    ll_material *m;
+    ll_word_params p, q;
+    (void)state;
+    m = parse_ok("dielectric eta=1.5 alpha=0.1 dist=ggx\n"
+                 "dielectric eta=1.2 alpha=0.2 dist=beckmann\n"
+                 "conductor eta=Au alpha=0.3 dist=ggx compensate=0\n");
+    assert_int_equal(m->words[0].choice, LL_DISTRIBUTION_GGX);
+    assert_int_equal(m->words[1].choice, LL_DISTRIBUTION_BECKMANN);
+    assert_int_equal(m->words[2].choice, LL_DISTRIBUTION_GGX);
+    ll_word_params_get(m, 0, 0, 1, &p);
+    assert_int_equal(p.choice, LL_DISTRIBUTION_GGX);
+    ll_word_params_get(m, 2, 1, 3, &p);
+    assert_int_equal(p.choice, LL_DISTRIBUTION_GGX);
+    assert_float_equal(p.v[LL_CONDUCTOR_ALPHA], 0.3, 0.0);
+    assert_non_null(strstr(m->metadata, "\"alpha\": 0.10000000000000001, \"dist\": \"ggx\""));
+    assert_non_null(strstr(m->metadata, "\"dist\": \"beckmann\""));
+    assert_non_null(strstr(m->metadata, "\"compensate\": 0, \"dist\": \"ggx\""));
+    ll_material_destroy(m);
+
+    /* The default is Beckmann, and says nothing. */
+    m = parse_ok("dielectric eta=1.5 alpha=0.1\nconductor eta=Au alpha=0.3\n");
+    assert_int_equal(m->words[0].choice, LL_DISTRIBUTION_BECKMANN);
+    assert_int_equal(m->words[1].choice, LL_DISTRIBUTION_BECKMANN);
+    assert_null(strstr(m->metadata, "dist"));
+    ll_word_params_get(m, 0, 0, 1, &p);
+    ll_material_destroy(m);
+    m = parse_ok("dielectric eta=1.5 alpha=0.1 dist=ggx\n");
+    ll_word_params_get(m, 0, 0, 1, &q);
+    assert_false(ll_word_params_equal(&p, &q));
+    ll_material_destroy(m);
+
+    /* Sweeps over a GGX alpha. */
+    m = parse_ok("dielectric eta=1.5 alpha=[0.05 0.1 0.3] dist=ggx\nconductor eta=Au alpha=0.2\n");
+    assert_int_equal(ll_material_basis_count(m), 3);
+    assert_int_equal(m->words[0].choice, LL_DISTRIBUTION_GGX);
+    ll_material_destroy(m);
+
+    expect_error("dielectric eta=1.5 alpha=0.1 dist=phong", "t:1:35: ",
+                 "unknown microfacet distribution 'phong'; expected beckmann or ggx");
+    expect_error("conductor eta=Au alpha=0.1 dist=ggx dist=ggx", "t:1:37: ", "dist is given twice");
+    expect_error("diffuse albedo=0.5 dist=ggx", "t:1:20: ", "dist");
 }
 
 /* The table of words is complete: every descriptor has its hooks, unique
@@ -464,6 +513,7 @@ int main(void)
         cmocka_unit_test(measured_paths_resolve_against_the_file),
         cmocka_unit_test(mutations_parse_or_fail_cleanly),
         cmocka_unit_test(api_arguments_are_checked),
+        cmocka_unit_test(interface_distribution),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -30,19 +30,31 @@ static inline double ll_test_layer_eval(const ll_layer *l, double mu_i, double m
     return ll_layer_eval(l, mu_i, mu_o, phi_d, &f) == LL_OK ? f : 0.0;
 }
 
-/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
-static inline ll_status ll_test_set_microfacet(ll_layer *l, double eta_re, double eta_im,
-                                               double alpha, int compensate,
-                                               size_t n_orders_internal,
-                                               const ll_monitor *monitor)
+/* ll_layer_set_microfacet of an interface given by its numbers, of a
+ * distribution (LL_MICROFACET_BECKMANN, LL_MICROFACET_GGX). */
+static inline ll_status ll_test_set_microfacet_dist(ll_layer *l, double eta_re, double eta_im,
+                                                    double alpha, int distribution,
+                                                    int compensate, size_t n_orders_internal,
+                                                    const ll_monitor *monitor)
 {
     ll_microfacet mf = LL_MICROFACET_INIT;
     mf.eta_re = eta_re;
     mf.eta_im = eta_im;
     mf.alpha = alpha;
+    mf.distribution = distribution;
     mf.compensate = compensate;
     mf.n_orders_internal = n_orders_internal;
     return ll_layer_set_microfacet(l, &mf, monitor);
+}
+
+/* The same of a Beckmann interface. */
+static inline ll_status ll_test_set_microfacet(ll_layer *l, double eta_re, double eta_im,
+                                               double alpha, int compensate,
+                                               size_t n_orders_internal,
+                                               const ll_monitor *monitor)
+{
+    return ll_test_set_microfacet_dist(l, eta_re, eta_im, alpha, LL_MICROFACET_BECKMANN,
+                                       compensate, n_orders_internal, monitor);
 }
 
 /* ll_resolution_search_microfacet of a compensated Beckmann interface (the

@@ -124,9 +124,9 @@ LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, d
  * transmits; eta_re < 1 is allowed; eta_re == 1 is no interface at all and
  * makes the layer clear). Light from below sees the relative index 1/eta.
  *
- * distribution: the microfacet distribution. LL_MICROFACET_BECKMANN
- * (Walter et al. 2007) is the one implemented; LL_MICROFACET_GGX returns
- * LL_ERROR_UNSUPPORTED.
+ * distribution: the microfacet distribution, LL_MICROFACET_BECKMANN (the
+ * paper's) or LL_MICROFACET_GGX (Trowbridge-Reitz, the distribution of
+ * current renderers and material standards), both as in Walter et al. 2007.
  *
  * alpha is the roughness; alpha below LL_MICROFACET_MIN_ALPHA is rejected:
  * the Fourier series of a smoother interface would need more orders than
@@ -165,8 +165,8 @@ typedef struct ll_microfacet {
 
 /* The interface of *microfacet on the layer's nodes. The BSDF is the
  * original layerlab's (microfacet.cpp), in the layer's conventions: the
- * distribution D with roughness alpha, Smith shadowing by Walter's rational
- * approximation of G1, unpolarised Fresnel reflectance (ll_fresnel_* at the
+ * distribution D with roughness alpha, Smith shadowing (Beckmann: Walter's
+ * rational approximation of G1; GGX: its exact closed form), unpolarised Fresnel reflectance (ll_fresnel_* at the
  * microfacet), and Walter's refraction Jacobian including eta^2, so that
  * the transmission blocks obey f_bt(a, b) = f_tb(b, a) / eta^2 (radiance,
  * not importance).
@@ -184,7 +184,7 @@ typedef struct ll_microfacet {
  * of it, one unit per incident node), the energy compensation; every
  * worker polls once per node pair of its column. Returns
  * LL_ERROR_INVALID_ARGUMENT (NULL layer or microfacet, a field out of
- * range), LL_ERROR_UNSUPPORTED (GGX) or LL_ERROR_OUT_OF_MEMORY; on failure
+ * range) or LL_ERROR_OUT_OF_MEMORY; on failure
  * the layer is unchanged. */
 LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfacet,
                                          const ll_monitor *monitor);

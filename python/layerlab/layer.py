@@ -8,7 +8,8 @@ import weakref
 import numpy as np
 
 from ._errors import InvalidArgumentError
-from ._native import Microfacet, check, fspath, layer_p, lib
+from ._native import (MICROFACET_BECKMANN, MICROFACET_GGX, Microfacet, check, fspath, layer_p,
+                      lib)
 from ._util import count_argument, double_ptr, real_argument, vector_argument
 
 __all__ = ["Layer", "parameterHeuristicMicrofacet", "parameterHeuristicHG",
@@ -153,9 +154,10 @@ class Layer:
         check(lib.ll_layer_set_von_mises_fisher(self._handle, real_argument(albedo, "albedo"),
                                                 real_argument(kappa, "kappa"), None))
 
-    def setMicrofacet(self, eta, alpha, conserveEnergy=True, fourierOrders=0):
-        """Initialize the layer with a rough (Beckmann) interface, dielectric
-        or conductor
+    def setMicrofacet(self, eta, alpha, conserveEnergy=True, fourierOrders=0,
+                      distribution="beckmann"):
+        """Initialize the layer with a rough interface, dielectric or
+        conductor
 
         Parameter ``eta``:
             Relative index of refraction of the material below over the one
@@ -164,7 +166,7 @@ class Layer:
             ``k > 0`` is an opaque conductor.
 
         Parameter ``alpha``:
-            Beckmann roughness (> 0; at least 1e-3)
+            Roughness of the distribution (> 0; at least 1e-3)
 
         Parameter ``conserveEnergy``:
             Add the paper's compensation for the energy that single
@@ -173,8 +175,17 @@ class Layer:
         Parameter ``fourierOrders``:
             Number of Fourier orders used internally in the computation.
             Default (0): the layer's own :attr:`fourierOrders`
+
+        Parameter ``distribution``:
+            The microfacet distribution: ``"beckmann"`` (the paper's, the
+            default) or ``"ggx"`` (Trowbridge-Reitz)
         """
+        distributions = {"beckmann": MICROFACET_BECKMANN, "ggx": MICROFACET_GGX}
+        if distribution not in distributions:
+            raise InvalidArgumentError("setMicrofacet: distribution %r is not 'beckmann' or "
+                                       "'ggx'" % (distribution,))
         mf = Microfacet()
+        mf.distribution = distributions[distribution]
         mf.eta_re, mf.eta_im = complex_argument(eta, "eta")
         mf.alpha = real_argument(alpha, "alpha")
         mf.compensate = 1 if conserveEnergy else 0

@@ -140,6 +140,23 @@ def test_adding_follows_stokes_for_two_plates():
     assert r + t == pytest.approx(1.0, abs=1e-6)
 
 
+def test_ggx_interface_by_name():
+    # The distribution is chosen by name; GGX's longer tails reflect more
+    # light far from the mirror direction than Beckmann's of the same alpha,
+    # and a compensated, non-absorbing GGX dielectric conserves energy.
+    beckmann, ggx = make_layer(40, 40), make_layer(40, 40)
+    beckmann.setMicrofacet(eta=0.2 + 3j, alpha=0.2)
+    ggx.setMicrofacet(eta=0.2 + 3j, alpha=0.2, distribution="ggx")
+    far = (0.9, -0.3, 0.0)  # mu_o, mu_i (the original's order), phi
+    assert ggx.eval(*far) > 2.0 * beckmann.eval(*far) > 0.0
+    glass = make_layer(40, 40)
+    glass.setMicrofacet(eta=1.5, alpha=0.5, distribution="ggx")
+    r, t = glass.albedo(0.7)
+    assert r + t == pytest.approx(1.0, abs=1e-9)
+    with pytest.raises(ll.InvalidArgumentError, match="distribution"):
+        glass.setMicrofacet(eta=1.5, alpha=0.5, distribution="phong")
+
+
 def test_reverse_swaps_sides():
     clear = make_layer(10)
     diffuse = make_layer(10)

@@ -1,5 +1,5 @@
 /*
- * conductor eta=NAME|n+ki|n [k=K] alpha=A: a rough opaque metal
+ * conductor eta=NAME|n+ki|n [k=K] alpha=A [dist=beckmann|ggx]: a rough opaque metal
  * (ll_layer_set_microfacet with k > 0).
  *
  * A conductor's eta is the metal's own index, relative to vacuum, as
@@ -169,6 +169,7 @@ static void conductor_params(const ll_word *w, size_t c, size_t n_channels, doub
         n = ll_number_channel(&w->number[ETA], c, n_channels, 1.0);
         k = ll_number_channel(&w->number[K], c, n_channels, 0.0);
     }
+    out->choice = w->choice; /* the distribution */
     out->v[ETA] = n / above;
     out->v[K] = k / above;
     out->v[ALPHA] = ll_number_channel(&w->number[ALPHA], c, n_channels, 0.0);
@@ -179,14 +180,14 @@ static ll_status conductor_resolution(const ll_word_params *p, double tolerance,
                                       ll_watch *watch, size_t *n, size_t *m, double *error)
 {
     /* The layer conductor_build makes: with or without the compensation. */
-    return ll_search_microfacet(p->v[ALPHA], p->v[ETA], p->v[K],
-                                p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, tolerance, mu_min, watch,
-                                n, m, error);
+    return ll_search_microfacet_distribution(p->v[ALPHA], p->v[ETA], p->v[K], p->choice,
+                                             p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, tolerance,
+                                             mu_min, watch, n, m, error);
 }
 
 static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
 {
-    ll_interface_cost(p->v[ALPHA], p->v[ETA], p->v[K], n, m, out);
+    ll_interface_cost(p->v[ALPHA], p->v[ETA], p->v[K], p->choice, n, m, out);
 }
 
 static ll_status conductor_build(const ll_word_build_ctx *ctx, const ll_word *w,
@@ -197,6 +198,7 @@ static ll_status conductor_build(const ll_word_build_ctx *ctx, const ll_word *w,
     mf.eta_re = p->v[ETA];
     mf.eta_im = p->v[K];
     mf.alpha = p->v[ALPHA];
+    mf.distribution = p->choice;
     mf.compensate = p->v[LL_CONDUCTOR_COMPENSATE] != 0.0;
     return ll_layer_set_microfacet(layer, &mf, ctx->monitor(ctx->user, 1.0));
 }
@@ -213,13 +215,15 @@ static void conductor_metadata(ll_text *b, const ll_word *w)
     ll_text_number(b, "k", &w->number[K]);
     ll_text_number(b, "alpha", &w->number[ALPHA]);
     ll_text_number(b, "compensate", &w->number[LL_CONDUCTOR_COMPENSATE]);
+    ll_distribution_metadata(b, w);
 }
 
 const ll_word_desc ll_word_conductor = {
     "conductor", "conductor eta=Au alpha=0.1", "conductor interface", 1, 1,
     { { "eta", 1, ETA, 0, 0, 0, 0, NULL, conductor_parse_eta, NULL },
       { "k", 0, K, 0, 0, 0, 0, NULL, conductor_parse_k, NULL },
-      LL_PARAM_ALPHA(ALPHA), LL_PARAM_COMPENSATE(LL_CONDUCTOR_COMPENSATE) },
+      LL_PARAM_ALPHA(ALPHA), LL_PARAM_COMPENSATE(LL_CONDUCTOR_COMPENSATE),
+      LL_PARAM_DISTRIBUTION },
     conductor_finish, conductor_needs_colour, NULL, conductor_params, conductor_resolution,
     conductor_cost, conductor_build, conductor_metadata, NULL, 0
 };

@@ -194,14 +194,15 @@ enum { LL_MEASURED_WEIGHT_R = 0 }; /* values: the weights of the MERL channels R
 LL_INTERNAL size_t ll_doubling_count(double tau, double min_mu);
 
 /* The cost of a rough interface (ll_layer_set_microfacet) of roughness
- * alpha and relative index eta_re + i eta_im (material_estimate.c). */
+ * alpha, relative index eta_re + i eta_im and distribution
+ * (LL_DISTRIBUTION_*; material_estimate.c). */
 /* Per-order CPU seconds of an adding or doubling step per n x n entry:
  * orders where both layers hold something, and the others (a pass over
  * the storage). */
 #define LL_COST_ADD_ORDER 4.5e-9
 #define LL_COST_ADD_EMPTY 3e-10
-LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im, size_t n,
-                                   size_t m, ll_word_cost *out);
+LL_INTERNAL void ll_interface_cost(double alpha, double eta_re, double eta_im,
+                                   int distribution, size_t n, size_t m, ll_word_cost *out);
 
 /* The roughness parameter of interfaces: its lower limit is the one of
  * ll_layer_set_microfacet. */
@@ -225,5 +226,15 @@ LL_INTERNAL ll_status ll_check_compensate(const ll_parser *p, const ll_word *w,
       ll_check_compensate }
 /* The value of a word's compensate in its parameters: 1 unless given. */
 LL_INTERNAL double ll_compensate_value(const ll_number *x);
+
+/* dist=beckmann|ggx of the interfaces: the microfacet distribution, the
+ * word's choice (LL_DISTRIBUTION_* of words/microfacet.h; Beckmann unless
+ * given), which the parameters carry as their choice. */
+LL_INTERNAL ll_status ll_parse_distribution(const ll_parser *p, ll_word *w, const ll_token *key,
+                                            const ll_token *v);
+#define LL_PARAM_DISTRIBUTION { "dist", 0, -1, 0, 0, 0, 0, NULL, ll_parse_distribution, NULL }
+/* , "dist": "ggx" when dist= is given (a file without it describes the
+ * Beckmann interface it always did). */
+LL_INTERNAL void ll_distribution_metadata(ll_text *b, const ll_word *w);
 
 #endif /* LL_MATERIAL_WORD_TABLE_H */

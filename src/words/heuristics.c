@@ -247,14 +247,25 @@ ll_status ll_resolution_search_microfacet(const ll_microfacet *microfacet, doubl
     if (s != LL_OK)
         return s;
     ll_watch_stage(&watch, "resolution", 0.0, 1.0, LL_PROBE_SEARCH_UNITS);
-    s = ll_search_microfacet(in.alpha, in.eta_re, in.eta_im, in.compensate != 0, tolerance,
-                             mu_min, &watch, n_nodes, n_orders, error);
+    s = ll_search_microfacet_distribution(in.alpha, in.eta_re, in.eta_im, in.distribution,
+                                          in.compensate != 0, tolerance, mu_min, &watch,
+                                          n_nodes, n_orders, error);
     return ll_watch_finish(&watch, s, fn);
 }
 
 ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int compensate,
                                double tolerance, double mu_min, ll_watch *watch,
                                size_t *n_nodes, size_t *n_orders, double *error)
+{
+    return ll_search_microfacet_distribution(alpha, eta_re, eta_im, LL_DISTRIBUTION_BECKMANN,
+                                             compensate, tolerance, mu_min, watch, n_nodes,
+                                             n_orders, error);
+}
+
+ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double eta_im,
+                                            int distribution, int compensate, double tolerance,
+                                            double mu_min, ll_watch *watch, size_t *n_nodes,
+                                            size_t *n_orders, double *error)
 {
     static const char fn[] = "ll_resolution_search_microfacet";
     ll_probe_set set;
@@ -295,9 +306,10 @@ ll_status ll_search_microfacet(double alpha, double eta_re, double eta_im, int c
     ctx.compensate = compensate;
     ctx.set = &set;
     /* n: the fit's guess; m: what the probes' own series need. */
-    s = ll_probe_interface_model(eta_re, eta_im, alpha, &ctx.mf);
+    s = ll_probe_interface_model_distribution(eta_re, eta_im, alpha, distribution, &ctx.mf);
     if (s == LL_OK && compensate)
-        s = ll_probe_compensation_model(eta_re, eta_im, alpha, &ctx.mf0);
+        s = ll_probe_compensation_model_distribution(eta_re, eta_im, alpha, distribution,
+                                                     &ctx.mf0);
     if (s == LL_OK)
         s = ll_probe_interface_orders(ctx.mf, tolerance, &set, &m);
     if (s == LL_OK)

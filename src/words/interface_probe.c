@@ -71,7 +71,15 @@ void ll_probe_add_series(const double *c, size_t len, const double *phi, size_t 
 ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
                                    ll_microfacet_model **out)
 {
-    return ll_microfacet_create(eta_re, eta_im, alpha, TRUE_ORDERS, TRUE_MAX_LEN, out);
+    return ll_probe_interface_model_distribution(eta_re, eta_im, alpha,
+                                                 LL_DISTRIBUTION_BECKMANN, out);
+}
+
+ll_status ll_probe_interface_model_distribution(double eta_re, double eta_im, double alpha,
+                                                int distribution, ll_microfacet_model **out)
+{
+    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution, TRUE_ORDERS,
+                                             TRUE_MAX_LEN, out);
 }
 
 /* One probe pair's 4 x 4 stencil (signed node cosines and weights). */

@@ -78,8 +78,16 @@ done:
 ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
                                       ll_microfacet_model **out)
 {
+    return ll_probe_compensation_model_distribution(eta_re, eta_im, alpha,
+                                                    LL_DISTRIBUTION_BECKMANN, out);
+}
+
+ll_status ll_probe_compensation_model_distribution(double eta_re, double eta_im, double alpha,
+                                                   int distribution, ll_microfacet_model **out)
+{
     /* No widening, series of one term (maps of one order). */
-    return ll_microfacet_create(eta_re, eta_im, alpha, LL_PROBE_TRUE_ORDERS, 1, out);
+    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution,
+                                             LL_PROBE_TRUE_ORDERS, 1, out);
 }
 
 ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im, size_t n,

@@ -1,5 +1,5 @@
 /*
- * Rough interfaces: the Beckmann microfacet BSDF of Walter et al. 2007
+ * Rough interfaces: the Beckmann or GGX microfacet BSDF of Walter et al. 2007
  * (dielectric or conductor) as a layer (Jakob et al. 2014, section 6.2 and
  * the appendix; the original layerlab's microfacetFourierSeries and
  * Layer::setMicrofacet, whose BSDF and conventions this reproduces).
@@ -51,12 +51,19 @@
  * original keeps only the integral of exp(A + B cos phi), and with g not
  * constant across the wider lobe that adds up to 10% at grazing angles
  * (R + T = 1.06 for eta = 1.5, alpha = 0.3 at its 61 orders).
+ *
+ * GGX has the same g and the same A + B cos phi, but its peak factor
+ * (1 - A - B cos phi)^-2 has tails that never fall below 1e-12 on the
+ * circle: its window is the whole circle, where the peak's series is known
+ * in closed form and g is interpolated in cos phi (words/microfacet_ggx.h);
+ * its Filon path grades the panels geometrically away from the peak.
  */
 #include "words/microfacet.h"
 #include "support/watch.h"
 
 #include "numerics/filon.h"
 #include "words/fresnel.h"
+#include "words/microfacet_ggx.h"
 #include "layer/layer.h"
 #include "numerics/series.h"
 
@@ -84,6 +91,17 @@
                                * the window from it spoils the Chebyshev form  */
 #define ANGLE_EPS 1e-7        /* azimuths this close count as equal            */
 #define NEGLIGIBLE 1e-10      /* skip pairs whose peak series starts below     */
+#define GGX_FILON_SAMPLES 17  /* Filon samples of each of GGX's pieces (odd),
+                               * which double in width away from the peak      */
+#define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
+                               * point (odd); the pieces shrink by 4 ...       */
+#define GGX_KINK_LEVELS 8     /* ... this many times                           */
+#define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
+                               * pair's peak add nothing (ggx_piece)           */
+#define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
+                               * terms below 1e-4 (a tenth of what the layer
+                               * keeps, LL_MICROFACET_RELERR) would double the
+                               * orders of TAIL_GOAL's 1e-6 for nothing        */
 
 /* The largest B whose exp(B cos phi) series a layer with n orders holds at
  * relative error 1e-3 (the original's fit, Bmax(n, 1e-3)). A sharper lobe
@@ -103,6 +121,8 @@ typedef struct grid_entry {
 struct ll_microfacet_model {
     double eta_re, eta_im, alpha;
     int conductor;
+    int ggx;             /* GGX, else Beckmann                             */
+    ll_ggx_basis ggx_basis;
     double b_max;        /* lobes sharper than this are widened            */
     double map_b_max;    /* the maps hold every order up to this B (the
                           * b_max of creation; ll_microfacet_set_orders
@@ -116,8 +136,9 @@ struct ll_microfacet_model {
 typedef struct pair_plan {
     int reflect;
     double eta;        /* relative index in the half vector wi + eta wo     */
-    double a_plus_b;   /* log of the peak of exp(A + B cos phi)             */
-    double b;
+    double a_plus_b;   /* log of the peak of exp(A + B cos phi) (GGX: of
+                        * (1 - A - B cos phi)^-2)                           */
+    double b;          /* Beckmann: B; GGX: beta (words/microfacet_ggx.h)    */
     int widened;       /* B was reduced to what the orders hold             */
     size_t grid;       /* B_k <= B                                           */
     double phi_end;    /* the window in phi: [0, phi_end]                   */
@@ -202,7 +223,7 @@ static void note_branch_point(pair_plan *p, double u, double delta)
  *    where |H| vanishes. */
 static int classify_window(const ll_microfacet_model *mf, pair_plan *p)
 {
-    double delta = window_delta(p->b), t0 = -p->sin_prod - p->mu_prod;
+    double delta = mf->ggx ? 2.0 : window_delta(p->b), t0 = -p->sin_prod - p->mu_prod;
     double span = p->sin_prod * delta;
     p->phi_end = window_angle(delta);
     p->filon = p->grade_start = p->grade_end = 0;
@@ -223,6 +244,50 @@ static int classify_window(const ll_microfacet_model *mf, pair_plan *p)
     if (!mf->conductor)
         note_branch_point(p, (1.0 - 2.0 * p->eta * p->eta - t0) / span, delta);
     return 1;
+}
+
+/* The phi-independent factor of g (plan_pair): G1(wi) G1(wo) / (pi
+ * alpha^2 h_z^4 |mu_i mu_o|), times eta^2 for refraction. */
+static double pair_scale(const ll_microfacet_model *mf, const pair_plan *p, double g1_i, double g1_o,
+                         double h_z)
+{
+    double scale = g1_i * g1_o /
+                   (LL_PI * mf->alpha * mf->alpha * (h_z * h_z) * (h_z * h_z) * fabs(p->mu_prod));
+    return p->reflect ? scale : scale * p->eta * p->eta;
+}
+
+/* plan_pair for GGX, from Beckmann's A + B = -X_0 and B: the peak factor
+ * (1 + X_0)^-2 (1 + beta v)^-2, beta = B / (1 + X_0). */
+static int plan_ggx(const ll_microfacet_model *mf, pair_plan *p, double b_limit, double mu_i,
+                    double si, double so, double h_z)
+{
+    double x0 = -p->a_plus_b, e0, gmax;
+    p->b /= 1.0 + x0;
+    p->a_plus_b = -2.0 * log1p(x0);
+    e0 = exp(p->a_plus_b);
+    if (!(p->b < HUGE_VAL) || !(e0 > 0.0))
+        return 0;
+    p->widened = p->b > b_limit;
+    if (p->widened) {
+        /* Widen, keeping the mean of the peak (the energy of the whole
+         * lobe is restored by ll_microfacet_series). */
+        p->a_plus_b += log(ll_ggx_peak_mean(p->b) / ll_ggx_peak_mean(b_limit));
+        p->b = b_limit;
+    }
+    p->grid = 0; /* no maps: the peak's series is closed-form */
+    if (!classify_window(mf, p))
+        return 0;
+    p->sign_h = h_z > 0.0 ? 1.0 : -1.0;
+    p->scale = pair_scale(mf, p, ll_ggx_smith_g1(si / fabs(mu_i), mf->alpha),
+                          ll_ggx_smith_g1(so / fabs(p->mu_o), mf->alpha), h_z);
+    /* Negligible when f's mean over phi is, in absolute terms: unlike
+     * Beckmann's, the peak factor alone says nothing, as its tails fall
+     * like X^-2 ~ h_z^4, which the scale's h_z^-4 makes up for (a grazing
+     * pair whose factor is 1e-12 can have f ~ 1). g / scale is at most
+     * (1 + t)^2 <= 4 for reflection, |wi.H wo.H| <= (1 + eta)^2 for
+     * refraction. */
+    gmax = p->reflect ? 4.0 : (1.0 + p->eta) * (1.0 + p->eta);
+    return exp(p->a_plus_b) * ll_ggx_peak_mean(p->b) * p->scale * gmax >= NEGLIGIBLE;
 }
 
 /* Plan a pair, its lobe widened to at most B = b_limit; returns 0 if it
@@ -261,6 +326,8 @@ static int plan_pair(const ll_microfacet_model *mf, double mu_o, double mu_i, do
     p->b = 2.0 * eta_h * p->sin_prod * inv * inv;
     if (!(p->b < HUGE_VAL))
         return 0;
+    if (mf->ggx)
+        return plan_ggx(mf, p, b_limit, mu_i, si, so, h_z);
     /* The series' first term i0e(B) e^(A + B), with i0e <= 1. */
     e0 = exp(p->a_plus_b);
     if (!(e0 >= NEGLIGIBLE) || !(e0 * ll_bessel_i0e(p->b) >= NEGLIGIBLE))
@@ -373,18 +440,46 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
     ll_filon_moments(f, samples, a, b, n_out, out, filon);
 }
 
+/* add_piece for GGX, with its peak factor; *seen is the largest f of the
+ * pair's pieces so far. A piece whose samples all stay below
+ * GGX_NEGLIGIBLE of it adds no moments: its share of f at any azimuth, of
+ * the series' partial sums too, is below that fraction of the peak (the
+ * tails of a sharp lobe and the kinks far out in them cost most of the
+ * samples otherwise). */
+static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                      double b, size_t samples, size_t n_out, double *out, double *scratch,
+                      double *seen)
+{
+    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
+    double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
+    size_t k;
+    if (!(b > a))
+        return;
+    azimuth_cosines(a, b, samples, cos_phi);
+    sample_profile(mf, p, cos_phi, samples, reference ? NULL : f, reference ? f : NULL);
+    for (k = 0; k < samples; ++k) {
+        double c = 1.0 + p->b * (1.0 - cos_phi[k]);
+        f[k] *= peak / (c * c);
+        largest = fmax(largest, fabs(f[k]));
+    }
+    *seen = fmax(*seen, largest);
+    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
+        return;
+    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+}
+
 /* [a, b] on uniform panels, except that next to an end at (or near) a
  * branch point the first panel pair is replaced by pieces shrinking by 4
  * towards it: Fresnel's square root there would cost O(h^1/2) on uniform
  * panels; graded, only the last tiny piece errs. */
 static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
-                       double b, int grade_a, int grade_b, size_t n_out, double *out,
-                       double *scratch)
+                       double b, size_t samples, int grade_a, int grade_b, size_t n_out,
+                       double *out, double *scratch)
 {
-    double edge = 2.0 * (b - a) / (double)(FILON_SAMPLES - 1), lo_frac = 0.25, hi_frac = 1.0;
+    double edge = 2.0 * (b - a) / (double)(samples - 1), lo_frac = 0.25, hi_frac = 1.0;
     double main_a = grade_a ? a + edge : a, main_b = grade_b ? b - edge : b;
     int level;
-    add_piece(mf, p, reference, main_a, main_b, FILON_SAMPLES, n_out, out, scratch);
+    add_piece(mf, p, reference, main_a, main_b, samples, n_out, out, scratch);
     for (level = 0; level < FILON_LEVELS; ++level) {
         double lo = level == FILON_LEVELS - 1 ? 0.0 : lo_frac;
         if (grade_a)
@@ -398,6 +493,67 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
     }
 }
 
+/* [a, b] for GGX, graded towards a singular end over its whole length:
+ * pieces at distances [d / 4, d] from it, d = b - a, b - a / 4, ..., each
+ * with the same samples, so that every piece resolves the square root of
+ * Fresnel at the kink to the same relative accuracy (on uniform panels,
+ * as add_graded's, the panels next to the graded ones err by O(h^1/2)
+ * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
+static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                        double b, int at_a, int at_b, size_t n_out, double *out,
+                        double *scratch, double *seen)
+{
+    double d = b - a;
+    int level;
+    if (!(b > a))
+        return;
+    if (at_a && at_b) {
+        double mid = 0.5 * (a + b);
+        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch, seen);
+        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch, seen);
+        return;
+    }
+    if (!at_a && !at_b) {
+        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch, seen);
+        return;
+    }
+    for (level = 0; level < GGX_KINK_LEVELS; ++level) {
+        double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
+        if (at_a)
+            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
+        else
+            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
+        d = near;
+    }
+}
+
+/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
+ * width from the peak's half width beta^-1/2 on (the tails fall like
+ * phi^-4, so each piece spans the same relative change of f), cut at the
+ * kink and graded towards it and towards near branch points. */
+static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                      size_t n_out, double *out, double *scratch)
+{
+    double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
+    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
+    while (a < end) {
+        double b = a == 0.0 ? first : 2.0 * a;
+        int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
+        if (b > end - ANGLE_EPS)
+            b = end;
+        if (p->split > a && p->split < b)
+            b = p->split;
+        /* Reflection's kink is total internal reflection, which holds
+         * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
+         * there, and Fresnel's square root is on the far side alone. */
+        grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
+        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch, &seen);
+        a = b;
+    }
+}
+
 /* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
  * dphi, l < n_out, over the window (f is below 1e-12 of its peak beyond),
  * split at a kink. */
@@ -406,14 +562,17 @@ static void filon_series(const ll_microfacet_model *mf, const pair_plan *p, int 
 {
     size_t l;
     memset(out, 0, n_out * sizeof(double));
-    if (p->split > 0.0) {
-        add_graded(mf, p, reference, 0.0, p->split, p->grade_start, 1, n_out, out, scratch);
-        if (p->reflect) /* refracted light ends at the split */
-            add_graded(mf, p, reference, p->split, p->phi_end, 1, p->grade_end, n_out, out,
-                       scratch);
-    } else {
-        add_graded(mf, p, reference, 0.0, p->phi_end, p->grade_start, p->grade_end, n_out,
+    if (mf->ggx) {
+        ggx_filon(mf, p, reference, n_out, out, scratch);
+    } else if (p->split > 0.0) {
+        add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
                    out, scratch);
+        if (p->reflect) /* refracted light ends at the split */
+            add_graded(mf, p, reference, p->split, p->phi_end, FILON_SAMPLES, 1, p->grade_end,
+                       n_out, out, scratch);
+    } else {
+        add_graded(mf, p, reference, 0.0, p->phi_end, FILON_SAMPLES, p->grade_start,
+                   p->grade_end, n_out, out, scratch);
     }
     out[0] *= LL_INV_PI;
     for (l = 1; l < n_out; ++l)
@@ -428,6 +587,26 @@ size_t ll_microfacet_scratch_size(size_t max_len)
     return 2 * FILON_SAMPLES + 7 * max_len + 2 * CHEB;
 }
 
+/* GGX's smooth pairs: g at the Chebyshev points of cos phi, the closed
+ * form of the peak's series (words/microfacet_ggx.h). */
+static ll_status ggx_pair_series(const ll_microfacet_model *mf, const pair_plan *p, size_t max_len,
+                                 double *out, size_t *n_out, double *ref0, double *scratch)
+{
+    double *g = scratch, *g_ref = scratch + LL_GGX_CHEB, *rest = scratch + 2 * LL_GGX_CHEB;
+    double peak = exp(p->a_plus_b);
+    size_t i, len = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len) + LL_GGX_CHEB;
+    sample_profile(mf, p, mf->ggx_basis.cos_phi, LL_GGX_CHEB, g, ref0 ? g_ref : NULL);
+    for (i = 0; i < LL_GGX_CHEB; ++i) {
+        g[i] *= peak;
+        g_ref[i] = ref0 ? g_ref[i] * peak : 0.0;
+    }
+    *n_out = len < max_len ? len : max_len;
+    ll_ggx_series(&mf->ggx_basis, p->b, g, *n_out, out, rest);
+    if (ref0)
+        ll_ggx_series(&mf->ggx_basis, p->b, g_ref, 1, ref0, rest);
+    return LL_OK;
+}
+
 /* The series of a planned pair, n_out <= max_len terms (*n_out), and the
  * order 0 of its reference (F = 1) if ref0 is not NULL. */
 static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, size_t max_len,
@@ -436,8 +615,12 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     const grid_entry *e;
     double *g = scratch, *g_ref = ref0 ? scratch + CHEB : NULL, rest, peak;
     size_t i, l, len;
+    if (mf->ggx && !p->filon)
+        return ggx_pair_series(mf, p, max_len, out, n_out, ref0, scratch);
     if (p->filon) {
-        len = ll_expcos_length(p->b, TAIL_GOAL) + FILON_EXTRA;
+        len = (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
+                       : ll_expcos_length(p->b, TAIL_GOAL)) +
+              FILON_EXTRA;
         *n_out = len < max_len ? len : max_len;
         if (ref0) /* order 0 of the reference, by the same rule */
             filon_series(mf, p, 1, 1, ref0, scratch);
@@ -531,6 +714,20 @@ ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, doubl
 ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_t n_orders,
                                size_t max_len, ll_microfacet_model **out)
 {
+    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, LL_DISTRIBUTION_BECKMANN,
+                                             n_orders, max_len, out);
+}
+
+/* The widest lobe that n orders hold (the model's distribution). */
+static double model_max_b(const ll_microfacet_model *mf, size_t n_orders)
+{
+    return mf->ggx ? ll_ggx_max_beta(n_orders, LL_MICROFACET_RELERR) : max_b(n_orders);
+}
+
+ll_status ll_microfacet_create_distribution(double eta_re, double eta_im, double alpha,
+                                            int distribution, size_t n_orders, size_t max_len,
+                                            ll_microfacet_model **out)
+{
     ll_microfacet_model *mf = ll_calloc(1, sizeof *mf);
     *out = NULL;
     if (!mf)
@@ -539,7 +736,10 @@ ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_
     mf->eta_im = eta_im;
     mf->alpha = alpha;
     mf->conductor = eta_im != 0.0;
-    mf->b_max = max_b(n_orders);
+    mf->ggx = distribution == LL_DISTRIBUTION_GGX;
+    if (mf->ggx)
+        ll_ggx_basis_init(&mf->ggx_basis);
+    mf->b_max = model_max_b(mf, n_orders);
     mf->map_b_max = mf->b_max;
     mf->max_len = max_len;
     *out = mf;
@@ -548,7 +748,7 @@ ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha, size_
 
 void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders)
 {
-    mf->b_max = fmin(max_b(n_orders), mf->map_b_max);
+    mf->b_max = fmin(model_max_b(mf, n_orders), mf->map_b_max);
 }
 
 static void grid_entry_free(grid_entry *e)
@@ -720,8 +920,8 @@ static ll_status grow_grid(ll_microfacet_model *mf, size_t *n_grid, unsigned cha
 static void mark_pair(const ll_microfacet_model *mf, double mu_o, double mu_i, unsigned char *need)
 {
     pair_plan p;
-    if (!plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p))
-        return;
+    if (mf->ggx || !plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p))
+        return; /* GGX needs no maps */
     if (!p.filon)
         need[p.grid] = 1;
     if (p.b > mf->b_max && plan_pair(mf, mu_o, mu_i, mf->b_max, &p) && !p.filon)
@@ -1027,12 +1227,7 @@ ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out, const 
     s = ll_struct_read(out, sizeof *out, in, fn, "ll_microfacet");
     if (s != LL_OK)
         return s;
-    if (out->distribution == LL_MICROFACET_GGX)
-        return ll_fail(LL_ERROR_UNSUPPORTED,
-                       "%s: the GGX distribution is not implemented yet; "
-                       "LL_MICROFACET_BECKMANN is",
-                       fn);
-    if (out->distribution != LL_MICROFACET_BECKMANN)
+    if (out->distribution != LL_MICROFACET_BECKMANN && out->distribution != LL_MICROFACET_GGX)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "%s: distribution = %d is not an ll_microfacet_distribution", fn,
                        out->distribution);
@@ -1047,7 +1242,7 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfac
     ll_microfacet_model *mf = NULL;
     double *mu = NULL, *order0 = NULL, *ref0 = NULL, *w = NULL, *work = NULL;
     double eta_re, eta_im, alpha;
-    int conserve_energy;
+    int conserve_energy, distribution;
     layer_job job;
     ll_watch watch;
     ll_microfacet in;
@@ -1060,6 +1255,7 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfac
     alpha = in.alpha;
     conserve_energy = in.compensate;
     n_orders_internal = in.n_orders_internal;
+    distribution = in.distribution;
     s = check_arguments(layer, eta_re, eta_im, alpha);
     if (s == LL_OK)
         s = ll_watch_begin(&watch, monitor, fn);
@@ -1079,7 +1275,8 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfac
     job.column_memory = NULL;
     job.slots = 0;
 
-    s = ll_microfacet_create(eta_re, eta_im, alpha, n_orders_internal, m, &mf);
+    s = ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution,
+                                          n_orders_internal, m, &mf);
     if (s != LL_OK)
         return s;
     mu = ll_alloc_array(n, sizeof(double));

@@ -1,5 +1,5 @@
 /*
- * The azimuthal Fourier series of the rough (Beckmann microfacet) interface
+ * The azimuthal Fourier series of the rough (Beckmann or GGX microfacet) interface
  * for one pair of zenith cosines: the engine of ll_layer_set_microfacet,
  * exposed internally for tests.
  *
@@ -26,10 +26,15 @@
 typedef struct ll_microfacet_model ll_microfacet_model;
 
 /* The caller's ll_microfacet read up to its struct_size (defaults after),
- * the distribution checked: GGX is LL_ERROR_UNSUPPORTED. The other fields
+ * the distribution checked. The other fields
  * are checked by their users. */
 LL_INTERNAL ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out,
                                          const char *fn);
+
+/* The microfacet distributions (the values of the public
+ * ll_microfacet_distribution). */
+#define LL_DISTRIBUTION_BECKMANN LL_MICROFACET_BECKMANN
+#define LL_DISTRIBUTION_GGX LL_MICROFACET_GGX
 
 /* The model: complex relative index, Beckmann roughness, the number of
  * Fourier orders n_orders it is resolved with (a lobe too sharp for them is
@@ -38,6 +43,12 @@ LL_INTERNAL ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet 
 LL_INTERNAL ll_status ll_microfacet_create(double eta_re, double eta_im, double alpha,
                                            size_t n_orders, size_t max_len,
                                            ll_microfacet_model **out);
+/* The same for a distribution (LL_DISTRIBUTION_*; alpha is its roughness;
+ * ll_microfacet_create's is Beckmann). */
+LL_INTERNAL ll_status ll_microfacet_create_distribution(double eta_re, double eta_im,
+                                                        double alpha, int distribution,
+                                                        size_t n_orders, size_t max_len,
+                                                        ll_microfacet_model **out);
 LL_INTERNAL void ll_microfacet_destroy(ll_microfacet_model *mf);
 
 /* Resolve the lobes with n_orders (at most the n_orders of creation) from

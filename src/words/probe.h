@@ -66,6 +66,10 @@ LL_INTERNAL double ll_probe_error(const ll_probe_set *set, const double *v, cons
  * the maps of its series): every order, no widening (words/microfacet.h). */
 LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
                                                ll_microfacet_model **out);
+/* The same for a distribution (LL_DISTRIBUTION_*, words/microfacet.h). */
+LL_INTERNAL ll_status ll_probe_interface_model_distribution(double eta_re, double eta_im,
+                                                            double alpha, int distribution,
+                                                            ll_microfacet_model **out);
 
 /* No widening: the orders a "true" series may have (more than any layer
  * holds: LL_MATERIAL_MAX_RESOLUTION is 100000). */
@@ -83,6 +87,9 @@ LL_INTERNAL ll_status ll_probe_interface_model(double eta_re, double eta_im, dou
  * per column. */
 LL_INTERNAL ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha,
                                                   ll_microfacet_model **out);
+LL_INTERNAL ll_status ll_probe_compensation_model_distribution(double eta_re, double eta_im,
+                                                               double alpha, int distribution,
+                                                               ll_microfacet_model **out);
 typedef struct ll_probe_compensation {
     size_t h;
     double *memory;
@@ -172,6 +179,14 @@ LL_INTERNAL ll_status ll_search_microfacet(double alpha, double eta_re, double e
                                            int compensate, double tolerance, double mu_min,
                                            ll_watch *watch, size_t *n_nodes, size_t *n_orders,
                                            double *error);
+/* The same for a distribution (LL_DISTRIBUTION_*): the probes evaluate its
+ * model; the first guess is the (Beckmann) fit either way. */
+LL_INTERNAL ll_status ll_search_microfacet_distribution(double alpha, double eta_re,
+                                                        double eta_im, int distribution,
+                                                        int compensate, double tolerance,
+                                                        double mu_min, ll_watch *watch,
+                                                        size_t *n_nodes, size_t *n_orders,
+                                                        double *error);
 LL_INTERNAL ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
                                                   ll_watch *watch, size_t *n_nodes,
                                                   size_t *n_orders, double *error);

@@ -1,0 +1,115 @@
+/*
+ * GGX's peak factor and shadowing (words/microfacet_ggx.h has the method).
+ */
+#include "words/microfacet_ggx.h"
+
+
+#include <math.h>
+#include <string.h>
+
+void ll_ggx_basis_init(ll_ggx_basis *basis)
+{
+    /* Chebyshev points y_i = cos(theta_i), theta_i = pi (i + 1/2) / N, of
+     * y = -cos phi (= v - 1, so that y = -1 is the peak). The interpolant's
+     * coefficients a_j = (2 - [j = 0]) / N sum_i g_i cos(j theta_i), and
+     * T_j(-cos phi) = (-1)^j cos(j phi): b_j = (-1)^j a_j. */
+    size_t i, j;
+    for (i = 0; i < LL_GGX_CHEB; ++i)
+        basis->cos_phi[i] = -cos(LL_PI * ((double)i + 0.5) / LL_GGX_CHEB);
+    for (j = 0; j < LL_GGX_CHEB; ++j)
+        for (i = 0; i < LL_GGX_CHEB; ++i)
+            basis->to_cosine[j][i] = (j == 0 ? 1.0 : 2.0) / LL_GGX_CHEB * (j % 2 ? -1.0 : 1.0) *
+                                     cos(LL_PI * (double)j * ((double)i + 0.5) / LL_GGX_CHEB);
+}
+
+double ll_ggx_smith_g1(double tan_theta, double alpha)
+{
+    double a = alpha * tan_theta;
+    return 2.0 / (1.0 + sqrt(1.0 + a * a));
+}
+
+/* c, s and r of E_beta = (c - d cos phi)^-2, c = 1 + beta, d = beta; s =
+ * sqrt((c - d)(c + d)) without cancellation, r = d / (c + s) < 1. */
+static void peak_constants(double beta, double *c, double *s, double *r)
+{
+    *c = 1.0 + beta;
+    *s = sqrt(1.0 + 2.0 * beta);
+    *r = beta / (*c + *s);
+}
+
+double ll_ggx_peak_mean(double beta)
+{
+    double c, s, r;
+    peak_constants(beta, &c, &s, &r);
+    return c / (s * s * s);
+}
+
+/* Term l of the cosine series relative to the first: 2 r^l (c + l s) / c. */
+static double term_ratio(double beta, double l)
+{
+    double c, s, r;
+    peak_constants(beta, &c, &s, &r);
+    if (r == 0.0)
+        return l == 0.0 ? 1.0 : 0.0;
+    return 2.0 * exp(l * log(r)) * (c + l * s) / c;
+}
+
+size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
+{
+    double c, s, r, power = 1.0;
+    size_t l;
+    peak_constants(beta, &c, &s, &r);
+    for (l = 1; l < cap; ++l) {
+        power *= r;
+        if (2.0 * power * (c + (double)l * s) < relerr * c)
+            return l;
+    }
+    return cap;
+}
+
+double ll_ggx_max_beta(size_t n_orders, double relerr)
+{
+    /* term_ratio grows with beta: bisection in log beta. */
+    double lo = log(1e-6), hi = log(1e16), n = (double)n_orders;
+    int k;
+    if (term_ratio(exp(hi), n) <= relerr)
+        return exp(hi);
+    if (term_ratio(exp(lo), n) > relerr)
+        return exp(lo);
+    for (k = 0; k < 200 && hi - lo > 1e-12; ++k) {
+        double mid = 0.5 * (lo + hi);
+        if (term_ratio(exp(mid), n) <= relerr)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return exp(lo);
+}
+
+void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size_t n_out,
+                   double *out, double *scratch)
+{
+    /* E_beta p with p = sum_j b_j cos(j phi): the two-sided coefficient of
+     * order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) + e_(l + j)) / 2. */
+    double *b = scratch, *e = scratch + LL_GGX_CHEB;
+    double c, s, r, power = 1.0, inv_s3;
+    size_t i, j, l, n_e = n_out + LL_GGX_CHEB;
+    peak_constants(beta, &c, &s, &r);
+    inv_s3 = 1.0 / (s * s * s);
+    for (j = 0; j < LL_GGX_CHEB; ++j) {
+        double sum = 0.0;
+        for (i = 0; i < LL_GGX_CHEB; ++i)
+            sum += basis->to_cosine[j][i] * g[i];
+        b[j] = j == 0 ? sum : 0.5 * sum;
+    }
+    for (l = 0; l < n_e; ++l) {
+        e[l] = power * (c + (double)l * s) * inv_s3;
+        power *= r;
+    }
+    for (l = 0; l < n_out; ++l) {
+        double sum = b[0] * e[l];
+        for (j = 1; j < LL_GGX_CHEB; ++j)
+            sum += b[j] * (e[l > j ? l - j : j - l] + e[l + j]);
+        out[l] = l == 0 ? sum : 2.0 * sum;
+    }
+}
