@@ -161,7 +161,7 @@ TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz deps-ci lib tools test check \
         test-c test-python check-c check-python test-tsan coverage clang cmake-check \
-        bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src \
+        bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src tests \
         need-lib need-tools need-test need-check need-coverage need-cmake \
         venv-test venv-check
 all: lib tools
@@ -202,6 +202,9 @@ venv-test: | need-test
 	@sh scripts/venv.sh base
 venv-check: | need-test
 	@sh scripts/venv.sh base reference mitsuba
+
+# Every test program of this BUILD, built (not run).
+tests: $(TESTS)
 
 # The reader's file list, for tests/layering.sh run by hand.
 print-reader-src:
@@ -366,8 +369,7 @@ coverage: | need-coverage
 # The libraries and every C test built by clang, warnings as errors, in a
 # build folder of their own (run by CI beside the gcc build).
 clang:
-	@$(MAKE) --no-print-directory lib $(TEST_SRC:tests/%.c=build-clang/tests/%) \
-	    CC=clang BUILD=build-clang DEV=1
+	@$(MAKE) --no-print-directory lib tests CC=clang BUILD=build-clang DEV=1
 
 # The CMake build (CMakeLists.txt): configured, built and installed into
 # build-cmake/prefix, then tests/cmake-consumer built against that install
