@@ -89,9 +89,10 @@ SAN      := -fsanitize=thread -fno-omit-frame-pointer
 BUILD    := build-tsan
 endif
 # Line coverage (make coverage): gcc's --coverage at -O1, whose line
-# numbers follow the source closely enough while the numerics stay fast.
+# numbers follow the source closely enough while the numerics stay fast;
+# atomic counters, since OpenMP threads run the same lines at once.
 ifeq ($(COVERAGE),1)
-SAN      := --coverage
+SAN      := --coverage -fprofile-update=atomic
 OPT      := -O1
 BUILD    := build-cov
 endif
@@ -185,13 +186,13 @@ deps-ci:
 # What each step needs, checked (never installed) before it runs: a missing
 # piece stops with its Debian package and `make deps` (scripts/need.sh).
 need-lib:
-	@CC=$(CC) sh scripts/need.sh lib
+	@CC='$(CC)' sh scripts/need.sh lib
 need-tools:
-	@CC=$(CC) sh scripts/need.sh tools
+	@CC='$(CC)' sh scripts/need.sh tools
 need-test:
-	@CC=$(CC) sh scripts/need.sh test
+	@CC='$(CC)' sh scripts/need.sh test
 need-check:
-	@CC=$(CC) CXX=$(CXX) MPICC=$(or $(MPICC),mpicc) sh scripts/need.sh check
+	@CC='$(CC)' CXX='$(CXX)' MPICC='$(or $(MPICC),mpicc)' sh scripts/need.sh check
 need-coverage:
 	@sh scripts/need.sh coverage
 need-cmake:
@@ -356,14 +357,15 @@ check: test-c test-python check-c check-python
 endif
 
 # Line coverage of src/ by the fast C tier, in build-cov/; fails below
-# COVERAGE_FLOOR percent of the lines (set a few points under the measured
-# figure, so that a change that leaves code untested is noticed).
-COVERAGE_FLOOR ?= 80
+# COVERAGE_FLOOR percent of the lines: a few points under the measured
+# 95.2 %, so that a change that leaves much code untested is noticed.
+COVERAGE_FLOOR ?= 92
 coverage: | need-coverage
 	@find build-cov -name '*.gcda' -delete 2>/dev/null || true
 	@$(MAKE) --no-print-directory test-c COVERAGE=1
 	@gcovr --root . --filter 'src/' --object-directory build-cov/obj --print-summary \
-	    --fail-under-line $(COVERAGE_FLOOR) -o build-cov/coverage.txt build-cov/obj
+	    --gcov-ignore-parse-errors --fail-under-line $(COVERAGE_FLOOR) \
+	    -o build-cov/coverage.txt build-cov/obj
 	@echo "coverage: per file in build-cov/coverage.txt (floor $(COVERAGE_FLOOR) %)"
 
 # The libraries and every C test built by clang, warnings as errors, in a

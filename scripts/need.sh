@@ -19,17 +19,18 @@ miss() { # what, Debian package
 
 # A header the compiler finds on its own search path.
 has_header() {
-    printf '#include <%s>\n' "$1" | "$CC" -E -x c - >/dev/null 2>&1
+    # shellcheck disable=SC2086  # CC may carry flags (CC='gcc -m32')
+    printf '#include <%s>\n' "$1" | $CC -E -x c - >/dev/null 2>&1
 }
 
 # A library the linker finds on its own search path (or through $2's flags).
 has_lib() {
     printf 'int main(void) { return 0; }\n' |
-        "$CC" -x c - -o /dev/null $2 -l"$1" >/dev/null 2>&1
+        $CC -x c - -o /dev/null $2 -l"$1" >/dev/null 2>&1
 }
 
 need_lib() {
-    command -v "$CC" >/dev/null 2>&1 || { miss "the C compiler $CC" build-essential; return; }
+    command -v "${CC%% *}" >/dev/null 2>&1 || { miss "the C compiler $CC" build-essential; return; }
     command -v pkg-config >/dev/null 2>&1 || miss pkg-config pkg-config
     has_header cblas.h || miss "OpenBLAS's cblas.h" libopenblas-openmp-dev
     blas_dir=$(pkg-config --variable=libdir openblas 2>/dev/null || true)
@@ -55,7 +56,8 @@ need_test() {
 need_check() {
     command -v mpirun >/dev/null 2>&1 || miss "mpirun (tests/llbuild_mpi.sh)" openmpi-bin
     command -v "${MPICC:-mpicc}" >/dev/null 2>&1 || miss "mpicc (llbuild-mpi)" libopenmpi-dev
-    command -v "${CXX:-c++}" >/dev/null 2>&1 || miss "a C++ compiler (tests/pbrt_shim.sh)" build-essential
+    cxx=${CXX:-c++}
+    command -v "${cxx%% *}" >/dev/null 2>&1 || miss "a C++ compiler (tests/pbrt_shim.sh)" build-essential
     # Mitsuba 3.9's LLVM variants load LLVM 19 (Debian 12's default 14 aborts them).
     llvm=
     for f in /usr/lib/*/libLLVM.so.19* /usr/lib/*/libLLVM-19.so* /usr/lib/libLLVM-19.so*; do
