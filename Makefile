@@ -162,7 +162,7 @@ TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz deps-ci lib tools test check \
         test-c test-python check-c check-python test-tsan coverage clang cmake-check \
-        bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src tests \
+        bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src print-blas-libs tests \
         need-lib need-tools need-test need-check need-coverage need-cmake \
         venv-test venv-check
 all: lib tools
@@ -210,6 +210,11 @@ tests: $(TESTS)
 # The reader's file list, for tests/layering.sh run by hand.
 print-reader-src:
 	@echo $(READER_SRC)
+
+# The OpenBLAS and LAPACKE link flags the library uses, for scripts that
+# link programs against the same OpenBLAS (bench/run.sh).
+print-blas-libs:
+	@echo $(BLAS_LIBS)
 
 lib: $(SHARED) $(STATIC) $(BUILD)/lib/layerlab.pc \
      $(READER_SHARED) $(READER_STATIC) $(BUILD)/lib/layerlab-reader.pc
@@ -386,10 +391,14 @@ cmake-check: | need-cmake
 abi-baseline: lib
 	@BUILD=$(BUILD) sh tests/abidiff.sh --write-baseline
 
-# Benchmarks (bench/run.sh builds what it measures, in build-bench/).
+# Benchmarks (bench/run.sh), on the library and tools built with -O3 in
+# build-bench/. BENCH_BUILD is how the Makefile builds them there.
+BENCH_BUILD = $(MAKE) --no-print-directory all BUILD=build-bench OPT='-O3 -march=x86-64-v2'
 bench:
+	@$(BENCH_BUILD)
 	@BUILD=build-bench sh bench/run.sh
 bench-full:
+	@$(BENCH_BUILD)
 	@BUILD=build-bench sh bench/run.sh --full
 
 fuzz: | need-lib
