@@ -45,7 +45,11 @@ command -v dpkg-query >/dev/null 2>&1 || {
 }
 
 missing=""
+checked=" "
 for p in $packages; do
+    # A package named by two groups (clang) is looked at once.
+    case $checked in *" $p "*) continue ;; esac
+    checked="$checked$p "
     status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
     case "$status" in
         *"install ok installed"*) ;;
