@@ -88,12 +88,11 @@ ifeq ($(TSAN),1)
 SAN      := -fsanitize=thread -fno-omit-frame-pointer
 BUILD    := build-tsan
 endif
-# Line coverage (make coverage): gcc's --coverage at -O1, whose line
-# numbers follow the source closely enough while the numerics stay fast;
-# atomic counters, since OpenMP threads run the same lines at once.
+# Line coverage (make coverage): gcc's --coverage at the usual -O2 (the
+# numerics stay fast; a line counts as run or not either way), with atomic
+# counters, since OpenMP threads run the same lines at once.
 ifeq ($(COVERAGE),1)
 SAN      := --coverage -fprofile-update=atomic
-OPT      := -O1
 BUILD    := build-cov
 endif
 CFLAGS_LIB += $(SAN)
