@@ -12,7 +12,8 @@ bundled library unless LAYERLAB_LIBRARY or PKG_CONFIG_PATH says otherwise.
 The C sources are the repository around python/ (an in-tree build, what pip
 does for a local folder), or the copy under python/_csrc/ that the sdist
 carries (python -m build makes the wheel from the sdist). The library links
-the system's OpenBLAS and LAPACKE (`make deps` installs them), so the wheel
+the system's OpenBLAS and LAPACKE (`make deps` installs them; `make lib`
+only checks for them and names the package), so the wheel
 is tagged for the platform, not for a Python version: ctypes needs no
 compiled extension.
 
@@ -37,7 +38,7 @@ except ImportError:  # setuptools < 70.1 keeps it in the wheel package
 HERE = os.path.dirname(os.path.abspath(__file__))
 SONAME = "liblayerlab.so.1"
 # What `make lib` needs of the repository; the sdist copies these to _csrc/.
-C_TREE = ["Makefile", "src", "include", "data/ior", "scripts/deps.sh"]
+C_TREE = ["Makefile", "src", "include", "data/ior", "scripts/need.sh"]
 
 
 def c_root():

@@ -1,10 +1,11 @@
 #!/bin/sh
 # Install the Debian packages layerlab needs, only those that are missing.
-#   sh scripts/deps.sh [lib] [tools] [test] [fuzz]     (no argument: all four)
-# Run by the Makefile for what each target builds: `make lib` installs the
-# library's needs only (no cairo, OpenEXR or clang), `make` the tools' too,
-# `make test` the tests', `make fuzz` the fuzzer's; `make deps` all of them.
-# Set LL_SKIP_DEPS=1 to skip the check (e.g. on a non-Debian system).
+#   sh scripts/deps.sh [lib] [tools] [test] [fuzz] [ci]     (no argument: all)
+# Run by `make deps` (all) and `make deps-lib`, `deps-tools`, `deps-test`,
+# `deps-fuzz`, `deps-ci` (one group each), and by nothing else: a build,
+# a test run, `make install` and `pip install` only check what they need
+# (scripts/need.sh) and name the package when it is missing.
+# Set LL_SKIP_DEPS=1 to skip it (e.g. on a non-Debian system).
 set -eu
 [ "${LL_SKIP_DEPS:-0}" = 1 ] && exit 0
 
@@ -13,16 +14,19 @@ lib_packages="build-essential pkg-config libopenblas-openmp-dev liblapacke-dev"
 # The tools' pictures (llplot): cairo, the OpenEXR C API; llbuild-mpi:
 # OpenMPI's headers and mpicc.
 tools_packages="libopenexr-dev libcairo2-dev libopenmpi-dev"
-# The tests: cmocka, abidiff/abidw (tests/abidiff.sh), Python with pip for
-# the Python package and the cross-checks (they pip-install the rest),
-# venv for python/tests/pip_install.sh, LLVM 19 for Mitsuba 3.9's LLVM
-# variants (Dr.Jit finds it; Debian 12's default LLVM 14/15 aborts them);
+# The tests: cmocka, abidiff/abidw (tests/abidiff.sh), Python with venv
+# for the virtual environment under build/ into which the tests install
+# their Python packages (scripts/venv.sh), LLVM 19 for Mitsuba 3.9's LLVM
+# variants (Dr.Jit finds it; Debian 12's default LLVM 14/15 aborts them),
 # mpirun for llbuild-mpi's tests (tests/llbuild_mpi.sh).
-test_packages="libcmocka-dev abigail-tools python3 python3-pip python3-venv libllvm19 openmpi-bin"
+test_packages="libcmocka-dev abigail-tools python3 python3-venv libllvm19 openmpi-bin"
 # The fuzzer: clang with its libFuzzer runtime.
 fuzz_packages="clang libclang-rt-14-dev"
+# CI (.ci/run): the clang build (clang and its OpenMP), the line coverage (gcovr) and the
+# CMake build with its consumer project (cmake).
+ci_packages="clang libomp-14-dev gcovr cmake"
 
-[ $# -eq 0 ] && set -- lib tools test fuzz
+[ $# -eq 0 ] && set -- lib tools test fuzz ci
 packages=""
 for need in "$@"; do
     case $need in
@@ -30,7 +34,8 @@ for need in "$@"; do
         tools) packages="$packages $tools_packages" ;;
         test) packages="$packages $test_packages" ;;
         fuzz) packages="$packages $fuzz_packages" ;;
-        *) echo "deps: unknown need '$need' (lib, tools, test or fuzz)" >&2; exit 2 ;;
+        ci) packages="$packages $ci_packages" ;;
+        *) echo "deps: unknown need '$need' (lib, tools, test, fuzz or ci)" >&2; exit 2 ;;
     esac
 done
 
@@ -40,7 +45,11 @@ command -v dpkg-query >/dev/null 2>&1 || {
 }
 
 missing=""
+checked=" "
 for p in $packages; do
+    # A package named by two groups (clang) is looked at once.
+    case $checked in *" $p "*) continue ;; esac
+    checked="$checked$p "
     status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
     case "$status" in
         *"install ok installed"*) ;;

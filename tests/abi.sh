@@ -48,6 +48,10 @@ SAN_FLAGS=
 if [ -f "$LIB" ] && nm -D --undefined-only "$LIB" 2>/dev/null | grep -q '__asan_'; then
     SAN_FLAGS="-fsanitize=address,undefined"
 fi
+# So does a coverage build's static library (make coverage) need gcov's.
+if nm "$BUILD_DIR/lib/liblayerlab_reader.a" 2>/dev/null | grep -q ' U __gcov_'; then
+    SAN_FLAGS="--coverage"
+fi
 
 # ----------------------------------------------------------- (a) headers
 for header in "$SRC"/include/layerlab.h "$SRC"/include/layerlab/ll_*.h; do

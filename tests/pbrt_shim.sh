@@ -3,7 +3,7 @@
 # as C++11 and linked against the reader library (liblayerlab_reader: a
 # renderer needs nothing that builds layers), then its tests
 # (tests/test_pbrt_shim.cpp).
-# Run by `make test` with BUILD, CC and CXX set; prints "N passed, N failed".
+# Run by `make check` with BUILD, CC and CXX set; prints "N passed, N failed".
 set -u
 cd "$(dirname "$0")/.." || exit 1
 BUILD=${BUILD:-build}

@@ -7,11 +7,21 @@
 # LL_TEST_WHEEL=1 also makes a wheel with `python -m build` (sdist, then
 # the wheel from the sdist's copy of the C sources: a full compile, so not
 # in the default run) and installs it in a second environment.
+# The fresh environments are made from the tests' own Python (build/venv,
+# scripts/venv.sh) and install from its wheel folder with --no-index
+# (PIP_NO_INDEX, PIP_FIND_LINKS): pip's isolated build gets setuptools
+# there too, so nothing is downloaded.
 # Prints "N passed, N failed"; run by python/tests/run.sh.
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-PYTHON=${PYTHON:-python3}
+VENV=${VENV:-$root/build/venv}
+export VENV
+sh "$root/scripts/venv.sh" base || exit 1
+PYTHON=$VENV/bin/python
+PIP_NO_INDEX=1
+PIP_FIND_LINKS=$VENV/wheels
+export PIP_NO_INDEX PIP_FIND_LINKS
 passed=0
 failed=0
 pass() { echo "PASS: $1"; passed=$((passed + 1)); }
@@ -55,8 +65,7 @@ install_and_check() { # label, venv dir, what to pip install
 install_and_check "pip install ./python" "$tmp/venv" "$root/python"
 
 if [ "${LL_TEST_WHEEL:-0}" = 1 ]; then
-    "$tmp/venv/bin/pip" install -q --disable-pip-version-check build >/dev/null 2>&1 || true
-    if "$tmp/venv/bin/python" -m build --outdir "$tmp/dist" "$root/python" >"$tmp/build.log" 2>&1; then
+    if "$PYTHON" -m build --outdir "$tmp/dist" "$root/python" >"$tmp/build.log" 2>&1; then
         wheel=$(ls "$tmp"/dist/*.whl)
         pass "python -m build made $(basename "$wheel")"
         install_and_check "the wheel" "$tmp/venv-wheel" "$wheel"

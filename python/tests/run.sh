@@ -1,17 +1,21 @@
 #!/bin/sh
-# The Python package's tests, run by `make test` (target test-python) with
-# BUILD=<build dir>. Tests the package in python/ against $BUILD's library;
-# installs numpy, matplotlib, pytest and mitsuba quietly when they are missing.
+# The Python package's tests against $BUILD's library, in the tests' own
+# virtual environment (scripts/venv.sh: build/venv, never the system's
+# site-packages).
+#   sh python/tests/run.sh             `make test`: every test but the
+#                                      Mitsuba renders, and pip_install.sh
+#   sh python/tests/run.sh --mitsuba   `make check`: the Mitsuba plugin's
+#                                      renders (test_mitsuba.py)
+# Nothing is downloaded once the environment holds its packages: pip is
+# pointed at the environment's wheel folder (PIP_NO_INDEX, PIP_FIND_LINKS),
+# for the tests that run `pip install` themselves.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 BUILD=${BUILD:-build}
 case $BUILD in /*) build_dir=$BUILD ;; *) build_dir=$root/$BUILD ;; esac
-PYTHON=${PYTHON:-python3}
-if ! command -v "$PYTHON" >/dev/null 2>&1; then
-  echo "python/tests/run.sh: $PYTHON not found; the Python package needs Python 3.8 or later" >&2
-  exit 1
-fi
+VENV=${VENV:-$root/build/venv}
+export VENV
 
 LAYERLAB_LIBRARY=$build_dir/lib/liblayerlab.so
 export LAYERLAB_LIBRARY
@@ -20,27 +24,30 @@ if [ ! -e "$LAYERLAB_LIBRARY" ]; then
   exit 1
 fi
 
-missing=
-for module in numpy matplotlib pytest; do
-  "$PYTHON" -c "import $module" 2>/dev/null || missing="$missing $module"
-done
-if [ -n "$missing" ]; then
-  echo "python/tests/run.sh: installing$missing"
-  "$PYTHON" -m pip install -q --disable-pip-version-check $missing
+mitsuba=0
+[ "${1:-}" = --mitsuba ] && mitsuba=1
+if [ $mitsuba = 1 ]; then
+  # Mitsuba 3's LLVM variants need LLVM 19 (scripts/deps.sh test installs libllvm19).
+  sh "$root/scripts/venv.sh" base mitsuba
+else
+  sh "$root/scripts/venv.sh" base
 fi
+PYTHON=$VENV/bin/python
+PIP_NO_INDEX=1
+PIP_FIND_LINKS=$VENV/wheels
+PIP_DISABLE_PIP_VERSION_CHECK=1
+export PIP_NO_INDEX PIP_FIND_LINKS PIP_DISABLE_PIP_VERSION_CHECK
 
-# Mitsuba 3 for the plugin's tests (test_mitsuba.py); its LLVM variants need
-# LLVM 19 (scripts/deps.sh test installs libllvm19).
-if ! "$PYTHON" -c "import mitsuba" 2>/dev/null; then
-  echo "python/tests/run.sh: installing mitsuba==3.9.1"
-  "$PYTHON" -m pip install -q --disable-pip-version-check "mitsuba==3.9.1"
+if [ $mitsuba = 0 ]; then
+  # pip install ./python in a fresh virtual environment (no LAYERLAB_LIBRARY).
+  PYTHON=$PYTHON sh "$here/pip_install.sh"
 fi
-
-# pip install ./python in a fresh virtual environment (no LAYERLAB_LIBRARY).
-sh "$here/pip_install.sh"
 
 # Test the source tree, not some installed copy; PNGs go to out/python/.
 PYTHONPATH=$root/python${PYTHONPATH:+:$PYTHONPATH}
 export PYTHONPATH
 cd "$root/python"
-exec "$PYTHON" -m pytest -q -p no:cacheprovider tests
+if [ $mitsuba = 1 ]; then
+  exec "$PYTHON" -m pytest -q -p no:cacheprovider tests/test_mitsuba.py
+fi
+exec "$PYTHON" -m pytest -q -p no:cacheprovider --ignore=tests/test_mitsuba.py tests

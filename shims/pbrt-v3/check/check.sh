@@ -1,51 +1,49 @@
 #!/bin/sh
-# `make pbrt-check`: pbrt-v3 with and without the shim, against the system's
-# libraries, on the scene of shims/pbrt-v3/README.md.
+# `make pbrt-check`: two pbrt-v3 programs that the user already has, one
+# built with the shim (PBRT) and one without (PBRT_STOCK), on the scene of
+# shims/pbrt-v3/README.md. It builds no renderer: it only runs them.
 #
-#  1. copies the pbrt-v3 source tree PBRT_SRC twice into WORK (its .git left
-#     out), applies system-libs.sh to one ("stock") and `apply.sh
-#     --system-libs` to the other ("shim"), builds pbrt_exe in each;
+#  1. checks that the shimmed pbrt links liblayerlab and the stock one
+#     does not;
 #  2. renders the scene with both on the golden file and on coated gold as
 #     `llbuild` makes it from examples/coated-gold.layers, and prints their
 #     image difference;
 #  3. renders it with both on eight damaged copies of the golden file
-#     (damage.py) and prints what each build does with each;
+#     (damage.py) and prints what each program does with each;
 #  4. renders a textured coated gold with the shim: constant and
 #     image-textured coat roughness (section 4 says what it checks).
 #
-# It passes when both builds build and render the intact files, the two
-# builds' images of each intact file agree to RMSE/mean < PBRT_TOLERANCE, and
-# the shim meets every damaged file with exactly one error and a black sphere
-# (an image bit-identical to the scene with a black sphere). What stock
-# pbrt-v3 does is reported, not judged. A second run reuses the builds.
+# It passes when both programs render the intact files, their images of
+# each intact file agree to RMSE/mean < PBRT_TOLERANCE, and the shim meets
+# every damaged file with exactly one error and a black sphere (an image
+# bit-identical to the scene with a black sphere). What stock pbrt-v3 does
+# is reported, not judged.
 #
-# usage: sh check.sh PBRT_SRC WORK GOLDEN.bsdf LAYERLAB_PREFIX
-# environment: PBRT_JOBS (make -j, 2), PBRT_THREADS (pbrt --nthreads, 2),
-#   PBRT_TIMEOUT (seconds per render, 900), PBRT_TOLERANCE (2e-3)
+# usage: sh check.sh PBRT PBRT_STOCK WORK GOLDEN.bsdf LAYERLAB_PREFIX
+# environment: PBRT_THREADS (pbrt --nthreads, 2), PBRT_TIMEOUT (seconds per
+#   render, 900), PBRT_TOLERANCE (2e-3)
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 shim_dir=$(dirname "$here")
 top=$(dirname "$(dirname "$shim_dir")")
-jobs=${PBRT_JOBS:-2}
 threads=${PBRT_THREADS:-2}
 limit=${PBRT_TIMEOUT:-900}
 tolerance=${PBRT_TOLERANCE:-2e-3}
 
 fail() { echo "pbrt-check: $*" >&2; exit 1; }
-[ $# -eq 4 ] || fail "usage: sh check.sh PBRT_SRC WORK GOLDEN.bsdf LAYERLAB_PREFIX"
-[ -n "$1" ] || fail "give PBRT_SRC=/path/to/pbrt-v3 (a plain pbrt-v3 checkout)"
-for f in CMakeLists.txt src/core/api.cpp src/materials/fourier.h; do
-    [ -f "$1/$f" ] || fail "$1/$f not found: PBRT_SRC must be a pbrt-v3 source tree"
-done
-[ -f "$3" ] || fail "golden file $3 not found (PBRT_GOLDEN=...)"
-src=$(cd "$1" && pwd)
-mkdir -p "$2" || exit 1
-work=$(cd "$2" && pwd)
-golden=$(cd "$(dirname "$3")" && pwd)/$(basename "$3")
-prefix=$4
+[ $# -eq 5 ] || fail "usage: sh check.sh PBRT PBRT_STOCK WORK GOLDEN.bsdf LAYERLAB_PREFIX"
+[ -n "$1" ] && [ -x "$1" ] || fail "give PBRT=/path/to/pbrt, a pbrt-v3 built with the shim"
+[ -n "$2" ] && [ -x "$2" ] || fail "give PBRT_STOCK=/path/to/pbrt, an unmodified pbrt-v3"
+[ -f "$4" ] || fail "golden file $4 not found (PBRT_GOLDEN=...)"
+pbrt_shim=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+pbrt_stock=$(cd "$(dirname "$2")" && pwd)/$(basename "$2")
+mkdir -p "$3" || exit 1
+work=$(cd "$3" && pwd)
+golden=$(cd "$(dirname "$4")" && pwd)/$(basename "$4")
+prefix=$5
 [ -f "$prefix/lib/pkgconfig/layerlab.pc" ] && [ -x "$prefix/bin/llbuild" ] ||
     fail "no installed layerlab in $prefix (make pbrt-check installs it there)"
-for tool in cmake make python3 timeout; do
+for tool in python3 timeout; do
     command -v $tool > /dev/null || fail "$tool is needed"
 done
 now() { date +%s.%N; }
@@ -63,45 +61,16 @@ cpu_mark() {
         printf "%.2f", t
     }' "$work/times.txt")
 }
+# The program of each variant (stock, shim).
+pbrt_of() { if [ "$1" = shim ]; then echo "$pbrt_shim"; else echo "$pbrt_stock"; fi; }
 
-# ---------------------------------------------------------------- 1. builds
-# A copy is made again only when PBRT_SRC names another tree; the scripts
-# are idempotent and copy files only when they differ, so a rerun rebuilds
-# only what changed.
-for v in stock shim; do
-    tree=$work/src-$v
-    if [ "$(cat "$tree/.layerlab-pbrt-src" 2>/dev/null)" != "$src" ]; then
-        rm -rf "$tree" "$work/build-$v"
-        mkdir -p "$tree" &&
-        (cd "$src" && tar --exclude=./.git -cf - .) | (cd "$tree" && tar -xf -) ||
-            fail "cannot copy $src to $tree"
-        echo "$src" > "$tree/.layerlab-pbrt-src"
-    fi
-    if [ $v = stock ]; then
-        sh "$shim_dir/system-libs.sh" "$tree" > "$work/apply-$v.log" 2>&1
-    else
-        sh "$shim_dir/apply.sh" --system-libs "$tree" > "$work/apply-$v.log" 2>&1
-    fi || { cat "$work/apply-$v.log" >&2; fail "applying to the $v tree failed"; }
-done
-
-for v in stock shim; do
-    b=$work/build-$v
-    mkdir -p "$b"
-    start=$(now)
-    echo "pbrt-check: building $v pbrt-v3 in $b (make -j$jobs pbrt_exe; logs there)"
-    (cd "$b" && PKG_CONFIG_PATH=$prefix/lib/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH} \
-        cmake -DCMAKE_BUILD_TYPE=Release "$work/src-$v" > cmake.log 2>&1) ||
-        { tail -n 20 "$b/cmake.log" >&2; fail "cmake of the $v tree failed"; }
-    (cd "$b" && make -j"$jobs" pbrt_exe > make.log 2>&1) ||
-        { grep -m 20 -B 2 -A 6 'error' "$b/make.log" >&2; fail "building the $v tree failed"; }
-    eval "built_$v=\$(elapsed $start \$(now))"
-done
-linked=$(ldd "$work/build-shim/pbrt" 2>/dev/null | grep -o 'liblayerlab[a-z_]*\.so[.0-9]*' | head -n 1)
-[ -n "$linked" ] || fail "the shimmed pbrt links no liblayerlab"
-if ldd "$work/build-stock/pbrt" | grep -q liblayerlab; then
-    fail "the stock pbrt links liblayerlab"
+# ---------------------------------------------------------------- 1. programs
+linked=$(ldd "$pbrt_shim" 2>/dev/null | grep -o 'liblayerlab[a-z_]*\.so[.0-9]*' | head -n 1)
+[ -n "$linked" ] || fail "$pbrt_shim links no liblayerlab: not a pbrt-v3 built with the shim"
+if ldd "$pbrt_stock" | grep -q liblayerlab; then
+    fail "$pbrt_stock links liblayerlab: not an unmodified pbrt-v3"
 fi
-echo "pbrt-check: build wall time (s): stock $built_stock, shim $built_shim; the shim links $linked"
+echo "pbrt-check: shim $pbrt_shim (links $linked), stock $pbrt_stock"
 
 # ---------------------------------------------------------------- 2. scenes
 scenes=$work/scenes
@@ -158,7 +127,7 @@ render() {
     # fault" notice goes to /dev/null (the table says what happened); it
     # exits with pbrt's status (128 + signal after a crash).
     (cd "$scenes" && sh -c 'timeout "$1" "$2" --nthreads "$3" --quiet "$4.pbrt" \
-        --outfile "$5.pfm" > "$5.log" 2>&1; exit $?' sh "$limit" "$work/build-$1/pbrt" \
+        --outfile "$5.pfm" > "$5.log" 2>&1; exit $?' sh "$limit" "$(pbrt_of "$1")" \
         "$threads" "$2" "$out/$1-$2" 2> /dev/null)
     echo $? > "$out/$1-$2.rc"
     cpu_mark
@@ -311,7 +280,7 @@ for name in tex-0.1 tex-0.4 tex-halves tex-stripes; do
         { tail -n 5 "$out/shim-$name.log" >&2; fail "the shim did not render $name.pbrt"; }
 done
 # Without --quiet, which silences pbrt's warnings.
-(cd "$scenes" && timeout "$limit" "$work/build-shim/pbrt" --nthreads "$threads" tex-unset.pbrt \
+(cd "$scenes" && timeout "$limit" "$pbrt_shim" --nthreads "$threads" tex-unset.pbrt \
     --outfile "$out/shim-tex-unset.pfm" > "$out/shim-tex-unset.log" 2>&1) ||
     problem "the shim did not render tex-unset.pbrt (exit status $?)"
 echo
