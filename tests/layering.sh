@@ -1,6 +1,7 @@
 #!/bin/sh
 # The house plan held by a check: the folders of src/ are layers,
-#   support < numerics < layer < words < grammar < storage < material,
+#   support < numerics < layer < words < grammar < storage < distribution <
+#   material,
 # and a file includes only from its own folder or one below
 # (`#include "layer/order.h"` in src/grammar/ is fine, in src/numerics/ it
 # is not). The reader library's files (READER_SRC, from the Makefile) must
@@ -13,7 +14,7 @@
 #   sh tests/layering.sh --tree DIR READER_FILES...   checks DIR only
 set -u
 
-ORDER="support numerics layer words grammar storage material"
+ORDER="support numerics layer words grammar storage distribution material"
 READER_FORBIDDEN="layer words grammar material"
 
 rank() {
