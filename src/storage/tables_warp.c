@@ -264,7 +264,8 @@ void ll_warp2d_sample(const ll_warp2d *wp, const double u_in[2], const double *p
            target, c);
     cdf_c = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c) +
             ty * mix(&s, wp->cond, st, (r + 1) * w + c);
-    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) + ty * mix(&s, wp->data, st, (r + 1) * w + c);
+    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) +
+         ty * mix(&s, wp->data, st, (r + 1) * w + c);
     v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
          ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
     tx = invert_linear(v0, v1, target - cdf_c);
@@ -287,7 +288,8 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c) +
             ty * mix(&s, wp->cond, st, (r + 1) * w + c);
-    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) + ty * mix(&s, wp->data, st, (r + 1) * w + c);
+    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) +
+         ty * mix(&s, wp->data, st, (r + 1) * w + c);
     v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
          ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
     u[0] = row_total > 0.0 ? (cdf_c + v0 * tx + 0.5 * (v1 - v0) * tx * tx) / row_total : 0.0;
