@@ -65,11 +65,12 @@ static ll_status read_list(const ll_tensor_field *f, const char *file, double lo
     for (i = 0; i < f->count; ++i) {
         v[i] = ll_tensor_f32(f, i);
         if (!(v[i] >= lo && v[i] <= hi) || (i > 0 && !(v[i] > v[i - 1]))) {
+            double bad = v[i];
             ll_free(v);
             return ll_fail(LL_ERROR_FORMAT,
                            "ll_bsdf_open: %s: field \"%s\": element %zu = %g must lie in "
                            "[%g, %g], above the one before",
-                           file, f->name, i, v[i], lo, hi);
+                           file, f->name, i, bad, lo, hi);
         }
     }
     *out = v;
