@@ -134,8 +134,11 @@ static void slices(const ll_warp2d *wp, const double *param, slice_set *s)
     double t[LL_WARP_MAX_PARAMS];
     for (p = 0; p < wp->n_params; ++p)
         locate(wp->param_values[p], wp->param_size[p], param[p], &idx[p], &t[p]);
-    s->count = (size_t)1 << wp->n_params;
-    for (c = 0; c < s->count; ++c) {
+    /* Only the corners of non-zero weight are kept: an isotropic file's
+     * single azimuth and a channel index that hits its node exactly leave
+     * two of the eight, and every look-up then reads two slices. */
+    s->count = 0;
+    for (c = 0; c < ((size_t)1 << wp->n_params); ++c) {
         size_t index = 0;
         double weight = 1.0;
         for (p = 0; p < wp->n_params; ++p) {
@@ -148,8 +151,11 @@ static void slices(const ll_warp2d *wp, const double *param, slice_set *s)
             weight *= upper ? t[p] : 1.0 - t[p];
             index = index * wp->param_size[p] + i;
         }
-        s->index[c] = index;
-        s->weight[c] = weight;
+        if (weight != 0.0) {
+            s->index[s->count] = index;
+            s->weight[s->count] = weight;
+            ++s->count;
+        }
     }
 }
 
@@ -159,8 +165,7 @@ static double mix(const slice_set *s, const double *arr, size_t stride, size_t a
     size_t c;
     double v = 0.0;
     for (c = 0; c < s->count; ++c)
-        if (s->weight[c] != 0.0)
-            v += s->weight[c] * arr[s->index[c] * stride + at];
+        v += s->weight[c] * arr[s->index[c] * stride + at];
     return v;
 }
 
