@@ -45,13 +45,27 @@ static double jacobian(const ll_measured *t, const double um[2], const double uw
     return ll_is_finite(r) ? r : 0.0;
 }
 
-static void values_at(const ll_measured *t, const double s[2], double phi_i, double theta_i,
+/* The slices of an incident direction: the same for the vndf, luminance
+ * and (with the channel appended) rgb tables, whose parameter lists are
+ * the file's theta_i and phi_i alike. */
+static void incident_slices(const ll_measured *t, double phi_i, double theta_i,
+                            ll_warp_slices *sl)
+{
+    double param[2] = { phi_i, theta_i };
+    ll_warp2d_slices(&t->vndf, param, sl);
+}
+
+/* The channels at s; channel c hits node c of the 3 exactly (as the
+ * renderers evaluate an RGB file at 0, 1, 2). */
+static void values_at(const ll_measured *t, const ll_warp_slices *sl, const double s[2],
                       double scale, double value[3])
 {
-    int c;
+    size_t c;
     for (c = 0; c < 3; ++c) {
-        double param[3] = { phi_i, theta_i, (double)c };
-        double v = ll_warp2d_eval(&t->rgb, s, param) * scale;
+        ll_warp_slices ch;
+        double v;
+        ll_warp_slices_append(sl, c, 3, &ch);
+        v = ll_warp2d_eval_at(&t->rgb, &ch, s) * scale;
         value[c] = v > 0.0 ? v : 0.0;
     }
 }
@@ -88,6 +102,7 @@ void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[
                       double value[3])
 {
     double m[3], um[2], uwi[2], s[2], theta_m, theta_i, phi_i, p_v;
+    ll_warp_slices sl;
     value[0] = value[1] = value[2] = 0.0;
     if (!half_vector(wi, wo, m))
         return;
@@ -96,26 +111,23 @@ void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[
     uwi[0] = theta_to_u(theta_i);
     uwi[1] = phi_to_u(phi_i);
     normal_coords(m, phi_i, um, &theta_m);
-    {
-        double param[2] = { phi_i, theta_i };
-        ll_warp2d_invert(&t->vndf, um, param, s, &p_v);
-    }
-    values_at(t, s, phi_i, theta_i, jacobian(t, um, uwi), value);
+    incident_slices(t, phi_i, theta_i, &sl);
+    ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
+    values_at(t, &sl, s, jacobian(t, um, uwi), value);
 }
 
 double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo[3])
 {
     double m[3], um[2], s[2], theta_m, theta_i, phi_i, p_v, p_l;
-    double param[2];
+    ll_warp_slices sl;
     if (!half_vector(wi, wo, m))
         return 0.0;
     theta_i = elevation(wi);
     phi_i = atan2(wi[1], wi[0]);
-    param[0] = phi_i;
-    param[1] = theta_i;
     normal_coords(m, phi_i, um, &theta_m);
-    ll_warp2d_invert(&t->vndf, um, param, s, &p_v);
-    p_l = ll_warp2d_eval(&t->luminance, s, param);
+    incident_slices(t, phi_i, theta_i, &sl);
+    ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
+    p_l = ll_warp2d_eval_at(&t->luminance, &sl, s);
     return reflected_pdf(p_v, p_l, um[0], theta_m,
                          wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
 }
@@ -123,8 +135,9 @@ double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo
 int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[2],
                        double wo[3], double *pdf, double value[3])
 {
-    double theta_i, phi_i, param[2], pt[2], s[2], um[2], p_l, p_v, theta_m, phi_m, m[3], d;
+    double theta_i, phi_i, pt[2], s[2], um[2], p_l, p_v, theta_m, phi_m, m[3], d;
     double uwi[2];
+    ll_warp_slices sl;
     wo[0] = wo[1] = 0.0;
     wo[2] = 1.0;
     *pdf = 0.0;
@@ -133,14 +146,13 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
         return 0;
     theta_i = elevation(wi);
     phi_i = atan2(wi[1], wi[0]);
-    param[0] = phi_i;
-    param[1] = theta_i;
+    incident_slices(t, phi_i, theta_i, &sl);
     /* The second number drives the warps' x (the elevation-like axis), as
      * Mitsuba's swap of the two does. */
     pt[0] = u[1];
     pt[1] = u[0];
-    ll_warp2d_sample(&t->luminance, pt, param, s, &p_l);
-    ll_warp2d_sample(&t->vndf, s, param, um, &p_v);
+    ll_warp2d_sample_at(&t->luminance, &sl, pt, s, &p_l);
+    ll_warp2d_sample_at(&t->vndf, &sl, s, um, &p_v);
     theta_m = um[0] * um[0] * (LL_PI / 2);
     phi_m = (2.0 * um[1] - 1.0) * LL_PI + phi_i;
     m[0] = sin(theta_m) * cos(phi_m);
@@ -163,7 +175,7 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
     }
     uwi[0] = theta_to_u(theta_i);
     uwi[1] = phi_to_u(phi_i);
-    values_at(t, s, phi_i, theta_i, jacobian(t, um, uwi), value);
+    values_at(t, &sl, s, jacobian(t, um, uwi), value);
     return 1;
 }
 

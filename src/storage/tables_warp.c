@@ -12,12 +12,7 @@
  * of a vanishing density would be 0 / 0. */
 #define LL_WARP_EPSILON 5.9604644775390625e-08 /* 2^-24 */
 
-/* The slices around one parameter point and their weights: up to 2^3. */
-typedef struct slice_set {
-    size_t count;
-    size_t index[1 << LL_WARP_MAX_PARAMS];
-    double weight[1 << LL_WARP_MAX_PARAMS];
-} slice_set;
+typedef ll_warp_slices slice_set;
 
 void ll_warp2d_free(ll_warp2d *wp)
 {
@@ -38,26 +33,38 @@ void ll_warp2d_free(ll_warp2d *wp)
 static int build_slice(ll_warp2d *wp, size_t k)
 {
     size_t w = wp->w, h = wp->h, x, y;
-    double *v = wp->data + k * w * h, *c = wp->cond + k * w * h, *m = wp->marg + k * h;
-    double total, scale;
+    float *v = wp->data + k * w * h, *c = wp->cond + k * w * h, *m = wp->marg + k * h;
+    double total = 0.0, scale, sum, prev_row = 0.0;
+    /* The total first (sums in double), then every table divided by it and
+     * the running integrals taken over the divided values, so that they
+     * are exactly those of the stored density. */
     for (y = 0; y < h; ++y) {
-        c[y * w] = 0.0;
+        double row = 0.0;
         for (x = 0; x + 1 < w; ++x)
-            c[y * w + x + 1] = c[y * w + x] + 0.5 * (v[y * w + x] + v[y * w + x + 1]);
+            row += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
+        if (y > 0)
+            total += 0.5 * (prev_row + row);
+        prev_row = row;
     }
-    m[0] = 0.0;
-    for (y = 0; y + 1 < h; ++y)
-        m[y + 1] = m[y] + 0.5 * (c[y * w + w - 1] + c[(y + 1) * w + w - 1]);
-    total = m[h - 1];
     if (!(total > 0.0) || !ll_is_finite(total))
         return 0;
     scale = 1.0 / total;
-    for (x = 0; x < w * h; ++x) {
-        v[x] *= scale;
-        c[x] *= scale;
+    for (x = 0; x < w * h; ++x)
+        v[x] = (float)((double)v[x] * scale);
+    for (y = 0; y < h; ++y) {
+        sum = 0.0;
+        c[y * w] = 0.0f;
+        for (x = 0; x + 1 < w; ++x) {
+            sum += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
+            c[y * w + x + 1] = (float)sum;
+        }
     }
-    for (y = 0; y < h; ++y)
-        m[y] *= scale;
+    sum = 0.0;
+    m[0] = 0.0f;
+    for (y = 0; y + 1 < h; ++y) {
+        sum += 0.5 * ((double)c[y * w + w - 1] + (double)c[(y + 1) * w + w - 1]);
+        m[y + 1] = (float)sum;
+    }
     return 1;
 }
 
@@ -82,16 +89,16 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->n_slices = n;
     if (!ll_size_mul(w, h, &total) || !ll_size_mul(total, n, &total))
         return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
-    wp->data = ll_alloc_array(total, sizeof(double));
+    wp->data = ll_alloc_array(total, sizeof(float));
     if (!wp->data)
         goto oom;
     for (k = 0; k < total; ++k)
-        wp->data[k] = get(ctx, k);
+        wp->data[k] = (float)get(ctx, k);
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
-    wp->cond = ll_alloc_array(total, sizeof(double));
-    wp->marg = ll_alloc_array(n * h, sizeof(double));
+    wp->cond = ll_alloc_array(total, sizeof(float));
+    wp->marg = ll_alloc_array(n * h, sizeof(float));
     if (!wp->cond || !wp->marg)
         goto oom;
     for (k = 0; k < n; ++k)
@@ -128,7 +135,7 @@ static void locate(const double *v, size_t n, double x, size_t *i, double *t)
         *t = 1.0;
 }
 
-static void slices(const ll_warp2d *wp, const double *param, slice_set *s)
+void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 {
     size_t p, c, idx[LL_WARP_MAX_PARAMS];
     double t[LL_WARP_MAX_PARAMS];
@@ -160,12 +167,12 @@ static void slices(const ll_warp2d *wp, const double *param, slice_set *s)
 }
 
 /* arr[slice][at] mixed over the slice set (stride: one slice's length). */
-static double mix(const slice_set *s, const double *arr, size_t stride, size_t at)
+static double mix(const slice_set *s, const float *arr, size_t stride, size_t at)
 {
     size_t c;
     double v = 0.0;
     for (c = 0; c < s->count; ++c)
-        v += s->weight[c] * arr[s->index[c] * stride + at];
+        v += s->weight[c] * (double)arr[s->index[c] * stride + at];
     return v;
 }
 
@@ -203,13 +210,28 @@ static double area_scale(const ll_warp2d *wp)
     return wp->normalized ? (double)(wp->w - 1) * (double)(wp->h - 1) : 1.0;
 }
 
+void ll_warp_slices_append(const slice_set *s, size_t k, size_t n, slice_set *out)
+{
+    size_t c;
+    out->count = s->count;
+    for (c = 0; c < s->count; ++c) {
+        out->index[c] = s->index[c] * n + k;
+        out->weight[c] = s->weight[c];
+    }
+}
+
+double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double pos[2])
+{
+    double tx, ty;
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty);
+    return bilinear(wp, s, r, ty, c, tx) * area_scale(wp);
+}
+
 double ll_warp2d_eval(const ll_warp2d *wp, const double pos[2], const double *param)
 {
     slice_set s;
-    double tx, ty;
-    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty);
-    slices(wp, param, &s);
-    return bilinear(wp, &s, r, ty, c, tx) * area_scale(wp);
+    ll_warp2d_slices(wp, param, &s);
+    return ll_warp2d_eval_at(wp, &s, pos);
 }
 
 /* The t in [0, 1] where the integral of the linear density a + (b - a) t
@@ -240,12 +262,28 @@ static double invert_linear(double a, double b, double d)
         (out) = lo_;                                                                      \
     } while (0)
 
-void ll_warp2d_sample(const ll_warp2d *wp, const double u_in[2], const double *param,
+void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
                       double pos[2], double *pdf)
+{
+    slice_set s;
+    ll_warp2d_slices(wp, param, &s);
+    ll_warp2d_sample_at(wp, &s, u, pos, pdf);
+}
+
+void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *param,
+                      double u[2], double *pdf)
+{
+    slice_set s;
+    ll_warp2d_slices(wp, param, &s);
+    ll_warp2d_invert_at(wp, &s, pos, u, pdf);
+}
+
+void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *sp, const double u_in[2],
+                         double pos[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h, r, c;
     double u[2], target, r0, r1, ty, tx, row_total, v0, v1, cdf_c;
-    slice_set s;
+    const slice_set s = *sp;
     int k;
     for (k = 0; k < 2; ++k) {
         u[k] = u_in[k];
@@ -254,7 +292,6 @@ void ll_warp2d_sample(const ll_warp2d *wp, const double u_in[2], const double *p
         if (u[k] > 1.0 - LL_WARP_EPSILON)
             u[k] = 1.0 - LL_WARP_EPSILON;
     }
-    slices(wp, param, &s);
     /* Row interval from the marginal (slices are normalised: total 1). */
     target = u[1];
     SEARCH(h, mix(&s, wp->marg, h, i), target, r);
@@ -279,14 +316,13 @@ void ll_warp2d_sample(const ll_warp2d *wp, const double u_in[2], const double *p
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *param,
-                      double u[2], double *pdf)
+void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *sp, const double pos[2],
+                         double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
     double tx, ty, r0, r1, v0, v1, cdf_c, row_total;
     size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty);
-    slice_set s;
-    slices(wp, param, &s);
+    const slice_set s = *sp;
     r0 = mix(&s, wp->cond, st, r * w + w - 1);
     r1 = mix(&s, wp->cond, st, (r + 1) * w + w - 1);
     u[1] = mix(&s, wp->marg, h, r) + r0 * ty + 0.5 * (r1 - r0) * ty * ty;

@@ -29,14 +29,26 @@ typedef struct ll_warp2d {
     size_t param_size[LL_WARP_MAX_PARAMS];    /* values per parameter (>= 1)      */
     double *param_values[LL_WARP_MAX_PARAMS]; /* ascending, owned                 */
     size_t n_slices;                          /* product of param_size            */
-    double *data;                             /* [n_slices][h][w]                 */
-    double *cond;                             /* [n_slices][h][w] running trapezoid
+    /* Stored as float, as the renderers store them: a look-up reads a few
+     * scattered rows of tables of megabytes, so their size is what costs;
+     * every sum over them is in double. */
+    float *data;                              /* [n_slices][h][w]                 */
+    float *cond;                              /* [n_slices][h][w] running trapezoid
                                                  integrals along x (NULL if the
                                                  warp only interpolates)          */
-    double *marg;                             /* [n_slices][h] the same along y of
+    float *marg;                              /* [n_slices][h] the same along y of
                                                  the row totals                   */
     int normalized;                           /* each slice divided by its total  */
 } ll_warp2d;
+
+/* The slices around one parameter point and their weights (only those of
+ * non-zero weight), computed once and shared by the look-ups of warps with
+ * the same parameter lists. */
+typedef struct ll_warp_slices {
+    size_t count;
+    size_t index[1 << LL_WARP_MAX_PARAMS];
+    double weight[1 << LL_WARP_MAX_PARAMS];
+} ll_warp_slices;
 
 /* Build from data[n_slices * h * w] (any float layout the caller decodes
  * through get(ctx, index)), params[p][param_size[p]] ascending.
@@ -62,5 +74,18 @@ LL_INTERNAL void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const 
 /* The inverse of sample: the u that maps to pos, and the density at pos. */
 LL_INTERNAL void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *param,
                                   double u[2], double *pdf);
+
+/* The same with the slices given: ll_warp2d_slices finds them for the
+ * parameters param[n_params]; ll_warp_slices_append extends them by one
+ * more parameter that hits node k of its n values exactly (a channel). */
+LL_INTERNAL void ll_warp2d_slices(const ll_warp2d *wp, const double *param, ll_warp_slices *s);
+LL_INTERNAL void ll_warp_slices_append(const ll_warp_slices *s, size_t k, size_t n,
+                                       ll_warp_slices *out);
+LL_INTERNAL double ll_warp2d_eval_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double pos[2]);
+LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double u[2], double pos[2], double *pdf);
+LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double pos[2], double u[2], double *pdf);
 
 #endif /* LL_TABLES_WARP_H */
