@@ -167,7 +167,9 @@ typedef struct ll_bsdf_info {
  *    samples through the same calls, as Mitsuba's `measured` does, with f
  *    returned without the cosine; it reflects only (mu_i > 0, mu_o < 0 in
  *    the layer convention, both directions above the surface in the
- *    renderer convention; elsewhere 0). Its info has n_channels 3, n_bases
+ *    renderer convention; elsewhere 0); the _dir calls evaluate it on the
+ *    two directions themselves (wo is the format's fixed direction), not
+ *    through (mu_i, mu_o, cos phi_d). Its info has n_channels 3, n_bases
  *    1, eta 1, n_nodes, max_order, n_coeffs 0 and flags 0, and metadata is
  *    the file's "layerlab_metadata" field (else its "description");
  *    ll_bsdf_nodes gives NULL and ll_bsdf_get_tables LL_ERROR_UNSUPPORTED. */

@@ -248,6 +248,16 @@ static double invert_linear(double a, double b, double d)
     return t > 1.0 ? 1.0 : t;
 }
 
+/* The stored running integrals are float sums, so a cell's stored mass
+ * (the difference of its two ends) and the mass of its linear density
+ * (the mean of its end values) differ by rounding. sample and invert
+ * scale the inside of a cell by their ratio, which keeps the two exact
+ * inverses of each other whatever the rounding. 1 for an empty cell. */
+static double mass_ratio(double stored, double linear)
+{
+    return stored > 0.0 && linear > 0.0 ? linear / stored : 1.0;
+}
+
 /* Largest i in [0, n - 2] with value(i) <= target. */
 #define SEARCH(n, value, target, out)                                                     \
     do {                                                                                  \
@@ -297,7 +307,10 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *sp, const double 
     SEARCH(h, mix(&s, wp->marg, h, i), target, r);
     r0 = mix(&s, wp->cond, st, r * w + w - 1);
     r1 = mix(&s, wp->cond, st, (r + 1) * w + w - 1);
-    ty = invert_linear(r0, r1, target - mix(&s, wp->marg, h, r));
+    {
+        double m0 = mix(&s, wp->marg, h, r), m1 = mix(&s, wp->marg, h, r + 1);
+        ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    }
     /* Column interval from the conditional row at ty. */
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
@@ -310,7 +323,11 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *sp, const double 
          ty * mix(&s, wp->data, st, (r + 1) * w + c);
     v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
          ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
-    tx = invert_linear(v0, v1, target - cdf_c);
+    {
+        double cdf_c1 = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c + 1) +
+                        ty * mix(&s, wp->cond, st, (r + 1) * w + c + 1);
+        tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
+    }
     pos[0] = ((double)c + tx) / (double)(w - 1);
     pos[1] = ((double)r + ty) / (double)(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
@@ -320,12 +337,15 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *sp, const double 
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
-    double tx, ty, r0, r1, v0, v1, cdf_c, row_total;
+    double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total;
     size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty);
     const slice_set s = *sp;
     r0 = mix(&s, wp->cond, st, r * w + w - 1);
     r1 = mix(&s, wp->cond, st, (r + 1) * w + w - 1);
-    u[1] = mix(&s, wp->marg, h, r) + r0 * ty + 0.5 * (r1 - r0) * ty * ty;
+    {
+        double m0 = mix(&s, wp->marg, h, r), m1 = mix(&s, wp->marg, h, r + 1);
+        u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    }
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c) +
             ty * mix(&s, wp->cond, st, (r + 1) * w + c);
@@ -333,6 +353,11 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *sp, const double 
          ty * mix(&s, wp->data, st, (r + 1) * w + c);
     v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
          ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
-    u[0] = row_total > 0.0 ? (cdf_c + v0 * tx + 0.5 * (v1 - v0) * tx * tx) / row_total : 0.0;
+    cdf_c1 = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c + 1) +
+             ty * mix(&s, wp->cond, st, (r + 1) * w + c + 1);
+    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
+                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
+                                 row_total
+                           : 0.0;
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
