@@ -50,6 +50,11 @@ contains "$tmp/out" "4 x 16^2 x 8^2 tables, about" "dry-run size"
 expect 0 "conversion" -- "$llconvert" "$gold" -o "$tmp/gold.tab" --theta-i 4 --vndf 16 --sample 8
 contains "$tmp/out" "gold.tab: 4 x 16^2 x 8^2 tables" "conversion summary"
 head -c 11 "$tmp/gold.tab" | grep -q tensor_file && ok || bad "no tensor_file magic"
+# llplot draws a table file as it draws a .bsdf (it tells them by their first bytes).
+if [ -x "$BUILD/bin/llplot" ]; then
+    expect 0 "llplot draws a table" -- "$BUILD/bin/llplot" --polar "$tmp/gold.tab" -o "$tmp/polar.png"
+    [ -s "$tmp/polar.png" ] && ok || bad "llplot wrote no picture of the table"
+fi
 # A table converts again (it is an opaque untextured file too).
 expect 0 "table to table" -- "$llconvert" "$tmp/gold.tab" -o "$tmp/again.tab" --quiet
 
