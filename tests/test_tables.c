@@ -236,6 +236,54 @@ static void test_layer_convention(void **state)
     ll_bsdf_release(t);
 }
 
+/* The batches give what the scalar calls give on a table, element by
+ * element. */
+static void test_batches(void **state)
+{
+    enum { COUNT = 3000 };
+    ll_bsdf *t = table();
+    static double wo[3 * COUNT], wi[3 * COUNT], u[2 * COUNT], rgb[3 * COUNT], pdf[COUNT];
+    static double wi_s[3 * COUNT], pdf_s[COUNT], rgb_s[3 * COUNT];
+    uint64_t rng = 31;
+    size_t k;
+    int c;
+    (void)state;
+    for (k = 0; k < COUNT; ++k) {
+        double a = acos(ll_test_uniform(&rng)), b = 2.0 * LL_TEST_PI * ll_test_uniform(&rng);
+        direction(a, b, wo + 3 * k);
+        a = acos(ll_test_uniform(&rng));
+        b = 2.0 * LL_TEST_PI * ll_test_uniform(&rng);
+        direction(a, b, wi + 3 * k);
+        u[2 * k] = ll_test_uniform(&rng);
+        u[2 * k + 1] = ll_test_uniform(&rng);
+    }
+    assert_int_equal(
+        ll_bsdf_eval_dir_batch(t, COUNT, wo, wi, LL_TRANSPORT_RADIANCE, NULL, 0, rgb), LL_OK);
+    assert_int_equal(ll_bsdf_pdf_dir_batch(t, COUNT, wo, wi, NULL, 0, pdf), LL_OK);
+    for (k = 0; k < COUNT; ++k) {
+        double f[3], p;
+        assert_int_equal(
+            ll_bsdf_eval_dir(t, wo + 3 * k, wi + 3 * k, LL_TRANSPORT_RADIANCE, NULL, f), LL_OK);
+        assert_int_equal(ll_bsdf_pdf_dir(t, wo + 3 * k, wi + 3 * k, NULL, &p), LL_OK);
+        for (c = 0; c < 3; ++c)
+            assert_true(f[c] == rgb[3 * k + c]);
+        assert_true(p == pdf[k]);
+    }
+    assert_int_equal(ll_bsdf_sample_dir_batch(t, COUNT, wo, u, LL_TRANSPORT_RADIANCE, NULL, 0,
+                                              wi_s, pdf_s, rgb_s),
+                     LL_OK);
+    for (k = 0; k < COUNT; ++k) {
+        double w[3], p, f[3];
+        assert_int_equal(ll_bsdf_sample_dir(t, wo + 3 * k, u + 2 * k, LL_TRANSPORT_RADIANCE, NULL,
+                                            w, &p, f),
+                         LL_OK);
+        assert_true(p == pdf_s[k]);
+        for (c = 0; c < 3; ++c)
+            assert_true(w[c] == wi_s[3 * k + c] && f[c] == rgb_s[3 * k + c]);
+    }
+    ll_bsdf_release(t);
+}
+
 static void test_refusals(void **state)
 {
     ll_bsdf *f = open_file(LL_TEST_GOLDEN);
@@ -261,6 +309,7 @@ int main(void)
         cmocka_unit_test(test_sample_consistency),
         cmocka_unit_test(test_pdf_integral),
         cmocka_unit_test(test_layer_convention),
+        cmocka_unit_test(test_batches),
         cmocka_unit_test(test_refusals),
     };
     return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
