@@ -6,6 +6,7 @@
  * small valid table written by ll_tables_write_from_bsdf.
  */
 #include "test_bsdf_util.h"
+#include "support/support.h"
 
 static unsigned char *good;
 static size_t good_size;
@@ -261,6 +262,105 @@ static void test_random_damage(void **state)
     printf("%d of 3000 damaged copies opened (damage in values or padding)\n", opened);
 }
 
+/* Out of memory at each allocation of opening a table: the error, no
+ * handle, every block freed again. */
+static void test_out_of_memory(void **state)
+{
+    size_t n, k;
+    ll_bsdf *b = NULL;
+    (void)state;
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_bsdf_open_memory(good, good_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    assert_true(n > 5);
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        b = (ll_bsdf *)1;
+        ll_alloc_fail_after(k);
+        s = ll_bsdf_open_memory(good, good_size, NULL, &b);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
+        assert_null(b);
+        assert_true(live == 0);
+    }
+}
+
+/* Out of memory at each allocation of writing a table: the error, every
+ * block freed again, no file. */
+static void test_writer_out_of_memory(void **state)
+{
+    ll_bsdf *src = NULL;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    char path[600];
+    size_t n, k, reference_size;
+    unsigned char *reference;
+    (void)state;
+    o.n_theta_i = 3;
+    o.vndf_size = 4;
+    o.sample_size = 3;
+    snprintf(path, sizeof path, "%s/oom.tab", ll_test_dir());
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &src), LL_OK);
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_tables_write_from_bsdf(src, path, &o, NULL), LL_OK);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    reference = ll_test_read_file(path, &reference_size);
+    assert_int_equal(unlink(path), 0);
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        ll_alloc_fail_after(k);
+        s = ll_tables_write_from_bsdf(src, path, &o, NULL);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_true(live == 0);
+        if (s == LL_OK) {
+            /* An allocation the output can do without (the sweep of stale
+             * temporary files): the same file. */
+            size_t size;
+            unsigned char *bytes = ll_test_read_file(path, &size);
+            assert_int_equal(size, reference_size);
+            assert_memory_equal(bytes, reference, size);
+            free(bytes);
+            assert_int_equal(unlink(path), 0);
+            continue;
+        }
+        if (s != LL_ERROR_OUT_OF_MEMORY)
+            fail_msg("allocation %zu of %zu: status %d (%s)", k, n, (int)s,
+                     ll_last_error_message());
+        assert_int_equal(access(path, F_OK), -1);
+    }
+    free(reference);
+    ll_bsdf_release(src);
+}
+
+/* A monitor that cancels while the tables are computed: LL_ERROR_CANCELLED
+ * and no file. */
+static int cancel_in_tables(void *user, double fraction, const char *stage)
+{
+    (void)user;
+    (void)fraction;
+    return strcmp(stage, "tables") == 0;
+}
+
+static void test_cancel(void **state)
+{
+    ll_bsdf *src = NULL;
+    ll_monitor m = LL_MONITOR_INIT;
+    char path[600];
+    (void)state;
+    m.progress = cancel_in_tables;
+    snprintf(path, sizeof path, "%s/cancelled.tab", ll_test_dir());
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &src), LL_OK);
+    assert_int_equal(ll_tables_write_from_bsdf(src, path, NULL, &m), LL_ERROR_CANCELLED);
+    assert_int_equal(access(path, F_OK), -1);
+    ll_bsdf_release(src);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -272,6 +372,9 @@ int main(void)
         cmocka_unit_test(test_values),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_random_damage),
+        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_writer_out_of_memory),
+        cmocka_unit_test(test_cancel),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
