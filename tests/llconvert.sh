@@ -62,6 +62,14 @@ if [ -x "$llbuild" ]; then
     printf 'set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n' >"$tmp/glass.layers"
     printf 'set nodes=12 orders=6\ndielectric name=coat eta=1.5 alpha=[0.1 0.2]\nconductor eta=2+3i alpha=0.2\n' \
         >"$tmp/textured.layers"
+    # A medium alone: eta 1, but light goes through.
+    printf 'set nodes=12 orders=6\nmedium albedo=0.9 tau=1 g=0.5\n' >"$tmp/medium.layers"
+    if "$llbuild" --quiet "$tmp/medium.layers" -o "$tmp/medium.bsdf"; then
+        expect 1 "transmitting source of eta 1" -- "$llconvert" "$tmp/medium.bsdf" -o "$tmp/m.tab"
+        contains "$tmp/err" "transmits light" "transmission refusal says why"
+    else
+        bad "llbuild could not build the medium"
+    fi
     if "$llbuild" --quiet "$tmp/glass.layers" -o "$tmp/glass.bsdf" &&
        "$llbuild" --quiet "$tmp/textured.layers" -o "$tmp/textured.bsdf"; then
         expect 1 "transmissive source" -- "$llconvert" "$tmp/glass.bsdf" -o "$tmp/glass.tab"
