@@ -38,10 +38,12 @@ static void normal_coords(const double m[3], double phi_i, double um[2], double 
  * if it is not finite. */
 static double jacobian(const ll_measured *t, const double um[2], const double uwi[2])
 {
+    ll_warp_slices one;
     double r;
     if (!t->jacobian)
         return 1.0;
-    r = ll_warp2d_eval(&t->ndf, um, NULL) / (4.0 * ll_warp2d_eval(&t->sigma, uwi, NULL));
+    ll_warp_slices_single(&one);
+    r = ll_warp2d_eval_at(&t->ndf, &one, um) / (4.0 * ll_warp2d_eval_at(&t->sigma, &one, uwi));
     return ll_is_finite(r) ? r : 0.0;
 }
 
@@ -61,11 +63,9 @@ static void values_at(const ll_measured *t, const ll_warp_slices *sl, const doub
                       double scale, double value[3])
 {
     size_t c;
+    ll_warp2d_eval_nodes(&t->rgb, sl, 3, s, value);
     for (c = 0; c < 3; ++c) {
-        ll_warp_slices ch;
-        double v;
-        ll_warp_slices_append(sl, c, 3, &ch);
-        v = ll_warp2d_eval_at(&t->rgb, &ch, s) * scale;
+        double v = value[c] * scale;
         value[c] = v > 0.0 ? v : 0.0;
     }
 }

@@ -227,6 +227,25 @@ double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double p
     return bilinear(wp, s, r, ty, c, tx) * area_scale(wp);
 }
 
+void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
+                          const double pos[2], double *out)
+{
+    double tx, ty;
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), k;
+    for (k = 0; k < n; ++k) {
+        slice_set ch;
+        ll_warp_slices_append(s, k, n, &ch);
+        out[k] = bilinear(wp, &ch, r, ty, c, tx) * area_scale(wp);
+    }
+}
+
+void ll_warp_slices_single(slice_set *s)
+{
+    s->count = 1;
+    s->index[0] = 0;
+    s->weight[0] = 1.0;
+}
+
 double ll_warp2d_eval(const ll_warp2d *wp, const double pos[2], const double *param)
 {
     slice_set s;

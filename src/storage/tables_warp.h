@@ -83,6 +83,13 @@ LL_INTERNAL void ll_warp_slices_append(const ll_warp_slices *s, size_t k, size_t
                                        ll_warp_slices *out);
 LL_INTERNAL double ll_warp2d_eval_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double pos[2]);
+/* n values at pos of a warp whose last parameter has exactly n values,
+ * each hit at its node (the channels of an RGB table): out[k] is the value
+ * for slices s extended by k. One cell look-up for all n (n <= 3). */
+LL_INTERNAL void ll_warp2d_eval_nodes(const ll_warp2d *wp, const ll_warp_slices *s, size_t n,
+                                      const double pos[2], double *out);
+/* The one slice of a warp without parameters. */
+LL_INTERNAL void ll_warp_slices_single(ll_warp_slices *s);
 LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double u[2], double pos[2], double *pdf);
 LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
