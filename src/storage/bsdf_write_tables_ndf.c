@@ -18,8 +18,10 @@
  * to the numerical floor of a Fourier series (about 1e-4 of the peak), so
  * its support reaches the horizon while its tail is almost nothing: the
  * outer node of the grid then lands at the horizon with value 0 and the
- * lobe's tail is interpolated towards zero (a prototype lost 1.5% of albedo
- * at normal incidence, 6-11% at grazing). Zeroing D below a threshold
+ * lobe's tail is interpolated towards zero (on rough gold, alpha 0.2, at
+ * 32 x 128^2 x 64^2, the plain derived D loses 0.3% of albedo at cos
+ * theta_i = 0.7 and 1.2% at 0.3; with the mixture below 0.02% and 0.02%).
+ * Zeroing D below a threshold
  * instead makes f / D explode where f has its floor. A Beckmann lobe of
  * twice the fitted roughness (weight 0.2) and a uniform floor 1/pi (weight
  * 0.02, itself normalised: the integral of cos / pi is 1) give the tails
