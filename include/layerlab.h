@@ -21,6 +21,7 @@
 #include "layerlab/ll_layer.h"
 #include "layerlab/ll_bsdf.h"
 #include "layerlab/ll_bsdf_write.h"
+#include "layerlab/ll_tables.h"
 #include "layerlab/ll_material.h"
 #include "layerlab/ll_distribution.h"
 

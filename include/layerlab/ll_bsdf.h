@@ -153,9 +153,28 @@ typedef struct ll_bsdf_info {
     size_t metadata_size;    /* bytes, without the terminator                   */
     size_t file_size;        /* bytes                                           */
     uint32_t flags;          /* header flags                                    */
+    uint32_t format;         /* LL_BSDF_FORMAT_FOURIER or LL_BSDF_FORMAT_TABLES */
 } ll_bsdf_info;
 
-#define LL_BSDF_INFO_INIT { sizeof(ll_bsdf_info), 0, 0, 0, 0, 0, 0, 0.0, { 0.0, 0.0 }, NULL, 0, 0, 0 }
+#define LL_BSDF_INFO_INIT { sizeof(ll_bsdf_info), 0, 0, 0, 0, 0, 0, 0.0, { 0.0, 0.0 }, NULL, 0, \
+                            0, 0, 0 }
+
+/* Which format ll_bsdf_open read (ll_bsdf_info.format), recognised by the
+ * file's first bytes whatever its name:
+ *  LL_BSDF_FORMAT_FOURIER: a .bsdf Fourier file (above);
+ *  LL_BSDF_FORMAT_TABLES: a table file of the `measured` format of Mitsuba 3
+ *    and pbrt-v4 (docs/measured-format.md; RGB, isotropic). It evaluates and
+ *    samples through the same calls, as Mitsuba's `measured` does, with f
+ *    returned without the cosine; it reflects only (mu_i > 0, mu_o < 0 in
+ *    the layer convention, both directions above the surface in the
+ *    renderer convention; elsewhere 0); the _dir calls evaluate it on the
+ *    two directions themselves (wo is the format's fixed direction), not
+ *    through (mu_i, mu_o, cos phi_d). Its info has n_channels 3, n_bases
+ *    1, eta 1, n_nodes, max_order, n_coeffs 0 and flags 0, and metadata is
+ *    the file's "layerlab_metadata" field (else its "description");
+ *    ll_bsdf_nodes gives NULL and ll_bsdf_get_tables LL_ERROR_UNSUPPORTED. */
+#define LL_BSDF_FORMAT_FOURIER 0u
+#define LL_BSDF_FORMAT_TABLES 1u
 
 LL_API ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info);
 

@@ -83,7 +83,8 @@ class BsdfInfo(ctypes.Structure):
                 ("metadata", ctypes.c_char_p),
                 ("metadata_size", ctypes.c_size_t),
                 ("file_size", ctypes.c_size_t),
-                ("flags", ctypes.c_uint32)]
+                ("flags", ctypes.c_uint32),
+                ("format", ctypes.c_uint32)]
 
     def __init__(self):
         super().__init__()

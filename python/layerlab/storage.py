@@ -371,6 +371,12 @@ class BSDFStorage:
         return self._info.eta
 
     @property
+    def format(self):
+        """Which format the file is in: "fourier" (a .bsdf) or "tables" (the
+        `measured` format of Mitsuba 3 and pbrt-v4, docs/measured-format.md)"""
+        return "tables" if self._info.format == 1 else "fourier"
+
+    @property
     def extrapolated(self):
         """Whether the file uses harmonic extrapolation (header flag 2)"""
         return bool(self._info.flags & 2)

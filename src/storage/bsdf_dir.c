@@ -10,6 +10,7 @@
  * f * |mu_o|) and, for radiance transport through the interface, eta^2.
  */
 #include "storage/bsdf_internal.h"
+#include "storage/tables_internal.h"
 
 #include <math.h>
 
@@ -60,6 +61,35 @@ static double transport_scale(const ll_bsdf *b, double mu_i, double mu_o, ll_tra
     return e * e;
 }
 
+/* A table file (tables_internal.h) is evaluated on the directions
+ * themselves, as the renderers' readers do: through (mu_i, mu_o, cos phi)
+ * the azimuth's sine would come back as sqrt(1 - cos^2), which loses half
+ * the digits next to the plane of incidence. Our wo (the viewer) is the
+ * format's wi. 0 if either direction is not usable. */
+static int unit_pair(const double wo[3], const double wi[3], double v[3], double l[3])
+{
+    double lo = length_of(wo), li = length_of(wi);
+    int k;
+    if (!(lo > 0.0) || !(li > 0.0))
+        return 0;
+    for (k = 0; k < 3; ++k) {
+        v[k] = wo[k] / lo;
+        l[k] = wi[k] / li;
+    }
+    return 1;
+}
+
+static void measured_rgb(const double value[3], double cos_light, double weight, double rgb[3])
+{
+    double scale = weight * ll_bsdf_cosine_scale(cos_light);
+    int c;
+    for (c = 0; c < 3; ++c) {
+        rgb[c] = value[c] * scale;
+        if (!(rgb[c] > 0.0) || !ll_is_finite(rgb[c]))
+            rgb[c] = 0.0;
+    }
+}
+
 static ll_status check_mode(ll_transport mode, const char *fn)
 {
     if (mode != LL_TRANSPORT_RADIANCE && mode != LL_TRANSPORT_IMPORTANCE)
@@ -83,6 +113,13 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
+    if (b->measured) {
+        double v[3], l[3], value[3];
+        unit_pair(wo, wi, v, l);
+        ll_measured_eval(b->measured, v, l, value);
+        measured_rgb(value, l[2], (double)basis[0], rgb);
+        return LL_OK;
+    }
     ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, transport_scale(b, mu_i, mu_o, mode), rgb);
     return LL_OK;
 }
@@ -101,6 +138,12 @@ ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
+    if (b->measured) {
+        double v[3], l[3];
+        unit_pair(wo, wi, v, l);
+        *pdf = ll_measured_pdf(b->measured, v, l);
+        return LL_OK;
+    }
     *pdf = ll_bsdf_pdf_cos(b, mu_i, mu_o, cos_phi, basis);
     return LL_OK;
 }
@@ -128,6 +171,15 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
                        "ll_bsdf_sample_dir: wo must be finite and non-zero and u = (%g, %g) "
                        "in [0, 1]",
                        u[0], u[1]);
+    if (b->measured) {
+        double v[3], value[3];
+        int k;
+        for (k = 0; k < 3; ++k)
+            v[k] = wo[k] / lo;
+        if (ll_measured_sample(b->measured, v, u, wi, pdf, value))
+            measured_rgb(value, wi[2], (double)basis[0], rgb);
+        return LL_OK;
+    }
     mu_i = clamp_unit(wo[2] / lo);
     if (!ll_bsdf_sample_core(b, mu_i, u, basis, &mu_o, &phi, pdf, sums))
         return LL_OK;

@@ -5,6 +5,7 @@
  * "Evaluation").
  */
 #include "storage/bsdf_internal.h"
+#include "storage/tables_internal.h"
 #include "storage/bsdf_format.h"
 
 #include <math.h>
@@ -161,6 +162,10 @@ void ll_bsdf_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi
     ll_bsdf_series s;
     double sums[3];
     rgb[0] = rgb[1] = rgb[2] = 0.0;
+    if (b->measured) {
+        ll_measured_eval_cos(b, mu_i, mu_o, cos_phi, basis, extra_scale, rgb);
+        return;
+    }
     /* The stored series is f * |mu_o| (bsdf-format.md); at mu_o = 0 the
      * value is taken as 0, as pbrt-v3 does. */
     if (mu_o == 0.0 || !ll_bsdf_gather(b, mu_i, mu_o, basis, &s) || s.count == 0)
@@ -175,6 +180,8 @@ double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_ph
     ll_bsdf_series s;
     ptrdiff_t off_i;
     double w_i[4], sums[3], rho;
+    if (b->measured)
+        return ll_measured_pdf_cos(b, mu_i, mu_o, cos_phi);
     if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
         !ll_bsdf_gather_weighted(b, off_i, w_i, mu_o, basis, &s) || s.count == 0)
         return 0.0;

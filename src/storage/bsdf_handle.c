@@ -4,6 +4,7 @@
  * an atomic count) and the read-only queries.
  */
 #include "storage/bsdf_internal.h"
+#include "storage/tables_internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +15,7 @@ void ll_bsdf_free(ll_bsdf *b)
 {
     if (!b)
         return;
+    ll_measured_free(b->measured);
     ll_free(b->nodes_f);
     ll_free(b->nodes);
     ll_free(b->param_counts);
@@ -66,6 +68,7 @@ ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
     full.metadata_size = b->metadata_size;
     full.file_size = b->file_size;
     full.flags = b->flags;
+    full.format = b->measured ? LL_BSDF_FORMAT_TABLES : LL_BSDF_FORMAT_FOURIER;
     /* Write only the fields the caller's (possibly older, smaller) struct has. */
     return ll_struct_write(info, &full, sizeof full, "ll_bsdf_get_info", "ll_bsdf_info");
 }

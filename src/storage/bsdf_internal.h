@@ -27,8 +27,14 @@ typedef struct ll_bsdf_interval {
     double x0, inv_width, f0, f1;
 } ll_bsdf_interval;
 
+struct ll_measured;
+
 struct ll_bsdf {
     int refcount;               /* atomic; the object is immutable otherwise   */
+    struct ll_measured *measured; /* a table file of the `measured` format
+                                   (tables_internal.h), or NULL for a .bsdf;
+                                   a table handle has no Fourier parts (no
+                                   nodes, series or CDF): n_nodes is 0      */
     size_t n_nodes;
     size_t max_order;
     size_t n_channels;          /* 1 or 3 (stored as Y, R, B)                  */

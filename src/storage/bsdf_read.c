@@ -12,6 +12,8 @@
  */
 #include "storage/bsdf_internal.h"
 #include "storage/bsdf_format.h"
+#include "storage/tables_internal.h"
+#include "storage/tensor.h"
 #include "support/regular_file.h"
 
 #include <errno.h>
@@ -572,6 +574,12 @@ ll_status ll_bsdf_open_memory(const void *data, size_t size, const ll_open_optio
     if (!data)
         return file_error(LL_ERROR_FORMAT, "<memory>", "truncated header (0 of %d bytes)",
                           LL_BSDF_HEADER_SIZE);
+    if (ll_tensor_is_tensor(data, size)) {
+        if (size > lim.max_bytes)
+            return file_error(LL_ERROR_UNSUPPORTED, "<memory>",
+                              "%zu bytes exceed the limit max_bytes = %zu", size, lim.max_bytes);
+        return ll_measured_open(data, size, "<memory>", out);
+    }
     s = check_header(data, size, size, &lim, "<memory>", &h, &l);
     if (s != LL_OK)
         return s;
@@ -616,6 +624,25 @@ ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_bsdf **
     got = size < sizeof head ? size : sizeof head;
     if (!source_read(&src, 0, head, got)) {
         s = read_failure(file);
+        goto done;
+    }
+    /* A table file of the `measured` format, whatever the name: read
+     * whole (within max_bytes) and validated from memory. */
+    if (ll_tensor_is_tensor(head, got)) {
+        if (size > lim.max_bytes) {
+            s = file_error(LL_ERROR_UNSUPPORTED, file,
+                           "%zu bytes exceed the limit max_bytes = %zu", size, lim.max_bytes);
+            goto done;
+        }
+        front = ll_malloc(size);
+        if (!front) {
+            s = file_error(LL_ERROR_OUT_OF_MEMORY, file, "out of memory reading %zu bytes", size);
+            goto done;
+        }
+        if (!source_read(&src, 0, front, size))
+            s = read_failure(file);
+        else
+            s = ll_measured_open(front, size, file, out);
         goto done;
     }
     s = check_header(head, got, size, &lim, file, &h, &l);

@@ -7,6 +7,7 @@
  * bracket and a bounded number of steps.
  */
 #include "storage/bsdf_internal.h"
+#include "storage/tables_internal.h"
 
 #include <math.h>
 
@@ -197,6 +198,8 @@ int ll_bsdf_sample_core(const ll_bsdf *b, double mu_i, const double u[2], const 
     double w_i[4], pdf_mu = 0.0, first_step;
     int moved;
 
+    if (b->measured)
+        return ll_measured_sample_core(b, mu_i, u, basis, mu_o, phi_d, pdf, sums);
     *mu_o = 0.0;
     *phi_d = 0.0;
     *pdf = 0.0;

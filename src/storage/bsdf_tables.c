@@ -22,6 +22,9 @@ ll_status ll_bsdf_get_tables(const ll_bsdf *b, ll_bsdf_tables *out)
     ll_bsdf_tables full;
     if (!b || !out)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_bsdf_get_tables: bsdf or out is NULL");
+    if (b->measured)
+        return ll_fail(LL_ERROR_UNSUPPORTED, "ll_bsdf_get_tables: the file is a table file "
+                       "(format LL_BSDF_FORMAT_TABLES), which has no Fourier tables");
     memset(&full, 0, sizeof full);
     full.struct_size = sizeof full;
     full.n_nodes = b->n_nodes;

@@ -17,14 +17,18 @@
 #define PREVIEW_MAX_NODES 120
 #define PREVIEW_MAX_ORDERS 200
 
+/* A file ll_bsdf_open reads: a .bsdf ("SCATFUN") or a table file of the
+ * `measured` format ("tensor_file" and a NUL; docs/measured-format.md). */
 static int is_bsdf_file(const char *path, int *is_bsdf)
 {
-    char magic[7];
+    char magic[12];
+    size_t got;
     FILE *f = fopen(path, "rb");
     if (!f)
         return llplot_fail(LLPLOT_EXIT_IO, "%s: cannot open: %s", path, strerror(errno));
-    *is_bsdf = fread(magic, 1, sizeof magic, f) == sizeof magic &&
-               memcmp(magic, "SCATFUN", sizeof magic) == 0;
+    got = fread(magic, 1, sizeof magic, f);
+    *is_bsdf = (got >= 7 && memcmp(magic, "SCATFUN", 7) == 0) ||
+               (got == 12 && memcmp(magic, "tensor_file", 12) == 0);
     if (ferror(f)) {
         int err = errno;
         fclose(f);

@@ -1,0 +1,368 @@
+/*
+ * ll_tables_write_from_bsdf (ll_tables.h): the tables of the `measured`
+ * format from an opened opaque, untextured file, following the producer's
+ * steps of docs/measured-format.md:
+ *  1. D and sigma from retro-reflection (bsdf_write_tables_ndf.c), stored
+ *     as float tables over (u_phi, u_theta) with two equal rows;
+ *  2. per incident elevation, the visible-normal density
+ *     max(0, wi.m) D(m) / sigma(wi) times the change of variables
+ *     2 pi^2 u_theta sin(theta_m) on the VNDF grid;
+ *  3. the sample grid's nodes pushed through the reader's own warp
+ *     (tables_warp.c, built from the very floats written), the incident
+ *     direction reflected about each normal, f cos there;
+ *  4. stored values f cos 4 sigma(wi) / D(m) with D and sigma as the
+ *     tables interpolate them, so a reader's product gives f cos back
+ *     exactly at the nodes; the luminance of those values, with a floor
+ *     of 1e-3 of the slice's largest, as the sampling density.
+ */
+#include "layerlab/ll_tables.h"
+#include "storage/bsdf_write_tables.h"
+#include "storage/bsdf_write_tensor.h"
+#include "storage/tables_warp.h"
+#include "support/watch.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define FN "ll_tables_write_from_bsdf"
+/* The luminance table's floor, relative to its slice's largest value:
+ * every slice stays normalisable and every part of the square reachable. */
+#define LUMINANCE_FLOOR 1e-3
+/* Light transmitted beyond this fraction of the largest reflected a_0
+ * makes a file transmissive (a conductor's transmitted blocks are 0). */
+#define TRANSMISSION_TOLERANCE 1e-6
+
+typedef struct writer {
+    const ll_bsdf *b;
+    size_t n_ti, nv, ns;
+    float *theta_i, phi_i[1], *ndf, *sigma, *vndf, *lum, *rgb;
+    ll_warp2d ndf_w, sigma_w, vndf_w;
+} writer;
+
+static double get_float(const void *ctx, size_t i) { return (double)((const float *)ctx)[i]; }
+
+static ll_status check_options(const ll_tables_options *opts, ll_tables_options *o)
+{
+    ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
+    ll_status s;
+    *o = defaults;
+    if (opts && (s = ll_struct_read(o, sizeof *o, opts, FN, "ll_tables_options")) != LL_OK)
+        return s;
+    if (!o->n_theta_i) o->n_theta_i = 32;
+    if (!o->vndf_size) o->vndf_size = 128;
+    if (!o->sample_size) o->sample_size = 64;
+    if (o->n_theta_i < 2 || o->n_theta_i > 1024 || o->vndf_size < 2 || o->vndf_size > 4096 ||
+        o->sample_size < 2 || o->sample_size > 4096)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": grid sizes n_theta_i = %zu (2..1024), vndf_size = %zu and "
+                       "sample_size = %zu (2..4096) out of range",
+                       o->n_theta_i, o->vndf_size, o->sample_size);
+    if (o->format != LL_TABLES_RGB)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": unknown format %d (LL_TABLES_RGB)",
+                       (int)o->format);
+    return LL_OK;
+}
+
+/* The format holds one opaque, untextured, reflecting material. */
+static ll_status check_source(const ll_bsdf *b)
+{
+    size_t n = b->n_nodes, i, o;
+    double reflected = 0.0, transmitted = 0.0;
+    if (b->n_bases != 1)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file is textured (%zu basis functions); a table file holds "
+                       "one material without parameters",
+                       b->n_bases);
+    if (fabs(b->eta - 1.0) > 1e-6)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file transmits (eta = %g); the `measured` format stores "
+                       "reflection only",
+                       b->eta);
+    for (i = 0; i < n; ++i)
+        for (o = 0; o < n; ++o) {
+            double a = fabs(b->a0[i * n + o]);
+            if (b->nodes[i] * b->nodes[o] > 0.0)
+                transmitted = a > transmitted ? a : transmitted;
+            else
+                reflected = a > reflected ? a : reflected;
+        }
+    if (transmitted > TRANSMISSION_TOLERANCE * reflected)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file transmits light (a transmitted series of %g against %g "
+                       "reflected); the `measured` format stores reflection only",
+                       transmitted, reflected);
+    return LL_OK;
+}
+
+static ll_status allocate(writer *w)
+{
+    size_t nd = LL_TABLES_NDF_NODES, v, s;
+    if (!ll_size_mul(w->nv, w->nv, &v) || !ll_size_mul(v, w->n_ti, &v) ||
+        !ll_size_mul(w->ns, w->ns, &s) || !ll_size_mul(s, w->n_ti, &s))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": the tables' size overflows");
+    w->theta_i = ll_alloc_array(w->n_ti, sizeof(float));
+    w->ndf = ll_alloc_array(2 * nd, sizeof(float));
+    w->sigma = ll_alloc_array(2 * nd, sizeof(float));
+    w->vndf = ll_alloc_array(v, sizeof(float));
+    w->lum = ll_alloc_array(s, sizeof(float));
+    w->rgb = ll_alloc_array(s, 3 * sizeof(float));
+    if (!w->theta_i || !w->ndf || !w->sigma || !w->vndf || !w->lum || !w->rgb)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
+    return LL_OK;
+}
+
+static void release(writer *w)
+{
+    ll_free(w->theta_i);
+    ll_free(w->ndf);
+    ll_free(w->sigma);
+    ll_free(w->vndf);
+    ll_free(w->lum);
+    ll_free(w->rgb);
+    ll_warp2d_free(&w->ndf_w);
+    ll_warp2d_free(&w->sigma_w);
+    ll_warp2d_free(&w->vndf_w);
+}
+
+/* Step 1: D and sigma, as float tables and as the warps that interpolate
+ * them exactly as a reader will. */
+static ll_status ndf_tables(writer *w, double *alpha)
+{
+    enum { N = LL_TABLES_NDF_NODES };
+    double d[N], sigma[N];
+    size_t j;
+    ll_status s = ll_tables_derive_ndf(w->b, d, sigma, alpha);
+    if (s != LL_OK)
+        return s;
+    for (j = 0; j < N; ++j) {
+        w->ndf[j] = w->ndf[N + j] = (float)d[j];
+        w->sigma[j] = w->sigma[N + j] = (float)sigma[j];
+    }
+    if ((s = ll_warp2d_init(&w->ndf_w, N, 2, 0, NULL, NULL, get_float, w->ndf, 0)) != LL_OK ||
+        (s = ll_warp2d_init(&w->sigma_w, N, 2, 0, NULL, NULL, get_float, w->sigma, 0)) != LL_OK)
+        return s;
+    return LL_OK;
+}
+
+static double sigma_at(const writer *w, double theta)
+{
+    double u[2] = { sqrt(theta * (2.0 / LL_PI)), 0.5 };
+    return ll_warp2d_eval(&w->sigma_w, u, NULL);
+}
+
+/* Step 2 for slice t. */
+static void vndf_slice(writer *w, size_t t)
+{
+    size_t nv = w->nv, x, y;
+    double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
+    double inv_sigma = 1.0 / sigma_at(w, th);
+    float *out = w->vndf + t * nv * nv;
+    for (y = 0; y < nv; ++y) {
+        double phi = (2.0 * (double)y / (double)(nv - 1) - 1.0) * LL_PI;
+        for (x = 0; x < nv; ++x) {
+            double u[2] = { (double)x / (double)(nv - 1), 0.5 };
+            double tm = u[0] * u[0] * (LL_PI / 2);
+            double m[3] = { sin(tm) * cos(phi), sin(tm) * sin(phi), cos(tm) };
+            double dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+            double v = dot > 0.0 ? dot * ll_warp2d_eval(&w->ndf_w, u, NULL) * inv_sigma *
+                                       2.0 * LL_PI * LL_PI * u[0] * sin(tm)
+                                 : 0.0;
+            out[y * nv + x] = (float)v;
+        }
+    }
+}
+
+/* Steps 3 and 4 for slice t. */
+static void value_slice(writer *w, size_t t)
+{
+    size_t ns = w->ns, x, y, c, plane = ns * ns;
+    double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
+    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(w, th), top = 0.0;
+    float *lum = w->lum + t * plane, *rgb = w->rgb + t * 3 * plane;
+    for (y = 0; y < ns; ++y)
+        for (x = 0; x < ns; ++x) {
+            double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
+            double um[2], pdf, tm, pm, m[3], dot, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale, y_lum;
+            ll_warp2d_sample(&w->vndf_w, sq, param, um, &pdf);
+            tm = um[0] * um[0] * (LL_PI / 2);
+            pm = (2.0 * um[1] - 1.0) * LL_PI;
+            m[0] = sin(tm) * cos(pm);
+            m[1] = sin(tm) * sin(pm);
+            m[2] = cos(tm);
+            dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+            wo[0] = 2.0 * dot * m[0] - wi[0];
+            wo[1] = 2.0 * dot * m[1] - wi[1];
+            wo[2] = 2.0 * dot * m[2] - wi[2];
+            /* Our renderer convention: wo (viewer) is the format's wi. */
+            if (wo[2] > 0.0 && wi[2] > 0.0 &&
+                ll_bsdf_eval_dir(w->b, wi, wo, LL_TRANSPORT_RADIANCE, NULL, f) != LL_OK)
+                f[0] = f[1] = f[2] = 0.0;
+            if (!(wo[2] > 0.0 && wi[2] > 0.0))
+                f[0] = f[1] = f[2] = 0.0;
+            scale = wo[2] * four_sigma / ll_warp2d_eval(&w->ndf_w, um, NULL);
+            if (!ll_is_finite(scale))
+                scale = 0.0;
+            for (c = 0; c < 3; ++c) {
+                double v = f[c] * scale;
+                rgb[c * plane + y * ns + x] = (float)(v > 0.0 ? v : 0.0);
+                f[c] = v > 0.0 ? v : 0.0;
+            }
+            y_lum = ll_tables_luminance(f);
+            lum[y * ns + x] = (float)y_lum;
+            if (y_lum > top)
+                top = y_lum;
+        }
+    for (x = 0; x < plane; ++x) {
+        double floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
+        if (!((double)lum[x] >= floor_v))
+            lum[x] = (float)floor_v;
+    }
+}
+
+/* JSON text of a string (quotes and escapes), appended to buf. */
+static size_t json_string(char *buf, size_t at, size_t cap, const char *s)
+{
+    if (at < cap) buf[at] = '"';
+    ++at;
+    for (; *s; ++s) {
+        unsigned char ch = (unsigned char)*s;
+        char esc[8];
+        size_t n, k;
+        if (ch == '"' || ch == '\\')
+            n = (size_t)snprintf(esc, sizeof esc, "\\%c", ch);
+        else if (ch < 0x20)
+            n = (size_t)snprintf(esc, sizeof esc, "\\u%04x", ch);
+        else {
+            esc[0] = (char)ch;
+            n = 1;
+        }
+        for (k = 0; k < n; ++k, ++at)
+            if (at < cap) buf[at] = esc[k];
+    }
+    if (at < cap) buf[at] = '"';
+    return at + 1;
+}
+
+/* Our metadata field: the grid, the fitted roughness, the source's text. */
+static char *metadata_text(const writer *w, double alpha, size_t *size)
+{
+    size_t cap = 512, at;
+    char *buf = NULL;
+    const char *src = w->b->metadata ? w->b->metadata : "";
+    if (!ll_size_add(cap, w->b->metadata_size, &cap) || !ll_size_mul(cap, 6, &cap))
+        return NULL;
+    buf = ll_malloc(cap);
+    if (!buf)
+        return NULL;
+    /* cap holds the worst case: every source byte escaped as \u00XX. */
+    at = (size_t)snprintf(buf, cap,
+                          "{\"writer\": \"layerlab %s\", \"theta_i\": %zu, \"vndf\": [%zu, %zu], "
+                          "\"sample\": [%zu, %zu], \"ndf_alpha\": %.6g, \"bsdf_metadata\": ",
+                          ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns, alpha);
+    at = json_string(buf, at, cap, src);
+    buf[at++] = '}';
+    buf[at] = '\0';
+    *size = at;
+    return buf;
+}
+
+ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
+                                    const ll_tables_options *opts, const ll_monitor *monitor)
+{
+    ll_tables_options o;
+    writer w;
+    ll_watch watch;
+    double alpha = 0.0;
+    char *meta = NULL;
+    size_t meta_size = 0, t;
+    ll_status s;
+    memset(&w, 0, sizeof w);
+    if (!b || !path)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": bsdf or path is NULL");
+    if ((s = check_options(opts, &o)) != LL_OK || (s = check_source(b)) != LL_OK ||
+        (s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
+        return s;
+    w.b = b;
+    w.n_ti = o.n_theta_i;
+    w.nv = o.vndf_size;
+    w.ns = o.sample_size;
+    w.phi_i[0] = 0.0f;
+    if ((s = allocate(&w)) != LL_OK)
+        goto done;
+    /* Incident elevations theta = 90 deg sin(v 90 deg), v uniform: the
+     * lobe's shape changes fastest towards grazing, where the slices are
+     * interpolated linearly on the sample square. On rough gold (alpha 0.2,
+     * 32 slices) this spacing cut the albedo error at 84 degrees from 0.35%
+     * (uniform theta) to 0.14%. */
+    for (t = 0; t < w.n_ti; ++t)
+        w.theta_i[t] = (float)(sin((double)t / (double)(w.n_ti - 1) * (LL_PI / 2)) * (LL_PI / 2));
+
+    ll_watch_stage(&watch, "ndf", 0.0, 0.1, 1);
+    if ((s = ndf_tables(&w, &alpha)) != LL_OK || (s = ll_watch_check(&watch, FN)) != LL_OK)
+        goto done;
+    ll_watch_stage(&watch, "tables", 0.1, 0.8, 2 * w.n_ti);
+    for (t = 0; t < w.n_ti; ++t) {
+        vndf_slice(&w, t);
+        ll_watch_advance(&watch, 1);
+        if ((s = ll_watch_check(&watch, FN)) != LL_OK)
+            goto done;
+    }
+    {
+        double phi[1] = { 0.0 }, *theta = ll_alloc_array(w.n_ti, sizeof(double));
+        const double *params[2];
+        size_t sizes[2];
+        if (!theta) {
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
+            goto done;
+        }
+        for (t = 0; t < w.n_ti; ++t)
+            theta[t] = (double)w.theta_i[t];
+        params[0] = phi;
+        params[1] = theta;
+        sizes[0] = 1;
+        sizes[1] = w.n_ti;
+        s = ll_warp2d_init(&w.vndf_w, w.nv, w.nv, 2, sizes, params, get_float, w.vndf, 1);
+        ll_free(theta);
+        if (s != LL_OK)
+            goto done;
+    }
+    for (t = 0; t < w.n_ti; ++t) {
+        value_slice(&w, t);
+        ll_watch_advance(&watch, 1);
+        if ((s = ll_watch_check(&watch, FN)) != LL_OK)
+            goto done;
+    }
+    meta = metadata_text(&w, alpha, &meta_size);
+    if (!meta) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (metadata)");
+        goto done;
+    }
+    ll_watch_stage(&watch, "writing", 0.9, 0.1, 1);
+    {
+        static const unsigned char jacobian[1] = { 1 };
+        const char *desc = o.description ? o.description
+                                         : "layerlab: warped tables of an opaque layered "
+                                           "material (RGB)";
+        size_t nd = LL_TABLES_NDF_NODES;
+        ll_tensor_out_field f[10] = {
+            { "description", LL_TENSOR_U8, 1, { strlen(desc) }, desc },
+            { "jacobian", LL_TENSOR_U8, 1, { 1 }, jacobian },
+            { "theta_i", LL_TENSOR_F32, 1, { w.n_ti }, w.theta_i },
+            { "phi_i", LL_TENSOR_F32, 1, { 1 }, w.phi_i },
+            { "ndf", LL_TENSOR_F32, 2, { 2, nd }, w.ndf },
+            { "sigma", LL_TENSOR_F32, 2, { 2, nd }, w.sigma },
+            { "vndf", LL_TENSOR_F32, 4, { 1, w.n_ti, w.nv, w.nv }, w.vndf },
+            { "luminance", LL_TENSOR_F32, 4, { 1, w.n_ti, w.ns, w.ns }, w.lum },
+            { "rgb", LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, w.rgb },
+            { "layerlab_metadata", LL_TENSOR_U8, 1, { meta_size }, meta },
+        };
+        if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
+            goto done;
+        s = ll_tensor_write(path, FN, f, 10);
+    }
+done:
+    ll_free(meta);
+    release(&w);
+    return s;
+}

@@ -1,0 +1,111 @@
+/*
+ * The tensor container's writer (bsdf_write_tensor.h): the header and
+ * field table first, with every offset computed in advance, then the data
+ * blocks, padded with zeros to 8-byte boundaries.
+ */
+#include "storage/bsdf_write_tensor.h"
+#include "storage/bsdf_file_out.h"
+#include "storage/bsdf_format.h"
+
+#include <string.h>
+
+static void put_u16(ll_bsdf_out *o, size_t v)
+{
+    unsigned char b[2] = { (unsigned char)(v & 0xffu), (unsigned char)((v >> 8) & 0xffu) };
+    ll_bsdf_out_bytes(o, b, 2);
+}
+
+static void put_u64(ll_bsdf_out *o, uint64_t v)
+{
+    ll_bsdf_out_u32(o, (uint32_t)(v & 0xffffffffu));
+    ll_bsdf_out_u32(o, (uint32_t)(v >> 32));
+}
+
+static void pad_to(ll_bsdf_out *o, size_t *at, size_t target)
+{
+    static const unsigned char zeros[8] = { 0 };
+    while (*at < target) {
+        size_t n = target - *at > 8 ? 8 : target - *at;
+        ll_bsdf_out_bytes(o, zeros, n);
+        *at += n;
+    }
+}
+
+/* Bytes of field f's data (0 on overflow, then *ok is cleared). */
+static size_t field_bytes(const ll_tensor_out_field *f, int *ok)
+{
+    size_t r, count = 1, bytes;
+    for (r = 0; r < f->rank; ++r)
+        if (!ll_size_mul(count, f->shape[r], &count))
+            *ok = 0;
+    if (!ll_size_mul(count, ll_tensor_dtype_size(f->dtype), &bytes))
+        *ok = 0;
+    return bytes;
+}
+
+ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_field *fields,
+                          size_t n_fields)
+{
+    size_t k, r, at = LL_TENSOR_HEADER_SIZE, data_at, offset[64];
+    int ok = 1;
+    ll_bsdf_out *o;
+    ll_status s;
+    if (n_fields == 0 || n_fields > sizeof offset / sizeof offset[0])
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu fields (1..64)", fn, n_fields);
+    for (k = 0; k < n_fields; ++k) {
+        size_t len = strlen(fields[k].name);
+        if ((fields[k].dtype != LL_TENSOR_F32 && fields[k].dtype != LL_TENSOR_U8) ||
+            len == 0 || len > LL_TENSOR_MAX_NAME || fields[k].rank > LL_TENSOR_MAX_RANK)
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: field \"%s\" cannot be written", fn,
+                           fields[k].name);
+        at += 2 + len + 2 + 1 + 8 + 8 * fields[k].rank;
+    }
+    /* Offsets: each block at the next multiple of 8. */
+    data_at = at;
+    for (k = 0; k < n_fields; ++k) {
+        size_t bytes = field_bytes(&fields[k], &ok);
+        if (!ll_size_add(data_at, 7, &data_at))
+            ok = 0;
+        data_at &= ~(size_t)7;
+        offset[k] = data_at;
+        if (!ll_size_add(data_at, bytes, &data_at))
+            ok = 0;
+    }
+    if (!ok)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the tables' size overflows", fn);
+
+    s = ll_bsdf_out_begin(path, fn, &o);
+    if (s != LL_OK)
+        return s;
+    ll_bsdf_out_bytes(o, LL_TENSOR_MAGIC, LL_TENSOR_MAGIC_SIZE);
+    {
+        const unsigned char version[2] = { 1, 0 };
+        ll_bsdf_out_bytes(o, version, 2);
+    }
+    ll_bsdf_out_u32(o, (uint32_t)n_fields);
+    for (k = 0; k < n_fields; ++k) {
+        const ll_tensor_out_field *f = &fields[k];
+        unsigned char dtype = (unsigned char)f->dtype;
+        put_u16(o, strlen(f->name));
+        ll_bsdf_out_bytes(o, f->name, strlen(f->name));
+        put_u16(o, f->rank);
+        ll_bsdf_out_bytes(o, &dtype, 1);
+        put_u64(o, (uint64_t)offset[k]);
+        for (r = 0; r < f->rank; ++r)
+            put_u64(o, (uint64_t)f->shape[r]);
+    }
+    for (k = 0; k < n_fields; ++k) {
+        const ll_tensor_out_field *f = &fields[k];
+        size_t bytes = field_bytes(f, &ok), i;
+        pad_to(o, &at, offset[k]);
+        if (f->dtype == LL_TENSOR_U8) {
+            ll_bsdf_out_bytes(o, f->data, bytes);
+        } else {
+            const float *v = f->data;
+            for (i = 0; i < bytes / 4; ++i)
+                ll_bsdf_out_f32(o, v[i]);
+        }
+        at += bytes;
+    }
+    return ll_bsdf_out_commit(o);
+}

@@ -1,0 +1,28 @@
+/*
+ * Writing the tensor container of the `measured` format
+ * (docs/measured-format.md) atomically, through the .bsdf writer's
+ * temporary-file-and-rename output (bsdf_file_out.h). Writer side only.
+ */
+#ifndef LL_BSDF_WRITE_TENSOR_H
+#define LL_BSDF_WRITE_TENSOR_H
+
+#include "storage/tensor.h"
+
+/* One field to write: float32 data as floats, uint8 data as bytes (the
+ * only two dtypes the format's producers need). */
+typedef struct ll_tensor_out_field {
+    const char *name;
+    int dtype;                          /* LL_TENSOR_F32 or LL_TENSOR_U8 */
+    size_t rank;
+    size_t shape[LL_TENSOR_MAX_RANK];
+    const void *data;                   /* count elements                */
+} ll_tensor_out_field;
+
+/* Write the fields in the given order, each data block at an offset
+ * rounded up to a multiple of 8 (as the format's Python writers do).
+ * fn names the caller in messages. LL_ERROR_IO, LL_ERROR_INVALID_ARGUMENT
+ * (a dtype other than the two, a size that overflows). */
+LL_INTERNAL ll_status ll_tensor_write(const char *path, const char *fn,
+                                      const ll_tensor_out_field *fields, size_t n_fields);
+
+#endif /* LL_BSDF_WRITE_TENSOR_H */

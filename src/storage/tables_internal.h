@@ -1,0 +1,53 @@
+/*
+ * An opened table file of the `measured` format (docs/measured-format.md)
+ * behind an ll_bsdf handle: the 2D warps of its fields, and evaluation and
+ * sampling as the renderers' `measured` readers do them. Reader side.
+ *
+ * Directions here are in the format's own convention: wi the direction
+ * held fixed (towards the viewer), wo the one evaluated or sampled
+ * (towards the light), both unit vectors in the shading frame, z the
+ * normal. Values are f cos(theta_o), as Mitsuba's BSDF returns them; the
+ * public calls divide by the cosine.
+ */
+#ifndef LL_TABLES_INTERNAL_H
+#define LL_TABLES_INTERNAL_H
+
+#include "storage/bsdf_internal.h"
+#include "storage/tables_warp.h"
+
+typedef struct ll_measured {
+    ll_warp2d ndf;        /* D over (u_phi, u_theta) of the normal          */
+    ll_warp2d sigma;      /* projected area over the incident direction     */
+    ll_warp2d vndf;       /* sampling, parameters (phi_i, theta_i)          */
+    ll_warp2d luminance;  /* sampling, parameters (phi_i, theta_i)          */
+    ll_warp2d rgb;        /* values, parameters (phi_i, theta_i, channel)   */
+    int jacobian;         /* stored values are f cos over D / (4 sigma)     */
+} ll_measured;
+
+/* Open a table file held in data[0 .. size) (validated completely; the
+ * bytes are not kept). file names it in messages. */
+LL_INTERNAL ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
+                                       ll_bsdf **out);
+LL_INTERNAL void ll_measured_free(ll_measured *m);
+
+/* f cos(theta_o) of the channels R, G, B at (wi, wo); 0 below the surface. */
+LL_INTERNAL void ll_measured_eval(const ll_measured *m, const double wi[3], const double wo[3],
+                                  double value[3]);
+/* Density (per solid angle of wo) of ll_measured_sample. */
+LL_INTERNAL double ll_measured_pdf(const ll_measured *m, const double wi[3], const double wo[3]);
+/* Sample wo given wi from u in [0, 1]^2 (u[1] drives the elevation-like
+ * coordinate, as Mitsuba's swapped sample): wo, its pdf and f cos there.
+ * 0 if no direction (below the horizon). */
+LL_INTERNAL int ll_measured_sample(const ll_measured *m, const double wi[3], const double u[2],
+                                   double wo[3], double *pdf, double value[3]);
+
+/* The layer-convention cores of ll_bsdf_internal.h for a table handle. */
+LL_INTERNAL void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
+                                      const float *basis, double extra_scale, double rgb[3]);
+LL_INTERNAL double ll_measured_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o,
+                                       double cos_phi);
+LL_INTERNAL int ll_measured_sample_core(const ll_bsdf *b, double mu_i, const double u[2],
+                                        const float *basis, double *mu_o, double *phi_d,
+                                        double *pdf, double sums[3]);
+
+#endif /* LL_TABLES_INTERNAL_H */

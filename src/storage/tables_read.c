@@ -1,0 +1,229 @@
+/*
+ * Opening a table file of the `measured` format (docs/measured-format.md)
+ * as an ll_bsdf: the container is parsed (tensor_read.c), then every field
+ * the evaluation reads is checked -- presence, dtype, rank, the shapes that
+ * must agree, every value finite and non-negative, the parameter lists
+ * ascending -- before the warps are built from it (style.md rule 10). Each
+ * problem is LL_ERROR_FORMAT naming the file and the field; a valid
+ * variant this reader does not evaluate (spectral or anisotropic files)
+ * LL_ERROR_UNSUPPORTED.
+ */
+#include "storage/tables_internal.h"
+#include "storage/tensor.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Values beyond this are not a reflectance, and would let the products of
+ * evaluation overflow (the same bound as the .bsdf reader's coefficients). */
+#define LL_MEASURED_MAX_VALUE 1.2676506002282294e30
+
+#define FAIL(status, ...) do { s = ll_fail(status, __VA_ARGS__); goto done; } while (0)
+
+static double get_field(const void *ctx, size_t index)
+{
+    return (double)ll_tensor_f32(ctx, index);
+}
+
+/* Field name: present, float32, of the given rank. */
+static ll_status require(const ll_tensor_file *t, const char *name, size_t rank,
+                         const char *file, const ll_tensor_field **out)
+{
+    const ll_tensor_field *f = ll_tensor_find(t, name);
+    size_t i;
+    if (!f)
+        return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\" is missing", file, name);
+    if (f->dtype != LL_TENSOR_F32 || f->rank != rank)
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"%s\" must be float32 of rank %zu "
+                       "(dtype code %d, rank %zu)",
+                       file, name, rank, f->dtype, f->rank);
+    for (i = 0; i < rank; ++i)
+        if (f->shape[i] == 0)
+            return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\" has extent 0",
+                           file, name);
+    for (i = 0; i < f->count; ++i) {
+        float v = ll_tensor_f32(f, i);
+        if (!(v >= 0.0f) || !((double)v <= LL_MEASURED_MAX_VALUE))
+            return ll_fail(LL_ERROR_FORMAT,
+                           "ll_bsdf_open: %s: field \"%s\": element %zu = %g is not a finite "
+                           "value in [0, 2^100]",
+                           file, name, i, (double)v);
+    }
+    *out = f;
+    return LL_OK;
+}
+
+/* A parameter list: strictly ascending. */
+static ll_status read_list(const ll_tensor_field *f, const char *file, double lo, double hi,
+                           double **out)
+{
+    size_t i;
+    double *v = ll_alloc_array(f->count, sizeof(double));
+    if (!v)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    for (i = 0; i < f->count; ++i) {
+        v[i] = ll_tensor_f32(f, i);
+        if (!(v[i] >= lo && v[i] <= hi) || (i > 0 && !(v[i] > v[i - 1]))) {
+            double bad = v[i];
+            ll_free(v);
+            return ll_fail(LL_ERROR_FORMAT,
+                           "ll_bsdf_open: %s: field \"%s\": element %zu = %g must lie in "
+                           "[%g, %g], above the one before",
+                           file, f->name, i, bad, lo, hi);
+        }
+    }
+    *out = v;
+    return LL_OK;
+}
+
+static ll_status shape_error(const char *file, const char *name, const char *what)
+{
+    return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\": %s", file, name, what);
+}
+
+/* The warp of field f (its last two axes), with the prefix's parameters. */
+static ll_status build(ll_warp2d *wp, const ll_tensor_field *f, size_t n_params,
+                      const size_t *sizes, const double *const *params, int sampling,
+                      const char *file)
+{
+    ll_status s = ll_warp2d_init(wp, f->shape[f->rank - 1], f->shape[f->rank - 2], n_params,
+                                 sizes, params, get_field, f, sampling);
+    if (s == LL_ERROR_FORMAT)
+        return ll_fail(s, "ll_bsdf_open: %s: field \"%s\": %s", file, f->name,
+                       ll_last_error_message());
+    return s;
+}
+
+/* The metadata the handle reports: our own field, else the description. */
+static ll_status copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
+{
+    const ll_tensor_field *f = ll_tensor_find(t, "layerlab_metadata");
+    if (!f)
+        f = ll_tensor_find(t, "description");
+    if (f && (f->dtype != LL_TENSOR_U8 || f->rank != 1))
+        return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\" must be uint8 text",
+                       file, f->name);
+    b->metadata_size = f ? f->count : 0;
+    b->metadata = ll_malloc(b->metadata_size + 1);
+    if (!b->metadata)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    if (f)
+        memcpy(b->metadata, f->data, f->count);
+    b->metadata[b->metadata_size] = '\0';
+    return LL_OK;
+}
+
+ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
+                           ll_bsdf **out)
+{
+    ll_tensor_file t = { 0, NULL };
+    const ll_tensor_field *theta, *phi, *ndf, *sigma, *vndf, *lum, *rgb, *jac;
+    double *theta_v = NULL, *phi_v = NULL, channels[3] = { 0.0, 1.0, 2.0 };
+    ll_bsdf *b = NULL;
+    ll_measured *m;
+    size_t n_ti, n_pi, n;
+    ll_status s = ll_tensor_parse(data, size, file, &t);
+    if (s != LL_OK)
+        return s;
+    if (ll_tensor_find(&t, "wavelengths") || (!ll_tensor_find(&t, "rgb") &&
+                                              ll_tensor_find(&t, "spectra")))
+        FAIL(LL_ERROR_UNSUPPORTED,
+             "ll_bsdf_open: %s: spectral tables (fields \"spectra\" and \"wavelengths\") are "
+             "not read by this version; RGB tables (field \"rgb\") are",
+             file);
+    if ((s = require(&t, "theta_i", 1, file, &theta)) != LL_OK ||
+        (s = require(&t, "phi_i", 1, file, &phi)) != LL_OK ||
+        (s = require(&t, "ndf", 2, file, &ndf)) != LL_OK ||
+        (s = require(&t, "sigma", 2, file, &sigma)) != LL_OK ||
+        (s = require(&t, "vndf", 4, file, &vndf)) != LL_OK ||
+        (s = require(&t, "luminance", 4, file, &lum)) != LL_OK ||
+        (s = require(&t, "rgb", 5, file, &rgb)) != LL_OK)
+        goto done;
+    jac = ll_tensor_find(&t, "jacobian");
+    if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
+        FAIL(LL_ERROR_FORMAT,
+             "ll_bsdf_open: %s: field \"jacobian\" must be one uint8 of value 0 or 1", file);
+    n_ti = theta->count;
+    n_pi = phi->count;
+    if (n_pi > 2)
+        FAIL(LL_ERROR_UNSUPPORTED,
+             "ll_bsdf_open: %s: field \"phi_i\": %zu incident azimuths (an anisotropic table) "
+             "are not read by this version",
+             file, n_pi);
+    if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
+        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"ndf\": each extent must be >= 2", file);
+    if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
+        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"sigma\": each extent must be >= 2",
+             file);
+    if (vndf->shape[0] != n_pi || vndf->shape[1] != n_ti || vndf->shape[2] < 2 ||
+        vndf->shape[3] < 2) {
+        s = shape_error(file, "vndf", "shape must be [phi_i, theta_i, >= 2, >= 2]");
+        goto done;
+    }
+    n = lum->shape[3];
+    if (lum->shape[0] != n_pi || lum->shape[1] != n_ti || lum->shape[2] != n || n < 2) {
+        s = shape_error(file, "luminance", "shape must be [phi_i, theta_i, N, N], N >= 2");
+        goto done;
+    }
+    if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti || rgb->shape[2] != 3 ||
+        rgb->shape[3] != n || rgb->shape[4] != n) {
+        s = shape_error(file, "rgb", "shape must be [phi_i, theta_i, 3, N, N] with the N of "
+                                     "\"luminance\"");
+        goto done;
+    }
+    if ((s = read_list(theta, file, 0.0, LL_PI / 2 + 1e-6, &theta_v)) != LL_OK ||
+        (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &phi_v)) != LL_OK)
+        goto done;
+    for (n = 0; n < sigma->count; ++n)
+        if (!(ll_tensor_f32(sigma, n) > 0.0f))
+            FAIL(LL_ERROR_FORMAT,
+                 "ll_bsdf_open: %s: field \"sigma\": element %zu is 0 (a projected area is "
+                 "positive)",
+                 file, n);
+
+    b = ll_calloc(1, sizeof *b);
+    m = b ? ll_calloc(1, sizeof *m) : NULL;
+    if (!m)
+        FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    b->measured = m;
+    b->refcount = 1;
+    b->n_channels = 3;
+    b->n_bases = 1;
+    b->eta = 1.0;
+    b->file_size = size;
+    m->jacobian = jac->data[0];
+    {
+        const double *params[3] = { phi_v, theta_v, channels };
+        size_t sizes[3] = { n_pi, n_ti, 3 };
+        if ((s = build(&m->ndf, ndf, 0, NULL, NULL, 0, file)) != LL_OK ||
+            (s = build(&m->sigma, sigma, 0, NULL, NULL, 0, file)) != LL_OK ||
+            (s = build(&m->vndf, vndf, 2, sizes, params, 1, file)) != LL_OK ||
+            (s = build(&m->luminance, lum, 2, sizes, params, 1, file)) != LL_OK ||
+            (s = build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK)
+            goto done;
+    }
+    s = copy_metadata(b, &t, file);
+done:
+    ll_free(theta_v);
+    ll_free(phi_v);
+    ll_tensor_file_free(&t);
+    if (s != LL_OK) {
+        ll_bsdf_free(b);
+        return s;
+    }
+    *out = b;
+    return LL_OK;
+}
+
+void ll_measured_free(ll_measured *m)
+{
+    if (!m)
+        return;
+    ll_warp2d_free(&m->ndf);
+    ll_warp2d_free(&m->sigma);
+    ll_warp2d_free(&m->vndf);
+    ll_warp2d_free(&m->luminance);
+    ll_warp2d_free(&m->rgb);
+    ll_free(m);
+}

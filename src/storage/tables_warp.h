@@ -1,0 +1,98 @@
+/*
+ * The piecewise-bilinear 2D warp of the `measured` format
+ * (docs/measured-format.md, "The 2D warp"): a density given by its values
+ * at the nodes of a W x H grid over the unit square, interpolated
+ * bilinearly, with conditional slices selected by up to three parameters
+ * and interpolated linearly between them. The one implementation that both
+ * the reader (evaluation and sampling of table files) and the writer (which
+ * pushes its sample grid through it, so that the stored values are exact at
+ * the nodes) use.
+ *
+ * Axes: x is the last (contiguous) axis of the stored array, y the one
+ * before it; node (x_k, y_l) = (k / (W - 1), l / (H - 1)). Slices are
+ * stored parameter 0 outermost. Sampling takes y from the marginal
+ * (binary search over the trapezoid integrals of the rows, then the root of
+ * the quadratic that the linear density gives inside the interval), then x
+ * the same way from the conditional row interpolated at that y; invert is
+ * the exact inverse of sample, and both return the density there.
+ */
+#ifndef LL_TABLES_WARP_H
+#define LL_TABLES_WARP_H
+
+#include "support/support.h"
+
+#define LL_WARP_MAX_PARAMS 3
+
+typedef struct ll_warp2d {
+    size_t w, h;                              /* nodes along x and y (>= 2)       */
+    size_t n_params;
+    size_t param_size[LL_WARP_MAX_PARAMS];    /* values per parameter (>= 1)      */
+    double *param_values[LL_WARP_MAX_PARAMS]; /* ascending, owned                 */
+    size_t n_slices;                          /* product of param_size            */
+    /* Stored as float, as the renderers store them: a look-up reads a few
+     * scattered rows of tables of megabytes, so their size is what costs;
+     * every sum over them is in double. */
+    float *data;                              /* [n_slices][h][w]                 */
+    float *cond;                              /* [n_slices][h][w] running trapezoid
+                                                 integrals along x (NULL if the
+                                                 warp only interpolates)          */
+    float *marg;                              /* [n_slices][h] the same along y of
+                                                 the row totals                   */
+    int normalized;                           /* each slice divided by its total  */
+} ll_warp2d;
+
+/* The slices around one parameter point and their weights (only those of
+ * non-zero weight), computed once and shared by the look-ups of warps with
+ * the same parameter lists. */
+typedef struct ll_warp_slices {
+    size_t count;
+    size_t index[1 << LL_WARP_MAX_PARAMS];
+    double weight[1 << LL_WARP_MAX_PARAMS];
+} ll_warp_slices;
+
+/* Build from data[n_slices * h * w] (any float layout the caller decodes
+ * through get(ctx, index)), params[p][param_size[p]] ascending.
+ * sampling: build the CDFs (then every slice must have a positive integral
+ * and is normalised). Returns LL_OK, LL_ERROR_OUT_OF_MEMORY, or
+ * LL_ERROR_FORMAT (message "slice k has no positive integral") which the
+ * caller prefixes with the field. */
+typedef double (*ll_warp_get)(const void *ctx, size_t index);
+LL_INTERNAL ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
+                                     const size_t *param_size, const double *const *params,
+                                     ll_warp_get get, const void *ctx, int sampling);
+LL_INTERNAL void ll_warp2d_free(ll_warp2d *wp);
+
+/* The bilinear value at pos (clamped into the square) for the parameters
+ * param[n_params]; a sampling warp returns the density per unit area of
+ * the square. */
+LL_INTERNAL double ll_warp2d_eval(const ll_warp2d *wp, const double pos[2], const double *param);
+
+/* Map u in [0, 1]^2 to a point; *pdf its density (sampling warps only). */
+LL_INTERNAL void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
+                                  double pos[2], double *pdf);
+
+/* The inverse of sample: the u that maps to pos, and the density at pos. */
+LL_INTERNAL void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *param,
+                                  double u[2], double *pdf);
+
+/* The same with the slices given: ll_warp2d_slices finds them for the
+ * parameters param[n_params]; ll_warp_slices_append extends them by one
+ * more parameter that hits node k of its n values exactly (a channel). */
+LL_INTERNAL void ll_warp2d_slices(const ll_warp2d *wp, const double *param, ll_warp_slices *s);
+LL_INTERNAL void ll_warp_slices_append(const ll_warp_slices *s, size_t k, size_t n,
+                                       ll_warp_slices *out);
+LL_INTERNAL double ll_warp2d_eval_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double pos[2]);
+/* n values at pos of a warp whose last parameter has exactly n values,
+ * each hit at its node (the channels of an RGB table): out[k] is the value
+ * for slices s extended by k. One cell look-up for all n (n <= 3). */
+LL_INTERNAL void ll_warp2d_eval_nodes(const ll_warp2d *wp, const ll_warp_slices *s, size_t n,
+                                      const double pos[2], double *out);
+/* The one slice of a warp without parameters. */
+LL_INTERNAL void ll_warp_slices_single(ll_warp_slices *s);
+LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double u[2], double pos[2], double *pdf);
+LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
+                                     const double pos[2], double u[2], double *pdf);
+
+#endif /* LL_TABLES_WARP_H */

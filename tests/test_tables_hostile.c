@@ -1,0 +1,380 @@
+/*
+ * Hostile table files (docs/measured-format.md): truncated, wrong magic or
+ * version, shapes that disagree, offsets outside the file, NaN and negative
+ * values, absurd sizes, the max_bytes limit, random damage. Each gives a
+ * clear error naming what is wrong, never a crash; the damaged bytes are a
+ * small valid table written by ll_tables_write_from_bsdf.
+ */
+#include "test_bsdf_util.h"
+#include "support/support.h"
+
+static unsigned char *good;
+static size_t good_size;
+
+static int setup(void **state)
+{
+    ll_bsdf *src = NULL;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    char path[600];
+    ll_test_dir_setup(state);
+    o.n_theta_i = 3;
+    o.vndf_size = 4;
+    o.sample_size = 3;
+    snprintf(path, sizeof path, "%s/small.tab", ll_test_dir());
+    if (ll_bsdf_open(LL_TEST_GOLDEN, NULL, &src) != LL_OK ||
+        ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
+        return 1;
+    ll_bsdf_release(src);
+    good = ll_test_read_file(path, &good_size);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    free(good);
+    return ll_test_dir_teardown(state);
+}
+
+static uint64_t get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    int k;
+    for (k = 7; k >= 0; --k)
+        v = (v << 8) | p[k];
+    return v;
+}
+
+static void put_u64(unsigned char *p, uint64_t v)
+{
+    int k;
+    for (k = 0; k < 8; ++k)
+        p[k] = (unsigned char)(v >> (8 * k));
+}
+
+/* Where field name's entry keeps its offset and its first extent. */
+static void locate(const unsigned char *d, const char *name, size_t *offset_at,
+                   size_t *shape_at, size_t *rank)
+{
+    size_t at = 18, n = d[14] | (d[15] << 8), k;
+    for (k = 0; k < n; ++k) {
+        size_t len = d[at] | (d[at + 1] << 8);
+        size_t r = d[at + 2 + len] | (d[at + 3 + len] << 8);
+        if (len == strlen(name) && memcmp(d + at + 2, name, len) == 0) {
+            *offset_at = at + 2 + len + 3;
+            *shape_at = *offset_at + 8;
+            *rank = r;
+            return;
+        }
+        at += 2 + len + 2 + 1 + 8 + 8 * r;
+    }
+    fail_msg("no field %s", name);
+}
+
+/* Open a damaged copy from memory; expect status and a message with what. */
+static void expect(const unsigned char *data, size_t size, ll_status status, const char *what)
+{
+    ll_bsdf *b = (ll_bsdf *)1;
+    ll_status s = ll_bsdf_open_memory(data, size, NULL, &b);
+    if (s != status || (what && !strstr(ll_last_error_message(), what)))
+        fail_msg("status %d (%s), expected %d naming \"%s\"", (int)s, ll_last_error_message(),
+                 (int)status, what ? what : "");
+    assert_null(b);
+}
+
+static unsigned char *copy(void)
+{
+    unsigned char *d = malloc(good_size);
+    assert_non_null(d);
+    memcpy(d, good, good_size);
+    return d;
+}
+
+static void test_good_opens(void **state)
+{
+    ll_bsdf *b = NULL;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    (void)state;
+    assert_int_equal(ll_bsdf_open_memory(good, good_size, NULL, &b), LL_OK);
+    assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+    assert_int_equal(info.format, LL_BSDF_FORMAT_TABLES);
+    ll_bsdf_release(b);
+}
+
+static void test_truncated(void **state)
+{
+    size_t n;
+    (void)state;
+    for (n = 12; n < good_size; ++n) {
+        ll_bsdf *b = NULL;
+        assert_int_equal(ll_bsdf_open_memory(good, n, NULL, &b), LL_ERROR_FORMAT);
+        assert_null(b);
+    }
+    expect(good, 17, LL_ERROR_FORMAT, "truncated header");
+    expect(good, good_size - 1, LL_ERROR_FORMAT, "outside the file");
+}
+
+static void test_magic_and_version(void **state)
+{
+    unsigned char *d = copy();
+    (void)state;
+    d[12] = 2;
+    expect(d, good_size, LL_ERROR_FORMAT, "version 2.0");
+    d[12] = 1;
+    d[13] = 1;
+    expect(d, good_size, LL_ERROR_FORMAT, "version 1.1");
+    d[13] = 0;
+    d[0] = 'T';
+    /* No longer a tensor file: read as a .bsdf, which it is not either. */
+    expect(d, good_size, LL_ERROR_FORMAT, NULL);
+    free(d);
+}
+
+static void test_shapes_disagree(void **state)
+{
+    unsigned char *d = copy();
+    size_t off, shape, rank;
+    (void)state;
+    /* rgb with 2 channels (its data then still lies inside the file). */
+    locate(d, "rgb", &off, &shape, &rank);
+    assert_int_equal(rank, 5);
+    put_u64(d + shape + 16, 2);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"rgb\"");
+    free(d);
+    d = copy();
+    /* luminance with one incident elevation less than theta_i. */
+    locate(d, "luminance", &off, &shape, &rank);
+    put_u64(d + shape + 8, 2);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\"");
+    free(d);
+    d = copy();
+    /* a vndf of one node per row */
+    locate(d, "vndf", &off, &shape, &rank);
+    put_u64(d + shape + 24, 1);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\"");
+    free(d);
+}
+
+static void test_offsets_and_sizes(void **state)
+{
+    unsigned char *d = copy();
+    size_t off, shape, rank;
+    (void)state;
+    locate(d, "sigma", &off, &shape, &rank);
+    put_u64(d + off, good_size - 4);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"sigma\": data at offset");
+    put_u64(d + off, UINT64_MAX - 3);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"sigma\"");
+    put_u64(d + off, 0);
+    expect(d, good_size, LL_ERROR_FORMAT, "overlaps the field table");
+    free(d);
+    d = copy();
+    locate(d, "vndf", &off, &shape, &rank);
+    put_u64(d + shape, (uint64_t)1 << 62);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\"");
+    put_u64(d + shape, 1);
+    put_u64(d + shape + 8, (uint64_t)1 << 40);
+    put_u64(d + shape + 16, (uint64_t)1 << 40);
+    expect(d, good_size, LL_ERROR_FORMAT, "overflows");
+    free(d);
+    d = copy();
+    d[14] = d[15] = d[16] = 0xff;
+    d[17] = 0x7f;
+    expect(d, good_size, LL_ERROR_FORMAT, "field count");
+    d[14] = d[15] = d[16] = d[17] = 0;
+    expect(d, good_size, LL_ERROR_FORMAT, "field count");
+    free(d);
+}
+
+static void test_values(void **state)
+{
+    static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
+    static const unsigned char minus_one[4] = { 0x00, 0x00, 0x80, 0xbf };
+    static const unsigned char zero[4] = { 0, 0, 0, 0 };
+    unsigned char *d = copy();
+    size_t off, shape, rank, at;
+    (void)state;
+    locate(d, "luminance", &off, &shape, &rank);
+    at = (size_t)get_u64(d + off);
+    memcpy(d + at + 4, nan_bytes, 4);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\": element 1");
+    memcpy(d + at + 4, minus_one, 4);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\": element 1");
+    free(d);
+    d = copy();
+    locate(d, "sigma", &off, &shape, &rank);
+    memcpy(d + (size_t)get_u64(d + off), zero, 4);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"sigma\"");
+    free(d);
+    d = copy();
+    /* theta_i not ascending */
+    locate(d, "theta_i", &off, &shape, &rank);
+    memcpy(d + (size_t)get_u64(d + off) + 4, zero, 4);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"theta_i\"");
+    free(d);
+    d = copy();
+    /* a jacobian of 2 */
+    locate(d, "jacobian", &off, &shape, &rank);
+    d[(size_t)get_u64(d + off)] = 2;
+    expect(d, good_size, LL_ERROR_FORMAT, "\"jacobian\"");
+    free(d);
+}
+
+static void test_limits(void **state)
+{
+    ll_open_options o = LL_OPEN_OPTIONS_INIT;
+    ll_bsdf *b = NULL;
+    (void)state;
+    o.max_bytes = good_size - 1;
+    assert_int_equal(ll_bsdf_open_memory(good, good_size, &o, &b), LL_ERROR_UNSUPPORTED);
+    assert_non_null(strstr(ll_last_error_message(), "max_bytes"));
+    assert_null(b);
+}
+
+/* Random damage: whatever the bytes, an answer and no crash; what opens
+ * evaluates and samples to finite values. */
+static void test_random_damage(void **state)
+{
+    uint64_t rng = 77;
+    int k, j, opened = 0;
+    (void)state;
+    for (k = 0; k < 3000; ++k) {
+        unsigned char *d = copy();
+        ll_bsdf *b = NULL;
+        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
+        for (j = 0; j < flips; ++j)
+            d[(size_t)(ll_test_uniform(&rng) * (double)good_size)] ^=
+                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
+        if (ll_bsdf_open_memory(d, good_size, NULL, &b) == LL_OK) {
+            double wo[3] = { 0.3, 0.1, 0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
+            ++opened;
+            assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, NULL, f), LL_OK);
+            assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+            u[0] = ll_test_uniform(&rng);
+            u[1] = ll_test_uniform(&rng);
+            assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf,
+                                                f),
+                             LL_OK);
+            assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+            ll_bsdf_release(b);
+        }
+        free(d);
+    }
+    printf("%d of 3000 damaged copies opened (damage in values or padding)\n", opened);
+}
+
+/* Out of memory at each allocation of opening a table: the error, no
+ * handle, every block freed again. */
+static void test_out_of_memory(void **state)
+{
+    size_t n, k;
+    ll_bsdf *b = NULL;
+    (void)state;
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_bsdf_open_memory(good, good_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    assert_true(n > 5);
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        b = (ll_bsdf *)1;
+        ll_alloc_fail_after(k);
+        s = ll_bsdf_open_memory(good, good_size, NULL, &b);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
+        assert_null(b);
+        assert_true(live == 0);
+    }
+}
+
+/* Out of memory at each allocation of writing a table: the error, every
+ * block freed again, no file. */
+static void test_writer_out_of_memory(void **state)
+{
+    ll_bsdf *src = NULL;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    char path[600];
+    size_t n, k, reference_size;
+    unsigned char *reference;
+    (void)state;
+    o.n_theta_i = 3;
+    o.vndf_size = 4;
+    o.sample_size = 3;
+    snprintf(path, sizeof path, "%s/oom.tab", ll_test_dir());
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &src), LL_OK);
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_tables_write_from_bsdf(src, path, &o, NULL), LL_OK);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    reference = ll_test_read_file(path, &reference_size);
+    assert_int_equal(unlink(path), 0);
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        ll_alloc_fail_after(k);
+        s = ll_tables_write_from_bsdf(src, path, &o, NULL);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_true(live == 0);
+        if (s == LL_OK) {
+            /* An allocation the output can do without (the sweep of stale
+             * temporary files): the same file. */
+            size_t size;
+            unsigned char *bytes = ll_test_read_file(path, &size);
+            assert_int_equal(size, reference_size);
+            assert_memory_equal(bytes, reference, size);
+            free(bytes);
+            assert_int_equal(unlink(path), 0);
+            continue;
+        }
+        if (s != LL_ERROR_OUT_OF_MEMORY)
+            fail_msg("allocation %zu of %zu: status %d (%s)", k, n, (int)s,
+                     ll_last_error_message());
+        assert_int_equal(access(path, F_OK), -1);
+    }
+    free(reference);
+    ll_bsdf_release(src);
+}
+
+/* A monitor that cancels while the tables are computed: LL_ERROR_CANCELLED
+ * and no file. */
+static int cancel_in_tables(void *user, double fraction, const char *stage)
+{
+    (void)user;
+    (void)fraction;
+    return strcmp(stage, "tables") == 0;
+}
+
+static void test_cancel(void **state)
+{
+    ll_bsdf *src = NULL;
+    ll_monitor m = LL_MONITOR_INIT;
+    char path[600];
+    (void)state;
+    m.progress = cancel_in_tables;
+    snprintf(path, sizeof path, "%s/cancelled.tab", ll_test_dir());
+    assert_int_equal(ll_bsdf_open(LL_TEST_GOLDEN, NULL, &src), LL_OK);
+    assert_int_equal(ll_tables_write_from_bsdf(src, path, NULL, &m), LL_ERROR_CANCELLED);
+    assert_int_equal(access(path, F_OK), -1);
+    ll_bsdf_release(src);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_good_opens),
+        cmocka_unit_test(test_truncated),
+        cmocka_unit_test(test_magic_and_version),
+        cmocka_unit_test(test_shapes_disagree),
+        cmocka_unit_test(test_offsets_and_sizes),
+        cmocka_unit_test(test_values),
+        cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_random_damage),
+        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_writer_out_of_memory),
+        cmocka_unit_test(test_cancel),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -1,0 +1,136 @@
+/*
+ * The piecewise-bilinear 2D warp of the `measured` format
+ * (src/storage/tables_warp.c): invert is the exact inverse of sample, the
+ * density integrates to 1, the density sample reports is the one a
+ * histogram of its points shows, and between parameter slices everything
+ * is interpolated consistently.
+ */
+#include "test_util.h"
+#include "storage/tables_warp.h"
+
+#define W 7
+#define H 5
+#define P0 2
+#define P1 3
+
+static double get_table(const void *ctx, size_t i) { return ((const double *)ctx)[i]; }
+
+/* A positive, lumpy table with 2 x 3 slices (parameter 0 outermost). */
+static void make(ll_warp2d *wp, int sampling)
+{
+    static double data[P0 * P1 * H * W];
+    static const double p0[P0] = { 0.0, 1.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
+    const double *params[2] = { p0, p1 };
+    size_t sizes[2] = { P0, P1 }, k;
+    uint64_t rng = 12345;
+    for (k = 0; k < P0 * P1 * H * W; ++k)
+        data[k] = 0.05 + ll_test_uniform(&rng) * (k % 3 == 0 ? 4.0 : 1.0);
+    assert_int_equal(ll_warp2d_init(wp, W, H, 2, sizes, params, get_table, data, sampling),
+                     LL_OK);
+}
+
+static void test_invert_of_sample(void **state)
+{
+    ll_warp2d wp;
+    uint64_t rng = 7;
+    int k;
+    (void)state;
+    make(&wp, 1);
+    for (k = 0; k < 20000; ++k) {
+        double u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
+        double param[2] = { ll_test_uniform(&rng), -1.2 + 3.5 * ll_test_uniform(&rng) };
+        double pos[2], back[2], pdf_s, pdf_i;
+        ll_warp2d_sample(&wp, u, param, pos, &pdf_s);
+        ll_warp2d_invert(&wp, pos, param, back, &pdf_i);
+        /* u is clamped into [2^-24, 1 - 2^-24] by sample. */
+        assert_true(fabs(back[0] - u[0]) < 1e-7);
+        assert_true(fabs(back[1] - u[1]) < 1e-7);
+        assert_true(ll_test_close(pdf_s, pdf_i, 1e-9, 1e-12));
+        assert_true(ll_test_close(pdf_s, ll_warp2d_eval(&wp, pos, param), 1e-9, 1e-12));
+    }
+    ll_warp2d_free(&wp);
+}
+
+static void test_density_integrates_to_one(void **state)
+{
+    ll_warp2d wp;
+    const size_t n = 600;
+    size_t i, j;
+    int q;
+    (void)state;
+    make(&wp, 1);
+    for (q = 0; q < 3; ++q) {
+        double param[2] = { 0.3 * q, -1.0 + 1.1 * q }, sum = 0.0;
+        for (i = 0; i < n; ++i)
+            for (j = 0; j < n; ++j) {
+                double pos[2] = { (i + 0.5) / n, (j + 0.5) / n };
+                sum += ll_warp2d_eval(&wp, pos, param);
+            }
+        sum /= (double)(n * n);
+        assert_true(fabs(sum - 1.0) < 1e-5);
+    }
+    ll_warp2d_free(&wp);
+}
+
+/* Chi-square of a histogram of sampled points against the density's
+ * integral over each bin. */
+static void test_histogram(void **state)
+{
+    enum { B = 12, SAMPLES = 400000, SUB = 16 };
+    ll_warp2d wp;
+    static double count[B][B];
+    double param[2] = { 0.7, 0.9 }, chi2 = 0.0;
+    uint64_t rng = 99;
+    size_t i, j, a, c;
+    (void)state;
+    make(&wp, 1);
+    memset(count, 0, sizeof count);
+    for (i = 0; i < SAMPLES; ++i) {
+        double u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) }, pos[2], pdf;
+        ll_warp2d_sample(&wp, u, param, pos, &pdf);
+        a = (size_t)(pos[0] * B);
+        c = (size_t)(pos[1] * B);
+        count[a < B ? a : B - 1][c < B ? c : B - 1] += 1.0;
+    }
+    for (i = 0; i < B; ++i)
+        for (j = 0; j < B; ++j) {
+            double expected = 0.0;
+            for (a = 0; a < SUB; ++a)
+                for (c = 0; c < SUB; ++c) {
+                    double pos[2] = { (i + (a + 0.5) / SUB) / B, (j + (c + 0.5) / SUB) / B };
+                    expected += ll_warp2d_eval(&wp, pos, param);
+                }
+            expected *= (double)SAMPLES / ((double)B * B * SUB * SUB);
+            chi2 += (count[i][j] - expected) * (count[i][j] - expected) / expected;
+        }
+    /* 143 degrees of freedom: the 99.9% point is about 200. */
+    assert_true(chi2 < 200.0);
+    ll_warp2d_free(&wp);
+}
+
+/* A value-only warp interpolates bilinearly, and linearly between slices. */
+static void test_interpolation(void **state)
+{
+    ll_warp2d wp;
+    double pos[2] = { 0.5 / (W - 1), 0.0 }, param_a[2] = { 0.0, -1.0 }, param_b[2] = { 1.0, -1.0 };
+    double param_m[2] = { 0.25, -1.0 }, va, vb, vm;
+    (void)state;
+    make(&wp, 0);
+    va = ll_warp2d_eval(&wp, pos, param_a);
+    vb = ll_warp2d_eval(&wp, pos, param_b);
+    vm = ll_warp2d_eval(&wp, pos, param_m);
+    assert_true(ll_test_close(vm, 0.75 * va + 0.25 * vb, 1e-12, 1e-15));
+    assert_true(ll_test_close(va, 0.5 * ((double)wp.data[0] + (double)wp.data[1]), 1e-12, 1e-15));
+    ll_warp2d_free(&wp);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_invert_of_sample),
+        cmocka_unit_test(test_density_integrates_to_one),
+        cmocka_unit_test(test_histogram),
+        cmocka_unit_test(test_interpolation),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
