@@ -25,7 +25,8 @@
 #include "numerics/filon.h"
 #include "words/microfacet.h"
 #include "numerics/series.h"
-#include "words/probe.h"
+#include "search/probe.h"
+#include "words/heuristics.h"
 
 /* ---------------------------------------------------------- helpers */
 

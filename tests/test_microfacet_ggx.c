@@ -22,7 +22,8 @@
 #include "test_util.h"
 #include "words/microfacet.h"
 #include "words/microfacet_ggx.h"
-#include "words/probe.h"
+#include "search/probe.h"
+#include "words/heuristics.h"
 
 #define GOLD_RE 0.2
 #define GOLD_IM 3.5
