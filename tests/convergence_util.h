@@ -19,7 +19,8 @@
 
 #include "test_util.h"
 
-#include "words/probe.h"
+#include "search/probe.h"
+#include "words/heuristics.h"
 #include "words/media.h"
 #include "material/word_table.h"
 #include "numerics/spline.h"
@@ -112,7 +113,7 @@ static inline void add_lobe(point_set *s, double mu_i, double centre, uint64_t *
 /* The centres (signed outgoing cosines) of the lobes of incident cosine mu
  * from above (side 0) or below (side 1): reflection where the index ahead
  * is above 1 (the dense side holds the Fresnel edge of total internal
- * reflection, outside the tolerance: words/probe_set.c) and transmission
+ * reflection, outside the tolerance: search/probe_set.c) and transmission
  * where it exists. Their count. */
 static inline size_t lobe_centres(double eta, int conductor, int side, double mu, double centre[2])
 {
@@ -198,7 +199,7 @@ static inline double worst_difference(const point_set *s, const ll_layer *a, con
 /* An interface word's layer at n nodes, without building it (for the
  * builds of the full grid too large for the machine, and the dense scan):
  * what ll_layer_eval gives, from the 16 series of each point's spline
- * stencil and the energy compensation made at n (words/interface_probe.c,
+ * stencil and the energy compensation made at n (search/interface_probe.c,
  * the resolution search's own evaluation). probes_are_the_layer shows it
  * is the layer to 1e-9, and check_interface shows it again at the
  * chosen resolution wherever it builds the layers. */
@@ -437,7 +438,7 @@ static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.5, 0.8 };
  * The comparison leaves out the delta-M forward term f I (the moments
  * beyond the kept ones as exactly forward scattering: a delta, shown by
  * ll_layer_eval near mu_o = mu_i as f over a node's weight, which changes
- * with n without converging; words/medium_probe.c). */
+ * with n without converging; search/medium_probe.c). */
 
 typedef struct lean_point {
     ptrdiff_t oo, oi;  /* the stencils' first internal node indices */

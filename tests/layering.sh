@@ -1,11 +1,11 @@
 #!/bin/sh
 # The house plan held by a check: the folders of src/ are layers,
-#   support < numerics < layer < words < grammar < storage < distribution <
-#   material,
+#   support < numerics < layer < words < search < grammar < storage <
+#   distribution < material,
 # and a file includes only from its own folder or one below
 # (`#include "layer/order.h"` in src/grammar/ is fine, in src/numerics/ it
 # is not). The reader library's files (READER_SRC, from the Makefile) must
-# not reach layer/, words/, grammar/ or material/ at all, directly or
+# not reach layer/, words/, search/, grammar/ or material/ at all, directly or
 # through a header of theirs: the reader is linked without them.
 # Each problem is printed as file:line. Then the check is run on a
 # temporary bad tree, where it must fail and name the right lines.
@@ -14,8 +14,8 @@
 #   sh tests/layering.sh --tree DIR READER_FILES...   checks DIR only
 set -u
 
-ORDER="support numerics layer words grammar storage distribution material"
-READER_FORBIDDEN="layer words grammar material"
+ORDER="support numerics layer words search grammar storage distribution material"
+READER_FORBIDDEN="layer words search grammar material"
 
 rank() {
     r=0
@@ -133,7 +133,7 @@ n=$?
 if [ -z "$READER_SRC" ]; then
     fail "no reader files (READER_SRC is empty and make print-reader-src gave none)"
 elif [ "$n" -eq 0 ]; then
-    pass "src/ includes only from its own folder or below ($ORDER), and the $(echo $READER_SRC | wc -w) reader files reach no layer/, words/, grammar/ or material/"
+    pass "src/ includes only from its own folder or below ($ORDER), and the $(echo $READER_SRC | wc -w) reader files reach no layer/, words/, search/, grammar/ or material/"
 else
     fail "$n layering violation(s):"
     sed 's/^/    /' "$scratch/report"

@@ -6,7 +6,7 @@
  * non-negative f and consistent sampling there.
  */
 #include "test_bsdf_util.h"
-#include "words/probe.h" /* ll_fit_microfacet: the original's resolution */
+#include "words/heuristics.h" /* ll_fit_microfacet: the original's resolution */
 
 #define N_ALPHA 5
 static const double g_alphas[N_ALPHA] = { 0.05, 0.1, 0.2, 0.3, 0.4 };

@@ -5,7 +5,7 @@
  * the eta^2 factor of radiance transport.
  */
 #include "test_bsdf_util.h"
-#include "words/probe.h" /* ll_fit_microfacet: the original's resolution */
+#include "words/heuristics.h" /* ll_fit_microfacet: the original's resolution */
 #include "storage/bsdf_format.h"
 
 static void path_in_dir(char *path, size_t size, const char *name)

@@ -6,7 +6,7 @@
  * reflection and transmission, wherever the BSDF is above 1% of the peak
  * of its lobe. The layers are built with the public API alone (the
  * material language, energy compensation on), at points other than the
- * search's own probes (words/probe_set.c), so the test checks the method
+ * search's own probes (search/probe_set.c), so the test checks the method
  * and not the probes against themselves.
  *
  * The grid (dielectrics eta 1.1, 1.33, 1.5, 2.0, 1/1.5 and gold,
@@ -158,7 +158,7 @@ static void lean_media_evaluation_is_the_layer(void **state)
     if (verbose())
         printf("  lean HG evaluation against ll_layer_eval: %.2g\n", worst);
     assert_true(worst <= 1e-12);
-    /* The search's probes of a medium (words/medium_probe.c), the same. */
+    /* The search's probes of a medium (search/medium_probe.c), the same. */
     {
         ll_probe_set set;
         double *v, w2 = 0.0;

@@ -18,7 +18,7 @@
 #include <layerlab.h>
 #include "test_util.h"
 #include "words/microfacet.h"
-#include "words/probe.h"
+#include "search/probe.h"
 
 #define GOLD_RE 0.2
 #define GOLD_IM 3.5

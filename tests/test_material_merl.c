@@ -18,6 +18,7 @@
 #include <layerlab.h>
 #include "test_util.h"
 #include "words/merl.h"
+#include "search/probe.h"
 #include "material/material.h"
 
 #define TH 12

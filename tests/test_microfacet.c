@@ -25,7 +25,8 @@
 #include "numerics/filon.h"
 #include "words/microfacet.h"
 #include "numerics/series.h"
-#include "words/probe.h"
+#include "search/probe.h"
+#include "words/heuristics.h"
 
 /* ---------------------------------------------------------- helpers */
 
@@ -45,7 +46,7 @@ static double uniform(uint64_t *state)
 }
 
 /* ----------------------------------------------- the closed-form BSDF
- * Written out in vectors, independently of microfacet.c's reduction to
+ * Written out in vectors, independently of microfacet_series.c's reduction to
  * t = wi . wo: the BSDF of Walter et al. 2007 as the original layerlab's
  * microfacet() evaluates it, in its frame (wi points back to the light,
  * wo is the outgoing direction, -mu_i mu_o > 0 is reflection, light with

@@ -22,7 +22,8 @@
 #include "test_util.h"
 #include "words/microfacet.h"
 #include "words/microfacet_ggx.h"
-#include "words/probe.h"
+#include "search/probe.h"
+#include "words/heuristics.h"
 
 #define GOLD_RE 0.2
 #define GOLD_IM 3.5
@@ -53,7 +54,7 @@ static double dot3(const double *a, const double *b)
 }
 
 /* ----------------------------------------------- the closed-form BSDF
- * Written out in vectors, independently of microfacet.c's reduction to
+ * Written out in vectors, independently of microfacet_series.c's reduction to
  * t = wi . wo and of microfacet_ggx.c: Walter et al. 2007 with GGX's D and
  * exact Smith G1, in the frame of words/microfacet.h (wi points back to
  * the light, wo is the outgoing direction, -mu_i mu_o > 0 is reflection,

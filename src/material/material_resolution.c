@@ -18,7 +18,7 @@
 #define _DEFAULT_SOURCE 1
 
 #include "material/word_table.h"
-#include "words/probe.h"
+#include "search/probe.h"
 
 #include <stddef.h>
 #include <math.h>

@@ -12,7 +12,7 @@
  * has its per-channel indices from its spectra (material/ior.c).
  */
 #include "material/word_table.h"
-#include "words/probe.h"
+#include "search/probe.h"
 
 #include "layerlab/ll_layer.h"
 

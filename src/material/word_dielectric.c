@@ -5,7 +5,7 @@
  * the product of the dielectric indices above it.
  */
 #include "material/word_table.h"
-#include "words/probe.h"
+#include "search/probe.h"
 
 #include "layerlab/ll_layer.h"
 

@@ -5,13 +5,14 @@
  */
 #include "material/word_table.h"
 #include "words/merl.h"
+#include "search/probe.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
-/* The search's first guess (words/merl_probe.c searches from it): 100
+/* The search's first guess (search/merl_probe.c searches from it): 100
  * nodes (about 1.8 degrees between nodes near the horizon, finer near the
  * pole) and 180 orders (azimuthal detail of 1 degree, the database's step
  * in phi_diff), the original's fixed resolution. */
@@ -102,7 +103,7 @@ static void measured_params(const ll_word *w, size_t c, size_t n_channels, doubl
 }
 
 /* The resolution at which the projected table is within the tolerance of
- * twice it (words/merl_probe.c): the file is read once more for
+ * twice it (search/merl_probe.c): the file is read once more for
  * the search, which costs what docs/method.md "Resolution" measures (5 to
  * 18 s for a table of the database's size). One search per file, on the
  * luminance mix, for every channel (resolution_reads: the file alone): the

@@ -6,7 +6,7 @@
  */
 #include "material/word_table.h"
 #include "grammar/grammar.h"
-#include "words/probe.h"
+#include "search/probe.h"
 
 #include "layerlab/ll_layer.h"
 

@@ -148,7 +148,7 @@ struct ll_word_desc {
      * HUGE_VAL when it is beyond the search's reach and not verified); may
      * fail with a message naming the largest supported parameter. watch
      * (nullable): a search polls it (LL_ERROR_CANCELLED) and advances its
-     * stage by up to LL_PROBE_SEARCH_UNITS (words/probe.h). */
+     * stage by up to LL_PROBE_SEARCH_UNITS (search/probe.h). */
     ll_status (*resolution)(const ll_word_params *p, double tolerance, double mu_min,
                             ll_watch *watch, size_t *n_nodes, size_t *n_orders, double *error);
     void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);

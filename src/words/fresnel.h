@@ -1,6 +1,6 @@
 /*
  * Fresnel reflectance kernels, shared by the public functions (fresnel.c)
- * and the inner loops of the rough interfaces (microfacet.c), which call
+ * and the inner loops of the rough interfaces (microfacet_plan.c), which call
  * them for every azimuth sample and want them inlined. No argument checks
  * here: the callers have checked.
  */

@@ -14,7 +14,6 @@
 
 #include "layer/layer.h"
 #include "support/watch.h"
-#include "words/probe.h"
 
 /* MERL's own reader (BRDFRead.cpp: RED_SCALE, GREEN_SCALE, BLUE_SCALE) turns
  * the stored numbers into reflectance in 1/sr with these factors. The
@@ -69,19 +68,5 @@ LL_INTERNAL void ll_merl_pair_series(const ll_merl *merl, const double weights[3
 /* The samples N of a layer of `orders` internal orders (4 per order, at
  * least 4) and cos(pi t / (N - 1)) for t < 2 (N - 1), allocated. */
 LL_INTERNAL ll_status ll_merl_cos_table(size_t orders, size_t *samples, double **table);
-
-/* What ll_merl_set_layer on n nodes and m orders followed by ll_layer_eval
- * gives at the probes (merl_probe.c), from the series of the probes'
- * stencils alone. values holds LL_PROBE_VALUES(set). */
-LL_INTERNAL ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3],
-                                         size_t n, size_t m, const ll_probe_set *set,
-                                         ll_watch *watch, double *values);
-/* The smallest (n, m) found, from the guess in *n_nodes, *n_orders, whose
- * projected lobe is within the tolerance of (2n, 2m) on the probes of
- * ll_probe_opaque (ll_probe_search); *error the difference there
- * (nullable). */
-LL_INTERNAL ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3],
-                                         double tolerance, double mu_min, ll_watch *watch,
-                                         size_t *n_nodes, size_t *n_orders, double *error);
 
 #endif /* LL_MERL_H */

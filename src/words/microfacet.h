@@ -54,7 +54,7 @@ LL_INTERNAL void ll_microfacet_destroy(ll_microfacet_model *mf);
 /* Resolve the lobes with n_orders (at most the n_orders of creation) from
  * now on: the series are then those of a model created with n_orders,
  * while the maps already prepared stay valid (they hold the orders of the
- * creation's). The resolution search (words/probe.h) so shares one model,
+ * creation's). The resolution search (search/probe.h) so shares one model,
  * and its maps, between the order counts it tries. Not thread-safe. */
 LL_INTERNAL void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders);
 

@@ -4,7 +4,7 @@
  * "pseudo-diffuse" term): from the order-0 albedos of the single-scattering
  * layer, the rank-one order-0 terms that give back what shadowing loses.
  *
- * One code path for the layer and the resolution probes (words/probe.h):
+ * One code path for the layer and the resolution probes (search/probe.h):
  * the probes compute the same albedos at the probed resolution and add the
  * same terms at the spline stencil of each probe, so the search measures
  * the layer the build makes (copper, alpha 0.8 at 214 x 45 was 1.32% off

@@ -1,6 +1,6 @@
 /*
  * The GGX (Trowbridge-Reitz) distribution's part of the rough interface
- * (words/microfacet.c): its Smith shadowing term and the cosine series of
+ * (words/microfacet_ggx_pair.c): its Smith shadowing term and the cosine series of
  * its peak factor, for one pair of zenith cosines.
  *
  * For GGX, D = 1 / (pi alpha^2 cos^4(theta_h) (1 + X)^2) with X =
@@ -27,7 +27,7 @@
  * |g - p| E_beta, so relative to the peak it is the interpolation error of
  * g (which converges geometrically while g's nearest branch point stays
  * away from the circle); the kinks and the near branch points take the
- * Filon path of words/microfacet.c instead, as for Beckmann.
+ * Filon path of words/microfacet_filon.c instead, as for Beckmann.
  */
 #ifndef LL_MICROFACET_GGX_H
 #define LL_MICROFACET_GGX_H

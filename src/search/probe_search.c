@@ -1,5 +1,5 @@
 /*
- * The search for the resolution that meets a tolerance (words/probe.h).
+ * The search for the resolution that meets a tolerance (search/probe.h).
  *
  * Criterion: (n, m) is accepted when its probe values agree with those at
  * (2n, 2m) within the tolerance wherever the latter are above 1% of their
@@ -12,7 +12,7 @@
  * Every evaluation is kept (a few dozen at most), so the comparisons
  * share them: the growth asks for (n, m), (2n, 2m), (2n, m), (n, 2m).
  */
-#include "words/probe.h"
+#include "search/probe.h"
 
 #include <math.h>
 

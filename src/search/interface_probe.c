@@ -1,5 +1,5 @@
 /*
- * A rough interface at the probes (words/probe.h), without building it.
+ * A rough interface at the probes (search/probe.h), without building it.
  *
  * ll_layer_eval of an interface layer is, per Fourier order, a Catmull-Rom
  * spline over the nodes of the half each direction lies in (4 x 4 node
@@ -14,12 +14,12 @@
  * With compensate, the energy compensation (ll_microfacet.compensate, a rank-one
  * term of order 0 per block, Jakob et al. 2014, sec. 6.2) is added at the
  * same stencils: it is made from the albedos of every node, so it is
- * computed whole at each resolution (words/interface_probe_compensation.c),
+ * computed whole at each resolution (search/interface_probe_compensation.c),
  * O(n^2) order-0 series. Left out, the probes accepted copper, alpha 0.8 at
  * 214 x 45, which was 1.32% off twice that resolution with the term (0.33%
  * without).
  */
-#include "words/probe.h"
+#include "search/probe.h"
 #include "words/microfacet.h"
 #include "numerics/spline.h"
 

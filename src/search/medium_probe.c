@@ -1,5 +1,5 @@
 /*
- * A medium's phase function at the probes (words/probe.h), without keeping
+ * A medium's phase function at the probes (search/probe.h), without keeping
  * its layer: ll_layer_set_medium_finished hands each order's phase matrix
  * over as it is made, and only the 4 x 4 spline stencils of ll_layer_eval
  * (layer/layer.c eval_point) at the probes are read from it; the orders
@@ -16,7 +16,7 @@
  * With g = -0.9 the true forward lobe is tiny (at mu = 1, 0.0022) and
  * f / w there was 0.6% of it at 300 x 150 and 8.4% at 2232 x 530: the
  * search never met the tolerance. */
-#include "words/probe.h"
+#include "search/probe.h"
 #include "words/media.h"
 
 #include "layerlab/ll_quad.h"

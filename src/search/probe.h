@@ -3,16 +3,17 @@
  * probe directions, what a layer of n nodes and m Fourier orders gives
  * there, and the search for the smallest (n, m) that agrees with twice the
  * resolution within the tolerance where the BSDF is above 1% of its peak.
- * The fits of heuristics.c are the search's first guess only.
+ * The fits of words/heuristics.c are the search's first guess only.
  */
-#ifndef LL_WORDS_PROBE_H
-#define LL_WORDS_PROBE_H
+#ifndef LL_SEARCH_PROBE_H
+#define LL_SEARCH_PROBE_H
 
 #include <stddef.h>
 #include "support/support.h"
 #include "words/microfacet.h"
 #include "support/watch.h"
 #include "words/media.h"
+#include "words/merl.h"
 
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
@@ -78,7 +79,7 @@ LL_INTERNAL ll_status ll_probe_interface_model_distribution(double eta_re, doubl
 /* The energy compensation of an interface layer at the probes: the terms
  * that ll_layer_set_microfacet (compensate = 1) on the Gauss-Lobatto
  * nodes of n adds to order 0, from the albedos of every node pair
- * (O(n^2) order-0 series; words/interface_probe_compensation.c). They do
+ * (O(n^2) order-0 series; search/interface_probe_compensation.c). They do
  * not depend on the layer's orders (a widened lobe keeps the order 0 of
  * the true one), so they are computed once per n from the true series'
  * order 0, with a model of its own (ll_probe_compensation_model: maps of
@@ -119,7 +120,7 @@ LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet_model *mf,
 /* What ll_layer_set_henyey_greenstein / _von_mises_fisher (kind, shape:
  * g or kappa; albedo 1) on the Gauss-Lobatto nodes of n and m orders
  * followed by ll_layer_eval gives at the probes, read from each order as
- * it is made and keeping none (words/medium_probe.c): O(n^2) memory per
+ * it is made and keeping none (search/medium_probe.c): O(n^2) memory per
  * thread instead of the layer's O(n^2 m); without with_forward, less the
  * delta-M forward term (a delta, not a lobe; the search compares the
  * lobe). monitor: nullable. */
@@ -171,7 +172,7 @@ LL_INTERNAL ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn 
                                       size_t *n_nodes, size_t *n_orders, double *error);
 
 /* ll_resolution_search_microfacet and ll_resolution_search_henyey_greenstein
- * (heuristics.c) on the parameters themselves, with a watch (nullable:
+ * (resolution.c) on the parameters themselves, with a watch (nullable:
  * polled, and one stage's progress per search, LL_PROBE_SEARCH_UNITS) and,
  * for the interface, whether the layer gets the energy compensation
  * (ll_microfacet.compensate). */
@@ -191,11 +192,18 @@ LL_INTERNAL ll_status ll_search_henyey_greenstein(double g, double tolerance, do
                                                   ll_watch *watch, size_t *n_nodes,
                                                   size_t *n_orders, double *error);
 
-/* The fits of the original layerlab (heuristics.c), the first guess of the
- * search: what ll_heuristic_microfacet and ll_heuristic_henyey_greenstein
- * returned before the tolerance (their argument checks and messages). */
-LL_INTERNAL ll_status ll_fit_microfacet(double alpha, double eta_re, double eta_im,
-                                        size_t *n_nodes, size_t *n_orders);
-LL_INTERNAL ll_status ll_fit_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
+/* What ll_merl_set_layer on n nodes and m orders followed by ll_layer_eval
+ * gives at the probes (merl_probe.c), from the series of the probes'
+ * stencils alone. values holds LL_PROBE_VALUES(set). */
+LL_INTERNAL ll_status ll_merl_probe_eval(const ll_merl *merl, const double weights[3],
+                                         size_t n, size_t m, const ll_probe_set *set,
+                                         ll_watch *watch, double *values);
+/* The smallest (n, m) found, from the guess in *n_nodes, *n_orders, whose
+ * projected lobe is within the tolerance of (2n, 2m) on the probes of
+ * ll_probe_opaque (ll_probe_search); *error the difference there
+ * (nullable). */
+LL_INTERNAL ll_status ll_merl_resolution(const ll_merl *merl, const double weights[3],
+                                         double tolerance, double mu_min, ll_watch *watch,
+                                         size_t *n_nodes, size_t *n_orders, double *error);
 
-#endif /* LL_WORDS_PROBE_H */
+#endif /* LL_SEARCH_PROBE_H */

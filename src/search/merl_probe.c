@@ -1,5 +1,5 @@
 /*
- * The resolution of a measured BRDF by the tolerance (words/probe.h): the
+ * The resolution of a measured BRDF by the tolerance (search/probe.h): the
  * projected lobe at (n, m) against (2n, 2m) on the probes of an opaque
  * surface, searched by ll_probe_search as the interfaces are.
  *
@@ -10,7 +10,7 @@
  * (neighbouring probes share most of them), each 4m lookups and a DCT of
  * 4m x m multiply-adds, against (n/2)^2 of them for a whole layer.
  */
-#include "words/merl.h"
+#include "search/probe.h"
 
 #include "layerlab/ll_quad.h"
 

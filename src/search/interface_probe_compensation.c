@@ -1,6 +1,6 @@
 /*
  * The energy compensation of an interface layer at the probes
- * (words/probe.h): the albedos of the single-scattering layer of n nodes
+ * (search/probe.h): the albedos of the single-scattering layer of n nodes
  * (order 0 only, every node pair, as ll_layer_set_microfacet computes them:
  * the same series, nodes, weights and order of summation), then the same
  * rank-one terms (words/microfacet_compensation.c).
@@ -11,7 +11,7 @@
  * only). That is still far below the layer's O(n^2 m): an order-0 series
  * is 16 samples of the profile and one dot product.
  */
-#include "words/probe.h"
+#include "search/probe.h"
 #include "words/microfacet.h"
 
 #include "layerlab/ll_quad.h"

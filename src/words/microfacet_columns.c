@@ -1,0 +1,193 @@
+/*
+ * The columns of an interface layer and the energy compensation of its
+ * order 0 (words/microfacet_columns.h).
+ */
+#include "words/microfacet_columns.h"
+#include "words/microfacet_pair.h"
+#include "support/watch.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* Doubles of scratch for one column: every row's series (m each; only the
+ * pages that the series reach are touched), the series' scratch and one
+ * column of the matrix; 0 if that overflows. */
+size_t ll_microfacet_column_doubles(size_t n, size_t m)
+{
+    size_t count, rows;
+    if (m > (SIZE_MAX - 2 * FILON_SAMPLES - 2 * CHEB) / 8 || !ll_size_mul(n, m, &rows) ||
+        !ll_size_add(rows, ll_microfacet_scratch_size(m), &count) ||
+        !ll_size_add(count, n, &count) || count > SIZE_MAX / sizeof(double))
+        return 0;
+    return count;
+}
+
+/* Rows by decreasing series length (ties by index: deterministic). */
+typedef struct row_length {
+    size_t row, len;
+} row_length;
+
+static int longer_first(const void *a, const void *b)
+{
+    const row_length *x = a, *y = b;
+    if (x->len != y->len)
+        return x->len > y->len ? -1 : 1;
+    return x->row < y->row ? -1 : x->row > y->row;
+}
+
+/* One incident column: every outgoing node, every order. The high orders
+ * of a column are nonzero only in the few rows near its lobes, so each
+ * order's column is filled from the rows whose series reach it (a prefix
+ * of the rows sorted by length) and cleared again, instead of sweeping
+ * n x m values. */
+static ll_status fill_column(size_t col, const ll_microfacet_job *job);
+
+ll_status ll_microfacet_layer_column(size_t col, void *ctx)
+{
+    const ll_microfacet_job *job = ctx;
+    ll_status s;
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+    s = fill_column(col, job);
+    ll_watch_advance(job->watch, 1);
+    return s;
+}
+
+static ll_status fill_column(size_t col, const ll_microfacet_job *job)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, m = l->m, h = n / 2, row, k, j, count;
+    double *pool, *scratch, *column, factor;
+    row_length *rows = ll_alloc_array(n, sizeof *rows);
+    size_t slot = ll_parallel_slot();
+    double *memory = NULL;
+    ll_status s = LL_OK;
+    /* The thread's column scratch (n x m, 37 MB at n = 1098, m = 4194),
+     * made by its first column and reused: one per column cost a page
+     * fault per 4 KiB touched, again for every column. Every value read
+     * is written first in the same column. */
+    if (slot < job->slots && !job->column_memory[slot])
+        job->column_memory[slot] = ll_alloc_array(job->column_doubles, sizeof(double));
+    if (slot < job->slots)
+        memory = job->column_memory[slot];
+    if (!memory || !rows) {
+        ll_free(rows);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
+    }
+    pool = memory;                                   /* row r's series at r m */
+    scratch = pool + n * m;
+    column = scratch + ll_microfacet_scratch_size(m); /* n, kept zero between uses */
+    for (row = 0; row < n && s == LL_OK; ++row) {
+        /* The reference (F = 1) is only needed for R^t: up from above. */
+        double *ref = job->ref0 && row < h && col >= h ? &job->ref0[col * n + row] : NULL;
+        if (ll_watch_poll(job->watch)) {
+            s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
+            break;
+        }
+        /* Depth grows opposite to the normal: the series takes -mu. */
+        rows[row].row = row;
+        s = ll_microfacet_series(job->mf, -l->nodes[row], -l->nodes[col], m, pool + row * m,
+                                 &rows[row].len, ref, scratch);
+        job->order0[col * n + row] = rows[row].len ? pool[row * m] : 0.0;
+    }
+    if (s == LL_OK) {
+        qsort(rows, n, sizeof *rows, longer_first);
+        memset(column, 0, n * sizeof(double));
+        factor = ll_layer_surface_factor(l, col, 1);
+        count = n;
+        /* Orders past the column's longest series stay empty in the builders. */
+        for (k = 1; k < rows[0].len && s == LL_OK; ++k) {
+            size_t lo = n, hi = 0;
+            while (count > 0 && rows[count - 1].len <= k)
+                --count;
+            for (j = 0; j < count; ++j) {
+                column[rows[j].row] = pool[rows[j].row * m + k] * factor;
+                if (rows[j].row < lo)
+                    lo = rows[j].row;
+                if (rows[j].row + 1 > hi)
+                    hi = rows[j].row + 1;
+            }
+            s = ll_order_builder_set_column_range(job->builders[k], col, column, lo, hi, 0.0);
+            for (j = 0; j < count; ++j)
+                column[rows[j].row] = 0.0;
+        }
+    }
+    ll_free(rows);
+    return s;
+}
+
+/* Column sums with the outgoing weights W_j = 2 pi w_j |mu_j|: the
+ * fraction of light of each incident direction that a block sends out. */
+static void block_albedo(const double *m0, size_t n, const double *w, size_t row0,
+                         size_t col0, double *out)
+{
+    size_t h = n / 2, i, j;
+    for (j = 0; j < h; ++j) {
+        double sum = 0.0;
+        for (i = 0; i < h; ++i)
+            sum += w[i] * m0[(col0 + j) * n + row0 + i];
+        out[j] = sum;
+    }
+}
+
+/* block += scale * u v^T (rows u, columns v). */
+static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, const double *u,
+                            const double *v, double scale)
+{
+    size_t h = n / 2, i, j;
+    for (j = 0; j < h; ++j)
+        for (i = 0; i < h; ++i)
+            m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
+}
+
+/* Energy compensation (words/microfacet_compensation.c) of the unweighted
+ * order 0. Blocks of m0 (column-major): R^t rows < h, columns >= h; R^b
+ * rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. work
+ * holds 8 h doubles. */
+static void compensate(const ll_microfacet_job *job, size_t n, double *work)
+{
+    size_t h = n / 2, q;
+    double *albedo[4];
+    ll_microfacet_compensation c;
+    for (q = 0; q < 4; ++q)
+        albedo[q] = work + (4 + q) * h;
+    if (job->eta_im == 0.0) {
+        for (q = 0; q < 4; ++q) /* (block q: rows >= h when q > 1, columns when q odd) */
+            block_albedo(job->order0, n, job->w, (q >> 1) * h, (q & 1) * h, albedo[q]);
+        ll_microfacet_compensate_dielectric(h, job->w, job->eta_re,
+                                            (const double *const *)albedo, work, &c);
+    } else {
+        block_albedo(job->ref0, n, job->w, 0, h, albedo[LL_BLOCK_RT]);
+        ll_microfacet_compensate_conductor(h, job->w, job->eta_re, job->eta_im,
+                                           albedo[LL_BLOCK_RT], work, &c);
+    }
+    for (q = 0; q < 4; ++q)
+        if (c.scale[q] != 0.0)
+            block_add_outer(job->order0, n, (q >> 1) * h, (q & 1) * h, c.u[q], c.v[q],
+                            c.scale[q]);
+}
+
+/* After the columns: energy compensation on the unweighted order 0, then
+ * the weights, and order 0 into its builder. */
+ll_status ll_microfacet_finish_order0(void *ctx)
+{
+    const ll_microfacet_job *job = ctx;
+    const ll_layer *layer = job->layer;
+    size_t n = layer->n, col;
+    ll_status s = LL_OK;
+    if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
+        return ll_watch_check(job->watch, "ll_layer_set_microfacet");
+    if (job->conserve_energy)
+        compensate(job, n, job->work);
+    for (col = 0; col < n && s == LL_OK; ++col) {
+        double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
+        size_t row;
+        for (row = 0; row < n; ++row)
+            column[row] *= factor;
+        s = ll_order_builder_set_column(job->builders[0], col, column, 0.0);
+        ll_watch_advance(job->watch, 1);
+        if (s == LL_OK)
+            s = ll_watch_check(job->watch, "ll_layer_set_microfacet");
+    }
+    return s;
+}

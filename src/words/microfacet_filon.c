@@ -1,0 +1,202 @@
+/*
+ * The Filon path of a pair's series. Where g has a kink inside the window
+ * (the critical azimuth of total internal reflection, or the azimuth where
+ * refraction ends), or a branch point just outside it (grazing pairs), no
+ * polynomial fits it (3-10% of the pairs). The product f itself is then
+ * integrated by Filon's rule for every order, split at the kink and with
+ * panels shrinking geometrically towards it (Fresnel's square-root
+ * behaviour there): Filon is exact for the oscillation of cos(l phi)
+ * whatever l. GGX's pieces double in width away from its peak.
+ */
+#include "words/microfacet_pair.h"
+
+#include "numerics/filon.h"
+
+#include <math.h>
+#include <string.h>
+
+#define FILON_LEVELS 4        /* geometric pieces towards a singular point     */
+#define FILON_LEVEL_SAMPLES 5 /* samples of each of them (odd)                 */
+#define GGX_FILON_SAMPLES 17  /* Filon samples of each of GGX's pieces (odd),
+                               * which double in width away from the peak      */
+#define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
+                               * point (odd); the pieces shrink by 4 ...       */
+#define GGX_KINK_LEVELS 8     /* ... this many times                           */
+#define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
+                               * pair's peak add nothing (ggx_piece)           */
+
+/* cos(a + k h) for k < count, h = (b - a) / (count - 1), by rotation
+ * (the error grows by about one rounding per step). */
+static void azimuth_cosines(double a, double b, size_t count, double *out)
+{
+    double h = (b - a) / (double)(count - 1), ch = cos(h), sh = sin(h);
+    double c = cos(a), s = sin(a);
+    size_t k;
+    for (k = 0; k < count; ++k) {
+        double next_c = c * ch - s * sh;
+        out[k] = c;
+        s = s * ch + c * sh;
+        c = next_c;
+    }
+}
+
+/* Scratch of the Filon path: samples, their cosines, Filon's own. */
+enum { FILON_SCR_F = 0, FILON_SCR_COS = FILON_SAMPLES, FILON_SCR_FILON = 2 * FILON_SAMPLES };
+
+/* Add the Filon moments of f = exp(A + B cos phi) g over [a, b] to out
+ * (with F = 1 in g for the reference). */
+static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                      double b, size_t samples, size_t n_out, double *out, double *scratch)
+{
+    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
+    double *filon = scratch + FILON_SCR_FILON;
+    size_t k;
+    if (!(b > a))
+        return;
+    azimuth_cosines(a, b, samples, cos_phi);
+    ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
+                                 reference ? f : NULL);
+    for (k = 0; k < samples; ++k)
+        f[k] *= exp(p->a_plus_b + p->b * (cos_phi[k] - 1.0));
+    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+}
+
+/* add_piece for GGX, with its peak factor; *seen is the largest f of the
+ * pair's pieces so far. A piece whose samples all stay below
+ * GGX_NEGLIGIBLE of it adds no moments: its share of f at any azimuth, of
+ * the series' partial sums too, is below that fraction of the peak (the
+ * tails of a sharp lobe and the kinks far out in them cost most of the
+ * samples otherwise). */
+static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                      double b, size_t samples, size_t n_out, double *out, double *scratch,
+                      double *seen)
+{
+    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
+    double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
+    size_t k;
+    if (!(b > a))
+        return;
+    azimuth_cosines(a, b, samples, cos_phi);
+    ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
+                                 reference ? f : NULL);
+    for (k = 0; k < samples; ++k) {
+        double c = 1.0 + p->b * (1.0 - cos_phi[k]);
+        f[k] *= peak / (c * c);
+        largest = fmax(largest, fabs(f[k]));
+    }
+    *seen = fmax(*seen, largest);
+    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
+        return;
+    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+}
+
+/* [a, b] on uniform panels, except that next to an end at (or near) a
+ * branch point the first panel pair is replaced by pieces shrinking by 4
+ * towards it: Fresnel's square root there would cost O(h^1/2) on uniform
+ * panels; graded, only the last tiny piece errs. */
+static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                       double b, size_t samples, int grade_a, int grade_b, size_t n_out,
+                       double *out, double *scratch)
+{
+    double edge = 2.0 * (b - a) / (double)(samples - 1), lo_frac = 0.25, hi_frac = 1.0;
+    double main_a = grade_a ? a + edge : a, main_b = grade_b ? b - edge : b;
+    int level;
+    add_piece(mf, p, reference, main_a, main_b, samples, n_out, out, scratch);
+    for (level = 0; level < FILON_LEVELS; ++level) {
+        double lo = level == FILON_LEVELS - 1 ? 0.0 : lo_frac;
+        if (grade_a)
+            add_piece(mf, p, reference, a + lo * edge, a + hi_frac * edge,
+                      FILON_LEVEL_SAMPLES, n_out, out, scratch);
+        if (grade_b)
+            add_piece(mf, p, reference, b - hi_frac * edge, b - lo * edge,
+                      FILON_LEVEL_SAMPLES, n_out, out, scratch);
+        hi_frac = lo_frac;
+        lo_frac *= 0.25;
+    }
+}
+
+/* [a, b] for GGX, graded towards a singular end over its whole length:
+ * pieces at distances [d / 4, d] from it, d = b - a, b - a / 4, ..., each
+ * with the same samples, so that every piece resolves the square root of
+ * Fresnel at the kink to the same relative accuracy (on uniform panels,
+ * as add_graded's, the panels next to the graded ones err by O(h^1/2)
+ * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
+static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+                        double b, int at_a, int at_b, size_t n_out, double *out,
+                        double *scratch, double *seen)
+{
+    double d = b - a;
+    int level;
+    if (!(b > a))
+        return;
+    if (at_a && at_b) {
+        double mid = 0.5 * (a + b);
+        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch, seen);
+        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch, seen);
+        return;
+    }
+    if (!at_a && !at_b) {
+        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch, seen);
+        return;
+    }
+    for (level = 0; level < GGX_KINK_LEVELS; ++level) {
+        double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
+        if (at_a)
+            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
+        else
+            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch,
+                      seen);
+        d = near;
+    }
+}
+
+/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
+ * width from the peak's half width beta^-1/2 on (the tails fall like
+ * phi^-4, so each piece spans the same relative change of f), cut at the
+ * kink and graded towards it and towards near branch points. */
+static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                      size_t n_out, double *out, double *scratch)
+{
+    double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
+    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
+    while (a < end) {
+        double b = a == 0.0 ? first : 2.0 * a;
+        int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
+        if (b > end - ANGLE_EPS)
+            b = end;
+        if (p->split > a && p->split < b)
+            b = p->split;
+        /* Reflection's kink is total internal reflection, which holds
+         * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
+         * there, and Fresnel's square root is on the far side alone. */
+        grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
+        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch, &seen);
+        a = b;
+    }
+}
+
+/* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
+ * dphi, l < n_out, over the window (f is below 1e-12 of its peak beyond),
+ * split at a kink. */
+void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                                size_t n_out, double *out, double *scratch)
+{
+    size_t l;
+    memset(out, 0, n_out * sizeof(double));
+    if (mf->ggx) {
+        ggx_filon(mf, p, reference, n_out, out, scratch);
+    } else if (p->split > 0.0) {
+        add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
+                   out, scratch);
+        if (p->reflect) /* refracted light ends at the split */
+            add_graded(mf, p, reference, p->split, p->phi_end, FILON_SAMPLES, 1, p->grade_end,
+                       n_out, out, scratch);
+    } else {
+        add_graded(mf, p, reference, 0.0, p->phi_end, FILON_SAMPLES, p->grade_start,
+                   p->grade_end, n_out, out, scratch);
+    }
+    out[0] *= LL_INV_PI;
+    for (l = 1; l < n_out; ++l)
+        out[l] *= 2.0 * LL_INV_PI;
+}
