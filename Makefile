@@ -110,7 +110,8 @@ STATIC   := $(BUILD)/lib/liblayerlab.a
 # renderers. Its files are support/ without the threads (OpenMP), the
 # splines of numerics/, and storage/ without the writer; a new file in
 # storage/ is a reader file unless it is named like the writer's. They must
-# not include layer/, words/, grammar/ or material/ (tests/layering.sh).
+# not include layer/, words/, search/, grammar/, distribution/ or material/
+# (tests/layering.sh).
 # The patterns live in src/reader-sources.txt, which CMakeLists.txt reads
 # too: one list for both builds. Reader objects are compiled without
 # -fopenmp (they have no OpenMP) and shared with liblayerlab.

@@ -53,17 +53,10 @@ BIN="$BUILD/bench"
 WORK="$BUILD/bench/work"
 mkdir -p "$BIN" "$WORK" "$(dirname "$JSON")"
 
-# The same OpenBLAS as the library (the Makefile's BLAS_LIBS).
-MULTIARCH=$($CC -print-multiarch 2>/dev/null || true)
-BLAS_DIR=/usr/lib/$MULTIARCH/openblas-openmp
-BLAS_INC=/usr/include/$MULTIARCH/openblas-openmp
-if [ -n "$MULTIARCH" ] && [ -d "$BLAS_DIR" ]; then
-    BLAS_LIBS="-L$BLAS_DIR -Wl,-rpath,$BLAS_DIR -llapacke -lopenblas"
-else
-    BLAS_LIBS="-llapacke -lopenblas"
-fi
-BLAS_CFLAGS=""
-[ -n "$MULTIARCH" ] && [ -d "$BLAS_INC" ] && BLAS_CFLAGS="-I$BLAS_INC"
+# The same OpenBLAS as the library: the Makefile's BLAS_LIBS and the
+# include folder of that build (pkg-config's answer, as the Makefile asks).
+BLAS_LIBS=$(make -s --no-print-directory print-blas-libs 2>/dev/null || echo "-llapacke -lopenblas")
+BLAS_CFLAGS=$(pkg-config --cflags openblas 2>/dev/null || true)
 
 CFLAGS="-std=c99 -O3 -march=x86-64-v2 -g -Wall -Wextra -pedantic -Werror -D_DEFAULT_SOURCE -Iinclude"
 LIBS="-L$LIBDIR -Wl,-rpath,$LIBDIR -llayerlab -lm"
@@ -95,7 +88,7 @@ if [ "$FULL" = 1 ]; then
     # The convergence modes share tests/convergence_util.h with
     # tests/test_convergence.c (cmocka's assertions, internal headers).
     # shellcheck disable=SC2086
-    build convergence bench/convergence.c -Isrc -Itests "$BUILD/lib/liblayerlab.a" -fopenmp \
+    build convergence bench/convergence.c -DLL_EXPERIMENTAL -Isrc -Itests "$BUILD/lib/liblayerlab.a" -fopenmp \
         $BLAS_CFLAGS $BLAS_LIBS -lcmocka -lpthread
 fi
 

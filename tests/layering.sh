@@ -15,7 +15,7 @@
 set -u
 
 ORDER="support numerics layer words search grammar storage distribution material"
-READER_FORBIDDEN="layer words search grammar material"
+READER_FORBIDDEN="layer words search grammar distribution material"
 
 rank() {
     r=0
