@@ -315,7 +315,7 @@ static ll_status compute_cdf(ll_channel_writer *w)
         ll_free(values);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
     }
-    ll_watch_stage(job->watch, "writing", 0.0, 0.1, nn);
+    ll_wjob_stage(job, 0.05, 0.05, nn);
     for (i = 0; i < nn; ++i) {
         size_t li = layer_index(i, job->h);
         ll_watch_advance(job->watch, 1);

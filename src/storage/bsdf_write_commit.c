@@ -1,9 +1,11 @@
 /*
  * The commit of a .bsdf file (bsdf_write_commit.h). The progress of the
- * streaming commit: the CDF in [0, 0.1] of "writing" (the source's stage),
- * the pair table in [0.1, 0.15] a node row a unit, the coefficient block
+ * streaming commit: the offsets in [0, 0.05] of "writing" a node row a
+ * unit, the CDF in [0.05, 0.1] (the source's stage), the pair table in [0.1, 0.15] a node row a unit, the coefficient block
  * in [0.15, 1] a column a unit; the report of 1 comes last, before the
- * temporary file replaces the target.
+ * temporary file replaces the target. A call that handed the layers over
+ * itself (ll_bsdf_write) reported their going in first: the commit then
+ * fills what is left of "writing" after job->progress_from.
  */
 #include "storage/bsdf_write_commit.h"
 
@@ -68,11 +70,11 @@ ll_status ll_wjob_commit(write_job *job, ll_spill *spill, const char *path,
         s = src->put_cdf(src->writer, out);
     else
         put_cdf_table(out, job);
-    ll_watch_stage(job->watch, "writing", 0.1, 0.05, nn);
+    ll_wjob_stage(job, 0.1, 0.05, nn);
     if (s == LL_OK)
         s = ll_wjob_put_pairs(out, job);
     if (s == LL_OK)
-        ll_watch_stage(job->watch, "writing", 0.15, 0.85, nn);
+        ll_wjob_stage(job, 0.15, 0.85, nn);
     for (i = 0; i < nn && s == LL_OK; ++i) {
         ll_watch_advance(job->watch, 1);
         if (ll_watch_poll(job->watch))

@@ -28,7 +28,7 @@ typedef struct ll_wjob_source {
      * Nullable. */
     ll_status (*prepare)(void *writer);
     /* The CDF table, [(i * nn + o) * n_bases + b], as file floats, with a
-     * stage of its own in [0, 0.1] of "writing". NULL: job->cdf is written
+     * stage of its own in [0.05, 0.1] of the commit (ll_wjob_stage). NULL: job->cdf is written
      * as it is (its stage, if any, was prepare's). */
     ll_status (*put_cdf)(void *writer, ll_bsdf_out *out);
     /* File column i of the coefficient block (i not a mu = 0 node): the
@@ -53,6 +53,24 @@ LL_INTERNAL ll_status ll_wjob_put_pairs(ll_bsdf_out *out, const write_job *job);
  * far): the last report, then the metadata and the commit, or the abort
  * on an error or cancel. Returns the outcome. */
 LL_INTERNAL ll_status ll_wjob_put_end(ll_bsdf_out *out, const write_job *job, ll_status s);
+
+/* The basis writer (bsdf_writer.c) as the calls that hand it every layer
+ * at once use it (bsdf_write.c). open: fn names the calls in messages
+ * (open, add, commit); in_memory keeps the spill in memory (no file
+ * beside path). add: one basis, polling watch (nullable) per order and
+ * column, counting an order of each layer a unit of its stage. commit:
+ * the file, its stages in [progress_from, 1] of "writing"; w is left to
+ * the caller to free (ll_bsdf_writer_abort). */
+LL_INTERNAL ll_status ll_writer_open_as(const char *const fn[3], const char *path,
+                                        size_t n_channels, size_t n_parameters,
+                                        const size_t *param_counts,
+                                        const double *param_positions,
+                                        const ll_bsdf_write_options *opts, int in_memory,
+                                        ll_bsdf_writer **out);
+LL_INTERNAL ll_status ll_writer_add_watched(ll_bsdf_writer *w, const ll_layer *const *layers,
+                                            ll_watch *watch);
+LL_INTERNAL ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch,
+                                               double progress_from);
 
 /* The file's metadata: the options', else the default one. */
 static inline const char *ll_wjob_metadata(const write_job *job)

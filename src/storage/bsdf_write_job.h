@@ -1,8 +1,9 @@
 /*
- * The inside of the .bsdf writers (bsdf_write.c, all layers at once;
- * bsdf_writer.c, streaming one basis at a time): what is known about one
- * file before its bytes are produced, and the pieces both use, so that
- * the two write the same bytes (the rules are in bsdf_write.c's comment).
+ * The inside of the .bsdf writers (bsdf_writer.c, one basis at a time,
+ * also behind ll_bsdf_write; bsdf_write_channels.c, one channel at a
+ * time): what is known about one file before its bytes are produced, and
+ * the pieces both use, so that the two write the same bytes (the rules are
+ * in bsdf_write.c's comment).
  */
 #ifndef LL_BSDF_WRITE_JOB_H
 #define LL_BSDF_WRITE_JOB_H
@@ -15,7 +16,7 @@
 /* Everything known about one file before its bytes are produced. */
 typedef struct write_job {
     const char *fn;
-    const ll_layer *const *layers; /* [n_bases * n_channels] */
+    const ll_layer *const *layers; /* [n_channels]: the basis being added   */
     size_t n_channels, n_bases, n_parameters, n_parameter_values;
     const size_t *param_counts;
     const double *param_positions;
@@ -29,11 +30,21 @@ typedef struct write_job {
     size_t max_order, n_coeffs;
     char *metadata;                /* default JSON, when opts has none     */
     ll_watch *watch;               /* polled per column / node row        */
+    double progress_from;          /* the commit's stages fill [this, 1]  */
 } write_job;
 
 static inline ll_status write_cancelled(const write_job *job)
 {
     return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
+}
+
+/* A stage of the commit at [start, start + span] of its share of
+ * "writing" (all of it, unless the layers went in earlier in the same
+ * call: then the share after job->progress_from). */
+static inline void ll_wjob_stage(const write_job *job, double start, double span, size_t total)
+{
+    double rest = 1.0 - job->progress_from;
+    ll_watch_stage(job->watch, "writing", job->progress_from + start * rest, span * rest, total);
 }
 
 /* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */

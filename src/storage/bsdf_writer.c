@@ -32,6 +32,10 @@
  * created, so no path names it while the writer works: however the process
  * ends, the space returns when the descriptor closes. The output itself is
  * the atomic writer's (bsdf_file_out.c).
+ *
+ * ll_bsdf_write and ll_bsdf_write_textured (bsdf_write.c) are this writer
+ * with its spill in memory, fed every basis in one call under one monitor:
+ * the internal open, add and commit below take the calls' names and watch.
  */
 #include "storage/bsdf_write_commit.h"
 #include "layer/layer.h"
@@ -46,9 +50,9 @@
  * are few, small beside a layer). */
 #define LL_WRITER_CHUNK ((size_t)1 << 16)
 
-static const char *const fn_open = "ll_bsdf_writer_open";
-static const char *const fn_add = "ll_bsdf_writer_add_basis";
-static const char *const fn_commit = "ll_bsdf_writer_commit";
+static const char *const api_open = "ll_bsdf_writer_open";
+static const char *const api_add = "ll_bsdf_writer_add_basis";
+static const char *const api_commit = "ll_bsdf_writer_commit";
 
 struct ll_bsdf_writer {
     char *path;
@@ -72,6 +76,7 @@ struct ll_bsdf_writer {
     float *row_cdf;              /* nn * nn                                */
     float *row;                  /* channels * m: one pair's floats        */
     ll_layer *first;             /* basis 0's layer 0 (a clone): the shape */
+    const char *fn_open, *fn_add, *fn_commit; /* the public call, in messages */
 };
 
 /* --------------------------------------------------------------- open */
@@ -119,7 +124,7 @@ static ll_status copy_parameters(ll_bsdf_writer *w, size_t n_parameters, const s
         w->counts = ll_alloc_array(n_parameters, sizeof *w->counts);
         w->positions = ll_alloc_array(w->job.n_parameter_values, sizeof *w->positions);
         if (!w->counts || !w->positions)
-            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_open);
         memcpy(w->counts, counts, n_parameters * sizeof *counts);
         memcpy(w->positions, positions, w->job.n_parameter_values * sizeof *positions);
     }
@@ -128,32 +133,36 @@ static ll_status copy_parameters(ll_bsdf_writer *w, size_t n_parameters, const s
     return LL_OK;
 }
 
-ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_parameters,
-                              const size_t *param_counts, const double *param_positions,
-                              const ll_bsdf_write_options *opts, ll_bsdf_writer **out)
+ll_status ll_writer_open_as(const char *const fn[3], const char *path, size_t n_channels,
+                            size_t n_parameters, const size_t *param_counts,
+                            const double *param_positions, const ll_bsdf_write_options *opts,
+                            int in_memory, ll_bsdf_writer **out)
 {
     ll_bsdf_writer *w = NULL;
     ll_status s;
     size_t len;
     if (!out)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out is NULL", fn_open);
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: out is NULL", fn[0]);
     *out = NULL;
     if (!path || !*path)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn_open);
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn[0]);
     if (n_channels != 1 && n_channels != 3)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", fn_open,
+                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", fn[0],
                        n_channels);
     w = ll_calloc(1, sizeof *w);
     if (!w)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn[0]);
     ll_spill_init(&w->spill);
-    w->job.fn = fn_open;
+    w->fn_open = fn[0];
+    w->fn_add = fn[1];
+    w->fn_commit = fn[2];
+    w->job.fn = w->fn_open;
     w->job.n_channels = n_channels;
     len = strlen(path);
     w->path = ll_malloc(len + 1);
     if (!w->path) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_open);
         goto fail;
     }
     memcpy(w->path, path, len + 1);
@@ -162,16 +171,27 @@ ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_para
         goto fail;
     w->basis_at = ll_calloc_array(w->job.n_bases, sizeof *w->basis_at);
     if (!w->basis_at) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_open);
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_open);
         goto fail;
     }
-    if ((s = ll_spill_open(&w->spill, w->path, fn_open)) != LL_OK)
+    if (in_memory)
+        ll_spill_open_memory(&w->spill, w->path);
+    else if ((s = ll_spill_open(&w->spill, w->path, w->fn_open)) != LL_OK)
         goto fail;
     *out = w;
     return LL_OK;
 fail:
     writer_free(w);
     return s;
+}
+
+ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_parameters,
+                              const size_t *param_counts, const double *param_positions,
+                              const ll_bsdf_write_options *opts, ll_bsdf_writer **out)
+{
+    static const char *const fn[3] = { api_open, api_add, api_commit };
+    return ll_writer_open_as(fn, path, n_channels, n_parameters, param_counts, param_positions,
+                             opts, 0, out);
 }
 
 /* ----------------------------------------------------------- add_basis */
@@ -186,7 +206,7 @@ static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
         return s;
     if (!ll_size_mul(n, n, &n2) || !ll_size_mul(nn, nn, &nn2) ||
         !ll_size_mul(n, l->m, &per_layer) || !ll_size_mul(per_layer, job->n_channels, &per_layer))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", fn_add);
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the layers are too large", w->fn_add);
     w->len = ll_alloc_array(n2, sizeof *w->len);
     w->ext = ll_alloc_array(nn2, sizeof *w->ext);
     w->tail = ll_alloc_array(n2, sizeof *w->tail);
@@ -197,7 +217,7 @@ static ll_status take_shape(ll_bsdf_writer *w, const ll_layer *l)
     w->row = ll_alloc_array(job->n_channels * l->m, sizeof *w->row);
     if (!w->len || !w->ext || !w->tail || !w->ref0 || !w->stage || !w->values || !w->row_cdf ||
         !w->row)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_add);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_add);
     return ll_layer_clone(l, &w->first);
 }
 
@@ -249,7 +269,7 @@ static ll_status basis_cdf(ll_bsdf_writer *w)
         }
         ll_wjob_integrate_row(job->nodes, w->values, nn, w->row_cdf + i * nn, 1);
     }
-    return ll_spill_put(&w->spill, w->row_cdf, nn * nn * sizeof *w->row_cdf, fn_add);
+    return ll_spill_put(&w->spill, w->row_cdf, nn * nn * sizeof *w->row_cdf, w->fn_add);
 }
 
 /* The basis's stored floats, pair after pair, up to each pair's extent. */
@@ -257,12 +277,14 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
 {
     write_job *job = &w->job;
     size_t nn = job->nn, m = job->m, per_layer = job->n * job->m, i, o, c, k, L;
-    ll_status s = ll_spill_put(&w->spill, w->ext, nn * nn * sizeof *w->ext, fn_add);
+    ll_status s = ll_spill_put(&w->spill, w->ext, nn * nn * sizeof *w->ext, w->fn_add);
     for (i = 0; i < nn && s == LL_OK; ++i) {
         size_t li = layer_index(i, job->h), kmax = 0;
         double factor[2];
         if (li == (size_t)-1)
             continue;
+        if (ll_watch_poll(job->watch))
+            return write_cancelled(job);
         for (o = 0; o < nn; ++o)
             if (w->ext[i * nn + o] > kmax)
                 kmax = w->ext[i * nn + o];
@@ -283,7 +305,7 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
                     w->row[c * e + k] = (float)ll_wjob_staged_value(
                         job->n_channels, c, w->stage + lo * m, per_layer, k, mu_o,
                         factor[k > 0]);
-            s = ll_spill_put(&w->spill, w->row, job->n_channels * e * sizeof *w->row, fn_add);
+            s = ll_spill_put(&w->spill, w->row, job->n_channels * e * sizeof *w->row, w->fn_add);
         }
         for (L = 0; L < job->n_channels; ++L)
             ll_wjob_stage_column(layers[L], li, kmax, w->stage + L * per_layer, 1);
@@ -291,37 +313,35 @@ static ll_status basis_values(ll_bsdf_writer *w, const ll_layer *const *layers)
     return s;
 }
 
-ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *layers)
+ll_status ll_writer_add_watched(ll_bsdf_writer *w, const ll_layer *const *layers,
+                                ll_watch *watch)
 {
-    write_job *job;
+    write_job *job = &w->job;
     size_t c, i, o;
     ll_status s = LL_OK;
-    if (!w)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", fn_add);
-    job = &w->job;
-    job->fn = fn_add;
+    job->fn = w->fn_add;
     if (w->failed)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: an earlier call failed; only ll_bsdf_writer_abort is left", fn_add);
+                       "%s: an earlier call failed; only ll_bsdf_writer_abort is left", w->fn_add);
     if (w->added == job->n_bases) {
-        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: all %zu bases are added already", fn_add,
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: all %zu bases are added already", w->fn_add,
                     job->n_bases);
         goto fail;
     }
     if (!layers) {
-        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", fn_add);
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", w->fn_add);
         goto fail;
     }
     for (c = 0; c < job->n_channels; ++c)
         if (!layers[c]) {
             s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers[%zu] of basis %zu is NULL",
-                        fn_add, c, w->added);
+                        w->fn_add, c, w->added);
             goto fail;
         }
     if (!w->first && (s = take_shape(w, layers[0])) != LL_OK)
         goto fail;
     for (c = 0; c < job->n_channels; ++c)
-        if ((s = ll_layer_check_compatible(w->first, layers[c], fn_add)) != LL_OK)
+        if ((s = ll_layer_check_compatible(w->first, layers[c], w->fn_add)) != LL_OK)
             goto fail;
     /* The lengths: each layer's, joined into the running maxima. */
     for (c = 0; c < job->n_channels; ++c) {
@@ -336,17 +356,27 @@ ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *lay
             }
     }
     job->layers = layers;
+    job->watch = watch;
     w->basis_at[w->added] = ll_spill_tell(&w->spill);
     basis_extents(w, layers);
     if ((s = basis_cdf(w)) != LL_OK || (s = basis_values(w, layers)) != LL_OK)
         goto fail;
     job->layers = NULL;
+    job->watch = NULL;
     w->added++;
     return LL_OK;
 fail:
     job->layers = NULL;
+    job->watch = NULL;
     w->failed = 1;
     return s;
+}
+
+ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *layers)
+{
+    if (!w)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", api_add);
+    return ll_writer_add_watched(w, layers, NULL);
 }
 
 /* ---------------------------------------------------------------- commit */
@@ -362,7 +392,7 @@ static ll_status prepare_commit(void *writer)
     const write_job *job = &w->job;
     size_t nn = job->nn, nb = job->n_bases, b;
     if (!ll_size_mul(nb * job->n_channels, job->m, &w->chunk_floats))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_commit);
     if (w->chunk_floats < LL_WRITER_CHUNK)
         w->chunk_floats = LL_WRITER_CHUNK;
     w->chunk = ll_alloc_array(w->chunk_floats, sizeof *w->chunk);
@@ -371,7 +401,7 @@ static ll_status prepare_commit(void *writer)
     w->cursor = ll_alloc_array(nb, sizeof *w->cursor);
     w->pos = ll_alloc_array(nb, sizeof *w->pos);
     if (!w->chunk || !w->bytes || !w->col_ext || !w->cursor || !w->pos)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn_commit);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", w->fn_commit);
     /* A basis's pairs follow its CDF and extents in the spill. */
     for (b = 0; b < nb; ++b)
         w->cursor[b] = w->basis_at[b] + nn * nn * (sizeof(float) + sizeof(uint32_t));
@@ -388,14 +418,14 @@ static ll_status put_cdf(void *writer, ll_bsdf_out *out)
     ll_status s = LL_OK;
     if (per == 0)
         per = 1;
-    ll_watch_stage(job->watch, "writing", 0.0, 0.1, (pairs + per - 1) / per);
+    ll_wjob_stage(job, 0.05, 0.05, (pairs + per - 1) / per);
     for (at = 0; at < pairs && s == LL_OK; at += per) {
         size_t count = pairs - at < per ? pairs - at : per;
         if (ll_watch_poll(job->watch))
             return write_cancelled(job);
         for (b = 0; b < nb && s == LL_OK; ++b)
             s = ll_spill_read(&w->spill, w->basis_at[b] + at * sizeof(float),
-                              chunk + b * count, count * sizeof(float), fn_commit);
+                              chunk + b * count, count * sizeof(float), w->fn_commit);
         for (k = 0; k < count && s == LL_OK; ++k)
             for (b = 0; b < nb; ++b)
                 ll_bsdf_out_f32(out, chunk[b * count + k]);
@@ -406,7 +436,7 @@ static ll_status put_cdf(void *writer, ll_bsdf_out *out)
 
 /* One series of L coefficients, the first e of them (e <= L or not) from
  * values, the rest 0: checked, then as little-endian bytes in one call. */
-static ll_status put_series(ll_bsdf_out *out, unsigned char *bytes, const float *values,
+static ll_status put_series(const ll_bsdf_writer *w, ll_bsdf_out *out, const float *values,
                             size_t e, size_t L, size_t o, size_t i)
 {
     size_t k;
@@ -416,10 +446,10 @@ static ll_status put_series(ll_bsdf_out *out, unsigned char *bytes, const float 
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "%s: coefficient %zu of node pair (%zu, %zu) is %g, beyond float "
                            "range",
-                           fn_commit, k, o, i, (double)v);
-        ll_le_put_f32(bytes + 4 * k, v);
+                           w->fn_commit, k, o, i, (double)v);
+        ll_le_put_f32(w->bytes + 4 * k, v);
     }
-    ll_bsdf_out_bytes(out, bytes, 4 * L);
+    ll_bsdf_out_bytes(out, w->bytes, 4 * L);
     return LL_OK;
 }
 
@@ -439,7 +469,7 @@ static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
     for (b = 0; b < nb && s == LL_OK; ++b)
         s = ll_spill_read(&w->spill,
                           w->basis_at[b] + nn * nn * sizeof(float) + i * nn * sizeof(uint32_t),
-                          w->col_ext + b * nn, nn * sizeof(uint32_t), fn_commit);
+                          w->col_ext + b * nn, nn * sizeof(uint32_t), w->fn_commit);
     while (o0 < nn && s == LL_OK) {
         size_t used = 0, at = 0;
         for (o1 = o0; o1 < nn; ++o1) {
@@ -456,7 +486,7 @@ static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
                 floats += ext[b * nn + o] * nch;
             w->pos[b] = at;
             s = ll_spill_read(&w->spill, w->cursor[b], chunk + at, floats * sizeof(float),
-                              fn_commit);
+                              w->fn_commit);
             w->cursor[b] += floats * sizeof(float);
             at += floats;
         }
@@ -465,7 +495,7 @@ static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
             for (c = 0; c < nch && L > 0 && s == LL_OK; ++c)
                 for (b = 0; b < nb && s == LL_OK; ++b) {
                     size_t e = ext[b * nn + o];
-                    s = put_series(out, w->bytes, chunk + w->pos[b] + c * e, e, L, o, i);
+                    s = put_series(w, out, chunk + w->pos[b] + c * e, e, L, o, i);
                 }
             for (b = 0; b < nb; ++b)
                 w->pos[b] += ext[b * nn + o] * nch;
@@ -475,33 +505,34 @@ static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
     return s;
 }
 
-static ll_status commit_file(ll_bsdf_writer *w, const ll_monitor *monitor)
+ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch, double progress_from)
 {
     write_job *job = &w->job;
     ll_wjob_source src = { w, prepare_commit, put_cdf, put_column };
-    ll_watch watch;
-    ll_status s;
 
-    job->fn = fn_commit;
-    job->watch = &watch;
-    if ((s = ll_watch_begin(&watch, monitor, fn_commit)) != LL_OK)
-        return s;
+    job->fn = w->fn_commit;
+    job->watch = watch;
+    job->progress_from = progress_from;
     if (w->failed)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "%s: an earlier call failed; only ll_bsdf_writer_abort is left",
-                       fn_commit);
+                       w->fn_commit);
     if (w->added != job->n_bases)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu of the %zu bases were added",
-                       fn_commit, w->added, job->n_bases);
+                       w->fn_commit, w->added, job->n_bases);
     return ll_wjob_commit(job, &w->spill, w->path, &src);
 }
 
 ll_status ll_bsdf_writer_commit(ll_bsdf_writer *w, const ll_monitor *monitor)
 {
+    ll_watch watch;
     ll_status s;
     if (!w)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", fn_commit);
-    s = commit_file(w, monitor);
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: writer is NULL", api_commit);
+    w->job.fn = w->fn_commit;
+    s = ll_watch_begin(&watch, monitor, w->fn_commit);
+    if (s == LL_OK)
+        s = ll_writer_commit_watched(w, &watch, 0.0);
     writer_free(w);
     return s;
 }
