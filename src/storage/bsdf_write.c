@@ -30,7 +30,7 @@
  *
  * This file holds those rules' pieces that every writer shares (options,
  * lengths, offsets, CDF rows, header, metadata) and ll_bsdf_write and
- * ll_bsdf_write_textured, which hand their layers to the basis writer
+ * ll_bsdf_write_textured, which hand their layers to the writer
  * (bsdf_writer.c) with its spill in memory.
  */
 #include "layerlab/ll_bsdf_write.h"
@@ -384,8 +384,8 @@ void ll_wjob_stage_column(const ll_layer *l, size_t col, size_t kmax, double *st
  * rest. */
 #define LL_WRITE_LAYERS_SHARE 0.45
 
-/* Every layer at once: the basis writer (bsdf_writer.c) with its spill in
- * memory, fed basis after basis, so that there is one way to write a file. */
+/* Every layer at once: the writer (bsdf_writer.c) with its spill in
+ * memory, fed layer after layer, so that there is one way to write a file. */
 static ll_status write_general(const char *fn, const char *path, const ll_layer *const *layers,
                                size_t n_channels, size_t n_parameters,
                                const size_t *param_counts, const double *param_positions,
@@ -394,7 +394,7 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
     const char *const fns[3] = { fn, fn, fn };
     ll_bsdf_writer *w = NULL;
     ll_watch watch;
-    size_t n_bases = 1, units, p, b;
+    size_t n_bases = 1, units, p, b, c;
     ll_status s;
     if (!path || !*path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn);
@@ -413,7 +413,8 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
         units = 0;
     ll_watch_stage(&watch, "writing", 0.0, LL_WRITE_LAYERS_SHARE, units);
     for (b = 0; b < n_bases && s == LL_OK; ++b)
-        s = ll_writer_add_watched(w, layers + b * n_channels, &watch);
+        for (c = 0; c < n_channels && s == LL_OK; ++c)
+            s = ll_writer_add_unit(w, b, c, layers[b * n_channels + c], &watch);
     if (s == LL_OK)
         s = ll_writer_commit_watched(w, &watch, LL_WRITE_LAYERS_SHARE);
     ll_bsdf_writer_abort(w);

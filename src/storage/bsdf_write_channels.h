@@ -12,7 +12,8 @@
 #include "layerlab/ll_bsdf_write.h"
 #include "support/support.h"
 
-typedef struct ll_channel_writer ll_channel_writer;
+/* (The writer of ll_bsdf_write.h, opened for one basis.) */
+typedef struct ll_bsdf_writer ll_channel_writer;
 
 /* A writer of path with n_channels (1, or 3: R, G, B) channels; opts
  * (nullable) read now, as ll_bsdf_write reads them (its metadata copied).

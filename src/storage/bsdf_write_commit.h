@@ -54,21 +54,25 @@ LL_INTERNAL ll_status ll_wjob_put_pairs(ll_bsdf_out *out, const write_job *job);
  * on an error or cancel. Returns the outcome. */
 LL_INTERNAL ll_status ll_wjob_put_end(ll_bsdf_out *out, const write_job *job, ll_status s);
 
-/* The basis writer (bsdf_writer.c) as the calls that hand it every layer
- * at once use it (bsdf_write.c). open: fn names the calls in messages
- * (open, add, commit); in_memory keeps the spill in memory (no file
- * beside path). add: one basis, polling watch (nullable) per order and
- * column, counting an order of each layer a unit of its stage. commit:
- * the file, its stages in [progress_from, 1] of "writing"; w is left to
- * the caller to free (ll_bsdf_writer_abort). */
+/* The writer (bsdf_writer.c) as the calls that are not ll_bsdf_writer_*
+ * use it: ll_bsdf_write and ll_bsdf_write_textured (bsdf_write.c), the
+ * material builder's channel writer (bsdf_write_channels.c). open: fn
+ * names the calls in messages (open, add, commit); in_memory keeps the
+ * spill in memory (no file beside path). add_unit: channel `channel` of
+ * basis `basis` (the bases in order, a basis's channels in any), polling
+ * watch (nullable) per order and column and counting an order a unit of
+ * its stage. commit: the file, its stages in [progress_from, 1] of
+ * "writing"; w is left to the caller to free (ll_bsdf_writer_abort). */
 LL_INTERNAL ll_status ll_writer_open_as(const char *const fn[3], const char *path,
                                         size_t n_channels, size_t n_parameters,
                                         const size_t *param_counts,
                                         const double *param_positions,
                                         const ll_bsdf_write_options *opts, int in_memory,
                                         ll_bsdf_writer **out);
-LL_INTERNAL ll_status ll_writer_add_watched(ll_bsdf_writer *w, const ll_layer *const *layers,
-                                            ll_watch *watch);
+LL_INTERNAL ll_status ll_writer_add_unit(ll_bsdf_writer *w, size_t basis, size_t channel,
+                                         const ll_layer *layer, ll_watch *watch);
+/* After a failure of the caller's own (its monitor): only abort is left. */
+LL_INTERNAL void ll_writer_fail(ll_bsdf_writer *w);
 LL_INTERNAL ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch,
                                                double progress_from);
 
