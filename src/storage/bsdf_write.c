@@ -35,7 +35,6 @@
  */
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
-#include "storage/bsdf_write_commit.h"
 #include "storage/bsdf_write_job.h"
 #include "storage/bsdf_format.h"
 #include "support/parse_number.h"
@@ -242,33 +241,6 @@ ll_status ll_wjob_compute_offsets(write_job *job)
     return LL_OK;
 }
 
-/* --------------------------------------------------------- coefficients */
-
-/* a_k of one layer at file pair (o, i), as a double (see the file comment). */
-static double layer_coeff(const ll_layer *l, size_t lo, size_t li, size_t k)
-{
-    return ll_order_get(l->orders[k], lo, li) * fabs(l->nodes[lo]) /
-           ll_layer_surface_factor(l, li, k);
-}
-
-/* Stored coefficient k of channel ch (Y, R, B for colour files), basis b,
- * at file pair (o, i); the pair must not touch a mu = 0 node. */
-double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, size_t i,
-                           size_t k)
-{
-    size_t lo = layer_index(o, job->h), li = layer_index(i, job->h);
-    const ll_layer *const *set = job->layers + b * job->n_channels;
-    if (job->n_channels == 1)
-        return layer_coeff(set[0], lo, li, k);
-    if (ch == 1)
-        return layer_coeff(set[0], lo, li, k);
-    if (ch == 2)
-        return layer_coeff(set[2], lo, li, k);
-    return LL_BSDF_Y_FROM_R * layer_coeff(set[0], lo, li, k) +
-           LL_BSDF_Y_FROM_G * layer_coeff(set[1], lo, li, k) +
-           LL_BSDF_Y_FROM_B * layer_coeff(set[2], lo, li, k);
-}
-
 /* ------------------------------------------------------------------ CDF */
 
 void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n, float *cdf,
@@ -355,8 +327,6 @@ void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_
         ll_bsdf_out_f32(out, (float)job->param_positions[k]);
 }
 
-/* The coefficient block, pair after pair in table order, each pair
- * [channel][basis][k]. Fails if a value overflows float. */
 /* Copy (or clear) column col of a layer's orders k < kmax into
  * stage[row * m + k]: each order's two runs of that column are read once,
  * where looking every coefficient up separately cost a cache miss each. */

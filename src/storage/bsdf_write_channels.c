@@ -5,7 +5,7 @@
  * names and monitor.
  */
 #include "storage/bsdf_write_channels.h"
-#include "storage/bsdf_write_commit.h"
+#include "storage/bsdf_write_job.h"
 #include "layer/layer.h"
 
 static const char *const fn_names[3] = { "ll_material_build (opening the file)",

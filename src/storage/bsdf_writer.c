@@ -24,7 +24,7 @@
  *    M_0 = 0 in every layer) goes to the spill as nn * nn floats. A
  *    basis's channels come in any order, the bases in order 0, 1, ...
  *  - commit: offsets from the final lengths, then the file in order
- *    (ll_wjob_commit, bsdf_write_commit.c), the units read back in chunks
+ *    (commit_file below), the units read back in chunks
  *    of LL_WRITER_CHUNK doubles, or of one row of every unit's longest
  *    series if that is more (per column of pairs: every unit's E of that
  *    column, then the rows that fit), each value by the expression of
@@ -37,7 +37,7 @@
  * longest series: never a layer. The output itself is the atomic writer's
  * (bsdf_file_out.c).
  */
-#include "storage/bsdf_write_commit.h"
+#include "storage/bsdf_write_job.h"
 #include "layer/layer.h"
 #include "layerlab/ll_bsdf_write.h"
 
@@ -440,13 +440,12 @@ ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *w, const ll_layer *const *lay
 
 /* -------------------------------------------------------------- commit */
 
-/* The commit's scratch (ll_wjob_source.prepare): the add's staging freed,
+/* The commit's scratch: the add's staging freed,
  * the chunk of LL_WRITER_CHUNK doubles, or one row of every unit's longest
  * series if that is more, one pair of a basis, and per unit one column's
  * extents, its spill cursor and its place in the chunk. */
-static ll_status prepare_commit(void *writer)
+static ll_status prepare_commit(ll_bsdf_writer *w)
 {
-    ll_bsdf_writer *w = writer;
     const write_job *job = &w->job;
     size_t nn = job->nn, units = job->n_bases * job->n_channels, u;
     ll_free(w->stage);
@@ -469,9 +468,8 @@ static ll_status prepare_commit(void *writer)
 }
 
 /* The CDF table, [(i * nn + o) * n_bases + b], from each basis's block. */
-static ll_status put_cdf(void *writer, ll_bsdf_out *out)
+static ll_status put_cdf(ll_bsdf_writer *w, ll_bsdf_out *out)
 {
-    ll_bsdf_writer *w = writer;
     const write_job *job = &w->job;
     size_t nb = job->n_bases, pairs = job->nn * job->nn, at, b, k;
     size_t per = w->chunk_doubles * 2 / nb; /* floats in the chunk's room, a basis */
@@ -522,14 +520,13 @@ static ll_status put_pair(ll_bsdf_writer *w, ll_bsdf_out *out, size_t b, size_t 
     return LL_OK;
 }
 
-/* Column i of the coefficient block (ll_wjob_source.put_column): every
+/* Column i of the coefficient block: every
  * unit's extents of the column (w->col_ext, [units * nn]), then rows
  * [o0, o1) at a time, as many as fit in the chunk (one row always does);
  * w->cursor[u] is where unit u's data of the next row starts in the spill,
  * w->pos[u] where it stands in the chunk. */
-static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
+static ll_status put_column(ll_bsdf_writer *w, ll_bsdf_out *out, size_t i)
 {
-    ll_bsdf_writer *w = writer;
     const write_job *job = &w->job;
     size_t nn = job->nn, nb = job->n_bases, nch = job->n_channels, units = nb * nch;
     size_t o0 = 0, o1, u, o, b, c;
@@ -573,10 +570,84 @@ static ll_status put_column(void *writer, ll_bsdf_out *out, size_t i)
     return s;
 }
 
+/* The pair table (offset, length of each pair, nn * nn in table order),
+ * one unit of the current stage per node row, polled there. */
+static ll_status put_pairs(ll_bsdf_out *out, const write_job *job)
+{
+    size_t k;
+    for (k = 0; k < job->nn * job->nn; ++k) {
+        if (k % job->nn == 0) {
+            ll_watch_advance(job->watch, 1);
+            if (ll_watch_poll(job->watch))
+                return write_cancelled(job);
+        }
+        ll_bsdf_out_u32(out, job->offset[k]);
+        ll_bsdf_out_u32(out, job->length[k]);
+    }
+    return LL_OK;
+}
+
+/* The end of the file once its coefficient block is written (s its
+ * outcome so far): the last report, before the temporary file replaces
+ * the target so that a cancel there still leaves no file, then the
+ * metadata and the commit, or the abort on an error or cancel. */
+static ll_status put_end(ll_bsdf_out *out, const write_job *job, ll_status s)
+{
+    const char *metadata = ll_wjob_metadata(job);
+    /* The last report comes before the temporary file replaces the
+     * target: a cancel there still leaves no file. */
+    s = ll_watch_finish(job->watch, s, job->fn);
+    if (s != LL_OK) {
+        ll_bsdf_out_abort(out);
+        return s;
+    }
+    ll_bsdf_out_bytes(out, metadata, strlen(metadata));
+    return ll_bsdf_out_commit(out);
+}
+
+
+/* The file, once every unit is in: the spill flushed, offsets and the
+ * default metadata (unless the options give one) from the final lengths,
+ * the commit's scratch, all of which can fail for want of memory or of a
+ * valid total before the output is begun; then the parts in the order
+ * docs/bsdf-format.md stores them. Progress: the offsets in [0, 0.05] of
+ * the commit's share of "writing" a node row a unit, the CDF in
+ * [0.05, 0.1], the pair table in [0.1, 0.15] a node row a unit, the
+ * coefficient block in [0.15, 1] a column a unit; the report of 1 comes
+ * last (put_end). */
+static ll_status commit_file(ll_bsdf_writer *w)
+{
+    write_job *job = &w->job;
+    size_t nn = job->nn, i;
+    ll_bsdf_out *out = NULL;
+    ll_status s;
+    if ((s = ll_spill_flush(&w->spill, job->fn)) != LL_OK ||
+        (s = ll_wjob_compute_offsets(job)) != LL_OK || (s = prepare_commit(w)) != LL_OK)
+        return s;
+    if (!job->opts.metadata && (s = ll_wjob_default_metadata(job)) != LL_OK)
+        return s;
+    if ((s = ll_bsdf_out_begin(w->path, job->fn, &out)) != LL_OK)
+        return s;
+    ll_wjob_put_header(out, job, strlen(ll_wjob_metadata(job)));
+    s = put_cdf(w, out);
+    ll_wjob_stage(job, 0.1, 0.05, nn);
+    if (s == LL_OK)
+        s = put_pairs(out, job);
+    if (s == LL_OK)
+        ll_wjob_stage(job, 0.15, 0.85, nn);
+    for (i = 0; i < nn && s == LL_OK; ++i) {
+        ll_watch_advance(job->watch, 1);
+        if (ll_watch_poll(job->watch))
+            s = write_cancelled(job);
+        else if (layer_index(i, job->h) != (size_t)-1) /* mu = 0 holds no coefficients */
+            s = put_column(w, out, i);
+    }
+    return put_end(out, job, s);
+}
+
 ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch, double progress_from)
 {
     write_job *job = &w->job;
-    ll_wjob_source src = { w, prepare_commit, put_cdf, put_column };
     size_t c;
 
     job->fn = w->fn_commit;
@@ -592,7 +663,7 @@ ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch, double pr
     if (w->basis != job->n_bases)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu of the %zu bases were added",
                        w->fn_commit, w->basis, job->n_bases);
-    return ll_wjob_commit(job, &w->spill, w->path, &src);
+    return commit_file(w);
 }
 
 ll_status ll_bsdf_writer_commit(ll_bsdf_writer *w, const ll_monitor *monitor)
