@@ -49,7 +49,10 @@ typedef struct ll_bsdf_write_options {
  * temporary file remains (a stale temporary of an earlier, killed writer of
  * the same target is removed after 15 minutes). A new file's mode is 0666
  * less the umask, an existing target keeps its mode, and a symbolic link is
- * written through: the file it points to is replaced, the link stays. Returns LL_ERROR_IO (message names the path and
+ * written through: the file it points to is replaced, the link stays.
+ * Layers whose stored values take more than 64 MiB are first spilled, as
+ * by ll_bsdf_writer_*, to an unlinked file beside path (which then needs
+ * room for it too), smaller ones to memory. Returns LL_ERROR_IO (message names the path and
  * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
  * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
  * LL_ERROR_OUT_OF_MEMORY.

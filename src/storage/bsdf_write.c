@@ -39,6 +39,7 @@
 #include "storage/bsdf_format.h"
 #include "support/parse_number.h"
 #include "layer/layer.h"
+#include "layer/order.h"
 #include "support/watch.h"
 #include "layerlab/ll_bsdf.h"
 
@@ -354,8 +355,30 @@ void ll_wjob_stage_column(const ll_layer *l, size_t col, size_t kmax, double *st
  * rest. */
 #define LL_WRITE_LAYERS_SHARE 0.45
 
-/* Every layer at once: the writer (bsdf_writer.c) with its spill in
- * memory, fed layer after layer, so that there is one way to write a file. */
+/* Layers whose stored values take more than this spill to a file beside
+ * the output, as a build's do: in memory the spill would double what the
+ * caller already holds. Below it the spill stays in memory (no second
+ * file, no disk traffic for the small writes that are most of them). */
+#define LL_WRITE_MEMORY_SPILL ((size_t)64 << 20)
+
+/* Whether the spill of these layers (about their stored values) fits
+ * LL_WRITE_MEMORY_SPILL; NULL layers count nothing (the writer refuses
+ * them). */
+static int spill_fits_memory(const ll_layer *const *layers, size_t count)
+{
+    size_t bytes = 0, L, k;
+    for (L = 0; L < count; ++L)
+        for (k = 0; layers[L] && k < layers[L]->m; ++k) {
+            if (layers[L]->orders[k])
+                bytes += 8 * ll_order_stored(layers[L]->orders[k]);
+            if (bytes > LL_WRITE_MEMORY_SPILL)
+                return 0;
+        }
+    return 1;
+}
+
+/* Every layer at once: the writer (bsdf_writer.c), fed layer after layer,
+ * so that there is one way to write a file. */
 static ll_status write_general(const char *fn, const char *path, const ll_layer *const *layers,
                                size_t n_channels, size_t n_parameters,
                                const size_t *param_counts, const double *param_positions,
@@ -375,9 +398,15 @@ static ll_status write_general(const char *fn, const char *path, const ll_layer 
     if ((s = ll_writer_open_as(fns, path, n_channels, n_parameters, param_counts,
                                param_positions, opts, 1, &w)) != LL_OK)
         return s;
-    /* (open checked that the counts' product fits.) */
+    /* (open checked the channels and that the counts' product fits.) */
     for (p = 0; p < n_parameters; ++p)
         n_bases *= param_counts[p];
+    if (!spill_fits_memory(layers, n_bases * n_channels)) {
+        ll_bsdf_writer_abort(w);
+        if ((s = ll_writer_open_as(fns, path, n_channels, n_parameters, param_counts,
+                                   param_positions, opts, 0, &w)) != LL_OK)
+            return s;
+    }
     if (!ll_size_mul(n_bases, n_channels, &units) ||
         !ll_size_mul(units, layers[0] ? layers[0]->m : 0, &units))
         units = 0;
