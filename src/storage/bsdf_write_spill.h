@@ -1,14 +1,13 @@
 /*
- * A spill file for the writers that see a file's parts out of the order the
- * file stores them (ll_bsdf_writer_*: bases; the material builder's channel
- * writer: channels): a file beside the output (same file system), created
+ * A spill file for the writer (bsdf_writer.c), which sees a file's parts
+ * out of the order the file stores them (layer after layer, where the file
+ * interleaves them pair by pair): a file beside the output (same file system), created
  * with mkstemp (O_EXCL, mode 0600) and unlinked at once, so no path names it
  * while the writer works and its space returns however the process ends.
  * Writes are buffered; reads are positioned (pread) and may come in any
- * order once the bytes are flushed. A spill in memory (the writes that
- * are handed every layer at once, whose file is about the size of the
- * layers they already hold) keeps the bytes in its growing buffer instead
- * and creates no file.
+ * order once the bytes are flushed. A spill in memory (the small writes
+ * that are handed every layer at once) keeps the bytes in its growing
+ * buffer instead and creates no file.
  */
 #ifndef LL_STORAGE_BSDF_WRITE_SPILL_H
 #define LL_STORAGE_BSDF_WRITE_SPILL_H
