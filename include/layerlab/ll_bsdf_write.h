@@ -49,7 +49,10 @@ typedef struct ll_bsdf_write_options {
  * temporary file remains (a stale temporary of an earlier, killed writer of
  * the same target is removed after 15 minutes). A new file's mode is 0666
  * less the umask, an existing target keeps its mode, and a symbolic link is
- * written through: the file it points to is replaced, the link stays. Returns LL_ERROR_IO (message names the path and
+ * written through: the file it points to is replaced, the link stays.
+ * Layers whose stored values take more than 64 MiB are first spilled, as
+ * by ll_bsdf_writer_*, to an unlinked file beside path (which then needs
+ * room for it too), smaller ones to memory. Returns LL_ERROR_IO (message names the path and
  * the system error), LL_ERROR_INVALID_ARGUMENT (a NULL, mismatched or
  * non-finite layer, bad options, more than 2^32 - 1 coefficients) or
  * LL_ERROR_OUT_OF_MEMORY.
@@ -84,11 +87,11 @@ LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const 
  * returns): each basis's coefficients go to a spill file created beside
  * path (".NAME.spill.XXXXXX", unlinked right after it is created, so it has
  * no name while the writer works and its space returns when the process
- * ends, however it ends; it needs room on that
- * file system too: about half of the output's size),
- * and commit writes the file from it, so memory does
- * not grow with n_bases beyond a few bytes per basis, node and order
- * (4 nn + 12 m + 16). The file is byte for byte what
+ * ends, however it ends; it needs room on that file system too: the
+ * layers' stored values as doubles, about 1.5 to 2 times the output's
+ * size), and commit writes the file from it, so memory does not grow with
+ * n_bases beyond a few bytes per basis, node and order
+ * (n_channels (4 nn + 8 m + 24) + 8). The file is byte for byte what
  * ll_bsdf_write_textured writes for the same layers (series truncated by
  * the same rule, the longest over channels and bases), and as atomic: it
  * appears only when commit succeeds; abort, a failure or a cancel leaves no

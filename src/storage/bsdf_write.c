@@ -27,14 +27,19 @@
  *    entry is the albedo / 2 pi that the reader normalises with. A segment
  *    whose integral is negative (spline overshoot next to a zero) adds 0,
  *    keeping rows non-decreasing as readers require.
+ *
+ * This file holds those rules' pieces that every writer shares (options,
+ * lengths, offsets, CDF rows, header, metadata) and ll_bsdf_write and
+ * ll_bsdf_write_textured, which hand their layers to the writer
+ * (bsdf_writer.c) with its spill in memory.
  */
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
-#include "storage/bsdf_write_commit.h"
 #include "storage/bsdf_write_job.h"
 #include "storage/bsdf_format.h"
 #include "support/parse_number.h"
 #include "layer/layer.h"
+#include "layer/order.h"
 #include "support/watch.h"
 #include "layerlab/ll_bsdf.h"
 
@@ -150,33 +155,6 @@ ll_status ll_wjob_check_parameters(write_job *job)
     return LL_OK;
 }
 
-static ll_status check_layers(write_job *job)
-{
-    size_t k, count;
-    ll_status s;
-    if (!job->layers)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", job->fn);
-    if (job->n_channels != 1 && job->n_channels != 3)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: n_channels = %zu (must be 1, or 3 for R, G, B)", job->fn,
-                       job->n_channels);
-    if (!ll_size_mul(job->n_bases, job->n_channels, &count))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: too many layers", job->fn);
-    for (k = 0; k < count; ++k) {
-        if (!job->layers[k])
-            return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers[%zu] is NULL", job->fn, k);
-        if ((s = ll_layer_check_compatible(job->layers[0], job->layers[k], job->fn)) != LL_OK)
-            return s;
-    }
-    job->n = job->layers[0]->n;
-    job->h = job->n / 2;
-    job->m = job->layers[0]->m;
-    job->nn = job->n + 2;
-    if (job->nn > UINT32_MAX / 2)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu nodes are too many", job->fn, job->n);
-    return LL_OK;
-}
-
 /* ------------------------------------------------------- series lengths */
 
 /* Truncated series lengths of one layer, indexed col * n + row (layer
@@ -238,45 +216,11 @@ ll_status ll_wjob_layer_lengths(const write_job *job, const ll_layer *l, uint32_
     return LL_OK;
 }
 
-static ll_status compute_lengths(write_job *job)
-{
-    size_t n = job->n, nn = job->nn, count = job->n_bases * job->n_channels, k, i, o;
-    uint32_t *len = ll_alloc_array(n * n, sizeof *len);
-    double *tail = ll_alloc_array(n * n, sizeof *tail);
-    double *ref0 = ll_alloc_array(n * n, sizeof *ref0);
-    ll_status s = LL_OK;
-    if (!len || !tail || !ref0) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
-        goto done;
-    }
-    ll_watch_stage(job->watch, "writing", 0.0, 0.3, count * job->m);
-    for (k = 0; k < count && s == LL_OK; ++k) {
-        s = ll_wjob_layer_lengths(job, job->layers[k], len, tail, ref0);
-        for (i = 0; i < nn && s == LL_OK; ++i) {
-            if (ll_watch_poll(job->watch)) {
-                s = write_cancelled(job);
-                break;
-            }
-            for (o = 0; o < nn; ++o) {
-                size_t li = layer_index(i, job->h), lo = layer_index(o, job->h);
-                uint32_t *dst = &job->length[i * nn + o];
-                if (li != (size_t)-1 && lo != (size_t)-1 && len[li * n + lo] > *dst)
-                    *dst = len[li * n + lo];
-            }
-        }
-    }
-done:
-    ll_free(len);
-    ll_free(tail);
-    ll_free(ref0);
-    return s;
-}
-
 ll_status ll_wjob_compute_offsets(write_job *job)
 {
     size_t k, total = 0, block = job->n_bases * job->n_channels;
     job->max_order = 0;
-    ll_watch_stage(job->watch, "writing", 0.3, 0.05, job->nn);
+    ll_wjob_stage(job, 0.0, 0.05, job->nn);
     for (k = 0; k < job->nn * job->nn; ++k) {
         size_t size;
         if (k % job->nn == 0) {
@@ -296,33 +240,6 @@ ll_status ll_wjob_compute_offsets(write_job *job)
     }
     job->n_coeffs = total;
     return LL_OK;
-}
-
-/* --------------------------------------------------------- coefficients */
-
-/* a_k of one layer at file pair (o, i), as a double (see the file comment). */
-static double layer_coeff(const ll_layer *l, size_t lo, size_t li, size_t k)
-{
-    return ll_order_get(l->orders[k], lo, li) * fabs(l->nodes[lo]) /
-           ll_layer_surface_factor(l, li, k);
-}
-
-/* Stored coefficient k of channel ch (Y, R, B for colour files), basis b,
- * at file pair (o, i); the pair must not touch a mu = 0 node. */
-double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t b, size_t o, size_t i,
-                           size_t k)
-{
-    size_t lo = layer_index(o, job->h), li = layer_index(i, job->h);
-    const ll_layer *const *set = job->layers + b * job->n_channels;
-    if (job->n_channels == 1)
-        return layer_coeff(set[0], lo, li, k);
-    if (ch == 1)
-        return layer_coeff(set[0], lo, li, k);
-    if (ch == 2)
-        return layer_coeff(set[2], lo, li, k);
-    return LL_BSDF_Y_FROM_R * layer_coeff(set[0], lo, li, k) +
-           LL_BSDF_Y_FROM_G * layer_coeff(set[1], lo, li, k) +
-           LL_BSDF_Y_FROM_B * layer_coeff(set[2], lo, li, k);
 }
 
 /* ------------------------------------------------------------------ CDF */
@@ -346,32 +263,6 @@ void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n, f
             sum += segment;
         cdf[(k + 1) * stride] = (float)sum;
     }
-}
-
-static ll_status compute_cdf(write_job *job)
-{
-    size_t nn = job->nn, nb = job->n_bases, i, o, b;
-    double *values = ll_alloc_array(nn, sizeof *values);
-    if (!values)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
-    ll_watch_stage(job->watch, "writing", 0.35, 0.1, nn);
-    for (i = 0; i < nn; ++i) {
-        ll_watch_advance(job->watch, 1);
-        if (ll_watch_poll(job->watch)) {
-            ll_free(values);
-            return write_cancelled(job);
-        }
-        for (b = 0; b < nb; ++b) {
-            for (o = 0; o < nn; ++o)
-                /* The value a reader will see: the stored float. */
-                values[o] = job->length[i * nn + o]
-                                ? (double)(float)ll_wjob_stored_coeff(job, 0, b, o, i, 0)
-                                : 0.0;
-            ll_wjob_integrate_row(job->nodes, values, nn, job->cdf + i * nn * nb + b, nb);
-        }
-    }
-    ll_free(values);
-    return LL_OK;
 }
 
 /* ------------------------------------------------------------- metadata */
@@ -437,8 +328,6 @@ void ll_wjob_put_header(ll_bsdf_out *out, const write_job *job, size_t metadata_
         ll_bsdf_out_f32(out, (float)job->param_positions[k]);
 }
 
-/* The coefficient block, pair after pair in table order, each pair
- * [channel][basis][k]. Fails if a value overflows float. */
 /* Copy (or clear) column col of a layer's orders k < kmax into
  * stage[row * m + k]: each order's two runs of that column are read once,
  * where looking every coefficient up separately cost a cache miss each. */
@@ -459,149 +348,75 @@ void ll_wjob_stage_column(const ll_layer *l, size_t col, size_t kmax, double *st
     }
 }
 
-static ll_status put_coefficients(ll_bsdf_out *out, const write_job *job)
-{
-    size_t nn = job->nn, n = job->n, m = job->m, count = job->n_bases * job->n_channels;
-    size_t i, o, c, b, k, L, per_layer;
-    double *stage;
-    ll_status s = LL_OK;
-
-    if (!ll_size_mul(n, m, &per_layer) ||
-        !(stage = ll_calloc_array(count, per_layer * sizeof(double))))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory staging coefficients",
-                       job->fn);
-    ll_watch_stage(job->watch, "writing", 0.55, 0.4, nn);
-    for (i = 0; i < nn && s == LL_OK; ++i) {
-        size_t li = layer_index(i, job->h), kmax = 0;
-        const ll_layer *l0 = job->layers[0];
-        double factor[2];
-        ll_watch_advance(job->watch, 1);
-        if (ll_watch_poll(job->watch)) {
-            s = write_cancelled(job);
-            break;
-        }
-        if (li == (size_t)-1)
-            continue; /* the mu = 0 nodes hold no coefficients */
-        for (o = 0; o < nn; ++o)
-            if (job->length[i * nn + o] > kmax)
-                kmax = job->length[i * nn + o];
-        for (L = 0; L < count; ++L)
-            ll_wjob_stage_column(job->layers[L], li, kmax, stage + L * per_layer, 0);
-        /* a_k = M_k(o, i) |mu_o| / (pi |mu_i| w_i), times 1/2 for k = 0
-         * (bsdf-format.md): the layer's column factor of order 0 and k > 0. */
-        factor[0] = ll_layer_surface_factor(l0, li, 0);
-        factor[1] = ll_layer_surface_factor(l0, li, 1);
-        for (o = 0; o < nn && s == LL_OK; ++o) {
-            size_t len = job->length[i * nn + o], lo = layer_index(o, job->h);
-            double mu_o;
-            if (len == 0)
-                continue;
-            if (ll_watch_poll(job->watch)) {
-                s = write_cancelled(job);
-                break;
-            }
-            mu_o = fabs(l0->nodes[lo]);
-            for (c = 0; c < job->n_channels && s == LL_OK; ++c)
-                for (b = 0; b < job->n_bases && s == LL_OK; ++b) {
-                    const double *set = stage + b * job->n_channels * per_layer + lo * m;
-                    for (k = 0; k < len; ++k) {
-                        double v = ll_wjob_staged_value(job->n_channels, c, set, per_layer, k,
-                                                        mu_o, factor[k > 0]);
-                        if (!(fabs(v) <= FLT_MAX)) {
-                            s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                                        "%s: coefficient %zu of node pair (%zu, %zu) is %g, "
-                                        "beyond float range",
-                                        job->fn, k, o, i, v);
-                            break;
-                        }
-                        ll_bsdf_out_f32(out, (float)v);
-                    }
-                }
-        }
-        for (L = 0; L < count; ++L)
-            ll_wjob_stage_column(job->layers[L], li, kmax, stage + L * per_layer, 1);
-    }
-    ll_free(stage);
-    return s;
-}
-
-static ll_status put_file(const write_job *job, const char *path)
-{
-    size_t nn = job->nn, k;
-    ll_bsdf_out *out;
-    ll_status s = ll_bsdf_out_begin(path, job->fn, &out);
-    if (s != LL_OK)
-        return s;
-    ll_wjob_put_header(out, job, strlen(ll_wjob_metadata(job)));
-    /* The tables, polled once per node row (nn^2 entries each). */
-    ll_watch_stage(job->watch, "writing", 0.45, 0.1, 2 * nn);
-    for (k = 0; k < nn * nn * job->n_bases && s == LL_OK; ++k) {
-        if (k % (nn * job->n_bases) == 0 && ll_watch_poll(job->watch))
-            s = write_cancelled(job);
-        ll_bsdf_out_f32(out, job->cdf[k]);
-        if (k % (nn * job->n_bases) == 0)
-            ll_watch_advance(job->watch, 1);
-    }
-    if (s == LL_OK)
-        s = ll_wjob_put_pairs(out, job);
-    if (s == LL_OK)
-        s = put_coefficients(out, job);
-    return ll_wjob_put_end(out, job, s);
-}
-
 /* ---------------------------------------------------------------- driver */
 
-static ll_status prepare(write_job *job)
+/* The share of "writing" that the layers' going in to the writer takes
+ * (their series lengths, an order of a layer a unit); the commit has the
+ * rest. */
+#define LL_WRITE_LAYERS_SHARE 0.45
+
+/* Layers whose stored values take more than this spill to a file beside
+ * the output, as a build's do: in memory the spill would double what the
+ * caller already holds. Below it the spill stays in memory (no second
+ * file, no disk traffic for the small writes that are most of them). */
+#define LL_WRITE_MEMORY_SPILL ((size_t)64 << 20)
+
+/* Whether the spill of these layers (about their stored values) fits
+ * LL_WRITE_MEMORY_SPILL; NULL layers count nothing (the writer refuses
+ * them). */
+static int spill_fits_memory(const ll_layer *const *layers, size_t count)
 {
-    size_t nn = job->nn, k, cdf_count;
-    ll_status s;
-    if (!ll_size_mul(nn * nn, job->n_bases, &cdf_count))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: too many bases", job->fn);
-    job->nodes = ll_alloc_array(nn, sizeof *job->nodes);
-    job->length = ll_calloc_array(nn * nn, sizeof *job->length);
-    job->offset = ll_alloc_array(nn * nn, sizeof *job->offset);
-    job->cdf = ll_alloc_array(cdf_count, sizeof *job->cdf);
-    if (!job->nodes || !job->length || !job->offset || !job->cdf)
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", job->fn);
-    for (k = 0; k < nn; ++k) {
-        size_t l = layer_index(k, job->h);
-        job->nodes[k] = l == (size_t)-1 ? 0.0f : (float)job->layers[0]->nodes[l];
-    }
-    if ((s = compute_lengths(job)) != LL_OK || (s = ll_wjob_compute_offsets(job)) != LL_OK ||
-        (s = compute_cdf(job)) != LL_OK)
-        return s;
-    if (!job->opts.metadata)
-        return ll_wjob_default_metadata(job);
-    return LL_OK;
+    size_t bytes = 0, L, k;
+    for (L = 0; L < count; ++L)
+        for (k = 0; layers[L] && k < layers[L]->m; ++k) {
+            if (layers[L]->orders[k])
+                bytes += 8 * ll_order_stored(layers[L]->orders[k]);
+            if (bytes > LL_WRITE_MEMORY_SPILL)
+                return 0;
+        }
+    return 1;
 }
 
+/* Every layer at once: the writer (bsdf_writer.c), fed layer after layer,
+ * so that there is one way to write a file. */
 static ll_status write_general(const char *fn, const char *path, const ll_layer *const *layers,
                                size_t n_channels, size_t n_parameters,
                                const size_t *param_counts, const double *param_positions,
                                const ll_bsdf_write_options *opts, const ll_monitor *monitor)
 {
-    write_job job;
+    const char *const fns[3] = { fn, fn, fn };
+    ll_bsdf_writer *w = NULL;
     ll_watch watch;
+    size_t n_bases = 1, units, p, b, c;
     ll_status s;
-    memset(&job, 0, sizeof job);
-    job.fn = fn;
-    job.watch = &watch;
-    job.layers = layers;
-    job.n_channels = n_channels;
-    job.n_parameters = n_parameters;
-    job.param_counts = param_counts;
-    job.param_positions = param_positions;
     if (!path || !*path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: path is NULL or empty", fn);
-    if ((s = ll_watch_begin(&watch, monitor, fn)) == LL_OK &&
-        (s = ll_wjob_read_options(&job, opts)) == LL_OK && (s = ll_wjob_check_parameters(&job)) == LL_OK &&
-        (s = check_layers(&job)) == LL_OK && (s = prepare(&job)) == LL_OK)
-        s = put_file(&job, path);
-    ll_free(job.nodes);
-    ll_free(job.length);
-    ll_free(job.offset);
-    ll_free(job.cdf);
-    ll_free(job.metadata);
+    if ((s = ll_watch_begin(&watch, monitor, fn)) != LL_OK)
+        return s;
+    if (!layers)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: layers is NULL", fn);
+    if ((s = ll_writer_open_as(fns, path, n_channels, n_parameters, param_counts,
+                               param_positions, opts, 1, &w)) != LL_OK)
+        return s;
+    /* (open checked the channels and that the counts' product fits.) */
+    for (p = 0; p < n_parameters; ++p)
+        n_bases *= param_counts[p];
+    if (!spill_fits_memory(layers, n_bases * n_channels)) {
+        ll_bsdf_writer_abort(w);
+        if ((s = ll_writer_open_as(fns, path, n_channels, n_parameters, param_counts,
+                                   param_positions, opts, 0, &w)) != LL_OK)
+            return s;
+    }
+    if (!ll_size_mul(n_bases, n_channels, &units) ||
+        !ll_size_mul(units, layers[0] ? layers[0]->m : 0, &units))
+        units = 0;
+    ll_watch_stage(&watch, "writing", 0.0, LL_WRITE_LAYERS_SHARE, units);
+    for (b = 0; b < n_bases && s == LL_OK; ++b)
+        for (c = 0; c < n_channels && s == LL_OK; ++c)
+            s = ll_writer_add_unit(w, b, c, layers[b * n_channels + c], &watch);
+    if (s == LL_OK)
+        s = ll_writer_commit_watched(w, &watch, LL_WRITE_LAYERS_SHARE);
+    ll_bsdf_writer_abort(w);
     return s;
 }
 

@@ -4,7 +4,7 @@
  * layer is handed over as soon as it is complete and may be freed at once,
  * so a build never holds every channel's stack and the writer's staging at
  * the same time. The file is byte for byte what ll_bsdf_write writes for
- * the same layers, and as atomic (bsdf_write_channels.c says how).
+ * the same layers, and as atomic (bsdf_writer.c says how).
  */
 #ifndef LL_STORAGE_BSDF_WRITE_CHANNELS_H
 #define LL_STORAGE_BSDF_WRITE_CHANNELS_H
@@ -12,7 +12,8 @@
 #include "layerlab/ll_bsdf_write.h"
 #include "support/support.h"
 
-typedef struct ll_channel_writer ll_channel_writer;
+/* (The writer of ll_bsdf_write.h, opened for one basis.) */
+typedef struct ll_bsdf_writer ll_channel_writer;
 
 /* A writer of path with n_channels (1, or 3: R, G, B) channels; opts
  * (nullable) read now, as ll_bsdf_write reads them (its metadata copied).

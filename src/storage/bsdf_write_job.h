@@ -1,8 +1,9 @@
 /*
- * The inside of the .bsdf writers (bsdf_write.c, all layers at once;
- * bsdf_writer.c, streaming one basis at a time): what is known about one
- * file before its bytes are produced, and the pieces both use, so that
- * the two write the same bytes (the rules are in bsdf_write.c's comment).
+ * The inside of the .bsdf writer (bsdf_writer.c: one layer, a (basis,
+ * channel) unit, at a time; behind ll_bsdf_writer_*, ll_bsdf_write and
+ * the material builder's channel writer): what is known about one file
+ * before its bytes are produced, and the pieces of bsdf_write.c it uses
+ * (the rules are in bsdf_write.c's comment).
  */
 #ifndef LL_BSDF_WRITE_JOB_H
 #define LL_BSDF_WRITE_JOB_H
@@ -10,12 +11,12 @@
 #include "layerlab/ll_bsdf_write.h"
 #include "storage/bsdf_file_out.h"
 #include "storage/bsdf_format.h"
+#include "storage/bsdf_write_spill.h"
 #include "support/watch.h"
 
 /* Everything known about one file before its bytes are produced. */
 typedef struct write_job {
     const char *fn;
-    const ll_layer *const *layers; /* [n_bases * n_channels] */
     size_t n_channels, n_bases, n_parameters, n_parameter_values;
     const size_t *param_counts;
     const double *param_positions;
@@ -25,15 +26,24 @@ typedef struct write_job {
     float *nodes;                  /* [nn] file nodes                      */
     uint32_t *length;              /* [nn * nn] series length, i * nn + o  */
     uint32_t *offset;              /* [nn * nn]                            */
-    float *cdf;                    /* [(i * nn + o) * n_bases + b]         */
     size_t max_order, n_coeffs;
     char *metadata;                /* default JSON, when opts has none     */
     ll_watch *watch;               /* polled per column / node row        */
+    double progress_from;          /* the commit's stages fill [this, 1]  */
 } write_job;
 
 static inline ll_status write_cancelled(const write_job *job)
 {
     return ll_fail(LL_ERROR_CANCELLED, "%s: cancelled", job->fn);
+}
+
+/* A stage of the commit at [start, start + span] of its share of
+ * "writing" (all of it, unless the layers went in earlier in the same
+ * call: then the share after job->progress_from). */
+static inline void ll_wjob_stage(const write_job *job, double start, double span, size_t total)
+{
+    double rest = 1.0 - job->progress_from;
+    ll_watch_stage(job->watch, "writing", job->progress_from + start * rest, span * rest, total);
 }
 
 /* Layer index of file node f, or (size_t)-1 for the two mu = 0 nodes. */
@@ -63,10 +73,6 @@ LL_INTERNAL ll_status ll_wjob_layer_lengths(const write_job *job, const ll_layer
                                             uint32_t *len, double *tail, double *ref0);
 /* offset[], max_order, n_coeffs from length[]. */
 LL_INTERNAL ll_status ll_wjob_compute_offsets(write_job *job);
-/* Stored coefficient k of channel ch, basis b at file pair (o, i), from
- * job->layers (no mu = 0 node). */
-LL_INTERNAL double ll_wjob_stored_coeff(const write_job *job, size_t ch, size_t b, size_t o,
-                                        size_t i, size_t k);
 /* The CDF of one row: running exact integrals of the Catmull-Rom segments. */
 LL_INTERNAL void ll_wjob_integrate_row(const float *nodes, const double *values, size_t n,
                                        float *cdf, size_t stride);
@@ -93,6 +99,34 @@ static inline double ll_wjob_staged_value(size_t n_channels, size_t c, const dou
     return LL_BSDF_Y_FROM_R * (set[k] * mu_o / f) +
            LL_BSDF_Y_FROM_G * (set[per_layer + k] * mu_o / f) +
            LL_BSDF_Y_FROM_B * (set[2 * per_layer + k] * mu_o / f);
+}
+
+/* The writer (bsdf_writer.c) as the calls that are not ll_bsdf_writer_*
+ * use it: ll_bsdf_write and ll_bsdf_write_textured (bsdf_write.c), the
+ * material builder's channel writer (bsdf_write_channels.c). open: fn
+ * names the calls in messages (open, add, commit); in_memory keeps the
+ * spill in memory (no file beside path). add_unit: channel `channel` of
+ * basis `basis` (the bases in order, a basis's channels in any), polling
+ * watch (nullable) per order and column and counting an order a unit of
+ * its stage. commit: the file, its stages in [progress_from, 1] of
+ * "writing"; w is left to the caller to free (ll_bsdf_writer_abort). */
+LL_INTERNAL ll_status ll_writer_open_as(const char *const fn[3], const char *path,
+                                        size_t n_channels, size_t n_parameters,
+                                        const size_t *param_counts,
+                                        const double *param_positions,
+                                        const ll_bsdf_write_options *opts, int in_memory,
+                                        ll_bsdf_writer **out);
+LL_INTERNAL ll_status ll_writer_add_unit(ll_bsdf_writer *w, size_t basis, size_t channel,
+                                         const ll_layer *layer, ll_watch *watch);
+/* After a failure of the caller's own (its monitor): only abort is left. */
+LL_INTERNAL void ll_writer_fail(ll_bsdf_writer *w);
+LL_INTERNAL ll_status ll_writer_commit_watched(ll_bsdf_writer *w, ll_watch *watch,
+                                               double progress_from);
+
+/* The file's metadata: the options', else the default one. */
+static inline const char *ll_wjob_metadata(const write_job *job)
+{
+    return job->opts.metadata ? job->opts.metadata : job->metadata;
 }
 
 #endif /* LL_BSDF_WRITE_JOB_H */

@@ -45,6 +45,33 @@ ll_status ll_spill_open(ll_spill *sp, const char *path, const char *fn)
     return LL_OK;
 }
 
+void ll_spill_open_memory(ll_spill *sp, const char *path)
+{
+    ll_spill_init(sp);
+    sp->path = path;
+}
+
+/* In memory: room for `more` bytes after the buffered ones, the buffer
+ * doubled as it fills (so the copies cost as much as the bytes once). */
+static ll_status memory_reserve(ll_spill *sp, size_t more, const char *fn)
+{
+    size_t need, cap = sp->capacity ? sp->capacity : (size_t)1 << 16;
+    unsigned char *grown;
+    if (!ll_size_add(sp->buffered, more, &need))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    if (need <= sp->capacity)
+        return LL_OK;
+    while (cap < need)
+        if (!ll_size_mul(cap, 2, &cap))
+            cap = need;
+    grown = ll_realloc(sp->buffer, cap);
+    if (!grown)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    sp->buffer = grown;
+    sp->capacity = cap;
+    return LL_OK;
+}
+
 unsigned long long ll_spill_tell(const ll_spill *sp)
 {
     return sp->flushed + sp->buffered;
@@ -53,6 +80,8 @@ unsigned long long ll_spill_tell(const ll_spill *sp)
 ll_status ll_spill_flush(ll_spill *sp, const char *fn)
 {
     size_t done = 0;
+    if (sp->fd < 0)
+        return LL_OK; /* in memory: nothing to write out */
     while (done < sp->buffered) {
         ssize_t k = write(sp->fd, sp->buffer + done, sp->buffered - done);
         if (k < 0 && errno == EINTR)
@@ -70,6 +99,14 @@ ll_status ll_spill_flush(ll_spill *sp, const char *fn)
 ll_status ll_spill_put(ll_spill *sp, const void *data, size_t size, const char *fn)
 {
     const unsigned char *p = data;
+    if (sp->fd < 0) {
+        ll_status s = memory_reserve(sp, size, fn);
+        if (s == LL_OK && size > 0)
+            memcpy(sp->buffer + sp->buffered, data, size);
+        if (s == LL_OK)
+            sp->buffered += size;
+        return s;
+    }
     while (size > 0) {
         size_t room = LL_SPILL_BUFFER - sp->buffered, n = size < room ? size : room;
         memcpy(sp->buffer + sp->buffered, p, n);
@@ -89,6 +126,14 @@ ll_status ll_spill_read(const ll_spill *sp, unsigned long long at, void *data, s
                         const char *fn)
 {
     unsigned char *p = data;
+    if (sp->fd < 0) {
+        if (at > sp->buffered || size > sp->buffered - at)
+            return ll_fail(LL_ERROR_IO, "%s: \"%s\": reading the spill beyond its end", fn,
+                           sp->path);
+        if (size > 0)
+            memcpy(data, sp->buffer + at, size);
+        return LL_OK;
+    }
     while (size > 0) {
         ssize_t k = pread(sp->fd, p, size, (off_t)at);
         if (k < 0 && errno == EINTR)
