@@ -2,8 +2,10 @@
  * The material language, inside: a parsed stack of words (material_parse.c),
  * what each word means per colour channel and the stack's header
  * (material_stack.c), the resolution and cost of a build
- * (material_resolution.c), the JSON description stored in files
- * (material_metadata.c) and the build itself (material_build.c).
+ * (material_resolution.c, material_estimate.c), the sharing between
+ * channels that the build and its cost follow (material_sharing.c), the
+ * JSON description stored in files (material_metadata.c) and the build
+ * itself (material_build.c).
  * The language is described in docs/material-language.md.
  */
 #ifndef LL_MATERIAL_INTERNAL_H
@@ -219,11 +221,25 @@ LL_INTERNAL double ll_file_bytes_estimate(size_t n, size_t nch, size_t n_bases,
  * it when peak_bytes > budget. */
 LL_INTERNAL ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan,
                                       size_t budget, const char *fn);
-/* Channels c whose stack is another's, and words equal to another
- * channel's (the sharing of material_build.c). */
-LL_INTERNAL size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c);
-LL_INTERNAL void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
-                                 const size_t *below, size_t *owner);
+/* ---- material_sharing.c: the one walk of a build's sharing between
+ * channels, followed by the build, its progress weights and the cost
+ * models. Levels go bottom-up, one per word; at each, channel c's stack is
+ * owner[c]'s (c: its own) and, for an owner, its word layer is same[c]'s
+ * (c: its own to make). After the last level, owner[] says whose finished
+ * stack each channel's is. */
+typedef struct ll_level_walk {
+    const ll_word_params (*params)[3]; /* [word][channel] */
+    size_t count, nch;
+    size_t word;              /* this level's word, 0 at the top            */
+    int bottom, top;          /* the first level, the last                  */
+    size_t below[3];          /* owner[] of the level below (not at the bottom) */
+    size_t owner[3];
+    size_t same[3];
+} ll_level_walk;
+LL_INTERNAL void ll_level_walk_begin(ll_level_walk *walk, const ll_word_params (*params)[3],
+                                     size_t count, size_t nch);
+/* The next level up; 0 when the top was the last (owner[] is kept). */
+LL_INTERNAL int ll_level_walk_next(ll_level_walk *walk);
 
 /* ---- material_sweep.c */
 /* Once the text is read: labels unique, axis names. */

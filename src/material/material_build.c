@@ -6,7 +6,9 @@
  * parameters are equal in two channels (a clear coat) is built once, and two
  * channels whose stacks agree from the bottom up to some word share that
  * partial stack (a clone, whose Fourier orders are shared copy-on-write)
- * until a word differs. A grey stack built as RGB costs one channel.
+ * until a word differs. A grey stack built as RGB costs one channel. The
+ * levels and their sharing are material_sharing.c's walk, the one the cost
+ * model and the progress weights follow too.
  */
 #include "material/word_table.h"
 #include "layer/layer.h"
@@ -92,16 +94,6 @@ static const ll_monitor *next_call(build *b, const char *stage, double cost)
     b->call_cost = cost;
     b->call_stage = stage;
     return &b->call;
-}
-
-static size_t same_word_as(const build *b, size_t w, size_t c)
-{
-    return ll_same_word_as((const ll_word_params(*)[3])b->params, w, c);
-}
-
-static void stack_owners(const build *b, size_t w, const size_t *below, size_t *owner)
-{
-    ll_stack_owners((const ll_word_params(*)[3])b->params, w, b->nch, below, owner);
 }
 
 /* Prefix the message of a failed word call with where the word is. */
@@ -220,24 +212,22 @@ static ll_status ensure_bottom(build *b, size_t c, ll_layer *acc[3])
     return cached_word(b, b->pending_word, &b->params[b->pending_word][c], &acc[c]);
 }
 
-/* One level of the stack: word w on top of acc (bottom-up); top: the last. */
-static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
-                           int bottom, int top)
+/* One level of the stack (lv: the sharing walk's): its word on top of acc. */
+static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
 {
     ll_layer *word[3] = { NULL, NULL, NULL };
-    size_t owner[3], c;
+    const size_t w = lv->word, *below = lv->below, *owner = lv->owner;
+    const int bottom = lv->bottom, top = lv->top;
+    size_t c;
     ll_status s = LL_OK;
 
-    stack_owners(b, w, bottom ? NULL : below, owner);
     if (bottom && !top && b->sink) {
-        for (c = 0; c < b->nch; ++c)
-            below[c] = owner[c];
         b->pending = 1;
         b->pending_word = w;
         return LL_OK;
     }
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
-        size_t same = same_word_as(b, w, c);
+        size_t same = lv->same[c];
         if (owner[c] != c)
             continue; /* this channel's stack is another's */
         if (same != c && word[same])
@@ -275,11 +265,9 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
         if (s == LL_OK && top && b->sink)
             s = finish_channel(b, c, owner, acc);
     }
-    for (c = 0; c < b->nch; ++c) {
-        if (word[c] && same_word_as(b, w, c) == c)
+    for (c = 0; c < b->nch; ++c)
+        if (word[c] && lv->same[c] == c)
             ll_layer_destroy(word[c]);
-        below[c] = owner[c];
-    }
     if (!bottom)
         b->pending = 0; /* every stack the levels above need is made */
     return s;
@@ -288,21 +276,19 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
 /* Estimated seconds of the whole build (for progress fractions). */
 static double total_cost(const build *b)
 {
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, threads = ll_get_thread_count();
+    ll_level_walk lv;
+    size_t c, threads = ll_get_thread_count();
     double t = 0.0;
-    for (w = b->m->count; w-- > 0;) {
-        int bottom = w + 1 == b->m->count;
-        stack_owners(b, w, bottom ? NULL : below, owner);
+    ll_level_walk_begin(&lv, (const ll_word_params(*)[3])b->params, b->m->count, b->nch);
+    while (ll_level_walk_next(&lv))
         for (c = 0; c < b->nch; ++c) {
-            if (owner[c] != c)
+            if (lv.owner[c] != c)
                 continue;
-            if (same_word_as(b, w, c) == c)
-                t += ll_cost_word(&b->params[w][c], b->n, b->orders, threads);
-            if (!bottom)
+            if (lv.same[c] == c)
+                t += ll_cost_word(&b->params[lv.word][c], b->n, b->orders, threads);
+            if (!lv.bottom)
                 t += ll_cost_add(b->n, b->orders, threads);
         }
-        memcpy(below, owner, sizeof below);
-    }
     return t;
 }
 
@@ -405,20 +391,23 @@ static void fill_header(const ll_material *m, const ll_build_options *o, size_t 
 static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
 {
     ll_layer *acc[3] = { NULL, NULL, NULL };
-    size_t below[3] = { 0, 0, 0 }, w, c, saved_threads = ll_get_thread_count();
+    ll_level_walk lv;
+    size_t c, saved_threads = ll_get_thread_count();
+    const size_t *owner = lv.owner; /* after the walk: whose stack each channel's is */
     ll_status s = LL_OK;
 
     if (b->o.threads)
         s = ll_set_thread_count(b->o.threads);
     b->total = total_cost(b) + extra_cost;
-    for (w = b->m->count; w-- > 0 && s == LL_OK;)
-        s = add_level(b, w, acc, below, w + 1 == b->m->count, w == 0);
+    ll_level_walk_begin(&lv, (const ll_word_params(*)[3])b->params, b->m->count, b->nch);
+    while (s == LL_OK && ll_level_walk_next(&lv))
+        s = add_level(b, &lv, acc);
     for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
-        if (below[c] != c)
-            s = ll_layer_clone(acc[below[c]], &layers[c]);
+        if (owner[c] != c)
+            s = ll_layer_clone(acc[owner[c]], &layers[c]);
     if (s == LL_OK && !b->sink)
         for (c = 0; c < b->nch; ++c)
-            if (below[c] == c) {
+            if (owner[c] == c) {
                 layers[c] = acc[c];
                 acc[c] = NULL;
             }

@@ -5,7 +5,7 @@
  * budget can refuse a build before it allocates anything.
  *
  * The model follows the build of material_build.c step by step (the same
- * sharing between channels): each word's layer (its descriptor's cost),
+ * sharing between channels: the walk of material_sharing.c): each word's layer (its descriptor's cost),
  * each adding step, each doubling of a medium, the writing. It gives the
  * peak memory (an upper bound, which the budget is checked against) and
  * the work by kind (ll_work): counts, not seconds. The rates below were
@@ -195,31 +195,6 @@ double ll_cost_write(size_t n, size_t m, size_t n_channels)
     return (double)n * (double)n * dense * (double)n_channels * COST_WRITE;
 }
 
-size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c)
-{
-    size_t d;
-    for (d = 0; d < c; ++d)
-        if (ll_word_params_equal(&params[w][d], &params[w][c]))
-            return d;
-    return c;
-}
-
-void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
-                     const size_t *below, size_t *owner)
-{
-    size_t c, d;
-    for (c = 0; c < nch; ++c) {
-        owner[c] = c;
-        for (d = 0; d < c; ++d)
-            if ((!below || below[d] == below[c]) &&
-                ll_word_params_equal(&params[w][d], &params[w][c])) {
-                owner[c] = d;
-                break;
-            }
-    }
-}
-
-
 /*
  * The peak of a streamed build (ll_material_build, material_build.c),
  * replayed step by step in the order the build makes and frees
@@ -339,7 +314,8 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
                             size_t n, size_t m, size_t nch, size_t t)
 {
     stream_state st;
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, bottom_word = mat->count - 1;
+    ll_level_walk lv;
+    size_t c, bottom_word = mat->count - 1;
     double acc_dense[3] = { 0, 0, 0 }, h = (double)(n / 2), nn = (double)n + 2.0;
     int pending = 0;
 
@@ -349,10 +325,11 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
     st.t = t ? t : 1;
     for (c = 0; c < 3; ++c)
         st.set_of[c] = -1;
-    for (w = mat->count; w-- > 0;) {
-        int bottom = w + 1 == mat->count, top = w == 0;
+    ll_level_walk_begin(&lv, params, mat->count, nch);
+    while (ll_level_walk_next(&lv)) {
+        const size_t w = lv.word, *below = lv.below, *owner = lv.owner;
+        const int bottom = lv.bottom, top = lv.top;
         double words = 0.0, dense[3];
-        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
         for (c = 0; c < nch; ++c) {
             ll_word_cost wc;
             word_cost(&params[w][c], n, m, &wc);
@@ -364,7 +341,7 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
             pending = 1; /* made when the level above first needs it */
         } else {
             for (c = 0; c < nch; ++c)
-                if (owner[c] == c && ll_same_word_as(params, w, c) == c)
+                if (owner[c] == c && lv.same[c] == c)
                     words += stream_word(&st, &params[w][c]);
             /* Parting channels start from a clone of the stack below. */
             for (c = 0; c < nch && !bottom; ++c)
@@ -399,7 +376,6 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
         }
         for (c = 0; c < nch; ++c)
             acc_dense[c] = dense[c];
-        memcpy(below, owner, sizeof below);
     }
     /* The commit: the CDF and one column per channel from the spill. */
     stream_need(&st, 4.0 * nn * nn + (double)nch * 8.0 * (double)n * (double)m);
@@ -409,7 +385,8 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
                       size_t m, size_t nch, size_t threads, ll_cost_plan *out)
 {
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, t = threads < m ? threads : m;
+    ll_level_walk lv;
+    size_t c, t = threads < m ? threads : m;
     double acc_nz[3] = { 0, 0, 0 }, acc_dense[3] = { 0, 0, 0 }, peak = 0.0;
     double h = (double)(n / 2), stored = 0.0;
 
@@ -418,11 +395,12 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
     out->m = m;
     out->channels = nch;
     out->threads = threads;
-    for (w = mat->count; w-- > 0;) {
-        int bottom = w + 1 == mat->count;
+    ll_level_walk_begin(&lv, params, mat->count, nch);
+    while (ll_level_walk_next(&lv)) {
+        const size_t w = lv.word, *below = lv.below, *owner = lv.owner;
+        const int bottom = lv.bottom;
         double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0, held = 0.0;
         double nz[3], dense[3];
-        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
         for (c = 0; c < nch; ++c) {
             nz[c] = dense[c] = 0.0;
             if (!bottom && owner[c] == c)
@@ -434,7 +412,7 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
             if (owner[c] != c)
                 continue;
             word_cost(p, n, m, &wc);
-            if (ll_same_word_as(params, w, c) == c) {
+            if (lv.same[c] == c) {
                 ll_work ww;
                 word_work(&wc, n, m, &ww);
                 ++out->layers_built;
@@ -473,12 +451,11 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
             acc_nz[c] = nz[c];
             acc_dense[c] = dense[c];
         }
-        memcpy(below, owner, sizeof below);
     }
     /* Writing: the finished layers and the file's float32 coefficients
      * with their spline fits (about as large again). */
     for (c = 0; c < nch; ++c)
-        if (below[c] == c)
+        if (lv.owner[c] == c)
             stored += (double)n * (double)n * acc_dense[c];
     if (16.0 * stored > peak)
         peak = 16.0 * stored;
