@@ -28,7 +28,12 @@ typedef struct build {
     size_t n, orders, nch;
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
+    ll_bsdf_write_options header; /* the file's, from the stack (in full) */
     double total, done;          /* estimated seconds: all, finished  */
+    double (*word_costs)[3];     /* [word][channel]: estimated seconds of the
+                                    word layers the build makes (the walk's
+                                    owners of their word), set with total */
+    double add_cost;             /* estimated seconds of one adding step */
     double word_cost;            /* estimated seconds of the word being built */
     const char *word_stage;      /* its progress stage                  */
     ll_monitor_fn monitor_fn;    /* the caller's ll_monitor (nullable) */
@@ -126,8 +131,9 @@ static ll_status expand_medium(void *user, ll_layer *l, double tau)
     return ll_layer_expand(l, tau, next_call(b, "medium", b->word_cost));
 }
 
-static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
+static ll_status build_word(build *b, size_t w, size_t c, ll_layer **out)
 {
+    const ll_word_params *p = &b->params[w][c];
     ll_layer *l = NULL;
     double done_before = b->done;
     ll_word_build_ctx ctx;
@@ -141,7 +147,7 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
-    b->word_cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    b->word_cost = b->word_costs[w][c];
     b->word_stage = p->desc->stage;
     s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
@@ -156,14 +162,15 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
 
 /* A builder's bases share word layers: a copy of the cached layer of equal
  * parameters (the copy shares its orders), else built and cached. */
-static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
+static ll_status cached_word(build *b, size_t w, size_t c, ll_layer **out)
 {
+    const ll_word_params *p = &b->params[w][c];
     ll_status s = b->cache ? ll_word_cache_get(b->cache, w, p, out) : LL_OK;
     if (s != LL_OK || (b->cache && *out)) {
-        b->done += ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+        b->done += b->word_costs[w][c];
         return s;
     }
-    s = build_word(b, w, p, out);
+    s = build_word(b, w, c, out);
     if (s == LL_OK && b->cache)
         s = ll_word_cache_put(b->cache, w, p, *out);
     if (s != LL_OK) {
@@ -209,7 +216,7 @@ static ll_status ensure_bottom(build *b, size_t c, ll_layer *acc[3])
 {
     if (!b->pending || acc[c])
         return LL_OK;
-    return cached_word(b, b->pending_word, &b->params[b->pending_word][c], &acc[c]);
+    return cached_word(b, b->pending_word, c, &acc[c]);
 }
 
 /* One level of the stack (lv: the sharing walk's): its word on top of acc. */
@@ -233,7 +240,7 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
         if (same != c && word[same])
             word[c] = word[same];
         else
-            s = cached_word(b, w, &b->params[w][c], &word[c]);
+            s = cached_word(b, w, c, &word[c]);
     }
     /* Channels that part from a shared stack here start from a copy of it
      * as it was below this word; copy all before adding to any. */
@@ -247,7 +254,7 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
         if (bottom) {
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
-            double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
+            double cost = b->add_cost, start;
             if ((s = ensure_bottom(b, c, acc)) != LL_OK)
                 break;
             report(b, "adding");
@@ -273,21 +280,27 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
     return s;
 }
 
-/* Estimated seconds of the whole build (for progress fractions). */
-static double total_cost(const build *b)
+/* The progress weights, once, on the threads the build runs on: the
+ * estimated seconds of each word layer the build makes and of an adding
+ * step; returns those of the whole build (for progress fractions). */
+static double total_cost(build *b)
 {
     ll_level_walk lv;
     size_t c, threads = ll_get_thread_count();
     double t = 0.0;
+    b->add_cost = ll_cost_add(b->n, b->orders, threads);
     ll_level_walk_begin(&lv, (const ll_word_params(*)[3])b->params, b->m->count, b->nch);
     while (ll_level_walk_next(&lv))
         for (c = 0; c < b->nch; ++c) {
             if (lv.owner[c] != c)
                 continue;
-            if (lv.same[c] == c)
-                t += ll_cost_word(&b->params[lv.word][c], b->n, b->orders, threads);
+            if (lv.same[c] == c) {
+                b->word_costs[lv.word][c] =
+                    ll_cost_word(&b->params[lv.word][c], b->n, b->orders, threads);
+                t += b->word_costs[lv.word][c];
+            }
             if (!lv.bottom)
-                t += ll_cost_add(b->n, b->orders, threads);
+                t += b->add_cost;
         }
     return t;
 }
@@ -297,6 +310,7 @@ static void build_free(build *b)
     ll_free(b->nodes);
     ll_free(b->weights);
     ll_free(b->params);
+    ll_free(b->word_costs);
 }
 
 /* The options and the monitors of a build. monitor: the caller's
@@ -323,6 +337,28 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
     return ll_build_options_read(opts, &b->o, fn);
 }
 
+/* The header a file of this material carries, in full (the stack's
+ * eta and roughness, the metadata, the error goal). */
+static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
+                        ll_bsdf_write_options *header)
+{
+    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_material_header(m, n_channels, &full.eta, full.alpha);
+    full.metadata = m->metadata;
+    full.error_goal = o->error_goal > 0.0   ? o->error_goal
+                      : m->error_goal > 0.0 ? m->error_goal
+                                            : 1e-3;
+    *header = full;
+}
+
+/* The build's header handed to the caller (fields that header's
+ * struct_size covers; checked before the build: cannot fail). */
+static void give_header(const build *b, ll_bsdf_write_options *header)
+{
+    (void)ll_struct_write(header, &b->header, sizeof b->header, "ll_material_build_layers",
+                          "ll_bsdf_write_options");
+}
+
 /* Resolution, budget, quadrature and per-channel parameters. share: a
  * distributed build's (nullable), whose ranks hold 1 / n_ranks each;
  * streamed: the budget is the streamed build's (ll_material_build). */
@@ -341,9 +377,13 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     /* The parameters (as many as the words), then the budget: nothing
      * that grows with the resolution is allocated before it. */
     b->params = ll_calloc_array(m->count, sizeof *b->params);
-    if (!b->params)
+    b->word_costs = ll_calloc_array(m->count, sizeof *b->word_costs);
+    if (!b->params || !b->word_costs) {
+        build_free(b);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    }
     ll_material_params(m, b->nch, b->params);
+    fill_header(m, &b->o, b->nch, &b->header);
     ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
                      b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
     if (!streamed)
@@ -369,22 +409,6 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     if (s != LL_OK)
         build_free(b);
     return s;
-}
-
-/* The header a file of this material carries (fields that header's
- * struct_size covers). */
-static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
-                        ll_bsdf_write_options *header)
-{
-    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
-    ll_material_header(m, n_channels, &full.eta, full.alpha);
-    full.metadata = m->metadata;
-    full.error_goal = o->error_goal > 0.0   ? o->error_goal
-                      : m->error_goal > 0.0 ? m->error_goal
-                                            : 1e-3;
-    /* Checked before the build: cannot fail. */
-    (void)ll_struct_write(header, &full, sizeof full, "ll_material_build_layers",
-                          "ll_bsdf_write_options");
 }
 
 /* The build proper, on an initialised state; restores the thread count. */
@@ -478,7 +502,7 @@ ll_status ll_material_build_layers_cached(const ll_material *material,
     if (s == LL_OK) {
         *n_channels = b.nch;
         if (header)
-            fill_header(b.m, &b.o, b.nch, header);
+            give_header(&b, header);
     } else {
         for (c = 0; c < 3; ++c) {
             ll_layer_destroy(layers[c]);
@@ -542,11 +566,7 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
         return s;
     /* The writing's share of the progress bar. */
     write_cost = ll_cost_write(b.n, b.orders, b.nch);
-    {
-        ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
-        fill_header(b.m, &b.o, b.nch, &header);
-        s = ll_channel_writer_open(out_path, b.nch, &header, &b.sink);
-    }
+    s = ll_channel_writer_open(out_path, b.nch, &b.header, &b.sink);
     if (s == LL_OK)
         s = run_build(&b, layers, write_cost);
     if (s == LL_OK) {
@@ -632,7 +652,7 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
     if (s == LL_OK) {
         *n_channels = b.nch;
         if (header && share->rank == 0)
-            fill_header(b.m, &b.o, b.nch, header);
+            give_header(&b, header);
     }
     if (s != LL_OK || share->rank != 0)
         for (c = 0; c < 3; ++c) {
