@@ -115,7 +115,6 @@ LL_INTERNAL void ll_word_params_above(const ll_material *m, size_t word, size_t 
                                       size_t n_channels, double above, ll_word_params *out);
 LL_INTERNAL double ll_word_index_ratio(const ll_material *m, size_t word, size_t channel,
                                        size_t n_channels);
-LL_INTERNAL int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b);
 /* The physical checks on the whole stack (opaque layers only at the
  * bottom, ...). LL_ERROR_PARSE with file:line:column. */
 LL_INTERNAL ll_status ll_material_check_stack(const ll_material *m);
@@ -240,6 +239,13 @@ LL_INTERNAL void ll_level_walk_begin(ll_level_walk *walk, const ll_word_params (
                                      size_t count, size_t nch);
 /* The next level up; 0 when the top was the last (owner[] is kept). */
 LL_INTERNAL int ll_level_walk_next(ll_level_walk *walk);
+/* The whole walk at once: levels[k] (count of them) is the walk at its
+ * level k, bottom-up (levels[0] is the bottom word's). */
+LL_INTERNAL void ll_material_levels(const ll_word_params (*params)[3], size_t count, size_t nch,
+                                    ll_level_walk *levels);
+/* Do two words build the same layer? (Equal parameters, the same table:
+ * what the channels, a builder's cache and the resolution memo share.) */
+LL_INTERNAL int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b);
 
 /* ---- material_sweep.c */
 /* Once the text is read: labels unique, axis names. */

@@ -28,6 +28,7 @@ typedef struct build {
     size_t n, orders, nch;
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
+    ll_level_walk *levels;       /* the sharing walk, bottom-up (count) */
     ll_bsdf_write_options header; /* the file's, from the stack (in full) */
     double total, done;          /* estimated seconds: all, finished  */
     double (*word_costs)[3];     /* [word][channel]: estimated seconds of the
@@ -285,23 +286,23 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
  * step; returns those of the whole build (for progress fractions). */
 static double total_cost(build *b)
 {
-    ll_level_walk lv;
-    size_t c, threads = ll_get_thread_count();
+    size_t k, c, threads = ll_get_thread_count();
     double t = 0.0;
     b->add_cost = ll_cost_add(b->n, b->orders, threads);
-    ll_level_walk_begin(&lv, (const ll_word_params(*)[3])b->params, b->m->count, b->nch);
-    while (ll_level_walk_next(&lv))
+    for (k = 0; k < b->m->count; ++k) {
+        const ll_level_walk *lv = &b->levels[k];
         for (c = 0; c < b->nch; ++c) {
-            if (lv.owner[c] != c)
+            if (lv->owner[c] != c)
                 continue;
-            if (lv.same[c] == c) {
-                b->word_costs[lv.word][c] =
-                    ll_cost_word(&b->params[lv.word][c], b->n, b->orders, threads);
-                t += b->word_costs[lv.word][c];
+            if (lv->same[c] == c) {
+                b->word_costs[lv->word][c] =
+                    ll_cost_word(&b->params[lv->word][c], b->n, b->orders, threads);
+                t += b->word_costs[lv->word][c];
             }
-            if (!lv.bottom)
+            if (!lv->bottom)
                 t += b->add_cost;
         }
+    }
     return t;
 }
 
@@ -311,6 +312,7 @@ static void build_free(build *b)
     ll_free(b->weights);
     ll_free(b->params);
     ll_free(b->word_costs);
+    ll_free(b->levels);
 }
 
 /* The options and the monitors of a build. monitor: the caller's
@@ -378,11 +380,13 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
      * that grows with the resolution is allocated before it. */
     b->params = ll_calloc_array(m->count, sizeof *b->params);
     b->word_costs = ll_calloc_array(m->count, sizeof *b->word_costs);
-    if (!b->params || !b->word_costs) {
+    b->levels = ll_calloc_array(m->count, sizeof *b->levels);
+    if (!b->params || !b->word_costs || !b->levels) {
         build_free(b);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
     }
     ll_material_params(m, b->nch, b->params);
+    ll_material_levels((const ll_word_params(*)[3])b->params, m->count, b->nch, b->levels);
     fill_header(m, &b->o, b->nch, &b->header);
     ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
                      b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
@@ -414,18 +418,18 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
 /* The build proper, on an initialised state; restores the thread count. */
 static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
 {
+    static const size_t no_stack[3] = { 0, 0, 0 };
     ll_layer *acc[3] = { NULL, NULL, NULL };
-    ll_level_walk lv;
-    size_t c, saved_threads = ll_get_thread_count();
-    const size_t *owner = lv.owner; /* after the walk: whose stack each channel's is */
+    size_t k, c, saved_threads = ll_get_thread_count();
+    /* After the last level: whose stack each channel's is. */
+    const size_t *owner = b->m->count ? b->levels[b->m->count - 1].owner : no_stack;
     ll_status s = LL_OK;
 
     if (b->o.threads)
         s = ll_set_thread_count(b->o.threads);
     b->total = total_cost(b) + extra_cost;
-    ll_level_walk_begin(&lv, (const ll_word_params(*)[3])b->params, b->m->count, b->nch);
-    while (s == LL_OK && ll_level_walk_next(&lv))
-        s = add_level(b, &lv, acc);
+    for (k = 0; k < b->m->count && s == LL_OK; ++k)
+        s = add_level(b, &b->levels[k], acc);
     for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
         if (owner[c] != c)
             s = ll_layer_clone(acc[owner[c]], &layers[c]);

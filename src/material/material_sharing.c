@@ -13,6 +13,22 @@
 
 #include <string.h>
 
+/* Parameters are a word layer's identity: the tables of two measured words
+ * are compared by their path. */
+int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
+{
+    size_t k;
+    if (a->desc != b->desc || a->choice != b->choice)
+        return 0;
+    /* Two tables of the same size are different words. */
+    if ((a->file || b->file) && (!a->file || !b->file || strcmp(a->file, b->file) != 0))
+        return 0;
+    for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
+        if (a->v[k] != b->v[k])
+            return 0;
+    return 1;
+}
+
 /* The lowest channel whose word w is equal to channel c's (c if none). */
 static size_t same_word_as(const ll_word_params (*params)[3], size_t w, size_t c)
 {
@@ -65,4 +81,14 @@ int ll_level_walk_next(ll_level_walk *walk)
     for (c = 0; c < walk->nch; ++c)
         walk->same[c] = same_word_as(walk->params, walk->word, c);
     return 1;
+}
+
+void ll_material_levels(const ll_word_params (*params)[3], size_t count, size_t nch,
+                        ll_level_walk *levels)
+{
+    ll_level_walk walk;
+    size_t k = 0;
+    ll_level_walk_begin(&walk, params, count, nch);
+    while (ll_level_walk_next(&walk))
+        levels[k++] = walk;
 }
