@@ -31,10 +31,7 @@ typedef struct build {
     ll_level_walk *levels;       /* the sharing walk, bottom-up (count) */
     ll_bsdf_write_options header; /* the file's, from the stack (in full) */
     double total, done;          /* estimated seconds: all, finished  */
-    double (*word_costs)[3];     /* [word][channel]: estimated seconds of the
-                                    word layers the build makes (the walk's
-                                    owners of their word), set with total */
-    double add_cost;             /* estimated seconds of one adding step */
+    ll_build_weights cost;       /* the steps' estimated seconds        */
     double word_cost;            /* estimated seconds of the word being built */
     const char *word_stage;      /* its progress stage                  */
     ll_monitor_fn monitor_fn;    /* the caller's ll_monitor (nullable) */
@@ -148,7 +145,7 @@ static ll_status build_word(build *b, size_t w, size_t c, ll_layer **out)
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
-    b->word_cost = b->word_costs[w][c];
+    b->word_cost = b->cost.word[w][c];
     b->word_stage = p->desc->stage;
     s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
@@ -168,7 +165,7 @@ static ll_status cached_word(build *b, size_t w, size_t c, ll_layer **out)
     const ll_word_params *p = &b->params[w][c];
     ll_status s = b->cache ? ll_word_cache_get(b->cache, w, p, out) : LL_OK;
     if (s != LL_OK || (b->cache && *out)) {
-        b->done += b->word_costs[w][c];
+        b->done += b->cost.word[w][c];
         return s;
     }
     s = build_word(b, w, c, out);
@@ -255,7 +252,7 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
         if (bottom) {
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
-            double cost = b->add_cost, start;
+            double cost = b->cost.add, start;
             if ((s = ensure_bottom(b, c, acc)) != LL_OK)
                 break;
             report(b, "adding");
@@ -281,37 +278,12 @@ static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
     return s;
 }
 
-/* The progress weights, once, on the threads the build runs on: the
- * estimated seconds of each word layer the build makes and of an adding
- * step; returns those of the whole build (for progress fractions). */
-static double total_cost(build *b)
-{
-    size_t k, c, threads = ll_get_thread_count();
-    double t = 0.0;
-    b->add_cost = ll_cost_add(b->n, b->orders, threads);
-    for (k = 0; k < b->m->count; ++k) {
-        const ll_level_walk *lv = &b->levels[k];
-        for (c = 0; c < b->nch; ++c) {
-            if (lv->owner[c] != c)
-                continue;
-            if (lv->same[c] == c) {
-                b->word_costs[lv->word][c] =
-                    ll_cost_word(&b->params[lv->word][c], b->n, b->orders, threads);
-                t += b->word_costs[lv->word][c];
-            }
-            if (!lv->bottom)
-                t += b->add_cost;
-        }
-    }
-    return t;
-}
-
 static void build_free(build *b)
 {
     ll_free(b->nodes);
     ll_free(b->weights);
     ll_free(b->params);
-    ll_free(b->word_costs);
+    ll_free(b->cost.word);
     ll_free(b->levels);
 }
 
@@ -368,7 +340,7 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
                             const ll_monitor *monitor, const char *fn, ll_share *share,
                             int streamed)
 {
-    ll_cost_plan cost;
+    double peak;
     ll_status s = build_start(b, m, opts, monitor, fn);
     b->share = share;
     if (s == LL_OK)
@@ -379,24 +351,23 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     /* The parameters (as many as the words), then the budget: nothing
      * that grows with the resolution is allocated before it. */
     b->params = ll_calloc_array(m->count, sizeof *b->params);
-    b->word_costs = ll_calloc_array(m->count, sizeof *b->word_costs);
+    b->cost.word = ll_calloc_array(m->count, sizeof *b->cost.word);
     b->levels = ll_calloc_array(m->count, sizeof *b->levels);
-    if (!b->params || !b->word_costs || !b->levels) {
+    if (!b->params || !b->cost.word || !b->levels) {
         build_free(b);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
     }
     ll_material_params(m, b->nch, b->params);
     ll_material_levels((const ll_word_params(*)[3])b->params, m->count, b->nch, b->levels);
     fill_header(m, &b->o, b->nch, &b->header);
-    ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
-                     b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
-    if (!streamed)
-        cost.peak_bytes = cost.held_peak_bytes; /* every stack kept to the end */
-    if (share) {
-        cost.peak_bytes /= (double)share->n_ranks;
-        share->peak_bytes = cost.peak_bytes;
-    }
-    s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);
+    /* The cost on the threads the build runs on (run_build sets them). */
+    s = ll_material_cost_build(m, (const ll_word_params(*)[3])b->params, b->levels, b->n,
+                               b->orders, b->nch,
+                               b->o.threads ? b->o.threads : ll_get_thread_count(), streamed,
+                               share ? share->n_ranks : 1, b->o.max_memory_bytes, fn, &peak,
+                               &b->cost);
+    if (share)
+        share->peak_bytes = peak;
     if (s != LL_OK) {
         build_free(b);
         return s;
@@ -427,7 +398,7 @@ static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
 
     if (b->o.threads)
         s = ll_set_thread_count(b->o.threads);
-    b->total = total_cost(b) + extra_cost;
+    b->total = b->cost.total + extra_cost;
     for (k = 0; k < b->m->count && s == LL_OK; ++k)
         s = add_level(b, &b->levels[k], acc);
     for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
@@ -557,7 +528,6 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
 {
     build b;
     ll_layer *layers[3] = { NULL, NULL, NULL };
-    double write_cost;
     ll_status s;
     size_t c;
 
@@ -568,11 +538,9 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
     s = build_init(&b, material, opts, monitor, "ll_material_build", NULL, 1);
     if (s != LL_OK)
         return s;
-    /* The writing's share of the progress bar. */
-    write_cost = ll_cost_write(b.n, b.orders, b.nch);
     s = ll_channel_writer_open(out_path, b.nch, &b.header, &b.sink);
-    if (s == LL_OK)
-        s = run_build(&b, layers, write_cost);
+    if (s == LL_OK) /* with the writing's share of the progress bar */
+        s = run_build(&b, layers, b.cost.write);
     if (s == LL_OK) {
         const ll_monitor *writing;
         report(&b, "writing");

@@ -129,7 +129,7 @@ static double layer_bytes(size_t n, size_t m, double dense_orders)
     return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
 }
 
-double ll_cost_add(size_t n, size_t m, size_t threads)
+static double cost_add(size_t n, size_t m, size_t threads)
 {
     return parallel(add_cpu(n, (double)m, (double)m, m), m, threads);
 }
@@ -179,7 +179,7 @@ void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, ll_work *w
     *bytes = layer_bytes(n, m, c.dense_orders);
 }
 
-double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
+static double cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
 {
     ll_word_cost c;
     double cpu, wall;
@@ -188,7 +188,7 @@ double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
     return wall;
 }
 
-double ll_cost_write(size_t n, size_t m, size_t n_channels)
+static double cost_write(size_t n, size_t m, size_t n_channels)
 {
     /* (Progress shares only: about 17 dense orders per channel.) */
     double dense = 17.0 < (double)m ? 17.0 : (double)m;
@@ -487,6 +487,38 @@ ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan, size
                    "default is half of the physical memory) or lower the resolution",
                    fn, mat->source, plan->n, plan->m, plan->channels,
                    plan->channels == 1 ? "" : "s", need, have);
+}
+
+ll_status ll_material_cost_build(const ll_material *mat, const ll_word_params (*params)[3],
+                                 const ll_level_walk *levels, size_t n, size_t m, size_t nch,
+                                 size_t threads, int streamed, size_t ranks, size_t budget,
+                                 const char *fn, double *peak_bytes, ll_build_weights *weights)
+{
+    ll_cost_plan cost;
+    size_t k, c;
+    ll_material_cost(mat, params, n, m, nch, threads, &cost);
+    if (!streamed)
+        cost.peak_bytes = cost.held_peak_bytes; /* every stack kept to the end */
+    cost.peak_bytes /= (double)ranks;
+    *peak_bytes = cost.peak_bytes;
+    /* The weights, summed in the order the build makes its steps. */
+    weights->add = cost_add(n, m, threads);
+    weights->write = cost_write(n, m, nch);
+    weights->total = 0.0;
+    for (k = 0; k < mat->count; ++k) {
+        const ll_level_walk *lv = &levels[k];
+        for (c = 0; c < nch; ++c) {
+            if (lv->owner[c] != c)
+                continue;
+            if (lv->same[c] == c) {
+                weights->word[lv->word][c] = cost_word(&params[lv->word][c], n, m, threads);
+                weights->total += weights->word[lv->word][c];
+            }
+            if (!lv->bottom)
+                weights->total += weights->add;
+        }
+    }
+    return ll_check_budget(mat, &cost, budget, fn);
 }
 
 /* The worker threads a build with these options would run on. */
