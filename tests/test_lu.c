@@ -1,6 +1,6 @@
 /*
- * The adding's own LU and right-sided solves (src/grammar/adding.c:
- * recursive, gemm-bound, issue 18) against what they replace: for random
+ * The LU and right-sided solves of adding and the slab (src/numerics/lu.c:
+ * recursive, gemm-bound) against what they replace: for random
  * and for structured matrices of sizes around the recursion's 64-column
  * panels, P L U must give back A, Z = B G^-1 must solve Z G = B, and a
  * singular matrix must be reported with dgetrf's info.
@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grammar/grammar.h"
+#include "numerics/lu.h"
 #include "test_util.h"
 
 /* |P L U - A| / |A| (max norms) for the factors lu and pivots of A. */

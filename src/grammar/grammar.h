@@ -9,7 +9,6 @@
 #include "layer/layer.h"
 #include "words/media.h"
 
-#include <lapacke.h>
 
 /* The doubling schedule of ll_layer_expand for nodes whose smallest |mu| is
  * min_mu: the initial thickness tau0 and the count k with tau0 2^k = tau. */
@@ -34,15 +33,6 @@ LL_INTERNAL int ll_medium_slab_applies(const ll_layer *layer, double tau);
 LL_INTERNAL ll_status ll_layer_set_medium_slab(ll_layer *layer, ll_medium_kind kind,
                                                double albedo, double shape, double tau,
                                                const ll_monitor *monitor, int *done);
-
-/* B = B G^-1 from the LU factors of G (G = P L U, as getrf leaves them), in
- * place on the h x h column-major B (adding.c; the slab's solves use it). */
-LL_INTERNAL void ll_right_solve_lu(size_t h, const double *lu, const lapack_int *piv, double *B);
-
-/* LU with partial pivoting of the h x h column-major A in place, as
- * LAPACK's dgetrf leaves it (adding.c; recursive, gemm-bound); returns
- * dgetrf's info. */
-LL_INTERNAL lapack_int ll_lu_factor(size_t h, double *A, lapack_int *piv);
 
 /* Is the h x h column-major block zero off its diagonal? (Adding and the
  * slab take a shortcut for the unscattered light of a forward-only order.) */

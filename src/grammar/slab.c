@@ -44,6 +44,7 @@
  */
 #include "grammar/grammar.h"
 #include "grammar/slab.h"
+#include "numerics/lu.h"
 
 #include <cblas.h>
 #include <lapacke.h>

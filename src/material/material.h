@@ -2,8 +2,10 @@
  * The material language, inside: a parsed stack of words (material_parse.c),
  * what each word means per colour channel and the stack's header
  * (material_stack.c), the resolution and cost of a build
- * (material_resolution.c), the JSON description stored in files
- * (material_metadata.c) and the build itself (material_build.c).
+ * (material_resolution.c, material_estimate.c), the sharing between
+ * channels that the build and its cost follow (material_sharing.c), the
+ * JSON description stored in files (material_metadata.c) and the build
+ * itself (material_build.c).
  * The language is described in docs/material-language.md.
  */
 #ifndef LL_MATERIAL_INTERNAL_H
@@ -113,7 +115,6 @@ LL_INTERNAL void ll_word_params_above(const ll_material *m, size_t word, size_t 
                                       size_t n_channels, double above, ll_word_params *out);
 LL_INTERNAL double ll_word_index_ratio(const ll_material *m, size_t word, size_t channel,
                                        size_t n_channels);
-LL_INTERNAL int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b);
 /* The physical checks on the whole stack (opaque layers only at the
  * bottom, ...). LL_ERROR_PARSE with file:line:column. */
 LL_INTERNAL ll_status ll_material_check_stack(const ll_material *m);
@@ -163,6 +164,33 @@ LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 #define LL_MATERIAL_MIN_NODES 10
 #define LL_MATERIAL_MAX_RESOLUTION 100000
 
+/* ---- material_sharing.c: the one walk of a build's sharing between
+ * channels, followed by the build, its progress weights and the cost
+ * models. Levels go bottom-up, one per word; at each, channel c's stack is
+ * owner[c]'s (c: its own) and, for an owner, its word layer is same[c]'s
+ * (c: its own to make). After the last level, owner[] says whose finished
+ * stack each channel's is. */
+typedef struct ll_level_walk {
+    const ll_word_params (*params)[3]; /* [word][channel] */
+    size_t count, nch;
+    size_t word;              /* this level's word, 0 at the top            */
+    int bottom, top;          /* the first level, the last                  */
+    size_t below[3];          /* owner[] of the level below (not at the bottom) */
+    size_t owner[3];
+    size_t same[3];
+} ll_level_walk;
+LL_INTERNAL void ll_level_walk_begin(ll_level_walk *walk, const ll_word_params (*params)[3],
+                                     size_t count, size_t nch);
+/* The next level up; 0 when the top was the last (owner[] is kept). */
+LL_INTERNAL int ll_level_walk_next(ll_level_walk *walk);
+/* The whole walk at once: levels[k] (count of them) is the walk at its
+ * level k, bottom-up (levels[0] is the bottom word's). */
+LL_INTERNAL void ll_material_levels(const ll_word_params (*params)[3], size_t count, size_t nch,
+                                    ll_level_walk *levels);
+/* Do two words build the same layer? (Equal parameters, the same table:
+ * what the channels, a builder's cache and the resolution memo share.) */
+LL_INTERNAL int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b);
+
 /* ---- material_estimate.c: the cost model, from counts alone */
 /* Work by kind, the counts of ll_build_estimate: what a time model
  * multiplies by its machine's rates (llbuild --dry-run has one). */
@@ -195,13 +223,6 @@ typedef struct ll_cost_plan {
 LL_INTERNAL void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
                                   size_t n, size_t m, size_t channels, size_t threads,
                                   ll_cost_plan *out);
-/* The progress weights of a build (material_build.c): the relative cost
- * of one word's layer, of one adding step and of writing, in the units of
- * the rates measured on the development machine (only their ratios matter
- * here; the time of a build is llbuild's model, from the counts). */
-LL_INTERNAL double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads);
-LL_INTERNAL double ll_cost_add(size_t n, size_t m, size_t threads);
-LL_INTERNAL double ll_cost_write(size_t n, size_t m, size_t n_channels);
 /* One word's work (its doublings included), doublings and the bytes its
  * layer keeps. */
 LL_INTERNAL void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m,
@@ -219,12 +240,26 @@ LL_INTERNAL double ll_file_bytes_estimate(size_t n, size_t nch, size_t n_bases,
  * it when peak_bytes > budget. */
 LL_INTERNAL ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan,
                                       size_t budget, const char *fn);
-/* Channels c whose stack is another's, and words equal to another
- * channel's (the sharing of material_build.c). */
-LL_INTERNAL size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c);
-LL_INTERNAL void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
-                                 const size_t *below, size_t *owner);
-
+/* What the build of material_build.c takes from the cost model, in one
+ * call: its peak bytes (streamed, or every stack held to the end; a
+ * distributed build's ranks hold 1 / ranks each), checked against budget
+ * as ll_check_budget, and its progress weights, the relative cost of each
+ * word layer it makes (the walk's levels, bottom-up), of an adding step and
+ * of the writing, in the units of the rates measured on the development
+ * machine (only their ratios matter; a build's time is llbuild's model,
+ * from the counts). */
+typedef struct ll_build_weights {
+    double (*word)[3];        /* [word][channel], the caller's array; set where
+                                 the walk's owner makes its word layer      */
+    double add, write;
+    double total;             /* the words and addings, in the build's order */
+} ll_build_weights;
+LL_INTERNAL ll_status ll_material_cost_build(const ll_material *mat,
+                                             const ll_word_params (*params)[3],
+                                             const ll_level_walk *levels, size_t n, size_t m,
+                                             size_t nch, size_t threads, int streamed,
+                                             size_t ranks, size_t budget, const char *fn,
+                                             double *peak_bytes, ll_build_weights *weights);
 /* ---- material_sweep.c */
 /* Once the text is read: labels unique, axis names. */
 LL_INTERNAL ll_status ll_material_finish_axes(ll_material *m);

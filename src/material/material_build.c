@@ -6,7 +6,9 @@
  * parameters are equal in two channels (a clear coat) is built once, and two
  * channels whose stacks agree from the bottom up to some word share that
  * partial stack (a clone, whose Fourier orders are shared copy-on-write)
- * until a word differs. A grey stack built as RGB costs one channel.
+ * until a word differs. A grey stack built as RGB costs one channel. The
+ * levels and their sharing are material_sharing.c's walk, the one the cost
+ * model and the progress weights follow too.
  */
 #include "material/word_table.h"
 #include "layer/layer.h"
@@ -26,7 +28,10 @@ typedef struct build {
     size_t n, orders, nch;
     double *nodes, *weights;
     ll_word_params (*params)[3]; /* [word][channel] */
+    ll_level_walk *levels;       /* the sharing walk, bottom-up (count) */
+    ll_bsdf_write_options header; /* the file's, from the stack (in full) */
     double total, done;          /* estimated seconds: all, finished  */
+    ll_build_weights cost;       /* the steps' estimated seconds        */
     double word_cost;            /* estimated seconds of the word being built */
     const char *word_stage;      /* its progress stage                  */
     ll_monitor_fn monitor_fn;    /* the caller's ll_monitor (nullable) */
@@ -94,16 +99,6 @@ static const ll_monitor *next_call(build *b, const char *stage, double cost)
     return &b->call;
 }
 
-static size_t same_word_as(const build *b, size_t w, size_t c)
-{
-    return ll_same_word_as((const ll_word_params(*)[3])b->params, w, c);
-}
-
-static void stack_owners(const build *b, size_t w, const size_t *below, size_t *owner)
-{
-    ll_stack_owners((const ll_word_params(*)[3])b->params, w, b->nch, below, owner);
-}
-
 /* Prefix the message of a failed word call with where the word is. */
 static ll_status word_failed(const build *b, size_t w, ll_status s)
 {
@@ -134,8 +129,9 @@ static ll_status expand_medium(void *user, ll_layer *l, double tau)
     return ll_layer_expand(l, tau, next_call(b, "medium", b->word_cost));
 }
 
-static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
+static ll_status build_word(build *b, size_t w, size_t c, ll_layer **out)
 {
+    const ll_word_params *p = &b->params[w][c];
     ll_layer *l = NULL;
     double done_before = b->done;
     ll_word_build_ctx ctx;
@@ -149,7 +145,7 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
     ctx.monitor = word_monitor;
     ctx.expand = expand_medium;
     ctx.user = b;
-    b->word_cost = ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+    b->word_cost = b->cost.word[w][c];
     b->word_stage = p->desc->stage;
     s = p->desc->build(&ctx, &b->m->words[w], p, l);
     if (s != LL_OK) {
@@ -164,14 +160,15 @@ static ll_status build_word(build *b, size_t w, const ll_word_params *p, ll_laye
 
 /* A builder's bases share word layers: a copy of the cached layer of equal
  * parameters (the copy shares its orders), else built and cached. */
-static ll_status cached_word(build *b, size_t w, const ll_word_params *p, ll_layer **out)
+static ll_status cached_word(build *b, size_t w, size_t c, ll_layer **out)
 {
+    const ll_word_params *p = &b->params[w][c];
     ll_status s = b->cache ? ll_word_cache_get(b->cache, w, p, out) : LL_OK;
     if (s != LL_OK || (b->cache && *out)) {
-        b->done += ll_cost_word(p, b->n, b->orders, ll_get_thread_count());
+        b->done += b->cost.word[w][c];
         return s;
     }
-    s = build_word(b, w, p, out);
+    s = build_word(b, w, c, out);
     if (s == LL_OK && b->cache)
         s = ll_word_cache_put(b->cache, w, p, *out);
     if (s != LL_OK) {
@@ -217,33 +214,31 @@ static ll_status ensure_bottom(build *b, size_t c, ll_layer *acc[3])
 {
     if (!b->pending || acc[c])
         return LL_OK;
-    return cached_word(b, b->pending_word, &b->params[b->pending_word][c], &acc[c]);
+    return cached_word(b, b->pending_word, c, &acc[c]);
 }
 
-/* One level of the stack: word w on top of acc (bottom-up); top: the last. */
-static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3],
-                           int bottom, int top)
+/* One level of the stack (lv: the sharing walk's): its word on top of acc. */
+static ll_status add_level(build *b, const ll_level_walk *lv, ll_layer *acc[3])
 {
     ll_layer *word[3] = { NULL, NULL, NULL };
-    size_t owner[3], c;
+    const size_t w = lv->word, *below = lv->below, *owner = lv->owner;
+    const int bottom = lv->bottom, top = lv->top;
+    size_t c;
     ll_status s = LL_OK;
 
-    stack_owners(b, w, bottom ? NULL : below, owner);
     if (bottom && !top && b->sink) {
-        for (c = 0; c < b->nch; ++c)
-            below[c] = owner[c];
         b->pending = 1;
         b->pending_word = w;
         return LL_OK;
     }
     for (c = 0; c < b->nch && s == LL_OK; ++c) {
-        size_t same = same_word_as(b, w, c);
+        size_t same = lv->same[c];
         if (owner[c] != c)
             continue; /* this channel's stack is another's */
         if (same != c && word[same])
             word[c] = word[same];
         else
-            s = cached_word(b, w, &b->params[w][c], &word[c]);
+            s = cached_word(b, w, c, &word[c]);
     }
     /* Channels that part from a shared stack here start from a copy of it
      * as it was below this word; copy all before adding to any. */
@@ -257,7 +252,7 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
         if (bottom) {
             s = ll_layer_clone(word[c], &acc[c]);
         } else {
-            double cost = ll_cost_add(b->n, b->orders, ll_get_thread_count()), start;
+            double cost = b->cost.add, start;
             if ((s = ensure_bottom(b, c, acc)) != LL_OK)
                 break;
             report(b, "adding");
@@ -275,35 +270,12 @@ static ll_status add_level(build *b, size_t w, ll_layer *acc[3], size_t below[3]
         if (s == LL_OK && top && b->sink)
             s = finish_channel(b, c, owner, acc);
     }
-    for (c = 0; c < b->nch; ++c) {
-        if (word[c] && same_word_as(b, w, c) == c)
+    for (c = 0; c < b->nch; ++c)
+        if (word[c] && lv->same[c] == c)
             ll_layer_destroy(word[c]);
-        below[c] = owner[c];
-    }
     if (!bottom)
         b->pending = 0; /* every stack the levels above need is made */
     return s;
-}
-
-/* Estimated seconds of the whole build (for progress fractions). */
-static double total_cost(const build *b)
-{
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, threads = ll_get_thread_count();
-    double t = 0.0;
-    for (w = b->m->count; w-- > 0;) {
-        int bottom = w + 1 == b->m->count;
-        stack_owners(b, w, bottom ? NULL : below, owner);
-        for (c = 0; c < b->nch; ++c) {
-            if (owner[c] != c)
-                continue;
-            if (same_word_as(b, w, c) == c)
-                t += ll_cost_word(&b->params[w][c], b->n, b->orders, threads);
-            if (!bottom)
-                t += ll_cost_add(b->n, b->orders, threads);
-        }
-        memcpy(below, owner, sizeof below);
-    }
-    return t;
 }
 
 static void build_free(build *b)
@@ -311,6 +283,8 @@ static void build_free(build *b)
     ll_free(b->nodes);
     ll_free(b->weights);
     ll_free(b->params);
+    ll_free(b->cost.word);
+    ll_free(b->levels);
 }
 
 /* The options and the monitors of a build. monitor: the caller's
@@ -337,6 +311,28 @@ static ll_status build_start(build *b, const ll_material *m, const ll_build_opti
     return ll_build_options_read(opts, &b->o, fn);
 }
 
+/* The header a file of this material carries, in full (the stack's
+ * eta and roughness, the metadata, the error goal). */
+static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
+                        ll_bsdf_write_options *header)
+{
+    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
+    ll_material_header(m, n_channels, &full.eta, full.alpha);
+    full.metadata = m->metadata;
+    full.error_goal = o->error_goal > 0.0   ? o->error_goal
+                      : m->error_goal > 0.0 ? m->error_goal
+                                            : 1e-3;
+    *header = full;
+}
+
+/* The build's header handed to the caller (fields that header's
+ * struct_size covers; checked before the build: cannot fail). */
+static void give_header(const build *b, ll_bsdf_write_options *header)
+{
+    (void)ll_struct_write(header, &b->header, sizeof b->header, "ll_material_build_layers",
+                          "ll_bsdf_write_options");
+}
+
 /* Resolution, budget, quadrature and per-channel parameters. share: a
  * distributed build's (nullable), whose ranks hold 1 / n_ranks each;
  * streamed: the budget is the streamed build's (ll_material_build). */
@@ -344,7 +340,7 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
                             const ll_monitor *monitor, const char *fn, ll_share *share,
                             int streamed)
 {
-    ll_cost_plan cost;
+    double peak;
     ll_status s = build_start(b, m, opts, monitor, fn);
     b->share = share;
     if (s == LL_OK)
@@ -355,18 +351,23 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     /* The parameters (as many as the words), then the budget: nothing
      * that grows with the resolution is allocated before it. */
     b->params = ll_calloc_array(m->count, sizeof *b->params);
-    if (!b->params)
+    b->cost.word = ll_calloc_array(m->count, sizeof *b->cost.word);
+    b->levels = ll_calloc_array(m->count, sizeof *b->levels);
+    if (!b->params || !b->cost.word || !b->levels) {
+        build_free(b);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
-    ll_material_params(m, b->nch, b->params);
-    ll_material_cost(m, (const ll_word_params(*)[3])b->params, b->n, b->orders, b->nch,
-                     b->o.threads ? b->o.threads : ll_get_thread_count(), &cost);
-    if (!streamed)
-        cost.peak_bytes = cost.held_peak_bytes; /* every stack kept to the end */
-    if (share) {
-        cost.peak_bytes /= (double)share->n_ranks;
-        share->peak_bytes = cost.peak_bytes;
     }
-    s = ll_check_budget(m, &cost, b->o.max_memory_bytes, fn);
+    ll_material_params(m, b->nch, b->params);
+    ll_material_levels((const ll_word_params(*)[3])b->params, m->count, b->nch, b->levels);
+    fill_header(m, &b->o, b->nch, &b->header);
+    /* The cost on the threads the build runs on (run_build sets them). */
+    s = ll_material_cost_build(m, (const ll_word_params(*)[3])b->params, b->levels, b->n,
+                               b->orders, b->nch,
+                               b->o.threads ? b->o.threads : ll_get_thread_count(), streamed,
+                               share ? share->n_ranks : 1, b->o.max_memory_bytes, fn, &peak,
+                               &b->cost);
+    if (share)
+        share->peak_bytes = peak;
     if (s != LL_OK) {
         build_free(b);
         return s;
@@ -385,40 +386,27 @@ static ll_status build_init(build *b, const ll_material *m, const ll_build_optio
     return s;
 }
 
-/* The header a file of this material carries (fields that header's
- * struct_size covers). */
-static void fill_header(const ll_material *m, const ll_build_options *o, size_t n_channels,
-                        ll_bsdf_write_options *header)
-{
-    ll_bsdf_write_options full = LL_BSDF_WRITE_OPTIONS_INIT;
-    ll_material_header(m, n_channels, &full.eta, full.alpha);
-    full.metadata = m->metadata;
-    full.error_goal = o->error_goal > 0.0   ? o->error_goal
-                      : m->error_goal > 0.0 ? m->error_goal
-                                            : 1e-3;
-    /* Checked before the build: cannot fail. */
-    (void)ll_struct_write(header, &full, sizeof full, "ll_material_build_layers",
-                          "ll_bsdf_write_options");
-}
-
 /* The build proper, on an initialised state; restores the thread count. */
 static ll_status run_build(build *b, ll_layer *layers[3], double extra_cost)
 {
+    static const size_t no_stack[3] = { 0, 0, 0 };
     ll_layer *acc[3] = { NULL, NULL, NULL };
-    size_t below[3] = { 0, 0, 0 }, w, c, saved_threads = ll_get_thread_count();
+    size_t k, c, saved_threads = ll_get_thread_count();
+    /* After the last level: whose stack each channel's is. */
+    const size_t *owner = b->m->count ? b->levels[b->m->count - 1].owner : no_stack;
     ll_status s = LL_OK;
 
     if (b->o.threads)
         s = ll_set_thread_count(b->o.threads);
-    b->total = total_cost(b) + extra_cost;
-    for (w = b->m->count; w-- > 0 && s == LL_OK;)
-        s = add_level(b, w, acc, below, w + 1 == b->m->count, w == 0);
+    b->total = b->cost.total + extra_cost;
+    for (k = 0; k < b->m->count && s == LL_OK; ++k)
+        s = add_level(b, &b->levels[k], acc);
     for (c = 0; c < b->nch && s == LL_OK && !b->sink; ++c)
-        if (below[c] != c)
-            s = ll_layer_clone(acc[below[c]], &layers[c]);
+        if (owner[c] != c)
+            s = ll_layer_clone(acc[owner[c]], &layers[c]);
     if (s == LL_OK && !b->sink)
         for (c = 0; c < b->nch; ++c)
-            if (below[c] == c) {
+            if (owner[c] == c) {
                 layers[c] = acc[c];
                 acc[c] = NULL;
             }
@@ -489,7 +477,7 @@ ll_status ll_material_build_layers_cached(const ll_material *material,
     if (s == LL_OK) {
         *n_channels = b.nch;
         if (header)
-            fill_header(b.m, &b.o, b.nch, header);
+            give_header(&b, header);
     } else {
         for (c = 0; c < 3; ++c) {
             ll_layer_destroy(layers[c]);
@@ -540,7 +528,6 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
 {
     build b;
     ll_layer *layers[3] = { NULL, NULL, NULL };
-    double write_cost;
     ll_status s;
     size_t c;
 
@@ -551,15 +538,9 @@ ll_status ll_material_build(const ll_material *material, const ll_build_options 
     s = build_init(&b, material, opts, monitor, "ll_material_build", NULL, 1);
     if (s != LL_OK)
         return s;
-    /* The writing's share of the progress bar. */
-    write_cost = ll_cost_write(b.n, b.orders, b.nch);
-    {
-        ll_bsdf_write_options header = LL_BSDF_WRITE_OPTIONS_INIT;
-        fill_header(b.m, &b.o, b.nch, &header);
-        s = ll_channel_writer_open(out_path, b.nch, &header, &b.sink);
-    }
-    if (s == LL_OK)
-        s = run_build(&b, layers, write_cost);
+    s = ll_channel_writer_open(out_path, b.nch, &b.header, &b.sink);
+    if (s == LL_OK) /* with the writing's share of the progress bar */
+        s = run_build(&b, layers, b.cost.write);
     if (s == LL_OK) {
         const ll_monitor *writing;
         report(&b, "writing");
@@ -643,7 +624,7 @@ static ll_status build_shared(const ll_material *material, const ll_build_option
     if (s == LL_OK) {
         *n_channels = b.nch;
         if (header && share->rank == 0)
-            fill_header(b.m, &b.o, b.nch, header);
+            give_header(&b, header);
     }
     if (s != LL_OK || share->rank != 0)
         for (c = 0; c < 3; ++c) {

@@ -5,7 +5,7 @@
  * budget can refuse a build before it allocates anything.
  *
  * The model follows the build of material_build.c step by step (the same
- * sharing between channels): each word's layer (its descriptor's cost),
+ * sharing between channels: the walk of material_sharing.c): each word's layer (its descriptor's cost),
  * each adding step, each doubling of a medium, the writing. It gives the
  * peak memory (an upper bound, which the budget is checked against) and
  * the work by kind (ll_work): counts, not seconds. The rates below were
@@ -144,7 +144,7 @@ static double layer_bytes(size_t n, size_t m, double dense_orders)
     return 8.0 * (double)n * (double)n * dense_orders + (double)m * ORDER_BYTES(n);
 }
 
-double ll_cost_add(size_t n, size_t m, size_t threads)
+static double cost_add(size_t n, size_t m, size_t threads)
 {
     return parallel(add_cpu(n, (double)m, (double)m, m), m, threads);
 }
@@ -194,7 +194,7 @@ void ll_cost_word_detail(const ll_word_params *p, size_t n, size_t m, ll_work *w
     *bytes = layer_bytes(n, m, c.dense_orders);
 }
 
-double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
+static double cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
 {
     ll_word_cost c;
     double cpu, wall;
@@ -203,37 +203,12 @@ double ll_cost_word(const ll_word_params *p, size_t n, size_t m, size_t threads)
     return wall;
 }
 
-double ll_cost_write(size_t n, size_t m, size_t n_channels)
+static double cost_write(size_t n, size_t m, size_t n_channels)
 {
     /* (Progress shares only: about 17 dense orders per channel.) */
     double dense = 17.0 < (double)m ? 17.0 : (double)m;
     return (double)n * (double)n * dense * (double)n_channels * COST_WRITE;
 }
-
-size_t ll_same_word_as(const ll_word_params (*params)[3], size_t w, size_t c)
-{
-    size_t d;
-    for (d = 0; d < c; ++d)
-        if (ll_word_params_equal(&params[w][d], &params[w][c]))
-            return d;
-    return c;
-}
-
-void ll_stack_owners(const ll_word_params (*params)[3], size_t w, size_t nch,
-                     const size_t *below, size_t *owner)
-{
-    size_t c, d;
-    for (c = 0; c < nch; ++c) {
-        owner[c] = c;
-        for (d = 0; d < c; ++d)
-            if ((!below || below[d] == below[c]) &&
-                ll_word_params_equal(&params[w][d], &params[w][c])) {
-                owner[c] = d;
-                break;
-            }
-    }
-}
-
 
 /*
  * The peak of a streamed build (ll_material_build, material_build.c),
@@ -354,7 +329,8 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
                             size_t n, size_t m, size_t nch, size_t t)
 {
     stream_state st;
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, bottom_word = mat->count - 1;
+    ll_level_walk lv;
+    size_t c, bottom_word = mat->count - 1;
     double acc_dense[3] = { 0, 0, 0 }, h = (double)(n / 2), nn = (double)n + 2.0;
     int pending = 0;
 
@@ -364,10 +340,11 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
     st.t = t ? t : 1;
     for (c = 0; c < 3; ++c)
         st.set_of[c] = -1;
-    for (w = mat->count; w-- > 0;) {
-        int bottom = w + 1 == mat->count, top = w == 0;
+    ll_level_walk_begin(&lv, params, mat->count, nch);
+    while (ll_level_walk_next(&lv)) {
+        const size_t w = lv.word, *below = lv.below, *owner = lv.owner;
+        const int bottom = lv.bottom, top = lv.top;
         double words = 0.0, dense[3];
-        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
         for (c = 0; c < nch; ++c) {
             ll_word_cost wc;
             word_cost(&params[w][c], n, m, &wc);
@@ -379,7 +356,7 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
             pending = 1; /* made when the level above first needs it */
         } else {
             for (c = 0; c < nch; ++c)
-                if (owner[c] == c && ll_same_word_as(params, w, c) == c)
+                if (owner[c] == c && lv.same[c] == c)
                     words += stream_word(&st, &params[w][c]);
             /* Parting channels start from a clone of the stack below. */
             for (c = 0; c < nch && !bottom; ++c)
@@ -414,7 +391,6 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
         }
         for (c = 0; c < nch; ++c)
             acc_dense[c] = dense[c];
-        memcpy(below, owner, sizeof below);
     }
     /* The commit: the CDF and one column per channel from the spill. */
     stream_need(&st, 4.0 * nn * nn + (double)nch * 8.0 * (double)n * (double)m);
@@ -424,7 +400,8 @@ static double streamed_peak(const ll_material *mat, const ll_word_params (*param
 void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3], size_t n,
                       size_t m, size_t nch, size_t threads, ll_cost_plan *out)
 {
-    size_t below[3] = { 0, 0, 0 }, owner[3], w, c, t = threads < m ? threads : m;
+    ll_level_walk lv;
+    size_t c, t = threads < m ? threads : m;
     double acc_nz[3] = { 0, 0, 0 }, acc_dense[3] = { 0, 0, 0 }, peak = 0.0;
     double h = (double)(n / 2), stored = 0.0;
 
@@ -433,11 +410,12 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
     out->m = m;
     out->channels = nch;
     out->threads = threads;
-    for (w = mat->count; w-- > 0;) {
-        int bottom = w + 1 == mat->count;
+    ll_level_walk_begin(&lv, params, mat->count, nch);
+    while (ll_level_walk_next(&lv)) {
+        const size_t w = lv.word, *below = lv.below, *owner = lv.owner;
+        const int bottom = lv.bottom;
         double words = 0.0, before = 0.0, result = 0.0, scratch = 0.0, held = 0.0;
         double nz[3], dense[3];
-        ll_stack_owners(params, w, nch, bottom ? NULL : below, owner);
         for (c = 0; c < nch; ++c) {
             nz[c] = dense[c] = 0.0;
             if (!bottom && owner[c] == c)
@@ -449,7 +427,7 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
             if (owner[c] != c)
                 continue;
             word_cost(p, n, m, &wc);
-            if (ll_same_word_as(params, w, c) == c) {
+            if (lv.same[c] == c) {
                 ll_work ww;
                 word_work(&wc, n, m, &ww);
                 ++out->layers_built;
@@ -488,12 +466,11 @@ void ll_material_cost(const ll_material *mat, const ll_word_params (*params)[3],
             acc_nz[c] = nz[c];
             acc_dense[c] = dense[c];
         }
-        memcpy(below, owner, sizeof below);
     }
     /* Writing: the finished layers and the file's float32 coefficients
      * with their spline fits (about as large again). */
     for (c = 0; c < nch; ++c)
-        if (below[c] == c)
+        if (lv.owner[c] == c)
             stored += (double)n * (double)n * acc_dense[c];
     if (16.0 * stored > peak)
         peak = 16.0 * stored;
@@ -525,6 +502,38 @@ ll_status ll_check_budget(const ll_material *mat, const ll_cost_plan *plan, size
                    "default is half of the physical memory) or lower the resolution",
                    fn, mat->source, plan->n, plan->m, plan->channels,
                    plan->channels == 1 ? "" : "s", need, have);
+}
+
+ll_status ll_material_cost_build(const ll_material *mat, const ll_word_params (*params)[3],
+                                 const ll_level_walk *levels, size_t n, size_t m, size_t nch,
+                                 size_t threads, int streamed, size_t ranks, size_t budget,
+                                 const char *fn, double *peak_bytes, ll_build_weights *weights)
+{
+    ll_cost_plan cost;
+    size_t k, c;
+    ll_material_cost(mat, params, n, m, nch, threads, &cost);
+    if (!streamed)
+        cost.peak_bytes = cost.held_peak_bytes; /* every stack kept to the end */
+    cost.peak_bytes /= (double)ranks;
+    *peak_bytes = cost.peak_bytes;
+    /* The weights, summed in the order the build makes its steps. */
+    weights->add = cost_add(n, m, threads);
+    weights->write = cost_write(n, m, nch);
+    weights->total = 0.0;
+    for (k = 0; k < mat->count; ++k) {
+        const ll_level_walk *lv = &levels[k];
+        for (c = 0; c < nch; ++c) {
+            if (lv->owner[c] != c)
+                continue;
+            if (lv->same[c] == c) {
+                weights->word[lv->word][c] = cost_word(&params[lv->word][c], n, m, threads);
+                weights->total += weights->word[lv->word][c];
+            }
+            if (!lv->bottom)
+                weights->total += weights->add;
+        }
+    }
+    return ll_check_budget(mat, &cost, budget, fn);
 }
 
 /* The worker threads a build with these options would run on. */

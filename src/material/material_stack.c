@@ -102,20 +102,6 @@ void ll_material_params(const ll_material *m, size_t n_channels, ll_word_params 
         }
 }
 
-int ll_word_params_equal(const ll_word_params *a, const ll_word_params *b)
-{
-    size_t k;
-    if (a->desc != b->desc || a->choice != b->choice)
-        return 0;
-    /* Two tables of the same size are different words. */
-    if ((a->file || b->file) && (!a->file || !b->file || strcmp(a->file, b->file) != 0))
-        return 0;
-    for (k = 0; k < LL_WORD_MAX_VALUES; ++k)
-        if (a->v[k] != b->v[k])
-            return 0;
-    return 1;
-}
-
 /* The roughness of an interface word in channel c: its "alpha" number. */
 static double word_alpha(const ll_word *w, size_t c, size_t n_channels)
 {

@@ -91,7 +91,8 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
     for (b = 0; b < bases; ++b) {
         ll_material view;
         ll_cost_plan one;
-        size_t below[3] = { 0, 0, 0 }, owner[3], w, c, k;
+        ll_level_walk lv;
+        size_t c, k;
         double cached = 0.0;
         ll_material_basis_view(m, b, words, &view);
         ll_material_params(&view, nch, params);
@@ -107,25 +108,22 @@ ll_status ll_material_cost_bases(const ll_material *m, size_t n, size_t orders, 
         if (one.stored_values > stored)
             stored = one.stored_values;
         /* The words the cache gives: as the build visits them, bottom-up. */
-        for (w = m->count; w-- > 0;) {
-            int bottom = w + 1 == m->count;
-            ll_stack_owners((const ll_word_params(*)[3])params, w, nch, bottom ? NULL : below,
-                            owner);
+        ll_level_walk_begin(&lv, (const ll_word_params(*)[3])params, m->count, nch);
+        while (ll_level_walk_next(&lv)) {
             for (c = 0; c < nch; ++c) {
                 ll_work work;
                 double bytes;
                 size_t doublings;
-                const ll_word_params *p = &params[w][c];
-                if (owner[c] != c || ll_same_word_as((const ll_word_params(*)[3])params, w, c) != c)
+                const ll_word_params *p = &params[lv.word][c];
+                if (lv.owner[c] != c || lv.same[c] != c)
                     continue;
                 ll_cost_word_detail(p, n, orders, &work, &doublings, &bytes);
-                if (sim_lookup(cache, &clock, w, p, bytes)) {
+                if (sim_lookup(cache, &clock, lv.word, p, bytes)) {
                     out->layers_built--;
                     out->doublings -= doublings;
                     ll_work_add(&out->work, &work, -1.0);
                 }
             }
-            memcpy(below, owner, sizeof below);
         }
         /* in memory: the most recently used entries */
         for (k = 0; k < LL_WORD_CACHE_ENTRIES; ++k) {
