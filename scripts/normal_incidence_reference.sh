@@ -1,5 +1,5 @@
 #!/bin/sh
-# The precise references of issue 14, "near normal incidence" (not part of
+# The precise references near normal incidence (docs/method.md; not part of
 # `make test`, which runs a short version in tests/test_normal_incidence.c):
 #  - tests/reference/mc_stack.c: Monte Carlo of the original's
 #    coated-gold-with-scatmedium recipe (dielectric eta 1.5 alpha 0.1 / HG

@@ -23,12 +23,11 @@ lib = ctypes.CDLL(LIB)
 D, P, S = ctypes.c_double, ctypes.c_void_p, ctypes.c_size_t
 lib.ll_layer_create.argtypes = [P, P, S, S, ctypes.POINTER(P)]
 lib.ll_layer_destroy.argtypes = [P]
-lib.ll_layer_set_henyey_greenstein.argtypes = [P, D, D]
-lib.ll_layer_expand.argtypes = [P, D]
-lib.ll_layer_eval.argtypes = [P, D, D, D]
-lib.ll_layer_eval.restype = D
+lib.ll_layer_set_henyey_greenstein.argtypes = [P, D, D, P]
+lib.ll_layer_expand.argtypes = [P, D, P]
+lib.ll_layer_eval.argtypes = [P, D, D, D, ctypes.POINTER(D)]
 lib.ll_layer_albedo.argtypes = [P, D, ctypes.POINTER(D), ctypes.POINTER(D)]
-lib.ll_quad_gauss_lobatto.argtypes = [S, P, P]
+lib.ll_quad_gauss_lobatto.argtypes = [S, P, P, P]
 
 results = []
 
@@ -41,11 +40,11 @@ def check(name, ok, detail):
 def slab(n, albedo, g, tau):
     x = np.zeros(n)
     w = np.zeros(n)
-    assert lib.ll_quad_gauss_lobatto(n, x.ctypes.data, w.ctypes.data) == 0
+    assert lib.ll_quad_gauss_lobatto(n, x.ctypes.data, w.ctypes.data, None) == 0
     layer = P()
     assert lib.ll_layer_create(x.ctypes.data, w.ctypes.data, n, n, ctypes.byref(layer)) == 0
-    assert lib.ll_layer_set_henyey_greenstein(layer, albedo, g) == 0
-    assert lib.ll_layer_expand(layer, tau) == 0
+    assert lib.ll_layer_set_henyey_greenstein(layer, albedo, g, None) == 0
+    assert lib.ll_layer_expand(layer, tau, None) == 0
     return layer
 
 
@@ -99,7 +98,9 @@ def main():
             for j in range(32):
                 if mu[j] < 0.05:
                     continue  # grazing: below the layer's first nodes, extrapolated
-                ours = lib.ll_layer_eval(layer, -mu[j], mu0, phi) * mu0
+                f = D()
+                assert lib.ll_layer_eval(layer, mu0, -mu[j], phi, ctypes.byref(f)) == 0
+                ours = f.value * mu0
                 worst = max(worst, abs(ours / ref[j] - 1.0))
         check("reflected radiance vs DISORT a=%g g=%g tau=%g mu0=%g" % (albedo, g, tau, mu0),
               worst < 0.005, "largest relative deviation %.2e" % worst)
