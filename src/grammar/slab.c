@@ -197,7 +197,7 @@ int ll_slab_solve(size_t h, const double *PT, const double *PR, const double *x,
 
 /*
  * The cost model, measured with bench/slab.c (one thread, OpenBLAS 0.3.21,
- * the 2-core development machine under load; HG g = 0.9, tau = 4, 17
+ * on 2 cores; HG g = 0.9, tau = 4, 17
  * doublings): one order by the slab costs as much as this many adding
  * steps of doubling,
  *     h      8    20    50   100   200   549

@@ -9,7 +9,7 @@
  * each adding step, each doubling of a medium, the writing. It gives the
  * peak memory (an upper bound, which the budget is checked against) and
  * the work by kind (ll_work): counts, not seconds. The rates below were
- * measured stage by stage on the development machine (x86-64, 2 cores,
+ * measured stage by stage (x86-64, 2 cores,
  * OpenBLAS; docs/material-language.md, "Estimates") and serve only as the
  * relative weights of the build's progress; the time a build takes is
  * llbuild's model (tools/llbuild/time_model.c), from the counts.
