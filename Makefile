@@ -108,11 +108,11 @@ STATIC   := $(BUILD)/lib/liblayerlab.a
 
 # The reader library: open, inspect, evaluate and sample .bsdf files, for
 # renderers. Its files are support/ without the threads (OpenMP), the
-# splines of numerics/, and storage/ without the writer; a new file in
-# storage/ is a reader file unless it is named like the writer's. They must
-# not include layer/, words/, search/, grammar/, distribution/ or material/
-# (tests/layering.sh).
-# The patterns live in src/reader-sources.txt, which CMakeLists.txt reads
+# splines of numerics/, and reader/ (the writer is writer/): the folder says
+# which library a file is in, so a new file in reader/ is a reader file
+# whatever its name. They must not include layer/, words/, search/,
+# grammar/, writer/, distribution/ or material/ (tests/layering.sh).
+# The folders live in src/reader-sources.txt, which CMakeLists.txt reads
 # too: one list for both builds. Reader objects are compiled without
 # -fopenmp (they have no OpenMP) and shared with liblayerlab.
 READER_PATTERNS := $(shell sed -n 's/^\([^\#!].*\)/\1/p' src/reader-sources.txt)

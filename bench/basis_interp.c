@@ -1,6 +1,6 @@
 /*
  * Which interpolation between the sample positions of a textured .bsdf
- * file's parameter (ll_bsdf_basis_coefficients, src/storage/bsdf_basis.c):
+ * file's parameter (ll_bsdf_basis_coefficients, src/reader/bsdf_basis.c):
  * linear or Catmull-Rom (the node spline, numerics/spline.c)? Measured, not
  * assumed: textured files whose bases are layers built directly at the
  * sample values, evaluated at in-between values with each interpolation's

@@ -1,12 +1,13 @@
 #!/bin/sh
 # The house plan held by a check: the folders of src/ are layers,
-#   support < numerics < layer < words < search < grammar < storage <
-#   distribution < material,
+#   support < numerics < layer < words < search < grammar < reader <
+#   writer < distribution < material,
 # and a file includes only from its own folder or one below
 # (`#include "layer/order.h"` in src/grammar/ is fine, in src/numerics/ it
 # is not). The reader library's files (READER_SRC, from the Makefile) must
-# not reach layer/, words/, search/, grammar/ or material/ at all, directly or
-# through a header of theirs: the reader is linked without them.
+# not reach layer/, words/, search/, grammar/, writer/, distribution/ or
+# material/ at all, directly or through a header of theirs: the reader is
+# linked without them.
 # Each problem is printed as file:line. Then the check is run on a
 # temporary bad tree, where it must fail and name the right lines.
 # Run by `make test` (with READER_SRC set); prints one line per check and
@@ -14,8 +15,8 @@
 #   sh tests/layering.sh --tree DIR READER_FILES...   checks DIR only
 set -u
 
-ORDER="support numerics layer words search grammar storage distribution material"
-READER_FORBIDDEN="layer words search grammar distribution material"
+ORDER="support numerics layer words search grammar reader writer distribution material"
+READER_FORBIDDEN="layer words search grammar writer distribution material"
 
 rank() {
     r=0
@@ -133,7 +134,7 @@ n=$?
 if [ -z "$READER_SRC" ]; then
     fail "no reader files (READER_SRC is empty and make print-reader-src gave none)"
 elif [ "$n" -eq 0 ]; then
-    pass "src/ includes only from its own folder or below ($ORDER), and the $(echo $READER_SRC | wc -w) reader files reach no layer/, words/, search/, grammar/ or material/"
+    pass "src/ includes only from its own folder or below ($ORDER), and the $(echo $READER_SRC | wc -w) reader files reach no layer/, words/, search/, grammar/, writer/, distribution/ or material/"
 else
     fail "$n layering violation(s):"
     sed 's/^/    /' "$scratch/report"
@@ -142,31 +143,35 @@ fi
 # ------------------------------------------------- the check of the check
 bad=$scratch/bad
 mkdir -p "$bad/src/support" "$bad/src/numerics" "$bad/src/layer" "$bad/src/grammar" \
-    "$bad/src/storage" "$bad/src/extras"
+    "$bad/src/reader" "$bad/src/writer" "$bad/src/extras"
 printf '#include "support/support.h"\n' > "$bad/src/support/support.h"
 printf '#include "support/support.h"\n#include <math.h>\n' > "$bad/src/numerics/fine.c"
 printf '/* upward */\n#include "layer/layer.h"\n' > "$bad/src/numerics/upward.c"
 printf '#include "numerics/x.h"\n' > "$bad/src/layer/layer.h"
 printf '#include "layer/layer.h"\n' > "$bad/src/grammar/grammar.h"
-printf '#include "support/support.h"\n\n#include "grammar/grammar.h"\n' > "$bad/src/storage/reader.h"
-printf '#include "storage/reader.h"\n' > "$bad/src/storage/reader.c"
-printf '#include "layer/layer.h"\n' > "$bad/src/storage/writer.c"
-sh "$0" --tree "$bad" src/storage/reader.c > "$scratch/bad.report"
+printf '#include "support/support.h"\n\n#include "grammar/grammar.h"\n' > "$bad/src/reader/reader.h"
+printf '#include "reader/reader.h"\n#include "writer/writer.h"\n' > "$bad/src/reader/reader.c"
+printf '#include "reader/reader.h"\n' > "$bad/src/writer/writer.h"
+printf '#include "layer/layer.h"\n#include "writer/writer.h"\n' > "$bad/src/writer/writer.c"
+sh "$0" --tree "$bad" src/reader/reader.c > "$scratch/bad.report"
 n=$?
 ok=1
 for want in "src/extras/: folder not in the layer order" \
             'src/numerics/upward.c:2: includes "layer/layer.h"' \
-            'src/storage/reader.h:3: includes "grammar/grammar.h": the reader library does not link grammar/ (reached from the reader file src/storage/reader.c)'; do
+            'src/reader/reader.h:3: includes "grammar/grammar.h": the reader library does not link grammar/ (reached from the reader file src/reader/reader.c)' \
+            'src/reader/reader.c:2: includes "writer/writer.h": writer/ is above reader/' \
+            'src/reader/reader.c:2: includes "writer/writer.h": the reader library does not link writer/'; do
     grep -qF "$want" "$scratch/bad.report" || ok=0
 done
-# The writer may include layer/, a file may include its own folder and below.
-if grep -q -e 'writer\.c' -e 'fine\.c' -e 'grammar\.h:' -e 'layer\.h:' "$scratch/bad.report"; then
+# The writer may include layer/ and reader/, a file may include its own
+# folder and below.
+if grep -q -e 'writer\.[ch]:' -e 'fine\.c' -e 'grammar\.h:' -e 'layer\.h:' "$scratch/bad.report"; then
     ok=0
 fi
-if [ "$n" -eq 3 ] && [ "$ok" = 1 ]; then
-    pass "on a bad tree the check fails and names the 3 problems (a folder outside the order, an upward include at its line, a reader header reaching grammar/)"
+if [ "$n" -eq 5 ] && [ "$ok" = 1 ]; then
+    pass "on a bad tree the check fails and names the 5 problems (a folder outside the order, an upward include at its line, a reader header reaching grammar/, a reader file including writer/: upward and not linked)"
 else
-    fail "on a bad tree the check gave status $n (expected 3) or the wrong lines:"
+    fail "on a bad tree the check gave status $n (expected 5) or the wrong lines:"
     sed 's/^/    /' "$scratch/bad.report"
 fi
 

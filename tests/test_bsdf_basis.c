@@ -1,5 +1,5 @@
 /*
- * ll_bsdf_basis_coefficients (src/storage/bsdf_basis.c): the weights of a
+ * ll_bsdf_basis_coefficients (src/reader/bsdf_basis.c): the weights of a
  * textured file's bases for a point of parameter space, and what a file
  * evaluated with them gives: the untextured file of the same layer at a
  * sample point, the documented interpolation error between samples, a

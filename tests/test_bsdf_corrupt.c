@@ -7,7 +7,7 @@
  * nothing leaks (LeakSanitizer checks at exit under SANITIZE=1).
  */
 #include "test_bsdf_util.h"
-#include "storage/bsdf_format.h"
+#include "reader/bsdf_format.h"
 
 /* The golden file's layout (tests/data/README.md). */
 enum {

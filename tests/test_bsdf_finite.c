@@ -11,7 +11,7 @@
  *    there); a large dip, a negative total or a non-zero start are refused.
  */
 #include "test_bsdf_util.h"
-#include "storage/bsdf_format.h"
+#include "reader/bsdf_format.h"
 
 #include <float.h>
 

@@ -5,7 +5,7 @@
  * renderer-convention calls, plus the layer convention's mapping.
  */
 #include "test_bsdf_util.h"
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 #include "numerics/spline.h"
 
 static ll_bsdf *open_golden(void)

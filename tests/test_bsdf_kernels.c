@@ -6,7 +6,7 @@
  * covers the other.
  */
 #include "test_bsdf_util.h"
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 static ll_bsdf *open_golden(void)
 {

@@ -13,7 +13,7 @@
  *    it does not hang).
  */
 #include "test_bsdf_util.h"
-#include "storage/bsdf_format.h"
+#include "reader/bsdf_format.h"
 #include "words/merl.h"
 
 #include <fcntl.h>

@@ -1,5 +1,5 @@
 /*
- * ll_bsdf_get_parameter_name (src/storage/bsdf_names.c): the names of a
+ * ll_bsdf_get_parameter_name (src/reader/bsdf_names.c): the names of a
  * textured file's parameters from the metadata's "parameters" array, the
  * default names "p0", "p1", ... for every other metadata, and hostile
  * metadata (cut, malformed, deeply nested, oversized) that must still open.

@@ -6,7 +6,7 @@
  */
 #include "test_bsdf_util.h"
 #include "words/heuristics.h" /* ll_fit_microfacet: the original's resolution */
-#include "storage/bsdf_format.h"
+#include "reader/bsdf_format.h"
 
 static void path_in_dir(char *path, size_t size, const char *name)
 {

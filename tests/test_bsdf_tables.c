@@ -1,5 +1,5 @@
 /*
- * ll_bsdf_get_tables (src/storage/bsdf_tables.c): the reader's tables as
+ * ll_bsdf_get_tables (src/reader/bsdf_tables.c): the reader's tables as
  * views. Checked by evaluating from them what the reader evaluates: at a
  * pair of nodes the Catmull-Rom weights are one-hot, so f there is one
  * stored series summed against cos(k phi), which must equal ll_bsdf_eval

@@ -1,6 +1,6 @@
 /*
  * Sweeps in the material language (src/material/material_sweep*.c) and the
- * streaming writer (src/storage/bsdf_writer.c): the axes as parsed, the
+ * streaming writer (src/writer/bsdf_writer.c): the axes as parsed, the
  * language's errors with file:line:column, word layers shared between
  * bases (counted), the streaming writer's bytes against
  * ll_bsdf_write_textured's, a textured build at its samples against the

@@ -1,12 +1,12 @@
 /*
  * The piecewise-bilinear 2D warp of the `measured` format
- * (src/storage/tables_warp.c): invert is the exact inverse of sample, the
+ * (src/reader/tables_warp.c): invert is the exact inverse of sample, the
  * density integrates to 1, the density sample reports is the one a
  * histogram of its points shows, and between parameter slices everything
  * is interpolated consistently.
  */
 #include "test_util.h"
-#include "storage/tables_warp.h"
+#include "reader/tables_warp.h"
 
 #define W 7
 #define H 5

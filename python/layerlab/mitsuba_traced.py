@@ -4,7 +4,7 @@ kernel instead of breaking it into one C call per wavefront.
 
 The tables come from the C reader (ll_bsdf_get_tables: validated once, never
 parsed here) and are uploaded once as Dr.Jit arrays. The algorithm is the C
-reader's (src/storage/bsdf_eval.c, bsdf_sample.c, bsdf_fourier.c; Jakob et
+reader's (src/reader/bsdf_eval.c, bsdf_sample.c, bsdf_fourier.c; Jakob et
 al. 2014, sec. 7), i.e. pbrt-v3's FourierBSDF, in the layer convention of
 ll_bsdf.h (mu_i > 0: light arriving from above; mu_o the outgoing cosine):
 

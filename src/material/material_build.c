@@ -12,7 +12,7 @@
  */
 #include "material/word_table.h"
 #include "layer/layer.h"
-#include "storage/bsdf_write_channels.h"
+#include "writer/bsdf_write_channels.h"
 #include "layerlab/ll_quad.h"
 #include "distribution/share.h"
 
@@ -184,7 +184,7 @@ static ll_status cached_word(build *b, size_t w, size_t c, ll_layer **out)
  * freed, so that the next channel's adding runs without it (kept, the dust
  * on gold's three finished stacks of about 0.45 GB each were alive beside
  * the third channel's adding). The order of the calls changes no byte of the
- * file (bsdf_write_channels.c).
+ * file (writer/bsdf_write_channels.c).
  */
 static ll_status finish_channel(build *b, size_t c, const size_t owner[3], ll_layer *acc[3])
 {

@@ -219,7 +219,7 @@ static ll_status set_medium(ll_layer *layer, double albedo, const double *chi, s
     /* Moments below 1e-12 of the first are not kept: the orders beyond the
      * last one kept hold only the forward term, a diagonal that needs no
      * dense work (the slab takes its exponential, doubling squares it).
-     * At 1e-12, the storage's own drop threshold (LL_DROP_THRESHOLD), the
+     * At 1e-12, the compact orders' own drop threshold (LL_DROP_THRESHOLD), the
      * slab of HG g = 0.9, tau = 4 at n = 400 moves by at most 1.0e-8 in
      * BSDF units (values up to 465; 4.3e-8 relative where |f| > 1e-3)
      * against a cutoff of 1e-15, with 263 dense orders instead of 328: a

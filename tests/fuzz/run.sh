@@ -6,7 +6,7 @@
 # Builds with clang's libFuzzer, AddressSanitizer and
 # UndefinedBehaviorSanitizer:
 #   fuzz_bsdf      tests/fuzz/fuzz_bsdf.c against the reader's sources only
-#                  (src/storage/bsdf_*.c but the writer, spline.c, support/):
+#                  (src/reader/, numerics/spline.c, support/):
 #                  a renderer that reads files links none of the layer code;
 #   fuzz_material  tests/fuzz/fuzz_material.c against every source of the
 #                  library (parse, resolution, estimate), single-threaded.
@@ -52,9 +52,8 @@ FLAGS="${FUZZ_CFLAGS:-} -std=c99 -g -O1 -D_POSIX_C_SOURCE=200809L -DLL_EXPERIMEN
 LIMITS="-timeout=5 -rss_limit_mb=2048 -print_final_stats=1"
 
 build_bsdf() {
-    sources=$(ls src/storage/bsdf_*.c | grep -v -e bsdf_write.c -e bsdf_file_out.c)
     # shellcheck disable=SC2086  # lists of flags and files
-    $CLANG $FLAGS tests/fuzz/fuzz_bsdf.c $sources src/numerics/spline.c src/support/*.c \
+    $CLANG $FLAGS tests/fuzz/fuzz_bsdf.c src/reader/*.c src/numerics/spline.c src/support/*.c \
         -lm -o "$out/fuzz_bsdf"
 }
 

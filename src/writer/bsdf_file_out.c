@@ -20,8 +20,8 @@
  *    points to (followed to the end of the chain) is replaced atomically in
  *    its own directory, and the link stays.
  */
-#include "storage/bsdf_file_out.h"
-#include "storage/bsdf_format.h"
+#include "writer/bsdf_file_out.h"
+#include "reader/bsdf_format.h"
 
 #include <dirent.h>
 #include <errno.h>

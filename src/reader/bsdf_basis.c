@@ -19,7 +19,7 @@
  * At most two weights per parameter are non-zero, so evaluation touches at
  * most 2^P bases (bsdf_eval.c skips the zero ones).
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 /* The hat weight of sample position j of a parameter at x (x already inside
  * [pos[0], pos[count - 1]]): 1 at pos[j], falling linearly to 0 at the

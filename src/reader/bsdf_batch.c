@@ -20,7 +20,7 @@
  * calling thread (ll_last_error_message is per thread) by repeating that
  * one scalar call.
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 #include <pthread.h>
 #include <stdlib.h>

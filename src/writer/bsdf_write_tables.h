@@ -4,7 +4,7 @@
 #ifndef LL_BSDF_WRITE_TABLES_H
 #define LL_BSDF_WRITE_TABLES_H
 
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 /* Nodes of the NDF and sigma tables along u_theta (uniform in u_theta;
  * also the quadrature of the derivation). */

@@ -3,8 +3,8 @@
  * immutable, so sharing it between materials and threads needs nothing but
  * an atomic count) and the read-only queries.
  */
-#include "storage/bsdf_internal.h"
-#include "storage/tables_internal.h"
+#include "reader/bsdf_internal.h"
+#include "reader/tables_internal.h"
 
 #include <stdlib.h>
 #include <string.h>

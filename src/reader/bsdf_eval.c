@@ -4,9 +4,9 @@
  * and ::Pdf compute them (Jakob et al. 2014, sec. 7; bsdf-format.md,
  * "Evaluation").
  */
-#include "storage/bsdf_internal.h"
-#include "storage/tables_internal.h"
-#include "storage/bsdf_format.h"
+#include "reader/bsdf_internal.h"
+#include "reader/tables_internal.h"
+#include "reader/bsdf_format.h"
 
 #include <math.h>
 

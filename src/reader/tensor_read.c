@@ -5,7 +5,7 @@
  * with overflow-checked arithmetic, before the one allocation sized by the
  * field count (itself bounded by what the table's bytes can hold).
  */
-#include "storage/tensor.h"
+#include "reader/tensor.h"
 
 #include <string.h>
 

@@ -37,7 +37,7 @@
  * longest series: never a layer. The output itself is the atomic writer's
  * (bsdf_file_out.c).
  */
-#include "storage/bsdf_write_job.h"
+#include "writer/bsdf_write_job.h"
 #include "layer/layer.h"
 #include "layerlab/ll_bsdf_write.h"
 

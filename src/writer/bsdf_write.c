@@ -34,9 +34,9 @@
  * (bsdf_writer.c) with its spill in memory.
  */
 #include "layerlab/ll_bsdf_write.h"
-#include "storage/bsdf_file_out.h"
-#include "storage/bsdf_write_job.h"
-#include "storage/bsdf_format.h"
+#include "writer/bsdf_file_out.h"
+#include "writer/bsdf_write_job.h"
+#include "reader/bsdf_format.h"
 #include "support/parse_number.h"
 #include "layer/layer.h"
 #include "layer/order.h"

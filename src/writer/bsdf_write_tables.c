@@ -8,17 +8,17 @@
  *     max(0, wi.m) D(m) / sigma(wi) times the change of variables
  *     2 pi^2 u_theta sin(theta_m) on the VNDF grid;
  *  3. the sample grid's nodes pushed through the reader's own warp
- *     (tables_warp.c, built from the very floats written), the incident
- *     direction reflected about each normal, f cos there;
+ *     (reader/tables_warp.c, built from the very floats written), the
+ *     incident direction reflected about each normal, f cos there;
  *  4. stored values f cos 4 sigma(wi) / D(m) with D and sigma as the
  *     tables interpolate them, so a reader's product gives f cos back
  *     exactly at the nodes; the luminance of those values, with a floor
  *     of 1e-3 of the slice's largest, as the sampling density.
  */
 #include "layerlab/ll_tables.h"
-#include "storage/bsdf_write_tables.h"
-#include "storage/bsdf_write_tensor.h"
-#include "storage/tables_warp.h"
+#include "writer/bsdf_write_tables.h"
+#include "writer/bsdf_write_tensor.h"
+#include "reader/tables_warp.h"
 #include "support/watch.h"
 
 #include <math.h>

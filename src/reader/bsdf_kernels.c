@@ -9,7 +9,7 @@
  * ISA extension). Both read the stored floats, widen them (exactly) and
  * compute in double; they differ only in the order of the additions.
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 #if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
 #define LL_BSDF_HAVE_AVX2_PATH 1

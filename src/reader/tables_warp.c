@@ -3,7 +3,7 @@
  * renderers compute the same quantities in float, so the two agree to float
  * rounding.
  */
-#include "storage/tables_warp.h"
+#include "reader/tables_warp.h"
 
 #include <math.h>
 #include <string.h>

@@ -10,7 +10,7 @@
  * with them (bsdf_kernels.c), weighted by its spline weight. Stack use is
  * constant, the work one multiply-add per stored coefficient.
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 #include <math.h>
 

@@ -9,9 +9,9 @@
 #define LL_BSDF_WRITE_JOB_H
 
 #include "layerlab/ll_bsdf_write.h"
-#include "storage/bsdf_file_out.h"
-#include "storage/bsdf_format.h"
-#include "storage/bsdf_write_spill.h"
+#include "writer/bsdf_file_out.h"
+#include "reader/bsdf_format.h"
+#include "writer/bsdf_write_spill.h"
 #include "support/watch.h"
 
 /* Everything known about one file before its bytes are produced. */

@@ -3,9 +3,9 @@
  * field table first, with every offset computed in advance, then the data
  * blocks, padded with zeros to 8-byte boundaries.
  */
-#include "storage/bsdf_write_tensor.h"
-#include "storage/bsdf_file_out.h"
-#include "storage/bsdf_format.h"
+#include "writer/bsdf_write_tensor.h"
+#include "writer/bsdf_file_out.h"
+#include "reader/bsdf_format.h"
 
 #include <string.h>
 

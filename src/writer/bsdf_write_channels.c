@@ -4,8 +4,8 @@
  * each channel as the material builder finishes it, under the build's
  * names and monitor.
  */
-#include "storage/bsdf_write_channels.h"
-#include "storage/bsdf_write_job.h"
+#include "writer/bsdf_write_channels.h"
+#include "writer/bsdf_write_job.h"
 #include "layer/layer.h"
 
 static const char *const fn_names[3] = { "ll_material_build (opening the file)",

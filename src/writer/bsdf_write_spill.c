@@ -1,5 +1,5 @@
 /* The writers' spill file (bsdf_write_spill.h). */
-#include "storage/bsdf_write_spill.h"
+#include "writer/bsdf_write_spill.h"
 
 #include <errno.h>
 #include <stdlib.h>

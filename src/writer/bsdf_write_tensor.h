@@ -6,7 +6,7 @@
 #ifndef LL_BSDF_WRITE_TENSOR_H
 #define LL_BSDF_WRITE_TENSOR_H
 
-#include "storage/tensor.h"
+#include "reader/tensor.h"
 
 /* One field to write: float32 data as floats, uint8 data as bytes (the
  * only two dtypes the format's producers need). */

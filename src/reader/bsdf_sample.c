@@ -6,8 +6,8 @@
  * (SampleFourier). Both inversions are Newton-bisection with a maintained
  * bracket and a bounded number of steps.
  */
-#include "storage/bsdf_internal.h"
-#include "storage/tables_internal.h"
+#include "reader/bsdf_internal.h"
+#include "reader/tables_internal.h"
 
 #include <math.h>
 

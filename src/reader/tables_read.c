@@ -8,8 +8,8 @@
  * variant this reader does not evaluate (spectral or anisotropic files)
  * LL_ERROR_UNSUPPORTED.
  */
-#include "storage/tables_internal.h"
-#include "storage/tensor.h"
+#include "reader/tables_internal.h"
+#include "reader/tensor.h"
 
 #include <math.h>
 #include <string.h>

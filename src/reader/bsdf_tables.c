@@ -9,7 +9,7 @@
 #ifndef LL_EXPERIMENTAL
 #define LL_EXPERIMENTAL
 #endif
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 #include <string.h>
 

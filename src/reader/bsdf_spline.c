@@ -10,7 +10,7 @@
  * division and no binary search per call. tests/test_bsdf_golden.c checks
  * the result against ll_spline_weights.
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 #include "numerics/spline.h"
 
 void ll_bsdf_spline_prepare(ll_bsdf *b)

@@ -16,7 +16,7 @@
  * convenience for binding parameters, never a reason to refuse a file whose
  * numbers all passed validation.
  */
-#include "storage/bsdf_internal.h"
+#include "reader/bsdf_internal.h"
 
 #include <stdio.h>
 #include <string.h>

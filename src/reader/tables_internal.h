@@ -12,8 +12,8 @@
 #ifndef LL_TABLES_INTERNAL_H
 #define LL_TABLES_INTERNAL_H
 
-#include "storage/bsdf_internal.h"
-#include "storage/tables_warp.h"
+#include "reader/bsdf_internal.h"
+#include "reader/tables_warp.h"
 
 typedef struct ll_measured {
     ll_warp2d ndf;        /* D over (u_phi, u_theta) of the normal          */

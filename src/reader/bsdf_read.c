@@ -10,10 +10,10 @@
  * feature this reader does not implement) with a message naming the file
  * and the field.
  */
-#include "storage/bsdf_internal.h"
-#include "storage/bsdf_format.h"
-#include "storage/tables_internal.h"
-#include "storage/tensor.h"
+#include "reader/bsdf_internal.h"
+#include "reader/bsdf_format.h"
+#include "reader/tables_internal.h"
+#include "reader/tensor.h"
 #include "support/regular_file.h"
 
 #include <errno.h>

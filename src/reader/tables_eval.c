@@ -7,8 +7,8 @@
  * then the VNDF warp, then reflection about the normal. Then the cores of
  * the public calls in the layer convention of ll_bsdf.h.
  */
-#include "storage/tables_internal.h"
-#include "storage/bsdf_format.h"
+#include "reader/tables_internal.h"
+#include "reader/bsdf_format.h"
 
 #include <math.h>
 

@@ -9,8 +9,8 @@
  * evaluate there, and scale f by 1 / |mu_o| (the stored series is
  * f * |mu_o|) and, for radiance transport through the interface, eta^2.
  */
-#include "storage/bsdf_internal.h"
-#include "storage/tables_internal.h"
+#include "reader/bsdf_internal.h"
+#include "reader/tables_internal.h"
 
 #include <math.h>
 

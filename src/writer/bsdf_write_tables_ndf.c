@@ -29,7 +29,7 @@
  * tables (the values carry f cos / D and the renderer multiplies D back),
  * so the mixture changes where the grid's resolution goes, not the BSDF.
  */
-#include "storage/bsdf_write_tables.h"
+#include "writer/bsdf_write_tables.h"
 
 #include <math.h>
 #include <string.h>
