@@ -5,10 +5,11 @@
  * ll_bsdf_basis_coefficients at an interior point: 4 non-zero) against the
  * untextured file of one of its layers, same directions. A benchmark driver
  * (never part of `make test`; the numbers are for the report):
- *   cc -std=c99 -O2 -Iinclude bench/basis_cost.c -Lbuild/lib -Wl,-rpath,$PWD/build/lib \
- *      -llayerlab -lm -o build/basis_cost && build/basis_cost /tmp
+ *   cc -std=c99 -O2 -D_DEFAULT_SOURCE -Iinclude bench/basis_cost.c bench/bench_util.c -Lbuild/lib \
+ *      -Wl,-rpath,$PWD/build/lib -llayerlab -lm -o build/basis_cost && build/basis_cost /tmp
  */
 #define _POSIX_C_SOURCE 200809L
+#include "bench_util.h"
 #include "layerlab/ll_bsdf.h"
 #include "layerlab/ll_bsdf_write.h"
 #include "layerlab/ll_layer.h"
@@ -18,31 +19,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
-
-/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
-static ll_status set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
-                                int compensate, size_t n_orders_internal,
-                                const ll_monitor *monitor)
-{
-    ll_microfacet mf = LL_MICROFACET_INIT;
-    mf.eta_re = eta_re;
-    mf.eta_im = eta_im;
-    mf.alpha = alpha;
-    mf.compensate = compensate;
-    mf.n_orders_internal = n_orders_internal;
-    return ll_layer_set_microfacet(layer, &mf, monitor);
-}
-
-/* The resolution a build chooses for a compensated Beckmann interface. */
-static ll_status search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
-                                   size_t *n_orders)
-{
-    ll_microfacet mf = LL_MICROFACET_INIT;
-    mf.eta_re = eta_re;
-    mf.eta_im = eta_im;
-    mf.alpha = alpha;
-    return ll_resolution_search_microfacet(&mf, 0.0, 0.0, NULL, n_nodes, n_orders, NULL);
-}
 
 #define SIDE 8
 #define CALLS 200000
@@ -138,13 +114,13 @@ int main(int argc, char **argv)
     char path[512];
     ll_bsdf *b64 = NULL, *b1 = NULL;
     size_t active = 0;
-    check(search_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
+    check(bench_search_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
     if (n > 64)
         n = 64;
     check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     for (k = 0; k < SIDE; ++k) {
         check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
-        check(set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
+        check(bench_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
         positions[k] = 0.2 + 0.05 * (double)k;
         positions[SIDE + k] = (double)k / (SIDE - 1);
     }

@@ -8,9 +8,11 @@
  * error is |f_interp - f_direct| / f_direct over directions where f_direct
  * exceeds 1% of its peak (max and mean over the directions). A benchmark
  * driver (never part of `make test`): build with
- *   cc -std=c99 -O2 -Iinclude -Isrc bench/basis_interp.c build/lib/liblayerlab.a \
+ *   cc -std=c99 -O2 -D_DEFAULT_SOURCE -Iinclude -Isrc bench/basis_interp.c bench/bench_util.c \
+ *      build/lib/liblayerlab.a \
  *      -llapacke -lopenblas -fopenmp -lm -lpthread -o build/basis_interp && build/basis_interp /tmp
  */
+#include "bench_util.h"
 #include "layerlab/ll_bsdf.h"
 #include "layerlab/ll_bsdf_write.h"
 #include "layerlab/ll_layer.h"
@@ -20,31 +22,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-
-/* ll_layer_set_microfacet of a Beckmann interface given by its numbers. */
-static ll_status set_microfacet(ll_layer *layer, double eta_re, double eta_im, double alpha,
-                                int compensate, size_t n_orders_internal,
-                                const ll_monitor *monitor)
-{
-    ll_microfacet mf = LL_MICROFACET_INIT;
-    mf.eta_re = eta_re;
-    mf.eta_im = eta_im;
-    mf.alpha = alpha;
-    mf.compensate = compensate;
-    mf.n_orders_internal = n_orders_internal;
-    return ll_layer_set_microfacet(layer, &mf, monitor);
-}
-
-/* The resolution a build chooses for a compensated Beckmann interface. */
-static ll_status search_microfacet(double alpha, double eta_re, double eta_im, size_t *n_nodes,
-                                   size_t *n_orders)
-{
-    ll_microfacet mf = LL_MICROFACET_INIT;
-    mf.eta_re = eta_re;
-    mf.eta_im = eta_im;
-    mf.alpha = alpha;
-    return ll_resolution_search_microfacet(&mf, 0.0, 0.0, NULL, n_nodes, n_orders, NULL);
-}
 
 #define N_SAMPLES 5
 static const double alphas[N_SAMPLES] = { 0.05, 0.1, 0.2, 0.3, 0.4 };
@@ -69,7 +46,7 @@ static ll_layer *build(const material *m, double alpha, size_t n, size_t orders)
     ll_layer *l = NULL;
     check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     check(ll_layer_create(x, w, n, orders, &l), "layer");
-    check(set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0, NULL), "microfacet");
+    check(bench_set_microfacet(l, m->eta_re, m->eta_im, alpha, 1, 0, NULL), "microfacet");
     free(x);
     free(w);
     return l;
@@ -180,7 +157,7 @@ int main(int argc, char **argv)
         char path[512];
         ll_bsdf *textured;
         /* One resolution for every build: what the sharpest sample needs. */
-        check(search_microfacet(alphas[0], mats[mi].eta_re, mats[mi].eta_im, &n, &orders),
+        check(bench_search_microfacet(alphas[0], mats[mi].eta_re, mats[mi].eta_im, &n, &orders),
               "heuristic");
         printf("%s: %zu nodes, %zu orders\n", mats[mi].name, n, orders);
         for (k = 0; k < N_SAMPLES; ++k) {
