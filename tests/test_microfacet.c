@@ -22,6 +22,7 @@
 
 #include <layerlab.h>
 #include "test_util.h"
+#include "series_check.h"
 #include "numerics/filon.h"
 #include "words/microfacet.h"
 #include "numerics/series.h"
@@ -180,8 +181,8 @@ static double peak_sharpness(const series_case *c, double mu_o, double mu_i)
 static double series_error(ll_microfacet_model *mf, const series_case *c, double mu_o, double mu_i,
                            double *f, double *ref, double *ours, double *scratch)
 {
-    double mu[2], peak = 0.0, h = LL_PI / (REF_POINTS - 1), worst = 0.0;
-    size_t len, l, k;
+    double mu[2], peak = 0.0, h = LL_PI / (REF_POINTS - 1);
+    size_t len, k;
     mu[0] = mu_o;
     mu[1] = mu_i;
     assert_int_equal(ll_microfacet_prepare(mf, mu, 2), LL_OK);
@@ -197,34 +198,8 @@ static double series_error(ll_microfacet_model *mf, const series_case *c, double
         assert_true(peak < 1e-6);
         return -1.0;
     }
-    /* ref_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi) dphi, with the
-     * cosines by their recurrence. */
-    memset(ref, 0, len * sizeof *ref);
-    for (k = 0; k < REF_POINTS; ++k) {
-        double w = (k == 0 || k == REF_POINTS - 1 ? 1.0 : k % 2 ? 4.0 : 2.0) * h / 3.0 * f[k];
-        double c1 = cos((double)k * h), prev = c1, cur = 1.0;
-        for (l = 0; l < len; ++l) {
-            double next = 2.0 * c1 * cur - prev;
-            ref[l] += w * cur;
-            prev = cur;
-            cur = next;
-        }
-    }
-    for (l = 0; l < len; ++l)
-        ref[l] *= (l == 0 ? 1.0 : 2.0) / LL_PI;
-    /* The same number of terms on both sides: the difference is the
-     * method's, not the truncation's. */
-    for (k = 0; k < REF_POINTS; k += 10) {
-        double c1 = cos((double)k * h), prev = c1, cur = 1.0, diff = 0.0;
-        for (l = 0; l < len; ++l) {
-            double next = 2.0 * c1 * cur - prev;
-            diff += (ours[l] - ref[l]) * cur;
-            prev = cur;
-            cur = next;
-        }
-        worst = fmax(worst, fabs(diff) / peak);
-    }
-    return worst;
+    ll_test_cosine_series(f, REF_POINTS, h, len, ref);
+    return ll_test_series_error(ours, ref, len, REF_POINTS, h, peak);
 }
 
 static void series_matches_direct_integration(void **state)
