@@ -262,6 +262,13 @@ LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,
                                       ll_build_estimate *estimate, const ll_monitor *monitor);
 
+/* Non-zero when the stack's bottom word is opaque (conductor, diffuse,
+ * measured), so no light leaves through it and a file of it holds
+ * reflection only; 0 for a transmissive stack or NULL. Known from the
+ * parsed text alone, before any build: a tool that writes a format holding
+ * reflection only (ll_tables.h) refuses a transmissive stack with it. */
+LL_API int ll_material_is_opaque(const ll_material *material);
+
 /* A builder makes the bases of a (swept or plain) material one at a time,
  * all at one resolution: the largest any basis's heuristics ask for, unless
  * the options or `set` give it. Word layers are shared between bases: a

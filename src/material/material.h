@@ -96,8 +96,7 @@ typedef struct ll_word_params {
 /* Does the description ask for colour (any three-valued number, a named
  * metal, a measured BRDF)? */
 LL_INTERNAL int ll_material_is_rgb(const ll_material *m);
-/* Is the bottom opaque (no light leaves through it)? */
-LL_INTERNAL int ll_material_is_opaque(const ll_material *m);
+/* ll_material_is_opaque: public (ll_material.h, experimental). */
 /* The value of a number in channel c of an n_channels build: the channel's
  * own value, or for a monochrome build of three values their luminance. */
 LL_INTERNAL double ll_number_channel(const ll_number *x, size_t c, size_t n_channels,

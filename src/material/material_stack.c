@@ -15,7 +15,7 @@ const char *ll_word_name(const ll_word *w) { return w->desc->name; }
 
 int ll_material_is_opaque(const ll_material *m)
 {
-    return m->count > 0 && m->words[m->count - 1].desc->opaque;
+    return m && m->count > 0 && m->words[m->count - 1].desc->opaque;
 }
 
 int ll_material_is_rgb(const ll_material *m)

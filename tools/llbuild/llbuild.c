@@ -23,6 +23,9 @@
 
 #include "progress.h"
 #include "time_model.h"
+#ifndef LLBUILD_NO_MAIN
+#include "tables.h"
+#endif
 
 #define EXIT_BAD_INPUT 1
 #define EXIT_IO 2
@@ -96,6 +99,12 @@ static const char usage[] =
     "                     half of the physical memory)\n"
     "  --ior-dir DIR      where NAME.eta.spd / NAME.k.spd spectra are (sets\n"
     "                     LAYERLAB_IOR_DIR; searched first)\n"
+    "  --format NAME      bsdf (the default) or measured: the warped tables that\n"
+    "                     Mitsuba 3's and pbrt-v4's `measured` BSDF read (an opaque,\n"
+    "                     unswept stack only: they hold reflection of one material)\n"
+    "  --theta-i N        measured: incident elevations (default 32)\n"
+    "  --vndf N           measured: side of the visible-normal grid (default 128)\n"
+    "  --sample N         measured: side of the sample grid (default 64)\n"
     "  --dry-run          print the resolution, estimated memory and time; build nothing\n"
     "  --quiet            no progress and no summary (errors only)\n"
     "  --version          print the version\n"
@@ -547,6 +556,7 @@ int main(int argc, char **argv)
     ll_build_options o = LL_BUILD_OPTIONS_INIT, built;
     ll_build_estimate plan = LL_BUILD_ESTIMATE_INIT;
     channel_summary summary;
+    llbuild_tables tables;
     ll_progress bar;
     ll_monitor monitor = monitor_for(&bar);
     double start = now_seconds();
@@ -554,6 +564,9 @@ int main(int argc, char **argv)
     int code;
 
     catch_signals();
+    code = llbuild_tables_take_args(&argc, argv, &tables);
+    if (code >= 0)
+        return code;
     code = parse_args(argc, argv, &a);
     if (code >= 0)
         return code;
@@ -564,6 +577,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
         return exit_code_for(s);
     }
+    code = llbuild_tables_check(&tables, m, a.input);
+    if (code >= 0) {
+        ll_material_destroy(m);
+        return code;
+    }
     options_from_args(&a, &o);
     if (cancel_flag) {
         ll_material_destroy(m);
@@ -571,6 +589,8 @@ int main(int argc, char **argv)
     }
     if (a.dry_run) {
         code = print_resolution(m, &o);
+        if (code == 0)
+            llbuild_tables_dry_run(&tables);
         ll_material_destroy(m);
         return cancel_flag ? die_cancelled() : code;
     }
@@ -581,7 +601,11 @@ int main(int argc, char **argv)
     built = o;
     ll_progress_update(&bar, 0.0, "choosing the resolution");
     choose_resolution(m, &built, &plan);
-    if (ll_material_axis_count(m) > 0) {
+    if (tables.measured) {
+        /* The table file instead of the .bsdf (tables.c). */
+        bar.scale = 1.0;
+        s = llbuild_tables_build(&tables, m, &built, &monitor, a.output);
+    } else if (ll_material_axis_count(m) > 0) {
         /* A swept material: its bases one at a time into one textured file
          * (the bar shows "basis 3/64: ..."); the library writes it. */
         bar.scale = 1.0;
@@ -607,7 +631,9 @@ int main(int argc, char **argv)
         code = s == LL_ERROR_OUT_OF_MEMORY && refused_by_budget(m, &o) ? EXIT_BAD_INPUT
                                                                          : exit_code_for(s);
     } else {
-        if (!a.quiet && ll_material_axis_count(m) > 0)
+        if (!a.quiet && tables.measured)
+            llbuild_tables_summary(&tables, a.input, a.output, now_seconds() - start);
+        else if (!a.quiet && ll_material_axis_count(m) > 0)
             print_textured_summary(&a, m, &o, &plan, now_seconds() - start);
         else if (!a.quiet)
             print_summary(&a, m, &o, &plan, &summary, now_seconds() - start);

@@ -1,0 +1,132 @@
+#!/bin/sh
+# llbuild --format measured: the table file written instead of the .bsdf
+# (byte for byte what llconvert makes of the .bsdf of the same build), the
+# grid options, --dry-run's size of the tables, the refusal of transmissive
+# and swept stacks before any build, and that a failed or interrupted run
+# leaves neither the output nor a temporary beside it.
+# Run by `make test` from the checkout with BUILD set.
+set -u
+BUILD=${BUILD:-build}
+llbuild="$BUILD/bin/llbuild"
+llconvert="$BUILD/bin/llconvert"
+tmp=$(mktemp -d /tmp/llbuild_tables_test.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+. "$(dirname "$0")/lib/stage_wait.sh"
+
+ok() { passed=$((passed + 1)); }
+bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
+
+# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
+expect() {
+    want=$1; what=$2; shift 3
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then ok; else
+        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
+    fi
+}
+
+# contains FILE TEXT DESCRIPTION
+contains() {
+    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
+}
+
+# only_layers DESCRIPTION: the work folder holds nothing but the inputs
+only_layers() {
+    left=$(ls "$tmp/w" | grep -v '\.layers$')
+    if [ -z "$left" ]; then ok; else bad "$1 left: $left"; fi
+}
+
+if [ ! -x "$llbuild" ] || [ ! -x "$llconvert" ]; then
+    echo "llbuild_tables.sh: $llbuild or $llconvert is not built"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+
+mkdir -p "$tmp/w"
+printf 'conductor eta=Au alpha=0.3\n' >"$tmp/w/gold.layers"
+small="--nodes 40 --orders 20 --threads 1"
+grid="--theta-i 4 --vndf 16 --sample 8"
+
+# --- the table file: what llconvert writes from the .bsdf of the same build
+expect 0 "--format measured" -- "$llbuild" --format measured $grid $small \
+    "$tmp/w/gold.layers" -o "$tmp/w/gold.tab"
+contains "$tmp/out" "(format measured)" "summary names the format"
+contains "$tmp/out" "4 incident elevations x 16^2 visible-normal x 8^2 sample grid" "summary grid"
+contains "$tmp/out" "file         $(wc -c <"$tmp/w/gold.tab" | tr -d ' ') bytes" \
+    "summary size is the file's"
+if [ "$(head -c 11 "$tmp/w/gold.tab")" = "tensor_file" ]; then ok; else
+    bad "gold.tab does not start with tensor_file"; fi
+expect 0 "--format bsdf" -- "$llbuild" -q --format bsdf $small "$tmp/w/gold.layers" \
+    -o "$tmp/gold.bsdf"
+expect 0 "the default format" -- "$llbuild" -q $small "$tmp/w/gold.layers" -o "$tmp/default.bsdf"
+if cmp -s "$tmp/gold.bsdf" "$tmp/default.bsdf"; then ok; else
+    bad "--format bsdf differs from the default"; fi
+expect 0 "llconvert of the .bsdf" -- "$llconvert" --quiet $grid "$tmp/gold.bsdf" \
+    -o "$tmp/conv.tab"
+if cmp -s "$tmp/w/gold.tab" "$tmp/conv.tab"; then ok; else
+    bad "llbuild --format measured differs from llconvert of the same build"; fi
+rm -f "$tmp/w/gold.tab"
+only_layers "a finished build"
+
+# --- --dry-run: the table's size for the grid (32 x 128^2 x 64^2 floats
+# and the small tables: 4 198 532 bytes, 4.00 MiB), no file
+expect 0 "--dry-run" -- "$llbuild" --format measured --dry-run $small "$tmp/w/gold.layers"
+contains "$tmp/out" "32 incident elevations x 128^2 visible-normal x 64^2 sample grid: about 4.00 MiB" \
+    "--dry-run table size"
+expect 0 "--dry-run, another grid" -- "$llbuild" --format measured --dry-run --vndf 64 \
+    --sample 32 --theta-i 16 $small "$tmp/w/gold.layers"
+contains "$tmp/out" "16 incident elevations x 64^2 visible-normal x 32^2 sample grid: about 0.50 MiB" \
+    "--dry-run size follows the grid"
+only_layers "--dry-run"
+
+# --- refused before building, saying why
+printf 'dielectric eta=1.5 alpha=0.1\n' >"$tmp/w/glass.layers"
+expect 1 "a transmissive stack" -- "$llbuild" --format measured "$tmp/w/glass.layers" \
+    -o "$tmp/w/glass.tab"
+contains "$tmp/err" "transmissive stack" "transmissive refusal names it"
+contains "$tmp/err" "reflection only" "transmissive refusal says why"
+if grep -q "%" "$tmp/err"; then bad "a transmissive stack was built before its refusal"; else ok; fi
+printf 'conductor eta=Au alpha=[0.1 0.2]\n' >"$tmp/w/swept.layers"
+expect 1 "a swept stack" -- "$llbuild" --format measured "$tmp/w/swept.layers" \
+    -o "$tmp/w/swept.tab"
+contains "$tmp/err" "swept (textured) material" "swept refusal names it"
+expect 1 "a transmissive stack, --dry-run" -- "$llbuild" --format measured --dry-run \
+    "$tmp/w/glass.layers"
+expect 1 "grid options without measured" -- "$llbuild" --vndf 16 "$tmp/w/gold.layers" \
+    -o "$tmp/w/x.bsdf"
+contains "$tmp/err" "size the tables of --format measured" "grid option message"
+expect 1 "unknown format" -- "$llbuild" --format exr "$tmp/w/gold.layers" -o "$tmp/w/x"
+expect 1 "a grid size out of range" -- "$llbuild" --format measured --sample 1 \
+    "$tmp/w/gold.layers" -o "$tmp/w/x"
+contains "$tmp/err" "--sample wants a whole number in 2..4096" "grid range message"
+only_layers "refusals"
+
+# --- an output that cannot be written: I/O, nothing left
+expect 2 "no such folder" -- "$llbuild" --format measured $grid $small "$tmp/w/gold.layers" \
+    -o "$tmp/w/missing/gold.tab"
+only_layers "an unwritable output"
+
+# --- interrupted while the tables are made: ends by the signal, leaves
+# neither the table file nor the .bsdf it was being made from
+mkdir -p "$tmp/run"
+for sig in INT TERM; do
+    stage_start "$tmp/run" "$llbuild" --format measured --vndf 1024 --sample 512 $small \
+        "$tmp/w/gold.layers" -o "$tmp/w/big.tab"
+    if ! stage_wait "*% tables (*"; then
+        stage_finish
+        bad "SIG$sig: llbuild never reported the tables (exit $stage_status)"
+        continue
+    fi
+    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
+    stage_finish
+    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
+        bad "SIG$sig: exit $stage_status, expected death by signal"; fi
+    contains "$stage_log" "interrupted; no file written" "SIG$sig message"
+    only_layers "SIG$sig"
+done
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,234 @@
+/*
+ * llbuild --format measured: the material built as usual, then written as
+ * the warped tables that Mitsuba 3's and pbrt-v4's `measured` BSDF read
+ * (docs/measured-format.md) instead of a .bsdf file.
+ *
+ * The tables are made from an opened .bsdf (ll_tables_write_from_bsdf), so
+ * the built layers go first to a .bsdf beside the output, which is opened
+ * and unlinked at once: the handle holds its data, and the name is gone
+ * before the (long) table step starts. The table file itself is written
+ * atomically by the library; a failed or cancelled run leaves neither file.
+ */
+#define LL_EXPERIMENTAL /* ll_tables_write_from_bsdf, ll_material_is_opaque */
+#include <layerlab.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "tables.h"
+
+/* A grid size: a whole number in 2..4096 (llconvert's rule). */
+static int parse_grid(const char *text, const char *option, size_t *out)
+{
+    char *end;
+    long v;
+    if (!text) {
+        fprintf(stderr, "llbuild: %s needs a value\n", option);
+        return 0;
+    }
+    v = strtol(text, &end, 10);
+    if (*text == '\0' || *end != '\0' || v < 2 || v > 4096) {
+        fprintf(stderr, "llbuild: %s wants a whole number in 2..4096, not '%s'\n", option,
+                text);
+        return 0;
+    }
+    *out = (size_t)v;
+    return 1;
+}
+
+int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
+{
+    int i, kept = 1;
+    ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
+    memset(t, 0, sizeof *t);
+    t->opts = defaults;
+    t->opts.n_theta_i = 32;
+    t->opts.vndf_size = 128;
+    t->opts.sample_size = 64;
+    for (i = 1; i < *argc; ++i) {
+        const char *o = argv[i], *next = i + 1 < *argc ? argv[i + 1] : NULL;
+        size_t *grid = !strcmp(o, "--theta-i") ? &t->opts.n_theta_i
+                       : !strcmp(o, "--vndf") ? &t->opts.vndf_size
+                       : !strcmp(o, "--sample") ? &t->opts.sample_size
+                                                : NULL;
+        if (!strcmp(o, "--format")) {
+            if (next && !strcmp(next, "measured")) {
+                t->measured = 1;
+            } else if (next && !strcmp(next, "bsdf")) {
+                t->measured = 0;
+            } else {
+                fprintf(stderr, "llbuild: --format: expected bsdf or measured, not '%s'\n",
+                        next ? next : "(missing)");
+                return 1;
+            }
+            ++i;
+        } else if (grid) {
+            if (!parse_grid(next, o, grid))
+                return 1;
+            t->grid_given = 1;
+            ++i;
+        } else {
+            argv[kept++] = argv[i];
+        }
+    }
+    argv[kept] = NULL;
+    *argc = kept;
+    if (t->grid_given && !t->measured) {
+        fprintf(stderr, "llbuild: --theta-i, --vndf and --sample size the tables of "
+                        "--format measured; a .bsdf file has no such grid\n");
+        return 1;
+    }
+    return -1;
+}
+
+int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const char *input)
+{
+    if (!t->measured)
+        return -1;
+    if (ll_material_axis_count(m) > 0) {
+        fprintf(stderr,
+                "llbuild: %s: a swept (textured) material cannot be written in the `measured` "
+                "format: its tables hold the reflection of one material only, with no "
+                "parameters; build it as a .bsdf (--format bsdf)\n",
+                input);
+        return 1;
+    }
+    if (!ll_material_is_opaque(m)) {
+        fprintf(stderr,
+                "llbuild: %s: a transmissive stack (its bottom word lets light through) "
+                "cannot be written in the `measured` format: its tables hold reflection only; "
+                "end the stack with an opaque word (conductor, diffuse, measured) or build it "
+                "as a .bsdf (--format bsdf)\n",
+                input);
+        return 1;
+    }
+    return -1;
+}
+
+/* The data the tables hold (the field table and text add a few hundred
+ * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb. */
+static double table_bytes(const ll_tables_options *o)
+{
+    double n_ti = (double)o->n_theta_i, nv = (double)o->vndf_size,
+           ns = (double)o->sample_size;
+    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + 4.0 * n_ti * ns * ns);
+}
+
+void llbuild_tables_dry_run(const llbuild_tables *t)
+{
+    if (!t->measured)
+        return;
+    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid: "
+           "about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
+           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size,
+           table_bytes(&t->opts) / 1048576.0);
+}
+
+static const double summary_degrees[4] = { 0.0, 30.0, 60.0, 80.0 };
+
+/* What the summary shows of the built layers, taken before they are freed. */
+static void remember_layers(llbuild_tables *t, ll_layer *const *layers, size_t n_channels)
+{
+    size_t a, c;
+    t->n_nodes = ll_layer_node_count(layers[0]);
+    t->n_orders = ll_layer_order_count(layers[0]);
+    t->n_channels = n_channels;
+    for (c = 0; c < n_channels && c < 3; ++c)
+        for (a = 0; a < 4; ++a) {
+            double transmitted = 0.0;
+            ll_layer_albedo(layers[c], cos(summary_degrees[a] * 3.14159265358979323846 / 180.0),
+                            &t->albedo[c][a], &transmitted);
+        }
+}
+
+void llbuild_tables_summary(const llbuild_tables *t, const char *input, const char *output,
+                            double seconds)
+{
+    ll_bsdf *b = NULL;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    size_t a, c;
+    if (ll_bsdf_open(output, NULL, &b) != LL_OK || ll_bsdf_get_info(b, &info) != LL_OK) {
+        fprintf(stderr, "llbuild: cannot read back %s: %s\n", output, ll_last_error_message());
+        ll_bsdf_release(b);
+        return;
+    }
+    printf("%s -> %s (format measured)\n", input, output);
+    printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
+           "tables are made from)\n",
+           t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
+    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
+           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    printf("file         %zu bytes (the .bsdf of these layers: %zu bytes)\n", info.file_size,
+           t->bsdf_bytes);
+    printf("albedo       %sreflected, of the layers\n", t->n_channels == 3 ? "(R G B) " : "");
+    for (a = 0; a < 4; ++a) {
+        printf("  %4.0f deg  ", summary_degrees[a]);
+        for (c = 0; c < t->n_channels; ++c)
+            printf(" %.4f", t->albedo[c][a]);
+        printf("\n");
+    }
+    printf("wall time    %.2f s\n", seconds);
+    ll_bsdf_release(b);
+}
+
+/* The built layers as an opened .bsdf: written beside output (where the
+ * user chose to have room) under a unique name, opened, and unlinked
+ * before returning whatever the outcome. */
+static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
+                              ll_layer *const *layers, size_t n_channels, const char *output,
+                              const ll_monitor *monitor, ll_bsdf **out, size_t *bytes)
+{
+    static const char suffix[] = ".llbuild-XXXXXX";
+    size_t n = strlen(output);
+    char *name = malloc(n + sizeof suffix);
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    ll_status s;
+    int fd;
+    *out = NULL;
+    if (!name)
+        return LL_ERROR_OUT_OF_MEMORY;
+    memcpy(name, output, n);
+    memcpy(name + n, suffix, sizeof suffix);
+    fd = mkstemp(name);
+    if (fd < 0) {
+        fprintf(stderr, "llbuild: cannot create a file beside %s: %s\n", output,
+                strerror(errno));
+        free(name);
+        return LL_ERROR_IO;
+    }
+    close(fd);
+    s = ll_material_write(m, o, layers, n_channels, name, monitor);
+    if (s == LL_OK)
+        s = ll_bsdf_open(name, NULL, out);
+    unlink(name);
+    free(name);
+    if (s != LL_OK)
+        return s;
+    ll_bsdf_get_info(*out, &info);
+    *bytes = info.file_size;
+    return LL_OK;
+}
+
+ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
+                               const ll_build_options *o, const ll_monitor *monitor,
+                               const char *output)
+{
+    ll_layer *layers[3] = { NULL, NULL, NULL };
+    size_t n_channels = 0, c;
+    ll_bsdf *b = NULL;
+    ll_status s = ll_material_build_layers(m, o, monitor, layers, &n_channels, NULL);
+    if (s != LL_OK)
+        return s;
+    remember_layers(t, layers, n_channels);
+    s = open_as_bsdf(m, o, layers, n_channels, output, monitor, &b, &t->bsdf_bytes);
+    for (c = 0; c < n_channels; ++c)
+        ll_layer_destroy(layers[c]);
+    if (s == LL_OK)
+        s = ll_tables_write_from_bsdf(b, output, &t->opts, monitor);
+    ll_bsdf_release(b);
+    return s;
+}
