@@ -1,4 +1,4 @@
-"""A Mitsuba 3 BSDF plugin for layerlab's .bsdf files.
+"""A Mitsuba 3 BSDF plugin for layerlab's .bsdf and table files.
 
     import mitsuba as mi
     mi.set_variant("llvm_ad_rgb")      # or scalar_rgb
@@ -17,7 +17,7 @@ interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
 Two implementations, chosen with the property "mode":
-- "traced" (the default in the LLVM variants): eval, pdf and sample written
+- "traced" (the default in the LLVM variants for .bsdf files): eval, pdf and sample written
   in Dr.Jit operations (layerlab.mitsuba_traced) over the file's tables,
   uploaded once as Dr.Jit arrays (ll_bsdf_get_tables). They trace into
   Mitsuba's rendering kernel, so its default symbolic (megakernel) mode
@@ -31,6 +31,12 @@ Two implementations, chosen with the property "mode":
   Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting of
   Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
   the same batch functions with one element.
+Table files (the `measured` format, docs/measured-format.md; ll_bsdf_info.format
+LL_BSDF_FORMAT_TABLES, BSDFStorage.format "tables") open like .bsdf files and
+render through "batch", the default for them in every variant: the traced
+path reads Fourier series (ll_bsdf_get_tables), which a table file does not
+hold, so "mode": "traced" on one is refused with that reason. (Mitsuba's own
+{"type": "measured"} reads the same file natively.)
 CUDA variants are refused: "batch" would move the directions to the CPU and
 back at every bounce, and "traced" is not tested there.
 
@@ -127,6 +133,9 @@ class _Table:
         self.n_bases = info.n_bases
         self.n_parameters = info.n_parameters
         self.n_channels = info.n_channels
+        # "fourier" (a .bsdf) or "tables" (the `measured` format): only the
+        # first has the series the traced path reads.
+        self.format = self.storage.format
         self.metadata = info.metadata.decode("utf-8", "replace") if info.metadata else ""
         self.positions = []
         for p in range(self.n_parameters):
@@ -280,9 +289,17 @@ def _make_class():
             self.m_filename = path
             self.m_table = _Table(path)
             self.m_jit = dr.is_jit_v(mi.Float)
-            mode = str(props["mode"]) if "mode" in props else ("traced" if self.m_jit else "batch")
+            tables = self.m_table.format == "tables"
+            default = "traced" if self.m_jit and not tables else "batch"
+            mode = str(props["mode"]) if "mode" in props else default
             if mode not in ("traced", "batch"):
                 raise ValueError('layerlab: "mode" is "%s"; it must be "traced" or "batch"' % mode)
+            if mode == "traced" and tables:
+                raise ValueError(
+                    'layerlab: %s is a table file (the `measured` format): "mode": "traced" '
+                    "evaluates the Fourier series of a .bsdf, which it does not hold; use "
+                    '"mode": "batch" (the default for table files: the C reader\'s batch '
+                    'calls), or Mitsuba\'s own {"type": "measured"}' % path)
             if mode == "traced" and not self.m_jit:
                 raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
                                  'the scalar variants use "batch"')
@@ -479,8 +496,9 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("LayerlabBSDF[filename=\"%s\", eta=%g, transmission=%s, mode=%s%s]"
-                    % (self.m_filename, self.m_eta, self.m_transmits, self.m_mode,
+            return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s]"
+                    % (self.m_filename, self.m_table.format, self.m_eta, self.m_transmits,
+                       self.m_mode,
                        "".join(", %s=%s" % (n, v) for n, v in self.m_params)))
 
     _CLASSES[variant] = LayerlabBSDF
