@@ -14,7 +14,7 @@
  *               own (1098, 4194), the slab against doubling, coated gold at
  *               1, 2, ... threads, batched evaluation and the tolerance's
  *               cost
- *   --bin       where run.sh put the programs recipe, adding and eval
+ *   --bin       where run.sh put the programs recipe, adding, eval and tables
  *   --work      scratch directory for the recipes' .bsdf files
  *   --testdata  the folder of the golden file roughgold_alpha_0.2.bsdf (tests/data)
  *   --original  optional: a directory with one executable per recipe name
@@ -421,6 +421,47 @@ static void run_eval(const config *cfg, bench_store *store)
     }
 }
 
+/* 3a. Table files: written from the golden file and from the coated-gold
+ * output with the default grid, then the three calls on the table and on
+ * its .bsdf over the same directions (bench/tables.c). */
+static void run_tables(const config *cfg, bench_store *store)
+{
+    char bin[1024], runs[32], golden[1024], gold[1024], out[2][1024];
+    const char *files[2], *labels[2] = { "roughgold", "coated-gold" };
+    size_t i;
+    path_join(bin, sizeof bin, cfg->bin_dir, "tables");
+    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
+    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
+    path_join(out[0], sizeof out[0], cfg->work_dir, "roughgold-tables.bsdf");
+    path_join(out[1], sizeof out[1], cfg->work_dir, "coated-gold-tables.bsdf");
+    files[0] = golden;
+    files[1] = gold;
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    record_load(store, "tables");
+    for (i = 0; i < 2; ++i) {
+        char *argv[6];
+        bench_child_result res;
+        char what[64];
+        if (access(files[i], R_OK) != 0) {
+            snprintf(what, sizeof what, "tables %s: no file %s", labels[i],
+                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
+            fprintf(stderr, "bench: %s\n", what);
+            bench_store_error(store, what);
+            continue;
+        }
+        argv[0] = bin;
+        argv[1] = (char *)files[i];
+        argv[2] = out[i];
+        argv[3] = (char *)labels[i];
+        argv[4] = runs;
+        argv[5] = NULL;
+        fprintf(stderr, "bench: table file of %s\n", labels[i]);
+        snprintf(what, sizeof what, "tables %s", labels[i]);
+        if (!bench_run_child(argv, NULL, "", store, &res))
+            child_failed(store, what, &res);
+    }
+}
+
 /* 3b. The batch calls on the golden file (per element, 1 and all threads). */
 static void run_batch(const config *cfg, bench_store *store)
 {
@@ -570,6 +611,7 @@ int main(int argc, char **argv)
         run_scaling(&cfg, &store);
     run_adding(&cfg, &store);
     run_eval(&cfg, &store);
+    run_tables(&cfg, &store);
     if (cfg.full) {
         run_batch(&cfg, &store);
         run_tolerance(&cfg, &store);

@@ -9,7 +9,7 @@
 #   (none)  the headline figures, under 10 minutes on a 2-core machine: the
 #           original's three recipes at their resolutions, the dust on gold
 #           at (400, 1600), adding against dgemm, evaluation and sampling
-#           per call
+#           per call, on .bsdf files and on table files made from them
 #   --full  also the dust on gold at (400, 800) and at its own (1098, 4194),
 #           the slab against doubling, coated gold at 1, 2, ... threads,
 #           batched evaluation, the tolerance's cost, the textured build,
@@ -75,6 +75,7 @@ build recipe bench/recipe.c bench/bench_util.c tools/llbuild/time_model.c -Itool
 # shellcheck disable=SC2086
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
 build eval bench/eval.c bench/bench_util.c
+build tables bench/tables.c bench/bench_util.c
 build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
     bench/report_table.c bench/report_json.c bench/bench_util.c
 if [ "$FULL" = 1 ]; then
