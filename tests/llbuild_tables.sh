@@ -57,6 +57,11 @@ contains "$tmp/out" "(format measured)" "summary names the format"
 contains "$tmp/out" "4 incident elevations x 16^2 visible-normal x 8^2 sample grid" "summary grid"
 contains "$tmp/out" "file         $(wc -c <"$tmp/w/gold.tab" | tr -d ' ') bytes" \
     "summary size is the file's"
+# one bar over the run: the tables after the build, not from 0% again
+contains "$tmp/err" "% tables" "progress names the tables"
+if grep -Eq '^llbuild: +([0-9]|[0-7][0-9]|8[0-4])% (ndf|tables)' "$tmp/err"; then
+    bad "the tables' progress starts the bar again:"; grep -E '% (ndf|tables)' "$tmp/err" | head -3
+else ok; fi
 if [ "$(head -c 11 "$tmp/w/gold.tab")" = "tensor_file" ]; then ok; else
     bad "gold.tab does not start with tensor_file"; fi
 expect 0 "--format bsdf" -- "$llbuild" -q --format bsdf $small "$tmp/w/gold.layers" \

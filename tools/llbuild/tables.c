@@ -213,6 +213,32 @@ static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
     return LL_OK;
 }
 
+/* One step's share [lo, hi] of the whole run's progress: each library
+ * call reports 0..1 for itself, and the bar should go once from 0 to 1. */
+typedef struct step {
+    const ll_monitor *whole;
+    double lo, hi;
+} step;
+
+static int report_step(void *user, double fraction, const char *stage)
+{
+    const step *st = user;
+    if (!st->whole || !st->whole->progress)
+        return 0;
+    return st->whole->progress(st->whole->user, st->lo + fraction * (st->hi - st->lo), stage);
+}
+
+static ll_monitor monitor_of(step *st, const ll_monitor *whole, double lo, double hi)
+{
+    ll_monitor m = LL_MONITOR_INIT;
+    st->whole = whole;
+    st->lo = lo;
+    st->hi = hi;
+    m.progress = report_step;
+    m.user = st;
+    return m;
+}
+
 ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
                                const ll_build_options *o, const ll_monitor *monitor,
                                const char *output)
@@ -220,15 +246,21 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     ll_layer *layers[3] = { NULL, NULL, NULL };
     size_t n_channels = 0, c;
     ll_bsdf *b = NULL;
-    ll_status s = ll_material_build_layers(m, o, monitor, layers, &n_channels, NULL);
+    step st;
+    /* Shares of the bar: the build most, the .bsdf a little, the tables
+     * (about a second at the default grid) the rest. */
+    ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
+    ll_status s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)
         return s;
     remember_layers(t, layers, n_channels);
-    s = open_as_bsdf(m, o, layers, n_channels, output, monitor, &b, &t->bsdf_bytes);
+    building = monitor_of(&st, monitor, 0.8, 0.85);
+    s = open_as_bsdf(m, o, layers, n_channels, output, &building, &b, &t->bsdf_bytes);
     for (c = 0; c < n_channels; ++c)
         ll_layer_destroy(layers[c]);
+    building = monitor_of(&st, monitor, 0.85, 1.0);
     if (s == LL_OK)
-        s = ll_tables_write_from_bsdf(b, output, &t->opts, monitor);
+        s = ll_tables_write_from_bsdf(b, output, &t->opts, &building);
     ll_bsdf_release(b);
     return s;
 }
