@@ -134,8 +134,17 @@ expect 0 "build" -- "$llbuild" --nodes 16 --orders 8 examples/plastic.layers -o 
 contains "$tmp/out" "^orders kept" "summary: orders kept"
 contains "$tmp/out" "^file  *[0-9]* bytes" "summary: file size"
 contains "$tmp/out" "^albedo" "summary: albedo"
+contains "$tmp/out" "^albedo .*reflected$" "an opaque stack shows reflection only"
 contains "$tmp/out" "^wall time" "summary: wall time"
 contains "$tmp/err" "llbuild: .*% " "plain progress lines"
+# A pane of frosted glass in air: the header's eta is 1 but the stack has
+# no opaque word, so the summary shows what it transmits beside what it
+# reflects (reflected + transmitted = 1 at normal incidence).
+printf 'dielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n' >"$tmp/pane.layers"
+expect 0 "a frosted pane" -- "$llbuild" --nodes 40 --orders 20 "$tmp/pane.layers" -o "$tmp/pane.bsdf"
+contains "$tmp/out" "^header       eta 1," "the pane's header has eta 1"
+contains "$tmp/out" "reflected | transmitted" "the pane's summary shows transmission"
+contains "$tmp/out" "0 deg   0.07[0-9]*  | 0.9[0-9]*$" "the pane transmits what it does not reflect"
 expect 0 "--quiet" -- "$llbuild" --quiet --nodes 16 --orders 8 examples/plastic.layers -o "$tmp/q.bsdf"
 if [ -s "$tmp/out" ] || [ -s "$tmp/err" ]; then bad "--quiet printed something"; else ok; fi
 expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orders 8 \

@@ -149,6 +149,12 @@ LL_API ll_status ll_material_write(const ll_material *material, const ll_build_o
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
 
+/* Does light leave the stack through its bottom? 1 unless the bottom word
+ * is opaque (conductor, diffuse, an opaque measured table); a stack of
+ * interfaces and media transmits whatever its indices (a pane of glass in
+ * air has eta 1 and still transmits). 0 for NULL. */
+LL_API int ll_material_transmits(const ll_material *material);
+
 /* ------------------------------------------------------------ sweeps
  *
  * A number parameter written as a sweep, `alpha=[0.02 0.05 0.1]` or

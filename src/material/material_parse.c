@@ -610,3 +610,5 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
 }
 
 size_t ll_material_word_count(const ll_material *m) { return m ? m->count : 0; }
+
+int ll_material_transmits(const ll_material *m) { return m && !ll_material_is_opaque(m); }

@@ -469,7 +469,9 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("header       eta %g, alpha %g (top) %g (bottom)\n", info.eta, info.alpha[0],
            info.alpha[1]);
-    print_albedo(sum, info.eta != 1.0);
+    /* From the stack, not the header's eta: a pane (glass between two
+     * airs) has eta 1 and transmits most of the light. */
+    print_albedo(sum, ll_material_transmits(m));
     printf("wall time    %.2f s\n", seconds);
     ll_bsdf_release(b);
 }
