@@ -77,6 +77,48 @@ expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
 expect 2 "unwritable output" -- "$llbuild" --nodes 10 --orders 2 examples/frosted-glass.layers \
     -o "$tmp/no/such/dir/x.bsdf"
 
+# --- mistakes found before any work: each refusal comes before the first
+# progress line (no "NN% " on stderr) and names the problem in the user's
+# words; the run builds nothing, so it leaves no file.
+# refused_early CODE DESCRIPTION TEXT -- command...
+refused_early() {
+    code=$1; what=$2; text=$3; shift 4
+    expect "$code" "$what" -- "$@"
+    contains "$tmp/err" "$text" "$what names the problem"
+    if grep -q '% ' "$tmp/err"; then bad "$what: refused after work began:"; sed 's/^/  | /' "$tmp/err" | head -3; else ok; fi
+}
+mkdir -p "$tmp/outdir"
+refused_early 2 "output directory missing" "the output directory '$tmp/nowhere/' does not exist" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/nowhere/x.bsdf"
+refused_early 2 "-o names a directory" "names a directory; name the file to write" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/outdir"
+refused_early 2 "-o ends in a slash" "names a directory" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/outdir/"
+printf 'x' >"$tmp/afile"
+refused_early 2 "output directory is a file" "'$tmp/afile/' is not a directory" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/afile/x.bsdf"
+mkdir -p "$tmp/readonly"
+chmod 555 "$tmp/readonly"
+if [ -w "$tmp/readonly" ]; then
+    : # root writes anywhere: nothing to refuse
+else
+    refused_early 2 "output directory not writable" "'$tmp/readonly/' is not writable" -- \
+        "$llbuild" examples/coated-gold.layers -o "$tmp/readonly/x.bsdf"
+fi
+chmod 755 "$tmp/readonly"
+refused_early 1 "--nodes 4" "--nodes 4: the node count must be even, from 10 to 100000" -- \
+    "$llbuild" --nodes 4 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 200000" "from 10 to 100000" -- \
+    "$llbuild" --nodes 200000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--orders 0" "--orders 0: the order count must be from 1 to 100000" -- \
+    "$llbuild" --orders 0 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--orders 200000" "from 1 to 100000" -- \
+    "$llbuild" --orders 200000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 20000 over the budget" "20000 nodes x 1 order (the fewest orders) needs about" -- \
+    "$llbuild" --nodes 20000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+contains "$tmp/err" "more than the memory budget" "the early budget refusal names the budget"
+[ -z "$(ls "$tmp/outdir")" ] && ok || bad "an early refusal left $(ls "$tmp/outdir")"
+
 # --- out of memory: 3. A diffuse layer on 12000 nodes needs 576 MB for its
 # order 0; with the address space capped at 400 MB the build fails cleanly.
 # (Not under AddressSanitizer, which reserves terabytes of address space.)

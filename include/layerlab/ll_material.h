@@ -45,6 +45,12 @@ LL_API ll_status ll_material_parse(const char *text, const char *source_name,
 LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
 LL_API void ll_material_destroy(ll_material *material);
 
+/* The resolutions a build accepts: a node count is even and at least
+ * LL_BUILD_MIN_NODES (with fewer, the quadrature's error in an albedo is
+ * above 1%); node and order counts are at most LL_BUILD_MAX_RESOLUTION. */
+#define LL_BUILD_MIN_NODES 10
+#define LL_BUILD_MAX_RESOLUTION 100000
+
 /* Options of a build. Every field's zero is its default. */
 typedef struct ll_build_options {
     size_t struct_size;       /* sizeof(ll_build_options)                          */

@@ -382,7 +382,9 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
                 return ll_parse_error(p, key.begin, "nodes is set twice");
             s = parse_count(p, &key, &v, &m->nodes);
             if (s == LL_OK && (m->nodes < 2 || m->nodes % 2))
-                s = ll_parse_error(p, v.begin, "nodes=%zu: expected an even count >= 2", m->nodes);
+                s = ll_parse_error(p, v.begin,
+                                   "nodes=%zu: a build needs an even count of at least %d",
+                                   m->nodes, LL_MATERIAL_MIN_NODES);
             else if (s == LL_OK && m->nodes > LL_MATERIAL_MAX_RESOLUTION)
                 s = ll_parse_error(p, v.begin, "nodes=%zu is beyond the %d supported", m->nodes,
                                    LL_MATERIAL_MAX_RESOLUTION);
