@@ -88,6 +88,17 @@ refused_early() {
     if grep -q '% ' "$tmp/err"; then bad "$what: refused after work began:"; sed 's/^/  | /' "$tmp/err" | head -3; else ok; fi
 }
 mkdir -p "$tmp/outdir"
+# the messages say the real rule: even and at least the minimum (with the
+# nearest counts), which count is too large (no "0 orders"), did you mean
+refused_early 1 "--nodes 101" "must be even, from 10 to 100000 (--nodes 100 or 102)" -- \
+    "$llbuild" --nodes 101 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 1000000" "--nodes 1000000: the node count must be even, from 10 to 100000" -- \
+    "$llbuild" --nodes 1000000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+if grep -q "0 orders" "$tmp/err"; then bad "--nodes 1000000 speaks of 0 orders"; else ok; fi
+printf 'dielectirc eta=1.5 alpha=0.1\ndiffuse albedo=0.5\n' >"$tmp/typo.layers"
+expect 1 "a mistyped word" -- "$llbuild" --dry-run "$tmp/typo.layers"
+contains "$tmp/err" "typo.layers:1:1: unknown word 'dielectirc'; did you mean 'dielectric'?" \
+    "a mistyped word gets a suggestion"
 refused_early 2 "output directory missing" "the output directory '$tmp/nowhere/' does not exist" -- \
     "$llbuild" examples/coated-gold.layers -o "$tmp/nowhere/x.bsdf"
 refused_early 2 "-o names a directory" "names a directory; name the file to write" -- \

@@ -8,6 +8,7 @@
  * expected there.
  */
 #include "material/word_table.h"
+#include "material/word_suggest.h"
 #include "support/parse_number.h"
 #include "support/regular_file.h"
 
@@ -437,6 +438,9 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
     }
 }
 
+/* More words than the language has, for the suggestion's list. */
+#define LL_SUGGEST_WORDS 32
+
 static ll_status parse_line(parser *p, const char *at, const char *line_end)
 {
     token name;
@@ -454,6 +458,19 @@ static ll_status parse_line(parser *p, const char *at, const char *line_end)
     snprintf(shown, sizeof shown, "%.*s%s", (int)(name.len > 24 ? 24 : name.len), name.begin,
              name.len > 24 ? "..." : "");
     list_words(names, sizeof names);
+    {
+        /* The words and "set": a typing mistake gets its likely meaning. */
+        const char *candidates[LL_SUGGEST_WORDS + 1], *closest;
+        size_t n = ll_word_table_size < LL_SUGGEST_WORDS ? ll_word_table_size : LL_SUGGEST_WORDS;
+        for (k = 0; k < n; ++k)
+            candidates[k] = ll_word_table[k]->name;
+        candidates[n] = "set";
+        closest = ll_closest_name(name.begin, name.len, candidates, n + 1);
+        if (closest)
+            return ll_parse_error(p, name.begin,
+                                  "unknown word '%s'; did you mean '%s'? (expected %s or set)",
+                                  shown, closest, names);
+    }
     return ll_parse_error(p, name.begin, "unknown word '%s'; expected %s or set", shown, names);
 }
 
