@@ -43,6 +43,16 @@ contains "$tmp/out" "exit codes" "--help lists the exit codes"
 expect 0 "--version" -- "$llbuild" --version
 contains "$tmp/out" "llbuild (layerlab) [0-9]" "--version"
 
+# --- the docs' synopsis (docs/material-language.md) names every option
+# --help prints
+synopsis=$(sed -n '/^llbuild \[options\] MATERIAL.layers/,/^```/p' docs/material-language.md)
+for opt in $("$llbuild" --help | sed -n 's/^  \(-[a-z], \)\{0,1\}\(--[a-z-]*\).*/\2/p'); do
+    case "$synopsis" in *"$opt "*|*"$opt
+"*) ok ;; *) bad "docs/material-language.md's llbuild synopsis lacks $opt" ;; esac
+done
+# and no doc has an empty code span (a name lost in an edit)
+if grep -n ' `` ' docs/*.md README.md; then bad "an empty code span in the docs"; else ok; fi
+
 # --- bad input: 1
 expect 1 "no arguments" -- "$llbuild"
 expect 1 "unknown option" -- "$llbuild" --frobnicate examples/plastic.layers -o "$tmp/x.bsdf"
