@@ -43,6 +43,16 @@ contains "$tmp/out" "exit codes" "--help lists the exit codes"
 expect 0 "--version" -- "$llbuild" --version
 contains "$tmp/out" "llbuild (layerlab) [0-9]" "--version"
 
+# --- the docs' synopsis (docs/material-language.md) names every option
+# --help prints
+synopsis=$(sed -n '/^llbuild \[options\] MATERIAL.layers/,/^```/p' docs/material-language.md)
+for opt in $("$llbuild" --help | sed -n 's/^  \(-[a-z], \)\{0,1\}\(--[a-z-]*\).*/\2/p'); do
+    case "$synopsis" in *"$opt "*|*"$opt
+"*) ok ;; *) bad "docs/material-language.md's llbuild synopsis lacks $opt" ;; esac
+done
+# and no doc has an empty code span (a name lost in an edit)
+if grep -n ' `` ' docs/*.md README.md; then bad "an empty code span in the docs"; else ok; fi
+
 # --- bad input: 1
 expect 1 "no arguments" -- "$llbuild"
 expect 1 "unknown option" -- "$llbuild" --frobnicate examples/plastic.layers -o "$tmp/x.bsdf"
@@ -76,6 +86,59 @@ rm -rf "$tmp/ior"
 expect 2 "missing material" -- "$llbuild" "$tmp/none.layers" -o "$tmp/x.bsdf"
 expect 2 "unwritable output" -- "$llbuild" --nodes 10 --orders 2 examples/frosted-glass.layers \
     -o "$tmp/no/such/dir/x.bsdf"
+
+# --- mistakes found before any work: each refusal comes before the first
+# progress line (no "NN% " on stderr) and names the problem in the user's
+# words; the run builds nothing, so it leaves no file.
+# refused_early CODE DESCRIPTION TEXT -- command...
+refused_early() {
+    code=$1; what=$2; text=$3; shift 4
+    expect "$code" "$what" -- "$@"
+    contains "$tmp/err" "$text" "$what names the problem"
+    if grep -q '% ' "$tmp/err"; then bad "$what: refused after work began:"; sed 's/^/  | /' "$tmp/err" | head -3; else ok; fi
+}
+mkdir -p "$tmp/outdir"
+# the messages say the real rule: even and at least the minimum (with the
+# nearest counts), which count is too large (no "0 orders"), did you mean
+refused_early 1 "--nodes 101" "must be even, from 10 to 100000 (--nodes 100 or 102)" -- \
+    "$llbuild" --nodes 101 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 1000000" "--nodes 1000000: the node count must be even, from 10 to 100000" -- \
+    "$llbuild" --nodes 1000000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+if grep -q "0 orders" "$tmp/err"; then bad "--nodes 1000000 speaks of 0 orders"; else ok; fi
+printf 'dielectirc eta=1.5 alpha=0.1\ndiffuse albedo=0.5\n' >"$tmp/typo.layers"
+expect 1 "a mistyped word" -- "$llbuild" --dry-run "$tmp/typo.layers"
+contains "$tmp/err" "typo.layers:1:1: unknown word 'dielectirc'; did you mean 'dielectric'?" \
+    "a mistyped word gets a suggestion"
+refused_early 2 "output directory missing" "the output directory '$tmp/nowhere/' does not exist" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/nowhere/x.bsdf"
+refused_early 2 "-o names a directory" "names a directory; name the file to write" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/outdir"
+refused_early 2 "-o ends in a slash" "names a directory" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/outdir/"
+printf 'x' >"$tmp/afile"
+refused_early 2 "output directory is a file" "'$tmp/afile/' is not a directory" -- \
+    "$llbuild" examples/coated-gold.layers -o "$tmp/afile/x.bsdf"
+mkdir -p "$tmp/readonly"
+chmod 555 "$tmp/readonly"
+if [ -w "$tmp/readonly" ]; then
+    : # root writes anywhere: nothing to refuse
+else
+    refused_early 2 "output directory not writable" "'$tmp/readonly/' is not writable" -- \
+        "$llbuild" examples/coated-gold.layers -o "$tmp/readonly/x.bsdf"
+fi
+chmod 755 "$tmp/readonly"
+refused_early 1 "--nodes 4" "--nodes 4: the node count must be even, from 10 to 100000" -- \
+    "$llbuild" --nodes 4 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 200000" "from 10 to 100000" -- \
+    "$llbuild" --nodes 200000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--orders 0" "--orders 0: the order count must be from 1 to 100000" -- \
+    "$llbuild" --orders 0 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--orders 200000" "from 1 to 100000" -- \
+    "$llbuild" --orders 200000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+refused_early 1 "--nodes 20000 over the budget" "20000 nodes x 1 order (the fewest orders) needs about" -- \
+    "$llbuild" --nodes 20000 examples/coated-gold.layers -o "$tmp/outdir/x.bsdf"
+contains "$tmp/err" "more than the memory budget" "the early budget refusal names the budget"
+[ -z "$(ls "$tmp/outdir")" ] && ok || bad "an early refusal left $(ls "$tmp/outdir")"
 
 # --- out of memory: 3. A diffuse layer on 12000 nodes needs 576 MB for its
 # order 0; with the address space capped at 400 MB the build fails cleanly.
@@ -134,8 +197,17 @@ expect 0 "build" -- "$llbuild" --nodes 16 --orders 8 examples/plastic.layers -o 
 contains "$tmp/out" "^orders kept" "summary: orders kept"
 contains "$tmp/out" "^file  *[0-9]* bytes" "summary: file size"
 contains "$tmp/out" "^albedo" "summary: albedo"
+contains "$tmp/out" "^albedo .*reflected$" "an opaque stack shows reflection only"
 contains "$tmp/out" "^wall time" "summary: wall time"
 contains "$tmp/err" "llbuild: .*% " "plain progress lines"
+# A pane of frosted glass in air: the header's eta is 1 but the stack has
+# no opaque word, so the summary shows what it transmits beside what it
+# reflects (reflected + transmitted = 1 at normal incidence).
+printf 'dielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n' >"$tmp/pane.layers"
+expect 0 "a frosted pane" -- "$llbuild" --nodes 40 --orders 20 "$tmp/pane.layers" -o "$tmp/pane.bsdf"
+contains "$tmp/out" "^header       eta 1," "the pane's header has eta 1"
+contains "$tmp/out" "reflected | transmitted" "the pane's summary shows transmission"
+contains "$tmp/out" "0 deg   0.07[0-9]*  | 0.9[0-9]*$" "the pane transmits what it does not reflect"
 expect 0 "--quiet" -- "$llbuild" --quiet --nodes 16 --orders 8 examples/plastic.layers -o "$tmp/q.bsdf"
 if [ -s "$tmp/out" ] || [ -s "$tmp/err" ]; then bad "--quiet printed something"; else ok; fi
 expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orders 8 \

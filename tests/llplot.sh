@@ -83,4 +83,10 @@ check sh -c '"$1" --grid "$2/swept.layers" -o "$2/swept.exr" --size 16 --spp 2 &
 step="textured_grid refuses values that do not increase"
 check sh -c '! "$1" "$2/never.bsdf" "diffuse albedo={0}" albedo=0.5,0.2 && [ ! -e "$2/never.bsdf" ]' \
     sh "$grid_tool" "$work"
+step="llplot --sphere's PNG has a title by default (the file name): it differs from one titled blank"
+check sh -c '"$1" --sphere "$2/tg.bsdf" --param coat.alpha=0.2 --param base.albedo=0.5 \
+        -o "$2/titled.png" --size 96 --spp 1 &&
+    "$1" --sphere "$2/tg.bsdf" --param coat.alpha=0.2 --param base.albedo=0.5 --title "" \
+        -o "$2/blank.png" --size 96 --spp 1 &&
+    ! cmp -s "$2/titled.png" "$2/blank.png"' sh "$llplot" "$work"
 exit $failed

@@ -582,6 +582,21 @@ static void bad_arguments_are_rejected(void **state)
     o.n_channels = 0;
     o.error_goal = 2.0;
     assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    o.error_goal = 0.0;
+    /* The resolution's messages say the real rule and name the count that
+     * is wrong (an unset order count is no "0 orders"). */
+    o.n_nodes = 101;
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "an even count of at least 10"));
+    o.n_nodes = 1000000;
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "n_nodes = 1000000 is beyond the 100000"));
+    assert_null(strstr(ll_last_error_message(), "orders"));
+    o.n_nodes = 0;
+    o.n_orders = 1000000;
+    assert_int_equal(ll_material_build(m, &o, NULL, path), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "n_orders = 1000000 is beyond the 100000"));
+    o.n_orders = 0;
     assert_int_equal(ll_material_write(m, NULL, layers, 2, path, NULL), LL_ERROR_INVALID_ARGUMENT);
     assert_int_equal(ll_material_write(m, NULL, layers, 1, path, NULL), LL_ERROR_INVALID_ARGUMENT);
     /* A directory that does not exist: an I/O error naming it. */

@@ -381,6 +381,14 @@ static void syntax_errors(void **state)
 {
     (void)state;
     expect_error("   plastic albedo=0.5", "t:1:4: ", "unknown word 'plastic'");
+    /* A typing mistake gets the word it was likely meant to be; a word
+     * like no other gets the list alone. */
+    expect_error("dielectirc eta=1.5 alpha=0.1", "t:1:1: ",
+                 "unknown word 'dielectirc'; did you mean 'dielectric'?");
+    expect_error("difuse albedo=0.5", "t:1:1: ", "did you mean 'diffuse'?");
+    expect_error("Conductr eta=Au alpha=0.1", "t:1:1: ", "did you mean 'conductor'?");
+    expect_error("sett nodes=10\ndiffuse albedo=0.5", "t:1:1: ", "did you mean 'set'?");
+    expect_error("   plastic albedo=0.5", "t:1:4: ", "expected diffuse, dielectric");
     expect_error("diffuse color=0.5", "t:1:9: ", "diffuse has no parameter 'color'");
     expect_error("diffuse albedo", "t:1:9: ", "expected key=value");
     expect_error("diffuse =0.5", "t:1:9: ", "expected key=value");

@@ -240,6 +240,22 @@ LL_API ll_status ll_bsdf_sample(const ll_bsdf *b, double mu_i, const double u[2]
                                 const float *basis_coeffs, double *mu_o, double *phi_d,
                                 double *pdf, double f_rgb[3]);
 
+/* The directional albedo for light arriving along mu_i (layer convention,
+ * as ll_bsdf_eval): the integral of f |mu_o| over the reflected
+ * hemisphere (mu_o of the other sign than mu_i; mu_i = 0 counts as from
+ * above) into rgb_reflected and over the transmitted one into
+ * rgb_transmitted (either may be NULL). At the file's own accuracy: the
+ * order-0 series (the azimuthal mean) interpolated in mu_i with the file's
+ * spline weights and integrated over mu_o with the spline the sampler
+ * inverts, so that the luminance of the sum of both is the normalisation
+ * of ll_bsdf_pdf and the mean of the sample weights f |mu_o| / pdf of
+ * ll_bsdf_sample. Allocates nothing; O(n_nodes) work. Colour and basis
+ * weights as ll_bsdf_eval. LL_ERROR_INVALID_ARGUMENT for NULL b,
+ * non-finite mu_i or missing basis weights; LL_ERROR_UNSUPPORTED for a
+ * table file (LL_BSDF_FORMAT_TABLES), which has no order-0 series. */
+LL_API ll_status ll_bsdf_albedo(const ll_bsdf *b, double mu_i, const float *basis_coeffs,
+                                double rgb_reflected[3], double rgb_transmitted[3]);
+
 /* ---------------------------------------------- renderer convention */
 
 /* f(wo, wi) without cosine into f_rgb (pbrt-v3's FourierBSDF::f; mapping

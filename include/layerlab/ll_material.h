@@ -45,6 +45,12 @@ LL_API ll_status ll_material_parse(const char *text, const char *source_name,
 LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
 LL_API void ll_material_destroy(ll_material *material);
 
+/* The resolutions a build accepts: a node count is even and at least
+ * LL_BUILD_MIN_NODES (with fewer, the quadrature's error in an albedo is
+ * above 1%); node and order counts are at most LL_BUILD_MAX_RESOLUTION. */
+#define LL_BUILD_MIN_NODES 10
+#define LL_BUILD_MAX_RESOLUTION 100000
+
 /* Options of a build. Every field's zero is its default. */
 typedef struct ll_build_options {
     size_t struct_size;       /* sizeof(ll_build_options)                          */
@@ -148,6 +154,12 @@ LL_API ll_status ll_material_write(const ll_material *material, const ll_build_o
 
 /* Number of words (layers) in the stack. */
 LL_API size_t ll_material_word_count(const ll_material *material);
+
+/* Does light leave the stack through its bottom? 1 unless the bottom word
+ * is opaque (conductor, diffuse, an opaque measured table); a stack of
+ * interfaces and media transmits whatever its indices (a pane of glass in
+ * air has eta 1 and still transmits). 0 for NULL. */
+LL_API int ll_material_transmits(const ll_material *material);
 
 /* ------------------------------------------------------------ sweeps
  *

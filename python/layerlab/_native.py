@@ -253,6 +253,7 @@ PROTOTYPES = {
     "ll_bsdf_nodes": (c_float_p, [bsdf_p]),
     "ll_bsdf_eval": (_S, [bsdf_p, _D, _D, _D, c_float_p, _P3]),
     "ll_bsdf_pdf": (_S, [bsdf_p, _D, _D, _D, c_float_p, c_double_p]),
+    "ll_bsdf_albedo": (_S, [bsdf_p, _D, c_float_p, _P3, _P3]),
     "ll_bsdf_sample": (_S, [bsdf_p, _D, ctypes.c_double * 2, c_float_p, c_double_p, c_double_p,
                             c_double_p, _P3]),
     "ll_bsdf_eval_dir": (_S, [bsdf_p, _P3, _P3, _I, c_float_p, _P3]),

@@ -532,6 +532,22 @@ class BSDFStorage:
         out = out.reshape(shape)
         return float(out) if out.ndim == 0 else out
 
+    def albedo(self, mu_i, basisCoeffs=None, params=None):
+        """albedo(mu_i, basisCoeffs=None, params=None) -> (reflected, transmitted)
+
+        The directional albedo for light arriving along ``mu_i`` (a number,
+        layer convention as :meth:`eval`): two (R, G, B) arrays, the
+        fraction reflected and the fraction transmitted, at the file's own
+        accuracy (its order-0 series integrated with its own splines; the
+        mean of :meth:`sample`'s weights). A table file raises
+        :class:`layerlab.UnsupportedError`.
+        """
+        handle = self._live()
+        _keep, coeffs = self._basis(basisCoeffs, params)
+        reflected, transmitted = (ctypes.c_double * 3)(), (ctypes.c_double * 3)()
+        check(lib.ll_bsdf_albedo(handle, float(mu_i), coeffs, reflected, transmitted))
+        return np.array(reflected[:]), np.array(transmitted[:])
+
     def sample(self, mu_i, sample, basisCoeffs=None, params=None):
         """sample(mu_i, sample, basisCoeffs=None, params=None) -> (weight, mu_o, phi_d, pdf)
 

@@ -191,3 +191,20 @@ def test_golden_from_bytes_and_damage(golden, testdata_dir):
     for cut in (10, 64, 1000, len(data) - 1):
         with pytest.raises(ll.FormatError):
             ll.BSDFStorage.fromBytes(data[:cut])
+
+
+def test_golden_albedo_is_the_sample_weight_mean(golden):
+    # A grid of cell midpoints in u (u[1] picks mu_o, u[0] phi).
+    for mu_i in (0.9, 0.4):
+        reflected, transmitted = golden.albedo(mu_i)
+        assert transmitted.tolist() == [0.0, 0.0, 0.0]
+        mean = np.zeros(3)
+        n_mu, n_phi = 500, 64
+        for a in range(n_phi):
+            for b in range(n_mu):
+                weight, _mu_o, _phi, _pdf = golden.sample(mu_i, ((a + 0.5) / n_phi,
+                                                                 (b + 0.5) / n_mu))
+                mean += weight
+        mean /= n_mu * n_phi
+        np.testing.assert_allclose(reflected, mean, atol=1e-3)
+        assert 0.1 < reflected[0] < 1.0

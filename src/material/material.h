@@ -160,8 +160,8 @@ LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 /* The smallest node count whose quadrature is meaningful
  * (docs/material-language.md, "Settings"), and the largest node or order
  * count a build accepts. */
-#define LL_MATERIAL_MIN_NODES 10
-#define LL_MATERIAL_MAX_RESOLUTION 100000
+#define LL_MATERIAL_MIN_NODES LL_BUILD_MIN_NODES
+#define LL_MATERIAL_MAX_RESOLUTION LL_BUILD_MAX_RESOLUTION
 
 /* ---- material_sharing.c: the one walk of a build's sharing between
  * channels, followed by the build, its progress weights and the cost

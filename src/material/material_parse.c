@@ -8,6 +8,7 @@
  * expected there.
  */
 #include "material/word_table.h"
+#include "material/word_suggest.h"
 #include "support/parse_number.h"
 #include "support/regular_file.h"
 
@@ -382,7 +383,9 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
                 return ll_parse_error(p, key.begin, "nodes is set twice");
             s = parse_count(p, &key, &v, &m->nodes);
             if (s == LL_OK && (m->nodes < 2 || m->nodes % 2))
-                s = ll_parse_error(p, v.begin, "nodes=%zu: expected an even count >= 2", m->nodes);
+                s = ll_parse_error(p, v.begin,
+                                   "nodes=%zu: a build needs an even count of at least %d",
+                                   m->nodes, LL_MATERIAL_MIN_NODES);
             else if (s == LL_OK && m->nodes > LL_MATERIAL_MAX_RESOLUTION)
                 s = ll_parse_error(p, v.begin, "nodes=%zu is beyond the %d supported", m->nodes,
                                    LL_MATERIAL_MAX_RESOLUTION);
@@ -435,6 +438,9 @@ static ll_status parse_settings(parser *p, const char *at, const char *line_end)
     }
 }
 
+/* More words than the language has, for the suggestion's list. */
+#define LL_SUGGEST_WORDS 32
+
 static ll_status parse_line(parser *p, const char *at, const char *line_end)
 {
     token name;
@@ -452,6 +458,19 @@ static ll_status parse_line(parser *p, const char *at, const char *line_end)
     snprintf(shown, sizeof shown, "%.*s%s", (int)(name.len > 24 ? 24 : name.len), name.begin,
              name.len > 24 ? "..." : "");
     list_words(names, sizeof names);
+    {
+        /* The words and "set": a typing mistake gets its likely meaning. */
+        const char *candidates[LL_SUGGEST_WORDS + 1], *closest;
+        size_t n = ll_word_table_size < LL_SUGGEST_WORDS ? ll_word_table_size : LL_SUGGEST_WORDS;
+        for (k = 0; k < n; ++k)
+            candidates[k] = ll_word_table[k]->name;
+        candidates[n] = "set";
+        closest = ll_closest_name(name.begin, name.len, candidates, n + 1);
+        if (closest)
+            return ll_parse_error(p, name.begin,
+                                  "unknown word '%s'; did you mean '%s'? (expected %s or set)",
+                                  shown, closest, names);
+    }
     return ll_parse_error(p, name.begin, "unknown word '%s'; expected %s or set", shown, names);
 }
 
@@ -610,3 +629,5 @@ ll_status ll_material_parse_file(const char *path, ll_material **out)
 }
 
 size_t ll_material_word_count(const ll_material *m) { return m ? m->count : 0; }
+
+int ll_material_transmits(const ll_material *m) { return m && !ll_material_is_opaque(m); }

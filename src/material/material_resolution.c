@@ -55,12 +55,17 @@ ll_status ll_build_options_read(const ll_build_options *in, ll_build_options *ou
         out->max_memory_bytes = default_budget();
     if (out->n_nodes != 0 && (out->n_nodes < 2 || out->n_nodes % 2 != 0))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: n_nodes = %zu; expected an even count >= 2 (or 0 for the default)",
-                       fn, out->n_nodes);
-    if (out->n_nodes > LL_MATERIAL_MAX_RESOLUTION || out->n_orders > LL_MATERIAL_MAX_RESOLUTION)
+                       "%s: n_nodes = %zu; a build needs an even count of at least %d (or 0 "
+                       "for the default)",
+                       fn, out->n_nodes, LL_MATERIAL_MIN_NODES);
+    if (out->n_nodes > LL_MATERIAL_MAX_RESOLUTION)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "%s: %zu nodes x %zu orders is beyond the %d supported", fn,
-                       out->n_nodes, out->n_orders, LL_MATERIAL_MAX_RESOLUTION);
+                       "%s: n_nodes = %zu is beyond the %d nodes supported", fn, out->n_nodes,
+                       LL_MATERIAL_MAX_RESOLUTION);
+    if (out->n_orders > LL_MATERIAL_MAX_RESOLUTION)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "%s: n_orders = %zu is beyond the %d orders supported", fn,
+                       out->n_orders, LL_MATERIAL_MAX_RESOLUTION);
     if (out->n_channels != 0 && out->n_channels != 1 && out->n_channels != 3)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "%s: n_channels = %zu; expected 1, 3 or 0 (from the material)", fn,

@@ -87,6 +87,11 @@ int main(int argc, char **argv)
         return finish(code);
     if (a.ior_dir && setenv("LAYERLAB_IOR_DIR", a.ior_dir, 1) != 0)
         return finish(bad_usage("cannot set LAYERLAB_IOR_DIR", NULL));
+    /* Where rank 0 will write, checked before any work. */
+    code = job.rank == 0 && a.output ? check_output(a.output) : -1;
+    MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (code >= 0)
+        return finish(code);
     /* Every rank reads the material (across machines, each its own copy). */
     s = mpi_agree(&job, ll_material_parse_file(a.input, &m), NULL, message, sizeof message);
     if (s != LL_OK) {

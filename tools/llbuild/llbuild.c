@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -142,7 +143,7 @@ typedef struct args {
     const char *input, *output, *ior_dir;
     size_t nodes, orders, channels, threads, max_memory;
     double error, tolerance, mu_min;
-    int dry_run, quiet;
+    int dry_run, quiet, nodes_given, orders_given;
 } args;
 
 static int exit_code_for(ll_status s)
@@ -209,6 +210,8 @@ static int parse_memory(const char *text, size_t *out)
     return 1;
 }
 
+static int check_resolution(const args *a);
+
 /* Returns -1 to go on, else an exit code. */
 static int parse_args(int argc, char **argv, args *a)
 {
@@ -233,9 +236,9 @@ static int parse_args(int argc, char **argv, args *a)
             if (!parse_size(next, &v))
                 return bad_usage(o, "expected a whole number");
             if (!strcmp(o, "--nodes"))
-                a->nodes = v;
+                a->nodes = v, a->nodes_given = 1;
             else if (!strcmp(o, "--orders"))
-                a->orders = v;
+                a->orders = v, a->orders_given = 1;
             else
                 a->threads = v;
             ++i;
@@ -294,10 +297,108 @@ static int parse_args(int argc, char **argv, args *a)
         return bad_usage("no material file given", NULL);
     if (!a->output && !a->dry_run)
         return bad_usage("no output file given (-o OUT.bsdf)", NULL);
-    if (a->nodes && (a->nodes < 2 || a->nodes % 2))
-        return bad_usage("--nodes: expected an even count >= 2", NULL);
+    return check_resolution(a);
+}
+
+/* --nodes and --orders against what a build accepts, said as the rule
+ * (checked before anything is read or searched). Returns -1 to go on. */
+static int check_resolution(const args *a)
+{
+    if (a->nodes_given && (a->nodes % 2 || a->nodes < LL_BUILD_MIN_NODES ||
+                           a->nodes > LL_BUILD_MAX_RESOLUTION)) {
+        size_t lo = a->nodes % 2 ? a->nodes - 1 : a->nodes, hi = lo + 2;
+        fprintf(stderr,
+                "llbuild: --nodes %zu: the node count must be even, from %d to %d", a->nodes,
+                LL_BUILD_MIN_NODES, LL_BUILD_MAX_RESOLUTION);
+        if (a->nodes % 2 && lo >= LL_BUILD_MIN_NODES && hi <= LL_BUILD_MAX_RESOLUTION)
+            fprintf(stderr, " (--nodes %zu or %zu)", lo, hi);
+        fprintf(stderr, "\n");
+        return EXIT_BAD_INPUT;
+    }
+    if (a->orders_given && (a->orders < 1 || a->orders > LL_BUILD_MAX_RESOLUTION)) {
+        fprintf(stderr, "llbuild: --orders %zu: the order count must be from 1 to %d\n",
+                a->orders, LL_BUILD_MAX_RESOLUTION);
+        return EXIT_BAD_INPUT;
+    }
     return -1;
 }
+
+/* Where the file goes, checked before any work: -o names a file (not a
+ * directory) in a directory that exists and that we may write (the
+ * library writes a spill file and the output beside each other there).
+ * Returns -1 to go on, else the exit code (I/O, as a failed write). */
+static int check_output(const char *out)
+{
+    struct stat st;
+    char *dir;
+    const char *slash;
+    size_t len = strlen(out);
+    int code = -1, found;
+    if (len == 0 || out[len - 1] == '/' || (stat(out, &st) == 0 && S_ISDIR(st.st_mode))) {
+        fprintf(stderr, "llbuild: -o %s names a directory; name the file to write, e.g. -o "
+                        "%s%sNAME.bsdf\n",
+                out, out, len && out[len - 1] == '/' ? "" : "/");
+        return EXIT_IO;
+    }
+    slash = strrchr(out, '/');
+    if (!slash)
+        return access(".", W_OK | X_OK) == 0 ? -1
+                                              : (fprintf(stderr,
+                                                         "llbuild: the current directory is "
+                                                         "not writable (%s)\n",
+                                                         strerror(errno)),
+                                                 EXIT_IO);
+    dir = malloc((size_t)(slash - out) + 2);
+    if (!dir)
+        return EXIT_NUMERICAL;
+    memcpy(dir, out, (size_t)(slash - out) + 1);
+    /* Shown with its slash; looked at without it (else a file named as
+     * the directory reads as missing), except the root itself. */
+    dir[slash - out] = '\0';
+    found = stat(slash == out ? "/" : dir, &st) == 0;
+    dir[slash - out] = '/';
+    dir[slash - out + 1] = '\0';
+    if (!found) {
+        fprintf(stderr, "llbuild: the output directory '%s' does not exist\n", dir);
+        code = EXIT_IO;
+    } else if (!S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "llbuild: the output directory '%s' is not a directory\n", dir);
+        code = EXIT_IO;
+    } else if (access(dir, W_OK | X_OK) != 0) {
+        fprintf(stderr, "llbuild: the output directory '%s' is not writable (%s)\n", dir,
+                strerror(errno));
+        code = EXIT_IO;
+    }
+    free(dir);
+    return code;
+}
+
+#ifndef LLBUILD_NO_MAIN
+/* The memory budget for a given node count, before any search: with the
+ * orders given, the build's own estimate; with only the nodes, the
+ * smallest build at that many nodes (1 order), whose refusal no search can
+ * change. Returns -1 to go on. */
+static int check_budget(const ll_material *m, const ll_build_options *o)
+{
+    ll_build_options lowest = *o;
+    ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
+    if (!o->n_nodes)
+        return -1;
+    if (!lowest.n_orders)
+        lowest.n_orders = 1;
+    if (ll_material_axis_count(m) > 0 || ll_material_estimate(m, &lowest, &e, NULL) != LL_OK ||
+        !e.over_budget)
+        return -1;
+    fprintf(stderr,
+            "llbuild: %zu nodes x %zu order%s%s needs about %.0f MiB at its peak, more than the "
+            "memory budget of %.0f MiB (raise it with --max-memory SIZE, or lower the "
+            "resolution)\n",
+            lowest.n_nodes, lowest.n_orders, lowest.n_orders == 1 ? "" : "s",
+            o->n_orders ? "" : " (the fewest orders)", e.peak_bytes / 1048576.0,
+            (double)e.max_memory_bytes / 1048576.0);
+    return EXIT_BAD_INPUT;
+}
+#endif /* LLBUILD_NO_MAIN */
 
 static double now_seconds(void)
 {
@@ -478,7 +579,9 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("header       eta %g, alpha %g (top) %g (bottom)\n", info.eta, info.alpha[0],
            info.alpha[1]);
-    print_albedo(sum, info.eta != 1.0);
+    /* From the stack, not the header's eta: a pane (glass between two
+     * airs) has eta 1 and transmits most of the light. */
+    print_albedo(sum, ll_material_transmits(m));
     printf("wall time    %.2f s\n", seconds);
     ll_bsdf_release(b);
 }
@@ -572,6 +675,9 @@ int main(int argc, char **argv)
         return code;
     if (a.ior_dir && setenv("LAYERLAB_IOR_DIR", a.ior_dir, 1) != 0)
         return bad_usage("cannot set LAYERLAB_IOR_DIR", NULL);
+    /* Everything that can be checked before the work is checked first. */
+    if (a.output && (code = check_output(a.output)) >= 0)
+        return code;
     s = ll_material_parse_file(a.input, &m);
     if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
@@ -583,6 +689,10 @@ int main(int argc, char **argv)
         return code;
     }
     options_from_args(&a, &o);
+    if (!a.dry_run && (code = check_budget(m, &o)) >= 0) {
+        ll_material_destroy(m);
+        return code;
+    }
     if (cancel_flag) {
         ll_material_destroy(m);
         return die_cancelled();

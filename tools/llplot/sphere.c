@@ -323,8 +323,11 @@ void llplot_sphere_paint(const llplot_options *o, const llplot_image *img, unsig
     }
 }
 
-/* vary: the caption of --vary ("NAME: LO (left) to HI (right)"), or NULL. */
-static int write_png(const llplot_options *o, const llplot_image *img, const char *vary)
+/* title: --title, else the input's file name (PNG figures have titles,
+ * docs/llplot.md); vary: the caption of --vary ("NAME: LO (left) to HI
+ * (right)"), or NULL. */
+static int write_png(const llplot_options *o, const llplot_image *img, const char *title,
+                     const char *vary)
 {
     cairo_t *cr;
     cairo_surface_t *surface = llplot_canvas_create((int)img->width, (int)img->height, &cr);
@@ -336,9 +339,9 @@ static int write_png(const llplot_options *o, const llplot_image *img, const cha
                         cairo_image_surface_get_stride(surface), 0, 0);
     cairo_surface_mark_dirty(surface);
     cairo_set_source_rgb(cr, 0.92, 0.92, 0.92);
-    if (o->title)
+    if (title && *title)
         llplot_text(cr, 0.5 * (double)img->width, (double)img->height - 8, 13, 0, 0.5, 1.0,
-                    o->title);
+                    title);
     if (vary)
         llplot_text(cr, 0.5 * (double)img->width, 8, 13, 0, 0.5, 0.0, vary);
     cairo_destroy(cr);
@@ -488,7 +491,7 @@ int llplot_sphere(const llplot_options *o, const llplot_source *s)
                  caption);
         code = llplot_write_exr(o->output, &img, comments);
     } else {
-        code = write_png(o, &img, o->vary ? caption : NULL);
+        code = write_png(o, &img, o->title ? o->title : s->label, o->vary ? caption : NULL);
     }
     llplot_image_free(&img);
     return code;
