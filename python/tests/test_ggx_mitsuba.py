@@ -68,8 +68,9 @@ def _mitsuba_bsdf(kind, alpha):
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    """Every (kind, alpha) built by llbuild, all at once (the search and the
-    build of one file are mostly single-threaded)."""
+    """Every (kind, alpha) built by llbuild at the tolerance's resolution:
+    ten processes of one thread each, started together (about 90 CPU
+    seconds in all)."""
     d = tmp_path_factory.mktemp("ggx")
     llbuild = _llbuild()
     out, procs = {}, []
