@@ -6,8 +6,10 @@
 #                                      Mitsuba renders, and pip_install.sh
 #   sh python/tests/run.sh --mitsuba   `make check`: what needs Mitsuba 3:
 #                                      the plugin's renders (test_mitsuba.py)
-#                                      and our tables against its `measured`
-#                                      (test_tables_mitsuba.py)
+#                                      our tables against its `measured`
+#                                      (test_tables_mitsuba.py) and GGX
+#                                      files against its roughconductor and
+#                                      roughdielectric (test_ggx_mitsuba.py)
 # Nothing is downloaded once the environment holds its packages: pip is
 # pointed at the environment's wheel folder (PIP_NO_INDEX, PIP_FIND_LINKS),
 # for the tests that run `pip install` themselves.
@@ -51,7 +53,7 @@ export PYTHONPATH
 cd "$root/python"
 if [ $mitsuba = 1 ]; then
   exec "$PYTHON" -m pytest -q -p no:cacheprovider tests/test_mitsuba.py \
-    tests/test_tables_mitsuba.py
+    tests/test_tables_mitsuba.py tests/test_ggx_mitsuba.py
 fi
 exec "$PYTHON" -m pytest -q -p no:cacheprovider --ignore=tests/test_mitsuba.py \
-  --ignore=tests/test_tables_mitsuba.py tests
+  --ignore=tests/test_tables_mitsuba.py --ignore=tests/test_ggx_mitsuba.py tests
