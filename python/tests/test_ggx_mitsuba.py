@@ -135,11 +135,11 @@ def _case(lib, h, bsdf, side, lobe, rng):
     return np.concatenate(rel), albedos
 
 
-# The cases that miss the bounds today (docs/method.md, "GGX against
-# Mitsuba 3": transmission at the jump |mu_o| = |mu_i| / eta, reflection from
-# below at grazing incidence, the conductor's median at alpha 0.05). Held
-# both ways: any other case that misses fails the test, and so does one of
-# these that starts to pass (then it leaves this list).
+# The cases that miss the bounds today (docs/method.md, "Rough interfaces",
+# the comparison with Mitsuba 3: transmission at the jump |mu_o| = |mu_i| /
+# eta, reflection from below at grazing incidence, the conductor's median at
+# alpha 0.05). Held both ways: any other case that misses fails the test, and
+# so does one of these that starts to pass (then it leaves this list).
 KNOWN_MISSES = {
     ("conductor above R", 0.05),
     ("dielectric below T", 0.1),
