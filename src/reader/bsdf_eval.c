@@ -180,6 +180,7 @@ double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_ph
     ll_bsdf_series s;
     ptrdiff_t off_i;
     double w_i[4], sums[3], rho;
+    size_t idx;
     if (b->measured)
         return ll_measured_pdf_cos(b, mu_i, mu_o, cos_phi);
     if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
@@ -191,6 +192,16 @@ double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_ph
     ll_bsdf_series_eval(&s, 1, cos_phi, sums);
     if (!(rho > 0.0 && sums[0] > 0.0))
         return 0.0;
+    /* In a segment where a CDF row was flattened (bsdf_cdf.c) mu_o has the
+     * flattened CDF's density, and phi the series' own (pdf_phi = f /
+     * (2 pi a_0)), as the sampler draws them. */
+    if (ll_bsdf_cdf_flat_segment(b, off_i, w_i, mu_o, &idx)) {
+        double a0 = ll_bsdf_series_mean(&s), pdf;
+        if (!(a0 > 0.0))
+            return 0.0;
+        pdf = ll_bsdf_cdf_flat_density(b, off_i, w_i, basis, idx) * sums[0] / (2.0 * LL_PI * a0);
+        return ll_is_finite(pdf) ? pdf : 0.0;
+    }
     /* A total that cancels to almost nothing under the spline weights
      * could overflow the ratio; sampling then returns no direction either
      * (ll_bsdf_sample_core), so the two stay consistent. */

@@ -22,6 +22,7 @@ void ll_bsdf_free(ll_bsdf *b)
     ll_free(b->param_first);
     ll_free(b->param_positions);
     ll_free(b->cdf);
+    ll_free(b->cdf_flat);
     ll_free(b->a0);
     ll_free(b->pairs);
     ll_free(b->coeffs);

@@ -52,8 +52,11 @@ struct ll_bsdf {
     size_t *param_first;        /* [n_parameters] index of the first position  */
     float *param_positions;     /* [n_parameter_values]                        */
     double *cdf;                /* [(i * n + o) * n_bases + b]; the running
-                                   maximum of the stored row (rounding dips
-                                   flattened, bsdf_read.c)                     */
+                                   maximum of the stored row (its dips
+                                   flattened, bsdf_cdf.c)                      */
+    unsigned char *cdf_flat;    /* [i * (n - 1) + o]: 1 if flattening changed
+                                   an end of segment o (nodes o, o + 1) of row
+                                   i in some basis; NULL if no row has a dip  */
     double *a0;                 /* same layout: order-0 luminance coefficient  */
     ll_bsdf_pair *pairs;        /* [i * n + o]                                 */
     float *coeffs;              /* [n_coeffs + 4] as stored (float: the calls
@@ -224,6 +227,25 @@ LL_INTERNAL void ll_bsdf_add_scaled4(int vector, double *acc, const float *const
 LL_INTERNAL void ll_bsdf_integral_dense(int vector, const double *a, const double *recip,
                                         size_t n4, const ll_harmonics *hc,
                                         const ll_harmonics *hs, double *F, double *f);
+
+/* The CDF rows (bsdf_cdf.c). settle: check every dip of the stored rows
+ * in b->cdf against the row's own spline integral of b->a0, flatten them
+ * (running maximum) and fill b->cdf_flat; LL_ERROR_FORMAT naming the row,
+ * entry and bound for a dip no float32 sum of the row produces.
+ * flattened: whether segment idx of the row interpolated over (off_i, w_i)
+ * has a flattened end in a row of non-zero weight; there the sampling
+ * density in mu_o is flat_density (the segment's mass over its width and
+ * the row's total, 0 if the mass is not positive), everywhere else a_0's
+ * spline over the total. flat_segment: the segment strictly containing
+ * mu_o, if it is such a segment. */
+LL_INTERNAL ll_status ll_bsdf_cdf_settle(ll_bsdf *b, const char *file);
+LL_INTERNAL int ll_bsdf_cdf_flattened(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4],
+                                      size_t idx);
+LL_INTERNAL int ll_bsdf_cdf_flat_segment(const ll_bsdf *b, ptrdiff_t off_i,
+                                         const double w_i[4], double mu_o, size_t *idx);
+LL_INTERNAL double ll_bsdf_cdf_flat_density(const ll_bsdf *b, ptrdiff_t off_i,
+                                            const double w_i[4], const float *basis,
+                                            size_t idx);
 
 /* Catmull-Rom spline interpolation, over the incident weights (off_i, w_i),
  * of the per-row tables cdf or a0 at outgoing node o, with basis weights. */

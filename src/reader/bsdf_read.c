@@ -291,25 +291,16 @@ static ll_status read_parameters(ll_bsdf *b, const unsigned char *counts,
     return LL_OK;
 }
 
-/* The original layerlab's writer stores each CDF row as a running float32
- * sum of spline integrals of a_0 (BSDFStorage), and an integral next to a
- * zero of a_0 can be slightly negative (spline overshoot) or round below the
- * sum: its coated-gold files carry dozens of entries a rounding error below
- * the previous one (e.g. -2.58e-10 after 0), and pbrt-v3 renders them. A
- * dip of at most this fraction of the row's total (2^-20, 8 float32 ulps of
- * the total) is such rounding and is stored flat (the running maximum), so
- * that sampling never selects a segment of negative probability; a larger
- * dip, a negative total or a first entry that is not 0 is a broken file. */
-#define LL_BSDF_CDF_DIP_TOLERANCE (1.0 / 1048576.0)
-
+/* The CDF rows as stored (finite, starting at 0, with a non-negative
+ * total); their dips are checked and flattened once a_0 is known
+ * (ll_bsdf_cdf_settle, bsdf_cdf.c). */
 static ll_status read_cdf(ll_bsdf *b, const unsigned char *p, const char *file)
 {
     size_t n = b->n_nodes, nb = b->n_bases, i, o, k;
     for (i = 0; i < n; ++i)
         for (k = 0; k < nb; ++k) {
             size_t first = i * n * nb + k;
-            double total = ll_le_get_f32(p + 4 * (first + (n - 1) * nb)), running = 0.0;
-            double allowed = LL_BSDF_CDF_DIP_TOLERANCE * total;
+            double total = ll_le_get_f32(p + 4 * (first + (n - 1) * nb));
             if (!isfinite(total) || !(total >= 0.0))
                 return file_error(LL_ERROR_FORMAT, file,
                                   "CDF row %zu (basis %zu): the total %g (last entry) is not "
@@ -323,15 +314,7 @@ static ll_status read_cdf(ll_bsdf *b, const unsigned char *p, const char *file)
                                       "CDF row %zu (basis %zu) entry %zu = %g: rows must start "
                                       "at 0 and be finite",
                                       i, k, o, v);
-                if (v < running - allowed)
-                    return file_error(LL_ERROR_FORMAT, file,
-                                      "CDF row %zu (basis %zu) entry %zu = %g falls %g below "
-                                      "the previous %g: more than the rounding tolerance (2^-20 "
-                                      "of the row's total %g); rows must be non-decreasing",
-                                      i, k, o, v, running - v, running, total);
-                if (v > running)
-                    running = v;
-                b->cdf[at] = running;
+                b->cdf[at] = v;
             }
         }
     return LL_OK;
@@ -444,10 +427,9 @@ static ll_status read_coeffs(ll_bsdf *b, const bsdf_source *src, size_t at, cons
     return LL_OK;
 }
 
-/* Derived tables: order-0 luminance per pair and basis (what pbrt-v3 calls
- * a0, interpolated when sampling mu) and the reciprocals for integrating
- * the series in phi. */
-static void derive_tables(ll_bsdf *b)
+/* The order-0 luminance per pair and basis (what pbrt-v3 calls a0,
+ * interpolated when sampling mu; the CDF rows are its running integral). */
+static void derive_a0(ll_bsdf *b)
 {
     size_t n = b->n_nodes, nb = b->n_bases, k, basis;
     for (k = 0; k < n * n; ++k) {
@@ -456,6 +438,13 @@ static void derive_tables(ll_bsdf *b)
             b->a0[k * nb + basis] =
                 pr->length ? b->coeffs[pr->offset + basis * pr->length] : 0.0;
     }
+}
+
+/* Derived tables: the reciprocals for integrating the series in phi and
+ * the spline constants. */
+static void derive_tables(ll_bsdf *b)
+{
+    size_t k;
     for (k = 0; k < b->max_order + 4; ++k)
         b->recip[k] = (k > 0 && k < b->max_order) ? 1.0 / (double)k : 0.0;
     ll_bsdf_spline_prepare(b);
@@ -524,6 +513,10 @@ static ll_status parse_body(const unsigned char *front, const bsdf_header *h,
         s = read_table(b, front + l->table, file);
     if (s == LL_OK)
         s = read_coeffs(b, src, l->coeffs, file);
+    if (s == LL_OK) {
+        derive_a0(b);
+        s = ll_bsdf_cdf_settle(b, file);
+    }
     if (s == LL_OK && !source_read(src, l->metadata, b->metadata, b->metadata_size))
         s = read_failure(file);
     if (s == LL_OK && !ll_bsdf_read_parameter_names(b))

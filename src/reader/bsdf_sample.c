@@ -92,6 +92,25 @@ static int sample_mu(const ll_bsdf *b, ptrdiff_t off_i, const double w_i[4], con
         *pdf_mu = f0 / maximum;
         return 1;
     }
+    if (ll_bsdf_cdf_flattened(b, off_i, w_i, idx)) {
+        /* A segment where a row was flattened (bsdf_cdf.c): a_0's spline no
+         * longer integrates to the segment's mass, so mu_o is uniform over
+         * it, the density ll_bsdf_pdf gives there. t stays strictly inside
+         * (2^-20 of the segment from its ends), where ll_bsdf_pdf finds the
+         * same segment; u = 0 or 1, of probability 0, lands there too. */
+        double c0 = ll_bsdf_row_value(b, b->cdf, off_i, w_i, idx, basis);
+        double mass = ll_bsdf_row_value(b, b->cdf, off_i, w_i, idx + 1, basis) - c0;
+        *pdf_mu = ll_bsdf_cdf_flat_density(b, off_i, w_i, basis, idx);
+        if (!(*pdf_mu > 0.0 && mass > 0.0))
+            return 0;
+        t = (target - c0) / mass;
+        if (!(t >= 0x1p-20))
+            t = 0x1p-20;
+        if (!(t <= 1.0 - 0x1p-20))
+            t = 1.0 - 0x1p-20;
+        *mu_o = x0 + width * t;
+        return 1;
+    }
     r = (target - ll_bsdf_row_value(b, b->cdf, off_i, w_i, idx, basis)) / width;
     d0 = idx > 0 ? width * (f1 - ll_bsdf_row_value(b, b->a0, off_i, w_i, idx - 1, basis)) /
                        (x1 - x[idx - 1])
