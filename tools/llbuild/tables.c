@@ -3,6 +3,10 @@
  * the warped tables that Mitsuba 3's and pbrt-v4's `measured` BSDF read
  * (docs/measured-format.md) instead of a .bsdf file.
  *
+ * With --wavelengths START:END:STEP the file is spectral: the warp still
+ * comes from the RGB build, the values from the material built again at
+ * each wavelength (ll_material_write_tables).
+ *
  * The tables are made from an opened .bsdf (ll_tables_write_from_bsdf), so
  * the built layers go first to a .bsdf beside the output, which is opened
  * and unlinked at once: the handle holds its data, and the name is gone
@@ -40,6 +44,59 @@ static int parse_grid(const char *text, const char *option, size_t *out)
     return 1;
 }
 
+/* --wavelengths START:END:STEP in nm: START, START + STEP, ... up to END
+ * (included when it falls on the grid), inside the CIE 1931 tables'
+ * 360..830 nm, at most LL_TABLES_MAX_WAVELENGTHS of them. */
+static int parse_wavelengths(const char *text, llbuild_tables *t)
+{
+    double v[3], count;
+    const char *p = text;
+    char *end;
+    size_t k, n;
+    if (!text) {
+        fprintf(stderr, "llbuild: --wavelengths needs a value START:END:STEP (nm)\n");
+        return 0;
+    }
+    for (k = 0; k < 3; ++k) {
+        v[k] = strtod(p, &end);
+        if (end == p || (k < 2 && *end != ':') || (k == 2 && *end != '\0') || !isfinite(v[k])) {
+            fprintf(stderr, "llbuild: --wavelengths wants START:END:STEP in nm (e.g. "
+                            "360:830:10), not '%s'\n",
+                    text);
+            return 0;
+        }
+        p = end + 1;
+    }
+    if (v[0] < 360.0 || v[1] > 830.0 || v[0] > v[1]) {
+        fprintf(stderr, "llbuild: --wavelengths %s: START and END must lie in 360..830 nm "
+                        "(the span of the CIE 1931 tables the file's colour is read with), "
+                        "START <= END\n",
+                text);
+        return 0;
+    }
+    if (!(v[2] > 0.0)) {
+        fprintf(stderr, "llbuild: --wavelengths %s: STEP must be > 0 nm\n", text);
+        return 0;
+    }
+    /* The last node within END (a hair of rounding allowed). */
+    count = floor((v[1] - v[0]) / v[2] + 1e-9) + 1.0;
+    if (count > (double)LL_TABLES_MAX_WAVELENGTHS) {
+        fprintf(stderr, "llbuild: --wavelengths %s gives %.0f wavelengths; at most %d (one "
+                        "per nm over 360..830): take a larger STEP\n",
+                text, count, LL_TABLES_MAX_WAVELENGTHS);
+        return 0;
+    }
+    n = (size_t)count;
+    for (k = 0; k < n; ++k)
+        t->wavelengths[k] = v[0] + (double)k * v[2];
+    if (t->wavelengths[n - 1] > 830.0)
+        t->wavelengths[n - 1] = 830.0;
+    t->opts.format = LL_TABLES_SPECTRAL;
+    t->opts.wavelengths = t->wavelengths;
+    t->opts.n_wavelengths = n;
+    return 1;
+}
+
 int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
 {
     int i, kept = 1;
@@ -66,6 +123,10 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
                 return 1;
             }
             ++i;
+        } else if (!strcmp(o, "--wavelengths")) {
+            if (!parse_wavelengths(next, t))
+                return 1;
+            ++i;
         } else if (grid) {
             if (!parse_grid(next, o, grid))
                 return 1;
@@ -80,6 +141,11 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     if (t->grid_given && !t->measured) {
         fprintf(stderr, "llbuild: --theta-i, --vndf and --sample size the tables of "
                         "--format measured; a .bsdf file has no such grid\n");
+        return 1;
+    }
+    if (t->opts.format == LL_TABLES_SPECTRAL && !t->measured) {
+        fprintf(stderr, "llbuild: --wavelengths makes a spectral table file of --format "
+                        "measured; a .bsdf file is RGB or monochrome\n");
         return 1;
     }
     return -1;
@@ -110,21 +176,27 @@ int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const ch
 }
 
 /* The data the tables hold (the field table and text add a few hundred
- * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb. */
+ * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb (or
+ * spectra and wavelengths). */
 static double table_bytes(const ll_tables_options *o)
 {
     double n_ti = (double)o->n_theta_i, nv = (double)o->vndf_size,
            ns = (double)o->sample_size;
-    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + 4.0 * n_ti * ns * ns);
+    double values = o->format == LL_TABLES_SPECTRAL ? (double)o->n_wavelengths : 3.0;
+    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns +
+                  (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
 }
 
 void llbuild_tables_dry_run(const llbuild_tables *t)
 {
     if (!t->measured)
         return;
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid: "
-           "about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size,
+    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid",
+           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    if (t->opts.format == LL_TABLES_SPECTRAL)
+        printf(" x %zu wavelengths (%g..%g nm)", t->opts.n_wavelengths, t->wavelengths[0],
+               t->wavelengths[t->opts.n_wavelengths - 1]);
+    printf(": about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
            table_bytes(&t->opts) / 1048576.0);
 }
 
@@ -162,9 +234,14 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
            t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
     printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
            t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    if (info.n_wavelengths > 0)
+        printf("spectra      %zu wavelengths, %g..%g nm (read back as linear sRGB: D65, CIE "
+               "1931)\n",
+               info.n_wavelengths, t->wavelengths[0], t->wavelengths[info.n_wavelengths - 1]);
     printf("file         %zu bytes (the .bsdf of these layers: %zu bytes)\n", info.file_size,
            t->bsdf_bytes);
-    printf("albedo       %sreflected, of the layers\n", t->n_channels == 3 ? "(R G B) " : "");
+    printf("albedo       %sreflected, of the layers%s\n", t->n_channels == 3 ? "(R G B) " : "",
+           info.n_wavelengths > 0 ? " (the RGB build the warp is made from)" : "");
     for (a = 0; a < 4; ++a) {
         printf("  %4.0f deg  ", summary_degrees[a]);
         for (c = 0; c < t->n_channels; ++c)
@@ -248,18 +325,23 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     ll_bsdf *b = NULL;
     step st;
     /* Shares of the bar: the build most, the .bsdf a little, the tables
-     * (about a second at the default grid) the rest. */
-    ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
+     * (about a second at the default grid) the rest; a spectral file's
+     * builds per wavelength are the tables' part and take most. */
+    int spectral = t->opts.format == LL_TABLES_SPECTRAL;
+    double split = spectral ? 0.2 : 0.8;
+    ll_monitor building = monitor_of(&st, monitor, 0.0, split);
     ll_status s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)
         return s;
     remember_layers(t, layers, n_channels);
-    building = monitor_of(&st, monitor, 0.8, 0.85);
+    building = monitor_of(&st, monitor, split, split + 0.05);
     s = open_as_bsdf(m, o, layers, n_channels, output, &building, &b, &t->bsdf_bytes);
     for (c = 0; c < n_channels; ++c)
         ll_layer_destroy(layers[c]);
-    building = monitor_of(&st, monitor, 0.85, 1.0);
-    if (s == LL_OK)
+    building = monitor_of(&st, monitor, split + 0.05, 1.0);
+    if (s == LL_OK && t->opts.format == LL_TABLES_SPECTRAL)
+        s = ll_material_write_tables(m, o, b, output, &t->opts, &building);
+    else if (s == LL_OK)
         s = ll_tables_write_from_bsdf(b, output, &t->opts, &building);
     ll_bsdf_release(b);
     return s;
