@@ -33,8 +33,9 @@ LL_INTERNAL void ll_xyz_to_linear_srgb(const double xyz[3], double rgb[3]);
  * ascending) into linear sRGB, rgb_c = sum_l w[l][c] v_l: the reflectance
  * lit by D65 and seen by the CIE 1931 observer (trapezoid rule on the
  * nodes), XYZ to linear sRGB, each channel normalised so that a constant
- * spectrum 1 reads (1, 1, 1). Returns 0 (w unusable) when the nodes see no
- * light of some channel (they miss the observer's span). */
+ * spectrum 1 reads (1, 1, 1); a single wavelength reads as the grey of
+ * its value (w = 1). Returns 0 (w unusable) when the nodes see no light of
+ * some channel (they miss the observer's span, or too much of it). */
 LL_INTERNAL int ll_spectral_rgb_weights(const double *lambda, size_t n, double (*w)[3]);
 
 #endif /* LL_CIE_H */

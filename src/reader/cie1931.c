@@ -568,9 +568,19 @@ int ll_spectral_rgb_weights(const double *lambda, size_t n, double (*w)[3])
             white[c] += rgb[c];
         }
     }
+    /* One wavelength has no colour: it reads as a grey of its value, if
+     * the observer sees it at all. */
+    if (n == 1) {
+        double cmf[3];
+        ll_cie1931_at(lambda[0], cmf);
+        for (c = 0; c < 3; ++c)
+            w[0][c] = 1.0;
+        return cmf[0] + cmf[1] + cmf[2] > 0.0;
+    }
     /* White balance on the nodes themselves: a constant spectrum 1 reads
      * (1, 1, 1) whatever the sampling, as it does on the 1 nm tables (the
-     * sRGB white is D65's). */
+     * sRGB white is D65's). Nodes that give some channel no positive
+     * white see too little of the spectrum to have a colour. */
     for (c = 0; c < 3; ++c)
         if (!(white[c] > 0.0))
             return 0;
