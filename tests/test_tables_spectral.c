@@ -13,6 +13,7 @@
 #include "support/support.h"
 #include "reader/cie.h"
 #include "material/rgb_spectrum.h"
+#include "material/material_spectral.h"
 
 /* --------------------------------------------------------- the colours */
 
@@ -421,6 +422,45 @@ static void test_material(void **state)
     assert_non_null(strstr(ll_last_error_message(), "reflection only"));
 }
 
+/* Wavelengths share word layers: a coat over gold at 7 wavelengths builds
+ * one coat and 7 gold interfaces, as ll_material_write_tables builds them
+ * (material_tables.c: one cache for all wavelengths). */
+static void test_sharing(void **state)
+{
+    ll_material *m = NULL;
+    ll_spectral_plan p;
+    ll_word_cache *cache = ll_word_cache_create();
+    ll_build_options o = LL_BUILD_OPTIONS_INIT, r;
+    double nm;
+    size_t n = 0;
+    (void)state;
+    assert_non_null(cache);
+    assert_int_equal(ll_material_parse("dielectric eta=1.5 alpha=0.1\nconductor eta=Au "
+                                       "alpha=0.1\n",
+                                       "coated gold", &m),
+                     LL_OK);
+    o.n_nodes = 30;
+    o.n_orders = 30;
+    o.n_channels = 1;
+    assert_int_equal(ll_build_options_read(&o, &r, "test"), LL_OK);
+    assert_int_equal(ll_spectral_plan_init(m, &p, "test"), LL_OK);
+    for (nm = 400.0; nm <= 700.0; nm += 50.0, ++n) {
+        ll_material view;
+        ll_layer *layers[3];
+        size_t nch;
+        ll_spectral_view(&p, nm, &view);
+        assert_int_equal(ll_material_build_layers_cached(&view, &r, NULL, cache, layers, &nch,
+                                                         NULL),
+                         LL_OK);
+        assert_int_equal(nch, 1);
+        ll_layer_destroy(layers[0]);
+    }
+    assert_int_equal(ll_word_cache_built(cache), n + 1);
+    ll_word_cache_destroy(cache);
+    ll_spectral_plan_free(&p);
+    ll_material_destroy(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -430,6 +470,7 @@ int main(void)
         cmocka_unit_test(test_writer_refusals),
         cmocka_unit_test(test_hostile),
         cmocka_unit_test(test_material),
+        cmocka_unit_test(test_sharing),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
