@@ -440,8 +440,8 @@ def test_spectral_albedo_against_rgb(tmp_path, timings, name, text, bound):
         start = time.time()
         assert lib.ll_material_write_tables(m, None, None, path.encode(),
                                             ctypes.byref(opts), None) == 0
-        timings["%s table file (%s, 16x64^2x32^2)" % (name, ("RGB", "spectral 24 nm")[kind])] = \
-            time.time() - start
+        label = ("RGB", "spectral, 24 wavelengths")[kind]
+        timings["%s table file (%s, 16x64^2x32^2)" % (name, label)] = time.time() - start
         h = ctypes.c_void_p()
         assert lib.ll_bsdf_open(path.encode(), None, ctypes.byref(h)) == 0
         handles[kind] = h
