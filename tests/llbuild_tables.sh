@@ -131,6 +131,12 @@ for bad_range in 300:700:10 400:900:10 700:400:10 400:700:0 400:700:-5 400:700 \
     if grep -q "%" "$tmp/err"; then bad "$bad_range: built before the refusal"; else ok; fi
 done
 contains "$tmp/err" "at most 471" "the count limit is said"
+printf 'conductor eta=0.2+3i,0.4+2.5i,1.2+1.8i alpha=0.2\n' >"$tmp/w/rgbk.layers"
+expect 1 "--wavelengths of an index given as R,G,B" -- "$llbuild" --format measured \
+    --wavelengths 400:700:100 $grid $small "$tmp/w/rgbk.layers" -o "$tmp/w/x.tab"
+contains "$tmp/err" "eta is given as R,G,B" "an R,G,B index has no spectrum: said"
+if grep -q "% building\|% adding\|% spectra" "$tmp/err"; then
+    bad "an R,G,B index was built before its refusal"; else ok; fi
 expect 1 "--wavelengths without measured" -- "$llbuild" --wavelengths 400:700:10 \
     "$tmp/w/gold.layers" -o "$tmp/w/x.bsdf"
 contains "$tmp/err" "spectral table file of --format measured" "--wavelengths needs measured"

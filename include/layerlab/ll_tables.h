@@ -133,15 +133,19 @@ LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
  *    Jakob & Hanika 2019, fitted per colour by Gauss-Newton on the CIELAB
  *    difference under D65 and the CIE 1931 observer in linear sRGB (the
  *    conversion ll_bsdf_open reads the file back with);
- * and refused (LL_ERROR_INVALID_ARGUMENT, naming the word) when some other
- * number is given as R,G,B (an index, a roughness, a depth), or a word has
- * no spectrum (a measured MERL table). A word whose parameters are equal
+ * and refused before anything is built (LL_ERROR_INVALID_ARGUMENT, naming
+ * the word and its line) when some other number is given as R,G,B (an
+ * index, a roughness, a depth), or a word has no spectrum (a measured MERL
+ * table). A word whose parameters are equal
  * at two wavelengths (a clear coat) is built once (a cache of word layers
  * as the builder of ll_material.h keeps). Each wavelength's build goes
  * through a temporary .bsdf beside path, removed at once, and only one is
  * held at a time. build (nullable) as for ll_material_build_layers;
  * tables as for ll_tables_write_from_bsdf (its spectrum fields are not
- * read; wavelengths are). monitor as in ll_common.h.
+ * read; wavelengths are). monitor as in ll_common.h: one progress from 0
+ * to 1 over the whole call (with rgb NULL, the RGB build takes the first
+ * fifth of a spectral file's, the first 0.8 of an RGB file's); a cancel is
+ * seen between wavelengths.
  * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
  * LL_ERROR_INVALID_ARGUMENT for a swept or transmissive material. */
 LL_API ll_status ll_material_write_tables(const ll_material *material,

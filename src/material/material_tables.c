@@ -95,9 +95,40 @@ static ll_status build_rgb(const ll_material *m, const ll_build_options *build,
     return s;
 }
 
+/* One step's share [lo, lo + span] of the caller's progress (each library
+ * call reports 0..1 for itself). */
+typedef struct share {
+    ll_monitor_fn progress;
+    void *user;
+    double lo, span;
+} share;
+
+static int report_share(void *user, double fraction, const char *stage)
+{
+    const share *sh = user;
+    return sh->progress ? sh->progress(sh->user, sh->lo + fraction * sh->span, stage) : 0;
+}
+
+static ll_monitor monitor_share(share *sh, const ll_monitor *caller, double lo, double span)
+{
+    ll_monitor m = LL_MONITOR_INIT;
+    ll_monitor c = LL_MONITOR_INIT;
+    if (caller)
+        ll_struct_read(&c, sizeof c, caller, FN, "ll_monitor");
+    sh->progress = c.progress;
+    sh->user = c.user;
+    sh->lo = lo;
+    sh->span = span;
+    m.progress = report_share;
+    m.user = sh;
+    return m;
+}
+
+/* plan: checked and fitted (ll_spectral_plan_init), owned from here. */
 static ll_status write_spectral(const ll_material *m, const ll_build_options *build,
                                 const ll_bsdf *rgb, const char *path,
-                                const ll_tables_options *tables, const ll_monitor *monitor)
+                                const ll_tables_options *tables, const ll_monitor *monitor,
+                                ll_spectral_plan *plan)
 {
     spectral_source src;
     ll_tables_options t = *tables;
@@ -105,9 +136,11 @@ static ll_status write_spectral(const ll_material *m, const ll_build_options *bu
     ll_status s;
     memset(&src, 0, sizeof src);
     src.path = path;
-    if ((s = ll_build_options_read(build, &src.o, FN)) != LL_OK ||
-        (s = ll_spectral_plan_init(m, &src.plan, FN)) != LL_OK)
+    src.plan = *plan;
+    if ((s = ll_build_options_read(build, &src.o, FN)) != LL_OK) {
+        ll_spectral_plan_free(&src.plan);
         return s;
+    }
     /* Every wavelength at the resolution of the RGB build. */
     s = ll_material_plan(m, &src.o, NULL, &n, &orders, &nch);
     if (s == LL_OK) {
@@ -134,6 +167,10 @@ ll_status ll_material_write_tables(const ll_material *m, const ll_build_options 
 {
     ll_tables_options t = LL_TABLES_OPTIONS_INIT;
     ll_bsdf *own = NULL;
+    ll_spectral_plan plan;
+    ll_monitor part = LL_MONITOR_INIT;
+    share sh;
+    double split = 0.0;
     ll_status s;
     if (!m || !path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": material or path is NULL");
@@ -149,13 +186,29 @@ ll_status ll_material_write_tables(const ll_material *m, const ll_build_options 
                        FN ": %s transmits light (its bottom word is not opaque): the `measured` "
                        "format stores reflection only",
                        m->source);
+    if (monitor && (s = ll_struct_check(monitor, FN, "ll_monitor")) != LL_OK)
+        return s;
+    /* A word without a spectrum is refused before anything is built. */
+    if (t.format == LL_TABLES_SPECTRAL && (s = ll_spectral_plan_init(m, &plan, FN)) != LL_OK)
+        return s;
     if (!rgb) {
-        if ((s = build_rgb(m, build, monitor, path, &own)) != LL_OK)
+        /* The progress: the RGB build a share, the tables (for a spectral
+         * file: a build per wavelength) the rest. */
+        split = t.format == LL_TABLES_SPECTRAL ? 0.2 : 0.8;
+        part = monitor_share(&sh, monitor, 0.0, split);
+        s = build_rgb(m, build, monitor ? &part : NULL, path, &own);
+        if (s != LL_OK) {
+            if (t.format == LL_TABLES_SPECTRAL)
+                ll_spectral_plan_free(&plan);
             return s;
+        }
         rgb = own;
+        part = monitor_share(&sh, monitor, split, 1.0 - split);
+        if (monitor)
+            monitor = &part;
     }
     if (t.format == LL_TABLES_SPECTRAL)
-        s = write_spectral(m, build, rgb, path, &t, monitor);
+        s = write_spectral(m, build, rgb, path, &t, monitor, &plan);
     else
         s = ll_tables_write_from_bsdf(rgb, path, &t, monitor);
     ll_bsdf_release(own);

@@ -3,9 +3,11 @@
  * the warped tables that Mitsuba 3's and pbrt-v4's `measured` BSDF read
  * (docs/measured-format.md) instead of a .bsdf file.
  *
- * With --wavelengths START:END:STEP the file is spectral: the warp still
- * comes from the RGB build, the values from the material built again at
- * each wavelength (ll_material_write_tables).
+ * With --wavelengths START:END:STEP the file is spectral: the library
+ * builds it all (ll_material_write_tables: the warp from the RGB build, the
+ * values from the material built again at each wavelength), after checking
+ * that every word has a spectrum; the summary's albedo is then the file's,
+ * by its own sampler.
  *
  * The tables are made from an opened .bsdf (ll_tables_write_from_bsdf), so
  * the built layers go first to a .bsdf beside the output, which is opened
@@ -217,6 +219,30 @@ static void remember_layers(llbuild_tables *t, ll_layer *const *layers, size_t n
         }
 }
 
+/* Albedo per channel for light seen along cos theta = mu, by the file's
+ * own sampler: the mean of the weights f cos / pdf over 64 x 64 strata
+ * (the tables sample nearly in proportion to f cos). */
+static void file_albedo(const ll_bsdf *b, double mu, double out[3])
+{
+    const int n = 64;
+    double wo[3];
+    int i, j, c;
+    wo[0] = sqrt(1.0 - mu * mu);
+    wo[1] = 0.0;
+    wo[2] = mu;
+    out[0] = out[1] = out[2] = 0.0;
+    for (i = 0; i < n; ++i)
+        for (j = 0; j < n; ++j) {
+            double u[2], wi[3], pdf = 0.0, f[3];
+            u[0] = (i + 0.5) / n;
+            u[1] = (j + 0.5) / n;
+            if (ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f) == LL_OK &&
+                pdf > 0.0)
+                for (c = 0; c < 3; ++c)
+                    out[c] += f[c] * fabs(wi[2]) / pdf / ((double)n * n);
+        }
+}
+
 void llbuild_tables_summary(const llbuild_tables *t, const char *input, const char *output,
                             double seconds)
 {
@@ -229,19 +255,36 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
         return;
     }
     printf("%s -> %s (format measured)\n", input, output);
-    printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
-           "tables are made from)\n",
-           t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
+    if (info.n_wavelengths > 0)
+        printf("resolution   %zu nodes x %zu Fourier orders (the layers of the warp, 3 "
+               "channels, and of each wavelength, 1)\n",
+               t->n_nodes, t->n_orders);
+    else
+        printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
+               "tables are made from)\n",
+               t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
     printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
            t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
     if (info.n_wavelengths > 0)
         printf("spectra      %zu wavelengths, %g..%g nm (read back as linear sRGB: D65, CIE "
                "1931)\n",
                info.n_wavelengths, t->wavelengths[0], t->wavelengths[info.n_wavelengths - 1]);
+    if (info.n_wavelengths > 0) {
+        printf("file         %zu bytes\n", info.file_size);
+        printf("albedo       (R G B) reflected, of the file (its sampler; linear sRGB)\n");
+        for (a = 0; a < 4; ++a) {
+            double alb[3];
+            file_albedo(b, cos(summary_degrees[a] * 3.14159265358979323846 / 180.0), alb);
+            printf("  %4.0f deg   %.4f %.4f %.4f\n", summary_degrees[a], alb[0], alb[1],
+                   alb[2]);
+        }
+        printf("wall time    %.2f s\n", seconds);
+        ll_bsdf_release(b);
+        return;
+    }
     printf("file         %zu bytes (the .bsdf of these layers: %zu bytes)\n", info.file_size,
            t->bsdf_bytes);
-    printf("albedo       %sreflected, of the layers%s\n", t->n_channels == 3 ? "(R G B) " : "",
-           info.n_wavelengths > 0 ? " (the RGB build the warp is made from)" : "");
+    printf("albedo       %sreflected, of the layers\n", t->n_channels == 3 ? "(R G B) " : "");
     for (a = 0; a < 4; ++a) {
         printf("  %4.0f deg  ", summary_degrees[a]);
         for (c = 0; c < t->n_channels; ++c)
@@ -325,23 +368,25 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     ll_bsdf *b = NULL;
     step st;
     /* Shares of the bar: the build most, the .bsdf a little, the tables
-     * (about a second at the default grid) the rest; a spectral file's
-     * builds per wavelength are the tables' part and take most. */
-    int spectral = t->opts.format == LL_TABLES_SPECTRAL;
-    double split = spectral ? 0.2 : 0.8;
-    ll_monitor building = monitor_of(&st, monitor, 0.0, split);
-    ll_status s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
+     * (about a second at the default grid) the rest. */
+    ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
+    ll_status s;
+    if (t->opts.format == LL_TABLES_SPECTRAL) {
+        t->n_nodes = o->n_nodes;
+        t->n_orders = o->n_orders;
+        t->n_channels = 3;
+        return ll_material_write_tables(m, o, NULL, output, &t->opts, monitor);
+    }
+    s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)
         return s;
     remember_layers(t, layers, n_channels);
-    building = monitor_of(&st, monitor, split, split + 0.05);
+    building = monitor_of(&st, monitor, 0.8, 0.85);
     s = open_as_bsdf(m, o, layers, n_channels, output, &building, &b, &t->bsdf_bytes);
     for (c = 0; c < n_channels; ++c)
         ll_layer_destroy(layers[c]);
-    building = monitor_of(&st, monitor, split + 0.05, 1.0);
-    if (s == LL_OK && t->opts.format == LL_TABLES_SPECTRAL)
-        s = ll_material_write_tables(m, o, b, output, &t->opts, &building);
-    else if (s == LL_OK)
+    building = monitor_of(&st, monitor, 0.85, 1.0);
+    if (s == LL_OK)
         s = ll_tables_write_from_bsdf(b, output, &t->opts, &building);
     ll_bsdf_release(b);
     return s;
