@@ -221,15 +221,17 @@ static void vndf_slice(writer *w, size_t t)
     }
 }
 
-/* The luminance floor of slice t (every slice normalisable). */
-static void floor_slice(writer *w, size_t t)
+/* The luminance floor of slice t (every slice normalisable), relative to
+ * top, its largest value (< 0: the largest stored). */
+static void floor_slice(writer *w, size_t t, double top)
 {
     size_t plane = w->ns * w->ns, x;
     float *lum = w->lum + t * plane;
-    double top = 0.0, floor_v;
-    for (x = 0; x < plane; ++x)
-        if ((double)lum[x] > top)
-            top = (double)lum[x];
+    double floor_v;
+    if (top < 0.0)
+        for (x = 0, top = 0.0; x < plane; ++x)
+            if ((double)lum[x] > top)
+                top = (double)lum[x];
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
@@ -242,7 +244,7 @@ static void value_slice(writer *w, size_t t)
 {
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(w, th);
+    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(w, th), top = 0.0;
     float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
@@ -283,9 +285,11 @@ static void value_slice(writer *w, size_t t)
             }
             y_lum = ll_tables_luminance(f);
             lum[y * ns + x] = (float)y_lum;
+            if (y_lum > top)
+                top = y_lum;
         }
     if (!w->spectral)
-        floor_slice(w, t);
+        floor_slice(w, t, top);
 }
 
 /* JSON text of a string (quotes and escapes), appended to buf. */
@@ -416,7 +420,7 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
         if (s != LL_OK)
             goto done;
         for (t = 0; t < w.n_ti; ++t)
-            floor_slice(&w, t);
+            floor_slice(&w, t, -1.0);
         for (t = 0; t < w.spectra.n_l; ++t)
             w.wavelengths[t] = (float)o.wavelengths[t];
     }
