@@ -166,5 +166,21 @@ for sig in INT TERM; do
     only_layers "SIG$sig"
 done
 
+# --- interrupted while the wavelengths are built: the same, no temporary
+# .bsdf of a wavelength left beside the output
+stage_start "$tmp/run" "$llbuild" --format measured --wavelengths 360:830:1 $grid $small \
+    "$tmp/w/gold.layers" -o "$tmp/w/spectral.tab"
+if ! stage_wait "*% spectra (*"; then
+    stage_finish
+    bad "SIGINT: llbuild never reported the spectra (exit $stage_status)"
+else
+    kill -s INT "$stage_pid" 2>/dev/null || bad "SIGINT: llbuild ended before the signal"
+    stage_finish
+    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
+        bad "SIGINT in the spectra: exit $stage_status, expected death by signal"; fi
+    contains "$stage_log" "interrupted; no file written" "SIGINT in the spectra: message"
+    only_layers "SIGINT in the spectra"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

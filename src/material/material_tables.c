@@ -22,11 +22,38 @@
 
 #define FN "ll_material_write_tables"
 
+/* The caller's monitor between the table writer and the wavelengths'
+ * builds: the writer's reports pass through (the last fraction kept), and
+ * a build polls the caller at that fraction, so that a cancel is seen
+ * during a wavelength's build without moving the caller's progress. */
+typedef struct relay {
+    ll_monitor_fn progress;
+    void *user;
+    double last;
+} relay;
+
+static int relay_report(void *user, double fraction, const char *stage)
+{
+    relay *r = user;
+    r->last = fraction;
+    return r->progress ? r->progress(r->user, fraction, stage) : 0;
+}
+
+static int relay_poll(void *user, double fraction, const char *stage)
+{
+    const relay *r = user;
+    (void)fraction;
+    (void)stage;
+    return r->progress ? r->progress(r->user, r->last, "spectra") : 0;
+}
+
 typedef struct spectral_source {
     ll_build_options o;          /* fixed resolution, one channel */
     ll_spectral_plan plan;
     ll_word_cache *cache;
     const char *path;
+    relay relay;
+    ll_monitor poll;             /* a wavelength's build: relay_poll */
 } spectral_source;
 
 /* layers (n_channels) of the material m as an opened file, through a
@@ -70,8 +97,8 @@ static ll_status build_at(void *user, size_t index, double nm, ll_bsdf **out)
     ll_status s;
     (void)index;
     ll_spectral_view(&src->plan, nm, &view);
-    s = ll_material_build_layers_cached(&view, &src->o, NULL, src->cache, layers, &n_channels,
-                                        NULL);
+    s = ll_material_build_layers_cached(&view, &src->o, src->relay.progress ? &src->poll : NULL,
+                                        src->cache, layers, &n_channels, NULL);
     if (s == LL_OK)
         s = open_layers(&view, &src->o, layers, n_channels, src->path, out);
     for (c = 0; c < 3; ++c)
@@ -132,11 +159,21 @@ static ll_status write_spectral(const ll_material *m, const ll_build_options *bu
 {
     spectral_source src;
     ll_tables_options t = *tables;
+    ll_monitor writer = LL_MONITOR_INIT, caller = LL_MONITOR_INIT;
     size_t n, orders, nch;
     ll_status s;
     memset(&src, 0, sizeof src);
     src.path = path;
     src.plan = *plan;
+    if (monitor)
+        ll_struct_read(&caller, sizeof caller, monitor, FN, "ll_monitor");
+    src.relay.progress = caller.progress;
+    src.relay.user = caller.user;
+    src.poll = writer;
+    src.poll.progress = relay_poll;
+    src.poll.user = &src.relay;
+    writer.progress = relay_report;
+    writer.user = &src.relay;
     if ((s = ll_build_options_read(build, &src.o, FN)) != LL_OK) {
         ll_spectral_plan_free(&src.plan);
         return s;
@@ -154,7 +191,7 @@ static ll_status write_spectral(const ll_material *m, const ll_build_options *bu
     if (s == LL_OK) {
         t.spectrum = build_at;
         t.spectrum_user = &src;
-        s = ll_tables_write_from_bsdf(rgb, path, &t, monitor);
+        s = ll_tables_write_from_bsdf(rgb, path, &t, monitor ? &writer : NULL);
     }
     ll_word_cache_destroy(src.cache);
     ll_spectral_plan_free(&src.plan);
