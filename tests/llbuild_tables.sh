@@ -109,6 +109,39 @@ expect 1 "a grid size out of range" -- "$llbuild" --format measured --sample 1 \
 contains "$tmp/err" "--sample wants a whole number in 2..4096" "grid range message"
 only_layers "refusals"
 
+# --- --wavelengths: a spectral file (the material at each wavelength), no
+# temporary left; the range checked before any work, saying what is wrong
+expect 0 "--wavelengths" -- "$llbuild" --format measured --wavelengths 400:700:100 $grid \
+    $small "$tmp/w/gold.layers" -o "$tmp/w/gold_s.tab"
+contains "$tmp/out" "spectra      4 wavelengths, 400..700 nm" "summary of a spectral file"
+contains "$tmp/out" "file         $(wc -c <"$tmp/w/gold_s.tab" | tr -d ' ') bytes" \
+    "spectral summary size is the file's"
+contains "$tmp/w/gold_s.tab" "wavelengths" "the file has wavelengths"
+contains "$tmp/w/gold_s.tab" "spectra" "the file has spectra"
+rm -f "$tmp/w/gold_s.tab"
+only_layers "a spectral build"
+expect 0 "--wavelengths --dry-run" -- "$llbuild" --format measured --dry-run \
+    --wavelengths 360:830:10 $small "$tmp/w/gold.layers"
+contains "$tmp/out" "x 48 wavelengths (360..830 nm): about 26.50 MiB" "--dry-run spectral size"
+for bad_range in 300:700:10 400:900:10 700:400:10 400:700:0 400:700:-5 400:700 \
+    400:700:x 360:830:0.5; do
+    expect 1 "--wavelengths $bad_range" -- "$llbuild" --format measured \
+        --wavelengths "$bad_range" "$tmp/w/gold.layers" -o "$tmp/w/x.tab"
+    contains "$tmp/err" "--wavelengths" "the message of $bad_range names the option"
+    if grep -q "%" "$tmp/err"; then bad "$bad_range: built before the refusal"; else ok; fi
+done
+contains "$tmp/err" "at most 471" "the count limit is said"
+printf 'conductor eta=0.2+3i,0.4+2.5i,1.2+1.8i alpha=0.2\n' >"$tmp/w/rgbk.layers"
+expect 1 "--wavelengths of an index given as R,G,B" -- "$llbuild" --format measured \
+    --wavelengths 400:700:100 $grid $small "$tmp/w/rgbk.layers" -o "$tmp/w/x.tab"
+contains "$tmp/err" "eta is given as R,G,B" "an R,G,B index has no spectrum: said"
+if grep -q "% building\|% adding\|% spectra" "$tmp/err"; then
+    bad "an R,G,B index was built before its refusal"; else ok; fi
+expect 1 "--wavelengths without measured" -- "$llbuild" --wavelengths 400:700:10 \
+    "$tmp/w/gold.layers" -o "$tmp/w/x.bsdf"
+contains "$tmp/err" "spectral table file of --format measured" "--wavelengths needs measured"
+only_layers "--wavelengths refusals"
+
 # --- an output that cannot be written: I/O, nothing left
 expect 2 "no such folder" -- "$llbuild" --format measured $grid $small "$tmp/w/gold.layers" \
     -o "$tmp/w/missing/gold.tab"
@@ -132,6 +165,22 @@ for sig in INT TERM; do
     contains "$stage_log" "interrupted; no file written" "SIG$sig message"
     only_layers "SIG$sig"
 done
+
+# --- interrupted while the wavelengths are built: the same, no temporary
+# .bsdf of a wavelength left beside the output
+stage_start "$tmp/run" "$llbuild" --format measured --wavelengths 360:830:1 $grid $small \
+    "$tmp/w/gold.layers" -o "$tmp/w/spectral.tab"
+if ! stage_wait "*% spectra (*"; then
+    stage_finish
+    bad "SIGINT: llbuild never reported the spectra (exit $stage_status)"
+else
+    kill -s INT "$stage_pid" 2>/dev/null || bad "SIGINT: llbuild ended before the signal"
+    stage_finish
+    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
+        bad "SIGINT in the spectra: exit $stage_status, expected death by signal"; fi
+    contains "$stage_log" "interrupted; no file written" "SIGINT in the spectra: message"
+    only_layers "SIGINT in the spectra"
+fi
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -39,6 +39,7 @@ static const size_t info_ends[] = {
     offsetof(ll_bsdf_info, file_size),
     offsetof(ll_bsdf_info, flags),
     offsetof(ll_bsdf_info, format),
+    offsetof(ll_bsdf_info, n_wavelengths),
     sizeof(ll_bsdf_info),
 };
 static const size_t build_options_ends[] = {
@@ -452,7 +453,7 @@ static void every_field_is_listed(void **state)
 {
     (void)state;
     assert_int_equal(COUNT(write_options_ends), 5);
-    assert_int_equal(COUNT(info_ends), 14);
+    assert_int_equal(COUNT(info_ends), 15);
     assert_int_equal(COUNT(build_options_ends), 11);
     assert_int_equal(COUNT(estimate_ends), 24);
     assert_int_equal(COUNT(microfacet_ends), 7);
@@ -475,8 +476,11 @@ static void every_field_is_listed(void **state)
                      sizeof(ll_open_options));
     assert_int_equal(offsetof(ll_bsdf_info, flags) + sizeof(uint32_t),
                      offsetof(ll_bsdf_info, format));
-    assert_true(offsetof(ll_bsdf_info, format) + sizeof(uint32_t) <= sizeof(ll_bsdf_info) &&
-                offsetof(ll_bsdf_info, format) + 8 >= sizeof(ll_bsdf_info));
+    assert_true(offsetof(ll_bsdf_info, format) + sizeof(uint32_t) <=
+                    offsetof(ll_bsdf_info, n_wavelengths) &&
+                offsetof(ll_bsdf_info, format) + 8 >= offsetof(ll_bsdf_info, n_wavelengths));
+    assert_int_equal(offsetof(ll_bsdf_info, n_wavelengths) + sizeof(size_t),
+                     sizeof(ll_bsdf_info));
 }
 
 /* ------------------------------------------------------- ll_microfacet */

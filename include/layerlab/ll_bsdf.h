@@ -154,16 +154,23 @@ typedef struct ll_bsdf_info {
     size_t file_size;        /* bytes                                           */
     uint32_t flags;          /* header flags                                    */
     uint32_t format;         /* LL_BSDF_FORMAT_FOURIER or LL_BSDF_FORMAT_TABLES */
+    size_t n_wavelengths;    /* a spectral table file's wavelengths, else 0     */
 } ll_bsdf_info;
 
 #define LL_BSDF_INFO_INIT { sizeof(ll_bsdf_info), 0, 0, 0, 0, 0, 0, 0.0, { 0.0, 0.0 }, NULL, 0, \
-                            0, 0, 0 }
+                            0, 0, 0, 0 }
 
 /* Which format ll_bsdf_open read (ll_bsdf_info.format), recognised by the
  * file's first bytes whatever its name:
  *  LL_BSDF_FORMAT_FOURIER: a .bsdf Fourier file (above);
  *  LL_BSDF_FORMAT_TABLES: a table file of the `measured` format of Mitsuba 3
- *    and pbrt-v4 (docs/measured-format.md; RGB, isotropic). It evaluates and
+ *    and pbrt-v4 (docs/measured-format.md; RGB or spectral, isotropic). A
+ *    spectral file (fields "spectra" and "wavelengths"; info.n_wavelengths
+ *    says how many) is read as linear sRGB: its values taken as a
+ *    reflectance lit by CIE D65 and seen by the CIE 1931 2-degree observer
+ *    (trapezoid rule on the file's wavelengths, normalised so that a
+ *    constant spectrum 1 reads (1, 1, 1)), negative components clipped to
+ *    0, converted once when the file is opened. It evaluates and
  *    samples through the same calls, as Mitsuba's `measured` does, with f
  *    returned without the cosine; it reflects only (mu_i > 0, mu_o < 0 in
  *    the layer convention, both directions above the surface in the

@@ -8,11 +8,13 @@
  *
  * Experimental: everything here is declared only when LL_EXPERIMENTAL is
  * defined before the include, and may change in a minor release (grid
- * sizes chosen by a tolerance, spectral files); its symbols are in the
- * version node LAYERLAB_EXPERIMENTAL_1.0.
+ * sizes chosen by a tolerance); its symbols are in the version nodes
+ * LAYERLAB_EXPERIMENTAL_1.0 (ll_tables_write_from_bsdf) and
+ * LAYERLAB_EXPERIMENTAL_1.1 (ll_material_write_tables).
  */
 #include "ll_common.h"
 #include "ll_bsdf.h"
+#include "ll_material.h"
 
 /* (The include guard sits inside the LL_EXPERIMENTAL block, so that a file
  * included once without LL_EXPERIMENTAL and then again with it gets the
@@ -27,8 +29,23 @@ extern "C" {
 
 /* What the table file stores per direction pair. */
 typedef enum {
-    LL_TABLES_RGB = 0   /* field "rgb": Mitsuba 3's RGB variants */
+    LL_TABLES_RGB = 0,      /* field "rgb": Mitsuba 3's RGB variants          */
+    LL_TABLES_SPECTRAL = 1  /* fields "spectra" and "wavelengths": pbrt-v4 and
+                               Mitsuba 3's spectral variants                  */
 } ll_tables_format;
+
+/* Where a spectral table file's values come from: the opaque, untextured
+ * material at wavelength_nm (the index-th of ll_tables_options.wavelengths),
+ * as an opened file (any format; one channel, or three equal ones: its
+ * luminance is taken). The writer releases *out after reading it, so one
+ * wavelength's file is held at a time. A status other than LL_OK stops the
+ * writer, which returns it. */
+typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wavelength_nm,
+                                           ll_bsdf **out);
+
+/* Spectral files: the most wavelengths a file may have (one per nanometre
+ * of the CIE 1931 tables, 360..830 nm). */
+#define LL_TABLES_MAX_WAVELENGTHS 471
 
 /* Grid sizes and text of a table file. Set struct_size =
  * sizeof(ll_tables_options) (the INIT macro does); the library reads only
@@ -40,9 +57,17 @@ typedef enum {
  *    (default 128; 2..4096);
  *  sample_size: side N of the sample grid at which the values are stored
  *    (default 64; 2..4096);
- *  format: LL_TABLES_RGB;
+ *  format: LL_TABLES_RGB or LL_TABLES_SPECTRAL;
  *  description: text of the file's "description" field (nullable: a
- *    default naming layerlab). */
+ *    default naming layerlab);
+ * and, read for LL_TABLES_SPECTRAL only:
+ *  wavelengths, n_wavelengths: the file's wavelengths in nm, strictly
+ *    increasing, inside the span of the CIE 1931 tables (360..830 nm),
+ *    1..LL_TABLES_MAX_WAVELENGTHS of them (the caller's array, read during
+ *    the call);
+ *  spectrum, spectrum_user: the material at each wavelength
+ *    (ll_tables_write_from_bsdf calls it once per wavelength, in order;
+ *    ll_material_write_tables sets its own). */
 typedef struct ll_tables_options {
     size_t struct_size;
     size_t n_theta_i;
@@ -50,9 +75,14 @@ typedef struct ll_tables_options {
     size_t sample_size;
     ll_tables_format format;
     const char *description;
+    const double *wavelengths;
+    size_t n_wavelengths;
+    ll_tables_spectrum_fn spectrum;
+    void *spectrum_user;
 } ll_tables_options;
 
-#define LL_TABLES_OPTIONS_INIT { sizeof(ll_tables_options), 0, 0, 0, LL_TABLES_RGB, NULL }
+#define LL_TABLES_OPTIONS_INIT { sizeof(ll_tables_options), 0, 0, 0, LL_TABLES_RGB, NULL, \
+                                 NULL, 0, NULL, NULL }
 
 /* Write the tables of an opened, untextured, opaque file b (a .bsdf, or a
  * table file) to path, atomically (a temporary file renamed over path when
@@ -66,7 +96,17 @@ typedef struct ll_tables_options {
  * the same tables and ll_bsdf_open give f back at the grid's nodes. The
  * file's "layerlab_metadata" field holds b's metadata and the grid sizes.
  * opts NULL takes the defaults; monitor as in ll_common.h (stages
- * "ndf", "tables", "writing").
+ * "ndf", "tables", "spectra", "writing").
+ *
+ * With format LL_TABLES_SPECTRAL, b gives the warp (D, sigma, the VNDF
+ * tables: one for all wavelengths), and the field "spectra" holds, for
+ * each wavelength in turn, f cos of opts->spectrum's file at the same
+ * sample nodes (with the jacobian rule as above); the luminance that
+ * sampling follows is that of the spectra (lit by D65, seen by the CIE 1931
+ * observer, reader/cie.h), with the same floor. One wavelength's file and
+ * values are held at a time: the values go to a scratch file and are
+ * copied into place when the file is written, so memory holds the warp,
+ * the luminance and the sample directions, not n_wavelengths tables.
  * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured file
  * (several basis functions) or a transmissive one (eta != 1, or light
  * transmitted), all with a message saying why the format cannot hold it;
@@ -75,6 +115,43 @@ typedef struct ll_tables_options {
 LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts,
                                            const ll_monitor *monitor);
+
+/* The table file of an opaque, untextured material (ll_material.h) at
+ * path, atomically. rgb (nullable) is the opened file of its RGB build
+ * (ll_material_build_layers, then a .bsdf), from which the warp is made; a
+ * NULL rgb makes the library build it (written to a temporary .bsdf beside
+ * path, opened, removed). LL_TABLES_RGB: ll_tables_write_from_bsdf(rgb).
+ * LL_TABLES_SPECTRAL: the material is built again at each wavelength, one
+ * channel at the resolution of its RGB build (ll_material_resolution with
+ * build), with:
+ *  - a named metal (eta=Au) at its measured n and k at that wavelength
+ *    (the spectra of data/ior, interpolated as for the RGB averages);
+ *  - a dielectric's eta, a roughness, an optical depth, a phase
+ *    parameter: as written, one value for every wavelength;
+ *  - an albedo given as R,G,B (diffuse, medium) as a smooth reflectance
+ *    spectrum whose colour is that RGB: the sigmoid of a quadratic of
+ *    Jakob & Hanika 2019, fitted per colour by Gauss-Newton on the CIELAB
+ *    difference under D65 and the CIE 1931 observer in linear sRGB (the
+ *    conversion ll_bsdf_open reads the file back with);
+ * and refused before anything is built (LL_ERROR_INVALID_ARGUMENT, naming
+ * the word and its line) when some other number is given as R,G,B (an
+ * index, a roughness, a depth), or a word has no spectrum (a measured MERL
+ * table). A word whose parameters are equal
+ * at two wavelengths (a clear coat) is built once (a cache of word layers
+ * as the builder of ll_material.h keeps). Each wavelength's build goes
+ * through a temporary .bsdf beside path, removed at once, and only one is
+ * held at a time. build (nullable) as for ll_material_build_layers;
+ * tables as for ll_tables_write_from_bsdf (its spectrum fields are not
+ * read; wavelengths are). monitor as in ll_common.h: one progress from 0
+ * to 1 over the whole call (with rgb NULL, the RGB build takes the first
+ * fifth of a spectral file's, the first 0.8 of an RGB file's); a cancel is
+ * seen between wavelengths.
+ * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
+ * LL_ERROR_INVALID_ARGUMENT for a swept or transmissive material. */
+LL_API ll_status ll_material_write_tables(const ll_material *material,
+                                          const ll_build_options *build, const ll_bsdf *rgb,
+                                          const char *path, const ll_tables_options *tables,
+                                          const ll_monitor *monitor);
 
 #ifdef __cplusplus
 }

@@ -84,7 +84,8 @@ class BsdfInfo(ctypes.Structure):
                 ("metadata_size", ctypes.c_size_t),
                 ("file_size", ctypes.c_size_t),
                 ("flags", ctypes.c_uint32),
-                ("format", ctypes.c_uint32)]
+                ("format", ctypes.c_uint32),
+                ("n_wavelengths", ctypes.c_size_t)]
 
     def __init__(self):
         super().__init__()

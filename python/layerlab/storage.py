@@ -377,6 +377,12 @@ class BSDFStorage:
         return "tables" if self._info.format == 1 else "fourier"
 
     @property
+    def wavelengths(self):
+        """The number of wavelengths of a spectral table file (read as linear
+        sRGB: D65, CIE 1931; ll_bsdf.h), 0 for RGB tables and .bsdf files"""
+        return self._info.n_wavelengths
+
+    @property
     def extrapolated(self):
         """Whether the file uses harmonic extrapolation (header flag 2)"""
         return bool(self._info.flags & 2)

@@ -54,6 +54,7 @@ int main(void)
     FIELD(ll_bsdf_info, file_size);
     FIELD(ll_bsdf_info, flags);
     FIELD(ll_bsdf_info, format);
+    FIELD(ll_bsdf_info, n_wavelengths);
 
     STRUCT(ll_bsdf_tables, LL_BSDF_TABLES_INIT);
     FIELD(ll_bsdf_tables, struct_size);

@@ -173,19 +173,6 @@ void ll_spectrum_to_xyz(const ll_spectrum *s, double xyz[3])
         xyz[c] = sum[c] / y_sum;
 }
 
-void ll_xyz_to_linear_srgb(const double xyz[3], double rgb[3])
-{
-    /* The sRGB matrix (IEC 61966-2-1), as the original recipes use it. */
-    static const double m[3][3] = {
-        { 3.240479, -1.537150, -0.498535 },
-        { -0.969256, 1.875991, 0.041556 },
-        { 0.055648, -0.204043, 1.057311 },
-    };
-    int r;
-    for (r = 0; r < 3; ++r)
-        rgb[r] = m[r][0] * xyz[0] + m[r][1] * xyz[1] + m[r][2] * xyz[2];
-}
-
 /* ---------------------------------------------------------------- metals */
 
 /* dir + "/" + name + suffix, malloc'ed. */
@@ -206,6 +193,7 @@ ll_status ll_metal_ior_from_dir(const char *dir, const char *name, ll_metal_ior 
     char *eta_path = join_path(dir, name, ".eta.spd"), *k_path = join_path(dir, name, ".k.spd");
     ll_spectrum n = { 0, NULL, NULL }, k = { 0, NULL, NULL };
     double xyz_n[3], xyz_k[3];
+    size_t j;
     ll_status s;
 
     if (!eta_path || !k_path) {
@@ -225,12 +213,32 @@ ll_status ll_metal_ior_from_dir(const char *dir, const char *name, ll_metal_ior 
     ll_xyz_to_linear_srgb(xyz_k, out->k);
     out->eta_y = xyz_n[1];
     out->k_y = xyz_k[1];
+    for (j = 0; j < LL_CIE1931_COUNT; ++j) {
+        out->eta_nm[j] = spectrum_at(&n, LL_CIE1931_FIRST_NM + (double)j);
+        out->k_nm[j] = spectrum_at(&k, LL_CIE1931_FIRST_NM + (double)j);
+    }
 done:
     ll_spectrum_free(&n);
     ll_spectrum_free(&k);
     ll_free(eta_path);
     ll_free(k_path);
     return s;
+}
+
+void ll_metal_ior_at(const ll_metal_ior *m, double nm, double *eta, double *k)
+{
+    double x = nm - LL_CIE1931_FIRST_NM, t;
+    size_t j;
+    if (!(x > 0.0))
+        x = 0.0;
+    if (x > (double)(LL_CIE1931_COUNT - 1))
+        x = (double)(LL_CIE1931_COUNT - 1);
+    j = (size_t)x;
+    if (j >= LL_CIE1931_COUNT - 1)
+        j = LL_CIE1931_COUNT - 2;
+    t = x - (double)j;
+    *eta = (1.0 - t) * m->eta_nm[j] + t * m->eta_nm[j + 1];
+    *k = (1.0 - t) * m->k_nm[j] + t * m->k_nm[j + 1];
 }
 
 /* ----------------------------------------------------------- the search */

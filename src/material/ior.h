@@ -13,11 +13,9 @@
 #define LL_IOR_H
 
 #include "support/support.h"
+#include "reader/cie.h"
 
-/* ---- the CIE 1931 2-degree observer, 1 nm steps, 360..830 nm (ior_cmf.c) */
-#define LL_CIE1931_COUNT 471
-#define LL_CIE1931_FIRST_NM 360.0
-LL_INTERNAL extern const double ll_cie1931_cmf[LL_CIE1931_COUNT][3];
+/* The CIE 1931 observer and the XYZ to linear sRGB matrix: reader/cie.h. */
 
 /* ---- tabulated spectra */
 typedef struct ll_spectrum {
@@ -37,14 +35,20 @@ LL_INTERNAL void ll_spectrum_free(ll_spectrum *s);
  * splines and held at its end values outside its range. */
 LL_INTERNAL void ll_spectrum_to_xyz(const ll_spectrum *s, double xyz[3]);
 
-/* CIE XYZ to linear sRGB (IEC 61966-2-1 primaries, D65 white). */
-LL_INTERNAL void ll_xyz_to_linear_srgb(const double xyz[3], double rgb[3]);
 
 /* ---- metals */
 typedef struct ll_metal_ior {
     double eta[3], k[3]; /* per channel R, G, B                            */
     double eta_y, k_y;   /* the Y (luminance-weighted) averages: monochrome */
+    /* The spectra themselves at 1 nm steps over the observer's span
+     * (LL_CIE1931_FIRST_NM + j), interpolated as ll_spectrum_to_xyz reads
+     * them: what a spectral build takes per wavelength. */
+    double eta_nm[LL_CIE1931_COUNT], k_nm[LL_CIE1931_COUNT];
 } ll_metal_ior;
+
+/* n and k of the metal at nm (linear between the 1 nm samples, held at the
+ * ends of the span). */
+LL_INTERNAL void ll_metal_ior_at(const ll_metal_ior *m, double nm, double *eta, double *k);
 
 /* The complex index of a metal from NAME.eta.spd and NAME.k.spd in dir. */
 LL_INTERNAL ll_status ll_metal_ior_from_dir(const char *dir, const char *name,

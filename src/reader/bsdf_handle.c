@@ -70,6 +70,7 @@ ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info)
     full.file_size = b->file_size;
     full.flags = b->flags;
     full.format = b->measured ? LL_BSDF_FORMAT_TABLES : LL_BSDF_FORMAT_FOURIER;
+    full.n_wavelengths = b->measured ? b->measured->n_wavelengths : 0;
     /* Write only the fields the caller's (possibly older, smaller) struct has. */
     return ll_struct_write(info, &full, sizeof full, "ll_bsdf_get_info", "ll_bsdf_info");
 }

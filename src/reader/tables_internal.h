@@ -22,6 +22,7 @@ typedef struct ll_measured {
     ll_warp2d luminance;  /* sampling, parameters (phi_i, theta_i)          */
     ll_warp2d rgb;        /* values, parameters (phi_i, theta_i, channel)   */
     int jacobian;         /* stored values are f cos over D / (4 sigma)     */
+    size_t n_wavelengths; /* a spectral file's (its rgb: converted), or 0   */
 } ll_measured;
 
 /* Open a table file held in data[0 .. size) (validated completely; the

@@ -5,11 +5,18 @@
  * must agree, every value finite and non-negative, the parameter lists
  * ascending -- before the warps are built from it (style.md rule 10). Each
  * problem is LL_ERROR_FORMAT naming the file and the field; a valid
- * variant this reader does not evaluate (spectral or anisotropic files)
+ * variant this reader does not evaluate (anisotropic files)
  * LL_ERROR_UNSUPPORTED.
+ *
+ * A spectral file ("spectra" and "wavelengths") is converted to linear
+ * sRGB here, once (reader/cie.h: the values as a reflectance lit by D65
+ * and seen by the CIE 1931 observer, white-normalised on the file's own
+ * wavelengths), so that evaluation and every consumer of the RGB calls
+ * work on it unchanged.
  */
 #include "reader/tables_internal.h"
 #include "reader/tensor.h"
+#include "reader/cie.h"
 
 #include <math.h>
 #include <string.h>
@@ -17,12 +24,20 @@
 /* Values beyond this are not a reflectance, and would let the products of
  * evaluation overflow (the same bound as the .bsdf reader's coefficients). */
 #define LL_MEASURED_MAX_VALUE 1.2676506002282294e30
+/* Wavelengths a spectral file may have (one per nm over 1 um and more). */
+#define LL_MEASURED_MAX_WAVELENGTHS 4096
+#define LL_MEASURED_MAX_WAVELENGTHS_TEXT "4096"
 
 #define FAIL(status, ...) do { s = ll_fail(status, __VA_ARGS__); goto done; } while (0)
 
 static double get_field(const void *ctx, size_t index)
 {
     return (double)ll_tensor_f32(ctx, index);
+}
+
+static double get_double(const void *ctx, size_t index)
+{
+    return ((const double *)ctx)[index];
 }
 
 /* Field name: present, float32, of the given rank. */
@@ -95,6 +110,19 @@ static ll_status build(ll_warp2d *wp, const ll_tensor_field *f, size_t n_params,
     return s;
 }
 
+/* The RGB warp of a spectral file, from its converted values (the
+ * field f names it in messages). */
+static ll_status build_rgb(ll_warp2d *wp, const ll_tensor_field *f, const double *rgb,
+                           const size_t *sizes, const double *const *params, const char *file)
+{
+    ll_status s = ll_warp2d_init(wp, f->shape[4], f->shape[3], 3, sizes, params, get_double,
+                                 rgb, 0);
+    if (s == LL_ERROR_FORMAT)
+        return ll_fail(s, "ll_bsdf_open: %s: field \"%s\": %s", file, f->name,
+                       ll_last_error_message());
+    return s;
+}
+
 /* The metadata the handle reports: our own field, else the description. */
 static ll_status copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
 {
@@ -114,31 +142,78 @@ static ll_status copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *
     return LL_OK;
 }
 
+/* "wavelengths" (read_list checked them: positive, strictly increasing)
+ * and "spectra" [n_pi, n_ti, n_l, N, N] into linear sRGB [n_pi, n_ti, 3,
+ * N, N]; a component below 0 (a spectrum outside the sRGB gamut) is
+ * clipped to 0, as the format's values are. */
+static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *lambda,
+                                const char *file, double **out)
+{
+    size_t n_l = spectra->shape[2], plane = spectra->shape[3] * spectra->shape[4];
+    size_t slices = spectra->shape[0] * spectra->shape[1], count, t, l, q;
+    double (*w)[3];
+    double *rgb;
+    int c;
+    if (!ll_size_mul(slices, plane, &count) || !ll_size_mul(count, 3, &count))
+        return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"spectra\": too large", file);
+    w = ll_alloc_array(n_l, sizeof *w);
+    rgb = ll_calloc_array(count, sizeof *rgb);
+    if (!w || !rgb) {
+        ll_free(w);
+        ll_free(rgb);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    }
+    if (!ll_spectral_rgb_weights(lambda, n_l, w)) {
+        ll_free(w);
+        ll_free(rgb);
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"wavelengths\": %g..%g nm see no light of "
+                       "the CIE 1931 observer (%g..%g nm): the spectra have no colour",
+                       file, lambda[0], lambda[n_l - 1], LL_CIE1931_FIRST_NM,
+                       LL_CIE1931_LAST_NM);
+    }
+    for (t = 0; t < slices; ++t)
+        for (l = 0; l < n_l; ++l) {
+            size_t from = (t * n_l + l) * plane;
+            for (q = 0; q < plane; ++q) {
+                double v = (double)ll_tensor_f32(spectra, from + q);
+                for (c = 0; c < 3; ++c)
+                    rgb[(t * 3 + (size_t)c) * plane + q] += w[l][c] * v;
+            }
+        }
+    for (q = 0; q < count; ++q)
+        if (!(rgb[q] > 0.0))
+            rgb[q] = 0.0;
+    ll_free(w);
+    *out = rgb;
+    return LL_OK;
+}
+
 ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
                            ll_bsdf **out)
 {
     ll_tensor_file t = { 0, NULL };
-    const ll_tensor_field *theta, *phi, *ndf, *sigma, *vndf, *lum, *rgb, *jac;
+    const ll_tensor_field *theta, *phi, *ndf, *sigma, *vndf, *lum, *rgb, *jac, *lam = NULL;
     double *theta_v = NULL, *phi_v = NULL, channels[3] = { 0.0, 1.0, 2.0 };
+    double *lambda_v = NULL, *converted = NULL;
+    int spectral;
     ll_bsdf *b = NULL;
     ll_measured *m;
     size_t n_ti, n_pi, n;
     ll_status s = ll_tensor_parse(data, size, file, &t);
     if (s != LL_OK)
         return s;
-    if (ll_tensor_find(&t, "wavelengths") || (!ll_tensor_find(&t, "rgb") &&
-                                              ll_tensor_find(&t, "spectra")))
-        FAIL(LL_ERROR_UNSUPPORTED,
-             "ll_bsdf_open: %s: spectral tables (fields \"spectra\" and \"wavelengths\") are "
-             "not read by this version; RGB tables (field \"rgb\") are",
-             file);
+    /* As Mitsuba: "wavelengths" makes the file spectral (pbrt reads only
+     * such files). */
+    spectral = ll_tensor_find(&t, "wavelengths") != NULL;
     if ((s = require(&t, "theta_i", 1, file, &theta)) != LL_OK ||
         (s = require(&t, "phi_i", 1, file, &phi)) != LL_OK ||
         (s = require(&t, "ndf", 2, file, &ndf)) != LL_OK ||
         (s = require(&t, "sigma", 2, file, &sigma)) != LL_OK ||
         (s = require(&t, "vndf", 4, file, &vndf)) != LL_OK ||
         (s = require(&t, "luminance", 4, file, &lum)) != LL_OK ||
-        (s = require(&t, "rgb", 5, file, &rgb)) != LL_OK)
+        (s = require(&t, spectral ? "spectra" : "rgb", 5, file, &rgb)) != LL_OK ||
+        (spectral && (s = require(&t, "wavelengths", 1, file, &lam)) != LL_OK))
         goto done;
     jac = ll_tensor_find(&t, "jacobian");
     if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
@@ -166,14 +241,27 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
         s = shape_error(file, "luminance", "shape must be [phi_i, theta_i, N, N], N >= 2");
         goto done;
     }
-    if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti || rgb->shape[2] != 3 ||
-        rgb->shape[3] != n || rgb->shape[4] != n) {
-        s = shape_error(file, "rgb", "shape must be [phi_i, theta_i, 3, N, N] with the N of "
-                                     "\"luminance\"");
+    if (spectral && lam->count > LL_MEASURED_MAX_WAVELENGTHS) {
+        s = shape_error(file, "wavelengths", "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
+                                             " wavelengths");
+        goto done;
+    }
+    if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti ||
+        rgb->shape[2] != (spectral ? lam->count : 3) || rgb->shape[3] != n ||
+        rgb->shape[4] != n) {
+        s = spectral ? shape_error(file, "spectra",
+                                   "shape must be [phi_i, theta_i, n, N, N] with the n of "
+                                   "\"wavelengths\" and the N of \"luminance\"")
+                     : shape_error(file, "rgb",
+                                   "shape must be [phi_i, theta_i, 3, N, N] with the N of "
+                                   "\"luminance\"");
         goto done;
     }
     if ((s = read_list(theta, file, 0.0, LL_PI / 2 + 1e-6, &theta_v)) != LL_OK ||
-        (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &phi_v)) != LL_OK)
+        (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &phi_v)) != LL_OK ||
+        (spectral && (s = read_list(lam, file, 1e-3, 1e6, &lambda_v)) != LL_OK))
+        goto done;
+    if (spectral && (s = spectra_to_rgb(rgb, lambda_v, file, &converted)) != LL_OK)
         goto done;
     for (n = 0; n < sigma->count; ++n)
         if (!(ll_tensor_f32(sigma, n) > 0.0f))
@@ -193,6 +281,7 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
     b->eta = 1.0;
     b->file_size = size;
     m->jacobian = jac->data[0];
+    m->n_wavelengths = spectral ? lam->count : 0;
     {
         const double *params[3] = { phi_v, theta_v, channels };
         size_t sizes[3] = { n_pi, n_ti, 3 };
@@ -200,13 +289,16 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
             (s = build(&m->sigma, sigma, 0, NULL, NULL, 0, file)) != LL_OK ||
             (s = build(&m->vndf, vndf, 2, sizes, params, 1, file)) != LL_OK ||
             (s = build(&m->luminance, lum, 2, sizes, params, 1, file)) != LL_OK ||
-            (s = build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK)
+            (s = spectral ? build_rgb(&m->rgb, rgb, converted, sizes, params, file)
+                          : build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK)
             goto done;
     }
     s = copy_metadata(b, &t, file);
 done:
     ll_free(theta_v);
     ll_free(phi_v);
+    ll_free(lambda_v);
+    ll_free(converted);
     ll_tensor_file_free(&t);
     if (s != LL_OK) {
         ll_bsdf_free(b);

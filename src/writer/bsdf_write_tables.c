@@ -14,11 +14,15 @@
  *     tables interpolate them, so a reader's product gives f cos back
  *     exactly at the nodes; the luminance of those values, with a floor
  *     of 1e-3 of the slice's largest, as the sampling density.
+ * A spectral file shares steps 1-3 (the warp of the RGB source) and takes
+ * its values per wavelength (bsdf_write_tables_spectra.c) at the same
+ * directions, which step 3 keeps for it.
  */
 #include "layerlab/ll_tables.h"
 #include "writer/bsdf_write_tables.h"
 #include "writer/bsdf_write_tensor.h"
 #include "reader/tables_warp.h"
+#include "reader/cie.h"
 #include "support/watch.h"
 
 #include <math.h>
@@ -38,9 +42,40 @@ typedef struct writer {
     size_t n_ti, nv, ns;
     float *theta_i, phi_i[1], *ndf, *sigma, *vndf, *lum, *rgb;
     ll_warp2d ndf_w, sigma_w, vndf_w;
+    int spectral;
+    double *geom;            /* spectral: [n_ti][ns * ns][wo, scale]      */
+    float *wavelengths;      /* spectral: [n_l] as stored                 */
+    ll_tables_spectra spectra;
 } writer;
 
 static double get_float(const void *ctx, size_t i) { return (double)((const float *)ctx)[i]; }
+
+/* A spectral file's wavelengths: where the CIE tables that read them back
+ * are defined, strictly increasing, and a source to build them from. */
+static ll_status check_wavelengths(const ll_tables_options *o)
+{
+    size_t l;
+    if (!o->spectrum)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": LL_TABLES_SPECTRAL needs a spectrum source (options.spectrum)");
+    if (!o->wavelengths || o->n_wavelengths == 0 || o->n_wavelengths > LL_TABLES_MAX_WAVELENGTHS)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": LL_TABLES_SPECTRAL needs 1..%d wavelengths (%zu given)",
+                       LL_TABLES_MAX_WAVELENGTHS, o->wavelengths ? o->n_wavelengths : 0);
+    for (l = 0; l < o->n_wavelengths; ++l) {
+        double v = o->wavelengths[l];
+        if (!(v >= LL_CIE1931_FIRST_NM && v <= LL_CIE1931_LAST_NM))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           FN ": wavelength %zu = %g nm lies outside the CIE 1931 tables "
+                           "(%g..%g nm)",
+                           l, v, LL_CIE1931_FIRST_NM, LL_CIE1931_LAST_NM);
+        if (l > 0 && !(v > o->wavelengths[l - 1]))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           FN ": wavelength %zu = %g nm is not above the one before (%g nm)", l,
+                           v, o->wavelengths[l - 1]);
+    }
+    return LL_OK;
+}
 
 static ll_status check_options(const ll_tables_options *opts, ll_tables_options *o)
 {
@@ -58,9 +93,12 @@ static ll_status check_options(const ll_tables_options *opts, ll_tables_options 
                        FN ": grid sizes n_theta_i = %zu (2..1024), vndf_size = %zu and "
                        "sample_size = %zu (2..4096) out of range",
                        o->n_theta_i, o->vndf_size, o->sample_size);
-    if (o->format != LL_TABLES_RGB)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": unknown format %d (LL_TABLES_RGB)",
+    if (o->format != LL_TABLES_RGB && o->format != LL_TABLES_SPECTRAL)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": unknown format %d (LL_TABLES_RGB, LL_TABLES_SPECTRAL)",
                        (int)o->format);
+    if (o->format == LL_TABLES_SPECTRAL)
+        return check_wavelengths(o);
     return LL_OK;
 }
 
@@ -106,8 +144,15 @@ static ll_status allocate(writer *w)
     w->sigma = ll_alloc_array(2 * nd, sizeof(float));
     w->vndf = ll_alloc_array(v, sizeof(float));
     w->lum = ll_alloc_array(s, sizeof(float));
-    w->rgb = ll_alloc_array(s, 3 * sizeof(float));
-    if (!w->theta_i || !w->ndf || !w->sigma || !w->vndf || !w->lum || !w->rgb)
+    if (w->spectral) {
+        /* The sample directions instead of the RGB values. */
+        w->geom = ll_alloc_array(s, 4 * sizeof(double));
+        w->wavelengths = ll_alloc_array(w->spectra.n_l, sizeof(float));
+    } else {
+        w->rgb = ll_alloc_array(s, 3 * sizeof(float));
+    }
+    if (!w->theta_i || !w->ndf || !w->sigma || !w->vndf || !w->lum ||
+        (w->spectral ? !w->geom || !w->wavelengths : !w->rgb))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
     return LL_OK;
 }
@@ -120,6 +165,9 @@ static void release(writer *w)
     ll_free(w->vndf);
     ll_free(w->lum);
     ll_free(w->rgb);
+    ll_free(w->geom);
+    ll_free(w->wavelengths);
+    ll_tables_spectra_close(&w->spectra);
     ll_warp2d_free(&w->ndf_w);
     ll_warp2d_free(&w->sigma_w);
     ll_warp2d_free(&w->vndf_w);
@@ -173,13 +221,31 @@ static void vndf_slice(writer *w, size_t t)
     }
 }
 
-/* Steps 3 and 4 for slice t. */
+/* The luminance floor of slice t (every slice normalisable), relative to
+ * top, its largest value (< 0: the largest stored). */
+static void floor_slice(writer *w, size_t t, double top)
+{
+    size_t plane = w->ns * w->ns, x;
+    float *lum = w->lum + t * plane;
+    double floor_v;
+    if (top < 0.0)
+        for (x = 0, top = 0.0; x < plane; ++x)
+            if ((double)lum[x] > top)
+                top = (double)lum[x];
+    floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
+    for (x = 0; x < plane; ++x)
+        if (!((double)lum[x] >= floor_v))
+            lum[x] = (float)floor_v;
+}
+
+/* Steps 3 and 4 for slice t; a spectral file keeps each node's direction
+ * and factor instead (its values come per wavelength). */
 static void value_slice(writer *w, size_t t)
 {
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
     double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(w, th), top = 0.0;
-    float *lum = w->lum + t * plane, *rgb = w->rgb + t * 3 * plane;
+    float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
@@ -194,6 +260,15 @@ static void value_slice(writer *w, size_t t)
             wo[0] = 2.0 * dot * m[0] - wi[0];
             wo[1] = 2.0 * dot * m[1] - wi[1];
             wo[2] = 2.0 * dot * m[2] - wi[2];
+            if (w->spectral) {
+                double *g = w->geom + (t * plane + y * ns + x) * 4;
+                scale = wo[2] * four_sigma / ll_warp2d_eval(&w->ndf_w, um, NULL);
+                g[0] = wo[0];
+                g[1] = wo[1];
+                g[2] = wo[2];
+                g[3] = wo[2] > 0.0 && wi[2] > 0.0 && ll_is_finite(scale) ? scale : 0.0;
+                continue;
+            }
             /* Our renderer convention: wo (viewer) is the format's wi. */
             if (wo[2] > 0.0 && wi[2] > 0.0 &&
                 ll_bsdf_eval_dir(w->b, wi, wo, LL_TRANSPORT_RADIANCE, NULL, f) != LL_OK)
@@ -213,11 +288,8 @@ static void value_slice(writer *w, size_t t)
             if (y_lum > top)
                 top = y_lum;
         }
-    for (x = 0; x < plane; ++x) {
-        double floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
-        if (!((double)lum[x] >= floor_v))
-            lum[x] = (float)floor_v;
-    }
+    if (!w->spectral)
+        floor_slice(w, t, top);
 }
 
 /* JSON text of a string (quotes and escapes), appended to buf. */
@@ -258,8 +330,10 @@ static char *metadata_text(const writer *w, double alpha, size_t *size)
     /* cap holds the worst case: every source byte escaped as \u00XX. */
     at = (size_t)snprintf(buf, cap,
                           "{\"writer\": \"layerlab %s\", \"theta_i\": %zu, \"vndf\": [%zu, %zu], "
-                          "\"sample\": [%zu, %zu], \"ndf_alpha\": %.6g, \"bsdf_metadata\": ",
-                          ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns, alpha);
+                          "\"sample\": [%zu, %zu], \"ndf_alpha\": %.6g, \"wavelengths\": %zu, "
+                          "\"bsdf_metadata\": ",
+                          ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns, alpha,
+                          w->spectral ? w->spectra.n_l : (size_t)0);
     at = json_string(buf, at, cap, src);
     buf[at++] = '}';
     buf[at] = '\0';
@@ -284,6 +358,8 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
         (s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
         return s;
     w.b = b;
+    w.spectral = o.format == LL_TABLES_SPECTRAL;
+    w.spectra.n_l = w.spectral ? o.n_wavelengths : 0;
     w.n_ti = o.n_theta_i;
     w.nv = o.vndf_size;
     w.ns = o.sample_size;
@@ -301,7 +377,7 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     ll_watch_stage(&watch, "ndf", 0.0, 0.1, 1);
     if ((s = ndf_tables(&w, &alpha)) != LL_OK || (s = ll_watch_check(&watch, FN)) != LL_OK)
         goto done;
-    ll_watch_stage(&watch, "tables", 0.1, 0.8, 2 * w.n_ti);
+    ll_watch_stage(&watch, "tables", 0.1, w.spectral ? 0.1 : 0.8, 2 * w.n_ti);
     for (t = 0; t < w.n_ti; ++t) {
         vndf_slice(&w, t);
         ll_watch_advance(&watch, 1);
@@ -333,6 +409,21 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
         if ((s = ll_watch_check(&watch, FN)) != LL_OK)
             goto done;
     }
+    if (w.spectral) {
+        ll_watch_stage(&watch, "spectra", 0.2, 0.7, w.spectra.n_l);
+        w.spectra.plane = w.ns * w.ns;
+        w.spectra.n_ti = w.n_ti;
+        w.spectra.wavelengths = o.wavelengths;
+        w.spectra.theta_i = w.theta_i;
+        w.spectra.geom = w.geom;
+        s = ll_tables_spectra_run(&w.spectra, o.spectrum, o.spectrum_user, w.lum, &watch, FN);
+        if (s != LL_OK)
+            goto done;
+        for (t = 0; t < w.n_ti; ++t)
+            floor_slice(&w, t, -1.0);
+        for (t = 0; t < w.spectra.n_l; ++t)
+            w.wavelengths[t] = (float)o.wavelengths[t];
+    }
     meta = metadata_text(&w, alpha, &meta_size);
     if (!meta) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (metadata)");
@@ -342,24 +433,34 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     {
         static const unsigned char jacobian[1] = { 1 };
         const char *desc = o.description ? o.description
+                           : w.spectral  ? "layerlab: warped tables of an opaque layered "
+                                           "material (spectral)"
                                          : "layerlab: warped tables of an opaque layered "
                                            "material (RGB)";
         size_t nd = LL_TABLES_NDF_NODES;
-        ll_tensor_out_field f[10] = {
-            { "description", LL_TENSOR_U8, 1, { strlen(desc) }, desc },
-            { "jacobian", LL_TENSOR_U8, 1, { 1 }, jacobian },
-            { "theta_i", LL_TENSOR_F32, 1, { w.n_ti }, w.theta_i },
-            { "phi_i", LL_TENSOR_F32, 1, { 1 }, w.phi_i },
-            { "ndf", LL_TENSOR_F32, 2, { 2, nd }, w.ndf },
-            { "sigma", LL_TENSOR_F32, 2, { 2, nd }, w.sigma },
-            { "vndf", LL_TENSOR_F32, 4, { 1, w.n_ti, w.nv, w.nv }, w.vndf },
-            { "luminance", LL_TENSOR_F32, 4, { 1, w.n_ti, w.ns, w.ns }, w.lum },
-            { "rgb", LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, w.rgb },
-            { "layerlab_metadata", LL_TENSOR_U8, 1, { meta_size }, meta },
+        ll_tensor_out_field f[11] = {
+            { "description", LL_TENSOR_U8, 1, { strlen(desc) }, desc, NULL, NULL },
+            { "jacobian", LL_TENSOR_U8, 1, { 1 }, jacobian, NULL, NULL },
+            { "theta_i", LL_TENSOR_F32, 1, { w.n_ti }, w.theta_i, NULL, NULL },
+            { "phi_i", LL_TENSOR_F32, 1, { 1 }, w.phi_i, NULL, NULL },
+            { "ndf", LL_TENSOR_F32, 2, { 2, nd }, w.ndf, NULL, NULL },
+            { "sigma", LL_TENSOR_F32, 2, { 2, nd }, w.sigma, NULL, NULL },
+            { "vndf", LL_TENSOR_F32, 4, { 1, w.n_ti, w.nv, w.nv }, w.vndf, NULL, NULL },
+            { "luminance", LL_TENSOR_F32, 4, { 1, w.n_ti, w.ns, w.ns }, w.lum, NULL, NULL },
+            { "rgb", LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, w.rgb, NULL, NULL },
+            { "layerlab_metadata", LL_TENSOR_U8, 1, { meta_size }, meta, NULL, NULL },
+            { "wavelengths", LL_TENSOR_F32, 1, { w.spectra.n_l }, w.wavelengths, NULL, NULL },
         };
+        if (w.spectral) {
+            /* "spectra" in the place of "rgb", filled from the scratch file. */
+            ll_tensor_out_field spectra = { "spectra", LL_TENSOR_F32, 5,
+                                            { 1, w.n_ti, w.spectra.n_l, w.ns, w.ns }, NULL,
+                                            ll_tables_spectra_fill, &w.spectra };
+            f[8] = spectra;
+        }
         if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
             goto done;
-        s = ll_tensor_write(path, FN, f, 10);
+        s = ll_tensor_write(path, FN, f, w.spectral ? 11 : 10);
     }
 done:
     ll_free(meta);

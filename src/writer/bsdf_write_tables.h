@@ -5,6 +5,13 @@
 #define LL_BSDF_WRITE_TABLES_H
 
 #include "reader/bsdf_internal.h"
+#ifndef LL_EXPERIMENTAL
+#define LL_EXPERIMENTAL /* the library's build defines it for every file */
+#endif
+#include "layerlab/ll_tables.h"
+#include "support/watch.h"
+
+#include <stdio.h>
 
 /* Nodes of the NDF and sigma tables along u_theta (uniform in u_theta;
  * also the quadrature of the derivation). */
@@ -22,5 +29,32 @@ LL_INTERNAL double ll_tables_luminance(const double rgb[3]);
  * back. */
 LL_INTERNAL ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma,
                                            double *alpha);
+
+/* The values of a spectral table file (bsdf_write_tables_spectra.c): per
+ * wavelength, f cos of the source's file at the sample nodes, whose
+ * directions and jacobian factors geom holds (per slice t and node q of
+ * the N x N square, 4 doubles: wo, then 4 sigma(wi) / D(m) times nothing
+ * else, 0 where wo is below the horizon). The values go to a scratch file,
+ * wavelength after wavelength; fill copies them out in the file's order
+ * [theta_i][wavelength][N][N]. */
+typedef struct ll_tables_spectra {
+    size_t n_ti, plane, n_l;       /* slices, N * N, wavelengths         */
+    const double *wavelengths;     /* [n_l], nm                          */
+    const float *theta_i;          /* [n_ti]                             */
+    const double *geom;            /* [n_ti * plane * 4]                 */
+    FILE *scratch;                 /* tmpfile(), [n_l][n_ti][plane] floats */
+} ll_tables_spectra;
+
+/* Every wavelength's values (source(user, l, lambda) opened, evaluated,
+ * released, one at a time) into the scratch file, and into lum (n_ti *
+ * plane, zeroed here) their luminance: the Y of the spectrum lit by D65,
+ * seen by the CIE 1931 observer (uniform weights when the wavelengths see
+ * none). watch advances by one per wavelength. fn names the caller. */
+LL_INTERNAL ll_status ll_tables_spectra_run(ll_tables_spectra *sp, ll_tables_spectrum_fn source,
+                                            void *user, float *lum, ll_watch *watch,
+                                            const char *fn);
+/* ll_tensor_out_field.fill of the "spectra" field: block b = t * n_l + l. */
+LL_INTERNAL ll_status ll_tables_spectra_fill(void *ctx, size_t block, float *out);
+LL_INTERNAL void ll_tables_spectra_close(ll_tables_spectra *sp);
 
 #endif /* LL_BSDF_WRITE_TABLES_H */

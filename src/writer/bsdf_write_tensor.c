@@ -43,6 +43,30 @@ static size_t field_bytes(const ll_tensor_out_field *f, int *ok)
     return bytes;
 }
 
+/* A filled field (data NULL): block by block, one block's buffer held. */
+static ll_status fill_blocks(ll_bsdf_out *o, const ll_tensor_out_field *f)
+{
+    size_t block, blocks = 1, per = 1, r, i;
+    float *buf;
+    ll_status s = LL_OK;
+    for (r = 0; r < f->rank; ++r) {
+        if (r + 2 < f->rank)
+            blocks *= f->shape[r]; /* the whole product was checked */
+        else
+            per *= f->shape[r];
+    }
+    buf = ll_alloc_array(per, sizeof *buf);
+    if (!buf)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "writing field \"%s\": out of memory", f->name);
+    for (block = 0; block < blocks && s == LL_OK; ++block) {
+        s = f->fill(f->fill_ctx, block, buf);
+        for (i = 0; s == LL_OK && i < per; ++i)
+            ll_bsdf_out_f32(o, buf[i]);
+    }
+    ll_free(buf);
+    return s;
+}
+
 ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_field *fields,
                           size_t n_fields)
 {
@@ -55,7 +79,9 @@ ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_
     for (k = 0; k < n_fields; ++k) {
         size_t len = strlen(fields[k].name);
         if ((fields[k].dtype != LL_TENSOR_F32 && fields[k].dtype != LL_TENSOR_U8) ||
-            len == 0 || len > LL_TENSOR_MAX_NAME || fields[k].rank > LL_TENSOR_MAX_RANK)
+            len == 0 || len > LL_TENSOR_MAX_NAME || fields[k].rank > LL_TENSOR_MAX_RANK ||
+            (!fields[k].data && (!fields[k].fill || fields[k].dtype != LL_TENSOR_F32 ||
+                                 fields[k].rank < 2)))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: field \"%s\" cannot be written", fn,
                            fields[k].name);
         at += 2 + len + 2 + 1 + 8 + 8 * fields[k].rank;
@@ -98,7 +124,13 @@ ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_
         const ll_tensor_out_field *f = &fields[k];
         size_t bytes = field_bytes(f, &ok), i;
         pad_to(o, &at, offset[k]);
-        if (f->dtype == LL_TENSOR_U8) {
+        if (!f->data) {
+            s = fill_blocks(o, f);
+            if (s != LL_OK) {
+                ll_bsdf_out_abort(o);
+                return s;
+            }
+        } else if (f->dtype == LL_TENSOR_U8) {
             ll_bsdf_out_bytes(o, f->data, bytes);
         } else {
             const float *v = f->data;

@@ -15,7 +15,12 @@ typedef struct ll_tensor_out_field {
     int dtype;                          /* LL_TENSOR_F32 or LL_TENSOR_U8 */
     size_t rank;
     size_t shape[LL_TENSOR_MAX_RANK];
-    const void *data;                   /* count elements                */
+    const void *data;                   /* count elements, or NULL: fill */
+    /* A float32 field too large to hold (data NULL): its elements in
+     * blocks of the last two extents' product, block b (row-major over the
+     * leading extents) written into out by fill(fill_ctx, b, out). */
+    ll_status (*fill)(void *fill_ctx, size_t block, float *out);
+    void *fill_ctx;
 } ll_tensor_out_field;
 
 /* Write the fields in the given order, each data block at an offset

@@ -3,6 +3,12 @@
  * the warped tables that Mitsuba 3's and pbrt-v4's `measured` BSDF read
  * (docs/measured-format.md) instead of a .bsdf file.
  *
+ * With --wavelengths START:END:STEP the file is spectral: the library
+ * builds it all (ll_material_write_tables: the warp from the RGB build, the
+ * values from the material built again at each wavelength), after checking
+ * that every word has a spectrum; the summary's albedo is then the file's,
+ * by its own sampler.
+ *
  * The tables are made from an opened .bsdf (ll_tables_write_from_bsdf), so
  * the built layers go first to a .bsdf beside the output, which is opened
  * and unlinked at once: the handle holds its data, and the name is gone
@@ -40,6 +46,59 @@ static int parse_grid(const char *text, const char *option, size_t *out)
     return 1;
 }
 
+/* --wavelengths START:END:STEP in nm: START, START + STEP, ... up to END
+ * (included when it falls on the grid), inside the CIE 1931 tables'
+ * 360..830 nm, at most LL_TABLES_MAX_WAVELENGTHS of them. */
+static int parse_wavelengths(const char *text, llbuild_tables *t)
+{
+    double v[3], count;
+    const char *p = text;
+    char *end;
+    size_t k, n;
+    if (!text) {
+        fprintf(stderr, "llbuild: --wavelengths needs a value START:END:STEP (nm)\n");
+        return 0;
+    }
+    for (k = 0; k < 3; ++k) {
+        v[k] = strtod(p, &end);
+        if (end == p || (k < 2 && *end != ':') || (k == 2 && *end != '\0') || !isfinite(v[k])) {
+            fprintf(stderr, "llbuild: --wavelengths wants START:END:STEP in nm (e.g. "
+                            "360:830:10), not '%s'\n",
+                    text);
+            return 0;
+        }
+        p = end + 1;
+    }
+    if (v[0] < 360.0 || v[1] > 830.0 || v[0] > v[1]) {
+        fprintf(stderr, "llbuild: --wavelengths %s: START and END must lie in 360..830 nm "
+                        "(the span of the CIE 1931 tables the file's colour is read with), "
+                        "START <= END\n",
+                text);
+        return 0;
+    }
+    if (!(v[2] > 0.0)) {
+        fprintf(stderr, "llbuild: --wavelengths %s: STEP must be > 0 nm\n", text);
+        return 0;
+    }
+    /* The last node within END (a hair of rounding allowed). */
+    count = floor((v[1] - v[0]) / v[2] + 1e-9) + 1.0;
+    if (count > (double)LL_TABLES_MAX_WAVELENGTHS) {
+        fprintf(stderr, "llbuild: --wavelengths %s gives %.0f wavelengths; at most %d (one "
+                        "per nm over 360..830): take a larger STEP\n",
+                text, count, LL_TABLES_MAX_WAVELENGTHS);
+        return 0;
+    }
+    n = (size_t)count;
+    for (k = 0; k < n; ++k)
+        t->wavelengths[k] = v[0] + (double)k * v[2];
+    if (t->wavelengths[n - 1] > 830.0)
+        t->wavelengths[n - 1] = 830.0;
+    t->opts.format = LL_TABLES_SPECTRAL;
+    t->opts.wavelengths = t->wavelengths;
+    t->opts.n_wavelengths = n;
+    return 1;
+}
+
 int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
 {
     int i, kept = 1;
@@ -66,6 +125,10 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
                 return 1;
             }
             ++i;
+        } else if (!strcmp(o, "--wavelengths")) {
+            if (!parse_wavelengths(next, t))
+                return 1;
+            ++i;
         } else if (grid) {
             if (!parse_grid(next, o, grid))
                 return 1;
@@ -80,6 +143,11 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     if (t->grid_given && !t->measured) {
         fprintf(stderr, "llbuild: --theta-i, --vndf and --sample size the tables of "
                         "--format measured; a .bsdf file has no such grid\n");
+        return 1;
+    }
+    if (t->opts.format == LL_TABLES_SPECTRAL && !t->measured) {
+        fprintf(stderr, "llbuild: --wavelengths makes a spectral table file of --format "
+                        "measured; a .bsdf file is RGB or monochrome\n");
         return 1;
     }
     return -1;
@@ -110,21 +178,27 @@ int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const ch
 }
 
 /* The data the tables hold (the field table and text add a few hundred
- * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb. */
+ * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb (or
+ * spectra and wavelengths). */
 static double table_bytes(const ll_tables_options *o)
 {
     double n_ti = (double)o->n_theta_i, nv = (double)o->vndf_size,
            ns = (double)o->sample_size;
-    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + 4.0 * n_ti * ns * ns);
+    double values = o->format == LL_TABLES_SPECTRAL ? (double)o->n_wavelengths : 3.0;
+    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns +
+                  (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
 }
 
 void llbuild_tables_dry_run(const llbuild_tables *t)
 {
     if (!t->measured)
         return;
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid: "
-           "about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size,
+    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid",
+           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    if (t->opts.format == LL_TABLES_SPECTRAL)
+        printf(" x %zu wavelengths (%g..%g nm)", t->opts.n_wavelengths, t->wavelengths[0],
+               t->wavelengths[t->opts.n_wavelengths - 1]);
+    printf(": about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
            table_bytes(&t->opts) / 1048576.0);
 }
 
@@ -145,6 +219,30 @@ static void remember_layers(llbuild_tables *t, ll_layer *const *layers, size_t n
         }
 }
 
+/* Albedo per channel for light seen along cos theta = mu, by the file's
+ * own sampler: the mean of the weights f cos / pdf over 64 x 64 strata
+ * (the tables sample nearly in proportion to f cos). */
+static void file_albedo(const ll_bsdf *b, double mu, double out[3])
+{
+    const int n = 64;
+    double wo[3];
+    int i, j, c;
+    wo[0] = sqrt(1.0 - mu * mu);
+    wo[1] = 0.0;
+    wo[2] = mu;
+    out[0] = out[1] = out[2] = 0.0;
+    for (i = 0; i < n; ++i)
+        for (j = 0; j < n; ++j) {
+            double u[2], wi[3], pdf = 0.0, f[3];
+            u[0] = (i + 0.5) / n;
+            u[1] = (j + 0.5) / n;
+            if (ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f) == LL_OK &&
+                pdf > 0.0)
+                for (c = 0; c < 3; ++c)
+                    out[c] += f[c] * fabs(wi[2]) / pdf / ((double)n * n);
+        }
+}
+
 void llbuild_tables_summary(const llbuild_tables *t, const char *input, const char *output,
                             double seconds)
 {
@@ -157,11 +255,33 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
         return;
     }
     printf("%s -> %s (format measured)\n", input, output);
-    printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
-           "tables are made from)\n",
-           t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
+    if (info.n_wavelengths > 0)
+        printf("resolution   %zu nodes x %zu Fourier orders (the layers of the warp, 3 "
+               "channels, and of each wavelength, 1)\n",
+               t->n_nodes, t->n_orders);
+    else
+        printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
+               "tables are made from)\n",
+               t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
     printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
            t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    if (info.n_wavelengths > 0)
+        printf("spectra      %zu wavelengths, %g..%g nm (read back as linear sRGB: D65, CIE "
+               "1931)\n",
+               info.n_wavelengths, t->wavelengths[0], t->wavelengths[info.n_wavelengths - 1]);
+    if (info.n_wavelengths > 0) {
+        printf("file         %zu bytes\n", info.file_size);
+        printf("albedo       (R G B) reflected, of the file (its sampler; linear sRGB)\n");
+        for (a = 0; a < 4; ++a) {
+            double alb[3];
+            file_albedo(b, cos(summary_degrees[a] * 3.14159265358979323846 / 180.0), alb);
+            printf("  %4.0f deg   %.4f %.4f %.4f\n", summary_degrees[a], alb[0], alb[1],
+                   alb[2]);
+        }
+        printf("wall time    %.2f s\n", seconds);
+        ll_bsdf_release(b);
+        return;
+    }
     printf("file         %zu bytes (the .bsdf of these layers: %zu bytes)\n", info.file_size,
            t->bsdf_bytes);
     printf("albedo       %sreflected, of the layers\n", t->n_channels == 3 ? "(R G B) " : "");
@@ -250,7 +370,14 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     /* Shares of the bar: the build most, the .bsdf a little, the tables
      * (about a second at the default grid) the rest. */
     ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
-    ll_status s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
+    ll_status s;
+    if (t->opts.format == LL_TABLES_SPECTRAL) {
+        t->n_nodes = o->n_nodes;
+        t->n_orders = o->n_orders;
+        t->n_channels = 3;
+        return ll_material_write_tables(m, o, NULL, output, &t->opts, monitor);
+    }
+    s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)
         return s;
     remember_layers(t, layers, n_channels);

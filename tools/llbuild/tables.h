@@ -15,12 +15,14 @@ typedef struct llbuild_tables {
     int measured;          /* --format measured (else bsdf, the default)  */
     int grid_given;        /* one of --theta-i --vndf --sample given       */
     ll_tables_options opts;
+    /* --wavelengths START:END:STEP: a spectral file (opts.format) */
+    double wavelengths[LL_TABLES_MAX_WAVELENGTHS];
     /* Filled by llbuild_tables_build for the summary: */
     size_t n_nodes, n_orders, n_channels, bsdf_bytes;
     double albedo[3][4];   /* reflected, at 0, 30, 60, 80 degrees          */
 } llbuild_tables;
 
-/* Take --format, --theta-i, --vndf and --sample out of argv (the rest is
+/* Take --format, --theta-i, --vndf, --sample and --wavelengths out of argv (the rest is
  * left for llbuild's own parser, argc updated). Returns -1 to go on, else
  * an exit code (the message printed). */
 int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t);
@@ -33,6 +35,7 @@ int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const ch
 void llbuild_tables_dry_run(const llbuild_tables *t);
 
 /* Build the layers with options o and write the table file at output
+ * (a spectral one through ll_material_write_tables)
  * (atomically: no file, and no temporary, after a failure or a cancel
  * through monitor). Statuses of the library calls; the message is
  * ll_last_error_message(). */

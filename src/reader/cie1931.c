@@ -1,13 +1,20 @@
 /*
- * The CIE 1931 2-degree standard observer: colour-matching functions
- * x(lambda), y(lambda), z(lambda) at 1 nm steps from 360 nm to 830 nm.
+ * The colour tables (cie.h): the CIE 1931 2-degree standard observer,
+ * colour-matching functions x(lambda), y(lambda), z(lambda) at 1 nm steps
+ * from 360 nm to 830 nm, and the CIE standard illuminant D65 at 5 nm steps
+ * over the same span; the conversion of a sampled reflectance spectrum to
+ * linear sRGB that the spectral table files are read with, and that the
+ * builder's upsampling of RGB albedos inverts.
  *
- * Source: CIE 015:2004 "Colorimetry", 3rd edition, Table T.4 (the same
- * numbers as the Colour & Vision Research Laboratory's file ciexyz31_1,
- * cvrl.org). Data only; used by ior.c to turn measured spectra into
- * colour-channel values.
+ * Sources: CIE 015:2004 "Colorimetry", 3rd edition, Table T.4 for the
+ * observer (the same numbers as the Colour & Vision Research Laboratory's
+ * file ciexyz31_1, cvrl.org) and Table T.1 for D65 (relative spectral power,
+ * 100 at 560 nm; the same numbers, up to one common scale, as Mitsuba 3's
+ * `d65` spectrum).
  */
-#include "material/ior.h"
+#include "reader/cie.h"
+
+#include <math.h>
 
 const double ll_cie1931_cmf[LL_CIE1931_COUNT][3] = {
     { 0.0001299, 3.917e-06, 0.0006061 }, /* 360 nm */
@@ -482,3 +489,103 @@ const double ll_cie1931_cmf[LL_CIE1931_COUNT][3] = {
     { 1.341977e-06, 4.846123e-07, 0.0 }, /* 829 nm */
     { 1.251141e-06, 4.5181e-07, 0.0 },  /* 830 nm */
 };
+
+const double ll_d65_spd[LL_D65_COUNT] = {
+    46.6383, 49.3637, 52.0891, 51.0323, 49.9755, 52.3118, 54.6482, 68.7015,
+    82.7549, 87.1204, 91.4860, 92.4589, 93.4318, 90.0570, 86.6823, 95.7736,
+    104.8650, 110.9360, 117.0080, 117.4100, 117.8120, 116.3360, 114.8610, 115.3920,
+    115.9230, 112.3670, 108.8110, 109.0820, 109.3540, 108.5780, 107.8020, 106.2960,
+    104.7900, 106.2390, 107.6890, 106.0470, 104.4050, 104.2250, 104.0460, 102.0230,
+    100.0000, 98.1671, 96.3342, 96.0611, 95.7880, 92.2368, 88.6856, 89.3459,
+    90.0062, 89.8026, 89.5991, 88.6489, 87.6987, 85.4936, 83.2886, 83.4939,
+    83.6992, 81.8630, 80.0268, 80.1207, 80.2146, 81.2462, 82.2778, 80.2810,
+    78.2842, 74.0027, 69.7213, 70.6652, 71.6091, 72.9790, 74.3490, 67.9765,
+    61.6040, 65.7448, 69.8856, 72.4863, 75.0870, 69.3398, 63.5927, 55.0054,
+    46.4182, 56.6118, 66.8054, 65.0941, 63.3828, 63.8434, 64.3040, 61.8779,
+    59.4519, 55.7054, 51.9590, 54.6998, 57.4406, 58.8765, 60.3125,
+};
+
+void ll_cie1931_at(double nm, double xyz[3])
+{
+    double x = nm - LL_CIE1931_FIRST_NM, t;
+    size_t j;
+    int c;
+    if (!(x >= 0.0) || x > (double)(LL_CIE1931_COUNT - 1)) {
+        xyz[0] = xyz[1] = xyz[2] = 0.0;
+        return;
+    }
+    j = (size_t)x;
+    if (j >= LL_CIE1931_COUNT - 1)
+        j = LL_CIE1931_COUNT - 2;
+    t = x - (double)j;
+    for (c = 0; c < 3; ++c)
+        xyz[c] = (1.0 - t) * ll_cie1931_cmf[j][c] + t * ll_cie1931_cmf[j + 1][c];
+}
+
+double ll_d65_at(double nm)
+{
+    double x = (nm - LL_CIE1931_FIRST_NM) / 5.0, t;
+    size_t j;
+    if (!(x >= 0.0) || x > (double)(LL_D65_COUNT - 1))
+        return 0.0;
+    j = (size_t)x;
+    if (j >= LL_D65_COUNT - 1)
+        j = LL_D65_COUNT - 2;
+    t = x - (double)j;
+    return (1.0 - t) * ll_d65_spd[j] + t * ll_d65_spd[j + 1];
+}
+
+void ll_xyz_to_linear_srgb(const double xyz[3], double rgb[3])
+{
+    /* The sRGB matrix (IEC 61966-2-1), as the original recipes use it. */
+    static const double m[3][3] = {
+        { 3.240479, -1.537150, -0.498535 },
+        { -0.969256, 1.875991, 0.041556 },
+        { 0.055648, -0.204043, 1.057311 },
+    };
+    int r;
+    for (r = 0; r < 3; ++r)
+        rgb[r] = m[r][0] * xyz[0] + m[r][1] * xyz[1] + m[r][2] * xyz[2];
+}
+
+int ll_spectral_rgb_weights(const double *lambda, size_t n, double (*w)[3])
+{
+    double white[3] = { 0.0, 0.0, 0.0 };
+    size_t l;
+    int c;
+    for (l = 0; l < n; ++l) {
+        /* The trapezoid rule's weight of node l over [lambda_0, lambda_n-1];
+         * a single wavelength weighs 1. */
+        double lo = l > 0 ? lambda[l - 1] : lambda[l];
+        double hi = l + 1 < n ? lambda[l + 1] : lambda[l];
+        double dl = n > 1 ? 0.5 * (hi - lo) : 1.0, cmf[3], rgb[3], e = ll_d65_at(lambda[l]);
+        ll_cie1931_at(lambda[l], cmf);
+        for (c = 0; c < 3; ++c)
+            cmf[c] *= dl * e;
+        ll_xyz_to_linear_srgb(cmf, rgb);
+        for (c = 0; c < 3; ++c) {
+            w[l][c] = rgb[c];
+            white[c] += rgb[c];
+        }
+    }
+    /* One wavelength has no colour: it reads as a grey of its value, if
+     * the observer sees it at all. */
+    if (n == 1) {
+        double cmf[3];
+        ll_cie1931_at(lambda[0], cmf);
+        for (c = 0; c < 3; ++c)
+            w[0][c] = 1.0;
+        return cmf[0] + cmf[1] + cmf[2] > 0.0;
+    }
+    /* White balance on the nodes themselves: a constant spectrum 1 reads
+     * (1, 1, 1) whatever the sampling, as it does on the 1 nm tables (the
+     * sRGB white is D65's). Nodes that give some channel no positive
+     * white see too little of the spectrum to have a colour. */
+    for (c = 0; c < 3; ++c)
+        if (!(white[c] > 0.0))
+            return 0;
+    for (l = 0; l < n; ++l)
+        for (c = 0; c < 3; ++c)
+            w[l][c] /= white[c];
+    return 1;
+}
