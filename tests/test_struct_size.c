@@ -52,6 +52,7 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, max_memory_bytes),
     offsetof(ll_build_options, channel_done),
     offsetof(ll_build_options, channel_done_user),
+    offsetof(ll_build_options, cache_dir),
     sizeof(ll_build_options),
 };
 static const size_t estimate_ends[] = {
