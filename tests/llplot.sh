@@ -38,6 +38,8 @@ $CC -std=c99 -O1 -g -Wall -Wextra -pedantic -Werror -D_POSIX_C_SOURCE=200809L $s
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/llplot-test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
+LAYERLAB_CACHE_DIR="$work/cache"
+export LAYERLAB_CACHE_DIR
 trap 'exit 130' INT TERM
 if [ -n "$san" ]; then
     # fontconfig (under cairo's text) keeps its configuration until exit;
