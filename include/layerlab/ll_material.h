@@ -114,9 +114,9 @@ LL_API ll_status ll_material_goal(const ll_material *material, const ll_build_op
 /* The resolution and channel count a build with these options would use.
  * Choosing it by the tolerance runs the resolution search of every
  * distinct interface and medium (ll_resolution_search_*: up to seconds
- * each) that opts->cache_dir does not remember; the monitor's stage is
- * then "resolution K/COUNT", the K-th of the COUNT searches left. monitor (nullable): stage "resolution"; a cancel returns
- * LL_ERROR_CANCELLED. */
+ * each) that opts->cache_dir does not remember. monitor (nullable): stage
+ * "resolution K/COUNT" during the K-th of the COUNT searches left; a
+ * cancel returns LL_ERROR_CANCELLED. */
 LL_API ll_status ll_material_resolution(const ll_material *material,
                                         const ll_build_options *opts,
                                         const ll_monitor *monitor, size_t *n_nodes,
