@@ -16,7 +16,7 @@
  * answer. Nothing here fails a build: a cache that cannot be read or
  * written is a cache miss.
  */
-/* mkstemp, fsync, lstat are POSIX 2008, strtoull C99. */
+/* mkstemp and st_mtim are POSIX 2008, strtoull C99. */
 #include "material/material.h"
 #include "material/word_table.h"
 
@@ -66,14 +66,19 @@ static int make_key(const ll_word_params *p, double tolerance, double mu_min, ch
         used += (size_t)len;
     }
     if (p->file) {
-        /* The table's identity as the search reads it: its path and, so
-         * that a replaced file is searched again, its size and time. */
+        /* The table's identity as the search reads it: its absolute path
+         * (two folders' "gold.binary" are two tables) and, so that a
+         * replaced file is searched again, its size and time. */
         struct stat st;
-        if (stat(p->file, &st) != 0)
+        char *path = ll_realpath(p->file);
+        if (!path || stat(path, &st) != 0) {
+            ll_free(path);
             return 0;
-        len = snprintf(key + used, size - used, " file %s size %lld mtime %lld.%09ld",
-                       p->file, (long long)st.st_size, (long long)st.st_mtim.tv_sec,
+        }
+        len = snprintf(key + used, size - used, " file %s size %lld mtime %lld.%09ld", path,
+                       (long long)st.st_size, (long long)st.st_mtim.tv_sec,
                        (long)st.st_mtim.tv_nsec);
+        ll_free(path);
         if (len < 0 || (size_t)len >= size - used)
             return 0;
         used += (size_t)len;
