@@ -146,6 +146,7 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # Mitsuba, signals running processes, or installs the cross-checks' codes.
 SLOW_TESTS   := test_convergence test_material_fuzz_replay
 SLOW_SCRIPTS := tests/llbuild_signals.sh tests/llbuild_mpi.sh tests/reference.sh \
+                tests/llbuild_time.sh \
                 tests/pbrt_shim.sh
 TEST_SRC := $(sort $(wildcard tests/test_*.c))
 TESTS    := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)

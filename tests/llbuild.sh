@@ -8,6 +8,10 @@ BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 tmp=$(mktemp -d /tmp/llbuild_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 passed=0
 failed=0
 . "$(dirname "$0")/lib/stage_wait.sh"
@@ -190,6 +194,45 @@ contains "$tmp/out" "^time" "--dry-run time"
 [ ! -e "$tmp/dry.bsdf" ] && ok || bad "--dry-run wrote a file"
 expect 0 "--dry-run --mono" -- "$llbuild" --dry-run --mono --nodes 30 --orders 7 examples/coated-gold.layers
 contains "$tmp/out" "30 nodes x 7 Fourier orders, 1 channel" "--dry-run honours options"
+
+# --- the resolutions chosen are remembered (--cache-dir, --no-cache, the
+# user's directory from LAYERLAB_CACHE_DIR); a dry run adds the choice's
+# measured time to the model's; the progress counts the searches left
+# seconds CMD...: the wall seconds CMD took (its output in $tmp/out, $tmp/err)
+seconds() {
+    s0=$(date +%s.%N); "$@" >"$tmp/out" 2>"$tmp/err"; s1=$(date +%s.%N)
+    echo "$s0 $s1" | awk '{ printf "%.3f", $2 - $1 }'
+}
+# below VALUE LIMIT DESCRIPTION
+below() {
+    if awk -v a="$1" -v b="$2" 'BEGIN { exit !(a < b) }'; then ok; else
+        bad "$3: $1 s, expected < $2 s"; fi
+}
+contains "$tmp/out" "+ choosing the resolution [0-9.]* s of CPU (measured now)" \
+    "--dry-run adds the choice's time (coated gold, cold cache)"
+t=$(seconds "$llbuild" --dry-run examples/coated-gold.layers)
+below "$t" 0.5 "--dry-run of coated gold with its choice in the cache"
+contains "$tmp/out" "choosing the resolution 0.0[0-9] s of CPU" "a remembered choice costs nothing"
+t=$(seconds "$llbuild" --dry-run --no-cache --nodes 442 --orders 328 examples/coated-gold.layers)
+below "$t" 0.5 "--dry-run with --nodes --orders"
+printf 'conductor eta=0.2+3i alpha=0.5\n' >"$tmp/metal.layers"
+expect 0 "--dry-run --cache-dir" -- "$llbuild" --dry-run --cache-dir "$tmp/c" "$tmp/metal.layers"
+cp "$tmp/out" "$tmp/cold.txt"
+contains "$tmp/out" "^resolution   112 nodes x 68" "the metal's resolution"
+[ "$(ls "$tmp/c" | wc -l)" -eq 1 ] && ok || bad "--cache-dir: not one entry in $tmp/c"
+entry=$(ls "$tmp/c"/*)
+cp "$entry" "$tmp/entry.good"
+printf 'layerlab resolution cache 1\ngarbage\n' >"$entry"
+expect 0 "--dry-run over a damaged entry" -- "$llbuild" --dry-run --cache-dir "$tmp/c" "$tmp/metal.layers"
+[ "$(grep '^resolution' "$tmp/out")" = "$(grep '^resolution' "$tmp/cold.txt")" ] && ok ||
+    bad "a damaged entry changed the resolution"
+cmp -s "$entry" "$tmp/entry.good" && ok || bad "a damaged entry was not rewritten"
+LAYERLAB_CACHE_DIR="$tmp/never" "$llbuild" --dry-run --no-cache "$tmp/metal.layers" >"$tmp/out" 2>&1
+[ ! -e "$tmp/never" ] && ok || bad "--no-cache wrote $tmp/never"
+LAYERLAB_CACHE_DIR="$tmp/user" "$llbuild" --dry-run "$tmp/metal.layers" >"$tmp/out" 2>&1
+[ "$(ls "$tmp/user" | wc -l)" -eq 1 ] && ok || bad "LAYERLAB_CACHE_DIR was not used"
+expect 0 "a build that searches" -- "$llbuild" --no-cache "$tmp/metal.layers" -o "$tmp/metal.bsdf"
+contains "$tmp/err" "% resolution 1/1 " "the progress shows the search's own count"
 
 # --- a build: summary on stdout, plain progress lines on stderr (no TTY)
 expect 0 "build" -- "$llbuild" --nodes 16 --orders 8 examples/plastic.layers -o "$tmp/plastic.bsdf"

@@ -16,6 +16,10 @@ if ! command -v mpirun >/dev/null 2>&1 || [ ! -x "$mpi" ]; then
 fi
 tmp=$(mktemp -d /tmp/llbuild_mpi_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 passed=0
 failed=0
 # CI runs as root, which OpenMPI refuses unless told.

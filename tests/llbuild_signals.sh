@@ -15,6 +15,10 @@ BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 tmp=$(mktemp -d /tmp/llbuild_signals.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 passed=0
 failed=0
 . "$(dirname "$0")/lib/stage_wait.sh"

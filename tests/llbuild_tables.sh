@@ -11,6 +11,10 @@ llbuild="$BUILD/bin/llbuild"
 llconvert="$BUILD/bin/llconvert"
 tmp=$(mktemp -d /tmp/llbuild_tables_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 passed=0
 failed=0
 . "$(dirname "$0")/lib/stage_wait.sh"

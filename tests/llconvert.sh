@@ -11,6 +11,10 @@ llbuild="$BUILD/bin/llbuild"
 gold=tests/data/roughgold_alpha_0.2.bsdf
 tmp=$(mktemp -d /tmp/llconvert_test.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 passed=0
 failed=0
 

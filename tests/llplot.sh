@@ -38,6 +38,8 @@ $CC -std=c99 -O1 -g -Wall -Wextra -pedantic -Werror -D_POSIX_C_SOURCE=200809L $s
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/llplot-test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
+LAYERLAB_CACHE_DIR="$work/cache"
+export LAYERLAB_CACHE_DIR
 trap 'exit 130' INT TERM
 if [ -n "$san" ]; then
     # fontconfig (under cairo's text) keeps its configuration until exit;
@@ -89,4 +91,15 @@ check sh -c '"$1" --sphere "$2/tg.bsdf" --param coat.alpha=0.2 --param base.albe
     "$1" --sphere "$2/tg.bsdf" --param coat.alpha=0.2 --param base.albedo=0.5 --title "" \
         -o "$2/blank.png" --size 96 --spp 1 &&
     ! cmp -s "$2/titled.png" "$2/blank.png"' sh "$llplot" "$work"
+step="llplot on a material file draws at the preview's 120 x 200, says so, and runs no resolution search (a g = -0.95 medium's, the costliest src/search/resolution.c still runs; < 20 s here)"
+printf 'medium albedo=0.9 g=-0.95 tau=1\ndiffuse albedo=0.5\n' > "$work/hg.layers"
+check sh -c 'start=$(date +%s); "$1" --sphere "$2/hg.layers" -o "$2/hg.png" --size 16 --spp 1 \
+        2> "$2/hg.err" && grep -q "drawing at 120 nodes x 200 orders" "$2/hg.err" &&
+    [ $(($(date +%s) - start)) -lt 20 ]' sh "$llplot" "$work"
+step="llplot keeps a material's own set nodes= below the cap, and --orders"
+printf 'set nodes=60\ndielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n' \
+    > "$work/set60.layers"
+check sh -c '"$1" --sphere "$2/set60.layers" --orders 50 -o "$2/set60.png" --size 16 --spp 1 \
+        2> "$2/set60.err" && grep -q "drawing at 60 nodes x 50 orders" "$2/set60.err"' \
+    sh "$llplot" "$work"
 exit $failed

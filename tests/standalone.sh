@@ -32,6 +32,10 @@ show() { tail -n "${2:-15}" "$1" | sed 's/^/    /'; }
 
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/layerlab-standalone.XXXXXX") || exit 1
 trap 'rm -rf "$tmp"' EXIT
+# Hermetic: the resolutions chosen are remembered in a scratch directory,
+# never the user's cache.
+LAYERLAB_CACHE_DIR="$tmp/cache"
+export LAYERLAB_CACHE_DIR
 trap 'exit 1' HUP INT TERM
 
 cd "$SRC" || exit 1

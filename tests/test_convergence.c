@@ -210,7 +210,8 @@ static double now_seconds(void)
 }
 
 /* A monitor that cancels at its `at`-th report of the stage "resolution"
- * (the search runs for seconds and reports while it runs). */
+ * (ll_material_*: "resolution K/COUNT", the K-th search; the search runs for
+ * seconds and reports while it runs). */
 typedef struct search_watcher {
     size_t at, reports, resolution_reports;
     double last, cancelled_at;
@@ -220,7 +221,7 @@ typedef struct search_watcher {
 static int watch_search(void *user, double fraction, const char *stage)
 {
     search_watcher *w = user;
-    int resolution = stage && strcmp(stage, "resolution") == 0;
+    int resolution = stage && strncmp(stage, "resolution", 10) == 0;
     if (w->reports++ > 0 && fraction < w->last)
         w->monotone = 0;
     w->last = fraction;

@@ -53,6 +53,7 @@ static const size_t build_options_ends[] = {
     offsetof(ll_build_options, max_memory_bytes),
     offsetof(ll_build_options, channel_done),
     offsetof(ll_build_options, channel_done_user),
+    offsetof(ll_build_options, cache_dir),
     sizeof(ll_build_options),
 };
 static const size_t estimate_ends[] = {
@@ -297,7 +298,16 @@ typedef struct outcome {
     int chosen;
     ll_status file_status;     /* ll_material_build */
     seen channels;             /* what channel_done saw there */
+    ll_status searched_status; /* a searched resolution (cache_dir) */
+    size_t cache_entries;      /* what it left in the cache directory */
 } outcome;
+
+/* The cache of chosen resolutions (cache_dir) shows only where a search
+ * runs: a material with no resolution set and one cheap search (an HG
+ * medium's), resolved with the caller's options less the resolution, and
+ * the directory the options name. */
+static ll_material *searched_material;
+static char cache_dir[600];
 
 static seen channels_seen;
 
@@ -342,6 +352,15 @@ static void run_material(const ll_material *m, const ll_build_options *o, outcom
         out->channels = channels_seen;
         ll_test_rmdir(dir);
     }
+    {
+        ll_build_options searched = LL_BUILD_OPTIONS_INIT;
+        size_t n, k, ch;
+        memcpy(&searched, o, o->struct_size);
+        searched.n_nodes = searched.n_orders = 0; /* (read only if within struct_size) */
+        out->searched_status =
+            ll_material_resolution(searched_material, &searched, NULL, &n, &k, &ch);
+        out->cache_entries = access(cache_dir, F_OK) == 0 ? ll_test_count_entries(cache_dir) : 0;
+    }
 }
 
 static void build_options_read_to_struct_size(void **state)
@@ -372,6 +391,12 @@ static void build_options_read_to_struct_size(void **state)
     /* The streamed file build's channels (issue 18). */
     given.channel_done = on_channel_done;
     given.channel_done_user = &channel_tag;
+    /* Where the searched material's choice is remembered. */
+    assert_int_equal(ll_material_parse("medium albedo=0.9 g=0.5 tau=0.5\ndiffuse albedo=0.5\n",
+                                       "searched.layers", &searched_material),
+                     LL_OK);
+    ll_test_mkdtemp(cache_dir, sizeof cache_dir);
+    given.cache_dir = cache_dir;
     for (i = 0; i < COUNT(build_options_ends); ++i) {
         size_t b = build_options_ends[i];
         ll_build_options *opts = caller_init(&c, b);
@@ -391,6 +416,8 @@ static void build_options_read_to_struct_size(void **state)
         previous = got;
     }
     assert_int_equal(ll_get_thread_count(), 1);
+    ll_test_rmdir(cache_dir);
+    ll_material_destroy(searched_material);
     for (i = 0; i < sizeof(size_t); i += 4) {
         size_t n, o, ch;
         assert_int_equal(ll_material_resolution(m, caller_init(&c, i), NULL, &n, &o, &ch),
@@ -454,7 +481,7 @@ static void every_field_is_listed(void **state)
     (void)state;
     assert_int_equal(COUNT(write_options_ends), 5);
     assert_int_equal(COUNT(info_ends), 15);
-    assert_int_equal(COUNT(build_options_ends), 11);
+    assert_int_equal(COUNT(build_options_ends), 12);
     assert_int_equal(COUNT(estimate_ends), 24);
     assert_int_equal(COUNT(microfacet_ends), 7);
     assert_int_equal(COUNT(monitor_ends), 3);
@@ -462,6 +489,8 @@ static void every_field_is_listed(void **state)
     assert_int_equal(offsetof(ll_bsdf_write_options, error_goal) + sizeof(double),
                      sizeof(ll_bsdf_write_options));
     assert_int_equal(offsetof(ll_build_options, channel_done_user) + sizeof(void *),
+                     offsetof(ll_build_options, cache_dir));
+    assert_int_equal(offsetof(ll_build_options, cache_dir) + sizeof(const char *),
                      sizeof(ll_build_options));
     assert_true(offsetof(ll_build_estimate, over_budget) + sizeof(int) <=
                     offsetof(ll_build_estimate, layers_built) &&

@@ -80,10 +80,28 @@ typedef struct ll_build_options {
      * call. Not called by the other builds, which return the layers. */
     void (*channel_done)(void *user, size_t channel, const ll_layer *layer);
     void *channel_done_user;
+    /* Where the resolution searches' choices are remembered between
+     * processes (a directory, created when first written): a word searched
+     * once at a tolerance and mu_min is not searched again by this library
+     * version. NULL (the default): nothing is read or written there, so a
+     * library call never writes to the user's files unasked;
+     * ll_material_cache_dir gives the user's cache directory, which
+     * llbuild and the Python package pass. Entries are one small file per
+     * word, replaced atomically: builds may share the directory at once,
+     * and a damaged entry is ignored and rewritten. */
+    const char *cache_dir;
 } ll_build_options;
 
 #define LL_BUILD_OPTIONS_INIT \
-    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, NULL, NULL }
+    { sizeof(ll_build_options), 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, NULL, NULL, NULL }
+
+/* The user's cache directory for ll_build_options.cache_dir:
+ * $LAYERLAB_CACHE_DIR if set, else $XDG_CACHE_HOME/layerlab (an absolute
+ * XDG_CACHE_HOME), else $HOME/.cache/layerlab; written into buffer (size
+ * bytes, NUL-terminated). Creates nothing. Errors:
+ * LL_ERROR_INVALID_ARGUMENT for a NULL or too small buffer or when none of
+ * the three variables is set. Thread-safe as getenv is. */
+LL_API ll_status ll_material_cache_dir(char *buffer, size_t size);
 
 /* The resolution's goal of a build with these options: the tolerance and
  * mu_min in effect (opts, else the material's set, else the defaults) and
@@ -96,8 +114,9 @@ LL_API ll_status ll_material_goal(const ll_material *material, const ll_build_op
 /* The resolution and channel count a build with these options would use.
  * Choosing it by the tolerance runs the resolution search of every
  * distinct interface and medium (ll_resolution_search_*: up to seconds
- * each). monitor (nullable): stage "resolution"; a cancel returns
- * LL_ERROR_CANCELLED. */
+ * each) that opts->cache_dir does not remember. monitor (nullable): stage
+ * "resolution K/COUNT" during the K-th of the COUNT searches left; a
+ * cancel returns LL_ERROR_CANCELLED. */
 LL_API ll_status ll_material_resolution(const ll_material *material,
                                         const ll_build_options *opts,
                                         const ll_monitor *monitor, size_t *n_nodes,

@@ -29,12 +29,12 @@ from ._util import count_argument as _count_argument
 from .layer import (Layer, fresnelConductor, fresnelConductorIntegral, fresnelDielectric,
                     fresnelDielectricIntegral, parameterHeuristicHG,
                     parameterHeuristicMicrofacet)
-from .material import CancelFlag, Material
+from .material import CancelFlag, Material, user_cache_dir
 from .storage import BSDFStorage
 
 __version__ = "1.0.0"
 
-__all__ = ["quad", "Layer", "BSDFStorage", "Material", "CancelFlag",
+__all__ = ["quad", "Layer", "BSDFStorage", "Material", "CancelFlag", "user_cache_dir",
            "parameterHeuristicMicrofacet", "parameterHeuristicHG",
            "fresnelDielectric", "fresnelConductor", "fresnelDielectricIntegral",
            "fresnelConductorIntegral", "libraryVersion", "libraryPath",

@@ -146,7 +146,8 @@ class BuildOptions(ctypes.Structure):
                 # void (*)(void *user, size_t channel, const ll_layer *layer)
                 ("channel_done", ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_size_t,
                                                   ctypes.c_void_p)),
-                ("channel_done_user", ctypes.c_void_p)]
+                ("channel_done_user", ctypes.c_void_p),
+                ("cache_dir", ctypes.c_char_p)]
 
     def __init__(self):
         super().__init__()
@@ -281,6 +282,7 @@ PROTOTYPES = {
     "ll_material_write": (_S, [material_p, ctypes.POINTER(BuildOptions), ctypes.POINTER(layer_p),
                                _Z, ctypes.c_char_p, monitor_p]),
     "ll_material_word_count": (_Z, [material_p]),
+    "ll_material_cache_dir": (_S, [ctypes.c_char_p, _Z]),
     # experimental in C (LL_EXPERIMENTAL)
     "ll_material_estimate": (_S, [material_p, ctypes.POINTER(BuildOptions),
                                   ctypes.POINTER(BuildEstimate), monitor_p]),

@@ -5,14 +5,27 @@ to bottom, one word per line) compiled into layers or a ``.bsdf`` file, over
 import ctypes
 import weakref
 
-from ._errors import CancelledError
+from ._errors import CancelledError, Error
 from ._native import (BsdfWriteOptions, BuildEstimate, BuildOptions, Monitor, check, fspath,
                       layer_p, lib, material_p, monitor_fn)
 from ._util import count_argument, real_argument
 from .layer import Layer
 from .storage import BSDFStorage
 
-__all__ = ["Material", "CancelFlag"]
+__all__ = ["Material", "CancelFlag", "user_cache_dir"]
+
+# The cache_dir keywords' default: the user's cache directory.
+_USER_CACHE = object()
+
+
+def user_cache_dir():
+    """The user's cache directory for the resolutions the searches chose
+    (``ll_material_cache_dir``): ``$LAYERLAB_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/layerlab``, else ``~/.cache/layerlab``. Raises
+    :class:`layerlab.InvalidArgumentError` when none can be named."""
+    buf = ctypes.create_string_buffer(4096)
+    check(lib.ll_material_cache_dir(buf, len(buf)))
+    return buf.value.decode("utf-8", "surrogateescape")
 
 
 class CancelFlag:
@@ -42,8 +55,16 @@ class _Build:
     the cancel flag, which stops the build."""
 
     def __init__(self, nodes, orders, channels, threads, error_goal, progress, cancel,
-                 tolerance=0.0, mu_min=0.0):
+                 tolerance=0.0, mu_min=0.0, cache_dir=None):
         self.opts = BuildOptions()
+        if cache_dir is _USER_CACHE:
+            try:
+                cache_dir = user_cache_dir()
+            except Error:
+                cache_dir = None  # (no directory to name: nothing remembered)
+        # Kept alive with the options that point at it.
+        self.cache_dir = fspath(cache_dir) if cache_dir is not None else None
+        self.opts.cache_dir = self.cache_dir
         self.opts.tolerance = real_argument(tolerance, "tolerance")
         self.opts.mu_min = real_argument(mu_min, "mu_min")
         self.opts.n_nodes = count_argument(nodes, "nodes")
@@ -136,21 +157,23 @@ class Material:
         return lib.ll_material_word_count(self._handle)
 
     def resolution(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-                   tolerance=0.0, mu_min=0.0):
+                   tolerance=0.0, mu_min=0.0, cache_dir=_USER_CACHE):
         """resolution(...) -> (nodes, orders, channels)
 
         The node count, Fourier order count and channel count that a build
-        with these keywords would use.
+        with these keywords would use. ``cache_dir`` (every call that may
+        search takes it): where the searches' choices are remembered between
+        runs, by default :func:`user_cache_dir`; ``None`` remembers nothing.
         """
         build = _Build(nodes, orders, channels, threads, error_goal, None, None,
-                       tolerance, mu_min)
+                       tolerance, mu_min, cache_dir)
         n, m, c = ctypes.c_size_t(), ctypes.c_size_t(), ctypes.c_size_t()
         build.run(lambda opts, monitor: lib.ll_material_resolution(
             self._handle, opts, monitor, ctypes.byref(n), ctypes.byref(m), ctypes.byref(c)))
         return n.value, m.value, c.value
 
     def estimate(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-                 tolerance=0.0, mu_min=0.0):
+                 tolerance=0.0, mu_min=0.0, cache_dir=_USER_CACHE):
         """estimate(...) -> dict
 
         What a build with these keywords would take, estimated without
@@ -164,7 +187,7 @@ class Material:
         library gives no seconds; ``llbuild --dry-run`` has a model).
         """
         build = _Build(nodes, orders, channels, threads, error_goal, None, None,
-                       tolerance, mu_min)
+                       tolerance, mu_min, cache_dir)
         est = BuildEstimate()
         build.run(lambda opts, monitor: lib.ll_material_estimate(self._handle, opts,
                                                                  ctypes.byref(est), monitor))
@@ -178,7 +201,7 @@ class Material:
                 "work": {name: getattr(est, name) for name in work}}
 
     def build(self, path, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-              progress=None, cancel=None, tolerance=0.0, mu_min=0.0):
+              progress=None, cancel=None, tolerance=0.0, mu_min=0.0, cache_dir=_USER_CACHE):
         """build(path, ...) -> BSDFStorage
 
         Build the material and write it to ``path`` as a ``.bsdf`` file
@@ -186,14 +209,15 @@ class Material:
         touch an existing one); returns the opened file.
         """
         build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel,
-                       tolerance, mu_min)
+                       tolerance, mu_min, cache_dir)
         target = fspath(path)
         build.run(lambda opts, monitor: lib.ll_material_build(self._handle, opts, monitor,
                                                               target))
         return BSDFStorage(path)
 
     def build_layers(self, nodes=0, orders=0, channels=0, threads=0, error_goal=0.0,
-                     progress=None, cancel=None, tolerance=0.0, mu_min=0.0):
+                     progress=None, cancel=None, tolerance=0.0, mu_min=0.0,
+                     cache_dir=_USER_CACHE):
         """build_layers(...) -> (layers, header)
 
         Build the material in memory: a list of one Layer (monochrome) or
@@ -202,7 +226,7 @@ class Material:
         :meth:`BSDFStorage.fromLayer` takes.
         """
         build = _Build(nodes, orders, channels, threads, error_goal, progress, cancel,
-                       tolerance, mu_min)
+                       tolerance, mu_min, cache_dir)
         handles = (layer_p * 3)()
         count = ctypes.c_size_t()
         header = BsdfWriteOptions()

@@ -7,8 +7,11 @@
 - Measured times (seconds, or (value, unit) pairs) print at the end of the run.
 """
 
+import atexit
 import os
 import pathlib
+import shutil
+import tempfile
 
 CHECKOUT = pathlib.Path(__file__).resolve().parents[2]
 TESTDATA = CHECKOUT / "tests" / "data"
@@ -17,6 +20,12 @@ if not os.environ.get("LAYERLAB_LIBRARY"):
     _built = CHECKOUT / "build" / "lib" / "liblayerlab.so"
     if _built.exists():
         os.environ["LAYERLAB_LIBRARY"] = str(_built)
+
+# Hermetic: the searches' choices go to a scratch directory, never the
+# user's cache (layerlab.user_cache_dir reads LAYERLAB_CACHE_DIR first).
+_cache = tempfile.mkdtemp(prefix="layerlab-cache-")
+os.environ["LAYERLAB_CACHE_DIR"] = _cache
+atexit.register(shutil.rmtree, _cache, True)
 
 import matplotlib  # noqa: E402
 

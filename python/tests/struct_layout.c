@@ -86,6 +86,7 @@ int main(void)
     FIELD(ll_build_options, max_memory_bytes);
     FIELD(ll_build_options, channel_done);
     FIELD(ll_build_options, channel_done_user);
+    FIELD(ll_build_options, cache_dir);
 
     STRUCT(ll_build_estimate, LL_BUILD_ESTIMATE_INIT);
     FIELD(ll_build_estimate, struct_size);

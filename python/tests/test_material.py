@@ -147,3 +147,18 @@ def test_swept_material_builds_one_textured_file(tmp_path):
     storage = material.build(tmp_path / "swept.bsdf")
     assert storage.basisCount == 6
     assert '"parameters": ["coat.alpha", "1.alpha"]' in storage.metadata
+
+
+def test_chosen_resolutions_are_remembered(tmp_path, monkeypatch):
+    # The user's cache directory by default (LAYERLAB_CACHE_DIR first; the
+    # tests point it at a scratch one), an explicit one, or none.
+    monkeypatch.setenv("LAYERLAB_CACHE_DIR", str(tmp_path / "user"))
+    assert ll.user_cache_dir() == str(tmp_path / "user")
+    metal = ll.Material.parse("conductor eta=0.2+3i alpha=0.5\n")
+    first = metal.resolution()
+    assert len(list((tmp_path / "user").iterdir())) == 1
+    assert metal.resolution() == first
+    assert metal.resolution(cache_dir=tmp_path / "own") == first
+    assert len(list((tmp_path / "own").iterdir())) == 1
+    assert metal.resolution(cache_dir=None) == first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["own", "user"]

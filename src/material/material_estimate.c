@@ -565,8 +565,16 @@ ll_status ll_material_estimate(const ll_material *material, const ll_build_optio
     s = ll_build_options_read(opts, &o, fn);
     if (s == LL_OK)
         s = ll_watch_begin(&watch, monitor, fn);
-    if (s == LL_OK)
-        s = ll_material_plan_bases(material, &o, &watch, &n, &m, &nch, &resolution_error);
+    if (s == LL_OK) {
+        /* The searches run on the build's threads, as the build does. */
+        size_t saved_threads = ll_get_thread_count();
+        if (o.threads)
+            s = ll_set_thread_count(o.threads);
+        if (s == LL_OK)
+            s = ll_material_plan_bases(material, &o, &watch, &n, &m, &nch, &resolution_error);
+        if (o.threads)
+            ll_set_thread_count(saved_threads);
+    }
     s = s == LL_OK ? ll_watch_finish(&watch, s, fn) : s;
     if (s != LL_OK)
         return s;

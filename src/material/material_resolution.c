@@ -129,25 +129,25 @@ void ll_resolution_memo_free(ll_resolution_memo *memo)
     memo->count = memo->capacity = 0;
 }
 
-/* One word's resolution, or that of a word already probed with the same
- * key (another channel's, another basis's): the resolution search probes
- * layers (a second or more per word), the look-up is a comparison. */
-static ll_status word_resolution(const ll_word_params *p, double tolerance, double mu_min,
-                                 ll_resolution_memo *memo, size_t *n, size_t *m, double *error)
+/* Has a word of this key been answered in this plan (memo)? */
+static int memo_find(const ll_resolution_memo *memo, const ll_word_params *p, size_t *n,
+                     size_t *m, double *error)
 {
     size_t k;
-    ll_status s;
     for (k = 0; k < memo->count; ++k)
         if (same_resolution_key(&memo->key[k], p)) {
             *n = memo->answer[k][0];
             *m = memo->answer[k][1];
             *error = memo->error[k];
-            return LL_OK;
+            return 1;
         }
-    *error = HUGE_VAL; /* (a hook that says nothing has verified nothing) */
-    s = p->desc->resolution(p, tolerance, mu_min, memo->watch, n, m, error);
-    if (s != LL_OK)
-        return s;
+    return 0;
+}
+
+/* Remember a word's answer in this plan. */
+static ll_status memo_add(ll_resolution_memo *memo, const ll_word_params *p, size_t n, size_t m,
+                          double error)
+{
     if (memo->count == memo->capacity) {
         size_t capacity = memo->capacity ? 2 * memo->capacity : 8;
         ll_word_params *key = ll_realloc_array(memo->key, capacity, sizeof *key);
@@ -167,18 +167,118 @@ static ll_status word_resolution(const ll_word_params *p, double tolerance, doub
         memo->capacity = capacity;
     }
     memo->key[memo->count] = *p;
-    memo->answer[memo->count][0] = *n;
-    memo->answer[memo->count][1] = *m;
-    memo->error[memo->count] = *error;
+    memo->answer[memo->count][0] = n;
+    memo->answer[memo->count][1] = m;
+    memo->error[memo->count] = error;
     ++memo->count;
     return LL_OK;
+}
+
+/* One word's resolution, or that of a word already probed with the same
+ * key (another channel's, another basis's; or another process's, from the
+ * persistent cache of cache_dir, nullable): the resolution search probes
+ * layers (a second or more per word), the look-up is a comparison. */
+static ll_status word_resolution(const ll_word_params *p, double tolerance, double mu_min,
+                                 const char *cache_dir, ll_resolution_memo *memo, size_t *n,
+                                 size_t *m, double *error)
+{
+    ll_status s;
+    if (memo_find(memo, p, n, m, error))
+        return LL_OK;
+    if (!ll_resolution_cache_get(cache_dir, p, tolerance, mu_min, n, m, error)) {
+        *error = HUGE_VAL; /* (a hook that says nothing has verified nothing) */
+        s = p->desc->resolution(p, tolerance, mu_min, memo->watch, n, m, error);
+        if (s != LL_OK)
+            return s;
+        ll_resolution_cache_put(cache_dir, p, tolerance, mu_min, *n, *m, *error);
+    }
+    return memo_add(memo, p, *n, *m, *error);
+}
+
+/* Is word i's key that of a word before it in p[0..i)? */
+static int seen_before(const ll_word_params *p, size_t i)
+{
+    size_t k;
+    for (k = 0; k < i; ++k)
+        if (same_resolution_key(&p[k], &p[i]))
+            return 1;
+    return 0;
+}
+
+/* The largest resolution the words ask for, and the worst error it was
+ * verified to. First every word's key and the answers already known (this
+ * plan's memo, the persistent cache), so that the searches left are
+ * counted: the progress is one stage per search, "resolution K/COUNT". */
+static ll_status plan_words(const ll_material *m, size_t channels, double tolerance,
+                            double mu_min, const char *cache_dir, ll_resolution_memo *memo,
+                            size_t *n_out, size_t *orders_out, double *worst_out)
+{
+    double above[3] = { 1.0, 1.0, 1.0 }, worst = 0.0;
+    size_t count = m->count * channels, w, c, i, todo = 0, searched = 0, n = 0, orders = 0;
+    ll_word_params *p = ll_alloc_array(count ? count : 1, sizeof *p);
+    ll_status s = LL_OK;
+    if (!p)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", m->source);
+    for (w = 0; w < m->count; ++w)
+        for (c = 0; c < channels; ++c) {
+            ll_word_params_above(m, w, c, channels, above[c], &p[w * channels + c]);
+            above[c] *= ll_word_index_ratio(m, w, c, channels);
+        }
+    for (i = 0; i < count && s == LL_OK; ++i) {
+        size_t wn, wm;
+        double we;
+        if (memo_find(memo, &p[i], &wn, &wm, &we) || seen_before(p, i))
+            continue;
+        if (ll_resolution_cache_get(cache_dir, &p[i], tolerance, mu_min, &wn, &wm, &we))
+            s = memo_add(memo, &p[i], wn, wm, we);
+        else
+            ++todo;
+    }
+    for (i = 0; i < count && s == LL_OK; ++i) {
+        size_t wn, wm;
+        double we;
+        w = i / channels;
+        if (!memo_find(memo, &p[i], &wn, &wm, &we)) {
+            /* A search: one part of the progress. */
+            if (ll_watch_stage_of(memo->watch, "resolution", searched + 1, todo,
+                                  (double)searched / (double)todo, 1.0 / (double)todo,
+                                  LL_PROBE_SEARCH_UNITS)) {
+                s = ll_fail(LL_ERROR_CANCELLED, "%s: cancelled while choosing the resolution",
+                            m->source);
+                break;
+            }
+            ++searched;
+            s = word_resolution(&p[i], tolerance, mu_min, cache_dir, memo, &wn, &wm, &we);
+            if (s == LL_ERROR_CANCELLED)
+                break; /* (its message stands: no fault of the word) */
+            if (s != LL_OK) {
+                char detail[700]; /* (the message is rewritten below) */
+                snprintf(detail, sizeof detail, "%s", ll_last_error_message());
+                s = ll_fail(s, "%s:%zu:%zu: no resolution heuristic for this %s: %s",
+                            m->source, m->words[w].line, m->words[w].column, p[i].desc->name,
+                            detail);
+                break;
+            }
+        }
+        if (wn > n)
+            n = wn;
+        if (wm > orders)
+            orders = wm;
+        if (!(we <= worst)) /* (HUGE_VAL and NaN stay the worst) */
+            worst = we;
+    }
+    ll_free(p);
+    *n_out = n;
+    *orders_out = orders;
+    *worst_out = worst;
+    return s;
 }
 
 ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
                                 ll_resolution_memo *memo, size_t *n_nodes, size_t *n_orders,
                                 size_t *n_channels, double *error)
 {
-    size_t channels, n = 0, orders = 0, w, c, searched = 0;
+    size_t channels, n = 0, orders = 0;
     double tolerance, mu_min, worst = -1.0; /* -1: given, not chosen */
     ll_status s;
 
@@ -187,40 +287,9 @@ ll_status ll_material_plan_memo(const ll_material *m, const ll_build_options *o,
              : ll_material_is_rgb(m) ? 3 : 1;
     goal_of(m, o, &tolerance, &mu_min);
     if (!(o->n_nodes || m->nodes) || !(o->n_orders || m->orders)) {
-        double above[3] = { 1.0, 1.0, 1.0 };
-        worst = 0.0;
-        for (w = 0; w < m->count; ++w)
-            for (c = 0; c < channels; ++c) {
-                ll_word_params p;
-                size_t wn, wm;
-                double we;
-                ll_word_params_above(m, w, c, channels, above[c], &p);
-                above[c] *= ll_word_index_ratio(m, w, c, channels);
-                /* Each word and channel one part of the progress (a memo
-                 * hit passes at once). */
-                if (ll_watch_stage(memo->watch, "resolution",
-                                   (double)searched / (double)(m->count * channels),
-                                   1.0 / (double)(m->count * channels), LL_PROBE_SEARCH_UNITS))
-                    return ll_fail(LL_ERROR_CANCELLED,
-                                   "%s: cancelled while choosing the resolution", m->source);
-                ++searched;
-                s = word_resolution(&p, tolerance, mu_min, memo, &wn, &wm, &we);
-                if (s == LL_ERROR_CANCELLED)
-                    return s; /* (its message stands: no fault of the word) */
-                if (s != LL_OK) {
-                    char detail[700]; /* (the message is rewritten below) */
-                    snprintf(detail, sizeof detail, "%s", ll_last_error_message());
-                    return ll_fail(s, "%s:%zu:%zu: no resolution heuristic for this %s: %s",
-                                   m->source, m->words[w].line, m->words[w].column,
-                                   p.desc->name, detail);
-                }
-                if (wn > n)
-                    n = wn;
-                if (wm > orders)
-                    orders = wm;
-                if (!(we <= worst)) /* (HUGE_VAL and NaN stay the worst) */
-                    worst = we;
-            }
+        s = plan_words(m, channels, tolerance, mu_min, o->cache_dir, memo, &n, &orders, &worst);
+        if (s != LL_OK)
+            return s;
     }
     if (n % 2)
         ++n;

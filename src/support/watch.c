@@ -4,6 +4,7 @@
 #include "support/watch.h"
 
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
@@ -96,6 +97,15 @@ int ll_watch_stage(ll_watch *w, const char *stage, double start, double span, si
     if (w->progress && is_owner(w))
         report(w, 1);
     return is_cancelled(w);
+}
+
+int ll_watch_stage_of(ll_watch *w, const char *stage, size_t k, size_t count, double start,
+                      double span, size_t total)
+{
+    if (!w)
+        return 0;
+    snprintf(w->stage_text, sizeof w->stage_text, "%s %zu/%zu", stage, k, count);
+    return ll_watch_stage(w, w->stage_text, start, span, total);
 }
 
 void ll_watch_advance(ll_watch *w, size_t units)

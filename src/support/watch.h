@@ -34,6 +34,7 @@ typedef struct ll_watch {
     int cancelled;            /* atomic: raised once, never lowered               */
     double reported;          /* owner: last fraction reported, -1 before any     */
     double reported_at;       /* owner: when, monotonic seconds                   */
+    char stage_text[64];      /* owner: a counted stage's name (ll_watch_stage_of) */
 } ll_watch;
 
 /* Begin a watch for a public call named fn on the calling thread. monitor
@@ -53,6 +54,10 @@ LL_INTERNAL void ll_watch_begin_raw(ll_watch *w, ll_monitor_fn progress, void *u
 LL_INTERNAL int ll_watch_stage(ll_watch *w, const char *stage, double start, double span,
                                size_t total);
 
+/* ll_watch_stage under the name "STAGE K/COUNT" (e.g. "resolution 2/5":
+ * the second of five searches), kept in the watch itself. */
+LL_INTERNAL int ll_watch_stage_of(ll_watch *w, const char *stage, size_t k, size_t count,
+                                  double start, double span, size_t total);
 /* Count finished units of the current stage (any thread; NULL is fine). */
 LL_INTERNAL void ll_watch_advance(ll_watch *w, size_t units);
 

@@ -119,7 +119,7 @@ int main(int argc, char **argv)
     /* Every rank chooses the same resolution (the search is deterministic). */
     built = o;
     ll_progress_update(&bar, 0.0, "choosing the resolution");
-    choose_resolution(m, &built, &plan);
+    choose_resolution(m, &built, &plan, &bar);
     if (textured) {
         /* Bases across the ranks (textured.c); the bar shows the bases
          * written, not each basis's own progress. */

@@ -95,6 +95,10 @@ static const char usage[] =
     "                     BSDF is above 1% of its peak (default 0.01; >= 0.001)\n"
     "  --mu-min C         smallest |cosine| the tolerance holds at (default 0.1)\n"
     "  --threads N        worker threads (default: all processors)\n"
+    "  --cache-dir DIR    where chosen resolutions are remembered (default:\n"
+    "                     $LAYERLAB_CACHE_DIR, else $XDG_CACHE_HOME/layerlab, else\n"
+    "                     ~/.cache/layerlab)\n"
+    "  --no-cache         search the resolution again and remember nothing\n"
     "  --max-memory SIZE  memory budget: a build estimated to need more is refused\n"
     "                     before it starts (8G, 500M, 1.5G, 64K or bytes; default:\n"
     "                     half of the physical memory)\n"
@@ -109,7 +113,8 @@ static const char usage[] =
     "  --wavelengths START:END:STEP  measured: a spectral file (fields spectra and\n"
     "                     wavelengths, which pbrt-v4 needs), e.g. 360:830:10 nm, within\n"
     "                     360..830, at most 471 wavelengths (without it: RGB)\n"
-    "  --dry-run          print the resolution, estimated memory and time; build nothing\n"
+    "  --dry-run          print the resolution, estimated memory and time (choosing\n"
+    "                     the resolution included); build nothing\n"
     "  --quiet            no progress and no summary (errors only)\n"
     "  --version          print the version\n"
     "  --help             this text\n"
@@ -143,7 +148,8 @@ static const char usage[] =
     "See docs/material-language.md for the whole language.\n";
 
 typedef struct args {
-    const char *input, *output, *ior_dir;
+    const char *input, *output, *ior_dir, *cache_dir;
+    int no_cache;
     size_t nodes, orders, channels, threads, max_memory;
     double error, tolerance, mu_min;
     int dry_run, quiet, nodes_given, orders_given;
@@ -275,6 +281,13 @@ static int parse_args(int argc, char **argv, args *a)
                                  "a byte count",
                                  next ? next : "(missing)");
             ++i;
+        } else if (!strcmp(o, "--cache-dir")) {
+            if (!next || !*next)
+                return bad_usage("--cache-dir needs a directory", NULL);
+            a->cache_dir = next;
+            ++i;
+        } else if (!strcmp(o, "--no-cache")) {
+            a->no_cache = 1;
         } else if (!strcmp(o, "--ior-dir")) {
             if (!next)
                 return bad_usage("--ior-dir needs a directory", NULL);
@@ -410,6 +423,15 @@ static double now_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* CPU seconds of the process so far (every thread). */
+static double cpu_seconds(void)
+{
+    struct timespec t;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0)
+        return 0.0;
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 /* The axes of a swept material, one line each. */
 static void print_axes(const ll_material *m)
 {
@@ -453,16 +475,38 @@ static void print_goal(const ll_material *m, const ll_build_options *o, size_t n
                tolerance, mu_min, n, orders, timed);
 }
 
+/* The monitor of the resolution's choice: the bar (nullable) shows the
+ * searches' own progress ("resolution 2/5": the second of five words to
+ * probe), and only that (a choice from the cache or the options reports
+ * no search). */
+static int watch_choice(void *user, double fraction, const char *stage)
+{
+    if (user && strncmp(stage, "resolution", 10) == 0)
+        ll_progress_update(user, fraction, stage);
+    return cancel_flag != 0;
+}
+
 /* Choose the resolution once, before the build (the build then does not
  * search again): plan receives the estimate, o the chosen nodes and orders
  * when the estimate succeeds (a failure is left for the build to report).
- * Returns the seconds it took. */
+ * bar (nullable) shows the searches' progress, then starts again for the
+ * build. Returns the seconds it took. */
 static double choose_resolution(const ll_material *m, ll_build_options *o,
-                                ll_build_estimate *plan)
+                                ll_build_estimate *plan, ll_progress *bar)
 {
-    double start = now_seconds();
-    ll_monitor signals = monitor_for(NULL);
-    if (ll_material_estimate(m, o, plan, &signals) == LL_OK) {
+    double start = now_seconds(), scale = bar ? bar->scale : 1.0;
+    ll_monitor choice = LL_MONITOR_INIT;
+    ll_status s;
+    choice.progress = watch_choice;
+    choice.user = bar;
+    if (bar)
+        bar->scale = 1.0; /* (the search's own fraction) */
+    s = ll_material_estimate(m, o, plan, &choice);
+    if (bar) {
+        ll_progress_init(bar, bar->out, bar->quiet, now_seconds());
+        bar->scale = scale;
+    }
+    if (s == LL_OK) {
         o->n_nodes = plan->n_nodes;
         o->n_orders = plan->n_orders;
     } else {
@@ -476,15 +520,19 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
 {
     ll_build_estimate e = LL_BUILD_ESTIMATE_INIT;
     ll_monitor signals = monitor_for(NULL);
-    double start = now_seconds(), wall, cpu;
+    double start = now_seconds(), start_cpu = cpu_seconds(), wall, cpu, choose_wall, choose_cpu;
     ll_status s = ll_material_estimate(m, o, &e, &signals);
+    /* The estimate's own cost is the choice of the resolution (the
+     * searches, or looking them up in the cache): measured, not modelled. */
+    choose_wall = now_seconds() - start;
+    choose_cpu = cpu_seconds() - start_cpu;
     if (s != LL_OK) {
         fprintf(stderr, "llbuild: %s\n", ll_last_error_message());
         return exit_code_for(s);
     }
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s\n", e.n_nodes,
            e.n_orders, e.n_channels, e.n_channels == 1 ? "" : "s");
-    print_goal(m, o, e.n_nodes, e.n_orders, e.resolution_error, now_seconds() - start);
+    print_goal(m, o, e.n_nodes, e.n_orders, e.resolution_error, choose_wall);
     if (ll_material_axis_count(m) > 0) {
         print_axes(m);
         printf("bases        %zu (one textured file)\n", e.n_bases);
@@ -496,9 +544,17 @@ static int print_resolution(const ll_material *m, const ll_build_options *o)
     printf("memory       about %.0f MiB at its peak (budget %.0f MiB)\n",
            e.peak_bytes / 1048576.0, (double)e.max_memory_bytes / 1048576.0);
     llbuild_time(&e, &wall, &cpu);
-    printf("time         about %.2f s on %zu thread%s, %.2f s of CPU (rates of a 2-core "
-           "x86-64 with OpenBLAS)\n",
-           wall, e.threads, e.threads == 1 ? "" : "s", cpu);
+    /* The whole build: the model's figure for building and writing, and
+     * the choice of the resolution as it just ran. */
+    printf("time         about %.2f s on %zu thread%s, %.2f s of CPU: building %.2f s of CPU "
+           "(modelled on the rates of a 2-core x86-64 with OpenBLAS) + choosing the "
+           "resolution %.2f s of CPU (measured now)\n",
+           wall + choose_wall, e.threads, e.threads == 1 ? "" : "s", cpu + choose_cpu, cpu,
+           choose_cpu);
+    if (o->cache_dir && choose_cpu >= 0.1)
+        printf("cache        the choice is remembered in %s: a build with these options now "
+               "skips it\n",
+               o->cache_dir);
     if (e.over_budget) {
         fprintf(stderr,
                 "llbuild: a build would be refused: it needs more than the memory budget "
@@ -641,9 +697,19 @@ static void file_is_complete(void)
         raise(cancel_signal ? cancel_signal : SIGINT);
 }
 
-/* The build options the command line asks for (llbuild and llbuild-mpi). */
+/* The build options the command line asks for (llbuild and llbuild-mpi):
+ * the cache of chosen resolutions in the user's cache directory unless
+ * --no-cache (none when no directory can be named). */
 static void options_from_args(const args *a, ll_build_options *o)
 {
+    static char cache_dir[4096];
+    if (a->no_cache)
+        o->cache_dir = NULL;
+    else if (a->cache_dir)
+        o->cache_dir = a->cache_dir;
+    else
+        o->cache_dir = ll_material_cache_dir(cache_dir, sizeof cache_dir) == LL_OK ? cache_dir
+                                                                                   : NULL;
     o->n_nodes = a->nodes;
     o->n_orders = a->orders;
     o->n_channels = a->channels;
@@ -713,7 +779,7 @@ int main(int argc, char **argv)
     bar.scale = 0.97;
     built = o;
     ll_progress_update(&bar, 0.0, "choosing the resolution");
-    choose_resolution(m, &built, &plan);
+    choose_resolution(m, &built, &plan, &bar);
     if (tables.measured) {
         /* The table file instead of the .bsdf (tables.c). */
         bar.scale = 1.0;

@@ -138,6 +138,53 @@ static int show_progress(void *user, double fraction, const char *stage)
     return 0;
 }
 
+/* The material's own setting of one part of the resolution (its `set
+ * nodes=` or `orders=`), found without a search: asked with the other part
+ * given, the resolution is chosen by no search exactly when the material
+ * sets this part. 0 when it does not. */
+static size_t material_setting(const ll_material *material, const ll_build_options *opts,
+                               int nodes)
+{
+    ll_build_options other = *opts;
+    size_t n = 0, m = 0, c = 0;
+    int chosen = 1;
+    if (nodes) {
+        other.n_nodes = 0;
+        other.n_orders = 1;
+    } else {
+        other.n_nodes = LL_BUILD_MIN_NODES;
+        other.n_orders = 0;
+    }
+    if (ll_material_goal(material, &other, NULL, NULL, &chosen) != LL_OK || chosen ||
+        ll_material_resolution(material, &other, NULL, &n, &m, &c) != LL_OK)
+        return 0;
+    return nodes ? n : m;
+}
+
+/* The resolution a picture is drawn at, with no resolution search (whose
+ * answer, for a glossy stack hundreds of nodes, the preview's cap would
+ * throw away): each part from --nodes/--orders, else the material's `set`
+ * line, at most the preview's cap, else the cap. Says it on stderr. */
+static void preview_resolution(const llplot_options *o, const ll_material *material,
+                               ll_build_options *opts)
+{
+    size_t set_nodes = o->nodes ? 0 : material_setting(material, opts, 1);
+    size_t set_orders = o->orders ? 0 : material_setting(material, opts, 0);
+    if (!o->nodes)
+        opts->n_nodes = set_nodes && set_nodes < PREVIEW_MAX_NODES ? set_nodes
+                                                                   : PREVIEW_MAX_NODES;
+    if (!o->orders)
+        opts->n_orders = set_orders && set_orders < PREVIEW_MAX_ORDERS ? set_orders
+                                                                      : PREVIEW_MAX_ORDERS;
+    if (!o->nodes || !o->orders)
+        fprintf(stderr,
+                "llplot: %s: drawing at %zu nodes x %zu orders (a preview: the material's "
+                "`set` or --nodes/--orders, at most %d x %d; no resolution search; a .bsdf "
+                "from llbuild shows the chosen resolution)\n",
+                o->input, opts->n_nodes, opts->n_orders, PREVIEW_MAX_NODES,
+                PREVIEW_MAX_ORDERS);
+}
+
 static int compile_material(const llplot_options *o, int need_sampling, llplot_source *s)
 {
     ll_material *material = NULL;
@@ -146,7 +193,6 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
     progress_label label;
     ll_monitor monitor = LL_MONITOR_INIT;
     const ll_monitor *shown = NULL;
-    size_t n_nodes = 0, n_orders = 0, n_channels = 0;
     ll_status st = ll_material_parse_file(o->input, &material);
     int code = LLPLOT_EXIT_OK;
     if (st != LL_OK)
@@ -160,21 +206,7 @@ static int compile_material(const llplot_options *o, int need_sampling, llplot_s
         monitor.user = &label;
         shown = &monitor;
     }
-    st = ll_material_resolution(material, &opts, NULL, &n_nodes, &n_orders, &n_channels);
-    if (st != LL_OK) {
-        code = llplot_fail_ll(st, o->input);
-        goto done;
-    }
-    if (o->nodes == 0 && n_nodes > PREVIEW_MAX_NODES)
-        opts.n_nodes = PREVIEW_MAX_NODES;
-    if (o->orders == 0 && n_orders > PREVIEW_MAX_ORDERS)
-        opts.n_orders = PREVIEW_MAX_ORDERS;
-    if (opts.n_nodes != o->nodes || opts.n_orders != o->orders)
-        fprintf(stderr,
-                "llplot: %s: previewing at %zu nodes and %zu orders (the material asks for %zu "
-                "and %zu; set --nodes/--orders to change)\n",
-                o->input, opts.n_nodes ? opts.n_nodes : n_nodes,
-                opts.n_orders ? opts.n_orders : n_orders, n_nodes, n_orders);
+    preview_resolution(o, material, &opts);
     if (ll_material_basis_count(material) > 1) {
         /* A swept material is one textured file, not one set of layers:
          * build it and draw the file (its bases at the resolution above). */
