@@ -118,7 +118,10 @@ static const char usage[] =
     "  --quiet            no progress and no summary (errors only)\n"
     "  --version          print the version\n"
     "  --help             this text\n"
-    "\n"
+    "\n";
+
+/* (Two strings: C99 promises string literals of 4095 characters only.) */
+static const char usage_language[] =
     "the language (one word per line, top to bottom; `#` starts a comment):\n"
     "  dielectric eta=E alpha=A      rough dielectric interface; eta relative to\n"
     "                                the medium above (1.5: a coat in air)\n"
@@ -230,6 +233,7 @@ static int parse_args(int argc, char **argv, args *a)
         const char *o = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
             fputs(usage, stdout);
+            fputs(usage_language, stdout);
             return 0;
         } else if (!strcmp(o, "--version")) {
             printf("llbuild (layerlab) %s\n", ll_version_string());
