@@ -429,6 +429,18 @@ pbrt-check: all
 	@sh shims/pbrt-v3/check/check.sh "$(PBRT)" "$(PBRT_STOCK)" "$(PBRT_WORK)" "$(PBRT_GOLDEN)" \
 	    "$(abspath $(PBRT_WORK))/layerlab"
 
+# A pbrt-v4 binary the user already has (PBRT4): our spectral table files in
+# its `measured` material, checked by a furnace and against pbrt-v4's own
+# layered materials (shims/pbrt-v4/check/check.py; not part of the tests;
+# PBRT4_ARGS passes options, e.g. --pictures DIR). It builds no renderer.
+PBRT4_WORK ?= $(BUILD)/pbrt4-check
+.PHONY: pbrt4-check
+pbrt4-check: all venv-test
+	@test -n "$(PBRT4)" || { echo "make pbrt4-check needs PBRT4=/path/to/pbrt (a pbrt-v4 binary)"; \
+	    exit 1; }
+	@"$(VENV)/bin/python" shims/pbrt-v4/check/check.py --pbrt "$(PBRT4)" --build "$(BUILD)" \
+	    --work "$(PBRT4_WORK)" $(PBRT4_ARGS)
+
 install: all
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/layerlab $(DESTDIR)$(BINDIR) $(DESTDIR)$(PKGDIR)
 	install -m 644 include/layerlab.h $(DESTDIR)$(INCDIR)/

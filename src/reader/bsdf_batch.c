@@ -160,44 +160,34 @@ static ll_status check_batch(const ll_bsdf *b, size_t count, int arrays_present,
     return LL_OK;
 }
 
+/* The three entry points: their arguments checked, then run_batch. */
+static ll_status start_batch(const batch_job *job, size_t count, int arrays_present,
+                             const char *fn)
+{
+    ll_status s = check_batch(job->b, count, arrays_present, job->basis_coeffs,
+                              job->coeff_stride, fn);
+    return s != LL_OK ? s : run_batch(job, count);
+}
+
 ll_status ll_bsdf_eval_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
                                  const double *wi, ll_transport mode,
                                  const float *basis_coeffs, size_t coeff_stride,
                                  double *rgb_out)
 {
-    batch_job job = { BATCH_EVAL, NULL, NULL, NULL, NULL, LL_TRANSPORT_RADIANCE,
-                      NULL, 0, NULL, NULL, NULL };
-    ll_status s = check_batch(b, count, wo && wi && rgb_out, basis_coeffs, coeff_stride,
-                              "ll_bsdf_eval_dir_batch");
-    if (s != LL_OK)
-        return s;
-    job.b = b;
-    job.wo = wo;
-    job.wi = wi;
-    job.mode = mode;
-    job.basis_coeffs = basis_coeffs;
-    job.coeff_stride = coeff_stride;
-    job.rgb_out = rgb_out;
-    return run_batch(&job, count);
+    batch_job job = { .kind = BATCH_EVAL, .b = b, .wo = wo, .wi = wi, .mode = mode,
+                      .basis_coeffs = basis_coeffs, .coeff_stride = coeff_stride,
+                      .rgb_out = rgb_out };
+    return start_batch(&job, count, wo && wi && rgb_out, "ll_bsdf_eval_dir_batch");
 }
 
 ll_status ll_bsdf_pdf_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
                                 const double *wi, const float *basis_coeffs,
                                 size_t coeff_stride, double *pdf_out)
 {
-    batch_job job = { BATCH_PDF, NULL, NULL, NULL, NULL, LL_TRANSPORT_RADIANCE,
-                      NULL, 0, NULL, NULL, NULL };
-    ll_status s = check_batch(b, count, wo && wi && pdf_out, basis_coeffs, coeff_stride,
-                              "ll_bsdf_pdf_dir_batch");
-    if (s != LL_OK)
-        return s;
-    job.b = b;
-    job.wo = wo;
-    job.wi = wi;
-    job.basis_coeffs = basis_coeffs;
-    job.coeff_stride = coeff_stride;
-    job.pdf_out = pdf_out;
-    return run_batch(&job, count);
+    batch_job job = { .kind = BATCH_PDF, .b = b, .wo = wo, .wi = wi,
+                      .mode = LL_TRANSPORT_RADIANCE, .basis_coeffs = basis_coeffs,
+                      .coeff_stride = coeff_stride, .pdf_out = pdf_out };
+    return start_batch(&job, count, wo && wi && pdf_out, "ll_bsdf_pdf_dir_batch");
 }
 
 ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double *wo,
@@ -205,20 +195,9 @@ ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double 
                                    const float *basis_coeffs, size_t coeff_stride,
                                    double *wi_out, double *pdf_out, double *rgb_out)
 {
-    batch_job job = { BATCH_SAMPLE, NULL, NULL, NULL, NULL, LL_TRANSPORT_RADIANCE,
-                      NULL, 0, NULL, NULL, NULL };
-    ll_status s = check_batch(b, count, wo && u && wi_out && pdf_out && rgb_out, basis_coeffs,
-                              coeff_stride, "ll_bsdf_sample_dir_batch");
-    if (s != LL_OK)
-        return s;
-    job.b = b;
-    job.wo = wo;
-    job.u = u;
-    job.mode = mode;
-    job.basis_coeffs = basis_coeffs;
-    job.coeff_stride = coeff_stride;
-    job.wi_out = wi_out;
-    job.pdf_out = pdf_out;
-    job.rgb_out = rgb_out;
-    return run_batch(&job, count);
+    batch_job job = { .kind = BATCH_SAMPLE, .b = b, .wo = wo, .u = u, .mode = mode,
+                      .basis_coeffs = basis_coeffs, .coeff_stride = coeff_stride,
+                      .wi_out = wi_out, .pdf_out = pdf_out, .rgb_out = rgb_out };
+    return start_batch(&job, count, wo && u && wi_out && pdf_out && rgb_out,
+                       "ll_bsdf_sample_dir_batch");
 }

@@ -11,7 +11,11 @@
  * The model is the one layerlab's words define, as described in
  * docs/method.md, "Words: what fills one layer":
  *  - interfaces: Beckmann D, separable Smith shadowing G1(wi) G1(wo) with
- *    Walter's rational approximation of G1 (Walter et al. 2007, eq. 27),
+ *    Walter's rational approximation of G1 (Walter et al. 2007, eq. 27);
+ *    or (-D ggx) the GGX D with its exact G1 = 2 / (1 + sqrt(1 + alpha^2
+ *    tan^2)) (Walter et al. eqs. 33, 34), separable as the library's, or
+ *    (-G correlated) with the height-correlated G2 = 1 / (1 + Lambda(wi) +
+ *    Lambda(wo)) (Heitz 2014, eq. 99) that pbrt-v4's microfacet BSDFs use;
  *    unpolarised Fresnel reflectance at the microfacet, Walter's BTDF
  *    (eq. 21); no multiple-scattering compensation (conserve_energy = 0,
  *    the original's recipes). Sampled as Walter et al. 2007 section 5.3:
@@ -22,9 +26,11 @@
  *  - the medium: optical thickness tau, single-scattering albedo a, HG
  *    phase function (g), free paths exp(-tau / |mu|); absorption by
  *    weight (w *= a per scattering event) with Russian roulette below 1e-3.
- *  - below the medium: the conductor, or nothing (the light leaves).
+ *  - below the medium: the conductor, a Lambertian base (-b diffuse,albedo:
+ *    cosine-distributed, weight albedo), or nothing (the light leaves).
  *
- * usage: mc_stack [-c eta,alpha] [-m albedo,g,tau] [-b eta,k,alpha | -b none]
+ * usage: mc_stack [-D beckmann|ggx] [-G separable|correlated] [-c eta,alpha]
+ *                 [-m albedo,g,tau] [-b eta,k,alpha | -b diffuse,albedo | -b none]
  *                 [-n paths] [-s seed] mu_i...
  * (-c 1,0: no coat, -m 0,0,0: no medium.) Prints per mu_i:
  *     mu_i R se(R) T se(T)
@@ -126,10 +132,23 @@ static double fresnel(double cos_i, double complex eta)
     return v > 1.0 ? 1.0 : v;
 }
 
-/* Walter et al. 2007 eq. 27: Smith G1 of Beckmann, rational approximation. */
+/* The microfacet model of every rough interface of a run (-D, -G). */
+static int use_ggx, use_correlated;
+
+/* GGX's Smith Lambda (Heitz 2014, eq. 86 with alpha^2 tan^2). */
+static double ggx_lambda(double cos_v, double alpha)
+{
+    double c = fabs(cos_v), t2 = fmax(0.0, 1.0 - c * c) / (c * c);
+    return 0.5 * (sqrt(1.0 + alpha * alpha * t2) - 1.0);
+}
+
+/* Walter et al. 2007 eq. 27: Smith G1 of Beckmann, rational approximation;
+ * GGX's exact G1 = 1 / (1 + Lambda) (eq. 34). */
 static double smith_g1(double cos_v, double alpha)
 {
     double c = fabs(cos_v), t = sqrt(fmax(0.0, 1.0 - c * c)) / c, a;
+    if (use_ggx)
+        return 1.0 / (1.0 + ggx_lambda(cos_v, alpha));
     if (t == 0.0)
         return 1.0;
     a = 1.0 / (alpha * t);
@@ -138,14 +157,14 @@ static double smith_g1(double cos_v, double alpha)
     return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
 }
 
-/* A Beckmann microfacet normal around +z (or n = +z when alpha = 0):
- * pdf D(m) |m.z| (Walter et al. 2007 eq. 28). */
+/* A Beckmann (or GGX) microfacet normal around +z (or n = +z when alpha =
+ * 0): pdf D(m) |m.z| (Walter et al. 2007 eqs. 28 and 35). */
 static vec sample_facet(rng *r, double alpha)
 {
     double u1 = uniform(r), u2 = uniform(r), tan2, c, s, phi;
     if (alpha == 0.0)
         return v3(0, 0, 1);
-    tan2 = -alpha * alpha * log(1.0 - u1);
+    tan2 = use_ggx ? alpha * alpha * u1 / (1.0 - u1) : -alpha * alpha * log(1.0 - u1);
     c = 1.0 / sqrt(1.0 + tan2);
     s = sqrt(fmax(0.0, 1.0 - c * c));
     phi = 2.0 * PI * u2;
@@ -174,8 +193,7 @@ static int scatter_interface(const interface *s, rng *r, vec *d, double *w)
     if (cos_im <= 0.0)
         return 0;
     f = fresnel(cos_im, eta);
-    weight = s->alpha == 0.0 ? 1.0
-                             : cos_im * smith_g1(wi.z, s->alpha) / (fabs(wi.z) * fabs(m.z));
+    weight = s->alpha == 0.0 ? 1.0 : cos_im / (fabs(wi.z) * fabs(m.z));
     if (conductor || uniform(r) < f) {
         wo = add(scale(m, 2.0 * cos_im), scale(wi, -1.0));
         if (conductor)
@@ -191,7 +209,9 @@ static int scatter_interface(const interface *s, rng *r, vec *d, double *w)
             return 0;
     }
     if (s->alpha != 0.0)
-        weight *= smith_g1(wo.z, s->alpha);
+        weight *= use_correlated ? 1.0 / (1.0 + ggx_lambda(wi.z, s->alpha) +
+                                          ggx_lambda(wo.z, s->alpha))
+                                 : smith_g1(wi.z, s->alpha) * smith_g1(wo.z, s->alpha);
     *d = wo;
     *w *= weight;
     return 1;
@@ -218,9 +238,18 @@ static vec scatter_hg(rng *r, vec d, double g)
 typedef struct stack {
     interface coat;     /* eta_re == 1: none                                */
     double albedo, g, tau; /* tau == 0: no medium                           */
-    int has_base;
+    int has_base;       /* 0: none, 1: the interface base, 2: Lambertian    */
     interface base;
+    double base_albedo; /* of the Lambertian base                           */
 } stack;
+
+/* A Lambertian reflection into the upper hemisphere (cosine-distributed,
+ * so the weight is the albedo). */
+static vec scatter_lambert(rng *r)
+{
+    double u = uniform(r), phi = 2.0 * PI * uniform(r), s = sqrt(u);
+    return v3(s * cos(phi), s * sin(phi), sqrt(fmax(0.0, 1.0 - u)));
+}
 
 typedef struct tally { double r, r2, t, t2; } tally;
 
@@ -270,8 +299,12 @@ static void trace(const stack *st, rng *r, double mu_i, tally *out)
                 out->t2 += w * w;
                 return;
             }
-            if (!scatter_interface(&st->base, r, &d, &w))
+            if (st->has_base == 2) {
+                d = scatter_lambert(r);
+                w *= st->base_albedo;
+            } else if (!scatter_interface(&st->base, r, &d, &w)) {
                 return;
+            }
         }
     }
     return;
@@ -334,7 +367,9 @@ static int parse_list(const char *s, double *v, int count)
 
 static void usage(void)
 {
-    fprintf(stderr, "usage: mc_stack [-c eta,alpha] [-m albedo,g,tau] [-b eta,k,alpha | -b none] "
+    fprintf(stderr, "usage: mc_stack [-D beckmann|ggx] [-G separable|correlated] "
+                    "[-c eta,alpha] [-m albedo,g,tau]\n"
+                    "                [-b eta,k,alpha | -b diffuse,albedo | -b none] "
                     "[-n paths] [-s seed] mu_i...\n");
     exit(2);
 }
@@ -343,7 +378,7 @@ int main(int argc, char **argv)
 {
     /* Defaults: the original's coated-gold-with-scatmedium recipe, R channel. */
     stack st = { { 1.5, 0.0, 0.1 }, 0.25, 0.5, 0.5, 1,
-                 { 0.14317534881908534, 3.9826674681176435, 0.1 } };
+                 { 0.14317534881908534, 3.9826674681176435, 0.1 }, 0.0 };
     double paths = 1e6;
     unsigned long long seed = 1;
     int a, first_mu;
@@ -368,9 +403,26 @@ int main(int argc, char **argv)
             st.g = v[1];
             st.tau = v[2];
             break;
+        case 'D':
+            if (strcmp(argv[a + 1], "ggx") && strcmp(argv[a + 1], "beckmann"))
+                usage();
+            use_ggx = !strcmp(argv[a + 1], "ggx");
+            break;
+        case 'G':
+            if (strcmp(argv[a + 1], "correlated") && strcmp(argv[a + 1], "separable"))
+                usage();
+            use_correlated = !strcmp(argv[a + 1], "correlated");
+            break;
         case 'b':
             if (strcmp(argv[a + 1], "none") == 0) {
                 st.has_base = 0;
+                break;
+            }
+            if (strncmp(argv[a + 1], "diffuse,", 8) == 0) {
+                if (!parse_list(argv[a + 1] + 8, v, 1) || v[0] < 0.0 || v[0] > 1.0)
+                    usage();
+                st.has_base = 2;
+                st.base_albedo = v[0];
                 break;
             }
             if (!parse_list(argv[a + 1], v, 3) || v[1] <= 0.0)
@@ -390,8 +442,8 @@ int main(int argc, char **argv)
             usage();
         }
     }
-    if (a >= argc || !(paths >= 1.0))
-        usage();
+    if (a >= argc || !(paths >= 1.0) || (use_correlated && !use_ggx))
+        usage(); /* the correlated G here is GGX's (Beckmann's G1 is rational) */
     first_mu = a;
     for (a = first_mu; a < argc; ++a) {
         double mu = strtod(argv[a], NULL), R, se_R, T, se_T;
