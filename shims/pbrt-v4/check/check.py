@@ -148,8 +148,10 @@ def main():
     p.add_argument("--pictures", default=None, help="write the peer pictures here")
     p.add_argument("--skip-peers", action="store_true")
     args = p.parse_args()
-    args.llbuild = os.path.join(args.build, "bin", "llbuild")
-    os.environ.setdefault("LAYERLAB_LIBRARY", os.path.join(args.build, "lib", "liblayerlab.so"))
+    args.work = os.path.abspath(args.work)
+    args.llbuild = os.path.abspath(os.path.join(args.build, "bin", "llbuild"))
+    os.environ.setdefault("LAYERLAB_LIBRARY",
+                          os.path.abspath(os.path.join(args.build, "lib", "liblayerlab.so")))
     sys.path.insert(0, os.path.join(spectra.ROOT, "python"))
     import layerlab as ll
     start, end, step = (float(v) for v in args.wavelengths.split(":"))
