@@ -136,9 +136,12 @@ LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, d
  * order 0 (recommended: on): the energy that single scattering loses to
  * shadowing returns as a low-rank term, split between reflection and
  * transmission by their current ratio (and eta^2-reciprocal) for a
- * dielectric, scaled by the hemispherical Fresnel average for a conductor;
- * a non-absorbing dielectric then conserves energy (R + T = 1 per incident
- * direction) wherever its lobes are resolved.
+ * dielectric; for a conductor coloured by the Fresnel reflectance of the
+ * facets where each direction loses it and of the bounces after, fitted to
+ * a random walk on the Smith microsurface (docs/method.md, "Energy
+ * compensation against a random walk"); a non-absorbing dielectric then
+ * conserves energy (R + T = 1 per incident direction) wherever its lobes
+ * are resolved, and so does a conductor with F = 1.
  *
  * n_orders_internal: the Fourier orders the lobes are resolved with, at
  * least the layer's (0 = the layer's). A lobe sharper than that many orders

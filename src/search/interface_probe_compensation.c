@@ -50,19 +50,24 @@ static ll_status albedo_column(size_t col, void *ctx)
         /* Depth grows opposite to the normal: the series takes -mu. */
         s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &v, &len,
                                  job->conductor ? &ref : NULL, scratch);
-        if (job->conductor)
-            v = ref; /* the mirror's (F = 1) */
-        else if (len == 0)
+        if (len == 0)
             v = 0.0;
-        if (row < h)
+        if (job->conductor) {
+            up += job->w[row] * ref; /* the mirror's (F = 1) */
+            down += job->w[row] * v; /* the interface's own */
+        } else if (row < h) {
             up += job->w[row] * v;
-        else
+        } else {
             down += job->w[row - h] * v;
+        }
     }
     if (s != LL_OK)
         goto done;
     if (job->conductor) {
+        /* (As ll_layer_set_microfacet's: the mirror's in R^t's slot, the
+         * interface's in R^b's.) */
         job->albedo[LL_BLOCK_RT][j] = up;
+        job->albedo[LL_BLOCK_RB][j] = down;
     } else if (col < h) {
         job->albedo[LL_BLOCK_TBT][j] = up;
         job->albedo[LL_BLOCK_RB][j] = down;
@@ -136,8 +141,8 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
     if (s != LL_OK)
         goto done;
     if (job.conductor)
-        ll_microfacet_compensate_conductor(h, job.w, eta_re, eta_im, job.albedo[LL_BLOCK_RT],
-                                           out->memory, &out->terms);
+        ll_microfacet_compensate_conductor(mf, h, x + h, job.w, job.albedo[LL_BLOCK_RT],
+                                           job.albedo[LL_BLOCK_RB], out->memory, &out->terms);
     else
         ll_microfacet_compensate_dielectric(h, job.w, eta_re, (const double *const *)job.albedo,
                                             out->memory, &out->terms);

@@ -111,12 +111,15 @@ LL_INTERNAL void ll_microfacet_compensate_dielectric(size_t h, const double *w, 
                                                      const double *const albedo[4],
                                                      double *work,
                                                      ll_microfacet_compensation *out);
-/* A conductor's from the albedo of reflection from above of the same
- * interface with F = 1 (ll_microfacet_series' ref0); work holds h doubles
- * and must outlive *out. */
-LL_INTERNAL void ll_microfacet_compensate_conductor(size_t h, const double *w, double eta_re,
-                                                    double eta_im, const double *mirror_albedo,
-                                                    double *work,
+/* A conductor's from the albedos of reflection from above of the same
+ * interface with F = 1 (ll_microfacet_series' ref0) and of the interface
+ * itself, at the positive node cosines mu; mf is a model of the interface
+ * (its index, distribution and roughness). work holds 2 h doubles and
+ * must outlive *out. */
+LL_INTERNAL void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
+                                                    const double *mu, const double *w,
+                                                    const double *mirror_albedo,
+                                                    const double *albedo, double *work,
                                                     ll_microfacet_compensation *out);
 
 #endif /* LL_MICROFACET_H */

@@ -157,9 +157,12 @@ static void compensate(const ll_microfacet_job *job, size_t n, double *work)
         ll_microfacet_compensate_dielectric(h, job->w, job->eta_re,
                                             (const double *const *)albedo, work, &c);
     } else {
+        /* (Reflection from above: rows < h, columns >= h; the mirror's
+         * albedo in R^t's slot, the layer's in R^b's.) */
         block_albedo(job->ref0, n, job->w, 0, h, albedo[LL_BLOCK_RT]);
-        ll_microfacet_compensate_conductor(h, job->w, job->eta_re, job->eta_im,
-                                           albedo[LL_BLOCK_RT], work, &c);
+        block_albedo(job->order0, n, job->w, 0, h, albedo[LL_BLOCK_RB]);
+        ll_microfacet_compensate_conductor(job->mf, h, job->layer->nodes + h, job->w,
+                                           albedo[LL_BLOCK_RT], albedo[LL_BLOCK_RB], work, &c);
     }
     for (q = 0; q < 4; ++q)
         if (c.scale[q] != 0.0)
