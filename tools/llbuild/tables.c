@@ -46,16 +46,25 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
     memset(t, 0, sizeof *t);
     t->opts = defaults;
-    t->opts.n_theta_i = 32;
-    t->opts.vndf_size = 128;
-    t->opts.sample_size = 64;
     for (i = 1; i < *argc; ++i) {
         const char *o = argv[i], *next = i + 1 < *argc ? argv[i + 1] : NULL;
         size_t *grid = !strcmp(o, "--theta-i") ? &t->opts.n_theta_i
                        : !strcmp(o, "--vndf") ? &t->opts.vndf_size
                        : !strcmp(o, "--sample") ? &t->opts.sample_size
                                                 : NULL;
-        if (!strcmp(o, "--format")) {
+        if (!strcmp(o, "--table-tolerance")) {
+            char *end;
+            t->opts.tolerance = next ? strtod(next, &end) : 0.0;
+            if (!next || *next == '\0' || *end != '\0' ||
+                !(t->opts.tolerance >= 0.005 && t->opts.tolerance <= 1.0)) {
+                fprintf(stderr, "llbuild: --table-tolerance wants a number in 0.005..1, not "
+                                "'%s'\n",
+                        next ? next : "(missing)");
+                return 1;
+            }
+            t->grid_given = 1;
+            ++i;
+        } else if (!strcmp(o, "--format")) {
             if (next && !strcmp(next, "measured")) {
                 t->measured = 1;
             } else if (next && !strcmp(next, "bsdf")) {
@@ -78,8 +87,8 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     argv[kept] = NULL;
     *argc = kept;
     if (t->grid_given && !t->measured) {
-        fprintf(stderr, "llbuild: --theta-i, --vndf and --sample size the tables of "
-                        "--format measured; a .bsdf file has no such grid\n");
+        fprintf(stderr, "llbuild: --theta-i, --vndf, --sample and --table-tolerance size the "
+                        "tables of --format measured; a .bsdf file has no such grid\n");
         return 1;
     }
     return -1;
@@ -120,12 +129,36 @@ static double table_bytes(const ll_tables_options *o)
 
 void llbuild_tables_dry_run(const llbuild_tables *t)
 {
+    const ll_tables_options *o = &t->opts;
+    ll_tables_options lo = *o, hi = *o;
     if (!t->measured)
         return;
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid: "
-           "about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size,
-           table_bytes(&t->opts) / 1048576.0);
+    if (o->n_theta_i && o->vndf_size && o->sample_size) {
+        printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample "
+               "grid: about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
+               o->n_theta_i, o->vndf_size, o->sample_size, table_bytes(o) / 1048576.0);
+        return;
+    }
+    /* The library's ladders (ll_tables.h): 16..192 elevations, sample
+     * grids 32..256, the VNDF grid the sample grid's but at least 64. */
+    if (!o->n_theta_i) {
+        lo.n_theta_i = 16;
+        hi.n_theta_i = 192;
+    }
+    if (!o->sample_size) {
+        lo.sample_size = 32;
+        hi.sample_size = 256;
+    }
+    if (!o->vndf_size) {
+        lo.vndf_size = lo.sample_size > 64 ? lo.sample_size : 64;
+        hi.vndf_size = hi.sample_size > 64 ? hi.sample_size : 64;
+    }
+    printf("tables       sized by the tolerance %g, known once measured: from %zu x %zu^2 x "
+           "%zu^2 (about %.2f MiB) up to %zu x %zu^2 x %zu^2 (about %.2f MiB) (the `measured` "
+           "file written instead of the .bsdf above)\n",
+           o->tolerance != 0.0 ? o->tolerance : 0.05, lo.n_theta_i, lo.vndf_size,
+           lo.sample_size, table_bytes(&lo) / 1048576.0, hi.n_theta_i, hi.vndf_size,
+           hi.sample_size, table_bytes(&hi) / 1048576.0);
 }
 
 static const double summary_degrees[4] = { 0.0, 30.0, 60.0, 80.0 };
@@ -160,8 +193,22 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
     printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
            "tables are made from)\n",
            t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
+    {
+        /* The grid the file holds (chosen by the tolerance, or given). */
+        const char *g = info.metadata ? strstr(info.metadata, "\"theta_i\": ") : NULL;
+        const char *f = info.metadata ? strstr(info.metadata, "\"figures\": {") : NULL;
+        unsigned long n_ti = 0, nv = 0, ns = 0;
+        if (g)
+            sscanf(g, "\"theta_i\": %lu, \"vndf\": [%lu, %*u], \"sample\": [%lu", &n_ti, &nv,
+                   &ns);
+        printf("tables       %lu incident elevations x %lu^2 visible-normal x %lu^2 sample "
+               "grid\n",
+               n_ti, nv, ns);
+        if (f) {
+            const char *end = strchr(f, '}');
+            printf("measured     %.*s\n", end ? (int)(end - f + 1) : 0, f);
+        }
+    }
     printf("file         %zu bytes (the .bsdf of these layers: %zu bytes)\n", info.file_size,
            t->bsdf_bytes);
     printf("albedo       %sreflected, of the layers\n", t->n_channels == 3 ? "(R G B) " : "");
