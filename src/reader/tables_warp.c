@@ -139,6 +139,22 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 {
     size_t p, c, idx[LL_WARP_MAX_PARAMS];
     double t[LL_WARP_MAX_PARAMS];
+    /* An isotropic file's incident slices: one azimuth, so only the
+     * elevation's two neighbours, with the weights the general loop below
+     * gives them (1 (1 - t) and 1 t), without its eight corners. */
+    if (wp->n_params == 2 && wp->param_size[0] == 1) {
+        locate(wp->param_values[1], wp->param_size[1], param[1], &idx[1], &t[1]);
+        s->count = 0;
+        if (1.0 - t[1] != 0.0) {
+            s->index[s->count] = idx[1];
+            s->weight[s->count++] = 1.0 - t[1];
+        }
+        if (t[1] != 0.0 && wp->param_size[1] > 1) {
+            s->index[s->count] = idx[1] + 1;
+            s->weight[s->count++] = t[1];
+        }
+        return;
+    }
     for (p = 0; p < wp->n_params; ++p)
         locate(wp->param_values[p], wp->param_size[p], param[p], &idx[p], &t[p]);
     /* Only the corners of non-zero weight are kept: an isotropic file's
