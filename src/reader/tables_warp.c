@@ -92,8 +92,18 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->data = ll_alloc_array(total, sizeof(float));
     if (!wp->data)
         goto oom;
-    for (k = 0; k < total; ++k)
-        wp->data[k] = (float)get(ctx, k);
+    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
+    {
+        /* Entry k of the caller's layout, slice (outer, j) at node at, goes
+         * to ((outer w h) + at) inner + j. */
+        size_t area = w * h, in = wp->inner, outer, j, at;
+        for (k = 0, outer = 0; outer < n / in; ++outer)
+            for (j = 0; j < in; ++j) {
+                float *to = wp->data + outer * area * in + j;
+                for (at = 0; at < area; ++at, ++k)
+                    to[at * in] = (float)get(ctx, k);
+            }
+    }
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
@@ -189,6 +199,7 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
  * general loop's to the bit (0 + a + b is a + b). */
 typedef struct slice_rows {
     size_t count;
+    size_t step;                              /* floats from one node to the next */
     const float *p[1 << LL_WARP_MAX_PARAMS];
     double w[1 << LL_WARP_MAX_PARAMS];
 } slice_rows;
@@ -197,15 +208,28 @@ static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_r
 {
     size_t c;
     out->count = s->count;
+    out->step = 1;
     for (c = 0; c < s->count; ++c) {
         out->p[c] = arr + s->index[c] * stride;
         out->w[c] = s->weight[c];
     }
 }
 
-static inline double mix(const slice_rows *r, size_t at)
+/* The values' slices (ll_warp2d.inner: slice i is (i / inner, i % inner)). */
+static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *out)
 {
-    size_t c;
+    size_t c, in = wp->inner, area = wp->w * wp->h;
+    out->count = s->count;
+    out->step = in;
+    for (c = 0; c < s->count; ++c) {
+        out->p[c] = wp->data + (s->index[c] / in) * area * in + s->index[c] % in;
+        out->w[c] = s->weight[c];
+    }
+}
+
+static inline double mix(const slice_rows *r, size_t node)
+{
+    size_t c, at = node * r->step;
     double v;
     if (r->count == 2)
         return r->w[0] * (double)r->p[0][at] + r->w[1] * (double)r->p[1][at];
@@ -246,7 +270,7 @@ static double bilinear(const ll_warp2d *wp, const slice_set *s, size_t r, double
                        double tx)
 {
     slice_rows d;
-    rows_of(s, wp->data, wp->w * wp->h, &d);
+    data_rows_of(wp, s, &d);
     return bilinear_rows(&d, wp->w, r, ty, c, tx);
 }
 
@@ -280,15 +304,17 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
     double tx, ty, scale = area_scale(wp);
     size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), st = wp->w * wp->h, k, j;
     slice_rows d;
-    /* Channel k of slice index i is slice i n + k (ll_warp_slices_append):
-     * its rows start k tables after channel 0's. */
-    rows_of(s, wp->data, st, &d);
-    for (j = 0; j < d.count; ++j)
-        d.p[j] += (n - 1) * s->index[j] * st;
+    /* Channel k of slice index i is slice i n + k (ll_warp_slices_append);
+     * with the channels innermost (n == inner) it sits k floats after
+     * channel 0 at every node, else a whole table after it. */
+    size_t next = n == wp->inner ? 1 : st;
+    slice_set first;
+    ll_warp_slices_append(s, 0, n, &first);
+    data_rows_of(wp, &first, &d);
     for (k = 0; k < n; ++k) {
         out[k] = bilinear_rows(&d, wp->w, r, ty, c, tx) * scale;
         for (j = 0; j < d.count; ++j)
-            d.p[j] += st;
+            d.p[j] += next;
     }
 }
 
@@ -386,7 +412,7 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
     }
     rows_of(s, wp->marg, h, &marg);
     rows_of(s, wp->cond, st, &cond);
-    rows_of(s, wp->data, st, &data);
+    data_rows_of(wp, s, &data);
     /* Row interval from the marginal (slices are normalised: total 1). */
     target = u[1];
     SEARCH(h, mix(&marg, i), target, r);
@@ -418,7 +444,7 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double p
     slice_rows marg, cond, data;
     rows_of(s, wp->marg, h, &marg);
     rows_of(s, wp->cond, st, &cond);
-    rows_of(s, wp->data, st, &data);
+    data_rows_of(wp, s, &data);
     r0 = mix(&cond, r * w + w - 1);
     r1 = mix(&cond, (r + 1) * w + w - 1);
     m0 = mix(&marg, r);
