@@ -295,7 +295,8 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     ll_bsdf *b = NULL;
     step st;
     /* Shares of the bar: the build most, the .bsdf a little, the tables
-     * (about a second at the default grid) the rest. */
+     * (a few seconds: each grid the tolerance tries is written and
+     * measured) the rest. */
     ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
     ll_status s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)
