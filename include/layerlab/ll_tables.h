@@ -83,7 +83,8 @@ typedef struct ll_tables_options {
  * file's "layerlab_metadata" field holds b's metadata, the grid sizes and
  * (sizes chosen by the tolerance) the figures measured. opts NULL takes the
  * defaults (every size chosen by the tolerance 0.05); monitor as in
- * ll_common.h (stages "ndf", "tables", "writing", once per grid tried).
+ * ll_common.h (stages "ndf", "tables", "writing" for each grid tried; the
+ * fraction goes once from 0 to 1 over them all).
  * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured file
  * (several basis functions) or a transmissive one (eta != 1, or light
  * transmitted), all with a message saying why the format cannot hold it;

@@ -103,6 +103,34 @@ static int grow(search *s, const ll_tables_figures *f)
     return grow_theta || grow_sample;
 }
 
+/* The caller's monitor seen through one step of the search: the step
+ * reports 0..1 for itself and the caller sees [lo, hi] of the whole. The
+ * number of grids is not known in advance, so grid i gets the half of
+ * what is left ([1 - 2^-i, 1 - 2^-(i+1)] of 0.9), and the final write the
+ * last tenth. */
+typedef struct step {
+    ll_monitor whole;
+    double lo, hi;
+} step;
+
+static int report_step(void *user, double fraction, const char *stage)
+{
+    const step *st = user;
+    return st->whole.progress ? st->whole.progress(st->whole.user,
+                                                   st->lo + fraction * (st->hi - st->lo), stage)
+                              : 0;
+}
+
+static ll_monitor monitor_of(step *st, double lo, double hi)
+{
+    ll_monitor m = LL_MONITOR_INIT;
+    st->lo = lo;
+    st->hi = hi;
+    m.progress = report_step;
+    m.user = st;
+    return m;
+}
+
 /* Write the grid g to at, open it, measure it against b. */
 static ll_status try_grid(const ll_bsdf *b, const char *at, const ll_tables_options *g,
                           const ll_monitor *monitor, ll_tables_figures *f)
@@ -119,17 +147,21 @@ static ll_status try_grid(const ll_bsdf *b, const char *at, const ll_tables_opti
 }
 
 static ll_status run(const ll_bsdf *b, const char *path, search *s, const char *scratch,
-                     const ll_monitor *monitor)
+                     step *progress)
 {
     ll_tables_options g;
     ll_tables_figures f;
+    ll_monitor m;
     char figures[400];
+    double left = 0.9;
     int met;
     ll_status st;
     for (;;) {
         grid_at(s, &g);
-        if ((st = try_grid(b, scratch, &g, monitor, &f)) != LL_OK)
+        m = monitor_of(progress, 0.9 - left, 0.9 - 0.5 * left);
+        if ((st = try_grid(b, scratch, &g, &m, &f)) != LL_OK)
             return st;
+        left *= 0.5;
         met = albedo_met(s, &f) && f_met(s, &f);
         if (met || !grow(s, &f))
             break;
@@ -139,14 +171,17 @@ static ll_status run(const ll_bsdf *b, const char *path, search *s, const char *
              "\"tolerance\": %.6g, \"figures\": {\"met\": %s, \"albedo\": %.3g, "
              "\"f_median\": %.3g, \"f_p95\": %.3g, \"f_p99\": %.3g}, ",
              s->tolerance, met ? "true" : "false", f.albedo, f.p50, f.p95, f.p99);
-    return ll_tables_write_grid(b, path, &g, figures, monitor);
+    m = monitor_of(progress, 0.9, 1.0);
+    return ll_tables_write_grid(b, path, &g, figures, &m);
 }
 
 ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                                     const ll_tables_options *opts, const ll_monitor *monitor)
 {
     ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
+    ll_monitor none = LL_MONITOR_INIT;
     search s;
+    step progress;
     char *scratch = NULL;
     size_t len;
     ll_status st;
@@ -169,7 +204,14 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     if (!(scratch = ll_malloc(len)))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
     snprintf(scratch, len, "%s.%ld.measuring", path, (long)getpid());
-    st = run(b, path, &s, scratch, monitor);
+    progress.whole = none;
+    if (monitor &&
+        (st = ll_struct_read(&progress.whole, sizeof progress.whole, monitor, FN, "ll_monitor")) !=
+            LL_OK) {
+        ll_free(scratch);
+        return st;
+    }
+    st = run(b, path, &s, scratch, &progress);
     unlink(scratch);
     ll_free(scratch);
     return st;
