@@ -53,8 +53,9 @@ typedef enum {
  * A size of 0 is chosen by the tolerance: the writer measures each table
  * it makes against b and grows the sizes left at 0 (the elevations when
  * the albedo misses, the VNDF and sample grids when f misses) until the
- * figures are met or the largest grid (192 elevations, VNDF and sample
- * grids of 256^2, about 250 MB) is reached; the figures reached are in the file's
+ * figures are met, the ladders end (192 elevations, VNDF and sample grids
+ * of 256^2) or the next grid would take more than the larger of b's file
+ * size and 16 MB; the figures reached are in the file's
  * "layerlab_metadata" ("figures", with "met" false if they fall short).
  * When all three sizes are given, the table is written at that grid and
  * nothing is measured. */
