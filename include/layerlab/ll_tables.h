@@ -77,8 +77,8 @@ typedef struct ll_tables_options {
  * distribution is derived from b's retro-reflection (the dominant
  * eigenvector of the operator of docs/measured-format.md, normalised so
  * that the integral of D cos over the hemisphere is 1), widened by a
- * Beckmann lobe of three times its roughness and a uniform floor so that
- * every part of the lobe gets grid cells; the values are f cos stored with the
+ * Beckmann lobe of three times its roughness, one of its peak's width and a
+ * uniform floor so that every part of the lobe gets grid cells; the values are f cos stored with the
  * jacobian rule, so that Mitsuba's `measured` plugin, pbrt-v4's reader of
  * the same tables and ll_bsdf_open give f back at the grid's nodes. The
  * file's "layerlab_metadata" field holds b's metadata, the grid sizes and

@@ -17,7 +17,8 @@ LL_INTERNAL double ll_tables_luminance(const double rgb[3]);
 /* D(theta) and sigma(theta) at the LL_TABLES_NDF_NODES nodes
  * theta_j = u_j^2 pi / 2, u_j = j / (n - 1), for the opaque isotropic b:
  * the dominant eigenvector of the retro-reflection operator, normalised,
- * mixed with a Beckmann lobe of three times its roughness and a uniform floor
+ * mixed with Beckmann lobes of three times its roughness and of its peak's
+ * width, and a uniform floor
  * (bsdf_write_tables_ndf.c says why). *alpha receives the fitted Beckmann
  * roughness. LL_OK, or LL_ERROR_INVALID_ARGUMENT if b reflects nothing
  * back. */

@@ -18,7 +18,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#define STRATA 128
+#define STRATA 256
 #define PAIRS 20000
 #define ANGLES 10
 #define LIMIT_DEG 80.0

@@ -37,6 +37,11 @@
 #define P95_SHARE 0.4
 #define P50_SHARE 0.04
 #define ALBEDO_SHARE 0.06
+/* The search's own measurement is one estimate (its pairs, 128^2 strata);
+ * another (tests/tables_figures.h: other pairs, 256^2 strata) differs by
+ * a few percent of a figure (coated gold's albedo: 0.293% here, 0.306%
+ * there), so the search aims at 0.9 of each bound. */
+#define MARGIN 0.9
 
 static const size_t theta_ladder[] = { 16, 24, 32, 48, 64, 96, 128, 192 };
 static const size_t sample_ladder[] = { 32, 48, 64, 80, 96, 128, 160, 192, 256 };
@@ -74,13 +79,13 @@ static void grid_at(const search *s, ll_tables_options *g)
 
 static int albedo_met(const search *s, const ll_tables_figures *f)
 {
-    return f->albedo <= ALBEDO_SHARE * s->tolerance;
+    return f->albedo <= MARGIN * ALBEDO_SHARE * s->tolerance;
 }
 
 static int f_met(const search *s, const ll_tables_figures *f)
 {
-    return f->p99 <= s->tolerance && f->p95 <= P95_SHARE * s->tolerance &&
-           f->p50 <= P50_SHARE * s->tolerance;
+    double t = MARGIN * s->tolerance;
+    return f->p99 <= t && f->p95 <= P95_SHARE * t && f->p50 <= P50_SHARE * t;
 }
 
 /* One step up the ladders the misses point to; 0 if none can grow. */
