@@ -422,7 +422,7 @@ static void run_eval(const config *cfg, bench_store *store)
 }
 
 /* 3a. Table files: written from the golden file and from the coated-gold
- * output with the default grid, then the three calls on the table and on
+ * output with the sizes the default tolerance chooses, then the three calls on the table and on
  * its .bsdf over the same directions (bench/tables.c). */
 static void run_tables(const config *cfg, bench_store *store)
 {

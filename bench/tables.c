@@ -6,8 +6,8 @@
  *
  * usage: tables SOURCE.bsdf TABLE_OUT LABEL RUNS [CALLS]   (CALLS default 10^6)
  *
- * The table is written from SOURCE with the default grid
- * (ll_tables_write_from_bsdf) to TABLE_OUT, then opened with ll_bsdf_open
+ * The table is written from SOURCE with the sizes the default tolerance
+ * chooses (ll_tables_write_from_bsdf) to TABLE_OUT, then opened with ll_bsdf_open
  * as a renderer would. The directions are drawn once, before timing, from
  * a fixed seed: wo uniform over the upper hemisphere (the viewer; a table
  * file reflects only, and reflection has wo and wi on the same side in the
@@ -163,7 +163,7 @@ int main(int argc, char **argv)
     bench_check(ll_tables_write_from_bsdf(source, argv[2], NULL, NULL),
                 "ll_tables_write_from_bsdf");
     snprintf(text, sizeof text, "%.2f s", bench_wall_seconds() - start);
-    bench_info("tables write (default grid, one thread)", text);
+    bench_info("tables write (sizes by the default tolerance, one thread)", text);
     bench_check(ll_bsdf_open(argv[2], NULL, &table), "ll_bsdf_open (table)");
     bench_check(ll_bsdf_get_info(table, &info), "ll_bsdf_get_info");
     snprintf(text, sizeof text, "%zu bytes", info.file_size);

@@ -82,9 +82,17 @@ only_layers "a finished build"
 
 # --- --dry-run: the table's size for the grid (32 x 128^2 x 64^2 floats
 # and the small tables: 4 198 532 bytes, 4.00 MiB), no file
-expect 0 "--dry-run" -- "$llbuild" --format measured --dry-run $small "$tmp/w/gold.layers"
+expect 0 "--dry-run" -- "$llbuild" --format measured --dry-run --theta-i 32 --vndf 128 \
+    --sample 64 $small "$tmp/w/gold.layers"
 contains "$tmp/out" "32 incident elevations x 128^2 visible-normal x 64^2 sample grid: about 4.00 MiB" \
     "--dry-run table size"
+# sizes left to the tolerance: the range of the library's ladders
+expect 0 "--dry-run by tolerance" -- "$llbuild" --format measured --dry-run \
+    --table-tolerance 0.1 $small "$tmp/w/gold.layers"
+contains "$tmp/out" "sized by the tolerance 0.1, known once measured: from 16 x 64^2 x 32^2" \
+    "--dry-run by tolerance names the range"
+expect 1 "a bad table tolerance" -- "$llbuild" --format measured --dry-run \
+    --table-tolerance 3 $small "$tmp/w/gold.layers"
 expect 0 "--dry-run, another grid" -- "$llbuild" --format measured --dry-run --vndf 64 \
     --sample 32 --theta-i 16 $small "$tmp/w/gold.layers"
 contains "$tmp/out" "16 incident elevations x 64^2 visible-normal x 32^2 sample grid: about 0.50 MiB" \

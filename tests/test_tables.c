@@ -18,14 +18,20 @@ static ll_bsdf *open_file(const char *p)
     return b;
 }
 
-/* The table of the golden file, written once for the program. */
+/* The table of the golden file, written once for the program, at the
+ * grid 32 x 128^2 x 64^2 (given, so nothing is measured: the sizes chosen
+ * by a tolerance are checked in the slow tier, test_tables_tolerance.c). */
 static ll_bsdf *table(void)
 {
     static int written;
     if (!written) {
         ll_bsdf *src = open_file(LL_TEST_GOLDEN);
+        ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+        o.n_theta_i = 32;
+        o.vndf_size = 128;
+        o.sample_size = 64;
         snprintf(path, sizeof path, "%s/gold.bsdf", ll_test_dir());
-        assert_int_equal(ll_tables_write_from_bsdf(src, path, NULL, NULL), LL_OK);
+        assert_int_equal(ll_tables_write_from_bsdf(src, path, &o, NULL), LL_OK);
         ll_bsdf_release(src);
         written = 1;
     }
@@ -47,7 +53,8 @@ static void test_info(void **state)
     assert_non_null(strstr(it.metadata, "\"theta_i\": 32"));
     assert_null(ll_bsdf_nodes(t));
     assert_int_equal(stat(path, &st), 0);
-    printf("table %lld bytes, .bsdf %zu bytes\n", (long long)st.st_size, fi.file_size);
+    printf("table %lld bytes, .bsdf %zu bytes; %.120s\n", (long long)st.st_size, fi.file_size,
+           strstr(it.metadata, "\"theta_i\""));
     ll_bsdf_release(t);
     ll_bsdf_release(f);
 }
@@ -284,6 +291,32 @@ static void test_batches(void **state)
     ll_bsdf_release(t);
 }
 
+/* Sizes given are the sizes written, and nothing is measured. */
+static void test_explicit_grid(void **state)
+{
+    ll_bsdf *f = open_file(LL_TEST_GOLDEN), *t;
+    ll_bsdf_info it = LL_BSDF_INFO_INIT;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    char out[600];
+    (void)state;
+    snprintf(out, sizeof out, "%s/explicit.bsdf", ll_test_dir());
+    o.n_theta_i = 8;
+    o.vndf_size = 16;
+    o.sample_size = 12;
+    assert_int_equal(ll_tables_write_from_bsdf(f, out, &o, NULL), LL_OK);
+    t = open_file(out);
+    assert_int_equal(ll_bsdf_get_info(t, &it), LL_OK);
+    assert_non_null(strstr(it.metadata, "\"theta_i\": 8, \"vndf\": [16, 16], \"sample\": [12, 12]"));
+    assert_null(strstr(it.metadata, "\"figures\""));
+    ll_bsdf_release(t);
+    /* A tolerance out of range, when a size is left to it. */
+    o.sample_size = 0;
+    o.tolerance = 2.0;
+    assert_int_equal(ll_tables_write_from_bsdf(f, out, &o, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "tolerance"));
+    ll_bsdf_release(f);
+}
+
 static void test_refusals(void **state)
 {
     ll_bsdf *f = open_file(LL_TEST_GOLDEN);
@@ -310,6 +343,7 @@ int main(void)
         cmocka_unit_test(test_pdf_integral),
         cmocka_unit_test(test_layer_convention),
         cmocka_unit_test(test_batches),
+        cmocka_unit_test(test_explicit_grid),
         cmocka_unit_test(test_refusals),
     };
     return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);

@@ -7,10 +7,10 @@
  * only, not in liblayerlab_reader.
  *
  * Experimental: everything here is declared only when LL_EXPERIMENTAL is
- * defined before the include, and may change in a minor release (grid
- * sizes chosen by a tolerance); its symbols are in the version nodes
- * LAYERLAB_EXPERIMENTAL_1.0 (ll_tables_write_from_bsdf) and
- * LAYERLAB_EXPERIMENTAL_1.1 (ll_material_write_tables).
+ * defined before the include, and may change in a minor release; its
+ * symbols are in the version nodes LAYERLAB_EXPERIMENTAL_1.0
+ * (ll_tables_write_from_bsdf) and LAYERLAB_EXPERIMENTAL_1.1
+ * (ll_material_write_tables).
  */
 #include "ll_common.h"
 #include "ll_bsdf.h"
@@ -47,19 +47,27 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  * of the CIE 1931 tables, 360..830 nm). */
 #define LL_TABLES_MAX_WAVELENGTHS 471
 
-/* Grid sizes and text of a table file. Set struct_size =
+/* Grid sizes, accuracy and text of a table file. Set struct_size =
  * sizeof(ll_tables_options) (the INIT macro does); the library reads only
- * the fields struct_size covers. A size of 0 takes its default.
+ * the fields struct_size covers.
  *  n_theta_i: incident elevations over [0, 90] degrees, denser towards
- *    grazing: theta = 90 sin(90 v) degrees for v uniform in [0, 1] (default
- *    32; 2..1024);
+ *    grazing: theta = 90 sin(90 v) degrees for v uniform in [0, 1]
+ *    (2..1024);
  *  vndf_size: side of the visible-normal grid, nodes in u_theta and u_phi
- *    (default 128; 2..4096);
+ *    (2..4096);
  *  sample_size: side N of the sample grid at which the values are stored
- *    (default 64; 2..4096);
+ *    (2..4096);
  *  format: LL_TABLES_RGB or LL_TABLES_SPECTRAL;
  *  description: text of the file's "description" field (nullable: a
  *    default naming layerlab);
+ *  tolerance: how close the table must come to the file it is written
+ *    from, per channel (0 takes 0.05; 0.005..1): the 99th percentile of
+ *    the relative error of f at most tolerance, its 95th percentile at
+ *    most 0.4 tolerance and its median at most 0.04 tolerance, where f cos
+ *    is above 1% of its largest value (both elevations <= 80 degrees, half
+ *    of the pairs near the mirror direction), and the albedo within 0.06
+ *    tolerance at viewer elevations 0..85 degrees (so 5%, 2%, 0.2% and
+ *    0.3% by default).
  * and, read for LL_TABLES_SPECTRAL only:
  *  wavelengths, n_wavelengths: the file's wavelengths in nm, strictly
  *    increasing, inside the span of the CIE 1931 tables (360..830 nm),
@@ -68,6 +76,15 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  *  spectrum, spectrum_user: the material at each wavelength
  *    (ll_tables_write_from_bsdf calls it once per wavelength, in order;
  *    ll_material_write_tables sets its own). */
+ * A size of 0 is chosen by the tolerance: the writer measures each table
+ * it makes against b and grows the sizes left at 0 (the elevations when
+ * the albedo misses, the VNDF and sample grids when f misses) until the
+ * figures are met, the ladders end (192 elevations, VNDF and sample grids
+ * of 256^2) or the next grid would take more than the larger of b's file
+ * size and 16 MB; the figures reached are in the file's
+ * "layerlab_metadata" ("figures", with "met" false if they fall short).
+ * When all three sizes are given, the table is written at that grid and
+ * nothing is measured. */
 typedef struct ll_tables_options {
     size_t struct_size;
     size_t n_theta_i;
@@ -79,10 +96,11 @@ typedef struct ll_tables_options {
     size_t n_wavelengths;
     ll_tables_spectrum_fn spectrum;
     void *spectrum_user;
+    double tolerance;
 } ll_tables_options;
 
 #define LL_TABLES_OPTIONS_INIT { sizeof(ll_tables_options), 0, 0, 0, LL_TABLES_RGB, NULL, \
-                                 NULL, 0, NULL, NULL }
+                                 NULL, 0, NULL, NULL, 0.0 }
 
 /* Write the tables of an opened, untextured, opaque file b (a .bsdf, or a
  * table file) to path, atomically (a temporary file renamed over path when
@@ -90,16 +108,20 @@ typedef struct ll_tables_options {
  * distribution is derived from b's retro-reflection (the dominant
  * eigenvector of the operator of docs/measured-format.md, normalised so
  * that the integral of D cos over the hemisphere is 1), widened by a
- * Beckmann lobe of twice its roughness and a uniform floor so that every
- * part of the lobe gets grid cells; the values are f cos stored with the
- * jacobian rule, so that Mitsuba's `measured` plugin, pbrt-v4's reader of
+ * Beckmann lobe of three times its roughness, one of its peak's width and a
+ * uniform floor so that every part of the lobe gets grid cells; the values
+ * are f cos stored with the jacobian rule, so that Mitsuba's `measured` plugin, pbrt-v4's reader of
  * the same tables and ll_bsdf_open give f back at the grid's nodes. The
- * file's "layerlab_metadata" field holds b's metadata and the grid sizes.
- * opts NULL takes the defaults; monitor as in ll_common.h (stages
- * "ndf", "tables", "spectra", "writing").
+ * file's "layerlab_metadata" field holds b's metadata, the grid sizes and
+ * (sizes chosen by the tolerance) the figures measured. opts NULL takes the
+ * defaults (every size chosen by the tolerance 0.05); monitor as in
+ * ll_common.h (stages "ndf", "tables", "writing" for each grid tried, and
+ * "spectra" for the grid chosen; the fraction goes once from 0 to 1 over
+ * them all).
  *
  * With format LL_TABLES_SPECTRAL, b gives the warp (D, sigma, the VNDF
- * tables: one for all wavelengths), and the field "spectra" holds, for
+ * tables: one for all wavelengths; sizes left at 0 are chosen by measuring
+ * b's own tables, which have that warp), and the field "spectra" holds, for
  * each wavelength in turn, f cos of opts->spectrum's file at the same
  * sample nodes (with the jacobian rule as above); the luminance that
  * sampling follows is that of the spectra (lit by D65, seen by the CIE 1931

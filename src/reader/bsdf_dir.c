@@ -110,16 +110,19 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
     if ((s = check_mode(mode, "ll_bsdf_eval_dir")) != LL_OK ||
         (s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_eval_dir", &basis)) != LL_OK)
         return s;
-    if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
     if (b->measured) {
+        /* unit_pair refuses what to_file_axes refuses (length_of of each). */
         double v[3], l[3], value[3];
-        unit_pair(wo, wi, v, l);
+        if (!unit_pair(wo, wi, v, l))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
         ll_measured_eval(b->measured, v, l, value);
         measured_rgb(value, l[2], (double)basis[0], rgb);
         return LL_OK;
     }
+    if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
     ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, transport_scale(b, mu_i, mu_o, mode), rgb);
     return LL_OK;
 }
@@ -135,15 +138,17 @@ ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[
     *pdf = 0.0;
     if ((s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_pdf_dir", &basis)) != LL_OK)
         return s;
-    if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
     if (b->measured) {
         double v[3], l[3];
-        unit_pair(wo, wi, v, l);
+        if (!unit_pair(wo, wi, v, l))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
         *pdf = ll_measured_pdf(b->measured, v, l);
         return LL_OK;
     }
+    if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
     *pdf = ll_bsdf_pdf_cos(b, mu_i, mu_o, cos_phi, basis);
     return LL_OK;
 }

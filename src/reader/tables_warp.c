@@ -92,8 +92,18 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->data = ll_alloc_array(total, sizeof(float));
     if (!wp->data)
         goto oom;
-    for (k = 0; k < total; ++k)
-        wp->data[k] = (float)get(ctx, k);
+    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
+    {
+        /* Entry k of the caller's layout, slice (outer, j) at node at, goes
+         * to ((outer w h) + at) inner + j. */
+        size_t area = w * h, in = wp->inner, outer, j, at;
+        for (k = 0, outer = 0; outer < n / in; ++outer)
+            for (j = 0; j < in; ++j) {
+                float *to = wp->data + outer * area * in + j;
+                for (at = 0; at < area; ++at, ++k)
+                    to[at * in] = (float)get(ctx, k);
+            }
+    }
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
@@ -139,6 +149,22 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 {
     size_t p, c, idx[LL_WARP_MAX_PARAMS];
     double t[LL_WARP_MAX_PARAMS];
+    /* An isotropic file's incident slices: one azimuth, so only the
+     * elevation's two neighbours, with the weights the general loop below
+     * gives them (1 (1 - t) and 1 t), without its eight corners. */
+    if (wp->n_params == 2 && wp->param_size[0] == 1) {
+        locate(wp->param_values[1], wp->param_size[1], param[1], &idx[1], &t[1]);
+        s->count = 0;
+        if (1.0 - t[1] != 0.0) {
+            s->index[s->count] = idx[1];
+            s->weight[s->count++] = 1.0 - t[1];
+        }
+        if (t[1] != 0.0 && wp->param_size[1] > 1) {
+            s->index[s->count] = idx[1] + 1;
+            s->weight[s->count++] = t[1];
+        }
+        return;
+    }
     for (p = 0; p < wp->n_params; ++p)
         locate(wp->param_values[p], wp->param_size[p], param[p], &idx[p], &t[p]);
     /* Only the corners of non-zero weight are kept: an isotropic file's
@@ -166,13 +192,50 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
     }
 }
 
-/* arr[slice][at] mixed over the slice set (stride: one slice's length). */
-static double mix(const slice_set *s, const float *arr, size_t stride, size_t at)
+/* One array's slices of a slice set, as pointers: a look-up mixes the
+ * same slices at many places (a search reads a row at every step), so
+ * the offsets are taken once. Two slices (an isotropic file: two
+ * elevations) is the common case and has its own path; its sum is the
+ * general loop's to the bit (0 + a + b is a + b). */
+typedef struct slice_rows {
+    size_t count;
+    size_t step;                              /* floats from one node to the next */
+    const float *p[1 << LL_WARP_MAX_PARAMS];
+    double w[1 << LL_WARP_MAX_PARAMS];
+} slice_rows;
+
+static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_rows *out)
 {
     size_t c;
-    double v = 0.0;
-    for (c = 0; c < s->count; ++c)
-        v += s->weight[c] * (double)arr[s->index[c] * stride + at];
+    out->count = s->count;
+    out->step = 1;
+    for (c = 0; c < s->count; ++c) {
+        out->p[c] = arr + s->index[c] * stride;
+        out->w[c] = s->weight[c];
+    }
+}
+
+/* The values' slices (ll_warp2d.inner: slice i is (i / inner, i % inner)). */
+static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *out)
+{
+    size_t c, in = wp->inner, area = wp->w * wp->h;
+    out->count = s->count;
+    out->step = in;
+    for (c = 0; c < s->count; ++c) {
+        out->p[c] = wp->data + (s->index[c] / in) * area * in + s->index[c] % in;
+        out->w[c] = s->weight[c];
+    }
+}
+
+static inline double mix(const slice_rows *r, size_t node)
+{
+    size_t c, at = node * r->step;
+    double v;
+    if (r->count == 2)
+        return r->w[0] * (double)r->p[0][at] + r->w[1] * (double)r->p[1][at];
+    v = 0.0;
+    for (c = 0; c < r->count; ++c)
+        v += r->w[c] * (double)r->p[c][at];
     return v;
 }
 
@@ -193,14 +256,22 @@ static size_t cell(double x, size_t n, double *t)
     return i;
 }
 
+/* The bilinear value in cell (r, c) at (tx, ty) of one array's slices. */
+static double bilinear_rows(const slice_rows *d, size_t w, size_t r, double ty, size_t c,
+                            double tx)
+{
+    size_t at = r * w + c;
+    double v00 = mix(d, at), v01 = mix(d, at + 1), v10 = mix(d, at + w);
+    double v11 = mix(d, at + w + 1);
+    return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
+}
+
 static double bilinear(const ll_warp2d *wp, const slice_set *s, size_t r, double ty, size_t c,
                        double tx)
 {
-    size_t w = wp->w, st = wp->w * wp->h;
-    double v00 = mix(s, wp->data, st, r * w + c), v01 = mix(s, wp->data, st, r * w + c + 1);
-    double v10 = mix(s, wp->data, st, (r + 1) * w + c);
-    double v11 = mix(s, wp->data, st, (r + 1) * w + c + 1);
-    return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
+    slice_rows d;
+    data_rows_of(wp, s, &d);
+    return bilinear_rows(&d, wp->w, r, ty, c, tx);
 }
 
 /* Density per unit area of the square for a sampling warp (slices hold
@@ -230,12 +301,20 @@ double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double p
 void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
                           const double pos[2], double *out)
 {
-    double tx, ty;
-    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), k;
+    double tx, ty, scale = area_scale(wp);
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), st = wp->w * wp->h, k, j;
+    slice_rows d;
+    /* Channel k of slice index i is slice i n + k (ll_warp_slices_append);
+     * with the channels innermost (n == inner) it sits k floats after
+     * channel 0 at every node, else a whole table after it. */
+    size_t next = n == wp->inner ? 1 : st;
+    slice_set first;
+    ll_warp_slices_append(s, 0, n, &first);
+    data_rows_of(wp, &first, &d);
     for (k = 0; k < n; ++k) {
-        slice_set ch;
-        ll_warp_slices_append(s, k, n, &ch);
-        out[k] = bilinear(wp, &ch, r, ty, c, tx) * area_scale(wp);
+        out[k] = bilinear_rows(&d, wp->w, r, ty, c, tx) * scale;
+        for (j = 0; j < d.count; ++j)
+            d.p[j] += next;
     }
 }
 
@@ -277,19 +356,29 @@ static double mass_ratio(double stored, double linear)
     return stored > 0.0 && linear > 0.0 ? linear / stored : 1.0;
 }
 
-/* Largest i in [0, n - 2] with value(i) <= target. */
+/* Largest i in [0, n - 2] with value(i) <= target (0 if none), for
+ * values that do not decrease with i (running integrals of non-negative
+ * densities, mixed with non-negative weights). Halving a range whose
+ * length does not depend on the data compiles without a data-dependent
+ * branch; the searches dominate a sample's cost. */
 #define SEARCH(n, value, target, out)                                                     \
     do {                                                                                  \
-        size_t lo_ = 0, hi_ = (n) - 2;                                                    \
-        while (lo_ < hi_) {                                                               \
-            size_t i = (lo_ + hi_ + 1) / 2;                                               \
-            if ((value) <= (target))                                                      \
-                lo_ = i;                                                                  \
-            else                                                                          \
-                hi_ = i - 1;                                                              \
+        size_t lo_ = 0, len_ = (n) - 1;                                                   \
+        while (len_ > 1) {                                                                \
+            size_t half_ = len_ / 2, i = lo_ + half_;                                     \
+            lo_ = (value) <= (target) ? i : lo_;                                          \
+            len_ -= half_;                                                                \
         }                                                                                 \
         (out) = lo_;                                                                      \
     } while (0)
+
+/* Rows r and r + 1 (r0 = r w: their first entry) of one array's slices
+ * interpolated at ty, at column i: a conditional integral or a value of
+ * the row at ty. */
+static inline double pair_at(const slice_rows *a, size_t r0, size_t w, double ty, size_t i)
+{
+    return (1.0 - ty) * mix(a, r0 + i) + ty * mix(a, r0 + w + i);
+}
 
 void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
                       double pos[2], double *pdf)
@@ -307,12 +396,12 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
 }
 
-void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *sp, const double u_in[2],
+void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
                          double pos[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h, r, c;
-    double u[2], target, r0, r1, ty, tx, row_total, v0, v1, cdf_c;
-    const slice_set s = *sp;
+    double u[2], target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
+    slice_rows marg, cond, data;
     int k;
     for (k = 0; k < 2; ++k) {
         u[k] = u_in[k];
@@ -321,59 +410,51 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *sp, const double 
         if (u[k] > 1.0 - LL_WARP_EPSILON)
             u[k] = 1.0 - LL_WARP_EPSILON;
     }
+    rows_of(s, wp->marg, h, &marg);
+    rows_of(s, wp->cond, st, &cond);
+    data_rows_of(wp, s, &data);
     /* Row interval from the marginal (slices are normalised: total 1). */
     target = u[1];
-    SEARCH(h, mix(&s, wp->marg, h, i), target, r);
-    r0 = mix(&s, wp->cond, st, r * w + w - 1);
-    r1 = mix(&s, wp->cond, st, (r + 1) * w + w - 1);
-    {
-        double m0 = mix(&s, wp->marg, h, r), m1 = mix(&s, wp->marg, h, r + 1);
-        ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
-    }
+    SEARCH(h, mix(&marg, i), target, r);
+    r0 = mix(&cond, r * w + w - 1);
+    r1 = mix(&cond, (r + 1) * w + w - 1);
+    m0 = mix(&marg, r);
+    m1 = mix(&marg, r + 1);
+    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
     /* Column interval from the conditional row at ty. */
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
-    SEARCH(w, (1.0 - ty) * mix(&s, wp->cond, st, r * w + i) +
-                  ty * mix(&s, wp->cond, st, (r + 1) * w + i),
-           target, c);
-    cdf_c = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c) +
-            ty * mix(&s, wp->cond, st, (r + 1) * w + c);
-    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) +
-         ty * mix(&s, wp->data, st, (r + 1) * w + c);
-    v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
-         ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
-    {
-        double cdf_c1 = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c + 1) +
-                        ty * mix(&s, wp->cond, st, (r + 1) * w + c + 1);
-        tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    }
+    SEARCH(w, pair_at(&cond, r * w, w, ty, i), target, c);
+    cdf_c = pair_at(&cond, r * w, w, ty, c);
+    cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
+    v0 = pair_at(&data, r * w, w, ty, c);
+    v1 = pair_at(&data, r * w, w, ty, c + 1);
+    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
     pos[0] = ((double)c + tx) / (double)(w - 1);
     pos[1] = ((double)r + ty) / (double)(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *sp, const double pos[2],
+void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
-    double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total;
+    double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
     size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty);
-    const slice_set s = *sp;
-    r0 = mix(&s, wp->cond, st, r * w + w - 1);
-    r1 = mix(&s, wp->cond, st, (r + 1) * w + w - 1);
-    {
-        double m0 = mix(&s, wp->marg, h, r), m1 = mix(&s, wp->marg, h, r + 1);
-        u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
-    }
+    slice_rows marg, cond, data;
+    rows_of(s, wp->marg, h, &marg);
+    rows_of(s, wp->cond, st, &cond);
+    data_rows_of(wp, s, &data);
+    r0 = mix(&cond, r * w + w - 1);
+    r1 = mix(&cond, (r + 1) * w + w - 1);
+    m0 = mix(&marg, r);
+    m1 = mix(&marg, r + 1);
+    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
-    cdf_c = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c) +
-            ty * mix(&s, wp->cond, st, (r + 1) * w + c);
-    v0 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c) +
-         ty * mix(&s, wp->data, st, (r + 1) * w + c);
-    v1 = (1.0 - ty) * mix(&s, wp->data, st, r * w + c + 1) +
-         ty * mix(&s, wp->data, st, (r + 1) * w + c + 1);
-    cdf_c1 = (1.0 - ty) * mix(&s, wp->cond, st, r * w + c + 1) +
-             ty * mix(&s, wp->cond, st, (r + 1) * w + c + 1);
+    cdf_c = pair_at(&cond, r * w, w, ty, c);
+    cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
+    v0 = pair_at(&data, r * w, w, ty, c);
+    v1 = pair_at(&data, r * w, w, ty, c + 1);
     u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
                                           mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
                                  row_total

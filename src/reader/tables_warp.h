@@ -32,7 +32,14 @@ typedef struct ll_warp2d {
     /* Stored as float, as the renderers store them: a look-up reads a few
      * scattered rows of tables of megabytes, so their size is what costs;
      * every sum over them is in double. */
-    float *data;                              /* [n_slices][h][w]                 */
+    float *data;                              /* [n_slices][h][w], but see inner  */
+    /* A warp that only interpolates stores its last parameter innermost,
+     * [outer slices][h][w][inner]: the channels of an RGB table (or the
+     * neighbouring wavelengths of a spectral one) that a look-up reads
+     * together then share cache lines instead of lying a table apart.
+     * inner is that parameter's count, or 1 (sampling warps, no
+     * parameters). */
+    size_t inner;
     float *cond;                              /* [n_slices][h][w] running trapezoid
                                                  integrals along x (NULL if the
                                                  warp only interpolates)          */

@@ -317,12 +317,15 @@ static size_t json_string(char *buf, size_t at, size_t cap, const char *s)
 }
 
 /* Our metadata field: the grid, the fitted roughness, the source's text. */
-static char *metadata_text(const writer *w, double alpha, size_t *size)
+static char *metadata_text(const writer *w, double alpha, const char *figures, size_t *size)
 {
     size_t cap = 512, at;
     char *buf = NULL;
     const char *src = w->b->metadata ? w->b->metadata : "";
-    if (!ll_size_add(cap, w->b->metadata_size, &cap) || !ll_size_mul(cap, 6, &cap))
+    if (!figures)
+        figures = "";
+    if (!ll_size_add(cap, w->b->metadata_size, &cap) || !ll_size_mul(cap, 6, &cap) ||
+        !ll_size_add(cap, strlen(figures), &cap))
         return NULL;
     buf = ll_malloc(cap);
     if (!buf)
@@ -331,9 +334,9 @@ static char *metadata_text(const writer *w, double alpha, size_t *size)
     at = (size_t)snprintf(buf, cap,
                           "{\"writer\": \"layerlab %s\", \"theta_i\": %zu, \"vndf\": [%zu, %zu], "
                           "\"sample\": [%zu, %zu], \"ndf_alpha\": %.6g, \"wavelengths\": %zu, "
-                          "\"bsdf_metadata\": ",
+                          "%s\"bsdf_metadata\": ",
                           ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns, alpha,
-                          w->spectral ? w->spectra.n_l : (size_t)0);
+                          w->spectral ? w->spectra.n_l : (size_t)0, figures);
     at = json_string(buf, at, cap, src);
     buf[at++] = '}';
     buf[at] = '\0';
@@ -341,8 +344,8 @@ static char *metadata_text(const writer *w, double alpha, size_t *size)
     return buf;
 }
 
-ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
-                                    const ll_tables_options *opts, const ll_monitor *monitor)
+ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tables_options *opts,
+                               const char *figures, const ll_monitor *monitor)
 {
     ll_tables_options o;
     writer w;
@@ -424,7 +427,7 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
         for (t = 0; t < w.spectra.n_l; ++t)
             w.wavelengths[t] = (float)o.wavelengths[t];
     }
-    meta = metadata_text(&w, alpha, &meta_size);
+    meta = metadata_text(&w, alpha, figures, &meta_size);
     if (!meta) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (metadata)");
         goto done;

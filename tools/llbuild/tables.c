@@ -105,16 +105,25 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
     memset(t, 0, sizeof *t);
     t->opts = defaults;
-    t->opts.n_theta_i = 32;
-    t->opts.vndf_size = 128;
-    t->opts.sample_size = 64;
     for (i = 1; i < *argc; ++i) {
         const char *o = argv[i], *next = i + 1 < *argc ? argv[i + 1] : NULL;
         size_t *grid = !strcmp(o, "--theta-i") ? &t->opts.n_theta_i
                        : !strcmp(o, "--vndf") ? &t->opts.vndf_size
                        : !strcmp(o, "--sample") ? &t->opts.sample_size
                                                 : NULL;
-        if (!strcmp(o, "--format")) {
+        if (!strcmp(o, "--table-tolerance")) {
+            char *end;
+            t->opts.tolerance = next ? strtod(next, &end) : 0.0;
+            if (!next || *next == '\0' || *end != '\0' ||
+                !(t->opts.tolerance >= 0.005 && t->opts.tolerance <= 1.0)) {
+                fprintf(stderr, "llbuild: --table-tolerance wants a number in 0.005..1, not "
+                                "'%s'\n",
+                        next ? next : "(missing)");
+                return 1;
+            }
+            t->grid_given = 1;
+            ++i;
+        } else if (!strcmp(o, "--format")) {
             if (next && !strcmp(next, "measured")) {
                 t->measured = 1;
             } else if (next && !strcmp(next, "bsdf")) {
@@ -141,8 +150,8 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     argv[kept] = NULL;
     *argc = kept;
     if (t->grid_given && !t->measured) {
-        fprintf(stderr, "llbuild: --theta-i, --vndf and --sample size the tables of "
-                        "--format measured; a .bsdf file has no such grid\n");
+        fprintf(stderr, "llbuild: --theta-i, --vndf, --sample and --table-tolerance size the "
+                        "tables of --format measured; a .bsdf file has no such grid\n");
         return 1;
     }
     if (t->opts.format == LL_TABLES_SPECTRAL && !t->measured) {
@@ -189,17 +198,49 @@ static double table_bytes(const ll_tables_options *o)
                   (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
 }
 
-void llbuild_tables_dry_run(const llbuild_tables *t)
+/* " x N wavelengths (A..B nm)" of a spectral file, nothing otherwise. */
+static void spectral_suffix(const llbuild_tables *t)
 {
-    if (!t->measured)
-        return;
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
     if (t->opts.format == LL_TABLES_SPECTRAL)
         printf(" x %zu wavelengths (%g..%g nm)", t->opts.n_wavelengths, t->wavelengths[0],
                t->wavelengths[t->opts.n_wavelengths - 1]);
-    printf(": about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
-           table_bytes(&t->opts) / 1048576.0);
+}
+
+void llbuild_tables_dry_run(const llbuild_tables *t)
+{
+    const ll_tables_options *o = &t->opts;
+    ll_tables_options lo = *o, hi = *o;
+    if (!t->measured)
+        return;
+    if (o->n_theta_i && o->vndf_size && o->sample_size) {
+        printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid",
+               o->n_theta_i, o->vndf_size, o->sample_size);
+        spectral_suffix(t);
+        printf(": about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
+               table_bytes(o) / 1048576.0);
+        return;
+    }
+    /* The library's ladders (ll_tables.h): 16..192 elevations, sample
+     * grids 32..256, the VNDF grid the sample grid's but at least 64. */
+    if (!o->n_theta_i) {
+        lo.n_theta_i = 16;
+        hi.n_theta_i = 192;
+    }
+    if (!o->sample_size) {
+        lo.sample_size = 32;
+        hi.sample_size = 256;
+    }
+    if (!o->vndf_size) {
+        lo.vndf_size = lo.sample_size > 64 ? lo.sample_size : 64;
+        hi.vndf_size = hi.sample_size > 64 ? hi.sample_size : 64;
+    }
+    printf("tables       sized by the tolerance %g, known once measured: from %zu x %zu^2 x "
+           "%zu^2 (about %.2f MiB) up to %zu x %zu^2 x %zu^2 (about %.2f MiB)",
+           o->tolerance != 0.0 ? o->tolerance : 0.05, lo.n_theta_i, lo.vndf_size,
+           lo.sample_size, table_bytes(&lo) / 1048576.0, hi.n_theta_i, hi.vndf_size,
+           hi.sample_size, table_bytes(&hi) / 1048576.0);
+    spectral_suffix(t);
+    printf(" (the `measured` file written instead of the .bsdf above)\n");
 }
 
 static const double summary_degrees[4] = { 0.0, 30.0, 60.0, 80.0 };
@@ -263,13 +304,26 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
         printf("resolution   %zu nodes x %zu Fourier orders, %zu channel%s (the layers the "
                "tables are made from)\n",
                t->n_nodes, t->n_orders, t->n_channels, t->n_channels == 1 ? "" : "s");
-    printf("tables       %zu incident elevations x %zu^2 visible-normal x %zu^2 sample grid\n",
-           t->opts.n_theta_i, t->opts.vndf_size, t->opts.sample_size);
-    if (info.n_wavelengths > 0)
+    {
+        /* The grid the file holds (chosen by the tolerance, or given). */
+        const char *g = info.metadata ? strstr(info.metadata, "\"theta_i\": ") : NULL;
+        const char *f = info.metadata ? strstr(info.metadata, "\"figures\": {") : NULL;
+        unsigned long n_ti = 0, nv = 0, ns = 0;
+        if (g)
+            sscanf(g, "\"theta_i\": %lu, \"vndf\": [%lu, %*u], \"sample\": [%lu", &n_ti, &nv,
+                   &ns);
+        printf("tables       %lu incident elevations x %lu^2 visible-normal x %lu^2 sample "
+               "grid\n",
+               n_ti, nv, ns);
+        if (f) {
+            const char *end = strchr(f, '}');
+            printf("measured     %.*s\n", end ? (int)(end - f + 1) : 0, f);
+        }
+    }
+    if (info.n_wavelengths > 0) {
         printf("spectra      %zu wavelengths, %g..%g nm (read back as linear sRGB: D65, CIE "
                "1931)\n",
                info.n_wavelengths, t->wavelengths[0], t->wavelengths[info.n_wavelengths - 1]);
-    if (info.n_wavelengths > 0) {
         printf("file         %zu bytes\n", info.file_size);
         printf("albedo       (R G B) reflected, of the file (its sampler; linear sRGB)\n");
         for (a = 0; a < 4; ++a) {
@@ -368,7 +422,8 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
     ll_bsdf *b = NULL;
     step st;
     /* Shares of the bar: the build most, the .bsdf a little, the tables
-     * (about a second at the default grid) the rest. */
+     * (a few seconds: each grid the tolerance tries is written and
+     * measured) the rest. */
     ll_monitor building = monitor_of(&st, monitor, 0.0, 0.8);
     ll_status s;
     if (t->opts.format == LL_TABLES_SPECTRAL) {

@@ -1,0 +1,144 @@
+/*
+ * ll_tables_measure (bsdf_write_tables.h): the figures a table's tolerance
+ * is stated in (ll_tables.h), measured on the opened table against the
+ * file it was written from, through the public calls a renderer uses.
+ *
+ * Albedo: each file by its own sampler, stratified over STRATA^2 cells
+ * (the weights f cos / pdf of both representations are nearly constant,
+ * so the estimate is far finer than the 0.3% it is compared with), at
+ * viewer elevations 0..85 degrees. f: PAIRS direction pairs from a fixed
+ * seed, both elevations <= 80 degrees, the viewer uniform in cos theta and
+ * the light half uniform in cos theta, half within 0.4 radians of the
+ * mirror direction (where f changes fastest and renders look); relative
+ * errors where f cos is above 1% of its largest value over the pairs,
+ * per channel, pooled.
+ */
+#include "writer/bsdf_write_tables.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#define STRATA 256
+#define PAIRS 20000
+#define ANGLES 10
+#define LIMIT_DEG 80.0
+
+static const double angles_deg[ANGLES] = { 0, 10, 20, 30, 40, 50, 60, 70, 80, 85 };
+
+static double uniform(uint64_t *s)
+{
+    *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void direction(double theta, double phi, double w[3])
+{
+    w[0] = sin(theta) * cos(phi);
+    w[1] = sin(theta) * sin(phi);
+    w[2] = cos(theta);
+}
+
+static ll_status albedo(const ll_bsdf *b, double theta, double out[3])
+{
+    double wo[3];
+    int i, j, c;
+    ll_status s;
+    direction(theta, 0.0, wo);
+    out[0] = out[1] = out[2] = 0.0;
+    for (i = 0; i < STRATA; ++i)
+        for (j = 0; j < STRATA; ++j) {
+            double u[2] = { (i + 0.5) / STRATA, (j + 0.5) / STRATA }, wi[3], pdf, f[3];
+            if ((s = ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f)) !=
+                LL_OK)
+                return s;
+            if (pdf > 0.0)
+                for (c = 0; c < 3; ++c)
+                    out[c] += f[c] * fabs(wi[2]) / pdf;
+        }
+    for (c = 0; c < 3; ++c)
+        out[c] /= (double)STRATA * STRATA;
+    return LL_OK;
+}
+
+static int compare(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static ll_status f_errors(const ll_bsdf *src, const ll_bsdf *table, ll_tables_figures *out)
+{
+    const double lim = LIMIT_DEG * LL_PI / 180.0;
+    double *ref = ll_alloc_array(PAIRS, 4 * sizeof(double));
+    double *got = ll_alloc_array(PAIRS, 3 * sizeof(double));
+    double *err = ll_alloc_array(PAIRS, 3 * sizeof(double)), top[3] = { 0.0, 0.0, 0.0 };
+    uint64_t rng = 0x7ab1e5;
+    size_t k, n = 0;
+    int c;
+    ll_status s = LL_OK;
+    if (!ref || !got || !err) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_tables_write_from_bsdf: out of memory (figures)");
+        goto done;
+    }
+    for (k = 0; k < PAIRS && s == LL_OK; ++k) {
+        double wo[3], wi[3], tv = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
+        direction(tv, 0.0, wo);
+        do {
+            if (k % 2 == 0) {
+                double tl = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
+                direction(tl, 2.0 * LL_PI * uniform(&rng), wi);
+            } else {
+                double dt = 0.4 * (2.0 * uniform(&rng) - 1.0);
+                double dp = 0.4 * (2.0 * uniform(&rng) - 1.0) / (sin(tv) + 0.2);
+                direction(fabs(tv + dt), LL_PI + dp, wi);
+            }
+        } while (acos(wi[2]) > lim);
+        if ((s = ll_bsdf_eval_dir(src, wo, wi, LL_TRANSPORT_RADIANCE, NULL, ref + 4 * k)) !=
+                LL_OK ||
+            (s = ll_bsdf_eval_dir(table, wo, wi, LL_TRANSPORT_RADIANCE, NULL, got + 3 * k)) !=
+                LL_OK)
+            break;
+        ref[4 * k + 3] = wi[2];
+        for (c = 0; c < 3; ++c)
+            if (ref[4 * k + c] * wi[2] > top[c])
+                top[c] = ref[4 * k + c] * wi[2];
+    }
+    if (s != LL_OK)
+        goto done;
+    for (k = 0; k < PAIRS; ++k)
+        for (c = 0; c < 3; ++c)
+            if (ref[4 * k + c] * ref[4 * k + 3] > 0.01 * top[c])
+                err[n++] = fabs(got[3 * k + c] / ref[4 * k + c] - 1.0);
+    if (n == 0) {
+        s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                    "ll_tables_write_from_bsdf: the file reflects nothing to compare");
+        goto done;
+    }
+    qsort(err, n, sizeof *err, compare);
+    out->p50 = err[n / 2];
+    out->p95 = err[(size_t)(0.95 * (double)n)];
+    out->p99 = err[(size_t)(0.99 * (double)n)];
+done:
+    ll_free(ref);
+    ll_free(got);
+    ll_free(err);
+    return s;
+}
+
+ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table, ll_tables_figures *out)
+{
+    int k, c;
+    ll_status s;
+    out->albedo = 0.0;
+    for (k = 0; k < ANGLES; ++k) {
+        double theta = angles_deg[k] * LL_PI / 180.0, at[3], as[3];
+        if ((s = albedo(table, theta, at)) != LL_OK || (s = albedo(src, theta, as)) != LL_OK)
+            return s;
+        for (c = 0; c < 3; ++c) {
+            double r = as[c] > 0.0 ? fabs(at[c] / as[c] - 1.0) : 0.0;
+            if (!(r <= out->albedo))
+                out->albedo = r;
+        }
+    }
+    return f_errors(src, table, out);
+}
