@@ -24,6 +24,12 @@
 #define GGX_KINK_LEVELS 8     /* ... this many times                           */
 #define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
+#define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
+                               * this many more ...                            */
+#define GGX_SETTLED 2.5e-4    /* ... extended (doubled) until the last quarter
+                               * of the block stays below this fraction of the
+                               * mean: a quarter of what the layer keeps
+                               * (LL_MICROFACET_RELERR)                        */
 
 /* cos(a + k h) for k < count, h = (b - a) / (count - 1), by rotation
  * (the error grows by about one rounding per step). */
@@ -68,8 +74,8 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
  * tails of a sharp lobe and the kinks far out in them cost most of the
  * samples otherwise). */
 static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
-                      double b, size_t samples, size_t n_out, double *out, double *scratch,
-                      double *seen)
+                      double b, size_t samples, size_t first, size_t n_out, double *out,
+                      double *scratch, double *seen)
 {
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
     double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
@@ -87,7 +93,7 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
     *seen = fmax(*seen, largest);
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
         return;
-    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+    ll_filon_moments_from(f, samples, a, b, first, n_out, out, filon);
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -122,7 +128,7 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
  * as add_graded's, the panels next to the graded ones err by O(h^1/2)
  * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
-                        double b, int at_a, int at_b, size_t n_out, double *out,
+                        double b, int at_a, int at_b, size_t first, size_t n_out, double *out,
                         double *scratch, double *seen)
 {
     double d = b - a;
@@ -131,22 +137,22 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int r
         return;
     if (at_a && at_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch, seen);
-        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch, seen);
+        add_towards(mf, p, reference, a, mid, 1, 0, first, n_out, out, scratch, seen);
+        add_towards(mf, p, reference, mid, b, 0, 1, first, n_out, out, scratch, seen);
         return;
     }
     if (!at_a && !at_b) {
-        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch, seen);
+        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, first, n_out, out, scratch, seen);
         return;
     }
     for (level = 0; level < GGX_KINK_LEVELS; ++level) {
         double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
         if (at_a)
-            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch,
-                      seen);
+            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, first, n_out, out,
+                      scratch, seen);
         else
-            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch,
-                      seen);
+            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, first, n_out, out,
+                      scratch, seen);
         d = near;
     }
 }
@@ -154,14 +160,15 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int r
 /* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
  * width from the peak's half width beta^-1/2 on (the tails fall like
  * phi^-4, so each piece spans the same relative change of f), cut at the
- * kink and graded towards it and towards near branch points. */
+ * kink and graded towards it and towards near branch points; the orders
+ * first .. first + n_out - 1 into out[0 .. n_out - 1]. */
 static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int reference,
-                      size_t n_out, double *out, double *scratch)
+                      size_t first, size_t n_out, double *out, double *scratch)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
-    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
+    double a = 0.0, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
     while (a < end) {
-        double b = a == 0.0 ? first : 2.0 * a;
+        double b = a == 0.0 ? width : 2.0 * a;
         int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
         if (b > end - ANGLE_EPS)
             b = end;
@@ -171,8 +178,43 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int ref
          * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
          * there, and Fresnel's square root is on the far side alone. */
         grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
-        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch, &seen);
+        add_towards(mf, p, reference, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
         a = b;
+    }
+}
+
+/* Whether the block of orders [0, n) has settled: its last quarter (at
+ * least 8 orders) below GGX_SETTLED of the mean (out[l] / out[0] is half
+ * the final ratio: the factors 2 / pi and 1 / pi come later). */
+static int ggx_settled(const double *out, size_t n)
+{
+    size_t width = n / 4 > 8 ? n / 4 : 8, l;
+    double largest = 0.0;
+    if (width > n)
+        width = n;
+    for (l = n - width; l < n; ++l)
+        largest = fmax(largest, fabs(out[l]));
+    return 2.0 * largest < GGX_SETTLED * fabs(out[0]);
+}
+
+/* GGX's Filon series, n_out orders at most, by blocks: a kink far out in
+ * the tail, or the end of refraction, adds terms that fall like a power
+ * of the order, and how far they matter depends on the size of the kink,
+ * which only the moments tell. Each block costs its orders times the
+ * samples, so the first holds the peak's orders and a few more, and the
+ * next ones (the orders after it, the same pieces and samples) double it
+ * until its last quarter has settled. */
+static void ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                       size_t n_out, double *out, double *scratch)
+{
+    size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    if (n > n_out)
+        n = n_out;
+    ggx_filon(mf, p, reference, 0, n, out, scratch);
+    while (n < n_out && !ggx_settled(out, n)) {
+        size_t next = n_out - n > n ? 2 * n : n_out;
+        ggx_filon(mf, p, reference, n, next - n, out + n, scratch);
+        n = next;
     }
 }
 
@@ -185,7 +227,7 @@ void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *
     size_t l;
     memset(out, 0, n_out * sizeof(double));
     if (mf->ggx) {
-        ggx_filon(mf, p, reference, n_out, out, scratch);
+        ggx_orders(mf, p, reference, n_out, out, scratch);
     } else if (p->split > 0.0) {
         add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
                    out, scratch);
