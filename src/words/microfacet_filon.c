@@ -72,21 +72,28 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
  * GGX_NEGLIGIBLE of it adds no moments: its share of f at any azimuth, of
  * the series' partial sums too, is below that fraction of the peak (the
  * tails of a sharp lobe and the kinks far out in them cost most of the
- * samples otherwise). */
-static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+ * samples otherwise). part: GGX_WHOLE (f), GGX_REFERENCE (f with F = 1) or
+ * GGX_FRESNEL (f minus its reference). */
+enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
+
+static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                       double b, size_t samples, size_t first, size_t n_out, double *out,
                       double *scratch, double *seen)
 {
-    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
-    double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
+    /* (the reference of GGX_FRESNEL behind f: samples <= FILON_SAMPLES / 2) */
+    double *f = scratch + FILON_SCR_F, *f_ref = f + FILON_SAMPLES / 2;
+    double *cos_phi = scratch + FILON_SCR_COS, *filon = scratch + FILON_SCR_FILON;
+    double peak = exp(p->a_plus_b), largest = 0.0;
     size_t k;
     if (!(b > a))
         return;
     azimuth_cosines(a, b, samples, cos_phi);
-    ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
-                                 reference ? f : NULL);
+    ll_microfacet_sample_profile(mf, p, cos_phi, samples, part == GGX_REFERENCE ? NULL : f,
+                                 part == GGX_WHOLE ? NULL : part == GGX_REFERENCE ? f : f_ref);
     for (k = 0; k < samples; ++k) {
         double c = 1.0 + p->b * (1.0 - cos_phi[k]);
+        if (part == GGX_FRESNEL)
+            f[k] -= f_ref[k];
         f[k] *= peak / (c * c);
         largest = fmax(largest, fabs(f[k]));
     }
@@ -127,7 +134,7 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
  * Fresnel at the kink to the same relative accuracy (on uniform panels,
  * as add_graded's, the panels next to the graded ones err by O(h^1/2)
  * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
-static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
+static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                         double b, int at_a, int at_b, size_t first, size_t n_out, double *out,
                         double *scratch, double *seen)
 {
@@ -137,36 +144,37 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int r
         return;
     if (at_a && at_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, reference, a, mid, 1, 0, first, n_out, out, scratch, seen);
-        add_towards(mf, p, reference, mid, b, 0, 1, first, n_out, out, scratch, seen);
+        add_towards(mf, p, part, a, mid, 1, 0, first, n_out, out, scratch, seen);
+        add_towards(mf, p, part, mid, b, 0, 1, first, n_out, out, scratch, seen);
         return;
     }
     if (!at_a && !at_b) {
-        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, first, n_out, out, scratch, seen);
+        ggx_piece(mf, p, part, a, b, GGX_FILON_SAMPLES, first, n_out, out, scratch, seen);
         return;
     }
     for (level = 0; level < GGX_KINK_LEVELS; ++level) {
         double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
         if (at_a)
-            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, first, n_out, out,
+            ggx_piece(mf, p, part, a + near, a + d, GGX_KINK_SAMPLES, first, n_out, out,
                       scratch, seen);
         else
-            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, first, n_out, out,
+            ggx_piece(mf, p, part, b - d, b - near, GGX_KINK_SAMPLES, first, n_out, out,
                       scratch, seen);
         d = near;
     }
 }
 
-/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
- * width from the peak's half width beta^-1/2 on (the tails fall like
- * phi^-4, so each piece spans the same relative change of f), cut at the
- * kink and graded towards it and towards near branch points; the orders
- * first .. first + n_out - 1 into out[0 .. n_out - 1]. */
-static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int reference,
-                      size_t first, size_t n_out, double *out, double *scratch)
+/* GGX's f over [start, pi] (or [start, split] for refraction; start is 0
+ * or the split): pieces doubling in width from the peak's half width
+ * beta^-1/2 on (the tails fall like phi^-4, so each piece spans the same
+ * relative change of f), cut at the kink and graded towards it and towards
+ * near branch points; the orders first .. first + n_out - 1 into out[0 ..
+ * n_out - 1]. seen: the largest f known before the first piece. */
+static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int part, double start,
+                      double seen, size_t first, size_t n_out, double *out, double *scratch)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
-    double a = 0.0, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
+    double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
@@ -178,15 +186,16 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int ref
          * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
          * there, and Fresnel's square root is on the far side alone. */
         grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
-        add_towards(mf, p, reference, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
+        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
         a = b;
     }
 }
 
-/* Whether the block of orders [0, n) has settled: its last quarter (at
- * least 8 orders) below GGX_SETTLED of the mean (out[l] / out[0] is half
- * the final ratio: the factors 2 / pi and 1 / pi come later). */
-static int ggx_settled(const double *out, size_t n)
+/* Whether the block of orders [0, n) of Filon moments has settled: its
+ * last quarter (at least 8 orders) below GGX_SETTLED of the mean, given
+ * as the moment of order 0 (the series' terms are 2 / pi times the
+ * moments, its mean 1 / pi times the moment of order 0). */
+static int ggx_settled(const double *out, size_t n, double moment0)
 {
     size_t width = n / 4 > 8 ? n / 4 : 8, l;
     double largest = 0.0;
@@ -194,28 +203,53 @@ static int ggx_settled(const double *out, size_t n)
         width = n;
     for (l = n - width; l < n; ++l)
         largest = fmax(largest, fabs(out[l]));
-    return 2.0 * largest < GGX_SETTLED * fabs(out[0]);
+    return 2.0 * largest < GGX_SETTLED * fabs(moment0);
 }
 
-/* GGX's Filon series, n_out orders at most, by blocks: a kink far out in
- * the tail, or the end of refraction, adds terms that fall like a power
- * of the order, and how far they matter depends on the size of the kink,
- * which only the moments tell. Each block costs its orders times the
- * samples, so the first holds the peak's orders and a few more, and the
- * next ones (the orders after it, the same pieces and samples) double it
- * until its last quarter has settled. */
-static void ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int reference,
-                       size_t n_out, double *out, double *scratch)
+/* GGX's Filon moments from start on, n_out orders at most, by blocks: a
+ * kink far out in the tail, or the end of refraction, adds terms that
+ * fall like a power of the order, and how far they matter depends on the
+ * size of the kink, which only the moments tell. Each block costs its
+ * orders times the samples, so the first holds the peak's orders and a few
+ * more, and the next ones (the orders after it, the same pieces and
+ * samples) double it until its last quarter has settled against moment0
+ * (0: the moments' own order 0). Returns the orders computed. */
+static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
+                         double start, double seen, double moment0, size_t n_out, double *out,
+                         double *scratch)
 {
     size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     if (n > n_out)
         n = n_out;
-    ggx_filon(mf, p, reference, 0, n, out, scratch);
-    while (n < n_out && !ggx_settled(out, n)) {
+    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch);
+    while (n < n_out && !ggx_settled(out, n, moment0 != 0.0 ? moment0 : out[0])) {
         size_t next = n_out - n > n ? 2 * n : n_out;
-        ggx_filon(mf, p, reference, n, next - n, out + n, scratch);
+        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch);
         n = next;
     }
+    return n;
+}
+
+/* The moments into a cosine series: (2 - [l = 0]) / pi. */
+static void moments_to_series(double *out, size_t n)
+{
+    size_t l;
+    if (n == 0)
+        return;
+    out[0] *= LL_INV_PI;
+    for (l = 1; l < n; ++l)
+        out[l] *= 2.0 * LL_INV_PI;
+}
+
+size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf, const pair_plan *p,
+                                      double mean, double seen, size_t n_out, double *out,
+                                      double *scratch)
+{
+    size_t n;
+    memset(out, 0, n_out * sizeof(double));
+    n = ggx_orders(mf, p, GGX_FRESNEL, p->split, seen, LL_PI * mean, n_out, out, scratch);
+    moments_to_series(out, n);
+    return n;
 }
 
 /* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
@@ -224,10 +258,10 @@ static void ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int re
 void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *p, int reference,
                                 size_t n_out, double *out, double *scratch)
 {
-    size_t l;
     memset(out, 0, n_out * sizeof(double));
     if (mf->ggx) {
-        ggx_orders(mf, p, reference, n_out, out, scratch);
+        ggx_orders(mf, p, reference ? GGX_REFERENCE : GGX_WHOLE, 0.0, 0.0, 0.0, n_out, out,
+                   scratch);
     } else if (p->split > 0.0) {
         add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
                    out, scratch);
@@ -238,7 +272,5 @@ void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *
         add_graded(mf, p, reference, 0.0, p->phi_end, FILON_SAMPLES, p->grade_start,
                    p->grade_end, n_out, out, scratch);
     }
-    out[0] *= LL_INV_PI;
-    for (l = 1; l < n_out; ++l)
-        out[l] *= 2.0 * LL_INV_PI;
+    moments_to_series(out, n_out);
 }
