@@ -22,14 +22,17 @@
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
 #define GGX_KINK_LEVELS 8     /* ... this many times towards the square root of
-                               * total internal reflection,                    */
+                               * total internal reflection, on the circle or
+                               * just off it,                                  */
 #define GGX_END_LEVELS 2      /* ... and this many towards the end of
                                * refraction (where g falls to 0 like a power
-                               * >= 1) or a branch point just off the circle:
-                               * measured against direct integration, 2 is as
-                               * accurate there as 8 (TIR's square root needs
-                               * its 8: with 5, its worst pair at alpha 1
-                               * errs by 3.3e-4 of the peak instead of 2.3e-4) */
+                               * >= 1) and towards a branch point just off the
+                               * circle but TIR's: measured against direct
+                               * integration, 2 is as accurate there as 8 (TIR
+                               * needs its 8: with 5, its worst pair at alpha 1
+                               * errs by 3.3e-4 of the peak instead of 2.3e-4,
+                               * and with 2 just off the circle by 5.1e-4
+                               * instead of 1.6e-4)                            */
 #define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
@@ -184,7 +187,9 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
     double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
+    /* (a dielectric's reflection: its branch points may be TIR's) */
     int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
+    int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a, grade_b;
@@ -195,11 +200,11 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
         /* Reflection's kink is total internal reflection, which holds
          * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
          * there, and Fresnel's square root is on the far side alone. */
-        grade_a = a == 0.0 ? (p->grade_start ? GGX_END_LEVELS : 0)
+        grade_a = a == 0.0 ? (p->grade_start ? branch_levels : 0)
                   : a == p->split ? kink_levels
                                   : 0;
         grade_b = b == p->split && !p->reflect ? kink_levels
-                  : b == LL_PI && p->grade_end ? GGX_END_LEVELS
+                  : b == LL_PI && p->grade_end ? branch_levels
                                                : 0;
         add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
         a = b;
