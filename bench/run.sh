@@ -9,7 +9,8 @@
 #   (none)  the headline figures, under 10 minutes on a 2-core machine: the
 #           original's three recipes at their resolutions, the dust on gold
 #           at (400, 1600), adding against dgemm, evaluation and sampling
-#           per call, on .bsdf files and on table files made from them
+#           per call, on .bsdf files and on table files made from them, and
+#           the build of a GGX interface against a Beckmann one by alpha
 #   --full  also the dust on gold at (400, 800) and at its own (1098, 4194),
 #           the slab against doubling, coated gold at 1, 2, ... threads,
 #           batched evaluation, the tolerance's cost, the textured build,
@@ -76,6 +77,7 @@ build recipe bench/recipe.c bench/bench_util.c tools/llbuild/time_model.c -Itool
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
 build eval bench/eval.c bench/bench_util.c
 build tables bench/tables.c bench/bench_util.c
+build ggx_speed bench/ggx_speed.c bench/bench_util.c
 build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
     bench/report_table.c bench/report_json.c bench/bench_util.c
 if [ "$FULL" = 1 ]; then
@@ -132,6 +134,16 @@ status=0
     --runs "$RUNS" --full "$FULL" --original "$ORIGINAL" \
     --llbuild "$BUILD/bin/llbuild" --commit "$COMMIT" \
     --compiler "$COMPILER -O3 -march=x86-64-v2" || status=$?
+
+# GGX against Beckmann at the same resolution (bench/ggx_speed.c): its own
+# table, by alpha, after the driver's (about 15 s of CPU).
+echo
+if [ -x "$BIN/ggx_speed" ]; then
+    "$BIN/ggx_speed" 200 3 || status=1
+else
+    echo "bench: bench/ggx_speed.c did not build" >&2
+    status=1
+fi
 
 # bench/convergence.c's modes: the resolution's convergence beyond the
 # test's subset (docs/method.md). Each prints the materials it checks.

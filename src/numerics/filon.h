@@ -18,4 +18,10 @@
 LL_INTERNAL void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
                                   size_t n_moments, double *moments, double *scratch);
 
+/* The same for the orders l = first .. first + n_moments - 1, added to
+ * moments[l - first] (a series extended by its next orders). */
+LL_INTERNAL void ll_filon_moments_from(const double *g, size_t n_samples, double a, double b,
+                                       size_t first, size_t n_moments, double *moments,
+                                       double *scratch);
+
 #endif /* LL_FILON_H */

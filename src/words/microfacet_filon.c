@@ -21,9 +21,26 @@
                                * which double in width away from the peak      */
 #define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
                                * point (odd); the pieces shrink by 4 ...       */
-#define GGX_KINK_LEVELS 8     /* ... this many times                           */
+#define GGX_KINK_LEVELS 8     /* ... this many times towards the square root of
+                               * total internal reflection, on the circle or
+                               * just off it,                                  */
+#define GGX_END_LEVELS 2      /* ... and this many towards the end of
+                               * refraction (where g falls to 0 like a power
+                               * >= 1) and towards a branch point just off the
+                               * circle but TIR's: measured against direct
+                               * integration, 2 is as accurate there as 8 (TIR
+                               * needs its 8: with 5, its worst pair at alpha 1
+                               * errs by 3.3e-4 of the peak instead of 2.3e-4,
+                               * and with 2 just off the circle by 5.1e-4
+                               * instead of 1.6e-4)                            */
 #define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
+#define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
+                               * this many more ...                            */
+#define GGX_SETTLED 2.5e-4    /* ... extended (doubled) until the last quarter
+                               * of the block stays below this fraction of the
+                               * mean: a quarter of what the layer keeps
+                               * (LL_MICROFACET_RELERR)                        */
 
 /* cos(a + k h) for k < count, h = (b - a) / (count - 1), by rotation
  * (the error grows by about one rounding per step). */
@@ -66,28 +83,35 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
  * GGX_NEGLIGIBLE of it adds no moments: its share of f at any azimuth, of
  * the series' partial sums too, is below that fraction of the peak (the
  * tails of a sharp lobe and the kinks far out in them cost most of the
- * samples otherwise). */
-static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
-                      double b, size_t samples, size_t n_out, double *out, double *scratch,
-                      double *seen)
+ * samples otherwise). part: GGX_WHOLE (f), GGX_REFERENCE (f with F = 1) or
+ * GGX_FRESNEL (f minus its reference). */
+enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
+
+static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
+                      double b, size_t samples, size_t first, size_t n_out, double *out,
+                      double *scratch, double *seen)
 {
-    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
-    double *filon = scratch + FILON_SCR_FILON, peak = exp(p->a_plus_b), largest = 0.0;
+    /* (the reference of GGX_FRESNEL behind f: samples <= FILON_SAMPLES / 2) */
+    double *f = scratch + FILON_SCR_F, *f_ref = f + FILON_SAMPLES / 2;
+    double *cos_phi = scratch + FILON_SCR_COS, *filon = scratch + FILON_SCR_FILON;
+    double peak = exp(p->a_plus_b), largest = 0.0;
     size_t k;
     if (!(b > a))
         return;
     azimuth_cosines(a, b, samples, cos_phi);
-    ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
-                                 reference ? f : NULL);
+    ll_microfacet_sample_profile(mf, p, cos_phi, samples, part == GGX_REFERENCE ? NULL : f,
+                                 part == GGX_WHOLE ? NULL : part == GGX_REFERENCE ? f : f_ref);
     for (k = 0; k < samples; ++k) {
         double c = 1.0 + p->b * (1.0 - cos_phi[k]);
+        if (part == GGX_FRESNEL)
+            f[k] -= f_ref[k];
         f[k] *= peak / (c * c);
         largest = fmax(largest, fabs(f[k]));
     }
     *seen = fmax(*seen, largest);
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
         return;
-    ll_filon_moments(f, samples, a, b, n_out, out, filon);
+    ll_filon_moments_from(f, samples, a, b, first, n_out, out, filon);
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -120,49 +144,55 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
  * with the same samples, so that every piece resolves the square root of
  * Fresnel at the kink to the same relative accuracy (on uniform panels,
  * as add_graded's, the panels next to the graded ones err by O(h^1/2)
- * there, and a kink under a wide GGX lobe is summed over ~100 orders). */
-static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int reference, double a,
-                        double b, int at_a, int at_b, size_t n_out, double *out,
-                        double *scratch, double *seen)
+ * there, and a kink under a wide GGX lobe is summed over ~100 orders).
+ * levels_a, levels_b: the pieces towards each end (0: not graded). */
+static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
+                        double b, int levels_a, int levels_b, size_t first, size_t n_out,
+                        double *out, double *scratch, double *seen)
 {
     double d = b - a;
-    int level;
+    int level, levels = levels_a ? levels_a : levels_b;
     if (!(b > a))
         return;
-    if (at_a && at_b) {
+    if (levels_a && levels_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, reference, a, mid, 1, 0, n_out, out, scratch, seen);
-        add_towards(mf, p, reference, mid, b, 0, 1, n_out, out, scratch, seen);
+        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, seen);
+        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, seen);
         return;
     }
-    if (!at_a && !at_b) {
-        ggx_piece(mf, p, reference, a, b, GGX_FILON_SAMPLES, n_out, out, scratch, seen);
+    if (!levels) {
+        ggx_piece(mf, p, part, a, b, GGX_FILON_SAMPLES, first, n_out, out, scratch, seen);
         return;
     }
-    for (level = 0; level < GGX_KINK_LEVELS; ++level) {
-        double near = level == GGX_KINK_LEVELS - 1 ? 0.0 : 0.25 * d;
-        if (at_a)
-            ggx_piece(mf, p, reference, a + near, a + d, GGX_KINK_SAMPLES, n_out, out, scratch,
-                      seen);
+    for (level = 0; level < levels; ++level) {
+        double near = level == levels - 1 ? 0.0 : 0.25 * d;
+        if (levels_a)
+            ggx_piece(mf, p, part, a + near, a + d, GGX_KINK_SAMPLES, first, n_out, out,
+                      scratch, seen);
         else
-            ggx_piece(mf, p, reference, b - d, b - near, GGX_KINK_SAMPLES, n_out, out, scratch,
-                      seen);
+            ggx_piece(mf, p, part, b - d, b - near, GGX_KINK_SAMPLES, first, n_out, out,
+                      scratch, seen);
         d = near;
     }
 }
 
-/* GGX's f over [0, pi] (or [0, split] for refraction): pieces doubling in
- * width from the peak's half width beta^-1/2 on (the tails fall like
- * phi^-4, so each piece spans the same relative change of f), cut at the
- * kink and graded towards it and towards near branch points. */
-static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int reference,
-                      size_t n_out, double *out, double *scratch)
+/* GGX's f over [start, pi] (or [start, split] for refraction; start is 0
+ * or the split): pieces doubling in width from the peak's half width
+ * beta^-1/2 on (the tails fall like phi^-4, so each piece spans the same
+ * relative change of f), cut at the kink and graded towards it and towards
+ * near branch points; the orders first .. first + n_out - 1 into out[0 ..
+ * n_out - 1]. seen: the largest f known before the first piece. */
+static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int part, double start,
+                      double seen, size_t first, size_t n_out, double *out, double *scratch)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
-    double a = 0.0, first = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI, seen = 0.0;
+    double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
+    /* (a dielectric's reflection: its branch points may be TIR's) */
+    int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
+    int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     while (a < end) {
-        double b = a == 0.0 ? first : 2.0 * a;
-        int grade_a = a == 0.0 ? p->grade_start : a == p->split, grade_b;
+        double b = a == 0.0 ? width : 2.0 * a;
+        int grade_a, grade_b;
         if (b > end - ANGLE_EPS)
             b = end;
         if (p->split > a && p->split < b)
@@ -170,10 +200,76 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int ref
         /* Reflection's kink is total internal reflection, which holds
          * below the split (t < 1 - 2 eta^2, and t grows with phi): F = 1
          * there, and Fresnel's square root is on the far side alone. */
-        grade_b = (b == p->split && !p->reflect) || (b == LL_PI && p->grade_end);
-        add_towards(mf, p, reference, a, b, grade_a, grade_b, n_out, out, scratch, &seen);
+        grade_a = a == 0.0 ? (p->grade_start ? branch_levels : 0)
+                  : a == p->split ? kink_levels
+                                  : 0;
+        grade_b = b == p->split && !p->reflect ? kink_levels
+                  : b == LL_PI && p->grade_end ? branch_levels
+                                               : 0;
+        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
         a = b;
     }
+}
+
+/* Whether the block of orders [0, n) of Filon moments has settled: its
+ * last quarter (at least 8 orders) below GGX_SETTLED of the mean, given
+ * as the moment of order 0 (the series' terms are 2 / pi times the
+ * moments, its mean 1 / pi times the moment of order 0). */
+static int ggx_settled(const double *out, size_t n, double moment0)
+{
+    size_t width = n / 4 > 8 ? n / 4 : 8, l;
+    double largest = 0.0;
+    if (width > n)
+        width = n;
+    for (l = n - width; l < n; ++l)
+        largest = fmax(largest, fabs(out[l]));
+    return 2.0 * largest < GGX_SETTLED * fabs(moment0);
+}
+
+/* GGX's Filon moments from start on, n_out orders at most, by blocks: a
+ * kink far out in the tail, or the end of refraction, adds terms that
+ * fall like a power of the order, and how far they matter depends on the
+ * size of the kink, which only the moments tell. Each block costs its
+ * orders times the samples, so the first holds the peak's orders and a few
+ * more, and the next ones (the orders after it, the same pieces and
+ * samples) double it until its last quarter has settled against moment0
+ * (0: the moments' own order 0). Returns the orders computed. */
+static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
+                         double start, double seen, double moment0, size_t n_out, double *out,
+                         double *scratch)
+{
+    size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    if (n > n_out)
+        n = n_out;
+    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch);
+    while (n < n_out && !ggx_settled(out, n, moment0 != 0.0 ? moment0 : out[0])) {
+        size_t next = n_out - n > n ? 2 * n : n_out;
+        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch);
+        n = next;
+    }
+    return n;
+}
+
+/* The moments into a cosine series: (2 - [l = 0]) / pi. */
+static void moments_to_series(double *out, size_t n)
+{
+    size_t l;
+    if (n == 0)
+        return;
+    out[0] *= LL_INV_PI;
+    for (l = 1; l < n; ++l)
+        out[l] *= 2.0 * LL_INV_PI;
+}
+
+size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf, const pair_plan *p,
+                                      double mean, double seen, size_t n_out, double *out,
+                                      double *scratch)
+{
+    size_t n;
+    memset(out, 0, n_out * sizeof(double));
+    n = ggx_orders(mf, p, GGX_FRESNEL, p->split, seen, LL_PI * mean, n_out, out, scratch);
+    moments_to_series(out, n);
+    return n;
 }
 
 /* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
@@ -182,10 +278,10 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int ref
 void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *p, int reference,
                                 size_t n_out, double *out, double *scratch)
 {
-    size_t l;
     memset(out, 0, n_out * sizeof(double));
     if (mf->ggx) {
-        ggx_filon(mf, p, reference, n_out, out, scratch);
+        ggx_orders(mf, p, reference ? GGX_REFERENCE : GGX_WHOLE, 0.0, 0.0, 0.0, n_out, out,
+                   scratch);
     } else if (p->split > 0.0) {
         add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
                    out, scratch);
@@ -196,7 +292,5 @@ void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *
         add_graded(mf, p, reference, 0.0, p->phi_end, FILON_SAMPLES, p->grade_start,
                    p->grade_end, n_out, out, scratch);
     }
-    out[0] *= LL_INV_PI;
-    for (l = 1; l < n_out; ++l)
-        out[l] *= 2.0 * LL_INV_PI;
+    moments_to_series(out, n_out);
 }

@@ -90,12 +90,22 @@ void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size
                    double *out, double *scratch)
 {
     /* E_beta p with p = sum_j b_j cos(j phi): the two-sided coefficient of
-     * order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) + e_(l + j)) / 2. */
+     * order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) + e_(l + j)) / 2.
+     * From l = LL_GGX_CHEB - 1 on, every l - j >= 0 and e_k = r^k (c + k s)
+     * / s^3 make that sum r^l ((c + l s) S_0 + S_1) / s^3 with
+     *     S_0 = b_0 + sum_(j >= 1) b_j (r^-j + r^j),
+     *     S_1 = s sum_(j >= 1) j b_j (r^j - r^-j),
+     * one term per order instead of LL_GGX_CHEB (a sharp lobe has hundreds
+     * of orders). For r below closed_r, r^-j would grow towards overflow;
+     * such a peak is wide and its series short, summed term by term. */
+    const double closed_r = 1e-2;
     double *b = scratch, *e = scratch + LL_GGX_CHEB;
     double c, s, r, power = 1.0, inv_s3;
-    size_t i, j, l, n_e = n_out + LL_GGX_CHEB;
+    size_t i, j, l, direct, n_e;
     peak_constants(beta, &c, &s, &r);
     inv_s3 = 1.0 / (s * s * s);
+    direct = r < closed_r || n_out < LL_GGX_CHEB ? n_out : LL_GGX_CHEB;
+    n_e = direct + LL_GGX_CHEB;
     for (j = 0; j < LL_GGX_CHEB; ++j) {
         double sum = 0.0;
         for (i = 0; i < LL_GGX_CHEB; ++i)
@@ -106,10 +116,27 @@ void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size
         e[l] = power * (c + (double)l * s) * inv_s3;
         power *= r;
     }
-    for (l = 0; l < n_out; ++l) {
+    for (l = 0; l < direct; ++l) {
         double sum = b[0] * e[l];
         for (j = 1; j < LL_GGX_CHEB; ++j)
             sum += b[j] * (e[l > j ? l - j : j - l] + e[l + j]);
         out[l] = l == 0 ? sum : 2.0 * sum;
+    }
+    if (direct < n_out) {
+        double s0 = b[0], s1 = 0.0, up = 1.0, down = 1.0, inv_r = 1.0 / r;
+        for (j = 1; j < LL_GGX_CHEB; ++j) {
+            up *= r;
+            down *= inv_r;
+            s0 += b[j] * (down + up);
+            s1 += (double)j * b[j] * (up - down);
+        }
+        s1 *= s;
+        power = 2.0 * inv_s3;
+        for (l = 0; l < direct; ++l)
+            power *= r;
+        for (l = direct; l < n_out; ++l) {
+            out[l] = power * ((c + (double)l * s) * s0 + s1);
+            power *= r;
+        }
     }
 }

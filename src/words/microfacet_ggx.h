@@ -36,7 +36,7 @@
 #include "support/support.h"
 
 /* Chebyshev points of g on the whole circle. */
-#define LL_GGX_CHEB 24
+#define LL_GGX_CHEB 16
 
 /* The sampling and the transform from samples to cosine coefficients. */
 typedef struct ll_ggx_basis {

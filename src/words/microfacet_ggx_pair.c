@@ -64,3 +64,42 @@ ll_status ll_microfacet_ggx_pair_series(const ll_microfacet_model *mf, const pai
         ll_ggx_series(&mf->ggx_basis, p->b, g_ref, 1, ref0, rest);
     return LL_OK;
 }
+
+/* Reflection with total internal reflection below the split (light from
+ * the denser side): F = 1 there, so f is its reference (F = 1), whose g
+ * is a quadratic in cos phi and whose series the closed form gives
+ * exactly, plus f minus the reference, which vanishes below the split.
+ * Only that part, with Fresnel's square root at the split, takes the
+ * Filon path; it lies in the peak's tail, away from the azimuths where the
+ * pieces are narrow, and as it is small against the pair's mean, far
+ * fewer of its orders matter than the peak has. */
+ll_status ll_microfacet_ggx_tir_series(const ll_microfacet_model *mf, const pair_plan *p,
+                                       size_t max_len, double *out, size_t *n_out, double *ref0,
+                                       double *scratch)
+{
+    double *g_ref = scratch, *rest = scratch + LL_GGX_CHEB, *part, peak = exp(p->a_plus_b);
+    double seen = 0.0;
+    size_t i, l, len = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len), n_part;
+    size_t n_filon = len + FILON_EXTRA < max_len ? len + FILON_EXTRA : max_len;
+    len = len + LL_GGX_CHEB < max_len ? len + LL_GGX_CHEB : max_len;
+    ll_microfacet_sample_profile(mf, p, mf->ggx_basis.cos_phi, LL_GGX_CHEB, NULL, g_ref);
+    for (i = 0; i < LL_GGX_CHEB; ++i) {
+        double c = 1.0 + p->b * (1.0 - mf->ggx_basis.cos_phi[i]);
+        g_ref[i] *= peak;
+        seen = fmax(seen, g_ref[i] / (c * c));
+    }
+    ll_ggx_series(&mf->ggx_basis, p->b, g_ref, len, out, rest);
+    if (ref0)
+        *ref0 = out[0];
+    /* The part after the series' scratch is done with: the part's terms,
+     * then Filon's scratch. */
+    part = scratch;
+    n_part = ll_microfacet_ggx_fresnel_part(mf, p, out[0], seen, n_filon, part,
+                                            scratch + max_len);
+    for (l = len; l < n_part; ++l)
+        out[l] = 0.0;
+    for (l = 0; l < n_part; ++l)
+        out[l] += part[l];
+    *n_out = n_part > len ? n_part : len;
+    return LL_OK;
+}

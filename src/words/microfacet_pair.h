@@ -16,6 +16,8 @@
 #define FILON_SAMPLES 129     /* Filon samples of a main piece (odd)           */
 #define ANGLE_EPS 1e-7        /* azimuths this close count as equal            */
 #define NEGLIGIBLE 1e-10      /* skip pairs whose peak series starts below     */
+#define FILON_EXTRA 100       /* a kinked f may need this many orders beyond
+                               * its peak's (as the original allows)           */
 #define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
                                * terms below 1e-4 (a tenth of what the layer
                                * keeps, LL_MICROFACET_RELERR) would double the
@@ -100,6 +102,23 @@ LL_INTERNAL ll_status ll_microfacet_ggx_pair_series(const ll_microfacet_model *m
                                                     const pair_plan *p, size_t max_len,
                                                     double *out, size_t *n_out, double *ref0,
                                                     double *scratch);
+
+/* A GGX reflection pair with total internal reflection below its split
+ * (microfacet_ggx_pair.c): n_out terms (*n_out) and the order 0 of the
+ * reference (F = 1) if ref0 is not NULL. */
+LL_INTERNAL ll_status ll_microfacet_ggx_tir_series(const ll_microfacet_model *mf,
+                                                   const pair_plan *p, size_t max_len,
+                                                   double *out, size_t *n_out, double *ref0,
+                                                   double *scratch);
+
+/* The cosine series of f minus its reference (F = 1) over [split, pi] of
+ * a GGX reflection pair, by Filon's rule (microfacet_filon.c): at most
+ * n_out terms, until they settle against the pair's mean; returns how
+ * many. seen: f's largest value known. scratch holds 2 FILON_SAMPLES +
+ * 7 n_out doubles. */
+LL_INTERNAL size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf,
+                                                  const pair_plan *p, double mean, double seen,
+                                                  size_t n_out, double *out, double *scratch);
 
 /* The cosine series of f, n_out terms, integrated by Filon's rule
  * (microfacet_filon.c); with F = 1 for the reference. scratch holds

@@ -59,13 +59,11 @@
 #include <math.h>
 #include <string.h>
 
-#define FILON_EXTRA 100       /* a kinked f may need this many orders beyond
-                               * its peak's (as the original allows)           */
-
 size_t ll_microfacet_scratch_size(size_t max_len)
 {
-    /* Chebyshev path: 2 CHEB; Filon path: 2 FILON_SAMPLES + 7 max_len. */
-    return 2 * FILON_SAMPLES + 7 * max_len + 2 * CHEB;
+    /* Chebyshev path: 2 CHEB; Filon path: 2 FILON_SAMPLES + 7 max_len;
+     * GGX's total internal reflection: a series more. */
+    return 2 * FILON_SAMPLES + 8 * max_len + 2 * CHEB;
 }
 
 /* The series of a planned pair, n_out <= max_len terms (*n_out), and the
@@ -78,6 +76,8 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     size_t i, l, len;
     if (mf->ggx && !p->filon)
         return ll_microfacet_ggx_pair_series(mf, p, max_len, out, n_out, ref0, scratch);
+    if (mf->ggx && p->reflect && p->split > 0.0)
+        return ll_microfacet_ggx_tir_series(mf, p, max_len, out, n_out, ref0, scratch);
     if (p->filon) {
         len = (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
                        : ll_expcos_length(p->b, TAIL_GOAL)) +
