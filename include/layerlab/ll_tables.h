@@ -60,6 +60,15 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  *  format: LL_TABLES_RGB or LL_TABLES_SPECTRAL;
  *  description: text of the file's "description" field (nullable: a
  *    default naming layerlab);
+ * and, read for LL_TABLES_SPECTRAL only:
+ *  wavelengths, n_wavelengths: the file's wavelengths in nm, strictly
+ *    increasing, inside the span of the CIE 1931 tables (360..830 nm),
+ *    1..LL_TABLES_MAX_WAVELENGTHS of them (the caller's array, read during
+ *    the call);
+ *  spectrum, spectrum_user: the material at each wavelength
+ *    (ll_tables_write_from_bsdf calls it once per wavelength, in order;
+ *    ll_material_write_tables sets its own);
+ * and for every format:
  *  tolerance: how close the table must come to the file it is written
  *    from, per channel (0 takes 0.05; 0.005..1): the 99th percentile of
  *    the relative error of f at most tolerance, its 95th percentile at
@@ -68,14 +77,6 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  *    of the pairs near the mirror direction), and the albedo within 0.06
  *    tolerance at viewer elevations 0..85 degrees (so 5%, 2%, 0.2% and
  *    0.3% by default).
- * and, read for LL_TABLES_SPECTRAL only:
- *  wavelengths, n_wavelengths: the file's wavelengths in nm, strictly
- *    increasing, inside the span of the CIE 1931 tables (360..830 nm),
- *    1..LL_TABLES_MAX_WAVELENGTHS of them (the caller's array, read during
- *    the call);
- *  spectrum, spectrum_user: the material at each wavelength
- *    (ll_tables_write_from_bsdf calls it once per wavelength, in order;
- *    ll_material_write_tables sets its own). */
  * A size of 0 is chosen by the tolerance: the writer measures each table
  * it makes against b and grows the sizes left at 0 (the elevations when
  * the albedo misses, the VNDF and sample grids when f misses) until the
