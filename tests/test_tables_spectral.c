@@ -110,7 +110,7 @@ static ll_tables_options small_options(void)
     ll_tables_options o = LL_TABLES_OPTIONS_INIT;
     o.n_theta_i = 4;
     o.vndf_size = 8;
-    o.sample_size = 5;
+    o.sample_size = 8;
     o.format = LL_TABLES_SPECTRAL;
     return o;
 }
@@ -245,6 +245,7 @@ static void test_layout_and_conversion(void **state)
             }
             assert_true(got[k][c] >= want[k][c] - 1e-6 * top[c]);
         }
+    printf("green values above 1e-3 of the peak compared: %d of 400\n", nonzero);
     assert_true(nonzero > 300);
     ll_bsdf_release(two);
     ll_bsdf_release(one[0]);
