@@ -133,7 +133,7 @@ contains "$tmp/w/gold_s.tab" "spectra" "the file has spectra"
 rm -f "$tmp/w/gold_s.tab"
 only_layers "a spectral build"
 expect 0 "--wavelengths --dry-run" -- "$llbuild" --format measured --dry-run \
-    --wavelengths 360:830:10 $small "$tmp/w/gold.layers"
+    --theta-i 32 --vndf 128 --sample 64 --wavelengths 360:830:10 $small "$tmp/w/gold.layers"
 contains "$tmp/out" "x 48 wavelengths (360..830 nm): about 26.50 MiB" "--dry-run spectral size"
 for bad_range in 300:700:10 400:900:10 700:400:10 400:700:0 400:700:-5 400:700 \
     400:700:x 360:830:0.5; do

@@ -35,6 +35,13 @@ static const char coated_gold[] =
     "0.5596436521957564+3.5811663478212896i,"
     "2.1657414364606975+2.4036841615535494i alpha=0.1\n";
 
+/* The same without the energy compensation. */
+static const char coated_gold_bare[] =
+    "dielectric eta=1.5 alpha=0.1 compensate=0\n"
+    "conductor eta=0.214763023228628+5.9740012021764652i,"
+    "0.5596436521957564+3.5811663478212896i,"
+    "2.1657414364606975+2.4036841615535494i alpha=0.1 compensate=0\n";
+
 static char tmpdir[64];
 static unsigned char *g_orig;
 static size_t g_size;
@@ -109,15 +116,18 @@ static void opens_although_rows_dip(void **state)
  * azimuths crowded at 0 and pi), the relative error of every channel where
  * f is above 1% of that side's peak (717 values); and the albedo at 20
  * incident cosines. Measured: mean relative error of f 8.7e-5, largest
- * 4.5e-3; albedos within 9.5e-4 (at |mu_i| = 0.1; within 1e-4 from
- * |mu_i| = 0.3 on). The same comparison at the original's own resolution
- * (196 nodes, 7 MB, not kept) gives albedos within 4e-4. */
+ * 4.5e-3; albedos within 2e-4 from |mu_i| = 0.3 on. Nearer grazing the
+ * two energy compensations differ by design (ours follows a random walk on
+ * the microsurface, docs/method.md, "Energy compensation against a random
+ * walk"; the original's term makes coloured metals too bright): there the
+ * albedos may differ by as much as our term itself adds (the albedo of our
+ * build less that of the same build with compensate=0), plus 1.5e-3. */
 static void evaluates_like_our_build(void **state)
 {
     ll_material *m = NULL;
     ll_build_options o = LL_BUILD_OPTIONS_INIT;
-    ll_bsdf *orig, *ours = NULL;
-    char path[128];
+    ll_bsdf *orig, *ours = NULL, *bare = NULL;
+    char path[128], bare_path[128];
     int side, i, j, k, c, pairs = 0;
     double worst = 0.0, sum = 0.0, worst_albedo = 0.0;
     (void)state;
@@ -130,6 +140,13 @@ static void evaluates_like_our_build(void **state)
     if (ll_material_build(m, &o, NULL, path) != LL_OK)
         fail_msg("%s", ll_last_error_message());
     assert_int_equal(ll_bsdf_open(path, NULL, &ours), LL_OK);
+    ll_material_destroy(m);
+    if (ll_material_parse(coated_gold_bare, "recipe, compensate=0", &m) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    snprintf(bare_path, sizeof bare_path, "%s/bare.bsdf", tmpdir);
+    if (ll_material_build(m, &o, NULL, bare_path) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    assert_int_equal(ll_bsdf_open(bare_path, NULL, &bare), LL_OK);
     orig = open_original();
     for (side = -1; side <= 1; side += 2) {
         static double fa[10][24][12][3], fb[10][24][12][3];
@@ -162,14 +179,21 @@ static void evaluates_like_our_build(void **state)
                         }
         for (i = 0; i < 10; ++i) {
             double mu_i = side * (0.1 + 0.85 * i / 9.0), ra[3], ta[3], rb[3], tb[3];
+            double r0[3], t0[3];
             assert_int_equal(ll_bsdf_albedo(orig, mu_i, NULL, ra, ta), LL_OK);
             assert_int_equal(ll_bsdf_albedo(ours, mu_i, NULL, rb, tb), LL_OK);
-            for (c = 0; c < 3; ++c)
-                if (fabs(ra[c] - rb[c]) > worst_albedo)
-                    worst_albedo = fabs(ra[c] - rb[c]);
+            assert_int_equal(ll_bsdf_albedo(bare, mu_i, NULL, r0, t0), LL_OK);
+            for (c = 0; c < 3; ++c) {
+                double d = fabs(ra[c] - rb[c]);
+                if (fabs(mu_i) >= 0.3 && d > worst_albedo)
+                    worst_albedo = d;
+                if (fabs(mu_i) < 0.3)
+                    assert_true(d < fabs(rb[c] - r0[c]) + 1.5e-3);
+            }
         }
     }
-    print_message("f: %d values, mean relative error %.3g, largest %.3g; albedo within %.3g\n",
+    print_message("f: %d values, mean relative error %.3g, largest %.3g; albedo within %.3g "
+                  "from |mu_i| = 0.3 on\n",
                   pairs, sum / pairs, worst, worst_albedo);
     assert_true(pairs > 600);
     assert_true(sum / pairs < 3e-4);
@@ -177,6 +201,8 @@ static void evaluates_like_our_build(void **state)
     assert_true(worst_albedo < 1.5e-3);
     ll_bsdf_release(orig);
     ll_bsdf_release(ours);
+    ll_bsdf_release(bare);
+    unlink(bare_path);
     ll_material_destroy(m);
 }
 
