@@ -84,7 +84,7 @@ static void test_medium_alone_vs_discrete_ordinates(void **state)
  * under a smooth eta = 1.5 boundary, nothing below. 2^20 paths. */
 static void test_references_agree(void **state)
 {
-    stack st = { { 1.5, 0.0, 0.0 }, 0.95, 0.5, 0.5, 0, { 1.0, 0.0, 0.0 } };
+    stack st = { { 1.5, 0.0, 0.0 }, 0.95, 0.5, 0.5, 0, { 1.0, 0.0, 0.0 }, 0.0 };
     double r, se_r, t, se_t, r_ref, t_ref;
     (void)state;
     assert_true(do_slab_albedo(0.95, 0.5, 0.5, 1.5, 48, 1.0, &r_ref, &t_ref));
@@ -186,7 +186,7 @@ static void test_monte_carlo_reproduces(void **state)
     (void)state;
     for (c = 0; c < 3; c += 2) {
         stack st = { { 1.5, 0.0, 0.1 }, MEDIUM_ALBEDO[c], 0.5, 0.5, 1,
-                     { GOLD_ETA[c], GOLD_K[c], 0.1 } };
+                     { GOLD_ETA[c], GOLD_K[c], 0.1 }, 0.0 };
         double r, se_r, t, se_t;
         mc_albedo(&st, 1.0, 1 << 20, 11, (uint64_t)c, &r, &se_r, &t, &se_t);
         printf("short Monte Carlo channel %d mu_i = 1: %.5f +- %.5f (stored %.6f)\n", c, r, se_r,
