@@ -31,7 +31,12 @@
  *
  * usage: mc_stack [-D beckmann|ggx] [-G separable|correlated] [-c eta,alpha]
  *                 [-m albedo,g,tau] [-b eta,k,alpha | -b diffuse,albedo | -b none]
- *                 [-n paths] [-s seed] mu_i...
+ *                 [-o mu_o,phi_o,half_angle] [-n paths] [-s seed] mu_i...
+ * (-o: f at the outgoing direction of cosine mu_o and azimuth phi_o in
+ * degrees from the direction towards the light, so 0 is retro-reflection
+ * and 180 the mirror direction: the light leaving within half_angle
+ * degrees of it, over the cone's solid angle and mu_o; printed in place of
+ * R and its standard error.)
  * (-c 1,0: no coat, -m 0,0,0: no medium.) Prints per mu_i:
  *     mu_i R se(R) T se(T)
  * Paths run in chunks of 2^16, each with its own seed derived from
@@ -253,6 +258,13 @@ static vec scatter_lambert(rng *r)
 
 typedef struct tally { double r, r2, t, t2; } tally;
 
+/* -o: only light leaving the top within a cone around one direction is
+ * counted, so that R / (solid angle x cos) estimates f there (a point
+ * value, to the cone's curvature: O(half angle^2)). */
+static int use_cone;
+static vec cone_axis;
+static double cone_cos;
+
 /* One path: returns the weight leaving through the top (or bottom). */
 static void trace(const stack *st, rng *r, double mu_i, tally *out)
 {
@@ -309,6 +321,8 @@ static void trace(const stack *st, rng *r, double mu_i, tally *out)
     }
     return;
 leave_top:
+    if (use_cone && dot(d, cone_axis) < cone_cos)
+        return;
     out->r += w;
     out->r2 += w * w;
 }
@@ -370,7 +384,7 @@ static void usage(void)
     fprintf(stderr, "usage: mc_stack [-D beckmann|ggx] [-G separable|correlated] "
                     "[-c eta,alpha] [-m albedo,g,tau]\n"
                     "                [-b eta,k,alpha | -b diffuse,albedo | -b none] "
-                    "[-n paths] [-s seed] mu_i...\n");
+                    "[-o mu_o,phi_o,half_angle] [-n paths] [-s seed] mu_i...\n");
     exit(2);
 }
 
@@ -432,6 +446,19 @@ int main(int argc, char **argv)
             st.base.eta_im = v[1];
             st.base.alpha = v[2];
             break;
+        case 'o': {
+            double s_o, half;
+            if (!parse_list(argv[a + 1], v, 3) || !(v[0] > 0.0 && v[0] <= 1.0) ||
+                !(v[2] > 0.0 && v[2] < 30.0))
+                usage();
+            s_o = sqrt(fmax(0.0, 1.0 - v[0] * v[0]));
+            /* The light travels along (-sin, 0, -mu): it comes from +x. */
+            cone_axis = v3(s_o * cos(v[1] * PI / 180.0), s_o * sin(v[1] * PI / 180.0), v[0]);
+            half = v[2] * PI / 180.0;
+            cone_cos = cos(half);
+            use_cone = 1;
+            break;
+        }
         case 'n':
             paths = strtod(argv[a + 1], NULL);
             break;
@@ -452,6 +479,12 @@ int main(int argc, char **argv)
         mc_albedo(&st, mu, paths, (uint64_t)seed, (uint64_t)(a - first_mu), &R, &se_R, &T, &se_T);
         if (R != R)
             return 1;
+        if (use_cone) {
+            /* The cone's solid angle times the cosine at its axis. */
+            double solid = 2.0 * PI * (1.0 - cone_cos) * cone_axis.z;
+            R /= solid;
+            se_R /= solid;
+        }
         printf("%.6f %.7f %.7f %.7f %.7f\n", mu, R, se_R, T, se_T);
         fflush(stdout);
     }
