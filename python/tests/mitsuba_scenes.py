@@ -56,6 +56,23 @@ def build_dielectric(path):
     return build(dielectric_text(), path)
 
 
+def build_table(bsdf_path, path):
+    """The table file of the `measured` format (ll_tables_write_from_bsdf,
+    grid sizes chosen by the default table tolerance) of an opened .bsdf."""
+    import ctypes
+    if os.path.exists(path):
+        return path
+    lib = ctypes.CDLL(os.environ["LAYERLAB_LIBRARY"])
+    src = ctypes.c_void_p()
+    assert lib.ll_bsdf_open(bsdf_path.encode(), None, ctypes.byref(src)) == 0
+    try:
+        status = lib.ll_tables_write_from_bsdf(src, path.encode(), None, None)
+    finally:
+        lib.ll_bsdf_release(src)
+    assert status == 0, "ll_tables_write_from_bsdf: status %d" % status
+    return path
+
+
 def native_bsdf(kind):
     if kind == "conductor":
         return {"type": "roughconductor", "distribution": "beckmann",

@@ -46,7 +46,9 @@ def files(tmp_path_factory):
             "textured": S.build_textured_conductor(str(d / "gold-textured.bsdf"),
                                                    S.TEXTURED_ALPHAS,
                                                    str(d / "gold-reference.bsdf"), 0.2),
-            "reference": str(d / "gold-reference.bsdf")}
+            "reference": str(d / "gold-reference.bsdf"),
+            "table": S.build_table(S.build_conductor(str(d / "gold.bsdf")),
+                                   str(d / "gold-tables.bsdf"))}
 
 
 def _directions(n, seed):
@@ -345,6 +347,10 @@ def renders(files):
         ours = S.scene(mi, {"type": "layerlab", "filename": files[kind]}, SIZE, spp)
         out[kind] = [S.render(mi, native, spp, 0), S.render(mi, ours, spp, 2),
                      S.render(mi, native, spp, 1), S.render(mi, ours, spp, 3)]
+    # Mitsuba's own `measured` on our table file of the same gold.
+    spp = SPP["conductor"]
+    measured = S.scene(mi, {"type": "measured", "filename": files["table"]}, SIZE, spp)
+    out["measured"] = [S.render(mi, measured, spp, 7), S.render(mi, measured, spp, 8)]
     wrong = S.scene(mi, {"type": "layerlab", "filename": files["wrong"]}, SIZE,
                     SPP["conductor"])
     out["wrong"] = [S.render(mi, wrong, SPP["conductor"], 4),
@@ -388,6 +394,20 @@ def test_render_matches_native_within_noise(renders, kind, timings):
     assert excess < limit, (
         "%s: relative RMSE %.4f vs %.4f expected from noise; excess %.3g > %.3g"
         % (kind, d, noise, excess, limit))
+
+
+def test_measured_on_our_table_matches_native_within_noise(renders, timings):
+    """Mitsuba's built-in `measured` BSDF on the table file of our gold
+    (compensate=0, sizes chosen by the default table tolerance) renders as
+    Mitsuba's native roughconductor does, within the noise."""
+    native, _, native2, _ = renders["conductor"]
+    ours, ours2 = renders["measured"]
+    d, noise, excess, limit = _check_within_noise(native, ours, native2, ours2)
+    timings["mitsuba measured on our gold table: relative RMSE vs native"] = (d, "")
+    timings["mitsuba measured on our gold table: squared-bias estimate / limit"] = (
+        excess / limit, "")
+    assert excess < limit, ("measured on our table: relative RMSE %.4f vs %.4f from noise; "
+                            "excess %.3g > %.3g" % (d, noise, excess, limit))
 
 
 def test_render_of_another_roughness_is_told_apart(renders, timings):
