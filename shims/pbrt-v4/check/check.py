@@ -97,6 +97,40 @@ def run_furnace(args, ll, wavelengths_nm):
     return ok
 
 
+def run_retro(args, ll):
+    """Where the peers differ most: light and view along the same direction,
+    the coat over a Lambertian base, pbrt-v4's `coateddiffuse` and our table
+    in its `measured`, each pixel against our layers' f at its angle (the
+    retro-reflection of Layer.eval, azimuth pi). The independent walk's f
+    at such points is in tests/test_coat_ggx_monte_carlo.c."""
+    import spectra as sp
+    print("\n## Light and view along the same direction: f against our layers\n")
+    print("| material | viewing angle | pbrt-v4's own / our layers | our table in pbrt-v4 / our "
+          "layers |")
+    print("|---|---|---|---|")
+    res, spp = 100, args.peer_spp * 4
+    white = sp.film_rgb(np.array([300.0, 900.0]), np.ones((1, 2)))[0].mean()
+    for m in materials.peer_materials():
+        if not m.name.startswith("coateddiffuse-a"):
+            continue
+        table, _ = build_table(args.llbuild, m, args.wavelengths, args.work, args.threads)
+        images = []
+        for who, line in (("theirs", m.pbrt_native), ("ours", measured_line(table))):
+            img, _, _ = pbrt4.render(args.pbrt, furnace.scene(
+                line, res, spp, "%s-retro-%s.pfm" % (m.name, who), furnace.RETRO_LIGHT),
+                args.work, "%s-retro-%s" % (m.name, who), seed=5, threads=args.threads)
+            images.append(img.mean(axis=2))
+        stack = materials.layers_at(ll, m, 550.0, 400, orders=200)
+        mu, inside = furnace.pixel_cosines(res)
+        centre = np.where(inside, np.nan_to_num(mu, nan=0.0).mean(axis=2), 0.0)
+        view = np.degrees(np.arccos(np.clip(centre, 0, 1)))
+        for lo, hi in ((15, 30), (30, 45), (45, 60), (60, 75)):
+            sel = inside & (view >= lo) & (view < hi)
+            expected = sum(stack.eval(-u, u, np.pi) * u for u in centre[sel]) * white
+            print("| %s | %d-%d | %.3f | %.3f |" % (m.name, lo, hi, images[0][sel].sum() / expected,
+                                                    images[1][sel].sum() / expected))
+
+
 def run_peers(args):
     print("\n## Peers: our tables in `measured` against pbrt-v4's layered materials\n")
     res, spp = args.peer_resolution, args.peer_spp
@@ -161,6 +195,7 @@ def main():
     ok = run_furnace(args, ll, wavelengths_nm)
     if not args.skip_peers:
         run_peers(args)
+        run_retro(args, ll)
     return 0 if ok else 1
 
 

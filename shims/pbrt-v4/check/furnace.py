@@ -15,20 +15,24 @@ import spectra
 BINS = [(0, 10), (10, 20), (20, 30), (30, 40), (40, 50), (50, 60), (60, 70), (70, 80)]
 
 
-def scene(material_line, resolution, spp, image_name):
+def scene(material_line, resolution, spp, image_name, light=None):
+    """The furnace; with light (a LightSource line) in place of the uniform
+    environment, e.g. a distant light at the camera, each pixel is f cos
+    for light and view along the same direction."""
     return """# The furnace (shims/pbrt-v4/check/furnace.py)
 LookAt 0 0 10  0 0 0  0 1 0
 Camera "orthographic" "float screenwindow" [ -1 1 -1 1 ]
-Film "rgb" "integer xresolution" [ %d ] "integer yresolution" [ %d ]
-    "string sensor" "cie1931" "string filename" [ "%s" ]
-PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
-Sampler "independent" "integer pixelsamples" [ %d ]
-Integrator "path" "integer maxdepth" [ 1 ]
-WorldBegin
-LightSource "infinite" "spectrum L" [ 300 1  900 1 ]
+%sWorldBegin
+%s
 %s
 Shape "sphere" "float radius" [ 1 ]
-""" % (resolution, resolution, image_name, spp, material_line)
+""" % (pbrt4.film(resolution, spp, image_name),
+       light or 'LightSource "infinite" "spectrum L" [ 300 1  900 1 ]', material_line)
+
+
+# A distant light at the camera (light and view along the same direction).
+RETRO_LIGHT = ('LightSource "distant" "point3 from" [ 0 0 10 ] "point3 to" [ 0 0 0 ]\n'
+               '    "spectrum L" [ 300 1  900 1 ]')
 
 
 def pixel_cosines(resolution, supersample=4):

@@ -108,13 +108,14 @@ def peer_materials(alphas=(0.1, 0.3)):
     return out
 
 
-def layers_at(ll, material, wavelength, nodes=300):
-    """Our stack at one wavelength, order 0 only (the albedo needs no more)."""
+def layers_at(ll, material, wavelength, nodes=300, orders=1):
+    """Our stack at one wavelength; order 0 only by default (the albedo
+    needs no more)."""
     mu, w = ll.quad.gaussLobatto(nodes)
     above = 1.0   # absolute index above the current interface (a named metal's is absolute)
     result = None
     for kind, p in material.stack:
-        layer = ll.Layer(mu, w, 1)
+        layer = ll.Layer(mu, w, orders)
         if kind == "dielectric":
             # the language's dielectric eta is relative to what is above it
             layer.setMicrofacet(p["eta"], p["alpha"], conserveEnergy=bool(p["compensate"]),

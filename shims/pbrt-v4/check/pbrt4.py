@@ -56,6 +56,19 @@ def render(pbrt, scene_text, work, name, seed=0, threads=None):
     return read_pfm(image), wall, cpu
 
 
+def film(resolution, spp, image_name):
+    """What every check scene shares: pbrt-v4's RGB film with the CIE 1931
+    sensor (so a spectrum's RGB is the observer's, spectra.film_rgb), a box
+    pixel filter (each pixel the mean over its area), independent samples,
+    one bounce."""
+    return """Film "rgb" "integer xresolution" [ %d ] "integer yresolution" [ %d ]
+    "string sensor" "cie1931" "string filename" [ "%s" ]
+PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
+Sampler "independent" "integer pixelsamples" [ %d ]
+Integrator "path" "integer maxdepth" [ 1 ]
+""" % (resolution, resolution, image_name, spp)
+
+
 def quote(path):
     if '"' in path:
         raise ValueError("a scene cannot name a file with a double quote: %r" % path)

@@ -8,6 +8,8 @@ sides can be read against the noise it would have if they agreed."""
 
 import numpy as np
 
+import pbrt4
+
 
 EYE = (0.0, 0.8, 4.2)   # looking at the sphere's centre, the origin
 FOV = 32.0              # degrees
@@ -17,18 +19,13 @@ def scene(material_line, resolution, spp, image_name):
     return """# Peer comparison (shims/pbrt-v4/check/peer.py)
 LookAt %g %g %g  0 0 0  0 1 0
 Camera "perspective" "float fov" [ %g ]
-Film "rgb" "integer xresolution" [ %d ] "integer yresolution" [ %d ]
-    "string sensor" "cie1931" "string filename" [ "%s" ]
-PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
-Sampler "independent" "integer pixelsamples" [ %d ]
-Integrator "path" "integer maxdepth" [ 1 ]
-WorldBegin
+%sWorldBegin
 LightSource "infinite" "spectrum L" [ 300 1  900 1 ] "float scale" [ 0.25 ]
 LightSource "distant" "point3 from" [ 2 3 4 ] "point3 to" [ 0 0 0 ]
     "spectrum L" [ 300 1  900 1 ] "float scale" [ 3 ]
 %s
 Shape "sphere" "float radius" [ 1 ]
-""" % (EYE + (FOV, resolution, resolution, image_name, spp, material_line))
+""" % (EYE + (FOV, pbrt4.film(resolution, spp, image_name), material_line))
 
 
 def sphere_mask(resolution):
