@@ -9,33 +9,9 @@ set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 llconvert="$BUILD/bin/llconvert"
-tmp=$(mktemp -d /tmp/llbuild_tables_test.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
+. "$(dirname "$0")/lib/tool_test.sh"
 . "$(dirname "$0")/lib/stage_wait.sh"
-
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
-expect() {
-    want=$1; what=$2; shift 3
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok; else
-        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
-    fi
-}
-
-# contains FILE TEXT DESCRIPTION
-contains() {
-    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
-}
+tool_test_begin llbuild_tables_test
 
 # only_layers DESCRIPTION: the work folder holds nothing but the inputs
 only_layers() {
@@ -43,11 +19,7 @@ only_layers() {
     if [ -z "$left" ]; then ok; else bad "$1 left: $left"; fi
 }
 
-if [ ! -x "$llbuild" ] || [ ! -x "$llconvert" ]; then
-    echo "llbuild_tables.sh: $llbuild or $llconvert is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+tool_test_need llbuild_tables.sh "$llbuild" "$llconvert"
 
 mkdir -p "$tmp/w"
 printf 'conductor eta=Au alpha=0.3\n' >"$tmp/w/gold.layers"
@@ -194,5 +166,4 @@ else
     only_layers "SIGINT in the spectra"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end
