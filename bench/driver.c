@@ -115,6 +115,34 @@ static void child_failed(bench_store *store, const char *what, const bench_child
     bench_store_error(store, message);
 }
 
+/* Whether `file`, what section `section` measures as `label`, is there to
+ * read; when not, that is recorded as the section's error (the golden
+ * file missing means tests/data is, a recipe's output that its build
+ * failed). */
+static int input_present(bench_store *store, const char *section, const char *label,
+                         const char *file, int golden)
+{
+    char what[64];
+    if (access(file, R_OK) == 0)
+        return 1;
+    snprintf(what, sizeof what, "%s %s: no file %s", section, label,
+             golden ? "(tests/data missing)" : "(the recipe failed)");
+    fprintf(stderr, "bench: %s\n", what);
+    bench_store_error(store, what);
+    return 0;
+}
+
+/* Run a measuring program that names its own metrics; a failure is
+ * recorded as "SECTION LABEL failed". */
+static void run_labelled(bench_store *store, char **argv, const char *section, const char *label)
+{
+    bench_child_result res;
+    char what[64];
+    snprintf(what, sizeof what, "%s %s", section, label);
+    if (!bench_run_child(argv, NULL, "", store, &res))
+        child_failed(store, what, &res);
+}
+
 /* The material file of a benchmark, as one info line (its lines joined
  * by "; ") under PREFIXmaterial, and its path under PREFIXmaterial_file. */
 static void record_material(bench_store *store, const char *prefix, const char *path)
@@ -400,24 +428,15 @@ static void run_eval(const config *cfg, bench_store *store)
     record_load(store, "eval");
     for (i = 0; i < 3; ++i) {
         char *argv[5];
-        bench_child_result res;
-        char what[64];
-        if (access(files[i], R_OK) != 0) {
-            snprintf(what, sizeof what, "eval %s: no file %s", labels[i],
-                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
-            fprintf(stderr, "bench: %s\n", what);
-            bench_store_error(store, what);
+        if (!input_present(store, "eval", labels[i], files[i], i == 0))
             continue;
-        }
         argv[0] = bin;
         argv[1] = (char *)files[i];
         argv[2] = (char *)labels[i];
         argv[3] = runs;
         argv[4] = NULL;
         fprintf(stderr, "bench: evaluation on %s\n", labels[i]);
-        snprintf(what, sizeof what, "eval %s", labels[i]);
-        if (!bench_run_child(argv, NULL, "", store, &res))
-            child_failed(store, what, &res);
+        run_labelled(store, argv, "eval", labels[i]);
     }
 }
 
@@ -440,15 +459,8 @@ static void run_tables(const config *cfg, bench_store *store)
     record_load(store, "tables");
     for (i = 0; i < 2; ++i) {
         char *argv[6];
-        bench_child_result res;
-        char what[64];
-        if (access(files[i], R_OK) != 0) {
-            snprintf(what, sizeof what, "tables %s: no file %s", labels[i],
-                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
-            fprintf(stderr, "bench: %s\n", what);
-            bench_store_error(store, what);
+        if (!input_present(store, "tables", labels[i], files[i], i == 0))
             continue;
-        }
         argv[0] = bin;
         argv[1] = (char *)files[i];
         argv[2] = out[i];
@@ -456,9 +468,7 @@ static void run_tables(const config *cfg, bench_store *store)
         argv[4] = runs;
         argv[5] = NULL;
         fprintf(stderr, "bench: table file of %s\n", labels[i]);
-        snprintf(what, sizeof what, "tables %s", labels[i]);
-        if (!bench_run_child(argv, NULL, "", store, &res))
-            child_failed(store, what, &res);
+        run_labelled(store, argv, "tables", labels[i]);
     }
 }
 
@@ -467,22 +477,18 @@ static void run_batch(const config *cfg, bench_store *store)
 {
     char bin[1024], runs[32], golden[1024];
     char *argv[5];
-    bench_child_result res;
     path_join(bin, sizeof bin, cfg->bin_dir, "batch");
     path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
     snprintf(runs, sizeof runs, "%zu", cfg->runs);
-    if (access(golden, R_OK) != 0) {
-        bench_store_error(store, "batch roughgold: no file (tests/data missing)");
+    if (!input_present(store, "batch", "roughgold", golden, 1))
         return;
-    }
     argv[0] = bin;
     argv[1] = golden;
     argv[2] = (char *)"roughgold";
     argv[3] = runs;
     argv[4] = NULL;
     fprintf(stderr, "bench: batch calls on roughgold\n");
-    if (!bench_run_child(argv, NULL, "", store, &res))
-        child_failed(store, "batch roughgold", &res);
+    run_labelled(store, argv, "batch", "roughgold");
 }
 
 /* 6. The cost of the tolerance (issue 14): each recipe built with the
