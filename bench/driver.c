@@ -410,34 +410,54 @@ static void run_adding(const config *cfg, bench_store *store)
         child_failed(store, "adding", &res);
 }
 
+/* The files the evaluation sections measure, in order: the golden file
+ * (tests/data), then llbuild's outputs of two recipes (work folder). */
+static const char *const measured_labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
+
+/* Run bench/PROGRAM.c as `PROGRAM FILE [TABLE_OUT] LABEL RUNS` on each of
+ * the first `count` measured files (TABLE_OUT, when `table_out` is set:
+ * LABEL-tables.bsdf in the work folder), saying "bench: DOING LABEL"; the
+ * program names its own metrics, and its section is PROGRAM. */
+static void run_on_files(const config *cfg, bench_store *store, const char *program,
+                         size_t count, int table_out, const char *doing)
+{
+    char bin[1024], runs[32], file[1024], out[1024], name[64];
+    size_t i;
+    path_join(bin, sizeof bin, cfg->bin_dir, program);
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    for (i = 0; i < count; ++i) {
+        const char *label = measured_labels[i];
+        char *argv[6];
+        size_t a = 0;
+        if (i == 0) {
+            path_join(file, sizeof file, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
+        } else {
+            snprintf(name, sizeof name, "%s.bsdf", label);
+            path_join(file, sizeof file, cfg->work_dir, name);
+        }
+        if (!input_present(store, program, label, file, i == 0))
+            continue;
+        argv[a++] = bin;
+        argv[a++] = file;
+        if (table_out) {
+            snprintf(name, sizeof name, "%s-tables.bsdf", label);
+            path_join(out, sizeof out, cfg->work_dir, name);
+            argv[a++] = out;
+        }
+        argv[a++] = (char *)label;
+        argv[a++] = runs;
+        argv[a] = NULL;
+        fprintf(stderr, "bench: %s %s\n", doing, label);
+        run_labelled(store, argv, program, label);
+    }
+}
+
 /* 3. Evaluation on the golden file and on our coated-gold and
  * coated-diffuse outputs (issue 18 quotes figures for both). */
 static void run_eval(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024], gold[1024], diffuse[1024];
-    const char *files[3], *labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
-    size_t i;
-    path_join(bin, sizeof bin, cfg->bin_dir, "eval");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
-    path_join(diffuse, sizeof diffuse, cfg->work_dir, "coated-diffuse.bsdf");
-    files[0] = golden;
-    files[1] = gold;
-    files[2] = diffuse;
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
     record_load(store, "eval");
-    for (i = 0; i < 3; ++i) {
-        char *argv[5];
-        if (!input_present(store, "eval", labels[i], files[i], i == 0))
-            continue;
-        argv[0] = bin;
-        argv[1] = (char *)files[i];
-        argv[2] = (char *)labels[i];
-        argv[3] = runs;
-        argv[4] = NULL;
-        fprintf(stderr, "bench: evaluation on %s\n", labels[i]);
-        run_labelled(store, argv, "eval", labels[i]);
-    }
+    run_on_files(cfg, store, "eval", 3, 0, "evaluation on");
 }
 
 /* 3a. Table files: written from the golden file and from the coated-gold
@@ -445,50 +465,14 @@ static void run_eval(const config *cfg, bench_store *store)
  * its .bsdf over the same directions (bench/tables.c). */
 static void run_tables(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024], gold[1024], out[2][1024];
-    const char *files[2], *labels[2] = { "roughgold", "coated-gold" };
-    size_t i;
-    path_join(bin, sizeof bin, cfg->bin_dir, "tables");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
-    path_join(out[0], sizeof out[0], cfg->work_dir, "roughgold-tables.bsdf");
-    path_join(out[1], sizeof out[1], cfg->work_dir, "coated-gold-tables.bsdf");
-    files[0] = golden;
-    files[1] = gold;
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
     record_load(store, "tables");
-    for (i = 0; i < 2; ++i) {
-        char *argv[6];
-        if (!input_present(store, "tables", labels[i], files[i], i == 0))
-            continue;
-        argv[0] = bin;
-        argv[1] = (char *)files[i];
-        argv[2] = out[i];
-        argv[3] = (char *)labels[i];
-        argv[4] = runs;
-        argv[5] = NULL;
-        fprintf(stderr, "bench: table file of %s\n", labels[i]);
-        run_labelled(store, argv, "tables", labels[i]);
-    }
+    run_on_files(cfg, store, "tables", 2, 1, "table file of");
 }
 
 /* 3b. The batch calls on the golden file (per element, 1 and all threads). */
 static void run_batch(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024];
-    char *argv[5];
-    path_join(bin, sizeof bin, cfg->bin_dir, "batch");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
-    if (!input_present(store, "batch", "roughgold", golden, 1))
-        return;
-    argv[0] = bin;
-    argv[1] = golden;
-    argv[2] = (char *)"roughgold";
-    argv[3] = runs;
-    argv[4] = NULL;
-    fprintf(stderr, "bench: batch calls on roughgold\n");
-    run_labelled(store, argv, "batch", "roughgold");
+    run_on_files(cfg, store, "batch", 1, 0, "batch calls on");
 }
 
 /* 6. The cost of the tolerance (issue 14): each recipe built with the
