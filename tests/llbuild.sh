@@ -7,7 +7,6 @@ set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 . "$(dirname "$0")/lib/tool_test.sh"
-. "$(dirname "$0")/lib/stage_wait.sh"
 tool_test_begin llbuild_test
 
 tool_test_need llbuild.sh "$llbuild"
@@ -238,16 +237,7 @@ for sig in INT TERM; do
     rm -f "$tmp/slow.bsdf"
     stage_start "$tmp/slow" "$llbuild" --nodes 300 --orders 40 "$tmp/slow.layers" \
         -o "$tmp/slow.bsdf"
-    if ! stage_wait "*% medium (*"; then
-        stage_finish
-        bad "SIG$sig: llbuild never reported the medium (exit $stage_status)"
-        continue
-    fi
-    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
-    stage_finish
-    status=$stage_status
-    if [ $status -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIG$sig: exit $status, expected death by signal"; fi
+    signal_in_stage $sig "*% medium (*" "the medium" "SIG$sig" || continue
     if ls "$tmp" | grep -q '^slow\.bsdf'; then bad "SIG$sig left $(ls "$tmp" | grep slow.bsdf)"; else ok; fi
     contains "$stage_log" "interrupted; no file written" "SIG$sig message"
 done

@@ -108,7 +108,6 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 # resolution": its shared words take 5 s before the first basis is written,
 # and the 8 bases then follow within 1.3 s, too close to the end for a
 # kill to land before the file is committed).
-. "$(dirname "$0")/lib/stage_wait.sh"
 mkdir -p "$tmp/run"
 cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1

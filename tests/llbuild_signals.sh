@@ -14,7 +14,6 @@ set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 . "$(dirname "$0")/lib/tool_test.sh"
-. "$(dirname "$0")/lib/stage_wait.sh"
 tool_test_begin llbuild_signals
 
 tool_test_need llbuild_signals.sh "$llbuild"

@@ -10,7 +10,6 @@ BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 llconvert="$BUILD/bin/llconvert"
 . "$(dirname "$0")/lib/tool_test.sh"
-. "$(dirname "$0")/lib/stage_wait.sh"
 tool_test_begin llbuild_tables_test
 
 # only_layers DESCRIPTION: the work folder holds nothing but the inputs
@@ -137,15 +136,7 @@ mkdir -p "$tmp/run"
 for sig in INT TERM; do
     stage_start "$tmp/run" "$llbuild" --format measured --vndf 1024 --sample 512 $small \
         "$tmp/w/gold.layers" -o "$tmp/w/big.tab"
-    if ! stage_wait "*% tables (*"; then
-        stage_finish
-        bad "SIG$sig: llbuild never reported the tables (exit $stage_status)"
-        continue
-    fi
-    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
-    stage_finish
-    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIG$sig: exit $stage_status, expected death by signal"; fi
+    signal_in_stage $sig "*% tables (*" "the tables" "SIG$sig" || continue
     contains "$stage_log" "interrupted; no file written" "SIG$sig message"
     only_layers "SIG$sig"
 done
@@ -154,14 +145,7 @@ done
 # .bsdf of a wavelength left beside the output
 stage_start "$tmp/run" "$llbuild" --format measured --wavelengths 360:830:1 $grid $small \
     "$tmp/w/gold.layers" -o "$tmp/w/spectral.tab"
-if ! stage_wait "*% spectra (*"; then
-    stage_finish
-    bad "SIGINT: llbuild never reported the spectra (exit $stage_status)"
-else
-    kill -s INT "$stage_pid" 2>/dev/null || bad "SIGINT: llbuild ended before the signal"
-    stage_finish
-    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIGINT in the spectra: exit $stage_status, expected death by signal"; fi
+if signal_in_stage INT "*% spectra (*" "the spectra" "SIGINT in the spectra"; then
     contains "$stage_log" "interrupted; no file written" "SIGINT in the spectra: message"
     only_layers "SIGINT in the spectra"
 fi

@@ -19,6 +19,16 @@
 #   tool_test_end [NAME]       print "[NAME: ]N passed, M failed"; its status
 #                              (the script's, as its last command) is 0 only
 #                              when nothing failed
+#   signal_in_stage SIG PATTERN NOUN LABEL
+#                              after stage_start (stage_wait.sh, sourced
+#                              here too) of an llbuild: send SIG as soon as
+#                              a progress line matches PATTERN, wait for the
+#                              build, and check that the signal ended it
+#                              ("LABEL: exit N, expected death by signal");
+#                              1, counted as a failure, when the build never
+#                              reported NOUN
+
+. "$(dirname "$0")/lib/stage_wait.sh"
 
 tool_test_begin() {
     tmp=$(mktemp -d "/tmp/$1.XXXXXX")
@@ -61,6 +71,19 @@ expect() {
 
 contains() {
     if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
+}
+
+signal_in_stage() {
+    if ! stage_wait "$2"; then
+        stage_finish
+        bad "SIG$1: llbuild never reported $3 (exit $stage_status)"
+        return 1
+    fi
+    kill -s "$1" "$stage_pid" 2>/dev/null || bad "SIG$1: llbuild ended before the signal"
+    stage_finish
+    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
+        bad "$4: exit $stage_status, expected death by signal"; fi
+    return 0
 }
 
 tool_test_end() {
