@@ -180,11 +180,38 @@ static void store_costs(bench_store *store, const char *prefix, const bench_chil
     }
 }
 
+/* One run of bench/recipe.c building recipe `name` into out_path
+ * (WORK/NAME.bsdf), saying "bench: DOINGNAME, run R of RUNS"; its figures
+ * and costs go under SECTION.NAME. 0, recorded as an error, if it failed. */
+static int run_recipe(const config *cfg, bench_store *store, char *bin, const char *section,
+                      const char *name, const char *doing, size_t run, size_t runs,
+                      char *out_path, size_t out_size)
+{
+    char out_name[128], prefix[160];
+    char *argv[5];
+    bench_child_result res;
+    snprintf(out_name, sizeof out_name, "%s.bsdf", name);
+    path_join(out_path, out_size, cfg->work_dir, out_name);
+    argv[0] = bin;
+    argv[1] = (char *)name;
+    argv[2] = out_path;
+    argv[3] = "0";
+    argv[4] = NULL;
+    fprintf(stderr, "bench: %s%s, run %zu of %zu\n", doing, name, run + 1, runs);
+    snprintf(prefix, sizeof prefix, "%s.%s.", section, name);
+    if (!bench_run_child(argv, NULL, prefix, store, &res)) {
+        child_failed(store, name, &res);
+        return 0;
+    }
+    store_costs(store, prefix, &res, 1);
+    return 1;
+}
+
 /* 1. The three recipes at all threads, interleaved run by run so that a
  * burst of load elsewhere spreads over all of them. */
 static void run_recipes(const config *cfg, bench_store *store)
 {
-    char recipe_bin[1024], out_path[1024], out_name[128], prefix[128], id[160];
+    char recipe_bin[1024], out_path[1024], id[160];
     size_t run, r;
     int failed[BENCH_RECIPE_COUNT] = { 0 };
 
@@ -193,27 +220,14 @@ static void run_recipes(const config *cfg, bench_store *store)
     for (run = 0; run < cfg->runs; ++run)
         for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
             const char *name = bench_recipes[r].name;
-            char *argv[5];
-            bench_child_result res;
             struct stat st;
             if (failed[r])
                 continue;
-            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
-            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
-            argv[0] = recipe_bin;
-            argv[1] = (char *)name;
-            argv[2] = out_path;
-            argv[3] = "0";
-            argv[4] = NULL;
-            fprintf(stderr, "bench: recipe %s, run %zu of %zu\n", name, run + 1, cfg->runs);
-            snprintf(prefix, sizeof prefix, "recipe.%s.", name);
-            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
-                child_failed(store, name, &res);
+            if (!run_recipe(cfg, store, recipe_bin, "recipe", name, "recipe ", run, cfg->runs,
+                            out_path, sizeof out_path)) {
                 failed[r] = 1;
                 continue;
             }
-            snprintf(id, sizeof id, "recipe.%s.", name);
-            store_costs(store, id, &res, 1);
             if (stat(out_path, &st) == 0) {
                 snprintf(id, sizeof id, "recipe.%s.output", name);
                 bench_store_add(store, id, "MB", (double)st.st_size * 1e-6);
@@ -226,7 +240,7 @@ static void run_recipes(const config *cfg, bench_store *store)
  * run, and only in the full run. */
 static void run_dust(const config *cfg, bench_store *store)
 {
-    char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128], prefix[128];
+    char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128];
     char id[160], sizes[BENCH_SLAB_SIZE_COUNT][16];
     size_t run, r, i;
     char *argv[BENCH_SLAB_SIZE_COUNT + 6];
@@ -239,23 +253,10 @@ static void run_dust(const config *cfg, bench_store *store)
         size_t runs = bench_dust[r].one_run ? 1 : cfg->runs;
         if (bench_dust[r].full_only && !cfg->full)
             continue;
-        for (run = 0; run < runs; ++run) {
-            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
-            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
-            argv[0] = recipe_bin;
-            argv[1] = (char *)name;
-            argv[2] = out_path;
-            argv[3] = "0";
-            argv[4] = NULL;
-            fprintf(stderr, "bench: %s, run %zu of %zu\n", name, run + 1, runs);
-            snprintf(prefix, sizeof prefix, "dust.%s.", name);
-            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
-                child_failed(store, name, &res);
+        for (run = 0; run < runs; ++run)
+            if (!run_recipe(cfg, store, recipe_bin, "dust", name, "", run, runs, out_path,
+                            sizeof out_path))
                 break;
-            }
-            snprintf(id, sizeof id, "dust.%s.", name);
-            store_costs(store, id, &res, 1);
-        }
         /* The same stack as a material (WORK/NAME.layers, from run.sh). */
         if (cfg->llbuild) {
             char layers[1024];
