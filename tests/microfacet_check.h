@@ -224,6 +224,41 @@ static inline double albedo_sum(const ll_layer *l, double mu)
     return R + T;
 }
 
+/* R + T = 1 within 1e-3 for light from every node of l (either side);
+ * raises *worst to the largest |R + T - 1|. */
+static inline void assert_conserves_energy(const ll_layer *l, double *worst)
+{
+    size_t n = ll_layer_node_count(l), i;
+    double *x = malloc(n * sizeof *x);
+    assert_non_null(x);
+    assert_int_equal(ll_layer_get_nodes(l, x, NULL), LL_OK);
+    for (i = 0; i < n; ++i) {
+        double sum = albedo_sum(l, x[i]);
+        *worst = fmax(*worst, fabs(sum - 1.0));
+        assert_float_equal(sum, 1.0, 1e-3);
+    }
+    free(x);
+}
+
+/* The share of the energy l loses, 1 - (R + T), over light from above,
+ * each node weighted by its quadrature weight and mu. */
+static inline double energy_lost(const ll_layer *l)
+{
+    size_t n = ll_layer_node_count(l), i;
+    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w), lost = 0.0, total = 0.0;
+    assert_non_null(x);
+    assert_non_null(w);
+    assert_int_equal(ll_layer_get_nodes(l, x, w), LL_OK);
+    for (i = 0; i < n; ++i)
+        if (x[i] > 0.0) {
+            lost += w[i] * x[i] * (1.0 - albedo_sum(l, x[i]));
+            total += w[i] * x[i];
+        }
+    free(x);
+    free(w);
+    return lost / total;
+}
+
 /* The first m orders of two n-node layers are equal to the bit. */
 static inline void assert_same_matrices(const ll_layer *one, const ll_layer *two, size_t n,
                                         size_t m)
