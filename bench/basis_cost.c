@@ -18,24 +18,26 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
 #define SIDE 8
 #define CALLS 200000
 
-static void check(ll_status s, const char *what)
+/* The next four numbers of the generator, uniform in [0, 1). */
+static void draw4(unsigned long long *rng, double u[4])
 {
-    if (s != LL_OK) {
-        fprintf(stderr, "%s: %s\n", what, ll_last_error_message());
-        exit(1);
+    int j;
+    for (j = 0; j < 4; ++j) {
+        *rng = *rng * 6364136223846793005ULL + 1442695040888963407ULL;
+        u[j] = (double)(*rng >> 11) / 9007199254740992.0;
     }
 }
 
-static double now(void)
+/* The direction of cos theta 0.05 + 0.95 u_z and azimuth 2 pi u_phi. */
+static void direction(double u_z, double u_phi, double w[3])
 {
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+    w[2] = 0.05 + 0.95 * u_z;
+    w[0] = sqrt(1 - w[2] * w[2]) * cos(6.283185307 * u_phi);
+    w[1] = sqrt(1 - w[2] * w[2]) * sin(6.283185307 * u_phi);
 }
 
 /* ns per sample_dir over CALLS pseudo-random (wo, u), best of 3 runs. */
@@ -45,23 +47,17 @@ static double time_sample(const ll_bsdf *b, const float *coeffs, double *checksu
     int run;
     for (run = 0; run < 3; ++run) {
         unsigned long long rng = 777;
-        double t0 = now(), sum = 0.0, t;
+        double t0 = bench_wall_seconds(), sum = 0.0, t;
         int k;
         for (k = 0; k < CALLS / 4; ++k) {
             double u[4], wo[3], wi[3], rgb[3], pdf;
-            int j;
-            for (j = 0; j < 4; ++j) {
-                rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
-                u[j] = (double)(rng >> 11) / 9007199254740992.0;
-            }
-            wo[2] = 0.05 + 0.95 * u[0];
-            wo[0] = sqrt(1 - wo[2] * wo[2]) * cos(6.283185307 * u[1]);
-            wo[1] = sqrt(1 - wo[2] * wo[2]) * sin(6.283185307 * u[1]);
-            check(ll_bsdf_sample_dir(b, wo, u + 2, LL_TRANSPORT_RADIANCE, coeffs, wi, &pdf, rgb),
+            draw4(&rng, u);
+            direction(u[0], u[1], wo);
+            bench_check(ll_bsdf_sample_dir(b, wo, u + 2, LL_TRANSPORT_RADIANCE, coeffs, wi, &pdf, rgb),
                   "sample");
             sum += pdf;
         }
-        t = (now() - t0) / (CALLS / 4) * 1e9;
+        t = (bench_wall_seconds() - t0) / (CALLS / 4) * 1e9;
         if (t < best)
             best = t;
         *checksum = sum;
@@ -77,25 +73,17 @@ static double time_eval(const ll_bsdf *b, const float *coeffs, double *checksum)
     int run;
     for (run = 0; run < 3; ++run) {
         unsigned long long rng = 12345;
-        double t0 = now(), sum = 0.0, t;
+        double t0 = bench_wall_seconds(), sum = 0.0, t;
         int k;
         for (k = 0; k < CALLS; ++k) {
             double u[4], wo[3], wi[3], rgb[3];
-            int j;
-            for (j = 0; j < 4; ++j) {
-                rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
-                u[j] = (double)(rng >> 11) / 9007199254740992.0;
-            }
-            wo[2] = 0.05 + 0.95 * u[0];
-            wo[0] = sqrt(1 - wo[2] * wo[2]) * cos(6.283185307 * u[1]);
-            wo[1] = sqrt(1 - wo[2] * wo[2]) * sin(6.283185307 * u[1]);
-            wi[2] = 0.05 + 0.95 * u[2];
-            wi[0] = sqrt(1 - wi[2] * wi[2]) * cos(6.283185307 * u[3]);
-            wi[1] = sqrt(1 - wi[2] * wi[2]) * sin(6.283185307 * u[3]);
-            check(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, coeffs, rgb), "eval");
+            draw4(&rng, u);
+            direction(u[0], u[1], wo);
+            direction(u[2], u[3], wi);
+            bench_check(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, coeffs, rgb), "eval");
             sum += rgb[0];
         }
-        t = (now() - t0) / CALLS * 1e9;
+        t = (bench_wall_seconds() - t0) / CALLS * 1e9;
         if (t < best)
             best = t;
         *checksum = sum;
@@ -114,13 +102,13 @@ int main(int argc, char **argv)
     char path[512];
     ll_bsdf *b64 = NULL, *b1 = NULL;
     size_t active = 0;
-    check(bench_search_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
+    bench_check(bench_search_microfacet(0.2, 0.2, 3.0, &n, &orders), "heuristic");
     if (n > 64)
         n = 64;
-    check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
+    bench_check(ll_quad_gauss_lobatto(n, x, w, NULL), "nodes");
     for (k = 0; k < SIDE; ++k) {
-        check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
-        check(bench_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
+        bench_check(ll_layer_create(x, w, n, orders, &l[k]), "layer");
+        bench_check(bench_set_microfacet(l[k], 0.2, 3.0, 0.2 + 0.05 * (double)k, 1, 0, NULL), "fill");
         positions[k] = 0.2 + 0.05 * (double)k;
         positions[SIDE + k] = (double)k / (SIDE - 1);
     }
@@ -129,12 +117,12 @@ int main(int argc, char **argv)
     for (k = 0; k < SIDE * SIDE; ++k)
         layers[k] = l[k % SIDE];
     snprintf(path, sizeof path, "%s/basis64.bsdf", dir);
-    check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL, NULL), "write");
-    check(ll_bsdf_open(path, NULL, &b64), "open");
+    bench_check(ll_bsdf_write_textured(path, layers, 1, 2, counts, positions, NULL, NULL), "write");
+    bench_check(ll_bsdf_open(path, NULL, &b64), "open");
     snprintf(path, sizeof path, "%s/basis1.bsdf", dir);
-    check(ll_bsdf_write(path, layers, 1, NULL, NULL), "write");
-    check(ll_bsdf_open(path, NULL, &b1), "open");
-    check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
+    bench_check(ll_bsdf_write(path, layers, 1, NULL, NULL), "write");
+    bench_check(ll_bsdf_open(path, NULL, &b1), "open");
+    bench_check(ll_bsdf_basis_coefficients(b64, params, coeffs), "coefficients");
     for (k = 0; k < SIDE * SIDE; ++k)
         active += coeffs[k] != 0.0f;
     (void)nonzero;

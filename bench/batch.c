@@ -9,46 +9,26 @@
  *
  * usage: batch FILE.bsdf LABEL RUNS [CALLS [BATCH]]   (10^6 and 65536)
  */
-#include "bench_util.h"
+#include "calls.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-static void uniform_hemisphere(bench_rng *rng, double w[3])
-{
-    double z = bench_rng_uniform(rng), r = sqrt(fmax(0.0, 1.0 - z * z));
-    double phi = 2.0 * 3.14159265358979323846 * bench_rng_uniform(rng);
-    w[0] = r * cos(phi);
-    w[1] = r * sin(phi);
-    w[2] = z;
-}
-
+/* eval.c's calls (the same seed), cut into batches, and the outputs. */
 typedef struct workload {
-    size_t calls, batch;
-    double *wo, *wi, *u, *rgb, *pdf, *wi_out;
+    bench_calls in;
+    size_t batch;
+    double *rgb, *pdf, *wi_out;
 } workload;
 
 static void workload_make(workload *w, size_t calls, size_t batch)
 {
-    bench_rng rng;
-    size_t k;
-    bench_rng_seed(&rng, 20140801);
-    w->calls = calls;
+    bench_calls_make(&w->in, calls, 20140801, NULL);
     w->batch = batch;
-    w->wo = bench_alloc(calls, 3 * sizeof(double));
-    w->wi = bench_alloc(calls, 3 * sizeof(double));
-    w->u = bench_alloc(calls, 2 * sizeof(double));
     w->rgb = bench_alloc(calls, 3 * sizeof(double));
     w->pdf = bench_alloc(calls, sizeof(double));
     w->wi_out = bench_alloc(calls, 3 * sizeof(double));
-    for (k = 0; k < calls; ++k) {
-        uniform_hemisphere(&rng, w->wo + 3 * k);
-        uniform_hemisphere(&rng, w->wi + 3 * k);
-        w->u[2 * k] = bench_rng_uniform(&rng);
-        w->u[2 * k + 1] = bench_rng_uniform(&rng);
-    }
 }
 
 /* One timed pass of function f (0 eval, 1 pdf, 2 sample) over all calls in
@@ -57,24 +37,24 @@ static double time_pass(const ll_bsdf *b, const workload *w, int f, double *sum)
 {
     double start = bench_wall_seconds(), acc = 0.0;
     size_t k, n;
-    for (k = 0; k < w->calls; k += n) {
-        n = w->calls - k < w->batch ? w->calls - k : w->batch;
+    for (k = 0; k < w->in.calls; k += n) {
+        n = w->in.calls - k < w->batch ? w->in.calls - k : w->batch;
         if (f == 0)
-            bench_check(ll_bsdf_eval_dir_batch(b, n, w->wo + 3 * k, w->wi + 3 * k,
+            bench_check(ll_bsdf_eval_dir_batch(b, n, w->in.wo + 3 * k, w->in.wi + 3 * k,
                                                LL_TRANSPORT_RADIANCE, NULL, 0, w->rgb + 3 * k),
                         "ll_bsdf_eval_dir_batch");
         else if (f == 1)
-            bench_check(ll_bsdf_pdf_dir_batch(b, n, w->wo + 3 * k, w->wi + 3 * k, NULL, 0,
+            bench_check(ll_bsdf_pdf_dir_batch(b, n, w->in.wo + 3 * k, w->in.wi + 3 * k, NULL, 0,
                                               w->pdf + k),
                         "ll_bsdf_pdf_dir_batch");
         else
-            bench_check(ll_bsdf_sample_dir_batch(b, n, w->wo + 3 * k, w->u + 2 * k,
+            bench_check(ll_bsdf_sample_dir_batch(b, n, w->in.wo + 3 * k, w->in.u + 2 * k,
                                                  LL_TRANSPORT_RADIANCE, NULL, 0,
                                                  w->wi_out + 3 * k, w->pdf + k, w->rgb + 3 * k),
                         "ll_bsdf_sample_dir_batch");
     }
     start = bench_wall_seconds() - start;
-    for (k = 0; k < w->calls; ++k)
+    for (k = 0; k < w->in.calls; ++k)
         acc += f == 1 ? w->pdf[k] : w->rgb[3 * k] + w->rgb[3 * k + 1] + w->rgb[3 * k + 2];
     *sum += acc;
     return start;

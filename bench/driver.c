@@ -115,6 +115,34 @@ static void child_failed(bench_store *store, const char *what, const bench_child
     bench_store_error(store, message);
 }
 
+/* Whether `file`, what section `section` measures as `label`, is there to
+ * read; when not, that is recorded as the section's error (the golden
+ * file missing means tests/data is, a recipe's output that its build
+ * failed). */
+static int input_present(bench_store *store, const char *section, const char *label,
+                         const char *file, int golden)
+{
+    char what[64];
+    if (access(file, R_OK) == 0)
+        return 1;
+    snprintf(what, sizeof what, "%s %s: no file %s", section, label,
+             golden ? "(tests/data missing)" : "(the recipe failed)");
+    fprintf(stderr, "bench: %s\n", what);
+    bench_store_error(store, what);
+    return 0;
+}
+
+/* Run a measuring program that names its own metrics; a failure is
+ * recorded as "SECTION LABEL failed". */
+static void run_labelled(bench_store *store, char **argv, const char *section, const char *label)
+{
+    bench_child_result res;
+    char what[64];
+    snprintf(what, sizeof what, "%s %s", section, label);
+    if (!bench_run_child(argv, NULL, "", store, &res))
+        child_failed(store, what, &res);
+}
+
 /* The material file of a benchmark, as one info line (its lines joined
  * by "; ") under PREFIXmaterial, and its path under PREFIXmaterial_file. */
 static void record_material(bench_store *store, const char *prefix, const char *path)
@@ -152,11 +180,38 @@ static void store_costs(bench_store *store, const char *prefix, const bench_chil
     }
 }
 
+/* One run of bench/recipe.c building recipe `name` into out_path
+ * (WORK/NAME.bsdf), saying "bench: DOINGNAME, run R of RUNS"; its figures
+ * and costs go under SECTION.NAME. 0, recorded as an error, if it failed. */
+static int run_recipe(const config *cfg, bench_store *store, char *bin, const char *section,
+                      const char *name, const char *doing, size_t run, size_t runs,
+                      char *out_path, size_t out_size)
+{
+    char out_name[128], prefix[160];
+    char *argv[5];
+    bench_child_result res;
+    snprintf(out_name, sizeof out_name, "%s.bsdf", name);
+    path_join(out_path, out_size, cfg->work_dir, out_name);
+    argv[0] = bin;
+    argv[1] = (char *)name;
+    argv[2] = out_path;
+    argv[3] = "0";
+    argv[4] = NULL;
+    fprintf(stderr, "bench: %s%s, run %zu of %zu\n", doing, name, run + 1, runs);
+    snprintf(prefix, sizeof prefix, "%s.%s.", section, name);
+    if (!bench_run_child(argv, NULL, prefix, store, &res)) {
+        child_failed(store, name, &res);
+        return 0;
+    }
+    store_costs(store, prefix, &res, 1);
+    return 1;
+}
+
 /* 1. The three recipes at all threads, interleaved run by run so that a
  * burst of load elsewhere spreads over all of them. */
 static void run_recipes(const config *cfg, bench_store *store)
 {
-    char recipe_bin[1024], out_path[1024], out_name[128], prefix[128], id[160];
+    char recipe_bin[1024], out_path[1024], id[160];
     size_t run, r;
     int failed[BENCH_RECIPE_COUNT] = { 0 };
 
@@ -165,27 +220,14 @@ static void run_recipes(const config *cfg, bench_store *store)
     for (run = 0; run < cfg->runs; ++run)
         for (r = 0; r < BENCH_RECIPE_COUNT; ++r) {
             const char *name = bench_recipes[r].name;
-            char *argv[5];
-            bench_child_result res;
             struct stat st;
             if (failed[r])
                 continue;
-            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
-            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
-            argv[0] = recipe_bin;
-            argv[1] = (char *)name;
-            argv[2] = out_path;
-            argv[3] = "0";
-            argv[4] = NULL;
-            fprintf(stderr, "bench: recipe %s, run %zu of %zu\n", name, run + 1, cfg->runs);
-            snprintf(prefix, sizeof prefix, "recipe.%s.", name);
-            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
-                child_failed(store, name, &res);
+            if (!run_recipe(cfg, store, recipe_bin, "recipe", name, "recipe ", run, cfg->runs,
+                            out_path, sizeof out_path)) {
                 failed[r] = 1;
                 continue;
             }
-            snprintf(id, sizeof id, "recipe.%s.", name);
-            store_costs(store, id, &res, 1);
             if (stat(out_path, &st) == 0) {
                 snprintf(id, sizeof id, "recipe.%s.output", name);
                 bench_store_add(store, id, "MB", (double)st.st_size * 1e-6);
@@ -198,7 +240,7 @@ static void run_recipes(const config *cfg, bench_store *store)
  * run, and only in the full run. */
 static void run_dust(const config *cfg, bench_store *store)
 {
-    char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128], prefix[128];
+    char recipe_bin[1024], slab_bin[1024], out_path[1024], out_name[128];
     char id[160], sizes[BENCH_SLAB_SIZE_COUNT][16];
     size_t run, r, i;
     char *argv[BENCH_SLAB_SIZE_COUNT + 6];
@@ -211,23 +253,10 @@ static void run_dust(const config *cfg, bench_store *store)
         size_t runs = bench_dust[r].one_run ? 1 : cfg->runs;
         if (bench_dust[r].full_only && !cfg->full)
             continue;
-        for (run = 0; run < runs; ++run) {
-            snprintf(out_name, sizeof out_name, "%s.bsdf", name);
-            path_join(out_path, sizeof out_path, cfg->work_dir, out_name);
-            argv[0] = recipe_bin;
-            argv[1] = (char *)name;
-            argv[2] = out_path;
-            argv[3] = "0";
-            argv[4] = NULL;
-            fprintf(stderr, "bench: %s, run %zu of %zu\n", name, run + 1, runs);
-            snprintf(prefix, sizeof prefix, "dust.%s.", name);
-            if (!bench_run_child(argv, NULL, prefix, store, &res)) {
-                child_failed(store, name, &res);
+        for (run = 0; run < runs; ++run)
+            if (!run_recipe(cfg, store, recipe_bin, "dust", name, "", run, runs, out_path,
+                            sizeof out_path))
                 break;
-            }
-            snprintf(id, sizeof id, "dust.%s.", name);
-            store_costs(store, id, &res, 1);
-        }
         /* The same stack as a material (WORK/NAME.layers, from run.sh). */
         if (cfg->llbuild) {
             char layers[1024];
@@ -382,43 +411,54 @@ static void run_adding(const config *cfg, bench_store *store)
         child_failed(store, "adding", &res);
 }
 
+/* The files the evaluation sections measure, in order: the golden file
+ * (tests/data), then llbuild's outputs of two recipes (work folder). */
+static const char *const measured_labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
+
+/* Run bench/PROGRAM.c as `PROGRAM FILE [TABLE_OUT] LABEL RUNS` on each of
+ * the first `count` measured files (TABLE_OUT, when `table_out` is set:
+ * LABEL-tables.bsdf in the work folder), saying "bench: DOING LABEL"; the
+ * program names its own metrics, and its section is PROGRAM. */
+static void run_on_files(const config *cfg, bench_store *store, const char *program,
+                         size_t count, int table_out, const char *doing)
+{
+    char bin[1024], runs[32], file[1024], out[1024], name[64];
+    size_t i;
+    path_join(bin, sizeof bin, cfg->bin_dir, program);
+    snprintf(runs, sizeof runs, "%zu", cfg->runs);
+    for (i = 0; i < count; ++i) {
+        const char *label = measured_labels[i];
+        char *argv[6];
+        size_t a = 0;
+        if (i == 0) {
+            path_join(file, sizeof file, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
+        } else {
+            snprintf(name, sizeof name, "%s.bsdf", label);
+            path_join(file, sizeof file, cfg->work_dir, name);
+        }
+        if (!input_present(store, program, label, file, i == 0))
+            continue;
+        argv[a++] = bin;
+        argv[a++] = file;
+        if (table_out) {
+            snprintf(name, sizeof name, "%s-tables.bsdf", label);
+            path_join(out, sizeof out, cfg->work_dir, name);
+            argv[a++] = out;
+        }
+        argv[a++] = (char *)label;
+        argv[a++] = runs;
+        argv[a] = NULL;
+        fprintf(stderr, "bench: %s %s\n", doing, label);
+        run_labelled(store, argv, program, label);
+    }
+}
+
 /* 3. Evaluation on the golden file and on our coated-gold and
  * coated-diffuse outputs (issue 18 quotes figures for both). */
 static void run_eval(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024], gold[1024], diffuse[1024];
-    const char *files[3], *labels[3] = { "roughgold", "coated-gold", "coated-diffuse" };
-    size_t i;
-    path_join(bin, sizeof bin, cfg->bin_dir, "eval");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
-    path_join(diffuse, sizeof diffuse, cfg->work_dir, "coated-diffuse.bsdf");
-    files[0] = golden;
-    files[1] = gold;
-    files[2] = diffuse;
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
     record_load(store, "eval");
-    for (i = 0; i < 3; ++i) {
-        char *argv[5];
-        bench_child_result res;
-        char what[64];
-        if (access(files[i], R_OK) != 0) {
-            snprintf(what, sizeof what, "eval %s: no file %s", labels[i],
-                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
-            fprintf(stderr, "bench: %s\n", what);
-            bench_store_error(store, what);
-            continue;
-        }
-        argv[0] = bin;
-        argv[1] = (char *)files[i];
-        argv[2] = (char *)labels[i];
-        argv[3] = runs;
-        argv[4] = NULL;
-        fprintf(stderr, "bench: evaluation on %s\n", labels[i]);
-        snprintf(what, sizeof what, "eval %s", labels[i]);
-        if (!bench_run_child(argv, NULL, "", store, &res))
-            child_failed(store, what, &res);
-    }
+    run_on_files(cfg, store, "eval", 3, 0, "evaluation on");
 }
 
 /* 3a. Table files: written from the golden file and from the coated-gold
@@ -426,63 +466,14 @@ static void run_eval(const config *cfg, bench_store *store)
  * its .bsdf over the same directions (bench/tables.c). */
 static void run_tables(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024], gold[1024], out[2][1024];
-    const char *files[2], *labels[2] = { "roughgold", "coated-gold" };
-    size_t i;
-    path_join(bin, sizeof bin, cfg->bin_dir, "tables");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    path_join(gold, sizeof gold, cfg->work_dir, "coated-gold.bsdf");
-    path_join(out[0], sizeof out[0], cfg->work_dir, "roughgold-tables.bsdf");
-    path_join(out[1], sizeof out[1], cfg->work_dir, "coated-gold-tables.bsdf");
-    files[0] = golden;
-    files[1] = gold;
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
     record_load(store, "tables");
-    for (i = 0; i < 2; ++i) {
-        char *argv[6];
-        bench_child_result res;
-        char what[64];
-        if (access(files[i], R_OK) != 0) {
-            snprintf(what, sizeof what, "tables %s: no file %s", labels[i],
-                     i == 0 ? "(tests/data missing)" : "(the recipe failed)");
-            fprintf(stderr, "bench: %s\n", what);
-            bench_store_error(store, what);
-            continue;
-        }
-        argv[0] = bin;
-        argv[1] = (char *)files[i];
-        argv[2] = out[i];
-        argv[3] = (char *)labels[i];
-        argv[4] = runs;
-        argv[5] = NULL;
-        fprintf(stderr, "bench: table file of %s\n", labels[i]);
-        snprintf(what, sizeof what, "tables %s", labels[i]);
-        if (!bench_run_child(argv, NULL, "", store, &res))
-            child_failed(store, what, &res);
-    }
+    run_on_files(cfg, store, "tables", 2, 1, "table file of");
 }
 
 /* 3b. The batch calls on the golden file (per element, 1 and all threads). */
 static void run_batch(const config *cfg, bench_store *store)
 {
-    char bin[1024], runs[32], golden[1024];
-    char *argv[5];
-    bench_child_result res;
-    path_join(bin, sizeof bin, cfg->bin_dir, "batch");
-    path_join(golden, sizeof golden, cfg->testdata_dir, "roughgold_alpha_0.2.bsdf");
-    snprintf(runs, sizeof runs, "%zu", cfg->runs);
-    if (access(golden, R_OK) != 0) {
-        bench_store_error(store, "batch roughgold: no file (tests/data missing)");
-        return;
-    }
-    argv[0] = bin;
-    argv[1] = golden;
-    argv[2] = (char *)"roughgold";
-    argv[3] = runs;
-    argv[4] = NULL;
-    fprintf(stderr, "bench: batch calls on roughgold\n");
-    if (!bench_run_child(argv, NULL, "", store, &res))
-        child_failed(store, "batch roughgold", &res);
+    run_on_files(cfg, store, "batch", 1, 0, "batch calls on");
 }
 
 /* 6. The cost of the tolerance (issue 14): each recipe built with the

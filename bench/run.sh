@@ -75,8 +75,8 @@ build() { # name, sources and extra flags
 build recipe bench/recipe.c bench/bench_util.c tools/llbuild/time_model.c -Itools/llbuild
 # shellcheck disable=SC2086
 build adding bench/adding.c bench/bench_util.c -fopenmp $BLAS_CFLAGS $BLAS_LIBS
-build eval bench/eval.c bench/bench_util.c
-build tables bench/tables.c bench/bench_util.c
+build eval bench/eval.c bench/calls.c bench/bench_util.c
+build tables bench/tables.c bench/calls.c bench/bench_util.c
 build ggx_speed bench/ggx_speed.c bench/bench_util.c
 build driver bench/driver.c bench/child.c bench/metrics.c bench/targets.c \
     bench/report_table.c bench/report_json.c bench/bench_util.c
@@ -85,7 +85,7 @@ if [ "$FULL" = 1 ]; then
     # static library (the same objects).
     # shellcheck disable=SC2086
     build slab bench/slab.c bench/bench_util.c -Isrc "$BUILD/lib/liblayerlab.a" -fopenmp $BLAS_LIBS
-    build batch bench/batch.c bench/bench_util.c
+    build batch bench/batch.c bench/calls.c bench/bench_util.c
     build tolerance bench/tolerance.c bench/bench_util.c
     build textured bench/textured.c bench/child.c bench/metrics.c bench/bench_util.c
     # The convergence modes share tests/convergence_util.h with

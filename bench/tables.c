@@ -19,38 +19,23 @@
  * tables.LABEL.bsdf_{eval,pdf,sample}_dir.
  */
 #define LL_EXPERIMENTAL /* ll_tables_write_from_bsdf */
-#include "bench_util.h"
+#include "calls.h"
 
 #include <layerlab/ll_tables.h>
 
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 
 #define DEFAULT_CALLS 1000000
-#define PI 3.14159265358979323846
 
-typedef struct workload {
-    size_t calls;
-    double *wo, *wi, *u; /* [3 calls], [3 calls], [2 calls] */
-} workload;
-
-static void uniform_hemisphere(bench_rng *rng, double w[3])
-{
-    double z = bench_rng_uniform(rng), r = sqrt(fmax(0.0, 1.0 - z * z));
-    double phi = 2.0 * PI * bench_rng_uniform(rng);
-    w[0] = r * cos(phi);
-    w[1] = r * sin(phi);
-    w[2] = z;
-}
-
-/* wi for the viewer wo: the reflection of wo about a normal m near the
- * pole, or a uniform direction (above the surface either way, as wo). */
-static void light_for(bench_rng *rng, const double wo[3], int near_mirror, double wi[3])
+/* wi of call k for the viewer wo (bench_light_fn): for odd k the
+ * reflection of wo about a normal m near the pole, for even k a uniform
+ * direction (above the surface either way, as wo). */
+static void light_for(bench_rng *rng, const double wo[3], size_t k, double wi[3])
 {
     double m[3], len, d;
-    if (!near_mirror) {
-        uniform_hemisphere(rng, wi);
+    if (!(k & 1u)) {
+        bench_uniform_hemisphere(rng, wi);
         return;
     }
     m[0] = 0.2 * (2.0 * bench_rng_uniform(rng) - 1.0);
@@ -66,89 +51,14 @@ static void light_for(bench_rng *rng, const double wo[3], int near_mirror, doubl
     wi[2] = 2.0 * d * m[2] - wo[2];
 }
 
-static void workload_make(workload *w, size_t calls)
-{
-    bench_rng rng;
-    size_t k;
-    bench_rng_seed(&rng, 29);
-    w->calls = calls;
-    w->wo = bench_alloc(3 * calls, sizeof(double));
-    w->wi = bench_alloc(3 * calls, sizeof(double));
-    w->u = bench_alloc(2 * calls, sizeof(double));
-    for (k = 0; k < calls; ++k) {
-        uniform_hemisphere(&rng, w->wo + 3 * k);
-        light_for(&rng, w->wo + 3 * k, (int)(k & 1u), w->wi + 3 * k);
-        w->u[2 * k] = bench_rng_uniform(&rng);
-        w->u[2 * k + 1] = bench_rng_uniform(&rng);
-    }
-}
-
-/* Each timer returns seconds and adds its results to *sum, which is
- * printed, so that the work is observable. */
-static double time_eval(const ll_bsdf *b, const workload *w, double *sum)
-{
-    double rgb[3], start = bench_wall_seconds(), acc = 0.0;
-    size_t k;
-    for (k = 0; k < w->calls; ++k) {
-        bench_check(ll_bsdf_eval_dir(b, w->wo + 3 * k, w->wi + 3 * k, LL_TRANSPORT_RADIANCE,
-                                     NULL, rgb),
-                    "ll_bsdf_eval_dir");
-        acc += rgb[0] + rgb[1] + rgb[2];
-    }
-    *sum += acc;
-    return bench_wall_seconds() - start;
-}
-
-static double time_pdf(const ll_bsdf *b, const workload *w, double *sum)
-{
-    double start = bench_wall_seconds(), acc = 0.0;
-    size_t k;
-    for (k = 0; k < w->calls; ++k) {
-        double pdf;
-        bench_check(ll_bsdf_pdf_dir(b, w->wo + 3 * k, w->wi + 3 * k, NULL, &pdf),
-                    "ll_bsdf_pdf_dir");
-        acc += pdf;
-    }
-    *sum += acc;
-    return bench_wall_seconds() - start;
-}
-
-static double time_sample(const ll_bsdf *b, const workload *w, double *sum)
-{
-    double wi[3], pdf, rgb[3], start = bench_wall_seconds(), acc = 0.0;
-    size_t k;
-    for (k = 0; k < w->calls; ++k) {
-        bench_check(ll_bsdf_sample_dir(b, w->wo + 3 * k, w->u + 2 * k, LL_TRANSPORT_RADIANCE,
-                                       NULL, wi, &pdf, rgb),
-                    "ll_bsdf_sample_dir");
-        acc += pdf + wi[2] + rgb[1];
-    }
-    *sum += acc;
-    return bench_wall_seconds() - start;
-}
-
-/* One run of the three calls on b, as metrics tables.LABEL.PREFIX*_dir. */
-static void measure(const ll_bsdf *b, const workload *w, const char *label, const char *prefix,
-                    double *sum)
-{
-    double scale = 1e9 / (double)w->calls;
-    char id[160];
-    snprintf(id, sizeof id, "tables.%s.%seval_dir", label, prefix);
-    bench_metric(id, "ns", time_eval(b, w, sum) * scale);
-    snprintf(id, sizeof id, "tables.%s.%spdf_dir", label, prefix);
-    bench_metric(id, "ns", time_pdf(b, w, sum) * scale);
-    snprintf(id, sizeof id, "tables.%s.%ssample_dir", label, prefix);
-    bench_metric(id, "ns", time_sample(b, w, sum) * scale);
-}
-
 int main(int argc, char **argv)
 {
     ll_bsdf *source = NULL, *table = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
-    workload w, warm;
+    bench_calls w;
     size_t runs, calls = DEFAULT_CALLS, run;
     double sum = 0.0, start;
-    char text[64];
+    char text[64], prefix[2][128];
 
     if (argc != 5 && argc != 6)
         bench_die("usage: %s SOURCE.bsdf TABLE_OUT LABEL RUNS [CALLS]", argv[0]);
@@ -168,25 +78,20 @@ int main(int argc, char **argv)
     bench_check(ll_bsdf_get_info(table, &info), "ll_bsdf_get_info");
     snprintf(text, sizeof text, "%zu bytes", info.file_size);
     bench_info("table file", text);
-    workload_make(&w, calls);
+    bench_calls_make(&w, calls, 29, light_for);
     /* An untimed pass of each over 1% of the calls warms caches and pages. */
-    warm = w;
-    warm.calls = calls / 100 ? calls / 100 : 1;
-    (void)time_eval(table, &warm, &sum);
-    (void)time_pdf(table, &warm, &sum);
-    (void)time_sample(table, &warm, &sum);
-    (void)time_eval(source, &warm, &sum);
-    (void)time_sample(source, &warm, &sum);
+    bench_calls_warm(table, &w, 1, &sum);
+    bench_calls_warm(source, &w, 0, &sum);
+    snprintf(prefix[0], sizeof prefix[0], "tables.%s.", argv[3]);
+    snprintf(prefix[1], sizeof prefix[1], "tables.%s.bsdf_", argv[3]);
     for (run = 0; run < runs; ++run) {
-        measure(table, &w, argv[3], "", &sum);
-        measure(source, &w, argv[3], "bsdf_", &sum);
+        bench_calls_measure(table, &w, prefix[0], &sum);
+        bench_calls_measure(source, &w, prefix[1], &sum);
     }
     snprintf(text, sizeof text, "%g", sum);
     bench_info("checksum", text);
     ll_bsdf_release(table);
     ll_bsdf_release(source);
-    free(w.wo);
-    free(w.wi);
-    free(w.u);
+    bench_calls_free(&w);
     return 0;
 }

@@ -6,39 +6,10 @@
 set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
-tmp=$(mktemp -d /tmp/llbuild_test.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
-. "$(dirname "$0")/lib/stage_wait.sh"
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin llbuild_test
 
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
-expect() {
-    want=$1; what=$2; shift 3
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok; else
-        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
-    fi
-}
-
-# contains FILE TEXT DESCRIPTION
-contains() {
-    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
-}
-
-if [ ! -x "$llbuild" ]; then
-    echo "llbuild.sh: $llbuild is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+tool_test_need llbuild.sh "$llbuild"
 
 # --- help and version
 expect 0 "--help" -- "$llbuild" --help
@@ -266,16 +237,7 @@ for sig in INT TERM; do
     rm -f "$tmp/slow.bsdf"
     stage_start "$tmp/slow" "$llbuild" --nodes 300 --orders 40 "$tmp/slow.layers" \
         -o "$tmp/slow.bsdf"
-    if ! stage_wait "*% medium (*"; then
-        stage_finish
-        bad "SIG$sig: llbuild never reported the medium (exit $stage_status)"
-        continue
-    fi
-    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
-    stage_finish
-    status=$stage_status
-    if [ $status -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIG$sig: exit $status, expected death by signal"; fi
+    signal_in_stage $sig "*% medium (*" "the medium" "SIG$sig" || continue
     if ls "$tmp" | grep -q '^slow\.bsdf'; then bad "SIG$sig left $(ls "$tmp" | grep slow.bsdf)"; else ok; fi
     contains "$stage_log" "interrupted; no file written" "SIG$sig message"
 done
@@ -298,5 +260,4 @@ expect 1 "a decreasing sweep" -- "$llbuild" "$tmp/badsweep.layers" -o "$tmp/x.bs
 contains "$tmp/err" "badsweep.layers:1:29: alpha: the values of a sweep must be strictly increasing" \
     "decreasing sweep message"
 
-echo "llbuild.sh: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end llbuild.sh

@@ -14,14 +14,8 @@ if ! command -v mpirun >/dev/null 2>&1 || [ ! -x "$mpi" ]; then
     echo "0 passed, 0 failed"
     exit 0
 fi
-tmp=$(mktemp -d /tmp/llbuild_mpi_test.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin llbuild_mpi_test
 # CI runs as root, which OpenMPI refuses unless told.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # Under `make test SANITIZE=1`: OpenMPI keeps allocations past MPI_Finalize,
@@ -31,8 +25,6 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
 # No MPI warnings about the transport on a machine without a network card.
 export OMPI_MCA_btl=self,vader OMPI_MCA_btl_base_warn_component_unused=0
 
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
 run() { n=$1; shift; mpirun --oversubscribe -n "$n" "$mpi" "$@"; }
 
 # --- byte-identical to llbuild for every N: a medium between rough
@@ -116,7 +108,6 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 # resolution": its shared words take 5 s before the first basis is written,
 # and the 8 bases then follow within 1.3 s, too close to the end for a
 # kill to land before the file is committed).
-. "$(dirname "$0")/lib/stage_wait.sh"
 mkdir -p "$tmp/run"
 cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1
@@ -180,5 +171,4 @@ stage_finish
 [ "$(leftovers longtex)" -eq 0 ] && ok ||
     { bad "textured, an interrupt left:"; ls -A "$tmp"; }
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

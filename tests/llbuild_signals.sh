@@ -13,24 +13,10 @@
 set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
-tmp=$(mktemp -d /tmp/llbuild_signals.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
-. "$(dirname "$0")/lib/stage_wait.sh"
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin llbuild_signals
 
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-if [ ! -x "$llbuild" ]; then
-    echo "llbuild_signals.sh: $llbuild is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+tool_test_need llbuild_signals.sh "$llbuild"
 
 # interrupt NAME SIGNAL STAGE MATERIAL: build MATERIAL, signal it as soon as
 # a progress line names STAGE. (A stage's name can show before a sub-stage
@@ -96,5 +82,4 @@ interrupt basis INT "basis 2/3: dielectric interface" \
     'set nodes=500 orders=150\ndielectric eta=1.5 alpha=[0.05 0.06 0.07]\n'
 interrupt textured-writing TERM writing 'set nodes=2000 orders=1\ndiffuse albedo=[0.3 0.5]\n'
 
-echo "llbuild_signals.sh: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end llbuild_signals.sh

@@ -9,33 +9,8 @@ set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
 llconvert="$BUILD/bin/llconvert"
-tmp=$(mktemp -d /tmp/llbuild_tables_test.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
-. "$(dirname "$0")/lib/stage_wait.sh"
-
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
-expect() {
-    want=$1; what=$2; shift 3
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok; else
-        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
-    fi
-}
-
-# contains FILE TEXT DESCRIPTION
-contains() {
-    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
-}
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin llbuild_tables_test
 
 # only_layers DESCRIPTION: the work folder holds nothing but the inputs
 only_layers() {
@@ -43,11 +18,7 @@ only_layers() {
     if [ -z "$left" ]; then ok; else bad "$1 left: $left"; fi
 }
 
-if [ ! -x "$llbuild" ] || [ ! -x "$llconvert" ]; then
-    echo "llbuild_tables.sh: $llbuild or $llconvert is not built"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+tool_test_need llbuild_tables.sh "$llbuild" "$llconvert"
 
 mkdir -p "$tmp/w"
 printf 'conductor eta=Au alpha=0.3\n' >"$tmp/w/gold.layers"
@@ -165,15 +136,7 @@ mkdir -p "$tmp/run"
 for sig in INT TERM; do
     stage_start "$tmp/run" "$llbuild" --format measured --vndf 1024 --sample 512 $small \
         "$tmp/w/gold.layers" -o "$tmp/w/big.tab"
-    if ! stage_wait "*% tables (*"; then
-        stage_finish
-        bad "SIG$sig: llbuild never reported the tables (exit $stage_status)"
-        continue
-    fi
-    kill -s $sig "$stage_pid" 2>/dev/null || bad "SIG$sig: llbuild ended before the signal"
-    stage_finish
-    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIG$sig: exit $stage_status, expected death by signal"; fi
+    signal_in_stage $sig "*% tables (*" "the tables" "SIG$sig" || continue
     contains "$stage_log" "interrupted; no file written" "SIG$sig message"
     only_layers "SIG$sig"
 done
@@ -182,17 +145,9 @@ done
 # .bsdf of a wavelength left beside the output
 stage_start "$tmp/run" "$llbuild" --format measured --wavelengths 360:830:1 $grid $small \
     "$tmp/w/gold.layers" -o "$tmp/w/spectral.tab"
-if ! stage_wait "*% spectra (*"; then
-    stage_finish
-    bad "SIGINT: llbuild never reported the spectra (exit $stage_status)"
-else
-    kill -s INT "$stage_pid" 2>/dev/null || bad "SIGINT: llbuild ended before the signal"
-    stage_finish
-    if [ "$stage_status" -gt 128 ] && [ "$stage_timed_out" -eq 0 ]; then ok; else
-        bad "SIGINT in the spectra: exit $stage_status, expected death by signal"; fi
+if signal_in_stage INT "*% spectra (*" "the spectra" "SIGINT in the spectra"; then
     contains "$stage_log" "interrupted; no file written" "SIGINT in the spectra: message"
     only_layers "SIGINT in the spectra"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

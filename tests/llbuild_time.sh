@@ -8,13 +8,9 @@
 set -u
 BUILD=${BUILD:-build}
 llbuild="$BUILD/bin/llbuild"
-tmp=$(mktemp -d /tmp/llbuild_time.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
+. "$(dirname "$0")/lib/tool_test.sh"
 # Hermetic: nothing in the user's cache (and --no-cache below anyway).
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
+tool_test_begin llbuild_time
 
 if [ ! -x "$llbuild" ] || [ ! -x /usr/bin/time ]; then
     echo "llbuild_time.sh: needs $llbuild and /usr/bin/time"
@@ -24,23 +20,21 @@ fi
 
 for ex in coated-gold plastic coated-gold-with-scatmedium; do
     if ! "$llbuild" --threads 1 --no-cache --dry-run "examples/$ex.layers" >"$tmp/dry" 2>&1; then
-        failed=$((failed + 1)); echo "FAIL: $ex: --dry-run failed"; cat "$tmp/dry"; continue
+        bad "$ex: --dry-run failed"; cat "$tmp/dry"; continue
     fi
     estimate=$(sed -n 's/^time .* s on 1 thread, \([0-9.]*\) s of CPU: .*/\1/p' "$tmp/dry")
     if ! /usr/bin/time -f '%U %S' -o "$tmp/cpu" "$llbuild" --threads 1 --no-cache --quiet \
             "examples/$ex.layers" -o "$tmp/$ex.bsdf" 2>"$tmp/err"; then
-        failed=$((failed + 1)); echo "FAIL: $ex: the build failed"; cat "$tmp/err"; continue
+        bad "$ex: the build failed"; cat "$tmp/err"; continue
     fi
     cpu=$(awk '{ print $1 + $2 }' "$tmp/cpu")
     if [ -n "$estimate" ] &&
        awk -v e="$estimate" -v c="$cpu" 'BEGIN { exit !(e <= 2 * c && c <= 2 * e) }'; then
-        passed=$((passed + 1))
+        ok
         echo "PASS: $ex: --dry-run says $estimate s of CPU, the build took $cpu s"
     else
-        failed=$((failed + 1))
-        echo "FAIL: $ex: --dry-run says '$estimate' s of CPU, the build took $cpu s (not within 2x)"
+        bad "$ex: --dry-run says '$estimate' s of CPU, the build took $cpu s (not within 2x)"
         grep '^time' "$tmp/dry"
     fi
 done
-echo "llbuild_time.sh: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end llbuild_time.sh

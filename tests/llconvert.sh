@@ -9,32 +9,8 @@ BUILD=${BUILD:-build}
 llconvert="$BUILD/bin/llconvert"
 llbuild="$BUILD/bin/llbuild"
 gold=tests/data/roughgold_alpha_0.2.bsdf
-tmp=$(mktemp -d /tmp/llconvert_test.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-# Hermetic: the resolutions chosen are remembered in a scratch directory,
-# never the user's cache.
-LAYERLAB_CACHE_DIR="$tmp/cache"
-export LAYERLAB_CACHE_DIR
-passed=0
-failed=0
-
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-# expect CODE DESCRIPTION -- command...: the command's exit status must be CODE
-expect() {
-    want=$1; what=$2; shift 3
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok; else
-        bad "$what: exit $got, expected $want"; sed 's/^/  | /' "$tmp/err" | head -5
-    fi
-}
-
-# contains FILE TEXT DESCRIPTION
-contains() {
-    if grep -q -- "$2" "$1"; then ok; else bad "$3: no '$2' in:"; sed 's/^/  | /' "$1" | head -8; fi
-}
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin llconvert_test
 
 expect 0 "help" -- "$llconvert" --help
 contains "$tmp/out" "usage: llconvert" "help text"
@@ -93,5 +69,4 @@ else
     bad "no $llbuild"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

@@ -10,7 +10,9 @@
  *    over the pairs (per channel), both elevations <= 80 degrees, half of
  *    the pairs near the mirror direction; their median, 95th and 99th
  *    percentiles.
- * Public API only, so that it measures what a renderer reads.
+ * Public API only, so that it measures what a renderer reads. The
+ * albedo and the f errors are also what test_tables.c holds its table of
+ * the golden file to. Header-only (static inline).
  */
 #ifndef LL_TEST_TABLES_FIGURES_H
 #define LL_TEST_TABLES_FIGURES_H
@@ -37,20 +39,23 @@ typedef struct tf_figures {
     int failed;                        /* a call did not return LL_OK   */
 } tf_figures;
 
-static double tf_uniform(uint64_t *s)
+static inline double tf_uniform(uint64_t *s)
 {
     *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
     return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
 }
 
-static void tf_direction(double theta, double phi, double w[3])
+/* A direction at elevation theta, azimuth phi. */
+static inline void tf_direction(double theta, double phi, double w[3])
 {
     w[0] = sin(theta) * cos(phi);
     w[1] = sin(theta) * sin(phi);
     w[2] = cos(theta);
 }
 
-static int tf_albedo(const ll_bsdf *b, double mu, double out[3])
+/* Albedo per channel for light seen along wo (cos theta = mu); 0 if a
+ * call failed. */
+static inline int tf_albedo(const ll_bsdf *b, double mu, double out[3])
 {
     const int n = 256;
     double wo[3] = { sqrt(1.0 - mu * mu), 0.0, mu };
@@ -70,13 +75,16 @@ static int tf_albedo(const ll_bsdf *b, double mu, double out[3])
     return 1;
 }
 
-static int tf_compare(const void *a, const void *b)
+static inline int tf_compare(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y;
 }
 
-static int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig)
+/* fig's relative f errors (p50, p95, p99, n_values), with the pairs drawn
+ * by `uniform` from a fixed seed; 0 if a call failed or no value counted. */
+static inline int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig,
+                              double (*uniform)(uint64_t *))
 {
     const double lim = 80.0 * TF_PI / 180.0;
     double(*wo)[3] = malloc(TF_PAIRS * sizeof *wo), (*wi)[3] = malloc(TF_PAIRS * sizeof *wi);
@@ -86,16 +94,17 @@ static int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig
     size_t k, n = 0;
     int c, ok = wo && wi && ref && got && err;
     for (k = 0; ok && k < TF_PAIRS; ++k) {
-        double tv = acos(1.0 - tf_uniform(&rng) * (1.0 - cos(lim)));
+        double tv = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
         tf_direction(tv, 0.0, wo[k]);
         do {
             if (k % 2 == 0) {
-                double tl = acos(1.0 - tf_uniform(&rng) * (1.0 - cos(lim)));
-                tf_direction(tl, 2.0 * TF_PI * tf_uniform(&rng), wi[k]);
+                double tl = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
+                tf_direction(tl, 2.0 * TF_PI * uniform(&rng), wi[k]);
             } else {
-                /* Near the mirror direction: offsets of up to 0.4 radians. */
-                double dt = 0.4 * (2.0 * tf_uniform(&rng) - 1.0);
-                double dp = 0.4 * (2.0 * tf_uniform(&rng) - 1.0) / (sin(tv) + 0.2);
+                /* Near the mirror direction: offsets of up to 0.4 radians
+                 * (about 2 alpha for the golden file). */
+                double dt = 0.4 * (2.0 * uniform(&rng) - 1.0);
+                double dp = 0.4 * (2.0 * uniform(&rng) - 1.0) / (sin(tv) + 0.2);
                 tf_direction(fabs(tv + dt), TF_PI + dp, wi[k]);
             }
         } while (acos(wi[k][2]) > lim);
@@ -125,7 +134,7 @@ static int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig
 }
 
 /* All the figures of table against src; fig->failed if a call failed. */
-static void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig)
+static inline void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig)
 {
     int k, c;
     memset(fig, 0, sizeof *fig);
@@ -142,11 +151,11 @@ static void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig
                 fig->worst_albedo = fabs(r - 1.0);
         }
     }
-    if (!tf_f_errors(src, table, fig))
+    if (!tf_f_errors(src, table, fig, tf_uniform))
         fig->failed = 1;
 }
 
-static void tf_print(const char *label, const tf_figures *fig)
+static inline void tf_print(const char *label, const tf_figures *fig)
 {
     int k;
     printf("%s: albedo table/source by viewer elevation (R G B):\n", label);

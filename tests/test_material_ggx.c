@@ -52,18 +52,10 @@ static ll_layer *build_one(const char *text, size_t nodes, size_t orders)
 static ll_layer *direct(const ll_layer *like, double eta_re, double eta_im, double alpha,
                         int distribution)
 {
-    size_t n = ll_layer_node_count(like), m = ll_layer_order_count(like);
-    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
-    ll_layer *l = NULL;
-    assert_non_null(x);
-    assert_non_null(w);
-    assert_int_equal(ll_layer_get_nodes(like, x, w), LL_OK);
-    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
+    ll_layer *l = ll_test_layer_like(like);
     assert_int_equal(ll_test_set_microfacet_dist(l, eta_re, eta_im, alpha, distribution,
                                                           1, 0, NULL),
                      LL_OK);
-    free(x);
-    free(w);
     return l;
 }
 

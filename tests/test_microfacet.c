@@ -22,7 +22,7 @@
 
 #include <layerlab.h>
 #include "test_util.h"
-#include "series_check.h"
+#include "microfacet_check.h"
 #include "numerics/filon.h"
 #include "words/microfacet.h"
 #include "numerics/series.h"
@@ -39,24 +39,10 @@ static ll_layer *make_layer(size_t n, size_t m, double *x, double *w)
     return l;
 }
 
-/* A small deterministic generator (64-bit LCG, top 53 bits). */
-static double uniform(uint64_t *state)
-{
-    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
-}
-
 /* ----------------------------------------------- the closed-form BSDF
- * Written out in vectors, independently of microfacet_series.c's reduction to
- * t = wi . wo: the BSDF of Walter et al. 2007 as the original layerlab's
- * microfacet() evaluates it, in its frame (wi points back to the light,
- * wo is the outgoing direction, -mu_i mu_o > 0 is reflection, light with
- * -mu_i > 0 comes from the side of relative index eta). */
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+ * Written out in vectors (microfacet_check.h): the BSDF of Walter et al.
+ * 2007 as the original layerlab's microfacet() evaluates it, with
+ * Beckmann's D and the original's rational fit of Smith G1. */
 
 static double smith_g1(const double *v, const double *m, double alpha)
 {
@@ -67,35 +53,20 @@ static double smith_g1(const double *v, const double *m, double alpha)
     return a >= 1.6 ? 1.0 : (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
 }
 
-static double closed_form(double mu_o, double mu_i, double eta_re, double eta_im, double alpha,
-                          double phi)
+static double closed_form(const series_case *c, double mu_o, double mu_i, double phi)
 {
-    double si = sqrt(1.0 - mu_i * mu_i), so = sqrt(1.0 - mu_o * mu_o);
-    double wi[3], wo[3], h[3], len, sign, c2, d, f, g, wih, woh, eta;
-    int reflect = -mu_i * mu_o > 0.0, conductor = eta_im != 0.0, k;
-    if (conductor && !reflect)
+    mf_geometry q;
+    double c2, d, f, g, alpha = c->alpha;
+    if (!mf_geometry_set(&q, mu_o, mu_i, c->eta_re, c->eta_im, phi))
         return 0.0;
-    wi[0] = -si, wi[1] = 0.0, wi[2] = -mu_i;
-    wo[0] = so * cos(phi), wo[1] = so * sin(phi), wo[2] = mu_o;
-    eta = (-mu_i > 0.0 || conductor) ? eta_re : 1.0 / eta_re;
-    for (k = 0; k < 3; ++k)
-        h[k] = wi[k] + (reflect ? 1.0 : eta) * wo[k];
-    len = sqrt(dot3(h, h));
-    sign = h[2] > 0.0 ? 1.0 : -1.0;
-    for (k = 0; k < 3; ++k)
-        h[k] *= sign / len;
-    c2 = h[2] * h[2];
+    c2 = q.h[2] * q.h[2];
     d = exp(-(1.0 - c2) / c2 / (alpha * alpha)) / (LL_PI * alpha * alpha * c2 * c2);
-    wih = dot3(wi, h);
-    woh = dot3(wo, h);
-    assert_int_equal(conductor ? ll_fresnel_conductor(fabs(wih), eta_re, eta_im, &f)
-                               : ll_fresnel_dielectric(wih, eta_re, &f, NULL),
+    assert_int_equal(c->eta_im != 0.0
+                         ? ll_fresnel_conductor(fabs(q.wih), c->eta_re, c->eta_im, &f)
+                         : ll_fresnel_dielectric(q.wih, c->eta_re, &f, NULL),
                      LL_OK);
-    g = smith_g1(wi, h, alpha) * smith_g1(wo, h, alpha);
-    if (reflect)
-        return f * d * g / (4.0 * fabs(mu_i * mu_o));
-    return fabs((1.0 - f) * d * g * eta * eta * wih * woh /
-                (mu_i * mu_o * (wih + eta * woh) * (wih + eta * woh)));
+    g = smith_g1(q.wi, q.h, alpha) * smith_g1(q.wo, q.h, alpha);
+    return mf_walter(&q, mu_o, mu_i, f, d, g);
 }
 
 /* ------------------------------------------------------- numerics */
@@ -156,10 +127,6 @@ static void filon_is_exact_for_quadratics(void **state)
 
 /* ------------------------------- the series against direct integration */
 
-typedef struct series_case {
-    double eta_re, eta_im, alpha;
-} series_case;
-
 /* B of the pair (the sharpness of the Beckmann peak in phi), from the
  * half-vector geometry: tan^2(theta_h) = (lateral^2 + 2 k si so (1 - cos
  * phi)) / h_z^2 with H = wi + k wo. */
@@ -175,33 +142,6 @@ static double peak_sharpness(const series_case *c, double mu_o, double mu_i)
 #define REF_POINTS 8001 /* composite Simpson on [0, pi]: 30+ points per lobe width */
 #define MAX_ORDERS 400  /* no lobe below B = 5000 is widened at 400 orders */
 
-/* The worst error of the pair's series (relative to the BSDF's peak over
- * phi), comparing with coefficients computed by composite Simpson from the
- * closed form; returns -1 for pairs that scatter negligibly. */
-static double series_error(ll_microfacet_model *mf, const series_case *c, double mu_o, double mu_i,
-                           double *f, double *ref, double *ours, double *scratch)
-{
-    double mu[2], peak = 0.0, h = LL_PI / (REF_POINTS - 1);
-    size_t len, k;
-    mu[0] = mu_o;
-    mu[1] = mu_i;
-    assert_int_equal(ll_microfacet_prepare(mf, mu, 2), LL_OK);
-    assert_int_equal(ll_microfacet_series(mf, mu_o, mu_i, MAX_ORDERS, ours, &len, NULL, scratch),
-                     LL_OK);
-    for (k = 0; k < REF_POINTS; ++k) {
-        f[k] = closed_form(mu_o, mu_i, c->eta_re, c->eta_im, c->alpha, (double)k * h);
-        peak = fmax(peak, f[k]);
-    }
-    if (len == 0) {
-        /* Skipped as negligible: it must be (the peaks that matter here are
-         * 0.01 to 1e3). */
-        assert_true(peak < 1e-6);
-        return -1.0;
-    }
-    ll_test_cosine_series(f, REF_POINTS, h, len, ref);
-    return ll_test_series_error(ours, ref, len, REF_POINTS, h, peak);
-}
-
 static void series_matches_direct_integration(void **state)
 {
     /* Dielectrics lit from both sides (pairs of either sign), conductors
@@ -215,16 +155,12 @@ static void series_matches_direct_integration(void **state)
     static const double fixed[][2] = { { -0.6608, 0.8136 }, { -0.7047, 0.7621 },
                                        { -0.5338, 0.8532 }, { 0.6154, 0.8381 },
                                        { -0.0112, 0.1051 }, { -0.2323, 0.5485 } };
-    double *f = malloc(REF_POINTS * sizeof *f), *ref = malloc(MAX_ORDERS * sizeof *ref);
-    double *ours = malloc(MAX_ORDERS * sizeof *ours), worst = 0.0;
-    double *scratch = malloc(ll_microfacet_scratch_size(MAX_ORDERS) * sizeof *scratch);
+    series_work work;
+    double worst = 0.0;
     uint64_t rng = 12345;
     size_t ci, p, tested = 0;
     (void)state;
-    assert_non_null(f);
-    assert_non_null(ref);
-    assert_non_null(ours);
-    assert_non_null(scratch);
+    series_work_init(&work, REF_POINTS, MAX_ORDERS, closed_form);
     for (ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
         const series_case *c = &cases[ci];
         ll_microfacet_model *mf;
@@ -243,7 +179,7 @@ static void series_matches_direct_integration(void **state)
             /* Only lobes that the series holds without widening. */
             if (fabs(mu_o) < 0.01 || fabs(mu_i) < 0.01 || peak_sharpness(c, mu_o, mu_i) > 5000.0)
                 continue;
-            e = series_error(mf, c, mu_o, mu_i, f, ref, ours, scratch);
+            e = series_error(&work, mf, c, mu_o, mu_i);
             if (e < 0.0)
                 continue;
             if (e > 1e-3)
@@ -258,21 +194,10 @@ static void series_matches_direct_integration(void **state)
     print_message("series vs integration: %zu pairs, worst error %.2e of the peak\n", tested,
                   worst);
     assert_true(tested > 100);
-    free(f);
-    free(ref);
-    free(ours);
-    free(scratch);
+    series_work_free(&work);
 }
 
 /* ------------------------------------------------------------ energy */
-
-/* R + T for light along mu (either side), from the order-0 column. */
-static double albedo_sum(const ll_layer *l, double mu)
-{
-    double R, T;
-    assert_int_equal(ll_layer_albedo(l, mu, &R, &T), LL_OK);
-    return R + T;
-}
 
 /* A non-absorbing dielectric at the heuristic resolution: with the
  * compensation, R + T = 1 for every incident node (both sides); without
@@ -283,35 +208,20 @@ static void dielectric_conserves_energy(void **state)
 {
     static const double alphas[] = { 0.05, 0.1, 0.3, 0.5 };
     double loss[4], worst = 0.0;
-    size_t a, i;
+    size_t a;
     (void)state;
     for (a = 0; a < 4; ++a) {
         size_t n, m;
-        double *x, *w, lost = 0.0, total = 0.0;
         ll_layer *on, *off;
         assert_int_equal(ll_fit_microfacet(alphas[a], 1.5, 0.0, &n, &m), LL_OK);
-        x = malloc(n * sizeof *x);
-        w = malloc(n * sizeof *w);
-        assert_non_null(x);
-        assert_non_null(w);
-        on = make_layer(n, 1, x, w);
+        on = make_layer(n, 1, NULL, NULL);
         off = make_layer(n, 1, NULL, NULL);
         assert_int_equal(ll_test_set_microfacet(on, 1.5, 0.0, alphas[a], 1, m, NULL), LL_OK);
         assert_int_equal(ll_test_set_microfacet(off, 1.5, 0.0, alphas[a], 0, m, NULL), LL_OK);
-        for (i = 0; i < n; ++i) {
-            double sum = albedo_sum(on, x[i]);
-            worst = fmax(worst, fabs(sum - 1.0));
-            assert_float_equal(sum, 1.0, 1e-3);
-            if (x[i] > 0.0) {
-                lost += w[i] * x[i] * (1.0 - albedo_sum(off, x[i]));
-                total += w[i] * x[i];
-            }
-        }
-        loss[a] = lost / total;
+        assert_conserves_energy(on, &worst);
+        loss[a] = energy_lost(off);
         ll_layer_destroy(on);
         ll_layer_destroy(off);
-        free(x);
-        free(w);
     }
     print_message("R + T = 1 within %.2e; lost without compensation: %.4f %.4f %.4f %.4f\n", worst,
                   loss[0], loss[1], loss[2], loss[3]);
@@ -322,47 +232,21 @@ static void dielectric_conserves_energy(void **state)
 
 /* ------------------------------------------------------- reciprocity */
 
-/* With ascending nodes x (x[n-1-j] = -x[j]), f(mu_o, mu_i) of order k is
- * M[row(mu_o) * n + col(mu_i)]. Reflection is symmetric, f(-a, +b) =
- * f(-b, +a); transmission obeys f_bt(-a, -b) = f_tb(+b, +a) / eta^2. */
+static ll_layer *beckmann_interface(size_t n, size_t m, double eta_re, double eta_im,
+                                    double alpha)
+{
+    ll_layer *l = make_layer(n, m, NULL, NULL);
+    assert_int_equal(ll_test_set_microfacet(l, eta_re, eta_im, alpha, 1, 0, NULL), LL_OK);
+    return l;
+}
+
+/* Reflection is symmetric and transmission obeys the eta^2 relation
+ * (check_reciprocity, microfacet_check.h). */
 static void interface_is_reciprocal(void **state)
 {
-    static const double idx[][2] = { { 1.5, 0.0 }, { 0.14355224039215753, 3.9839744793223466 } };
-    size_t n = 92, m = 61, h = n / 2, e, k, j, q;
-    double *M = malloc(n * n * sizeof *M), worst_r = 0.0, worst_t = 0.0;
+    static const double idx[2][2] = { { 1.5, 0.0 }, { 0.14355224039215753, 3.9839744793223466 } };
     (void)state;
-    assert_non_null(M);
-    for (e = 0; e < 2; ++e) {
-        double eta2 = idx[e][0] * idx[e][0];
-        ll_layer *l = make_layer(n, m, NULL, NULL);
-        assert_int_equal(ll_test_set_microfacet(l, idx[e][0], idx[e][1], 0.3, 1, 0, NULL), LL_OK);
-        for (k = 0; k < m; ++k) {
-            double scale_r = 0.0, scale_t = 0.0;
-            assert_int_equal(ll_layer_matrix(l, k, M), LL_OK);
-            for (j = 0; j < n * n; ++j) {
-                size_t r = j / n, c = j % n;
-                if ((r < h) != (c < h))
-                    scale_r = fmax(scale_r, fabs(M[j]));
-                else
-                    scale_t = fmax(scale_t, fabs(M[j]));
-            }
-            for (j = h; j < n; ++j)
-                for (q = h; q < n; ++q) {
-                    size_t a = n - 1 - j, b = n - 1 - q; /* the mirror nodes -x */
-                    worst_r = fmax(worst_r, fabs(M[a * n + q] - M[b * n + j]) / scale_r);
-                    worst_r = fmax(worst_r, fabs(M[j * n + b] - M[q * n + a]) / scale_r);
-                    if (scale_t > 0.0)
-                        worst_t = fmax(worst_t,
-                                       fabs(M[a * n + b] - M[q * n + j] / eta2) / scale_t);
-                }
-        }
-        ll_layer_destroy(l);
-    }
-    print_message("reciprocity: reflection %.2e, transmission %.2e of the largest entry\n",
-                  worst_r, worst_t);
-    assert_true(worst_r < 1e-12);
-    assert_true(worst_t < 1e-9);
-    free(M);
+    check_reciprocity(beckmann_interface, idx, "");
 }
 
 /* ----------------------------------------------- the smooth limit */
@@ -482,26 +366,17 @@ static void rough_gold_matches_original_file(void **state)
 
 static void results_do_not_depend_on_thread_count(void **state)
 {
-    size_t n = 92, m = 61, k;
-    double *a = malloc(n * n * sizeof *a), *b = malloc(n * n * sizeof *b);
+    size_t n = 92, m = 61;
     ll_layer *one = make_layer(n, m, NULL, NULL), *two = make_layer(n, m, NULL, NULL);
     (void)state;
-    assert_non_null(a);
-    assert_non_null(b);
     assert_int_equal(ll_set_thread_count(1), LL_OK);
     assert_int_equal(ll_test_set_microfacet(one, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     assert_int_equal(ll_set_thread_count(2), LL_OK);
     assert_int_equal(ll_test_set_microfacet(two, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     assert_int_equal(ll_set_thread_count(0), LL_OK);
-    for (k = 0; k < m; ++k) {
-        assert_int_equal(ll_layer_matrix(one, k, a), LL_OK);
-        assert_int_equal(ll_layer_matrix(two, k, b), LL_OK);
-        assert_memory_equal(a, b, n * n * sizeof *a);
-    }
+    assert_same_matrices(one, two, n, m);
     ll_layer_destroy(one);
     ll_layer_destroy(two);
-    free(a);
-    free(b);
 }
 
 static void index_matched_interface_is_clear(void **state)

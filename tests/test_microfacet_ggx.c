@@ -20,7 +20,7 @@
 
 #include <layerlab.h>
 #include "test_util.h"
-#include "series_check.h"
+#include "microfacet_check.h"
 #include "words/microfacet.h"
 #include "words/microfacet_ggx.h"
 #include "search/probe.h"
@@ -29,7 +29,6 @@
 #define GOLD_RE 0.2
 #define GOLD_IM 3.5
 
-/* A small deterministic generator (64-bit LCG, top 53 bits). */
 /* The public Fresnel reflectances as values (0 on failure). */
 static double fresnel_conductor(double cos_i, double eta_re, double eta_im)
 {
@@ -43,23 +42,10 @@ static double fresnel_dielectric(double cos_i, double eta, double *cos_t)
     return ll_fresnel_dielectric(cos_i, eta, &r, cos_t) == LL_OK ? r : 0.0;
 }
 
-static double uniform(uint64_t *state)
-{
-    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 /* ----------------------------------------------- the closed-form BSDF
- * Written out in vectors, independently of microfacet_series.c's reduction to
- * t = wi . wo and of microfacet_ggx.c: Walter et al. 2007 with GGX's D and
- * exact Smith G1, in the frame of words/microfacet.h (wi points back to
- * the light, wo is the outgoing direction, -mu_i mu_o > 0 is reflection,
- * light with -mu_i > 0 comes from the side of relative index eta). */
+ * Written out in vectors (microfacet_check.h), independently of
+ * microfacet_ggx.c too: Walter et al. 2007 with GGX's D and exact Smith
+ * G1. */
 
 static double ggx_d(const double *m, double alpha)
 {
@@ -76,41 +62,19 @@ static double ggx_g1(const double *v, const double *m, double alpha)
     return 2.0 / (1.0 + sqrt(1.0 + alpha * alpha * t2));
 }
 
-static double closed_form(double mu_o, double mu_i, double eta_re, double eta_im, double alpha,
-                          double phi, int white)
+static double closed_form(const series_case *c, double mu_o, double mu_i, double phi)
 {
-    double si = sqrt(1.0 - mu_i * mu_i), so = sqrt(1.0 - mu_o * mu_o);
-    double wi[3], wo[3], h[3], len, sign, d, f, g, wih, woh, eta;
-    int reflect = -mu_i * mu_o > 0.0, conductor = eta_im != 0.0, k;
-    if (conductor && !reflect)
+    mf_geometry q;
+    double f, g;
+    if (!mf_geometry_set(&q, mu_o, mu_i, c->eta_re, c->eta_im, phi))
         return 0.0;
-    wi[0] = -si, wi[1] = 0.0, wi[2] = -mu_i;
-    wo[0] = so * cos(phi), wo[1] = so * sin(phi), wo[2] = mu_o;
-    eta = (-mu_i > 0.0 || conductor) ? eta_re : 1.0 / eta_re;
-    for (k = 0; k < 3; ++k)
-        h[k] = wi[k] + (reflect ? 1.0 : eta) * wo[k];
-    len = sqrt(dot3(h, h));
-    sign = h[2] > 0.0 ? 1.0 : -1.0;
-    for (k = 0; k < 3; ++k)
-        h[k] *= sign / len;
-    d = ggx_d(h, alpha);
-    wih = dot3(wi, h);
-    woh = dot3(wo, h);
-    f = white       ? 1.0
-        : conductor ? fresnel_conductor(fabs(wih), eta_re, eta_im)
-                    : fresnel_dielectric(wih, eta_re, NULL);
-    g = ggx_g1(wi, h, alpha) * ggx_g1(wo, h, alpha);
-    if (reflect)
-        return f * d * g / (4.0 * fabs(mu_i * mu_o));
-    return fabs((1.0 - f) * d * g * eta * eta * wih * woh /
-                (mu_i * mu_o * (wih + eta * woh) * (wih + eta * woh)));
+    f = c->eta_im != 0.0 ? fresnel_conductor(fabs(q.wih), c->eta_re, c->eta_im)
+                         : fresnel_dielectric(q.wih, c->eta_re, NULL);
+    g = ggx_g1(q.wi, q.h, c->alpha) * ggx_g1(q.wo, q.h, c->alpha);
+    return mf_walter(&q, mu_o, mu_i, f, ggx_d(q.h, c->alpha), g);
 }
 
 /* ------------------------------- the series against direct integration */
-
-typedef struct series_case {
-    double eta_re, eta_im, alpha;
-} series_case;
 
 /* beta of the pair (words/microfacet_ggx.h): B / (1 + X_0) from the
  * half-vector geometry, tan^2(theta_h) = (lateral^2 + 2 k si so (1 - cos
@@ -128,34 +92,6 @@ static double peak_sharpness(const series_case *c, double mu_o, double mu_i)
 #define REF_POINTS 16001 /* composite Simpson on [0, pi]: 20+ points per lobe width */
 #define MAX_ORDERS 800
 #define MAX_BETA 5000.0
-
-/* The worst error of the pair's series (relative to the BSDF's peak over
- * phi), comparing with coefficients computed by composite Simpson from the
- * closed form; returns -1 for pairs that scatter negligibly. */
-static double series_error(ll_microfacet_model *mf, const series_case *c, double mu_o, double mu_i,
-                           double *f, double *ref, double *ours, double *scratch)
-{
-    double mu[2], peak = 0.0, h = LL_PI / (REF_POINTS - 1);
-    size_t len, k;
-    mu[0] = mu_o;
-    mu[1] = mu_i;
-    assert_int_equal(ll_microfacet_prepare(mf, mu, 2), LL_OK);
-    assert_int_equal(ll_microfacet_series(mf, mu_o, mu_i, MAX_ORDERS, ours, &len, NULL, scratch),
-                     LL_OK);
-    for (k = 0; k < REF_POINTS; ++k) {
-        f[k] = closed_form(mu_o, mu_i, c->eta_re, c->eta_im, c->alpha, (double)k * h, 0);
-        peak = fmax(peak, f[k]);
-    }
-    if (len == 0) {
-        if (peak >= 1e-6)
-            print_message("eta %g+%gi alpha %g: mu_o %g mu_i %g: skipped, peak %g\n", c->eta_re,
-                          c->eta_im, c->alpha, mu_o, mu_i, peak);
-        assert_true(peak < 1e-6);
-        return -1.0;
-    }
-    ll_test_cosine_series(f, REF_POINTS, h, len, ref);
-    return ll_test_series_error(ours, ref, len, REF_POINTS, h, peak);
-}
 
 /* Fixed pairs: with a kink (critical azimuth of total internal reflection,
  * end of refraction) inside [0, pi], grazing on one or both sides, and near
@@ -180,18 +116,14 @@ static void series_matches_direct_integration(void **state)
 {
     static const double alphas[] = { 0.02, 0.05, 0.1, 0.3, 0.6, 1.0 };
     static const double idx[][2] = { { 1.5, 0.0 }, { 1.0 / 1.5, 0.0 }, { GOLD_RE, GOLD_IM } };
-    double *f = malloc(REF_POINTS * sizeof *f), *ref = malloc(MAX_ORDERS * sizeof *ref);
-    double *ours = malloc(MAX_ORDERS * sizeof *ours), worst = 0.0, worst_case[3] = { 0 };
-    double *scratch = malloc(ll_microfacet_scratch_size(MAX_ORDERS) * sizeof *scratch);
+    series_work work;
+    double worst = 0.0, worst_case[3] = { 0 };
     double fixed[64];
     double beta_max = fmin(MAX_BETA, ll_ggx_max_beta(MAX_ORDERS, LL_MICROFACET_RELERR));
     uint64_t rng = 12345;
     size_t ai, ei, p, tested = 0, n_fixed;
     (void)state;
-    assert_non_null(f);
-    assert_non_null(ref);
-    assert_non_null(ours);
-    assert_non_null(scratch);
+    series_work_init(&work, REF_POINTS, MAX_ORDERS, closed_form);
     kink_pairs(fixed, &n_fixed);
     for (ai = 0; ai < sizeof alphas / sizeof alphas[0]; ++ai)
         for (ei = 0; ei < 3; ++ei) {
@@ -221,7 +153,7 @@ static void series_matches_direct_integration(void **state)
                 if (fabs(mu_o) < 0.01 || fabs(mu_i) < 0.01 ||
                     peak_sharpness(&c, mu_o, mu_i) > beta_max)
                     continue;
-                e = series_error(mf, &c, mu_o, mu_i, f, ref, ours, scratch);
+                e = series_error(&work, mf, &c, mu_o, mu_i);
                 if (e < 0.0)
                     continue;
                 if (e > 2e-4)
@@ -239,10 +171,7 @@ static void series_matches_direct_integration(void **state)
                   "(eta 1.5 %.2e, 1/1.5 %.2e, gold %.2e)\n",
                   tested, worst, worst_case[0], worst_case[1], worst_case[2]);
     assert_true(tested > 400);
-    free(f);
-    free(ref);
-    free(ours);
-    free(scratch);
+    series_work_free(&work);
 }
 
 /* --------------------------------------------------- the white furnace */
@@ -342,54 +271,18 @@ static ll_layer *ggx_layer(size_t n, size_t m, double eta_re, double eta_im, dou
     return l;
 }
 
-/* With ascending nodes x (x[n-1-j] = -x[j]), f(mu_o, mu_i) of order k is
- * M[row(mu_o) * n + col(mu_i)]. Reflection is symmetric, f(-a, +b) =
- * f(-b, +a); transmission obeys f_bt(-a, -b) = f_tb(+b, +a) / eta^2. */
-static void interface_is_reciprocal(void **state)
+static ll_layer *ggx_interface(size_t n, size_t m, double eta_re, double eta_im, double alpha)
 {
-    static const double idx[][2] = { { 1.5, 0.0 }, { GOLD_RE, GOLD_IM } };
-    size_t n = 92, m = 61, h = n / 2, e, k, j, q;
-    double *M = malloc(n * n * sizeof *M), worst_r = 0.0, worst_t = 0.0;
-    (void)state;
-    assert_non_null(M);
-    for (e = 0; e < 2; ++e) {
-        double eta2 = idx[e][0] * idx[e][0];
-        ll_layer *l = ggx_layer(n, m, idx[e][0], idx[e][1], 0.3, 1, 0);
-        for (k = 0; k < m; ++k) {
-            double scale_r = 0.0, scale_t = 0.0;
-            assert_int_equal(ll_layer_matrix(l, k, M), LL_OK);
-            for (j = 0; j < n * n; ++j) {
-                size_t r = j / n, c = j % n;
-                if ((r < h) != (c < h))
-                    scale_r = fmax(scale_r, fabs(M[j]));
-                else
-                    scale_t = fmax(scale_t, fabs(M[j]));
-            }
-            for (j = h; j < n; ++j)
-                for (q = h; q < n; ++q) {
-                    size_t a = n - 1 - j, b = n - 1 - q; /* the mirror nodes -x */
-                    worst_r = fmax(worst_r, fabs(M[a * n + q] - M[b * n + j]) / scale_r);
-                    worst_r = fmax(worst_r, fabs(M[j * n + b] - M[q * n + a]) / scale_r);
-                    if (scale_t > 0.0)
-                        worst_t = fmax(worst_t,
-                                       fabs(M[a * n + b] - M[q * n + j] / eta2) / scale_t);
-                }
-        }
-        ll_layer_destroy(l);
-    }
-    print_message("GGX reciprocity: reflection %.2e, transmission %.2e of the largest entry\n",
-                  worst_r, worst_t);
-    assert_true(worst_r < 1e-12);
-    assert_true(worst_t < 1e-9);
-    free(M);
+    return ggx_layer(n, m, eta_re, eta_im, alpha, 1, 0);
 }
 
-/* R + T for light along mu (either side), from the order-0 column. */
-static double albedo_sum(const ll_layer *l, double mu)
+/* Reflection is symmetric and transmission obeys the eta^2 relation
+ * (check_reciprocity, microfacet_check.h). */
+static void interface_is_reciprocal(void **state)
 {
-    double R, T;
-    assert_int_equal(ll_layer_albedo(l, mu, &R, &T), LL_OK);
-    return R + T;
+    static const double idx[2][2] = { { 1.5, 0.0 }, { GOLD_RE, GOLD_IM } };
+    (void)state;
+    check_reciprocity(ggx_interface, idx, "GGX ");
 }
 
 /* A non-absorbing GGX dielectric: with the compensation, R + T = 1 for
@@ -402,39 +295,22 @@ static void dielectric_conserves_energy(void **state)
 {
     static const double alphas[] = { 0.05, 0.1, 0.3, 0.5, 0.8 };
     double loss[5], loss_beckmann[5], worst = 0.0;
-    size_t a, i;
+    size_t a;
     (void)state;
     for (a = 0; a < 5; ++a) {
         size_t n, m;
-        double *x, *w, lost = 0.0, lost_b = 0.0, total = 0.0;
         ll_layer *on, *off, *beckmann;
         assert_int_equal(ll_fit_microfacet(alphas[a], 1.5, 0.0, &n, &m), LL_OK);
-        x = malloc(n * sizeof *x);
-        w = malloc(n * sizeof *w);
-        assert_non_null(x);
-        assert_non_null(w);
         on = ggx_layer(n, 1, 1.5, 0.0, alphas[a], 1, m);
         off = ggx_layer(n, 1, 1.5, 0.0, alphas[a], 0, m);
         beckmann = ll_test_layer(n, 1);
         assert_int_equal(ll_test_set_microfacet(beckmann, 1.5, 0.0, alphas[a], 0, m, NULL), LL_OK);
-        assert_int_equal(ll_layer_get_nodes(on, x, w), LL_OK);
-        for (i = 0; i < n; ++i) {
-            double sum = albedo_sum(on, x[i]);
-            worst = fmax(worst, fabs(sum - 1.0));
-            assert_float_equal(sum, 1.0, 1e-3);
-            if (x[i] > 0.0) {
-                lost += w[i] * x[i] * (1.0 - albedo_sum(off, x[i]));
-                lost_b += w[i] * x[i] * (1.0 - albedo_sum(beckmann, x[i]));
-                total += w[i] * x[i];
-            }
-        }
-        loss[a] = lost / total;
-        loss_beckmann[a] = lost_b / total;
+        assert_conserves_energy(on, &worst);
+        loss[a] = energy_lost(off);
+        loss_beckmann[a] = energy_lost(beckmann);
         ll_layer_destroy(on);
         ll_layer_destroy(off);
         ll_layer_destroy(beckmann);
-        free(x);
-        free(w);
     }
     print_message("GGX R + T = 1 within %.2e; lost without compensation (GGX / Beckmann):", worst);
     for (a = 0; a < 5; ++a)
@@ -499,28 +375,19 @@ static void conductor_compensation_and_smooth_limit(void **state)
 
 static void beckmann_is_unchanged_and_unknown_distribution_rejected(void **state)
 {
-    size_t n = 40, m = 20, k;
-    double *a = malloc(n * n * sizeof *a), *b = malloc(n * n * sizeof *b);
+    size_t n = 40, m = 20;
     ll_layer *one = ll_test_layer(n, m), *two = ll_test_layer(n, m);
     (void)state;
-    assert_non_null(a);
-    assert_non_null(b);
     assert_int_equal(ll_test_set_microfacet(one, 1.5, 0.0, 0.3, 1, 0, NULL), LL_OK);
     assert_int_equal(ll_test_set_microfacet_dist(two, 1.5, 0.0, 0.3,
                                                           LL_DISTRIBUTION_BECKMANN, 1, 0, NULL),
                      LL_OK);
-    for (k = 0; k < m; ++k) {
-        assert_int_equal(ll_layer_matrix(one, k, a), LL_OK);
-        assert_int_equal(ll_layer_matrix(two, k, b), LL_OK);
-        assert_memory_equal(a, b, n * n * sizeof *a);
-    }
+    assert_same_matrices(one, two, n, m);
     assert_int_equal(ll_test_set_microfacet_dist(two, 1.5, 0.0, 0.3, 2, 1, 0, NULL),
                      LL_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(ll_last_error_message(), "distribution"));
     ll_layer_destroy(one);
     ll_layer_destroy(two);
-    free(a);
-    free(b);
 }
 
 static void shadowing_is_exact_smith(void **state)

@@ -8,6 +8,7 @@
  * transmissive).
  */
 #include "test_bsdf_util.h"
+#include "tables_figures.h"
 
 static char path[600];
 
@@ -60,26 +61,11 @@ static void test_info(void **state)
 }
 
 /* Albedo per channel for light seen along wo (cos theta = mu), by the
- * file's own sampler, stratified: the weights f cos / pdf are nearly
- * constant for both representations, so 256^2 strata resolve 1e-4. */
+ * file's own sampler, stratified (tables_figures.h); every sample must
+ * succeed. */
 static void albedo(const ll_bsdf *b, double mu, double out[3])
 {
-    const int n = 256;
-    double wo[3] = { sqrt(1.0 - mu * mu), 0.0, mu };
-    int i, j, c;
-    out[0] = out[1] = out[2] = 0.0;
-    for (i = 0; i < n; ++i)
-        for (j = 0; j < n; ++j) {
-            double u[2] = { (i + 0.5) / n, (j + 0.5) / n }, wi[3], pdf, f[3];
-            assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf,
-                                                f),
-                             LL_OK);
-            if (pdf > 0.0)
-                for (c = 0; c < 3; ++c)
-                    out[c] += f[c] * fabs(wi[2]) / pdf;
-        }
-    for (c = 0; c < 3; ++c)
-        out[c] /= (double)n * n;
+    assert_true(tf_albedo(b, mu, out));
 }
 
 static void test_albedo(void **state)
@@ -101,68 +87,21 @@ static void test_albedo(void **state)
     ll_bsdf_release(f);
 }
 
-static int compare_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* A direction at elevation theta, azimuth phi. */
-static void direction(double theta, double phi, double w[3])
-{
-    w[0] = sin(theta) * cos(phi);
-    w[1] = sin(theta) * sin(phi);
-    w[2] = cos(theta);
-}
-
 /* Relative errors of f where f cos is above 1% of its maximum, both
- * elevations <= 80 degrees, half of the pairs near the mirror direction. */
+ * elevations <= 80 degrees, half of the pairs near the mirror direction
+ * (tables_figures.h); every evaluation must succeed. */
 static void test_f_errors(void **state)
 {
-    enum { PAIRS = 60000 };
-    const double lim = 80.0 * LL_TEST_PI / 180.0;
     ll_bsdf *t = table(), *f = open_file(LL_TEST_GOLDEN);
-    static double wo[PAIRS][3], wi[PAIRS][3], ref[PAIRS][3], got[PAIRS][3], err[3 * PAIRS];
-    double top[3] = { 0.0, 0.0, 0.0 }, p50, p95, p99;
-    uint64_t rng = 2024;
-    size_t k, n = 0;
-    int c;
+    tf_figures fig;
     (void)state;
-    for (k = 0; k < PAIRS; ++k) {
-        double tv = acos(1.0 - ll_test_uniform(&rng) * (1.0 - cos(lim)));
-        direction(tv, 0.0, wo[k]);
-        do {
-            if (k % 2 == 0) {
-                double tl = acos(1.0 - ll_test_uniform(&rng) * (1.0 - cos(lim)));
-                direction(tl, 2.0 * LL_TEST_PI * ll_test_uniform(&rng), wi[k]);
-            } else {
-                /* Near the mirror direction: offsets of up to about 2 alpha. */
-                double dt = 0.4 * (2.0 * ll_test_uniform(&rng) - 1.0);
-                double dp = 0.4 * (2.0 * ll_test_uniform(&rng) - 1.0) / (sin(tv) + 0.2);
-                direction(fabs(tv + dt), LL_TEST_PI + dp, wi[k]);
-            }
-        } while (acos(wi[k][2]) > lim);
-        assert_int_equal(ll_bsdf_eval_dir(f, wo[k], wi[k], LL_TRANSPORT_RADIANCE, NULL, ref[k]),
-                         LL_OK);
-        assert_int_equal(ll_bsdf_eval_dir(t, wo[k], wi[k], LL_TRANSPORT_RADIANCE, NULL, got[k]),
-                         LL_OK);
-        for (c = 0; c < 3; ++c)
-            if (ref[k][c] * wi[k][2] > top[c])
-                top[c] = ref[k][c] * wi[k][2];
-    }
-    for (k = 0; k < PAIRS; ++k)
-        for (c = 0; c < 3; ++c)
-            if (ref[k][c] * wi[k][2] > 0.01 * top[c])
-                err[n++] = fabs(got[k][c] / ref[k][c] - 1.0);
-    qsort(err, n, sizeof *err, compare_double);
-    p50 = err[n / 2];
-    p95 = err[(size_t)(0.95 * (double)n)];
-    p99 = err[(size_t)(0.99 * (double)n)];
-    printf("f errors over %zu channel values: median %.4f%% 95th %.3f%% 99th %.3f%%\n", n,
-           100 * p50, 100 * p95, 100 * p99);
-    assert_true(p50 <= 0.002);
-    assert_true(p95 <= 0.02);
-    assert_true(p99 <= 0.05);
+    memset(&fig, 0, sizeof fig);
+    assert_true(tf_f_errors(f, t, &fig, ll_test_uniform));
+    printf("f errors over %zu channel values: median %.4f%% 95th %.3f%% 99th %.3f%%\n",
+           fig.n_values, 100 * fig.p50, 100 * fig.p95, 100 * fig.p99);
+    assert_true(fig.p50 <= 0.002);
+    assert_true(fig.p95 <= 0.02);
+    assert_true(fig.p99 <= 0.05);
     ll_bsdf_release(t);
     ll_bsdf_release(f);
 }
@@ -177,7 +116,7 @@ static void test_sample_consistency(void **state)
     for (k = 0; k < 5000; ++k) {
         double wo[3], u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) }, wi[3], pdf, f[3];
         double pdf_e, f_e[3];
-        direction(acos(ll_test_uniform(&rng)), 2.0 * LL_TEST_PI * ll_test_uniform(&rng), wo);
+        tf_direction(acos(ll_test_uniform(&rng)), 2.0 * LL_TEST_PI * ll_test_uniform(&rng), wo);
         assert_int_equal(ll_bsdf_sample_dir(t, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f),
                          LL_OK);
         if (!(pdf > 0.0))
@@ -203,7 +142,7 @@ static void test_pdf_integral(void **state)
     double wo[3], sum = 0.0;
     int i, j;
     (void)state;
-    direction(0.3, 0.0, wo);
+    tf_direction(0.3, 0.0, wo);
     for (i = 0; i < n; ++i)
         for (j = 0; j < 2 * n; ++j) {
             /* Uniform in cos theta and phi: d omega = dcos dphi. */
@@ -257,10 +196,10 @@ static void test_batches(void **state)
     (void)state;
     for (k = 0; k < COUNT; ++k) {
         double a = acos(ll_test_uniform(&rng)), b = 2.0 * LL_TEST_PI * ll_test_uniform(&rng);
-        direction(a, b, wo + 3 * k);
+        tf_direction(a, b, wo + 3 * k);
         a = acos(ll_test_uniform(&rng));
         b = 2.0 * LL_TEST_PI * ll_test_uniform(&rng);
-        direction(a, b, wi + 3 * k);
+        tf_direction(a, b, wi + 3 * k);
         u[2 * k] = ll_test_uniform(&rng);
         u[2 * k + 1] = ll_test_uniform(&rng);
     }

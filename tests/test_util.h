@@ -87,6 +87,22 @@ static inline ll_layer *ll_test_layer(size_t n, size_t m)
     return l;
 }
 
+/* A clear layer on the nodes of `like`, with as many orders: for a layer
+ * made directly to compare with one a build made. */
+static inline ll_layer *ll_test_layer_like(const ll_layer *like)
+{
+    size_t n = ll_layer_node_count(like), m = ll_layer_order_count(like);
+    double *x = malloc(n * sizeof *x), *w = malloc(n * sizeof *w);
+    ll_layer *l = NULL;
+    assert_non_null(x);
+    assert_non_null(w);
+    assert_int_equal(ll_layer_get_nodes(like, x, w), LL_OK);
+    assert_int_equal(ll_layer_create(x, w, n, m, &l), LL_OK);
+    free(x);
+    free(w);
+    return l;
+}
+
 /* A scratch directory, removed (with everything in it) by ll_test_rmdir. */
 static inline void ll_test_mkdtemp(char *dir, size_t size)
 {

@@ -1,6 +1,6 @@
-# Sourced by the tests that signal or kill a running build (llbuild.sh,
-# llbuild_signals.sh, llbuild_mpi.sh; kept out of tests/*.sh, which the
-# suite runs): the signal follows the build's own report of the stage,
+# Sourced (through tool_test.sh) by the tests that signal or kill a running
+# build (llbuild.sh, llbuild_tables.sh, llbuild_signals.sh, llbuild_mpi.sh;
+# kept out of tests/*.sh, which the suite runs): the signal follows the build's own report of the stage,
 # never a sleep. The build's stderr (llbuild's plain progress lines,
 # "llbuild:  40% adding (...)") goes to a fifo that this shell reads line
 # by line as the lines are written; stage_wait returns as soon as a line
