@@ -454,7 +454,7 @@ static void run_on_files(const config *cfg, bench_store *store, const char *prog
 }
 
 /* 3. Evaluation on the golden file and on our coated-gold and
- * coated-diffuse outputs (issue 18 quotes figures for both). */
+ * coated-diffuse outputs (docs/benchmarks.md has figures for both). */
 static void run_eval(const config *cfg, bench_store *store)
 {
     record_load(store, "eval");
