@@ -135,7 +135,7 @@ double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo
 int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[2],
                        double wo[3], double *pdf, double value[3])
 {
-    double theta_i, phi_i, pt[2], s[2], um[2], p_l, p_v, theta_m, phi_m, m[3], d;
+    double theta_i, phi_i, pt[2], s[2], um[2], p_l, p_v, theta_m, m[3], d;
     double uwi[2];
     ll_warp_slices sl;
     wo[0] = wo[1] = 0.0;
@@ -153,15 +153,7 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
     pt[1] = u[0];
     ll_warp2d_sample_at(&t->luminance, &sl, pt, s, &p_l);
     ll_warp2d_sample_at(&t->vndf, &sl, s, um, &p_v);
-    theta_m = um[0] * um[0] * (LL_PI / 2);
-    phi_m = (2.0 * um[1] - 1.0) * LL_PI + phi_i;
-    m[0] = sin(theta_m) * cos(phi_m);
-    m[1] = sin(theta_m) * sin(phi_m);
-    m[2] = cos(theta_m);
-    d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-    wo[0] = 2.0 * d * m[0] - wi[0];
-    wo[1] = 2.0 * d * m[1] - wi[1];
-    wo[2] = 2.0 * d * m[2] - wi[2];
+    d = ll_tables_mirror(wi, um, phi_i, &theta_m, m, wo);
     if (!(wo[2] > 0.0) || !(d > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;

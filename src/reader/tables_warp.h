@@ -21,6 +21,8 @@
 
 #include "support/support.h"
 
+#include <math.h>
+
 #define LL_WARP_MAX_PARAMS 3
 
 typedef struct ll_warp2d {
@@ -101,5 +103,25 @@ LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *
                                      const double u[2], double pos[2], double *pdf);
 LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double pos[2], double u[2], double *pdf);
+
+/* The microfacet normal m of a point um of the visible-normal square
+ * (theta_m = u_theta^2 pi / 2, phi_m = (2 u_phi - 1) pi + phi_i) and wi
+ * reflected about it into wo; returns wi.m. One mapping for the reader's
+ * sampler and the writer's sample grid: the writer stores values at the
+ * very directions the readers' warps produce. */
+static inline double ll_tables_mirror(const double wi[3], const double um[2], double phi_i,
+                                      double *theta_m, double m[3], double wo[3])
+{
+    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI + phi_i, d;
+    m[0] = sin(tm) * cos(pm);
+    m[1] = sin(tm) * sin(pm);
+    m[2] = cos(tm);
+    d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    wo[0] = 2.0 * d * m[0] - wi[0];
+    wo[1] = 2.0 * d * m[1] - wi[1];
+    wo[2] = 2.0 * d * m[2] - wi[2];
+    *theta_m = tm;
+    return d;
+}
 
 #endif /* LL_TABLES_WARP_H */

@@ -249,17 +249,9 @@ static void value_slice(writer *w, size_t t)
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
-            double um[2], pdf, tm, pm, m[3], dot, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale, y_lum;
+            double um[2], pdf, tm, m[3], wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale, y_lum;
             ll_warp2d_sample(&w->vndf_w, sq, param, um, &pdf);
-            tm = um[0] * um[0] * (LL_PI / 2);
-            pm = (2.0 * um[1] - 1.0) * LL_PI;
-            m[0] = sin(tm) * cos(pm);
-            m[1] = sin(tm) * sin(pm);
-            m[2] = cos(tm);
-            dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-            wo[0] = 2.0 * dot * m[0] - wi[0];
-            wo[1] = 2.0 * dot * m[1] - wi[1];
-            wo[2] = 2.0 * dot * m[2] - wi[2];
+            (void)ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
             if (w->spectral) {
                 double *g = w->geom + (t * plane + y * ns + x) * 4;
                 scale = wo[2] * four_sigma / ll_warp2d_eval(&w->ndf_w, um, NULL);
