@@ -1,0 +1,124 @@
+#!/bin/sh
+# The tree says what is, not how it came to be: no text in it refers to the
+# project's own tracker ("issue 7", "#18"), to the machine's load or the
+# development machine a figure was taken on ("load 7-8", "load average 9"),
+# to dates of work ("2026-11-22"), or to the sessions it was written in.
+# The past is in git; a figure belongs in docs/benchmarks.md with the
+# machine and method stated, or in a test that checks it.
+# Each hit is printed as file:line: text. Then the check is run on a
+# temporary tree of planted lines, where it must find each one (so a broken
+# pattern cannot pass silently).
+# Exempt, and why:
+#   - this file, which has to spell the patterns;
+#   - release headings of CHANGELOG.md ("## 1.0.0 - 2026-..."): a release
+#     date is what a changelog is for;
+#   - pytest's scope="session", an API word, not a working session;
+#   - the code that measures the load (getloadavg, the benchmark report's
+#     "load average" fields): it records the load of the run being
+#     reported, not of a past one;
+#   - a citation of another project's tracker as owner/repo#N (e.g.
+#     mmp/pbrt-v4#80): a stable external reference, like a paper's.
+# Run by `make test`; prints one line per check and "N passed, N failed";
+# exits non-zero when a check fails.
+#   sh tests/history_words.sh [PATH...]   checks these files or folders only
+#                                         (relative to the top of the tree)
+set -u
+
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+cd "$SRC" || exit 1
+
+passed=0
+failed=0
+pass() { echo "PASS: $1"; passed=$((passed + 1)); }
+fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/layerlab-history.XXXXXX") || exit 1
+trap 'rm -rf "$tmp"' EXIT
+trap 'exit 1' HUP INT TERM
+
+# What is checked by default: every text file of the project (data/ holds
+# measured spectra and test inputs, which are not prose).
+TREE="src include tools shims python scripts tests bench examples docs cmake abi .ci
+      README.md CONTRIBUTING.md CHANGELOG.md Makefile CMakeLists.txt"
+
+# One extended regular expression per kind of word.
+P_ISSUE='(^|[^A-Za-z0-9_])[Ii]ssues? #?[0-9]+'
+P_HASH='(^|[^A-Za-z0-9_/&#$%.-])#[0-9]{1,5}([^0-9A-Za-z_]|$)'
+P_LOAD='(^|[^A-Za-z0-9_])[Ll]oad (average )?(of |at |around |about |near |~ ?)?[0-9]|[Aa]t loads [0-9]|[Ll]oad average'
+P_MACHINE='[Dd]evelopment machine|[Dd]ev machine|[Mm]y machine'
+P_DATE='(^|[^0-9])20[0-9][0-9]-[01][0-9]([^0-9]|$)'
+P_SESSION='(^|[^A-Za-z0-9_])[Ss]essions?([^A-Za-z0-9_]|$)'
+PATTERN="$P_ISSUE|$P_HASH|$P_LOAD|$P_MACHINE|$P_DATE|$P_SESSION"
+
+# The exemptions above, as file:line:text filters (extended expressions).
+EXEMPT='^CHANGELOG\.md:[0-9]+:## |scope="session"|getloadavg|load\.(start|end)|"load average \(1/5/15 min\)|[A-Za-z0-9_.-]+/[A-Za-z0-9_.-]+#[0-9]+'
+
+# scan DIR PATH...: the hits under DIR, as path:line: text.
+scan() {
+    dir=$1
+    shift
+    (cd "$dir" && for p in "$@"; do
+        [ -e "$p" ] || continue
+        grep -rnHIE --exclude=history_words.sh --exclude-dir=__pycache__ \
+            --exclude-dir=.pytest_cache --exclude='*.egg-info' "$PATTERN" "$p"
+    done) | grep -vE "$EXEMPT"
+}
+
+# --- the tree (or the paths given)
+if [ $# -gt 0 ]; then
+    paths="$*"
+else
+    paths=$TREE
+fi
+# shellcheck disable=SC2086
+scan "$SRC" $paths >"$tmp/hits"
+if [ -s "$tmp/hits" ]; then
+    fail "history or workplace words ($(wc -l <"$tmp/hits") lines; say what is, or move the figure to docs/benchmarks.md):"
+    cut -c1-200 "$tmp/hits" | sed 's/^/    /'
+else
+    pass "no issue numbers, machine loads, dates of work or session words in: $(echo $paths)"
+fi
+
+# --- the patterns on planted lines: each must be found, the exempt ones not.
+# The words are assembled here so that this file reads as clean as the rest.
+mkdir -p "$tmp/plant/docs" "$tmp/plant/src"
+iss="Iss""ue"
+{
+    echo "fixed in $iss 18"
+    echo "see issues 7 and 18"
+    echo "as in #12, the"
+    echo "(median of 3, lo""ad ~3 on 2 cores)"
+    echo "69 s wall at lo""ad 9"
+    echo "at a lo""ad of 10"
+    echo "runs at lo""ads 7-8"
+    echo "lo""ad average 7.5"
+    echo "on the develop""ment machine"
+    echo "second pass (20""26-12-02)"
+    echo "results-20""26-11-22.json"
+    echo "this ses""sion found"
+} >"$tmp/plant/docs/bad.md"
+{
+    echo '    color = "#000000"  /* a colour, not a reference */'
+    echo '    printf("%#0x", v);'
+    echo '@pytest.fixture(scope="ses''sion")'
+    echo 'see mmp/pbrt-v4#80 upstream'
+    echo 'loads 64 entries; 1999-12 is not a date of work; issued 3 times'
+} >"$tmp/plant/src/good.c"
+scan "$tmp/plant" docs src >"$tmp/planted"
+want=$(wc -l <"$tmp/plant/docs/bad.md")
+got=$(grep -c '^docs/bad\.md:' "$tmp/planted")
+if [ "$got" -eq "$want" ]; then
+    pass "every planted word is found ($got lines)"
+else
+    fail "the patterns found $got of $want planted lines:"
+    sed 's/^/    /' "$tmp/planted"
+fi
+if grep -q '^src/good\.c:' "$tmp/planted"; then
+    fail "the patterns flag lines that are fine:"
+    grep '^src/good\.c:' "$tmp/planted" | sed 's/^/    /'
+else
+    pass "colours, format flags, pytest scopes and external citations are not flagged"
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
