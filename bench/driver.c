@@ -476,7 +476,7 @@ static void run_batch(const config *cfg, bench_store *store)
     run_on_files(cfg, store, "batch", 1, 0, "batch calls on");
 }
 
-/* 6. The cost of the tolerance (issue 14): each recipe built with the
+/* 6. The cost of the tolerance: each recipe built with the
  * resolution its tolerance chooses, once per tolerance (they take minutes),
  * finest first; then the others against the finest. LL_BENCH_TOLERANCE=0
  * skips it; LL_BENCH_TOLERANCE_RECIPES="coated-gold ..." picks recipes. */

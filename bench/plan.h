@@ -1,6 +1,7 @@
 /*
  * What the benchmark measures, shared by the driver (which runs it) and
- * the report (which lays it out), and the reference figures of issue 7.
+ * the report (which lays it out), and the reference figures: the original
+ * layerlab's and pbrt-v3's, measured on another 2-core machine.
  */
 #ifndef BENCH_PLAN_H
 #define BENCH_PLAN_H
@@ -14,7 +15,7 @@
 
 typedef struct bench_recipe_ref {
     const char *name;
-    double original_wall_s;   /* the original layerlab, issue 7: whole process, median of 3 */
+    double original_wall_s;   /* the original layerlab: whole process, median of 3 */
     double original_rss_mib;  /* its peak resident memory                                  */
 } bench_recipe_ref;
 
@@ -34,7 +35,7 @@ static const char *const bench_stages[BENCH_STAGE_COUNT] = {
 typedef struct bench_eval_ref {
     const char *function;     /* metric suffix                          */
     const char *pbrt_name;    /* pbrt-v3 FourierBSDF method             */
-    double pbrt_low_ns, pbrt_high_ns; /* issue 7, on roughgold_alpha_0.2 */
+    double pbrt_low_ns, pbrt_high_ns; /* on roughgold_alpha_0.2 */
 } bench_eval_ref;
 
 static const bench_eval_ref bench_eval_functions[BENCH_EVAL_FUNCTION_COUNT] = {
@@ -43,7 +44,7 @@ static const bench_eval_ref bench_eval_functions[BENCH_EVAL_FUNCTION_COUNT] = {
     { "sample_dir", "Sample_f", 1200.0, 1800.0 },
 };
 
-/* The tolerances of the resolution whose cost is measured (issue 14); the
+/* The tolerances of the resolution whose cost is measured; the
  * finest is the others' reference. */
 #define BENCH_TOLERANCE_COUNT 3
 static const double bench_tolerances[BENCH_TOLERANCE_COUNT] = { 0.05, 0.01, 0.002 };
@@ -52,8 +53,8 @@ static const double bench_tolerances[BENCH_TOLERANCE_COUNT] = { 0.05, 0.01, 0.00
  * the figures before the slab solver, the straight-through orders and the
  * reused workspaces were taken at, and at the seed's own (1098, 4194), one
  * run (minutes), only in the full run (bench/run.sh --full). 0: no figure
- * before (the (400, 800) one was measured on the 2-core machine under a
- * load of ~20, so its wall time is only indicative). */
+ * before (the (400, 800) one was measured on a busy 2-core machine, so
+ * its wall time is only indicative; its CPU time holds). */
 #define BENCH_DUST_COUNT 3
 typedef struct bench_dust_ref {
     const char *name;
@@ -65,8 +66,8 @@ typedef struct bench_dust_ref {
 
 static const bench_dust_ref bench_dust[BENCH_DUST_COUNT] = {
     { "dust-on-gold-400x1600", 0, 0, 0.0, 0.0, 0.0, "" },
-    { "dust-on-gold-400", 1, 0, 142.0, 20.7, 492.0, "be5d0ca, this recipe, load ~20" },
-    { "dust-on-gold", 1, 1, 429.0, 732.0 + 78.0, 4.8 * 1024.0, "issue 18" },
+    { "dust-on-gold-400", 1, 0, 142.0, 20.7, 492.0, "be5d0ca, this recipe, busy machine" },
+    { "dust-on-gold", 1, 1, 429.0, 732.0 + 78.0, 4.8 * 1024.0, "earlier figure" },
 };
 /* Per-order cost of the slab against doubling (bench/slab.c), these n. */
 #define BENCH_SLAB_SIZE_COUNT 3
@@ -74,7 +75,7 @@ static const size_t bench_slab_sizes[BENCH_SLAB_SIZE_COUNT] = { 100, 400, 1098 }
 #define BENCH_TARGET_DUST_WALL 60.0          /* s, dust-on-gold (1098, 4194)  */
 #define BENCH_TARGET_DUST_RSS (2.0 * 1024.0) /* MiB                           */
 
-/* Targets of issue 7. */
+/* The speed and memory targets. */
 #define BENCH_TARGET_SPEEDUP 5.0       /* recipes: at least 5x faster than the original   */
 #define BENCH_TARGET_MEMORY_RATIO 0.5  /* ... with at most half its peak memory           */
 #define BENCH_TARGET_ADD_RATIO 0.5     /* ll_layer_add >= half of dgemm for n >= 500      */

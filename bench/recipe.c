@@ -57,14 +57,15 @@ typedef struct recipe {
 } recipe;
 
 static const medium_recipe original_medium = { { 0.25, 0.0, 0.95 }, 0.5, 0.5 };
-/* The seed's dust on gold (issue 18): an index-matched HG medium, so no
+/* The seed's dust on gold: an index-matched HG medium, so no
  * coating above it, over smooth gold. */
 static const medium_recipe dust = { { 0.9, 0.9, 0.9 }, 0.9, 4.0 };
 
 /* Resolutions as the original recipes compute them (n = max over the two
- * interfaces, m = the coating's), quoted in issue 7; the dust on gold at
- * the seed's own resolution (1098, 4194) and at two reduced ones: (400,
- * 1600), the seed's ratio of orders to nodes, and (400, 800). */
+ * interfaces, m = the coating's), at which the original's figures in
+ * plan.h were taken; the dust on gold at the seed's own resolution (1098,
+ * 4194) and at two reduced ones: (400, 1600), the seed's ratio of orders
+ * to nodes, and (400, 800). */
 static const recipe recipes[] = {
     { "coated-gold", 196, 267, 0.1, BASE_GOLD, NULL, 0.1 },
     { "coated-gold-medium", 196, 267, 0.1, BASE_GOLD, &original_medium, 0.1 },

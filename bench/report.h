@@ -1,7 +1,7 @@
 /*
  * The benchmark's outputs: the table printed by `make bench` and the JSON
  * file (bench/results.json), both from the driver's store, with the
- * targets of issue 7 checked against the figures.
+ * speed and memory targets (targets.h) checked against the figures.
  */
 #ifndef BENCH_REPORT_H
 #define BENCH_REPORT_H

@@ -1,8 +1,8 @@
 /* bench/results.json; see report.h. Layout:
  *   { "format": "layerlab-bench-1",
- *     "info":    { key: text, ... }       machine, load averages, versions
+ *     "info":    { key: text, ... }       machine, system load, versions
  *     "metrics": { id: { "unit", "median", "min", "max", "samples": [...] } }
- *     "reference": the original's and pbrt-v3's figures quoted in issue 7
+ *     "reference": the original's and pbrt-v3's figures (plan.h)
  *     "targets": [ { "what", "value", "goal", "at_least", "met", "basis" } ]
  *     "errors":  [ text ] } */
 #include "plan.h"
@@ -80,7 +80,7 @@ static void write_metrics(FILE *f, const bench_store *s)
 static void write_reference(FILE *f)
 {
     size_t i;
-    fputs("  \"reference\": {\n    \"source\": \"issue 7: the original layerlab on a 2-core "
+    fputs("  \"reference\": {\n    \"source\": \"the original layerlab on another 2-core "
           "machine, whole process, median of 3; pbrt-v3 FourierBSDF on "
           "roughgold_alpha_0.2.bsdf\",\n    \"original\": {",
           f);

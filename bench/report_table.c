@@ -150,7 +150,7 @@ static void print_recipes(FILE *out, const bench_store *s)
         } else {
             format_value(a, sizeof a, bench_recipes[r].original_wall_s);
             format_value(b, sizeof b, bench_recipes[r].original_rss_mib);
-            fprintf(out, "%-20s original (issue 7 figures, another machine): wall %s s, "
+            fprintf(out, "%-20s original (its figures, another machine): wall %s s, "
                          "peak %s MiB\n", "", a, b);
         }
     }
@@ -247,22 +247,21 @@ static void print_adding(FILE *out, const bench_store *s)
         }
 }
 
-/* The figures before issue 18's kernel work, printed under each file's
- * row: bench/results.json at f61ccd6 (median of 3, load ~3 on 2 cores) for
- * roughgold and coated-diffuse; issue 18's text for coated-gold, which
- * that run did not measure (no pdf figure: 0 prints as "-"). Then the
- * second render-side pass's starting point, cfeba3b, measured side by side
- * with 2b5271c in one run (5 alternating rounds of 2 x 10^5 calls, median,
- * load 6.7-8.6 on 2 cores;
- * docs/benchmarks.md, "Issue 18, render side, second pass"). Order:
- * eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
+/* Earlier figures of the evaluation kernels, printed under each file's
+ * row as "before (commit)", so that a run shows what the kernels gained:
+ * the results of commit f61ccd6 (median of 3 on 2 cores) for roughgold and
+ * coated-diffuse, and a figure taken before the kernels were rewritten for
+ * coated-gold, which that run did not measure (no pdf figure: 0 prints as
+ * "-"); then commit cfeba3b, measured side by side with 2b5271c in one run
+ * (5 alternating rounds of 2 x 10^5 calls, median, on a busy 2-core
+ * machine). Order: eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
 static const struct {
     const char *label, *source;
     double ns[3];
 } previous_eval[] = {
     { "roughgold", "f61ccd6", { 521.2, 389.7, 1945.9 } },
     { "roughgold", "cfeba3b", { 678.0, 536.0, 2420.0 } },
-    { "coated-gold", "issue 18", { 2300.0, 0.0, 6200.0 } },
+    { "coated-gold", "old kernels", { 2300.0, 0.0, 6200.0 } },
     { "coated-gold", "cfeba3b", { 1454.0, 979.0, 4228.0 } },
     { "coated-diffuse", "f61ccd6", { 11839.3, 5218.5, 47432.9 } },
     { "coated-diffuse", "cfeba3b", { 8418.0, 5463.0, 25510.0 } },
@@ -301,7 +300,7 @@ static void print_eval(FILE *out, const bench_store *s)
             fputc('\n', out);
         }
     }
-    fprintf(out, "%-20s", "pbrt-v3 (issue 7)");
+    fprintf(out, "%-20s", "pbrt-v3 (quoted)");
     for (f = 0; f < BENCH_EVAL_FUNCTION_COUNT; ++f) {
         char range[48];
         snprintf(range, sizeof range, "%.0f-%.0f (%s)", bench_eval_functions[f].pbrt_low_ns,
@@ -339,7 +338,7 @@ static void print_targets(FILE *out, const bench_store *s)
     bench_target targets[BENCH_MAX_TARGETS];
     size_t count = bench_compute_targets(s, targets), i;
     char v[32], g[32];
-    fprintf(out, "\nTargets (issues 7 and 18)\n");
+    fprintf(out, "\nTargets\n");
     for (i = 0; i < count; ++i) {
         format_value(v, sizeof v, targets[i].value);
         format_value(g, sizeof g, targets[i].goal);

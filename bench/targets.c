@@ -1,4 +1,4 @@
-/* The targets of issue 7; see targets.h. */
+/* The speed and memory targets; see targets.h. */
 #include "targets.h"
 #include "plan.h"
 
@@ -42,7 +42,7 @@ static size_t recipe_targets(const bench_store *store, bench_target *targets, si
         if (owall.count == 0) {
             owall.median = ref->original_wall_s;
             orss.median = ref->original_rss_mib;
-            basis = "issue 7 figures (another machine)";
+            basis = "the original's figures (another machine)";
         }
         snprintf(what, sizeof what, "%s: speedup over the original", ref->name);
         count = add_target(targets, count, what, owall.median / wall.median,
@@ -86,7 +86,7 @@ static size_t eval_targets(const bench_store *store, bench_target *targets, size
         snprintf(what, sizeof what, "ll_bsdf_%s: speedup over pbrt-v3 %s", ref->function,
                  ref->pbrt_name);
         /* Against the fast end of pbrt-v3's range: the strict reading. */
-        snprintf(basis, sizeof basis, "pbrt-v3 %.0f ns (issue 7, fast end)", ref->pbrt_low_ns);
+        snprintf(basis, sizeof basis, "pbrt-v3 %.0f ns (quoted, fast end)", ref->pbrt_low_ns);
         count = add_target(targets, count, what,
                            ref->pbrt_low_ns / bench_store_stats(store, id).median,
                            BENCH_TARGET_EVAL_SPEEDUP, 1, basis);
@@ -94,7 +94,7 @@ static size_t eval_targets(const bench_store *store, bench_target *targets, size
     return count;
 }
 
-/* Issue 18: the dust on gold at its own resolution, when it was run. */
+/* The dust on gold at its own resolution, when it was run. */
 static size_t dust_targets(const bench_store *store, bench_target *targets, size_t count)
 {
     /* llbuild's figures (the path users take) where measured. */
@@ -107,9 +107,9 @@ static size_t dust_targets(const bench_store *store, bench_target *targets, size
     if (wall.count == 0)
         return count;
     count = add_target(targets, count, "dust-on-gold (1098, 4194): wall s", wall.median,
-                       BENCH_TARGET_DUST_WALL, 0, "issue 18, this machine");
+                       BENCH_TARGET_DUST_WALL, 0, "this machine");
     count = add_target(targets, count, "dust-on-gold (1098, 4194): peak MiB", rss.median,
-                       BENCH_TARGET_DUST_RSS, 0, "issue 18, this machine");
+                       BENCH_TARGET_DUST_RSS, 0, "this machine");
     return count;
 }
 

@@ -1,8 +1,8 @@
 /*
- * The targets of issue 7, checked against the measured medians. Each
+ * The speed and memory targets, checked against the measured medians. Each
  * target carries the basis of its comparison: the original measured side
- * by side on this machine (driver --original), or the figures quoted in
- * the issue (measured elsewhere, so only indicative).
+ * by side on this machine (driver --original), or its figures in plan.h
+ * (measured elsewhere, so only indicative).
  */
 #ifndef BENCH_TARGETS_H
 #define BENCH_TARGETS_H
@@ -14,7 +14,7 @@
 typedef struct bench_target {
     char what[128];    /* e.g. "coated-gold: speedup over the original" */
     double value;      /* the measured figure (a ratio)                  */
-    double goal;       /* the figure the issue asks for                  */
+    double goal;       /* the figure aimed at                            */
     int at_least;      /* 1: value >= goal passes; 0: value <= goal      */
     int met;
     char basis[96];    /* what the comparison is against                 */

@@ -1,5 +1,5 @@
 /*
- * The textured build against separate builds (issue 15's benchmark): an
+ * The textured build against separate builds: an
  * 8 x 8 coated-gold grid, coat alpha x gold alpha from 0.05 to 0.4, at the
  * coated-gold recipe's resolution (196 nodes, 267 orders, RGB), built as one
  * textured file by one `llbuild` run, and the same 64 materials built by 64

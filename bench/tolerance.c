@@ -1,5 +1,5 @@
 /*
- * The cost of the resolution's tolerance (issue 14): the three recipes of
+ * The cost of the resolution's tolerance: the three recipes of
  * bench/recipe.c written in the material language without a resolution,
  * so that the tolerance chooses it, built at a given tolerance; and the
  * worst difference of such a file from a reference file.
