@@ -51,7 +51,7 @@ P_SESSION='(^|[^A-Za-z0-9_])[Ss]essions?([^A-Za-z0-9_]|$)'
 PATTERN="$P_ISSUE|$P_HASH|$P_LOAD|$P_MACHINE|$P_DATE|$P_SESSION"
 
 # The exemptions above, as file:line:text filters (extended expressions).
-EXEMPT='^CHANGELOG\.md:[0-9]+:## |scope="session"|getloadavg|load\.(start|end)|"load average \(1/5/15 min\)|[A-Za-z0-9_.-]+/[A-Za-z0-9_.-]+#[0-9]+'
+EXEMPT='^CHANGELOG\.md:[0-9]+:## |scope="session"|getloadavg|load\.(start|end)|"load average \(1/5/15 min\)|load average %s"|[A-Za-z0-9_.-]+/[A-Za-z0-9_.-]+#[0-9]+'
 
 # scan DIR PATH...: the hits under DIR, as path:line: text.
 scan() {

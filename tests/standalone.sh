@@ -1,5 +1,5 @@
 #!/bin/sh
-# The project stands alone (issue 13): it owns every file it needs.
+# The project stands alone: it owns every file it needs.
 #   (a) nothing in the project refers to a folder beside or above the
 #       checkout (the old shared folder with its ior, testdata and docs);
 #   (b) every document the code cites by name exists in docs/, and every

@@ -1,6 +1,6 @@
 /*
  * Every file that opens gives finite eval/pdf/sample results whatever the
- * directions, and every file the original layerlab wrote opens (issue 13):
+ * directions, and every file the original layerlab wrote opens:
  *  - the golden file with its two mu = 0 nodes moved apart (no pair at 0):
  *    f = stored f |mu_o| / |mu_o| returned +inf at mu_o = 5e-324;
  *  - coefficients beyond what evaluation can scale without overflow are

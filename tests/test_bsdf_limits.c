@@ -1,5 +1,5 @@
 /*
- * Reader limits and what is not a regular file (issue 13):
+ * Reader limits and what is not a regular file:
  *  - ll_bsdf_open / ll_bsdf_open_memory with ll_open_options:
  *    defaults, each limit, struct_size of an older caller;
  *  - a sparse .bsdf file (4 KB on disk, 960 MB apparent, one series of

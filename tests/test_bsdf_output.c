@@ -1,8 +1,7 @@
 /*
- * What the atomic writer leaves in the target's directory (issue 13,
- * "Output files"): no visible placeholder, hidden temporaries
- * (.NAME.XXXXXX.tmp) and stale ones of the same target removed by the next
- * writer; the mode of a new file follows the umask and an existing target
+ * What the atomic writer leaves in the target's directory: no visible
+ * placeholder, hidden temporaries (.NAME.XXXXXX.tmp) and stale ones of the
+ * same target removed by the next writer; the mode of a new file follows the umask and an existing target
  * keeps its own; a symbolic link is written through; names up to NAME_MAX
  * work; a full disk names the target, not the temporary.
  */

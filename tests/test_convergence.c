@@ -31,9 +31,9 @@
  * azimuths stepped from 0.3 to 0.6 (probe_set.c), and three metals:
  * copper, alpha 0.8 is the case that the compensation's term left out of
  * the probes made 1.32% off. The search probes the compensation now, which
- * costs O(n^2) per node count (a dielectric's 3 to 6 s of CPU), so eta
- * 1/1.5, alpha 0.8 and eta 2, alpha 0.5 are the full grid's: the whole
- * test is 19 s of CPU (69 s wall at load 9 on 2 cores). */
+ * costs O(n^2) per node count (seconds of CPU for a dielectric), so eta
+ * 1/1.5, alpha 0.8 and eta 2, alpha 0.5 are left to the full grid, which
+ * keeps this subset short. */
 static const struct {
     size_t c;
     double alpha;

@@ -1,8 +1,8 @@
 /*
  * Numbers in material files and spectra are read the same way whatever
- * locale the host program has set (issue 13: under LC_ALL=de_DE.UTF-8,
- * `albedo=0.5` was "not a number" and the metals' spectra did not load,
- * because strtod reads the locale's decimal comma).
+ * locale the host program has set (a regression test: under
+ * LC_ALL=de_DE.UTF-8, `albedo=0.5` was "not a number" and the metals'
+ * spectra did not load, because strtod reads the locale's decimal comma).
  *
  * The test switches the process to a comma-decimal locale: de_DE.UTF-8 if
  * installed, else one generated with localedef into the build folder (found

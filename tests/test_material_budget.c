@@ -1,5 +1,5 @@
 /*
- * What a build refuses before it starts (issue 13): the memory budget, the
+ * What a build refuses before it starts: the memory budget, the
  * caps of the resolution heuristics and of `set`, the smallest meaningful
  * resolution; estimates from counts alone for any input; the metadata
  * without comments and capped; the reason an unreadable material fails.
@@ -107,8 +107,8 @@ static void budget_defaults_to_half_the_memory(void **state)
     ll_material_destroy(m);
 }
 
-/* The absurd resolutions of issue 13 are estimated from counts alone (no
- * quadrature of 100000 nodes, no 16 GB reserved) and refused. */
+/* Absurd resolutions are estimated from counts alone (no quadrature of
+ * 100000 nodes, no 16 GB reserved) and refused. */
 static void absurd_builds_are_estimated_and_refused(void **state)
 {
     ll_material *m = parse("set nodes=100000 orders=100000\ndielectric eta=1.5 alpha=0.15\n"

@@ -21,9 +21,9 @@
 #define LL_TEST_INPUT_SECONDS 30
 /* The corpus replay chooses each material's resolution (a second or more
  * of CPU per word; media build their phase matrices repeatedly), so its
- * limit is on CPU time (SIGPROF, all threads), which a loaded machine does
- * not stretch: 53 s of wall time for edge-medium-phases at a load of 10 on
- * 2 cores was 5 s of CPU. A hang without CPU still meets the wall alarm.
+ * limit is on CPU time (SIGPROF, all threads), which a busy machine does
+ * not stretch (on a shared machine an input's wall time can be ten times
+ * its CPU time). A hang without CPU still meets the wall alarm.
  * Since the interface search probes the energy compensation (O(n^2)
  * order-0 series per node count, docs/method.md "Resolution"),
  * edge-alpha-0.01 (eta 1.33, alpha 0.01: 3682 x 2847) takes 30 s of CPU on

@@ -279,7 +279,7 @@ static ll_layer *matusik_layer(size_t n, size_t m)
     return l;
 }
 
-/* The measured word's resolution (issue 14): the layer built at what the
+/* The measured word's resolution: the layer built at what the
  * material's resolution chooses agrees with the one at twice its nodes and
  * orders within the tolerance wherever it is above 1% of its peak, at
  * grazing (mu 0.1, 0.15, 0.2) and pseudo-random pairs, mirror and

@@ -1,5 +1,5 @@
 /*
- * The streamed build (issue 18): ll_material_build hands each channel's
+ * The streamed build: ll_material_build hands each channel's
  * finished stack to the file as soon as it is complete (writer/
  * bsdf_write_channels.c) and makes a channel's bottom word only when it is
  * needed. Its file must be byte for byte what building the layers and

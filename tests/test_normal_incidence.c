@@ -1,5 +1,5 @@
 /*
- * Near normal incidence (issue 14): the directional albedo of the original's
+ * Near normal incidence: the directional albedo of the original's
  * coated-gold-with-scatmedium recipe at mu_i = 1, 0.999, 0.99, 0.9 against
  * references that share no code with the library (tests/reference/):
  *  - the HG medium alone against a discrete-ordinate solution on its own

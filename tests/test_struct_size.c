@@ -388,7 +388,7 @@ static void build_options_read_to_struct_size(void **state)
      * given, but reported by ll_material_goal). */
     given.tolerance = 0.05;
     given.mu_min = 0.2;
-    /* The streamed file build's channels (issue 18). */
+    /* The streamed file build's channels. */
     given.channel_done = on_channel_done;
     given.channel_done_user = &channel_tag;
     /* Where the searched material's choice is remembered. */

@@ -11,7 +11,8 @@ default (symbolic, megakernel) mode, alternating, two renders each after a
 wavefront mode (set on this thread, as the batch mode needs), native and the
 batch plugin once each. Each render's wall time and the process's CPU time
 (all threads; on a shared machine the CPU-time ratio is the steadier
-figure). Prints the load average before and after.
+figure). Prints the system's load before and after, to show how busy the
+machine was.
 """
 
 import os

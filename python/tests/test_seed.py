@@ -1,4 +1,4 @@
-"""The seed's notebook session, cell by cell, on our library.
+"""The seed's notebook, cell by cell, on our library.
 
 The cells run in order and share their state as a notebook does (module-
 scoped fixtures). Each test checks what the cell showed: the printed
