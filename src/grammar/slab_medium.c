@@ -4,8 +4,8 @@
  * (slab.c) on the worker thread that made it, and only the slab is stored.
  * ll_layer_set_henyey_greenstein (etc.) followed by ll_layer_expand holds
  * the phase matrices of every order and the slab of every order at once,
- * twice the memory (3 GB each for the dust on gold at n = 1098); the
- * results are the same bits as that two-step path with the slab
+ * twice the memory (gigabytes each for the largest media a material asks
+ * for); the results are the same bits as that two-step path with the slab
  * (tests/test_slab.c).
  */
 #include "grammar/grammar.h"

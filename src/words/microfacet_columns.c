@@ -62,10 +62,10 @@ static ll_status fill_column(size_t col, const ll_microfacet_job *job)
     size_t slot = ll_parallel_slot();
     double *memory = NULL;
     ll_status s = LL_OK;
-    /* The thread's column scratch (n x m, 37 MB at n = 1098, m = 4194),
-     * made by its first column and reused: one per column cost a page
-     * fault per 4 KiB touched, again for every column. Every value read
-     * is written first in the same column. */
+    /* The thread's column scratch (n x m doubles, tens of MB for the
+     * largest layers), made by its first column and reused: one per column
+     * cost a page fault per 4 KiB touched, again for every column. Every
+     * value read is written first in the same column. */
     if (slot < job->slots && !job->column_memory[slot])
         job->column_memory[slot] = ll_alloc_array(job->column_doubles, sizeof(double));
     if (slot < job->slots)
