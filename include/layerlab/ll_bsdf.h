@@ -134,9 +134,11 @@ LL_API ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_
 LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, const ll_open_options *opts,
                                      ll_bsdf **out);
 
-/* Add a reference; returns b. */
+/* Add a reference, which the caller drops with ll_bsdf_release; returns b
+ * (NULL for NULL). Thread-safe (an atomic count). */
 LL_API ll_bsdf *ll_bsdf_retain(ll_bsdf *b);
-/* Drop a reference; the last one frees. NULL is fine. */
+/* Drop a reference; the last one frees the file's memory, after every
+ * other thread's last use of it. NULL is fine. Thread-safe. */
 LL_API void ll_bsdf_release(ll_bsdf *b);
 
 typedef struct ll_bsdf_info {
@@ -183,10 +185,18 @@ typedef struct ll_bsdf_info {
 #define LL_BSDF_FORMAT_FOURIER 0u
 #define LL_BSDF_FORMAT_TABLES 1u
 
+/* The file's description (ll_bsdf_info above) into *info, of which only the
+ * fields that info->struct_size covers are written (set it, or start from
+ * LL_BSDF_INFO_INIT), so a program built against older headers keeps
+ * working. info->metadata points into b and lives as long as b.
+ * Thread-safe (b is immutable). LL_ERROR_INVALID_ARGUMENT for NULL b or
+ * info, or a struct_size smaller than the struct_size field itself. */
 LL_API ll_status ll_bsdf_get_info(const ll_bsdf *b, ll_bsdf_info *info);
 
-/* Sample positions of textured parameter p: *count values at *positions
- * (owned by b). */
+/* Sample positions of textured parameter p (p < info.n_parameters):
+ * *count values at *positions (owned by b, valid while b
+ * lives). Thread-safe. LL_ERROR_INVALID_ARGUMENT for NULL arguments or p
+ * out of range. */
 LL_API ll_status ll_bsdf_get_parameter(const ll_bsdf *b, size_t p, size_t *count,
                                        const float **positions);
 
@@ -214,7 +224,8 @@ LL_API ll_status ll_bsdf_get_parameter_name(const ll_bsdf *b, size_t p, const ch
  * point of parameter space", compares them with Catmull-Rom weights). */
 LL_API ll_status ll_bsdf_basis_coefficients(const ll_bsdf *b, const double *params, float *coeffs);
 
-/* The file's nodes (n_nodes floats, ascending, owned by b). */
+/* The file's nodes (n_nodes floats, ascending, owned by b and valid while
+ * b lives); NULL for NULL b or a table file. */
 LL_API const float *ll_bsdf_nodes(const ll_bsdf *b);
 
 /* ------------------------------------------------- layer convention */
@@ -375,7 +386,9 @@ typedef struct ll_bsdf_tables {
                               NULL, NULL, NULL, NULL, NULL }
 
 /* Fill *out with b's tables (above). LL_ERROR_INVALID_ARGUMENT for NULL
- * arguments or a struct_size smaller than the first field's end. */
+ * arguments or a struct_size smaller than the first field's end;
+ * LL_ERROR_UNSUPPORTED for a table file (LL_BSDF_FORMAT_TABLES), which has
+ * no Fourier tables. Thread-safe (b is immutable). */
 LL_API ll_status ll_bsdf_get_tables(const ll_bsdf *b, ll_bsdf_tables *out);
 
 #endif /* LL_EXPERIMENTAL */

@@ -81,6 +81,8 @@ LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const 
                                         const ll_bsdf_write_options *opts,
                                         const ll_monitor *monitor);
 
+typedef struct ll_bsdf_writer ll_bsdf_writer;
+
 /* A streaming writer of textured files: the bases are added one at a time,
  * in order 0 .. n_bases - 1, and the writer never holds more than one
  * basis's layers (it keeps none of the caller's layers after add_basis
@@ -99,9 +101,10 @@ LL_API ll_status ll_bsdf_write_textured(const char *path, const ll_layer *const 
  *
  * open: n_channels 1 or 3; the parameters as ll_bsdf_write_textured
  * (n_parameters = 0: one basis, an untextured file); opts (nullable) read
- * now (opts->metadata is copied). Statuses as ll_bsdf_write_textured. */
-typedef struct ll_bsdf_writer ll_bsdf_writer;
-
+ * now (opts->metadata is copied). *out is the new writer, NULL on
+ * failure; it is freed by ll_bsdf_writer_commit or ll_bsdf_writer_abort.
+ * Statuses as ll_bsdf_write_textured. A writer is used by one thread at a
+ * time; writers of different files may run at once. */
 LL_API ll_status ll_bsdf_writer_open(const char *path, size_t n_channels, size_t n_parameters,
                                      const size_t *param_counts, const double *param_positions,
                                      const ll_bsdf_write_options *opts, ll_bsdf_writer **out);

@@ -150,6 +150,13 @@ typedef struct ll_allocator {
 } ll_allocator;
 #define LL_ALLOCATOR_INIT { sizeof(ll_allocator), NULL, NULL, NULL, NULL }
 
+/* Make *allocator the one every later allocation of the library uses (its
+ * fields are copied: the struct may go after the call), or restore malloc,
+ * realloc and free with NULL. Process-wide and not thread-safe: call it as
+ * the rules above say, before anything else of layerlab runs. LL_OK, or
+ * LL_ERROR_INVALID_ARGUMENT (the allocator in effect unchanged) for a
+ * struct_size smaller than the first field's end or a NULL function
+ * pointer. */
 LL_API ll_status ll_set_allocator(const ll_allocator *allocator);
 
 #ifdef __cplusplus

@@ -46,9 +46,11 @@ extern "C" {
  * thread* may use (adding, doubling, building interfaces). 0 means all
  * processors (the default). Results never depend on this number: they are
  * bit-identical for any thread count. The setting is per calling thread, so
- * two renderer threads can use different counts without locking. */
+ * two renderer threads can use different counts without locking.
+ * LL_ERROR_INVALID_ARGUMENT (the setting unchanged) above 4096 threads. */
 LL_API ll_status ll_set_thread_count(size_t n_threads);
-/* The effective count for the calling thread (>= 1). */
+/* The effective count for the calling thread (>= 1): its setting, or the
+ * number of processors when that is 0. */
 LL_API size_t ll_get_thread_count(void);
 
 typedef struct ll_layer ll_layer;
@@ -61,12 +63,16 @@ typedef struct ll_layer ll_layer;
  * (positive, finite), and n_orders >= 1 Fourier orders. Nodes may be given
  * in ascending order (as the ll_quad_* rules write them). The new layer is
  * clear: no reflection, full transmission (R = 0, T = I for every order).
- * *out receives the layer, or NULL on failure. */
+ * *out receives the layer, or NULL on failure; the caller frees it with
+ * ll_layer_destroy. LL_ERROR_INVALID_ARGUMENT for NULL pointers or nodes,
+ * weights or counts outside the rules above, LL_ERROR_OUT_OF_MEMORY. */
 LL_API ll_status ll_layer_create(const double *nodes, const double *weights,
                                  size_t n_nodes, size_t n_orders, ll_layer **out);
 
-/* A deep copy (internally, unchanged Fourier orders are shared copy-on-write,
- * so a clone is cheap). */
+/* A deep copy into *out (NULL on failure; freed by ll_layer_destroy):
+ * internally, unchanged Fourier orders are shared copy-on-write, so a clone
+ * is cheap, and either layer may then be changed without the other seeing
+ * it. LL_ERROR_INVALID_ARGUMENT for NULL arguments, LL_ERROR_OUT_OF_MEMORY. */
 LL_API ll_status ll_layer_clone(const ll_layer *layer, ll_layer **out);
 
 /* Free a layer; NULL is fine. */
@@ -77,7 +83,8 @@ LL_API size_t ll_layer_node_count(const ll_layer *layer);
 LL_API size_t ll_layer_order_count(const ll_layer *layer);
 
 /* Copy the nodes and weights in ascending node order (as given to
- * ll_layer_create). Either buffer may be NULL; each holds node_count values. */
+ * ll_layer_create). Either buffer may be NULL; each holds node_count values.
+ * LL_ERROR_INVALID_ARGUMENT for a NULL layer. */
 LL_API ll_status ll_layer_get_nodes(const ll_layer *layer, double *nodes, double *weights);
 
 /* Number of matrix entries actually stored (over all orders and blocks);
@@ -85,7 +92,11 @@ LL_API ll_status ll_layer_get_nodes(const ll_layer *layer, double *nodes, double
 LL_API size_t ll_layer_stored_count(const ll_layer *layer);
 
 /* ----------------------------------------------------------------- words
- * Each setter replaces the layer's contents. */
+ * Each setter replaces the layer's contents, keeping its nodes and order
+ * count. Statuses: LL_ERROR_INVALID_ARGUMENT for a NULL layer or a
+ * parameter outside the range given, LL_ERROR_OUT_OF_MEMORY,
+ * LL_ERROR_CANCELLED by the monitor; on any failure the layer is
+ * unchanged. */
 
 /* Lambertian reflector with the given albedo in [0, 1] on both sides:
  * f = albedo / pi on the reflection blocks, Fourier order 0 only, no
@@ -210,13 +221,19 @@ LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int cha
  * Each Fourier order: one LU factorisation per gain matrix, then solves and
  * products (LAPACK getrf/getrs, BLAS gemm), orders in parallel. Stage
  * "adding", one unit per Fourier order; workers poll between the O(h^3)
- * BLAS/LAPACK calls of each order (h = n / 2). */
+ * BLAS/LAPACK calls of each order (h = n / 2). LL_ERROR_INVALID_ARGUMENT
+ * for NULL or mismatched layers, LL_ERROR_NUMERICAL when a gain matrix
+ * I - R R is singular (two non-absorbing perfect reflectors facing each
+ * other), LL_ERROR_OUT_OF_MEMORY, LL_ERROR_CANCELLED; out is unchanged on
+ * failure. */
 LL_API ll_status ll_layer_add(const ll_layer *top, const ll_layer *bottom, ll_layer *out,
                               int homogeneous, const ll_monitor *monitor);
 
-/* layer = top stacked on layer (ll_layer_add without a monitor). */
+/* layer = top stacked on layer (ll_layer_add without a monitor; its
+ * statuses). */
 LL_API ll_status ll_layer_add_to_top(ll_layer *layer, const ll_layer *top);
-/* layer = layer stacked on bottom (ll_layer_add without a monitor). */
+/* layer = layer stacked on bottom (ll_layer_add without a monitor; its
+ * statuses). */
 LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom);
 
 /* Thickness: the layer holds a phase function (set_isotropic, set_henyey_
@@ -230,13 +247,18 @@ LL_API ll_status ll_layer_add_to_bottom(ll_layer *layer, const ll_layer *bottom)
  * "Thickening a medium: the slab or doubling"). Stage "doubling", one unit
  * per doubling step of each Fourier order; workers poll before every
  * doubling step and between its BLAS/LAPACK calls (the closed form: before
- * every order). A cancel leaves the phase function, not a partial slab. */
+ * every order). A cancel leaves the phase function, not a partial slab.
+ * LL_ERROR_INVALID_ARGUMENT for a NULL layer or a tau that is negative,
+ * not finite or beyond 1e12, LL_ERROR_OUT_OF_MEMORY, LL_ERROR_NUMERICAL,
+ * LL_ERROR_CANCELLED; the layer is unchanged on failure. */
 LL_API ll_status ll_layer_expand(ll_layer *layer, double tau, const ll_monitor *monitor);
 
-/* Turn the layer upside down (swap top and bottom). */
+/* Turn the layer upside down (swap top and bottom). LL_ERROR_INVALID_ARGUMENT
+ * for NULL, LL_ERROR_OUT_OF_MEMORY (the layer then unchanged). */
 LL_API ll_status ll_layer_reverse(ll_layer *layer);
 
-/* Make the layer clear (R = 0, T = I). */
+/* Make the layer clear (R = 0, T = I). LL_ERROR_INVALID_ARGUMENT for NULL,
+ * LL_ERROR_OUT_OF_MEMORY (the layer then unchanged). */
 LL_API ll_status ll_layer_clear(ll_layer *layer);
 
 /* ------------------------------------------------------------- reading */
@@ -249,20 +271,23 @@ LL_API ll_status ll_layer_eval(const ll_layer *layer, double mu_i, double mu_o, 
                                double *f);
 
 /* Vectorised ll_layer_eval: out[k] = f(mu_i[k], mu_o[k], phi_d[k]) for
- * k < count. phi_d may be NULL (0 everywhere). */
+ * k < count. phi_d may be NULL (0 everywhere). LL_ERROR_INVALID_ARGUMENT
+ * for a NULL layer or a NULL array other than phi_d. */
 LL_API ll_status ll_layer_eval_many(const ll_layer *layer, size_t count, const double *mu_i,
                                     const double *mu_o, const double *phi_d, double *out);
 
 /* The n x n BSDF matrix of Fourier order `order`, integration weights and
  * cosine factors removed (values of f_l), rows (outgoing) and columns
  * (incident) in ascending node order, stored row-major:
- * out[row * n + col]. out holds n * n doubles. */
+ * out[row * n + col]. out holds n * n doubles. LL_ERROR_INVALID_ARGUMENT
+ * for NULL arguments or an order not below ll_layer_order_count. */
 LL_API ll_status ll_layer_matrix(const ll_layer *layer, size_t order, double *out);
 
 /* Directional-hemispherical totals for light travelling in direction mu_i
  * (mu_i > 0: arriving from above; mu_i < 0: from below), |mu_i| in (0, 1]:
  * the fraction reflected and the fraction transmitted, the unscattered
- * part of the transmission included. Either output may be NULL. */
+ * part of the transmission included. Either output may be NULL.
+ * LL_ERROR_INVALID_ARGUMENT for a NULL layer or mu_i out of range. */
 LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *reflectance,
                                  double *transmittance);
 

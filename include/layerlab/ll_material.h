@@ -41,8 +41,11 @@ typedef struct ll_material ll_material;
 LL_API ll_status ll_material_parse(const char *text, const char *source_name,
                                    ll_material **out);
 /* The same for a file; relative `file=` paths inside resolve against the
- * file's directory. LL_ERROR_IO if it cannot be read. */
+ * file's directory. LL_ERROR_IO if it cannot be read. *out (NULL on
+ * failure) is freed with ll_material_destroy. */
 LL_API ll_status ll_material_parse_file(const char *path, ll_material **out);
+/* Free a parsed material and everything it owns (axis names and
+ * positions); NULL is fine. No build of it may still be running. */
 LL_API void ll_material_destroy(ll_material *material);
 
 /* The resolutions a build accepts: a node count is even and at least
@@ -171,7 +174,7 @@ LL_API ll_status ll_material_write(const ll_material *material, const ll_build_o
                                    ll_layer *const *layers, size_t n_channels,
                                    const char *out_path, const ll_monitor *monitor);
 
-/* Number of words (layers) in the stack. */
+/* Number of words (layers) in the stack; 0 for NULL. */
 LL_API size_t ll_material_word_count(const ll_material *material);
 
 /* Does light leave the stack through its bottom? 1 unless the bottom word
@@ -289,6 +292,16 @@ typedef struct ll_build_estimate {
     { sizeof(ll_build_estimate), 0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0, 0, 0, 0,              \
       0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 }
 
+/* Fill *estimate (ll_build_estimate above; only the fields its struct_size
+ * covers are written) for a build of material with opts (nullable:
+ * defaults). Over the budget is not an error here: over_budget says so,
+ * and ll_material_build would refuse. Statuses: LL_ERROR_INVALID_ARGUMENT
+ * for a NULL material or estimate, a struct_size smaller than the
+ * struct_size field itself or bad options; when the tolerance chooses the
+ * resolution, those of ll_material_resolution (LL_ERROR_CANCELLED by the
+ * monitor, LL_ERROR_INVALID_ARGUMENT when a search misses its tolerance,
+ * LL_ERROR_OUT_OF_MEMORY). Threads: as ll_material_resolution (the
+ * searches run on opts->threads workers); material may be shared. */
 LL_API ll_status ll_material_estimate(const ll_material *material,
                                       const ll_build_options *opts,
                                       ll_build_estimate *estimate, const ll_monitor *monitor);
@@ -299,6 +312,8 @@ LL_API ll_status ll_material_estimate(const ll_material *material,
  * parsed text alone, before any build: a tool that writes a format holding
  * reflection only (ll_tables.h) refuses a transmissive stack with it. */
 LL_API int ll_material_is_opaque(const ll_material *material);
+
+typedef struct ll_material_builder ll_material_builder;
 
 /* A builder makes the bases of a (swept or plain) material one at a time,
  * all at one resolution: the largest any basis's heuristics ask for, unless
@@ -320,9 +335,8 @@ LL_API int ll_material_is_opaque(const ll_material *material);
  * (LL_ERROR_INVALID_ARGUMENT) when bases would need different file
  * headers' eta (the format stores one relative index: sweep indices only
  * in opaque stacks) or the options are bad; LL_ERROR_OUT_OF_MEMORY over
- * the budget, as ll_material_build. */
-typedef struct ll_material_builder ll_material_builder;
-
+ * the budget, as ll_material_build. *out is the new builder (NULL on
+ * failure), freed by ll_material_builder_destroy. */
 LL_API ll_status ll_material_builder_create(const ll_material *material,
                                             const ll_build_options *opts,
                                             const ll_monitor *monitor,

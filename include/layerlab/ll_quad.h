@@ -17,7 +17,7 @@
 extern "C" {
 #endif
 
-/* The Gauss rules cost O(n) per node (n = 30000 takes seconds), so they
+/* The Gauss rules cost O(n) per node, O(n^2) in all, so they
  * take a monitor (ll_common.h; nullable): stage "quadrature", one unit per
  * node pair, polled once per node (per Newton sweep), on the calling
  * thread (the rules use no other). With a monitor the rule is computed
@@ -39,11 +39,13 @@ LL_API ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights,
                                        const ll_monitor *monitor);
 
 /* Composite Simpson: odd n >= 3 equidistant nodes (n-1 even intervals),
- * exact for cubics. */
+ * exact for cubics. LL_ERROR_INVALID_ARGUMENT for another n or NULL
+ * buffers. */
 LL_API ll_status ll_quad_composite_simpson(size_t n, double *nodes, double *weights);
 
 /* Composite Simpson 3/8: n >= 4 equidistant nodes with n-1 divisible by 3,
- * exact for cubics. */
+ * exact for cubics. LL_ERROR_INVALID_ARGUMENT for another n or NULL
+ * buffers. */
 LL_API ll_status ll_quad_composite_simpson38(size_t n, double *nodes, double *weights);
 
 #ifdef __cplusplus
