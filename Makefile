@@ -15,6 +15,7 @@
 #   make clang         the libraries and the C tests built by clang, warnings as errors
 #   make cmake-check   the CMake build installed, and a CMake project that uses it
 #   make abi-baseline  rewrite abi/*.abi from the libraries just built (see abi/README.md)
+#   make api-doc       rewrite docs/api.md from the headers' comments (after changing one)
 #   DEV=1 (or CI=true) turns warnings into errors
 #   make bench         the headline benchmarks, under 10 minutes (make bench-full: all); never in the tests
 #   make install PREFIX=/usr/local
@@ -167,7 +168,7 @@ TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz deps-ci lib tools test check \
         test-c test-python check-c check-python test-tsan coverage clang cmake-check \
-        bench bench-full install uninstall clean fuzz demo abi-baseline print-reader-src print-blas-libs tests \
+        bench bench-full install uninstall clean fuzz demo abi-baseline api-doc print-reader-src print-blas-libs tests \
         need-lib need-tools need-test need-check need-coverage need-cmake \
         venv-test venv-check
 all: lib tools
@@ -388,6 +389,13 @@ clang:
 # with find_package(layerlab) and run.
 cmake-check: | need-cmake
 	@sh tests/cmake-consumer/run.sh
+
+# docs/api.md, the API reference, from the public headers' comments
+# (scripts/api_doc.py, Python 3's standard library only); tests/api_doc.sh
+# fails in `make test` when the page is not current.
+api-doc:
+	@python3 scripts/api_doc.py -o docs/api.md
+	@echo "docs/api.md written from include/layerlab/*.h"
 
 # The ABI baselines that tests/abidiff.sh compares the libraries with. Run
 # after a deliberate, compatible change that abidiff reports (a field
