@@ -1,8 +1,9 @@
 #!/bin/sh
 # The tree says what is, not how it came to be: no text in it refers to the
-# project's own tracker ("issue 7", "#18"), to the machine's load or the
-# development machine a figure was taken on ("load 7-8", "load average 9"),
-# to dates of work ("2026-11-22"), or to the sessions it was written in.
+# project's own tracker ("issue 7", "#18"), to the machine's load, the
+# development machine a figure was taken on or its working folders ("load
+# 7-8", "load average 9", "/work/wt-..."), to dates of work ("2026-11-22",
+# "2 December 2026"), or to the sessions it was written in.
 # The past is in git; a figure belongs in docs/benchmarks.md with the
 # machine and method stated, or in a test that checks it.
 # Each hit is printed as file:line: text. Then the check is run on a
@@ -45,8 +46,10 @@ TREE="src include tools shims python scripts tests bench examples docs cmake abi
 P_ISSUE='(^|[^A-Za-z0-9_])[Ii]ssues? #?[0-9]+'
 P_HASH='(^|[^A-Za-z0-9_/&#$%.-])#[0-9]{1,5}([^0-9A-Za-z_]|$)'
 P_LOAD='(^|[^A-Za-z0-9_])[Ll]oad (average )?(of |at |around |about |near |~ ?)?[0-9]|[Aa]t loads [0-9]|[Ll]oad average'
-P_MACHINE='[Dd]evelopment machine|[Dd]ev machine|[Mm]y machine'
-P_DATE='(^|[^0-9])20[0-9][0-9]-[01][0-9]([^0-9]|$)'
+P_MACHINE='[Dd]evelopment machine|[Dd]ev machine|[Mm]y machine|/work/(wt-|main)'
+MONTH='(January|February|March|April|May|June|July|August|September|October|November|December)'
+P_DATE="(^|[^0-9])20[0-9][0-9]-[01][0-9]([^0-9]|\$)|[0-9] $MONTH 20[0-9][0-9]|$MONTH [0-9]{1,2}, 20[0-9][0-9]"
+
 P_SESSION='(^|[^A-Za-z0-9_])[Ss]essions?([^A-Za-z0-9_]|$)'
 PATTERN="$P_ISSUE|$P_HASH|$P_LOAD|$P_MACHINE|$P_DATE|$P_SESSION"
 
@@ -93,8 +96,11 @@ iss="Iss""ue"
     echo "runs at lo""ads 7-8"
     echo "lo""ad average 7.5"
     echo "on the develop""ment machine"
+    echo "scenes in /wo""rk/wt-pbrt/build"
     echo "second pass (20""26-12-02)"
     echo "results-20""26-11-22.json"
+    echo "rendered on 2 Dece""mber 20""26"
+    echo "run on Decem""ber 1, 20""26"
     echo "this ses""sion found"
 } >"$tmp/plant/docs/bad.md"
 {
