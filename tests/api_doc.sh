@@ -23,22 +23,22 @@ trap 'rm -rf "$tmp"' EXIT
 trap 'exit 1' HUP INT TERM
 
 # --- the page regenerated into a temporary file, compared
-if ! python3 scripts/api_doc.py -o "$tmp/api.md" 2>"$tmp/err"; then
+if ! python3 scripts/api_doc.py -o "$tmp/generated" 2>"$tmp/err"; then
     fail "scripts/api_doc.py failed:"
     sed 's/^/    /' "$tmp/err"
 elif [ ! -f docs/api.md ]; then
     fail "docs/api.md is missing: run \`make api-doc\` and commit it"
-elif cmp -s "$tmp/api.md" docs/api.md; then
+elif cmp -s "$tmp/generated" docs/api.md; then
     pass "docs/api.md is current with the headers"
 else
     fail "docs/api.md is not current with the headers: run \`make api-doc\` and commit it"
-    diff -u docs/api.md "$tmp/api.md" | head -n 40 | sed 's/^/    /'
+    diff -u docs/api.md "$tmp/generated" | head -n 40 | sed 's/^/    /'
 fi
 
 # --- every exported function is on the page
 missing=""
 for f in $(sed -n 's/^[[:space:]]*\(ll_[a-z0-9_]*\);[[:space:]]*$/\1/p' src/*.map | sort -u); do
-    grep -q "<a id=\"$f\"></a>" "$tmp/api.md" 2>/dev/null || missing="$missing $f"
+    grep -q "<a id=\"$f\"></a>" "$tmp/generated" 2>/dev/null || missing="$missing $f"
 done
 if [ -z "$missing" ]; then
     pass "every function of src/*.map is documented on the page"
