@@ -13,7 +13,8 @@
 #   - this file, which has to spell the patterns;
 #   - release headings of CHANGELOG.md ("## 1.0.0 - 2026-..."): a release
 #     date is what a changelog is for;
-#   - pytest's scope="session", an API word, not a working session;
+#   - pytest's scope="session", an API word, not a working session (a
+#     user's Python session is not flagged either);
 #   - the code that measures the load (getloadavg, the benchmark report's
 #     "load average" fields): it records the load of the run being
 #     reported, not of a past one;
@@ -50,7 +51,8 @@ P_MACHINE='[Dd]evelopment machine|[Dd]ev machine|[Mm]y machine|/work/(wt-|main)'
 MONTH='(January|February|March|April|May|June|July|August|September|October|November|December)'
 P_DATE="(^|[^0-9])20[0-9][0-9]-[01][0-9]([^0-9]|\$)|[0-9] $MONTH 20[0-9][0-9]|$MONTH [0-9]{1,2}, 20[0-9][0-9]"
 
-P_SESSION='(^|[^A-Za-z0-9_])[Ss]essions?([^A-Za-z0-9_]|$)'
+# A working session, not a user's Python or notebook session.
+P_SESSION='([Tt]his|[Tt]hat|[Pp]revious|[Ll]ast|[Nn]ext|[Ee]arlier|[Ll]ater|[Aa]nother|[Oo]ther|[Bb]y a|[Ii]n a|of the) sessions?([^A-Za-z0-9_]|$)|[Ss]ession [0-9]|[Ss]essions? (found|wrote|added|filed|made|fixed|measured)([^A-Za-z0-9_]|$)'
 PATTERN="$P_ISSUE|$P_HASH|$P_LOAD|$P_MACHINE|$P_DATE|$P_SESSION"
 
 # The exemptions above, as file:line:text filters (extended expressions).
@@ -102,12 +104,17 @@ iss="Iss""ue"
     echo "rendered on 2 Dece""mber 20""26"
     echo "run on Decem""ber 1, 20""26"
     echo "this ses""sion found"
+    echo "filed by a ses""sion"
+    echo "first run of the ses""sion"
+    echo "missed only under other ses""sions' load"
+    echo "measured in ses""sion 4"
 } >"$tmp/plant/docs/bad.txt"
 {
     echo '    color = "#000000"  /* a colour, not a reference */'
     echo '    printf("%#0x", v);'
     echo '@pytest.fixture(scope="ses''sion")'
     echo 'see mmp/pbrt-v4#80 upstream'
+    echo 'A first ses''sion: the seed notebook, in a Python ses''sion'
     echo 'loads 64 entries; 1999-12 is not a date of work; issued 3 times'
 } >"$tmp/plant/src/good.c"
 scan "$tmp/plant" docs src >"$tmp/planted"
