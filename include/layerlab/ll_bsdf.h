@@ -130,7 +130,8 @@ typedef struct ll_open_options {
  * the stored f |mu_o| over |mu_o|, with |mu_o| taken as at least 1e-6). */
 LL_API ll_status ll_bsdf_open(const char *path, const ll_open_options *opts, ll_bsdf **out);
 
-/* The same from memory (the bytes are copied; data may be freed after). */
+/* The same from memory (the bytes are copied; data may be freed after),
+ * with the same checks and statuses; messages name the file <memory>. */
 LL_API ll_status ll_bsdf_open_memory(const void *data, size_t size, const ll_open_options *opts,
                                      ll_bsdf **out);
 
@@ -221,7 +222,9 @@ LL_API ll_status ll_bsdf_get_parameter_name(const ll_bsdf *b, size_t p, const ch
  * The weights are products of 1-D linear (hat) weights over each parameter's positions: >= 0,
  * at most two non-zero per parameter, summing to 1, so f stays >= 0 and sampling is exact;
  * evaluation and sampling visit only the non-zero ones (docs/bsdf-format.md, "Weights for a
- * point of parameter space", compares them with Catmull-Rom weights). */
+ * point of parameter space", compares them with Catmull-Rom weights). Thread-safe.
+ * LL_ERROR_INVALID_ARGUMENT for NULL b or coeffs, NULL params for a textured file, or a
+ * non-finite parameter value. */
 LL_API ll_status ll_bsdf_basis_coefficients(const ll_bsdf *b, const double *params, float *coeffs);
 
 /* The file's nodes (n_nodes floats, ascending, owned by b and valid while

@@ -119,7 +119,9 @@ LL_API ll_status ll_bsdf_writer_add_basis(ll_bsdf_writer *writer,
 
 /* Write the file (all bases must have been added) and free the writer,
  * whatever the outcome. monitor (nullable) as for ll_bsdf_write: stage
- * "writing", and a cancel leaves no file. */
+ * "writing", and a cancel leaves no file. Statuses as ll_bsdf_write
+ * (LL_ERROR_INVALID_ARGUMENT also for a NULL writer, missing bases or a
+ * writer that failed before). */
 LL_API ll_status ll_bsdf_writer_commit(ll_bsdf_writer *writer, const ll_monitor *monitor);
 
 /* Give up: no file is left (nor the spill); frees the writer. NULL is fine. */

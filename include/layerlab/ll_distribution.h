@@ -81,7 +81,9 @@ typedef struct ll_distribution {
  * the estimate divided by n_ranks. The monitor is called
  * on every rank (a tool shows rank 0's); a cancel on any rank stops all.
  * A file written from rank 0's layers with ll_material_write is byte for
- * byte the one ll_material_build writes. */
+ * byte the one ll_material_build writes. Statuses as
+ * ll_material_build_layers, the same on every rank; a failing collective
+ * is that rank's failure. */
 LL_API ll_status ll_material_build_layers_distributed(const ll_material *material,
                                                       const ll_build_options *opts,
                                                       const ll_monitor *monitor,
@@ -92,7 +94,8 @@ LL_API ll_status ll_material_build_layers_distributed(const ll_material *materia
 /* Build and write: ll_material_build across the ranks. Rank 0 writes
  * out_path atomically (the other ranks ignore out_path, which may be NULL
  * there); every rank returns the outcome of the whole, the write included.
- * A failure anywhere leaves no file and no temporary. */
+ * A failure anywhere leaves no file and no temporary. Statuses as
+ * ll_material_build, the same on every rank. */
 LL_API ll_status ll_material_build_distributed(const ll_material *material,
                                                const ll_build_options *opts,
                                                const ll_monitor *monitor,

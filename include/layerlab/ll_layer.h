@@ -208,7 +208,10 @@ LL_API ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *m
  * multiplied by the MERL scale factors (1/1500, 1.15/1500, 1.66/1500) which
  * give reflectance in units of 1/sr. n_orders_internal as for
  * ll_microfacet. Stage "measured": reading the file, then one unit per
- * incident node; workers poll once per outgoing node. */
+ * incident node; workers poll once per outgoing node. LL_ERROR_IO when the
+ * file cannot be read, LL_ERROR_FORMAT when it is not a MERL table,
+ * LL_ERROR_INVALID_ARGUMENT (NULL arguments, channel), LL_ERROR_OUT_OF_MEMORY,
+ * LL_ERROR_CANCELLED; the layer is unchanged on failure. */
 LL_API ll_status ll_layer_set_matusik(ll_layer *layer, const char *path, int channel,
                                       size_t n_orders_internal, const ll_monitor *monitor);
 
@@ -298,7 +301,8 @@ LL_API ll_status ll_layer_albedo(const ll_layer *layer, double mu_i, double *ref
 
 /* Fit for a Henyey-Greenstein medium with asymmetry g in (-1, 1): the
  * original layerlab's parameterHeuristicHG, n = 8.6 / (1 - |g|) - 0.2,
- * m = 5.4 / (1 - |g|) - 1.3. Instant. */
+ * m = 5.4 / (1 - |g|) - 1.3. Instant. LL_ERROR_INVALID_ARGUMENT for g
+ * outside (-1, 1) or NULL outputs. */
 LL_API ll_status ll_heuristic_henyey_greenstein(double g, size_t *n_nodes, size_t *n_orders);
 
 /* Fit for a rough interface: the paper's fits (the original's

@@ -110,7 +110,7 @@ LL_API ll_status ll_material_cache_dir(char *buffer, size_t size);
  * mu_min in effect (opts, else the material's set, else the defaults) and
  * whether the resolution is chosen by them (*chosen = 0 when both nodes
  * and orders are given by opts or the material). Instant. Any output may
- * be NULL. */
+ * be NULL. LL_ERROR_INVALID_ARGUMENT for a NULL material or bad options. */
 LL_API ll_status ll_material_goal(const ll_material *material, const ll_build_options *opts,
                                   double *tolerance, double *mu_min, int *chosen);
 
@@ -169,7 +169,7 @@ LL_API ll_status ll_material_build_layers(const ll_material *material,
  * opts or the material. opts may be NULL; only error_goal is read.
  * Atomic, like ll_material_build; monitor (nullable) as for ll_bsdf_write:
  * a cancel, also at the last report before the file replaces out_path,
- * leaves no file and keeps an existing one. */
+ * leaves no file and keeps an existing one. Statuses as ll_bsdf_write. */
 LL_API ll_status ll_material_write(const ll_material *material, const ll_build_options *opts,
                                    ll_layer *const *layers, size_t n_channels,
                                    const char *out_path, const ll_monitor *monitor);

@@ -34,7 +34,11 @@ LL_API ll_status ll_quad_gauss_legendre(size_t n, double *nodes, double *weights
 /* Gauss-Lobatto: n >= 2 nodes including both end points -1 and 1, exact
  * for polynomials of degree 2n-3. ll_quad_gauss_lobatto(10, ...) gives
  * -1, -0.91953391, -0.73877387, -0.47792495, -0.16527896, 0.16527896, ...
- * with weights 0.02222222, 0.13330599, 0.22488934, 0.29204268, 0.32753976, ... */
+ * with weights 0.02222222, 0.13330599, 0.22488934, 0.29204268, 0.32753976, ...
+ * LL_ERROR_INVALID_ARGUMENT for n < 2 or NULL buffers; with a monitor also
+ * LL_ERROR_OUT_OF_MEMORY and LL_ERROR_CANCELLED (above). Both Gauss rules
+ * return LL_ERROR_NUMERICAL should Newton's iteration not settle on a
+ * node. */
 LL_API ll_status ll_quad_gauss_lobatto(size_t n, double *nodes, double *weights,
                                        const ll_monitor *monitor);
 
