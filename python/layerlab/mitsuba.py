@@ -31,7 +31,7 @@ Two implementations, chosen with the property "mode":
   Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting of
   Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
   the same batch functions with one element.
-Table files (the `measured` format, docs/measured-format.md; ll_bsdf_info.format
+Table files (the `measured` format, docs/formats.md; ll_bsdf_info.format
 LL_BSDF_FORMAT_TABLES, BSDFStorage.format "tables") open like .bsdf files and
 render through "batch", the default for them in every variant: the traced
 path reads Fourier series (ll_bsdf_get_tables), which a table file does not

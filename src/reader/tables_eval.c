@@ -1,6 +1,6 @@
 /*
  * Evaluating and sampling a table file (tables_internal.h) as the
- * renderers' `measured` readers do (docs/measured-format.md, "Evaluation
+ * renderers' `measured` readers do (docs/formats.md, "Evaluation
  * and sampling"): the half vector's coordinates on the unit square, the
  * VNDF warp's inverse to the sample square, the stored values there times
  * D / (4 sigma) under the jacobian rule; sampling by the luminance warp,

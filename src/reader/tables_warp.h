@@ -1,6 +1,6 @@
 /*
  * The piecewise-bilinear 2D warp of the `measured` format
- * (docs/measured-format.md, "The 2D warp"): a density given by its values
+ * (docs/formats.md, "The 2D warp"): a density given by its values
  * at the nodes of a W x H grid over the unit square, interpolated
  * bilinearly, with conditional slices selected by up to three parameters
  * and interpolated linearly between them. The one implementation that both
