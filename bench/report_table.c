@@ -254,7 +254,7 @@ static void print_adding(FILE *out, const bench_store *s)
  * second render-side pass's starting point, cfeba3b, measured side by side
  * with 2b5271c in one run (5 alternating rounds of 2 x 10^5 calls, median,
  * load 6.7-8.6 on 2 cores;
- * docs/benchmarks.md, "Issue 18, render side, second pass"). Order:
+ * docs/benchmarks.md, "Evaluation per call"). Order:
  * eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
 static const struct {
     const char *label, *source;
