@@ -24,6 +24,7 @@ void ll_warp2d_free(ll_warp2d *wp)
     ll_free(wp->data);
     ll_free(wp->cond);
     ll_free(wp->marg);
+    ll_free(wp->row_total);
     memset(wp, 0, sizeof *wp);
 }
 
@@ -68,6 +69,19 @@ static int build_slice(ll_warp2d *wp, size_t k)
     return 1;
 }
 
+/* Whether every row of every slice repeats the first row of its slice
+ * (compared as stored, all inner values of a node at once). */
+static int rows_equal(const ll_warp2d *wp)
+{
+    size_t row = wp->w * wp->inner, plane = row * wp->h, k, y;
+    for (k = 0; k < wp->n_slices / wp->inner; ++k)
+        for (y = 1; y < wp->h; ++y)
+            if (memcmp(wp->data + k * plane, wp->data + k * plane + y * row,
+                       row * sizeof(float)) != 0)
+                return 0;
+    return 1;
+}
+
 ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
                          const size_t *param_size, const double *const *params, ll_warp_get get,
                          const void *ctx, int sampling)
@@ -104,16 +118,20 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
                     to[at * in] = (float)get(ctx, k);
             }
     }
+    wp->rows_equal = rows_equal(wp);
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
     wp->cond = ll_alloc_array(total, sizeof(float));
     wp->marg = ll_alloc_array(n * h, sizeof(float));
-    if (!wp->cond || !wp->marg)
+    wp->row_total = ll_alloc_array(n * h, sizeof(float));
+    if (!wp->cond || !wp->marg || !wp->row_total)
         goto oom;
     for (k = 0; k < n; ++k)
         if (!build_slice(wp, k))
             return ll_fail(LL_ERROR_FORMAT, "slice %zu has no positive finite integral", k);
+    for (k = 0; k < n * h; ++k)
+        wp->row_total[k] = wp->cond[k * w + w - 1];
     return LL_OK;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
@@ -194,9 +212,8 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 
 /* One array's slices of a slice set, as pointers: a look-up mixes the
  * same slices at many places (a search reads a row at every step), so
- * the offsets are taken once. Two slices (an isotropic file: two
- * elevations) is the common case and has its own path; its sum is the
- * general loop's to the bit (0 + a + b is a + b). */
+ * the offsets are taken once. This general form serves sets of more than
+ * two slices (anisotropic files); two or fewer take the pair below. */
 typedef struct slice_rows {
     size_t count;
     size_t step;                              /* floats from one node to the next */
@@ -230,17 +247,64 @@ static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *ou
 static inline double mix(const slice_rows *r, size_t node)
 {
     size_t c, at = node * r->step;
-    double v;
-    if (r->count == 2)
-        return r->w[0] * (double)r->p[0][at] + r->w[1] * (double)r->p[1][at];
-    v = 0.0;
+    double v = 0.0;
     for (c = 0; c < r->count; ++c)
         v += r->w[c] * (double)r->p[c][at];
     return v;
 }
 
+/* Two slices (an isotropic file's two neighbouring elevations; one slice
+ * is the pair with a second of weight 0 at the same place): the common
+ * look-up, without loops or branches. w0 a + w1 b is the general sum to
+ * the bit (0 + w0 a + w1 b, and w0 a + 0 b = 0 + w0 a for the finite
+ * values stored), so both forms give the same numbers. */
+typedef struct slice_pair {
+    const float *p0, *p1;
+    double w0, w1;
+} slice_pair;
+
+static inline double pmix(const slice_pair *q, size_t at)
+{
+    return q->w0 * (double)q->p0[at] + q->w1 * (double)q->p1[at];
+}
+
+/* The pair of an array whose slice i starts at arr + i * stride; 0 if the
+ * set has more than two slices. */
+static int pair_of(const slice_set *s, const float *arr, size_t stride, slice_pair *q)
+{
+    if (s->count > 2)
+        return 0;
+    q->p0 = arr + s->index[0] * stride;
+    q->w0 = s->weight[0];
+    if (s->count == 2) {
+        q->p1 = arr + s->index[1] * stride;
+        q->w1 = s->weight[1];
+    } else {
+        q->p1 = q->p0;
+        q->w1 = 0.0;
+    }
+    return 1;
+}
+
+/* The same for the values (ll_warp2d.inner), the division only where an
+ * inner parameter makes it needed. */
+static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
+{
+    size_t in = wp->inner, area = wp->w * wp->h;
+    if (s->count > 2)
+        return 0;
+    if (in == 1)
+        return pair_of(s, wp->data, area, q);
+    q->p0 = wp->data + (s->index[0] / in) * area * in + s->index[0] % in;
+    q->w0 = s->weight[0];
+    q->p1 = s->count == 2 ? wp->data + (s->index[1] / in) * area * in + s->index[1] % in
+                          : q->p0;
+    q->w1 = s->count == 2 ? s->weight[1] : 0.0;
+    return 1;
+}
+
 /* Cell and fraction of coordinate x in [0, 1] over n nodes. */
-static size_t cell(double x, size_t n, double *t)
+static inline size_t cell(double x, size_t n, double *t)
 {
     double f;
     size_t i;
@@ -266,12 +330,14 @@ static double bilinear_rows(const slice_rows *d, size_t w, size_t r, double ty, 
     return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
 }
 
-static double bilinear(const ll_warp2d *wp, const slice_set *s, size_t r, double ty, size_t c,
-                       double tx)
+/* The same for a pair whose nodes lie step floats apart. */
+static inline double bilinear_pair(const slice_pair *q, size_t step, size_t w, size_t r,
+                                   double ty, size_t c, double tx)
 {
-    slice_rows d;
-    data_rows_of(wp, s, &d);
-    return bilinear_rows(&d, wp->w, r, ty, c, tx);
+    size_t at = (r * w + c) * step, down = w * step;
+    double v00 = pmix(q, at), v01 = pmix(q, at + step), v10 = pmix(q, at + down);
+    double v11 = pmix(q, at + down + step);
+    return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
 }
 
 /* Density per unit area of the square for a sampling warp (slices hold
@@ -295,7 +361,38 @@ double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double p
 {
     double tx, ty;
     size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty);
-    return bilinear(wp, s, r, ty, c, tx) * area_scale(wp);
+    slice_pair q;
+    slice_rows d;
+    if (data_pair_of(wp, s, &q))
+        return bilinear_pair(&q, wp->inner, wp->w, r, ty, c, tx) * area_scale(wp);
+    data_rows_of(wp, s, &d);
+    return bilinear_rows(&d, wp->w, r, ty, c, tx) * area_scale(wp);
+}
+
+/* The four corner nodes of cell (r, c) of a pair whose nodes lie step
+ * floats apart, and the weights that give the bilinear value of the pair
+ * there as one sum: sum_j w[j] p[j][0]. */
+static void corners(const slice_pair *q, size_t step, size_t w, size_t r, double ty, size_t c,
+                    double tx, const float *p[8], double wt[8])
+{
+    size_t at = (r * w + c) * step, down = w * step;
+    double a = (1.0 - ty) * (1.0 - tx), b = (1.0 - ty) * tx, d = ty * (1.0 - tx), e = ty * tx;
+    p[0] = q->p0 + at;
+    p[1] = q->p0 + at + step;
+    p[2] = q->p0 + at + down;
+    p[3] = q->p0 + at + down + step;
+    p[4] = q->p1 + at;
+    p[5] = q->p1 + at + step;
+    p[6] = q->p1 + at + down;
+    p[7] = q->p1 + at + down + step;
+    wt[0] = q->w0 * a;
+    wt[1] = q->w0 * b;
+    wt[2] = q->w0 * d;
+    wt[3] = q->w0 * e;
+    wt[4] = q->w1 * a;
+    wt[5] = q->w1 * b;
+    wt[6] = q->w1 * d;
+    wt[7] = q->w1 * e;
 }
 
 void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
@@ -309,6 +406,41 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
      * channel 0 at every node, else a whole table after it. */
     size_t next = n == wp->inner ? 1 : st;
     slice_set first;
+    if (n == wp->inner && s->count <= 2) {
+        /* The channels of a node share its cache line, and the weights of
+         * the eight (slice, corner) nodes are the same for each: one sum of
+         * eight products per channel (the bilinear value of the mixed
+         * slices to rounding). */
+        slice_pair q;
+        const float *p[8];
+        double wt[8];
+        size_t plane = st * n;
+        q.p0 = wp->data + s->index[0] * plane;
+        q.w0 = s->weight[0];
+        q.p1 = s->count == 2 ? wp->data + s->index[1] * plane : q.p0;
+        q.w1 = s->count == 2 ? s->weight[1] : 0.0;
+        corners(&q, n, wp->w, r, ty, c, tx, p, wt);
+        if (n == 3) {
+            /* An RGB table: the three sums side by side. */
+            double v0 = 0.0, v1 = 0.0, v2 = 0.0;
+            for (j = 0; j < 8; ++j) {
+                v0 += wt[j] * (double)p[j][0];
+                v1 += wt[j] * (double)p[j][1];
+                v2 += wt[j] * (double)p[j][2];
+            }
+            out[0] = v0 * scale;
+            out[1] = v1 * scale;
+            out[2] = v2 * scale;
+            return;
+        }
+        for (k = 0; k < n; ++k) {
+            double v = 0.0;
+            for (j = 0; j < 8; ++j)
+                v += wt[j] * (double)p[j][k];
+            out[k] = v * scale;
+        }
+        return;
+    }
     ll_warp_slices_append(s, 0, n, &first);
     data_rows_of(wp, &first, &d);
     for (k = 0; k < n; ++k) {
@@ -316,6 +448,43 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
         for (j = 0; j < d.count; ++j)
             d.p[j] += next;
     }
+}
+
+void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const slice_set *s, const double pos[2])
+{
+#if defined(__GNUC__)
+    double tx, ty;
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), in = wp->inner, j;
+    size_t plane = wp->w * wp->h * in, at = (r * wp->w + c) * in, down = wp->w * in;
+    if (s->count > 2)
+        return;
+    for (j = 0; j < s->count; ++j) {
+        /* Both nodes of each row: their first and last floats. */
+        const float *p = wp->data + s->index[j] * plane + at;
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + 2 * in - 1);
+        __builtin_prefetch(p + down);
+        __builtin_prefetch(p + down + 2 * in - 1);
+    }
+#else
+    (void)wp;
+    (void)s;
+    (void)pos;
+#endif
+}
+
+double ll_warp2d_eval_single(const ll_warp2d *wp, const double pos[2])
+{
+    double tx, ty, scale = area_scale(wp);
+    size_t w = wp->w, c = cell(pos[0], w, &tx), r;
+    const float *d = wp->data + c;
+    if (wp->rows_equal)
+        return ((1.0 - tx) * (double)d[0] + tx * (double)d[1]) * scale;
+    r = cell(pos[1], wp->h, &ty);
+    d += r * w;
+    return ((1.0 - ty) * ((1.0 - tx) * (double)d[0] + tx * (double)d[1]) +
+            ty * ((1.0 - tx) * (double)d[w] + tx * (double)d[w + 1])) *
+           scale;
 }
 
 void ll_warp_slices_single(slice_set *s)
@@ -380,6 +549,26 @@ static inline double pair_at(const slice_rows *a, size_t r0, size_t w, double ty
     return (1.0 - ty) * mix(a, r0 + i) + ty * mix(a, r0 + w + i);
 }
 
+static inline double pair_at2(const slice_pair *a, size_t r0, size_t w, double ty, size_t i)
+{
+    return (1.0 - ty) * pmix(a, r0 + i) + ty * pmix(a, r0 + w + i);
+}
+
+/* Ask for the bytes [p, p + n) ahead of their use: the rows a search is
+ * about to read lie in tables of megabytes, and fetched one halving step
+ * at a time each would wait for memory in turn. */
+static inline void prefetch(const float *p, size_t n)
+{
+#if defined(__GNUC__)
+    const char *c = (const char *)p, *end = (const char *)(p + n);
+    for (; c < end; c += 64)
+        __builtin_prefetch(c);
+#else
+    (void)p;
+    (void)n;
+#endif
+}
+
 void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
                       double pos[2], double *pdf)
 {
@@ -396,6 +585,41 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
 }
 
+/* sample_at for a pair of slices: the general form's arithmetic, in the
+ * same order, so both give the same numbers. */
+static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[2],
+                        double pos[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h, r, c, at;
+    double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
+    slice_pair marg, tot, cond, data;
+    (void)pair_of(s, wp->marg, h, &marg);
+    (void)pair_of(s, wp->row_total, h, &tot);
+    (void)pair_of(s, wp->cond, st, &cond);
+    (void)pair_of(s, wp->data, st, &data);
+    target = u[1];
+    SEARCH(h, pmix(&marg, i), target, r);
+    at = r * w;
+    prefetch(cond.p0 + at, 2 * w);
+    prefetch(cond.p1 + at, 2 * w);
+    r0 = pmix(&tot, r);
+    r1 = pmix(&tot, r + 1);
+    m0 = pmix(&marg, r);
+    m1 = pmix(&marg, r + 1);
+    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    row_total = (1.0 - ty) * r0 + ty * r1;
+    target = u[0] * row_total;
+    SEARCH(w, pair_at2(&cond, at, w, ty, i), target, c);
+    cdf_c = pair_at2(&cond, at, w, ty, c);
+    cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
+    v0 = pair_at2(&data, at, w, ty, c);
+    v1 = pair_at2(&data, at, w, ty, c + 1);
+    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
+    pos[0] = ((double)c + tx) / (double)(w - 1);
+    pos[1] = ((double)r + ty) / (double)(h - 1);
+    *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
+}
+
 void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
                          double pos[2], double *pdf)
 {
@@ -409,6 +633,10 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
             u[k] = LL_WARP_EPSILON;
         if (u[k] > 1.0 - LL_WARP_EPSILON)
             u[k] = 1.0 - LL_WARP_EPSILON;
+    }
+    if (s->count <= 2) {
+        sample_pair(wp, s, u, pos, pdf);
+        return;
     }
     rows_of(s, wp->marg, h, &marg);
     rows_of(s, wp->cond, st, &cond);
@@ -435,13 +663,48 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
+/* invert_at for a pair of slices, as sample_pair. */
+static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double pos[2],
+                        double u[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h;
+    double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
+    size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty), at = r * w;
+    slice_pair marg, tot, cond, data;
+    (void)pair_of(s, wp->marg, h, &marg);
+    (void)pair_of(s, wp->row_total, h, &tot);
+    (void)pair_of(s, wp->cond, st, &cond);
+    (void)pair_of(s, wp->data, st, &data);
+    r0 = pmix(&tot, r);
+    r1 = pmix(&tot, r + 1);
+    m0 = pmix(&marg, r);
+    m1 = pmix(&marg, r + 1);
+    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    row_total = (1.0 - ty) * r0 + ty * r1;
+    cdf_c = pair_at2(&cond, at, w, ty, c);
+    cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
+    v0 = pair_at2(&data, at, w, ty, c);
+    v1 = pair_at2(&data, at, w, ty, c + 1);
+    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
+                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
+                                 row_total
+                           : 0.0;
+    *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
+}
+
 void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
     double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
-    size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty);
+    size_t c, r;
     slice_rows marg, cond, data;
+    if (s->count <= 2) {
+        invert_pair(wp, s, pos, u, pdf);
+        return;
+    }
+    c = cell(pos[0], w, &tx);
+    r = cell(pos[1], h, &ty);
     rows_of(s, wp->marg, h, &marg);
     rows_of(s, wp->cond, st, &cond);
     data_rows_of(wp, s, &data);
