@@ -21,8 +21,7 @@ void ll_warp2d_free(ll_warp2d *wp)
         return;
     for (p = 0; p < LL_WARP_MAX_PARAMS; ++p)
         ll_free(wp->param_values[p]);
-    ll_free(wp->data);
-    ll_free(wp->cond);
+    ll_free(wp->data); /* cond points into it */
     ll_free(wp->marg);
     ll_free(wp->row_total);
     memset(wp, 0, sizeof *wp);
@@ -34,15 +33,16 @@ void ll_warp2d_free(ll_warp2d *wp)
 static int build_slice(ll_warp2d *wp, size_t k)
 {
     size_t w = wp->w, h = wp->h, x, y;
-    float *v = wp->data + k * w * h, *c = wp->cond + k * w * h, *m = wp->marg + k * h;
+    float *v = wp->data + k * w * h * 2, *c = wp->cond + k * w * h * 2, *m = wp->marg + k * h;
     double total = 0.0, scale, sum, prev_row = 0.0;
-    /* The total first (sums in double), then every table divided by it and
+    /* Node i of the slice holds its value v[2 i] and its running integral
+     * c[2 i] side by side (ll_warp2d.step). The total first (sums in double), then every table divided by it and
      * the running integrals taken over the divided values, so that they
      * are exactly those of the stored density. */
     for (y = 0; y < h; ++y) {
         double row = 0.0;
         for (x = 0; x + 1 < w; ++x)
-            row += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
+            row += 0.5 * ((double)v[2 * (y * w + x)] + (double)v[2 * (y * w + x + 1)]);
         if (y > 0)
             total += 0.5 * (prev_row + row);
         prev_row = row;
@@ -51,19 +51,19 @@ static int build_slice(ll_warp2d *wp, size_t k)
         return 0;
     scale = 1.0 / total;
     for (x = 0; x < w * h; ++x)
-        v[x] = (float)((double)v[x] * scale);
+        v[2 * x] = (float)((double)v[2 * x] * scale);
     for (y = 0; y < h; ++y) {
         sum = 0.0;
-        c[y * w] = 0.0f;
+        c[2 * (y * w)] = 0.0f;
         for (x = 0; x + 1 < w; ++x) {
-            sum += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
-            c[y * w + x + 1] = (float)sum;
+            sum += 0.5 * ((double)v[2 * (y * w + x)] + (double)v[2 * (y * w + x + 1)]);
+            c[2 * (y * w + x + 1)] = (float)sum;
         }
     }
     sum = 0.0;
     m[0] = 0.0f;
     for (y = 0; y + 1 < h; ++y) {
-        sum += 0.5 * ((double)c[y * w + w - 1] + (double)c[(y + 1) * w + w - 1]);
+        sum += 0.5 * ((double)c[2 * (y * w + w - 1)] + (double)c[2 * ((y + 1) * w + w - 1)]);
         m[y + 1] = (float)sum;
     }
     return 1;
@@ -73,7 +73,7 @@ static int build_slice(ll_warp2d *wp, size_t k)
  * (compared as stored, all inner values of a node at once). */
 static int rows_equal(const ll_warp2d *wp)
 {
-    size_t row = wp->w * wp->inner, plane = row * wp->h, k, y;
+    size_t row = wp->w * wp->step, plane = row * wp->h, k, y;
     for (k = 0; k < wp->n_slices / wp->inner; ++k)
         for (y = 1; y < wp->h; ++y)
             if (memcmp(wp->data + k * plane, wp->data + k * plane + y * row,
@@ -103,35 +103,38 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->n_slices = n;
     if (!ll_size_mul(w, h, &total) || !ll_size_mul(total, n, &total))
         return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
+    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
+    wp->step = sampling ? 2 : wp->inner;
+    if (sampling && !ll_size_mul(total, 2, &total))
+        return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
     wp->data = ll_alloc_array(total, sizeof(float));
     if (!wp->data)
         goto oom;
-    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
     {
         /* Entry k of the caller's layout, slice (outer, j) at node at, goes
-         * to ((outer w h) + at) inner + j. */
-        size_t area = w * h, in = wp->inner, outer, j, at;
+         * to ((outer w h) + at) step + j. */
+        size_t area = w * h, in = wp->inner, st = wp->step, outer, j, at;
         for (k = 0, outer = 0; outer < n / in; ++outer)
             for (j = 0; j < in; ++j) {
-                float *to = wp->data + outer * area * in + j;
+                float *to = wp->data + outer * area * st + j;
                 for (at = 0; at < area; ++at, ++k)
-                    to[at * in] = (float)get(ctx, k);
+                    to[at * st] = (float)get(ctx, k);
             }
     }
     wp->rows_equal = rows_equal(wp);
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
-    wp->cond = ll_alloc_array(total, sizeof(float));
+    wp->cond = wp->data + 1;
     wp->marg = ll_alloc_array(n * h, sizeof(float));
     wp->row_total = ll_alloc_array(n * h, sizeof(float));
-    if (!wp->cond || !wp->marg || !wp->row_total)
+    if (!wp->marg || !wp->row_total)
         goto oom;
     for (k = 0; k < n; ++k)
         if (!build_slice(wp, k))
             return ll_fail(LL_ERROR_FORMAT, "slice %zu has no positive finite integral", k);
     for (k = 0; k < n * h; ++k)
-        wp->row_total[k] = wp->cond[k * w + w - 1];
+        wp->row_total[k] = wp->cond[(k * w + w - 1) * 2];
     return LL_OK;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
@@ -221,11 +224,12 @@ typedef struct slice_rows {
     double w[1 << LL_WARP_MAX_PARAMS];
 } slice_rows;
 
-static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_rows *out)
+static void rows_of(const slice_set *s, const float *arr, size_t stride, size_t step,
+                    slice_rows *out)
 {
     size_t c;
     out->count = s->count;
-    out->step = 1;
+    out->step = step;
     for (c = 0; c < s->count; ++c) {
         out->p[c] = arr + s->index[c] * stride;
         out->w[c] = s->weight[c];
@@ -235,11 +239,11 @@ static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_r
 /* The values' slices (ll_warp2d.inner: slice i is (i / inner, i % inner)). */
 static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *out)
 {
-    size_t c, in = wp->inner, area = wp->w * wp->h;
+    size_t c, in = wp->inner, area = wp->w * wp->h, st = wp->step;
     out->count = s->count;
-    out->step = in;
+    out->step = st;
     for (c = 0; c < s->count; ++c) {
-        out->p[c] = wp->data + (s->index[c] / in) * area * in + s->index[c] % in;
+        out->p[c] = wp->data + (s->index[c] / in) * area * st + s->index[c] % in;
         out->w[c] = s->weight[c];
     }
 }
@@ -261,6 +265,7 @@ static inline double mix(const slice_rows *r, size_t node)
 typedef struct slice_pair {
     const float *p0, *p1;
     double w0, w1;
+    size_t step;                              /* floats from one node to the next */
 } slice_pair;
 
 static inline double pmix(const slice_pair *q, size_t at)
@@ -270,10 +275,12 @@ static inline double pmix(const slice_pair *q, size_t at)
 
 /* The pair of an array whose slice i starts at arr + i * stride; 0 if the
  * set has more than two slices. */
-static int pair_of(const slice_set *s, const float *arr, size_t stride, slice_pair *q)
+static int pair_of(const slice_set *s, const float *arr, size_t stride, size_t step,
+                   slice_pair *q)
 {
     if (s->count > 2)
         return 0;
+    q->step = step;
     q->p0 = arr + s->index[0] * stride;
     q->w0 = s->weight[0];
     if (s->count == 2) {
@@ -290,14 +297,15 @@ static int pair_of(const slice_set *s, const float *arr, size_t stride, slice_pa
  * inner parameter makes it needed. */
 static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
 {
-    size_t in = wp->inner, area = wp->w * wp->h;
+    size_t in = wp->inner, area = wp->w * wp->h, st = wp->step;
     if (s->count > 2)
         return 0;
     if (in == 1)
-        return pair_of(s, wp->data, area, q);
-    q->p0 = wp->data + (s->index[0] / in) * area * in + s->index[0] % in;
+        return pair_of(s, wp->data, area * st, st, q);
+    q->step = st;
+    q->p0 = wp->data + (s->index[0] / in) * area * st + s->index[0] % in;
     q->w0 = s->weight[0];
-    q->p1 = s->count == 2 ? wp->data + (s->index[1] / in) * area * in + s->index[1] % in
+    q->p1 = s->count == 2 ? wp->data + (s->index[1] / in) * area * st + s->index[1] % in
                           : q->p0;
     q->w1 = s->count == 2 ? s->weight[1] : 0.0;
     return 1;
@@ -364,7 +372,7 @@ double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double p
     slice_pair q;
     slice_rows d;
     if (data_pair_of(wp, s, &q))
-        return bilinear_pair(&q, wp->inner, wp->w, r, ty, c, tx) * area_scale(wp);
+        return bilinear_pair(&q, q.step, wp->w, r, ty, c, tx) * area_scale(wp);
     data_rows_of(wp, s, &d);
     return bilinear_rows(&d, wp->w, r, ty, c, tx) * area_scale(wp);
 }
@@ -454,7 +462,7 @@ void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const slice_set *s, const dou
 {
 #if defined(__GNUC__)
     double tx, ty;
-    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), in = wp->inner, j;
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), in = wp->step, j;
     size_t plane = wp->w * wp->h * in, at = (r * wp->w + c) * in, down = wp->w * in;
     if (s->count > 2)
         return;
@@ -476,14 +484,14 @@ void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const slice_set *s, const dou
 double ll_warp2d_eval_single(const ll_warp2d *wp, const double pos[2])
 {
     double tx, ty, scale = area_scale(wp);
-    size_t w = wp->w, c = cell(pos[0], w, &tx), r;
-    const float *d = wp->data + c;
+    size_t st = wp->step, w = wp->w * st, c = cell(pos[0], wp->w, &tx), r;
+    const float *d = wp->data + c * st;
     if (wp->rows_equal)
-        return ((1.0 - tx) * (double)d[0] + tx * (double)d[1]) * scale;
+        return ((1.0 - tx) * (double)d[0] + tx * (double)d[st]) * scale;
     r = cell(pos[1], wp->h, &ty);
     d += r * w;
-    return ((1.0 - ty) * ((1.0 - tx) * (double)d[0] + tx * (double)d[1]) +
-            ty * ((1.0 - tx) * (double)d[w] + tx * (double)d[w + 1])) *
+    return ((1.0 - ty) * ((1.0 - tx) * (double)d[0] + tx * (double)d[st]) +
+            ty * ((1.0 - tx) * (double)d[w] + tx * (double)d[w + st])) *
            scale;
 }
 
@@ -551,7 +559,7 @@ static inline double pair_at(const slice_rows *a, size_t r0, size_t w, double ty
 
 static inline double pair_at2(const slice_pair *a, size_t r0, size_t w, double ty, size_t i)
 {
-    return (1.0 - ty) * pmix(a, r0 + i) + ty * pmix(a, r0 + w + i);
+    return (1.0 - ty) * pmix(a, (r0 + i) * a->step) + ty * pmix(a, (r0 + w + i) * a->step);
 }
 
 /* Ask for the bytes [p, p + n) ahead of their use: the rows a search is
@@ -593,15 +601,15 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
     size_t w = wp->w, h = wp->h, st = w * h, r, c, at;
     double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
     slice_pair marg, tot, cond, data;
-    (void)pair_of(s, wp->marg, h, &marg);
-    (void)pair_of(s, wp->row_total, h, &tot);
-    (void)pair_of(s, wp->cond, st, &cond);
-    (void)pair_of(s, wp->data, st, &data);
+    (void)pair_of(s, wp->marg, h, 1, &marg);
+    (void)pair_of(s, wp->row_total, h, 1, &tot);
+    (void)pair_of(s, wp->cond, 2 * st, 2, &cond);
+    (void)pair_of(s, wp->data, 2 * st, 2, &data);
     target = u[1];
     SEARCH(h, pmix(&marg, i), target, r);
     at = r * w;
-    prefetch(cond.p0 + at, 2 * w);
-    prefetch(cond.p1 + at, 2 * w);
+    prefetch(cond.p0 + 2 * at, 4 * w);
+    prefetch(cond.p1 + 2 * at, 4 * w);
     r0 = pmix(&tot, r);
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
@@ -638,8 +646,8 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
         sample_pair(wp, s, u, pos, pdf);
         return;
     }
-    rows_of(s, wp->marg, h, &marg);
-    rows_of(s, wp->cond, st, &cond);
+    rows_of(s, wp->marg, h, 1, &marg);
+    rows_of(s, wp->cond, 2 * st, 2, &cond);
     data_rows_of(wp, s, &data);
     /* Row interval from the marginal (slices are normalised: total 1). */
     target = u[1];
@@ -671,10 +679,10 @@ static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double po
     double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
     size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty), at = r * w;
     slice_pair marg, tot, cond, data;
-    (void)pair_of(s, wp->marg, h, &marg);
-    (void)pair_of(s, wp->row_total, h, &tot);
-    (void)pair_of(s, wp->cond, st, &cond);
-    (void)pair_of(s, wp->data, st, &data);
+    (void)pair_of(s, wp->marg, h, 1, &marg);
+    (void)pair_of(s, wp->row_total, h, 1, &tot);
+    (void)pair_of(s, wp->cond, 2 * st, 2, &cond);
+    (void)pair_of(s, wp->data, 2 * st, 2, &data);
     r0 = pmix(&tot, r);
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
@@ -705,8 +713,8 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double p
     }
     c = cell(pos[0], w, &tx);
     r = cell(pos[1], h, &ty);
-    rows_of(s, wp->marg, h, &marg);
-    rows_of(s, wp->cond, st, &cond);
+    rows_of(s, wp->marg, h, 1, &marg);
+    rows_of(s, wp->cond, 2 * st, 2, &cond);
     data_rows_of(wp, s, &data);
     r0 = mix(&cond, r * w + w - 1);
     r1 = mix(&cond, (r + 1) * w + w - 1);

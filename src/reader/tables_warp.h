@@ -34,7 +34,8 @@ typedef struct ll_warp2d {
     /* Stored as float, as the renderers store them: a look-up reads a few
      * scattered rows of tables of megabytes, so their size is what costs;
      * every sum over them is in double. */
-    float *data;                              /* [n_slices][h][w], but see inner  */
+    float *data;                              /* [n_slices][h][w], but see inner
+                                                 and step                         */
     /* A warp that only interpolates stores its last parameter innermost,
      * [outer slices][h][w][inner]: the channels of an RGB table (or the
      * neighbouring wavelengths of a spectral one) that a look-up reads
@@ -42,9 +43,16 @@ typedef struct ll_warp2d {
      * inner is that parameter's count, or 1 (sampling warps, no
      * parameters). */
     size_t inner;
-    float *cond;                              /* [n_slices][h][w] running trapezoid
-                                                 integrals along x (NULL if the
-                                                 warp only interpolates)          */
+    /* A sampling warp keeps each node's running integral next to its
+     * value: a look-up reads both at the same nodes, which then share
+     * their cache lines (an evaluation reads half the lines it would from
+     * two tables). step is the floats from one node to the next in data:
+     * 2 for a sampling warp, inner otherwise. */
+    size_t step;
+    float *cond;                              /* data + 1, read with step 2: the
+                                                 running trapezoid integrals
+                                                 along x (NULL if the warp only
+                                                 interpolates)                    */
     float *marg;                              /* [n_slices][h] the same along y of
                                                  the row totals                   */
     int normalized;                           /* each slice divided by its total  */
