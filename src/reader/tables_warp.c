@@ -141,22 +141,22 @@ oom:
 }
 
 /* The interval of an ascending list that holds x, and the weight of its
- * upper end, clamped to the list's ends; a single value needs no weight. */
+ * upper end, clamped to the list's ends; a single value needs no weight.
+ * The halving runs over a length that does not depend on x (as SEARCH
+ * below): every call looks up a new elevation, whose comparisons a
+ * branch would mispredict half the time. */
 static void locate(const double *v, size_t n, double x, size_t *i, double *t)
 {
-    size_t lo = 0, hi;
+    size_t lo = 0, len;
     if (n < 2) {
         *i = 0;
         *t = 0.0;
         return;
     }
-    hi = n - 2;
-    while (lo < hi) {
-        size_t mid = (lo + hi + 1) / 2;
-        if (v[mid] <= x)
-            lo = mid;
-        else
-            hi = mid - 1;
+    for (len = n - 1; len > 1;) {
+        size_t half = len / 2, mid = lo + half;
+        lo = v[mid] <= x ? mid : lo;
+        len -= half;
     }
     *i = lo;
     *t = (x - v[lo]) / (v[lo + 1] - v[lo]);
@@ -427,20 +427,23 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
         q.w0 = s->weight[0];
         q.p1 = s->count == 2 ? wp->data + s->index[1] * plane : q.p0;
         q.w1 = s->count == 2 ? s->weight[1] : 0.0;
-        corners(&q, n, wp->w, r, ty, c, tx, p, wt);
         if (n == 3) {
-            /* An RGB table: the three sums side by side. */
-            double v0 = 0.0, v1 = 0.0, v2 = 0.0;
-            for (j = 0; j < 8; ++j) {
-                v0 += wt[j] * (double)p[j][0];
-                v1 += wt[j] * (double)p[j][1];
-                v2 += wt[j] * (double)p[j][2];
-            }
-            out[0] = v0 * scale;
-            out[1] = v1 * scale;
-            out[2] = v2 * scale;
+            /* An RGB table: the three sums side by side, straight. */
+            size_t at = (r * wp->w + c) * 3, down = wp->w * 3;
+            const float *a = q.p0 + at, *b = q.p1 + at;
+            double ty1 = 1.0 - ty, tx1 = 1.0 - tx;
+            double a0 = q.w0 * ty1 * tx1, a1 = q.w0 * ty1 * tx, a2 = q.w0 * ty * tx1;
+            double a3 = q.w0 * ty * tx, b0 = q.w1 * ty1 * tx1, b1 = q.w1 * ty1 * tx;
+            double b2 = q.w1 * ty * tx1, b3 = q.w1 * ty * tx;
+            for (k = 0; k < 3; ++k)
+                out[k] = (a0 * (double)a[k] + a1 * (double)a[3 + k] + a2 * (double)a[down + k] +
+                          a3 * (double)a[down + 3 + k] + b0 * (double)b[k] +
+                          b1 * (double)b[3 + k] + b2 * (double)b[down + k] +
+                          b3 * (double)b[down + 3 + k]) *
+                         scale;
             return;
         }
+        corners(&q, n, wp->w, r, ty, c, tx, p, wt);
         for (k = 0; k < n; ++k) {
             double v = 0.0;
             for (j = 0; j < 8; ++j)
