@@ -273,13 +273,11 @@ static inline double pmix(const slice_pair *q, size_t at)
     return q->w0 * (double)q->p0[at] + q->w1 * (double)q->p1[at];
 }
 
-/* The pair of an array whose slice i starts at arr + i * stride; 0 if the
- * set has more than two slices. */
-static int pair_of(const slice_set *s, const float *arr, size_t stride, size_t step,
-                   slice_pair *q)
+/* The pair of an array whose slice i starts at arr + i * stride, for a
+ * set of one or two slices. */
+static void pair_of(const slice_set *s, const float *arr, size_t stride, size_t step,
+                    slice_pair *q)
 {
-    if (s->count > 2)
-        return 0;
     q->step = step;
     q->p0 = arr + s->index[0] * stride;
     q->w0 = s->weight[0];
@@ -290,7 +288,6 @@ static int pair_of(const slice_set *s, const float *arr, size_t stride, size_t s
         q->p1 = q->p0;
         q->w1 = 0.0;
     }
-    return 1;
 }
 
 /* The same for the values (ll_warp2d.inner), the division only where an
@@ -300,8 +297,10 @@ static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
     size_t in = wp->inner, area = wp->w * wp->h, st = wp->step;
     if (s->count > 2)
         return 0;
-    if (in == 1)
-        return pair_of(s, wp->data, area * st, st, q);
+    if (in == 1) {
+        pair_of(s, wp->data, area * st, st, q);
+        return 1;
+    }
     q->step = st;
     q->p0 = wp->data + (s->index[0] / in) * area * st + s->index[0] % in;
     q->w0 = s->weight[0];
@@ -604,10 +603,10 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
     size_t w = wp->w, h = wp->h, st = w * h, r, c, at;
     double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
     slice_pair marg, tot, cond, data;
-    (void)pair_of(s, wp->marg, h, 1, &marg);
-    (void)pair_of(s, wp->row_total, h, 1, &tot);
-    (void)pair_of(s, wp->cond, 2 * st, 2, &cond);
-    (void)pair_of(s, wp->data, 2 * st, 2, &data);
+    pair_of(s, wp->marg, h, 1, &marg);
+    pair_of(s, wp->row_total, h, 1, &tot);
+    pair_of(s, wp->cond, 2 * st, 2, &cond);
+    pair_of(s, wp->data, 2 * st, 2, &data);
     target = u[1];
     SEARCH(h, pmix(&marg, i), target, r);
     at = r * w;
@@ -682,10 +681,10 @@ static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double po
     double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
     size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty), at = r * w;
     slice_pair marg, tot, cond, data;
-    (void)pair_of(s, wp->marg, h, 1, &marg);
-    (void)pair_of(s, wp->row_total, h, 1, &tot);
-    (void)pair_of(s, wp->cond, 2 * st, 2, &cond);
-    (void)pair_of(s, wp->data, 2 * st, 2, &data);
+    pair_of(s, wp->marg, h, 1, &marg);
+    pair_of(s, wp->row_total, h, 1, &tot);
+    pair_of(s, wp->cond, 2 * st, 2, &cond);
+    pair_of(s, wp->data, 2 * st, 2, &data);
     r0 = pmix(&tot, r);
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
