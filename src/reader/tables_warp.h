@@ -132,9 +132,10 @@ LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *
 
 /* The microfacet normal m of a point um of the visible-normal square
  * (theta_m = u_theta^2 pi / 2, phi_m = (2 u_phi - 1) pi + phi_i) and wi
- * reflected about it into wo; returns wi.m. One mapping for the reader's
- * sampler and the writer's sample grid: the writer stores values at the
- * very directions the readers' warps produce. */
+ * reflected about it into wo; returns wi.m. The writer's sample grid
+ * (at phi_i = 0) stores values at the very directions the readers' warps
+ * produce; the reader's sampler uses the same mapping in the form below,
+ * which takes phi_i as a unit vector. */
 static inline double ll_tables_mirror(const double wi[3], const double um[2], double phi_i,
                                       double *theta_m, double m[3], double wo[3])
 {
