@@ -70,6 +70,7 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
+from .mitsuba_tables import TracedTables, read_tensor_file, tables_from_bsdf  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0
@@ -133,6 +134,7 @@ class _Table:
         self.n_bases = info.n_bases
         self.n_parameters = info.n_parameters
         self.n_channels = info.n_channels
+        self.n_wavelengths = info.n_wavelengths
         # "fourier" (a .bsdf) or "tables" (the `measured` format): only the
         # first has the series the traced path reads.
         self.format = self.storage.format
@@ -271,17 +273,14 @@ def _make_class():
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
             current = mi.variant()
-            if current.startswith("cuda"):
-                raise RuntimeError(
-                    "layerlab: the CUDA variant %s is not supported: the .bsdf evaluation runs "
-                    "on the CPU (liblayerlab) or is traced for LLVM only; use an LLVM variant "
-                    "such as llvm_ad_rgb, or scalar_rgb" % current)
             if not current.endswith("_rgb"):
                 raise RuntimeError(
-                    "layerlab: variant %s is not supported: .bsdf files hold RGB (or one "
-                    "channel); use llvm_ad_rgb or scalar_rgb" % current)
+                    "layerlab: variant %s is not supported: the plugin renders RGB (files of "
+                    "one channel as grey); use scalar_rgb, llvm_ad_rgb or cuda_ad_rgb (a "
+                    "spectral table file renders in the spectral variants through Mitsuba's "
+                    "own {\"type\": \"measured\"})" % current)
             if "filename" not in props:
-                raise ValueError('layerlab: the BSDF needs "filename" (a .bsdf file)')
+                raise ValueError('layerlab: the BSDF needs "filename" (a .bsdf or table file)')
             name = str(props["filename"])
             resolver = mi.file_resolver() if hasattr(mi, "file_resolver") else \
                 mi.Thread.thread().file_resolver()
@@ -289,28 +288,31 @@ def _make_class():
             self.m_filename = path
             self.m_table = _Table(path)
             self.m_jit = dr.is_jit_v(mi.Float)
-            tables = self.m_table.format == "tables"
-            default = "traced" if self.m_jit and not tables else "batch"
-            mode = str(props["mode"]) if "mode" in props else default
-            if mode not in ("traced", "batch"):
-                raise ValueError('layerlab: "mode" is "%s"; it must be "traced" or "batch"' % mode)
-            if mode == "traced" and tables:
-                raise ValueError(
-                    'layerlab: %s is a table file (the `measured` format): "mode": "traced" '
-                    "evaluates the Fourier series of a .bsdf, which it does not hold; use "
-                    '"mode": "batch" (the default for table files: the C reader\'s batch '
-                    'calls), or Mitsuba\'s own {"type": "measured"}' % path)
-            if mode == "traced" and not self.m_jit:
-                raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
-                                 'the scalar variants use "batch"')
-            self.m_mode = mode
             self.m_params = self._parameters(props, path)
             self.m_eta = self.m_table.eta
-            self.m_transmits = self.m_table.transmits()
-            both = Flags.FrontSide | Flags.BackSide
-            components = [Flags.GlossyReflection | both]
-            if self.m_transmits:
-                components.append(Flags.GlossyTransmission | both)
+            tables_file = self.m_table.format == "tables"
+            self.m_transmits = False if tables_file else self.m_table.transmits()
+            mode = self._choose_mode(props, path, current)
+            self.m_mode = mode
+            self.m_tables = None
+            self.m_tables_source = ""
+            if mode == "tables":
+                if tables_file:
+                    fields, self.m_tables_source = read_tensor_file(path), "the file"
+                else:
+                    tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
+                    cache = bool(props["cache"]) if "cache" in props else True
+                    fields, self.m_tables_source = tables_from_bsdf(
+                        self.m_table.handle, path, tolerance, cache)
+                self.m_tables = TracedTables(fields, path)
+                # One-sided reflection, as Mitsuba's `measured` (the format
+                # holds the reflection above the surface).
+                components = [Flags.GlossyReflection | Flags.FrontSide]
+            else:
+                both = Flags.FrontSide | Flags.BackSide
+                components = [Flags.GlossyReflection | both]
+                if self.m_transmits:
+                    components.append(Flags.GlossyTransmission | both)
             self.m_components = components
             flags = components[0]
             for c in components[1:]:
@@ -319,6 +321,55 @@ def _make_class():
             self.m_traced = TracedBSDF(self.m_table.handle) if mode == "traced" else None
             if self.m_jit and mode == "batch":
                 wavefront_mode()  # (enough when the scene is built on this thread)
+
+        def _choose_mode(self, props, path, variant):
+            """The mode asked for, or the default, checked against what the
+            file holds and the variant."""
+            table = self.m_table
+            tables_file = table.format == "tables"
+            spectral = tables_file and table.n_wavelengths > 0
+            # What the traced tables can render: an RGB table file, or an
+            # opaque, untextured .bsdf (made into tables on load).
+            if tables_file:
+                why_not = ("it is a spectral table file (its RGB is the C reader's "
+                           "conversion of the spectra)" if spectral else None)
+            elif table.n_bases > 1:
+                why_not = "it is textured (%s)" % ", ".join(table.names)
+            elif self.m_transmits:
+                why_not = "it transmits light (the table format holds reflection only)"
+            else:
+                why_not = None
+            if why_not is None:
+                default = "tables"
+            elif self.m_jit and not tables_file:
+                default = "traced"
+            else:
+                default = "batch"
+            mode = str(props["mode"]) if "mode" in props else default
+            if mode not in ("tables", "traced", "batch"):
+                raise ValueError('layerlab: "mode" is "%s"; it must be "tables", "traced" or '
+                                 '"batch"' % mode)
+            if mode == "tables" and why_not is not None:
+                raise ValueError('layerlab: "mode": "tables" cannot render %s: %s; use '
+                                 '"mode": "%s"' % (path, why_not, default))
+            if mode == "traced" and tables_file:
+                raise ValueError(
+                    'layerlab: %s is a table file (the `measured` format): "mode": "traced" '
+                    "evaluates the Fourier series of a .bsdf, which it does not hold; use "
+                    '"mode": "tables" (its default%s) or "batch" (the C reader\'s batch '
+                    'calls), or Mitsuba\'s own {"type": "measured"}'
+                    % (path, "" if not spectral else ' for RGB table files'))
+            if mode == "traced" and not self.m_jit:
+                raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
+                                 'the scalar variants use "tables" or "batch"')
+            if variant.startswith("cuda") and mode != "tables":
+                raise RuntimeError(
+                    'layerlab: "mode": "%s" is not supported in the CUDA variant %s: "batch" '
+                    'evaluates on the CPU (liblayerlab) and "traced" is written for the LLVM '
+                    'variants; %s, or use an LLVM variant such as llvm_ad_rgb'
+                    % (mode, variant, '"tables" renders this file' if why_not is None else
+                       '"tables" cannot render %s (%s)' % (path, why_not)))
+            return mode
 
         def _parameters(self, props, path):
             """One (name, float or texture) per textured parameter."""
@@ -426,7 +477,15 @@ def _make_class():
 
         # ---------------------------------------------------- BSDF interface
 
+        def _tables_enabled(self, ctx):
+            return ctx.is_enabled(Flags.GlossyReflection, 0)
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Color3f(0.0)
+                value, _ = self.m_tables.eval_pdf(si.wi, wo, active, True, False)
+                return mi.Color3f(*value)
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, False)[0]
             width, a, b = self._pairs(si, wo)
@@ -437,6 +496,10 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Float(0.0)
+                return self.m_tables.eval_pdf(si.wi, wo, active, False, True)[1]
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, True)[1]
             width, a, b = self._pairs(si, wo)
@@ -447,6 +510,13 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Color3f(0.0), mi.Float(0.0)
+                # One inversion of the VNDF warp for both (Mitsuba's
+                # `measured` evaluates them separately).
+                value, pdf = self.m_tables.eval_pdf(si.wi, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, True)
             width, a, b = self._pairs(si, wo)
@@ -457,7 +527,21 @@ def _make_class():
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0), dr.select(ok, p, 0.0)
 
+        def _tables_sample(self, ctx, si, sample2, active):
+            bs = dr.zeros(mi.BSDFSample3f)
+            if not self._tables_enabled(ctx):
+                return bs, mi.Color3f(0.0)
+            wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
+            bs.wo = wo
+            bs.pdf = pdf
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+Flags.GlossyReflection)
+            bs.sampled_component = mi.UInt32(0)
+            return bs, mi.Color3f(*weight)
+
         def sample(self, ctx, si, sample1, sample2, active=True):
+            if self.m_tables is not None:
+                return self._tables_sample(ctx, si, sample2, active)
             bs = dr.zeros(mi.BSDFSample3f)
             if self.m_traced is not None:
                 bs.wo, pdf, f, found = self._traced_sample(ctx, si, sample2, active)
@@ -496,9 +580,12 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s]"
+            tables = ""
+            if self.m_tables is not None:
+                tables = ", tables=%s (%s)" % (self.m_tables.describe(), self.m_tables_source)
+            return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s%s]"
                     % (self.m_filename, self.m_table.format, self.m_eta, self.m_transmits,
-                       self.m_mode,
+                       self.m_mode, tables,
                        "".join(", %s=%s" % (n, v) for n, v in self.m_params)))
 
     _CLASSES[variant] = LayerlabBSDF
