@@ -1,9 +1,11 @@
 """A Mitsuba 3 BSDF plugin for layerlab's .bsdf and table files.
 
     import mitsuba as mi
-    mi.set_variant("llvm_ad_rgb")      # or scalar_rgb
+    mi.set_variant("llvm_ad_rgb")      # or scalar_rgb, cuda_ad_rgb
     import layerlab.mitsuba            # registers the BSDF "layerlab"
     bsdf = mi.load_dict({"type": "layerlab", "filename": "gold.bsdf"})
+    # or a table file (llbuild --format measured, llconvert), or
+    # {"type": "layerlab", "filename": "glass.bsdf", "mode": "traced"}
 
 Conventions: the same as the pbrt-v3 shim (shims/pbrt-v3), i.e. the
 renderer convention of ll_bsdf.h, with Mitsuba's names mapped onto pbrt's:
@@ -16,29 +18,49 @@ here. Radiance mode multiplies transmitted values by the eta^2 of the
 interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
-Two implementations, chosen with the property "mode":
-- "traced" (the default in the LLVM variants for .bsdf files): eval, pdf and sample written
-  in Dr.Jit operations (layerlab.mitsuba_traced) over the file's tables,
-  uploaded once as Dr.Jit arrays (ll_bsdf_get_tables). They trace into
-  Mitsuba's rendering kernel, so its default symbolic (megakernel) mode
-  stays on; values and sampled directions are the C reader's up to float32
-  rounding.
-- "batch" (the only one in the scalar variants): one call of the C batch API
-  (ll_bsdf_eval_dir_batch, ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch)
-  per wavefront, through numpy copies of the Dr.Jit arrays. That needs
-  evaluated (wavefront) loops and calls: symbolic ones hold no values to
-  hand to C. Creating a batch-mode BSDF in an LLVM variant therefore turns
-  Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting of
-  Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
-  the same batch functions with one element.
-Table files (the `measured` format, docs/measured-format.md; ll_bsdf_info.format
-LL_BSDF_FORMAT_TABLES, BSDFStorage.format "tables") open like .bsdf files and
-render through "batch", the default for them in every variant: the traced
-path reads Fourier series (ll_bsdf_get_tables), which a table file does not
-hold, so "mode": "traced" on one is refused with that reason. (Mitsuba's own
-{"type": "measured"} reads the same file natively.)
-CUDA variants are refused: "batch" would move the directions to the CPU and
-back at every bounce, and "traced" is not tested there.
+Three implementations, chosen with the property "mode":
+- "tables" (the default for an RGB table file and for an opaque, untextured
+  .bsdf, in every RGB variant: scalar_rgb, llvm_ad_rgb, cuda_ad_rgb): warped
+  tables of the `measured` format (docs/measured-format.md), evaluated and
+  sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
+  (mi.MarginalContinuous2D*) and Dr.Jit operations (layerlab.mitsuba_tables),
+  so in the JIT variants they trace into the rendering kernel (the symbolic
+  megakernel stays on) and nothing runs on the CPU per call. A table file is
+  opened by the C reader first (ll_bsdf_open validates it), then its fields
+  are read with numpy. A .bsdf is made into tables when it is loaded
+  (ll_tables_write_from_bsdf, grid sizes chosen by the table tolerance,
+  property "tolerance", default the library's 0.05) and the table file is
+  kept in the user's cache directory (layerlab.user_cache_dir(), folder
+  "mitsuba-tables", named by a hash of the .bsdf's bytes, the tolerance and
+  the library), so only the first load pays for the writer's tolerance search
+  (seconds; about a minute for a coated metal); "cache": false makes it in a
+  temporary file instead, removed once read. The lobe is one-sided glossy
+  reflection (FrontSide), as in Mitsuba's `measured`: zero unless both
+  directions are above the surface. Values are the C reader's on the same
+  table file up to float32 rounding (python/tests/test_tables_mitsuba.py).
+  A spectral table file is not read by this mode (its RGB is the C reader's
+  conversion of the spectra): it renders through "batch".
+- "traced" (the default in the LLVM variants for the .bsdf files that
+  "tables" cannot hold: transmissive or textured ones): the Fourier series'
+  eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
+  over the file's tables, uploaded once as Dr.Jit arrays
+  (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
+  values and sampled directions are the C reader's up to float32 rounding.
+- "batch" (the default for those files in the scalar variants, and for
+  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
+  numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
+  and calls: symbolic ones hold no values to hand to C. Creating a
+  batch-mode BSDF in an LLVM variant therefore turns Dr.Jit's SymbolicLoops
+  and SymbolicCalls flags off (a global setting of Dr.Jit; Mitsuba then
+  renders in wavefront mode). The scalar variants call the same batch
+  functions with one element.
+"tables" on a file it cannot hold, and "traced" on a table file (which holds
+no Fourier series) are refused with the reason. The CUDA variants take
+"tables" only: "batch" would move the directions to the CPU and back at every
+bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
+"tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
+Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
 
 Textured files (more than one basis function): one property per textured
 parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
@@ -49,9 +71,10 @@ parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
 only the bases of non-zero weight are read. In "batch" mode the same weights
 are computed per element in numpy and passed with a stride.
 
-Lobes: glossy reflection on both sides, and glossy transmission when the
-file transmits (its eta differs from 1, or it has non-zero transmission
-values: a probe of directions across the surface at load time).
+Lobes ("traced" and "batch"): glossy reflection on both sides, and glossy
+transmission when the file transmits (its eta differs from 1, or it has
+non-zero transmission values: a probe of directions across the surface at
+load time).
 """
 
 import ctypes
@@ -267,7 +290,8 @@ def _make_class():
 
     class LayerlabBSDF(mi.BSDF):
         """Mitsuba BSDF "layerlab": {"type": "layerlab", "filename": "x.bsdf"},
-        optional "mode": "traced" | "batch", and for a textured file one
+        optional "mode": "tables" | "traced" | "batch", "tolerance" and
+        "cache" (tables made from a .bsdf), and for a textured file one
         property per parameter name (float or texture)."""
 
         def __init__(self, props):
