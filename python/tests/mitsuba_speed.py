@@ -23,7 +23,7 @@ against its .bsdf in "traced" mode. Renders alternate within each material
 (REPS rounds, LAYERLAB_SPEED_REPS, default 2; the smallest CPU time counts)
 and the ratios are of CPU times in this run. --pictures also writes the
 last renders as PNGs into OUTDIR (gold native and ours, coated gold Fourier
-and tables).
+and tables); --only=gold or --only=coated-gold measures one material.
 """
 
 import os
@@ -82,8 +82,11 @@ def tables(out, size, spps, pictures):
                                                      "mode": "traced"}),
                         ("layerlab tables", {"type": "layerlab", "filename": coated_table})],
     }
+    only = [a.split("=", 1)[1] for a in sys.argv if a.startswith("--only=")]
     for spp in spps:
         for material, entries in materials.items():
+            if only and material.replace(" ", "-") not in only:
+                continue
             scenes = [(name, S.scene(mi, bsdf, size, spp)) for name, bsdf in entries]
             times = {name: [] for name, _ in entries}
             for r in range(reps):
