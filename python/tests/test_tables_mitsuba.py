@@ -387,6 +387,73 @@ def test_traced_tables_are_the_c_reader(table, variant, timings):
         np.testing.assert_allclose(pdf[kept], mpdf[kept], rtol=1e-4)
 
 
+def _write_tensor_file(path, fields):
+    """A tensor file of the given numpy arrays (the container of docs/measured-format.md):
+    the field table, then each block at the next multiple of 8."""
+    import struct
+    codes = {np.dtype(np.uint8): 1, np.dtype(np.float32): 10}
+    names = list(fields)
+    table = b""
+    for name in names:
+        table += struct.pack("<H", len(name)) + name.encode() + struct.pack("<HB", 0, 0) + \
+            b"\0" * 8 + b"\0" * 8 * fields[name].ndim
+    offset = 18 + len(table)
+    header, blocks = b"", b""
+    for name in names:
+        a = np.ascontiguousarray(fields[name])
+        offset = (offset + 7) // 8 * 8
+        blocks += b"\0" * (offset - 18 - len(table) - len(blocks))
+        header += struct.pack("<H", len(name)) + name.encode() + \
+            struct.pack("<HBQ", a.ndim, codes[a.dtype], offset) + \
+            struct.pack("<%dQ" % a.ndim, *a.shape)
+        blocks += a.tobytes()
+        offset += a.nbytes
+    with open(path, "wb") as f:
+        f.write(b"tensor_file\0" + bytes([1, 0]) + struct.pack("<I", len(names)) + header +
+                blocks)
+
+
+def test_traced_tables_with_two_azimuths(table, tmp_path):
+    """An isotropic file may hold two incident azimuths (the readers then interpolate between
+    them): the same tables stored at phi_i = 0 and 2 pi, read by the C reader, by Mitsuba's
+    `measured` and by the traced path (which then takes the azimuth as a warp parameter, as
+    `measured` does), give the one-azimuth file's values, pdfs and directions."""
+    from layerlab.mitsuba_tables import read_tensor_file
+    try:
+        mi.set_variant("llvm_ad_rgb")
+    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
+        pytest.skip("llvm_ad_rgb: %s" % error)
+    import layerlab.mitsuba as llmi
+    llmi.register()
+    _, _, path = table
+    fields = read_tensor_file(path)
+    for key in ("vndf", "luminance", "rgb"):
+        fields[key] = np.concatenate([fields[key], fields[key]], axis=0)
+    fields["phi_i"] = np.array([0.0, 2.0 * np.pi], dtype=np.float32)
+    two = str(tmp_path / "two-azimuths.tab")
+    _write_tensor_file(two, fields)
+    ours = mi.load_dict({"type": "layerlab", "filename": two})
+    one = mi.load_dict({"type": "layerlab", "filename": path})
+    measured = mi.load_dict({"type": "measured", "filename": two})
+    assert "mode=tables" in str(ours)
+    rng = np.random.default_rng(31)
+    pairs = _plugin_pairs(rng, 2000)
+    us = rng.uniform(0, 1, (len(pairs), 2)).astype(np.float32).astype(np.float64)
+    c, wi, wo, f_c, pdf_c, swo_c, _ = _reference(two, pairs, us)
+    got = [_traced_table_calls(b, "llvm_ad_rgb", wi, wo, us) for b in (ours, one, measured)]
+    top = f_c[:, 1].max()
+    kept = f_c[:, 1] > 1e-3 * top
+    for k, what in ((0, "f"), (1, "pdf")):
+        want = f_c if k == 0 else pdf_c
+        for g in got:
+            np.testing.assert_allclose(g[k][kept], want[kept], rtol=1e-4, err_msg=what)
+    sampled = got[0][5] > 0
+    for g in got[1:]:
+        assert np.max(np.linalg.norm(g[4][sampled] - got[0][4][sampled], axis=1)) < 1e-5
+    assert np.percentile(np.linalg.norm(got[0][4][sampled] - swo_c[sampled], axis=1),
+                         99.9) < 1e-4
+
+
 def test_opaque_bsdf_renders_from_tables_made_on_load(table, tmp_path, testdata_dir):
     """An opaque, untextured .bsdf renders from tables by default: made on load by
     ll_tables_write_from_bsdf (grid sizes by the default tolerance), kept in the cache and
