@@ -94,7 +94,8 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
-from .mitsuba_tables import TracedTables, read_tensor_file, tables_from_bsdf  # noqa: E402
+from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
+from .tensor_file import read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0

@@ -5,8 +5,8 @@ Mitsuba 3's own `measured` BSDF does, so that in Mitsuba's default
 the scalar variants the same code runs on scalars.
 
 What is read: the `rgb` field of an RGB table file, opened first by the C
-reader (ll_bsdf_open validates every field, shape and value; this module
-then reads the same bytes with numpy). Isotropic files only (one or two
+reader (ll_bsdf_open validates every field, shape and value; the fields are
+then read with numpy, layerlab.tensor_file). Isotropic files only (one or two
 incident azimuths), as the C reader. A spectral file (`spectra`,
 `wavelengths`) is not read here: the C reader turns its spectra into linear
 sRGB (docs/measured-format.md, "Spectral files"), which this module would
@@ -35,13 +35,13 @@ import ctypes
 import hashlib
 import math
 import os
-import struct
 import tempfile
 
 import numpy as np
 
 from . import _native
 from ._native import lib
+from .tensor_file import TensorFileError, read_tensor_file
 
 import drjit as dr
 import mitsuba as mi
@@ -52,61 +52,6 @@ PI = math.pi
 TWO_OVER_PI = 2.0 / PI
 INV_TWO_PI = 1.0 / (2.0 * PI)
 TWO_PI_SQUARED = 2.0 * PI * PI
-
-_MAGIC = b"tensor_file\0"
-_DTYPES = {1: "u1", 2: "i1", 3: "<u2", 4: "<i2", 5: "<u4", 6: "<i4", 7: "<u8", 8: "<i8",
-           9: "<f2", 10: "<f4", 11: "<f8"}
-
-
-class TensorFileError(ValueError):
-    """A table file that does not parse (it changed after the C reader
-    validated it, or it is not one)."""
-
-
-def read_tensor_file(path):
-    """The fields of a tensor file as numpy arrays (copies), by name. The
-    container of docs/measured-format.md: magic, version 1.0, the field
-    table (name, rank, type code, offset, extents), dense row-major blocks.
-    Bounds are checked here too, though the file was validated by the C
-    reader when it was opened: a file replaced in between fails with a
-    message rather than reading past its end."""
-    with open(path, "rb") as f:
-        data = f.read()
-
-    def fail(what):
-        raise TensorFileError("%s: %s" % (path, what))
-
-    if len(data) < 18 or data[:12] != _MAGIC:
-        fail("not a tensor file (no `tensor_file` magic)")
-    major, minor = data[12], data[13]
-    if (major, minor) != (1, 0):
-        fail("version %d.%d, expected 1.0" % (major, minor))
-    (count,) = struct.unpack_from("<I", data, 14)
-    pos, fields = 18, {}
-    for _ in range(count):
-        if pos + 2 > len(data):
-            fail("truncated field table")
-        (length,) = struct.unpack_from("<H", data, pos)
-        pos += 2
-        if pos + length + 11 > len(data):
-            fail("truncated field table")
-        name = data[pos:pos + length].decode("utf-8", "replace")
-        pos += length
-        rank, code = struct.unpack_from("<HB", data, pos)
-        (offset,) = struct.unpack_from("<Q", data, pos + 3)
-        pos += 11
-        if code not in _DTYPES or pos + 8 * rank > len(data):
-            fail("field %s: bad type code or truncated extents" % name)
-        shape = struct.unpack_from("<%dQ" % rank, data, pos)
-        pos += 8 * rank
-        dtype = np.dtype(_DTYPES[code])
-        n = int(np.prod(shape, dtype=np.float64)) if rank else 1
-        if offset + n * dtype.itemsize > len(data):
-            fail("field %s: data block outside the file" % name)
-        fields[name] = np.frombuffer(data, dtype=dtype, count=n,
-                                     offset=offset).reshape(shape).copy()
-    return fields
-
 
 def _elevation(d):
     """The elevation of a unit vector, 2 asin(|d - n| / 2): stable at the

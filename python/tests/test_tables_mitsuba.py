@@ -387,38 +387,13 @@ def test_traced_tables_are_the_c_reader(table, variant, timings):
         np.testing.assert_allclose(pdf[kept], mpdf[kept], rtol=1e-4)
 
 
-def _write_tensor_file(path, fields):
-    """A tensor file of the given numpy arrays (the container of docs/measured-format.md):
-    the field table, then each block at the next multiple of 8."""
-    import struct
-    codes = {np.dtype(np.uint8): 1, np.dtype(np.float32): 10}
-    names = list(fields)
-    table = b""
-    for name in names:
-        table += struct.pack("<H", len(name)) + name.encode() + struct.pack("<HB", 0, 0) + \
-            b"\0" * 8 + b"\0" * 8 * fields[name].ndim
-    offset = 18 + len(table)
-    header, blocks = b"", b""
-    for name in names:
-        a = np.ascontiguousarray(fields[name])
-        offset = (offset + 7) // 8 * 8
-        blocks += b"\0" * (offset - 18 - len(table) - len(blocks))
-        header += struct.pack("<H", len(name)) + name.encode() + \
-            struct.pack("<HBQ", a.ndim, codes[a.dtype], offset) + \
-            struct.pack("<%dQ" % a.ndim, *a.shape)
-        blocks += a.tobytes()
-        offset += a.nbytes
-    with open(path, "wb") as f:
-        f.write(b"tensor_file\0" + bytes([1, 0]) + struct.pack("<I", len(names)) + header +
-                blocks)
-
-
 def test_traced_tables_with_two_azimuths(table, tmp_path):
     """An isotropic file may hold two incident azimuths (the readers then interpolate between
     them): the same tables stored at phi_i = 0 and 2 pi, read by the C reader, by Mitsuba's
     `measured` and by the traced path (which then takes the azimuth as a warp parameter, as
     `measured` does), give the one-azimuth file's values, pdfs and directions."""
-    from layerlab.mitsuba_tables import read_tensor_file
+    from layerlab.tensor_file import read_tensor_file
+    from test_tensor_file import write_tensor_file
     try:
         mi.set_variant("llvm_ad_rgb")
     except Exception as error:  # pragma: no cover - depends on the Mitsuba build
@@ -431,7 +406,7 @@ def test_traced_tables_with_two_azimuths(table, tmp_path):
         fields[key] = np.concatenate([fields[key], fields[key]], axis=0)
     fields["phi_i"] = np.array([0.0, 2.0 * np.pi], dtype=np.float32)
     two = str(tmp_path / "two-azimuths.tab")
-    _write_tensor_file(two, fields)
+    write_tensor_file(two, fields)
     ours = mi.load_dict({"type": "layerlab", "filename": two})
     one = mi.load_dict({"type": "layerlab", "filename": path})
     measured = mi.load_dict({"type": "measured", "filename": two})
