@@ -254,7 +254,8 @@ static void print_adding(FILE *out, const bench_store *s)
  * coated-gold, which that run did not measure (no pdf figure: 0 prints as
  * "-"); then commit cfeba3b, measured side by side with 2b5271c in one run
  * (5 alternating rounds of 2 x 10^5 calls, median, on a busy 2-core
- * machine). Order: eval_dir, pdf_dir, sample_dir (bench_eval_functions). */
+ * machine; docs/benchmarks.md, "Evaluation per call"). Order: eval_dir,
+ * pdf_dir, sample_dir (bench_eval_functions). */
 static const struct {
     const char *label, *source;
     double ns[3];

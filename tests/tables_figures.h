@@ -1,7 +1,7 @@
 /*
  * How far a table file (the `measured` format) is from the file it was
  * written from, per channel, in the figures its tolerance is stated in
- * (ll_tables.h, docs/measured-format.md):
+ * (ll_tables.h, docs/formats.md):
  *  - albedo: the integral of f cos over the reflected hemisphere for a
  *    viewer at elevations 0..85 degrees, each file by its own sampler,
  *    stratified (the weights f cos / pdf are nearly constant for both

@@ -12,7 +12,7 @@
 static const double g_alphas[N_ALPHA] = { 0.05, 0.1, 0.2, 0.3, 0.4 };
 
 /* A rough conductor (eta 0.2 + 3i) textured over alpha at g_alphas, at the
- * resolution of its sharpest sample (the measurement of bsdf-format.md,
+ * resolution of its sharpest sample (the measurement of formats.md,
  * "Weights for a point of parameter space"), and its layers for direct builds. */
 static ll_layer *g_layers[N_ALPHA];
 static ll_bsdf *g_conductor;
@@ -255,7 +255,7 @@ static void sample_points_match_direct_builds(void **state)
 }
 
 /* Between samples: within the errors documented in ll_bsdf.h and
- * bsdf-format.md for this grid (measured max 0.90 / mean 0.27 at 0.15,
+ * formats.md for this grid (measured max 0.90 / mean 0.27 at 0.15,
  * max 0.18 / mean 0.042 at 0.35; bench/basis_interp.c). */
 static void between_samples_within_documented_error(void **state)
 {

@@ -269,7 +269,7 @@ static void textured_round_trip(void **state)
 }
 
 /* The writer's bytes, read back by hand (independently of the reader):
- * the layout of bsdf-format.md, the nodes with their two zeros, the CDF's
+ * the layout of formats.md, the nodes with their two zeros, the CDF's
  * last entry = albedo / 2 pi, the default metadata. */
 static void byte_layout(void **state)
 {

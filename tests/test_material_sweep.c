@@ -534,7 +534,7 @@ static void sample_points_match_untextured(void **state)
 
 /* Between samples, a textured rough conductor built from the language
  * agrees with a direct build within the errors documented in
- * bsdf-format.md ("Weights for a point of parameter space": linear, max /
+ * formats.md ("Weights for a point of parameter space": linear, max /
  * mean relative error 0.90 / 0.27 at alpha 0.15 and 0.18 / 0.042 at
  * 0.35, measured on this material at this resolution). */
 static void between_samples_within_documented_error(void **state)

@@ -1,5 +1,5 @@
 /*
- * Table files of the `measured` format (ll_tables.h, docs/measured-format.md):
+ * Table files of the `measured` format (ll_tables.h, docs/formats.md):
  * written from the rough-gold .bsdf, read back through ll_bsdf_open, and
  * compared with the .bsdf they came from (albedo per channel and relative
  * errors of f where f cos matters: the error targets of the tables), the

@@ -1,5 +1,5 @@
 /*
- * Hostile table files (docs/measured-format.md): truncated, wrong magic or
+ * Hostile table files (docs/formats.md): truncated, wrong magic or
  * version, shapes that disagree, offsets outside the file, NaN and negative
  * values, absurd sizes, the max_bytes limit, random damage. Each gives a
  * clear error naming what is wrong, never a crash; the damaged bytes are a

@@ -1,5 +1,5 @@
 /*
- * Spectral table files (ll_tables.h, LL_TABLES_SPECTRAL; docs/measured-format.md):
+ * Spectral table files (ll_tables.h, LL_TABLES_SPECTRAL; docs/formats.md):
  * the upsampling of RGB albedos (its round trip), the conversion the
  * reader applies (reader/cie.h), the writer and reader together (the
  * layout [theta_i][wavelength][N][N] checked against single-wavelength

@@ -51,6 +51,74 @@ static void test_invert_of_sample(void **state)
     ll_warp2d_free(&wp);
 }
 
+/* One value of the first parameter, as an isotropic file's single
+ * incident azimuth: every look-up then reads at most two slices, which
+ * the warp handles without its general loops; sample and invert must
+ * still be each other's inverse, and the density that of eval. */
+static void test_two_slices(void **state)
+{
+    static double data[P1 * H * W];
+    static const double p0[1] = { 0.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
+    const double *params[2] = { p0, p1 };
+    size_t sizes[2] = { 1, P1 }, k;
+    uint64_t rng = 4242;
+    ll_warp2d wp;
+    ll_warp_slices s;
+    (void)state;
+    for (k = 0; k < P1 * H * W; ++k)
+        data[k] = 0.05 + ll_test_uniform(&rng) * (k % 3 == 0 ? 4.0 : 1.0);
+    assert_int_equal(ll_warp2d_init(&wp, W, H, 2, sizes, params, get_table, data, 1), LL_OK);
+    for (k = 0; k < 20000; ++k) {
+        double u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
+        /* Every fifth parameter on a node exactly: one slice of weight 1. */
+        double param[2] = { 0.0, k % 5 == 0 ? p1[k % P1] : -1.2 + 3.5 * ll_test_uniform(&rng) };
+        double pos[2], back[2], pdf_s, pdf_i;
+        ll_warp2d_slices(&wp, param, &s);
+        assert_true(s.count >= 1 && s.count <= 2);
+        ll_warp2d_sample(&wp, u, param, pos, &pdf_s);
+        ll_warp2d_invert(&wp, pos, param, back, &pdf_i);
+        assert_true(fabs(back[0] - u[0]) < 1e-7);
+        assert_true(fabs(back[1] - u[1]) < 1e-7);
+        assert_true(ll_test_close(pdf_s, pdf_i, 1e-9, 1e-12));
+        assert_true(ll_test_close(pdf_s, ll_warp2d_eval(&wp, pos, param), 1e-9, 1e-12));
+    }
+    ll_warp2d_free(&wp);
+}
+
+/* A warp without parameters whose rows are equal (an isotropic file's ndf
+ * and sigma) is read along x only: the bilinear value to rounding. */
+static void test_equal_rows(void **state)
+{
+    static double data[H * W];
+    ll_warp2d wp;
+    uint64_t rng = 77;
+    size_t x, y;
+    int k;
+    (void)state;
+    for (x = 0; x < W; ++x) {
+        double v = 0.1 + ll_test_uniform(&rng);
+        for (y = 0; y < H; ++y)
+            data[y * W + x] = v;
+    }
+    assert_int_equal(ll_warp2d_init(&wp, W, H, 0, NULL, NULL, get_table, data, 0), LL_OK);
+    assert_true(wp.rows_equal);
+    for (k = 0; k < 1000; ++k) {
+        double pos[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
+        assert_true(ll_test_close(ll_warp2d_eval_single(&wp, pos), ll_warp2d_eval(&wp, pos, NULL),
+                                  1e-14, 1e-15));
+    }
+    ll_warp2d_free(&wp);
+    data[W + 2] += 0.5;
+    assert_int_equal(ll_warp2d_init(&wp, W, H, 0, NULL, NULL, get_table, data, 0), LL_OK);
+    assert_false(wp.rows_equal);
+    for (k = 0; k < 1000; ++k) {
+        double pos[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
+        assert_true(ll_test_close(ll_warp2d_eval_single(&wp, pos), ll_warp2d_eval(&wp, pos, NULL),
+                                  1e-14, 1e-15));
+    }
+    ll_warp2d_free(&wp);
+}
+
 static void test_density_integrates_to_one(void **state)
 {
     ll_warp2d wp;
@@ -132,6 +200,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_invert_of_sample),
+        cmocka_unit_test(test_two_slices),
+        cmocka_unit_test(test_equal_rows),
         cmocka_unit_test(test_density_integrates_to_one),
         cmocka_unit_test(test_histogram),
         cmocka_unit_test(test_interpolation),

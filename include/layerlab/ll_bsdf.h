@@ -167,7 +167,7 @@ typedef struct ll_bsdf_info {
  * file's first bytes whatever its name:
  *  LL_BSDF_FORMAT_FOURIER: a .bsdf Fourier file (above);
  *  LL_BSDF_FORMAT_TABLES: a table file of the `measured` format of Mitsuba 3
- *    and pbrt-v4 (docs/measured-format.md; RGB or spectral, isotropic). A
+ *    and pbrt-v4 (docs/formats.md; RGB or spectral, isotropic). A
  *    spectral file (fields "spectra" and "wavelengths"; info.n_wavelengths
  *    says how many) is read as linear sRGB: its values taken as a
  *    reflectance lit by CIE D65 and seen by the CIE 1931 2-degree observer
@@ -221,7 +221,7 @@ LL_API ll_status ll_bsdf_get_parameter_name(const ll_bsdf *b, size_t p, const ch
  * sampled range are clamped to it. NULL params is valid only for an untextured file.
  * The weights are products of 1-D linear (hat) weights over each parameter's positions: >= 0,
  * at most two non-zero per parameter, summing to 1, so f stays >= 0 and sampling is exact;
- * evaluation and sampling visit only the non-zero ones (docs/bsdf-format.md, "Weights for a
+ * evaluation and sampling visit only the non-zero ones (docs/formats.md, "Weights for a
  * point of parameter space", compares them with Catmull-Rom weights). Thread-safe.
  * LL_ERROR_INVALID_ARGUMENT for NULL b or coeffs, NULL params for a textured file, or a
  * non-finite parameter value. */

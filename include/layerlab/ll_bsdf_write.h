@@ -40,7 +40,7 @@ typedef struct ll_bsdf_write_options {
  * surfaces or slabs (what the words and adding-doubling produce; a phase
  * function set on a layer but not yet expanded to a thickness is not a
  * BSDF). What is stored follows the original layerlab's BSDFStorage
- * (bsdf-format.md): the nodes with two mu = 0 nodes inserted, coefficients
+ * (formats.md): the nodes with two mu = 0 nodes inserted, coefficients
  * f_k |mu_o| as float32, the CDF for sampling; the default metadata is a
  * JSON description (generator, nodes, orders, channels, eta, alpha, error
  * goal). opts may be NULL (defaults). Atomic: the file is written to a

@@ -2,7 +2,7 @@
  * layerlab — warped tables in the `measured` format that Mitsuba 3 and
  * pbrt-v4 read natively (Dupuy & Jakob 2018, "An Adaptive Parameterization
  * for Efficient Material Acquisition and Rendering"; the format and what a
- * producer computes: docs/measured-format.md). ll_bsdf_open reads these
+ * producer computes: docs/formats.md). ll_bsdf_open reads these
  * files too (ll_bsdf.h, LL_BSDF_FORMAT_TABLES). Writing is in liblayerlab
  * only, not in liblayerlab_reader.
  *
@@ -107,7 +107,7 @@ typedef struct ll_tables_options {
  * table file) to path, atomically (a temporary file renamed over path when
  * complete; on failure path is untouched). The microfacet normal
  * distribution is derived from b's retro-reflection (the dominant
- * eigenvector of the operator of docs/measured-format.md, normalised so
+ * eigenvector of the operator of docs/formats.md, normalised so
  * that the integral of D cos over the hemisphere is 1), widened by a
  * Beckmann lobe of three times its roughness, one of its peak's width and a
  * uniform floor so that every part of the lobe gets grid cells; the values

@@ -1,9 +1,11 @@
 """A Mitsuba 3 BSDF plugin for layerlab's .bsdf and table files.
 
     import mitsuba as mi
-    mi.set_variant("llvm_ad_rgb")      # or scalar_rgb
+    mi.set_variant("llvm_ad_rgb")      # or scalar_rgb, cuda_ad_rgb
     import layerlab.mitsuba            # registers the BSDF "layerlab"
     bsdf = mi.load_dict({"type": "layerlab", "filename": "gold.bsdf"})
+    # or a table file (llbuild --format measured, llconvert), or
+    # {"type": "layerlab", "filename": "glass.bsdf", "mode": "traced"}
 
 Conventions: the same as the pbrt-v3 shim (shims/pbrt-v3), i.e. the
 renderer convention of ll_bsdf.h, with Mitsuba's names mapped onto pbrt's:
@@ -16,29 +18,48 @@ here. Radiance mode multiplies transmitted values by the eta^2 of the
 interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
-Two implementations, chosen with the property "mode":
-- "traced" (the default in the LLVM variants for .bsdf files): eval, pdf and sample written
-  in Dr.Jit operations (layerlab.mitsuba_traced) over the file's tables,
-  uploaded once as Dr.Jit arrays (ll_bsdf_get_tables). They trace into
-  Mitsuba's rendering kernel, so its default symbolic (megakernel) mode
-  stays on; values and sampled directions are the C reader's up to float32
-  rounding.
-- "batch" (the only one in the scalar variants): one call of the C batch API
-  (ll_bsdf_eval_dir_batch, ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch)
-  per wavefront, through numpy copies of the Dr.Jit arrays. That needs
-  evaluated (wavefront) loops and calls: symbolic ones hold no values to
-  hand to C. Creating a batch-mode BSDF in an LLVM variant therefore turns
-  Dr.Jit's SymbolicLoops and SymbolicCalls flags off (a global setting of
-  Dr.Jit; Mitsuba then renders in wavefront mode). The scalar variants call
-  the same batch functions with one element.
-Table files (the `measured` format, docs/measured-format.md; ll_bsdf_info.format
-LL_BSDF_FORMAT_TABLES, BSDFStorage.format "tables") open like .bsdf files and
-render through "batch", the default for them in every variant: the traced
-path reads Fourier series (ll_bsdf_get_tables), which a table file does not
-hold, so "mode": "traced" on one is refused with that reason. (Mitsuba's own
-{"type": "measured"} reads the same file natively.)
-CUDA variants are refused: "batch" would move the directions to the CPU and
-back at every bounce, and "traced" is not tested there.
+Three implementations, chosen with the property "mode":
+- "tables" (the default for an RGB table file and for an opaque, untextured
+  .bsdf, in every RGB variant: scalar_rgb, llvm_ad_rgb, cuda_ad_rgb): warped
+  tables of the `measured` format (docs/formats.md), evaluated and
+  sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
+  (mi.MarginalContinuous2D*) and Dr.Jit operations (layerlab.mitsuba_tables),
+  so in the JIT variants they trace into the rendering kernel (the symbolic
+  megakernel stays on) and nothing runs on the CPU per call. A table file is
+  opened by the C reader first (ll_bsdf_open validates it), then its fields
+  are read with numpy. A .bsdf is made into tables when it is loaded
+  (ll_tables_write_from_bsdf, grid sizes chosen by the table tolerance,
+  property "tolerance", default the library's 0.05) and the table file is
+  kept in the user's cache directory (layerlab.user_cache_dir(), folder
+  "mitsuba-tables", named by a hash of the .bsdf's bytes, the tolerance and
+  the library), so only the first load pays for the writer's tolerance search (docs/benchmarks.md has its cost); "cache": false makes it in a
+  temporary file instead, removed once read. The lobe is one-sided glossy
+  reflection (FrontSide), as in Mitsuba's `measured`: zero unless both
+  directions are above the surface. Values are the C reader's on the same
+  table file up to float32 rounding (python/tests/test_tables_mitsuba.py).
+  A spectral table file is not read by this mode (its RGB is the C reader's
+  conversion of the spectra): it renders through "batch".
+- "traced" (the default in the LLVM variants for the .bsdf files that
+  "tables" cannot hold: transmissive or textured ones): the Fourier series'
+  eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
+  over the file's tables, uploaded once as Dr.Jit arrays
+  (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
+  values and sampled directions are the C reader's up to float32 rounding.
+- "batch" (the default for those files in the scalar variants, and for
+  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
+  numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
+  and calls: symbolic ones hold no values to hand to C. Creating a
+  batch-mode BSDF in an LLVM variant therefore turns Dr.Jit's SymbolicLoops
+  and SymbolicCalls flags off (a global setting of Dr.Jit; Mitsuba then
+  renders in wavefront mode). The scalar variants call the same batch
+  functions with one element.
+"tables" on a file it cannot hold, and "traced" on a table file (which holds
+no Fourier series) are refused with the reason. The CUDA variants take
+"tables" only: "batch" would move the directions to the CPU and back at every
+bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
+"tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
+Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
 
 Textured files (more than one basis function): one property per textured
 parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
@@ -49,9 +70,10 @@ parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
 only the bases of non-zero weight are read. In "batch" mode the same weights
 are computed per element in numpy and passed with a stride.
 
-Lobes: glossy reflection on both sides, and glossy transmission when the
-file transmits (its eta differs from 1, or it has non-zero transmission
-values: a probe of directions across the surface at load time).
+Lobes ("traced" and "batch"): glossy reflection on both sides, and glossy
+transmission when the file transmits (its eta differs from 1, or it has
+non-zero transmission values: a probe of directions across the surface at
+load time).
 """
 
 import ctypes
@@ -70,6 +92,8 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
+from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
+from .tensor_file import read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0
@@ -133,6 +157,7 @@ class _Table:
         self.n_bases = info.n_bases
         self.n_parameters = info.n_parameters
         self.n_channels = info.n_channels
+        self.n_wavelengths = info.n_wavelengths
         # "fourier" (a .bsdf) or "tables" (the `measured` format): only the
         # first has the series the traced path reads.
         self.format = self.storage.format
@@ -265,23 +290,21 @@ def _make_class():
 
     class LayerlabBSDF(mi.BSDF):
         """Mitsuba BSDF "layerlab": {"type": "layerlab", "filename": "x.bsdf"},
-        optional "mode": "traced" | "batch", and for a textured file one
+        optional "mode": "tables" | "traced" | "batch", "tolerance" and
+        "cache" (tables made from a .bsdf), and for a textured file one
         property per parameter name (float or texture)."""
 
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
             current = mi.variant()
-            if current.startswith("cuda"):
-                raise RuntimeError(
-                    "layerlab: the CUDA variant %s is not supported: the .bsdf evaluation runs "
-                    "on the CPU (liblayerlab) or is traced for LLVM only; use an LLVM variant "
-                    "such as llvm_ad_rgb, or scalar_rgb" % current)
             if not current.endswith("_rgb"):
                 raise RuntimeError(
-                    "layerlab: variant %s is not supported: .bsdf files hold RGB (or one "
-                    "channel); use llvm_ad_rgb or scalar_rgb" % current)
+                    "layerlab: variant %s is not supported: the plugin renders RGB (files of "
+                    "one channel as grey); use scalar_rgb, llvm_ad_rgb or cuda_ad_rgb (a "
+                    "spectral table file renders in the spectral variants through Mitsuba's "
+                    "own {\"type\": \"measured\"})" % current)
             if "filename" not in props:
-                raise ValueError('layerlab: the BSDF needs "filename" (a .bsdf file)')
+                raise ValueError('layerlab: the BSDF needs "filename" (a .bsdf or table file)')
             name = str(props["filename"])
             resolver = mi.file_resolver() if hasattr(mi, "file_resolver") else \
                 mi.Thread.thread().file_resolver()
@@ -289,28 +312,31 @@ def _make_class():
             self.m_filename = path
             self.m_table = _Table(path)
             self.m_jit = dr.is_jit_v(mi.Float)
-            tables = self.m_table.format == "tables"
-            default = "traced" if self.m_jit and not tables else "batch"
-            mode = str(props["mode"]) if "mode" in props else default
-            if mode not in ("traced", "batch"):
-                raise ValueError('layerlab: "mode" is "%s"; it must be "traced" or "batch"' % mode)
-            if mode == "traced" and tables:
-                raise ValueError(
-                    'layerlab: %s is a table file (the `measured` format): "mode": "traced" '
-                    "evaluates the Fourier series of a .bsdf, which it does not hold; use "
-                    '"mode": "batch" (the default for table files: the C reader\'s batch '
-                    'calls), or Mitsuba\'s own {"type": "measured"}' % path)
-            if mode == "traced" and not self.m_jit:
-                raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
-                                 'the scalar variants use "batch"')
-            self.m_mode = mode
             self.m_params = self._parameters(props, path)
             self.m_eta = self.m_table.eta
-            self.m_transmits = self.m_table.transmits()
-            both = Flags.FrontSide | Flags.BackSide
-            components = [Flags.GlossyReflection | both]
-            if self.m_transmits:
-                components.append(Flags.GlossyTransmission | both)
+            tables_file = self.m_table.format == "tables"
+            self.m_transmits = False if tables_file else self.m_table.transmits()
+            mode = self._choose_mode(props, path, current)
+            self.m_mode = mode
+            self.m_tables = None
+            self.m_tables_source = ""
+            if mode == "tables":
+                if tables_file:
+                    fields, self.m_tables_source = read_tensor_file(path), "the file"
+                else:
+                    tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
+                    cache = bool(props["cache"]) if "cache" in props else True
+                    fields, self.m_tables_source = tables_from_bsdf(
+                        self.m_table.handle, path, tolerance, cache)
+                self.m_tables = TracedTables(fields, path)
+                # One-sided reflection, as Mitsuba's `measured` (the format
+                # holds the reflection above the surface).
+                components = [Flags.GlossyReflection | Flags.FrontSide]
+            else:
+                both = Flags.FrontSide | Flags.BackSide
+                components = [Flags.GlossyReflection | both]
+                if self.m_transmits:
+                    components.append(Flags.GlossyTransmission | both)
             self.m_components = components
             flags = components[0]
             for c in components[1:]:
@@ -319,6 +345,55 @@ def _make_class():
             self.m_traced = TracedBSDF(self.m_table.handle) if mode == "traced" else None
             if self.m_jit and mode == "batch":
                 wavefront_mode()  # (enough when the scene is built on this thread)
+
+        def _choose_mode(self, props, path, variant):
+            """The mode asked for, or the default, checked against what the
+            file holds and the variant."""
+            table = self.m_table
+            tables_file = table.format == "tables"
+            spectral = tables_file and table.n_wavelengths > 0
+            # What the traced tables can render: an RGB table file, or an
+            # opaque, untextured .bsdf (made into tables on load).
+            if tables_file:
+                why_not = ("it is a spectral table file (its RGB is the C reader's "
+                           "conversion of the spectra)" if spectral else None)
+            elif table.n_bases > 1:
+                why_not = "it is textured (%s)" % ", ".join(table.names)
+            elif self.m_transmits:
+                why_not = "it transmits light (the table format holds reflection only)"
+            else:
+                why_not = None
+            if why_not is None:
+                default = "tables"
+            elif self.m_jit and not tables_file:
+                default = "traced"
+            else:
+                default = "batch"
+            mode = str(props["mode"]) if "mode" in props else default
+            if mode not in ("tables", "traced", "batch"):
+                raise ValueError('layerlab: "mode" is "%s"; it must be "tables", "traced" or '
+                                 '"batch"' % mode)
+            if mode == "tables" and why_not is not None:
+                raise ValueError('layerlab: "mode": "tables" cannot render %s: %s; use '
+                                 '"mode": "%s"' % (path, why_not, default))
+            if mode == "traced" and tables_file:
+                raise ValueError(
+                    'layerlab: %s is a table file (the `measured` format): "mode": "traced" '
+                    "evaluates the Fourier series of a .bsdf, which it does not hold; use "
+                    '"mode": "tables" (its default%s) or "batch" (the C reader\'s batch '
+                    'calls), or Mitsuba\'s own {"type": "measured"}'
+                    % (path, "" if not spectral else ' for RGB table files'))
+            if mode == "traced" and not self.m_jit:
+                raise ValueError('layerlab: "mode": "traced" needs a JIT variant (llvm_ad_rgb); '
+                                 'the scalar variants use "tables" or "batch"')
+            if variant.startswith("cuda") and mode != "tables":
+                raise RuntimeError(
+                    'layerlab: "mode": "%s" is not supported in the CUDA variant %s: "batch" '
+                    'evaluates on the CPU (liblayerlab) and "traced" is written for the LLVM '
+                    'variants; %s, or use an LLVM variant such as llvm_ad_rgb'
+                    % (mode, variant, '"tables" renders this file' if why_not is None else
+                       '"tables" cannot render %s (%s)' % (path, why_not)))
+            return mode
 
         def _parameters(self, props, path):
             """One (name, float or texture) per textured parameter."""
@@ -426,7 +501,15 @@ def _make_class():
 
         # ---------------------------------------------------- BSDF interface
 
+        def _tables_enabled(self, ctx):
+            return ctx.is_enabled(Flags.GlossyReflection, 0)
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Color3f(0.0)
+                value, _ = self.m_tables.eval_pdf(si.wi, wo, active, True, False)
+                return mi.Color3f(*value)
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, False)[0]
             width, a, b = self._pairs(si, wo)
@@ -437,6 +520,10 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Float(0.0)
+                return self.m_tables.eval_pdf(si.wi, wo, active, False, True)[1]
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, True)[1]
             width, a, b = self._pairs(si, wo)
@@ -447,6 +534,13 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_tables is not None:
+                if not self._tables_enabled(ctx):
+                    return mi.Color3f(0.0), mi.Float(0.0)
+                # One inversion of the VNDF warp for both (Mitsuba's
+                # `measured` evaluates them separately).
+                value, pdf = self.m_tables.eval_pdf(si.wi, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_traced is not None:
                 return self._traced_eval_pdf(ctx, si, wo, active, True)
             width, a, b = self._pairs(si, wo)
@@ -457,7 +551,21 @@ def _make_class():
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0), dr.select(ok, p, 0.0)
 
+        def _tables_sample(self, ctx, si, sample2, active):
+            bs = dr.zeros(mi.BSDFSample3f)
+            if not self._tables_enabled(ctx):
+                return bs, mi.Color3f(0.0)
+            wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
+            bs.wo = wo
+            bs.pdf = pdf
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+Flags.GlossyReflection)
+            bs.sampled_component = mi.UInt32(0)
+            return bs, mi.Color3f(*weight)
+
         def sample(self, ctx, si, sample1, sample2, active=True):
+            if self.m_tables is not None:
+                return self._tables_sample(ctx, si, sample2, active)
             bs = dr.zeros(mi.BSDFSample3f)
             if self.m_traced is not None:
                 bs.wo, pdf, f, found = self._traced_sample(ctx, si, sample2, active)
@@ -496,9 +604,12 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s]"
+            tables = ""
+            if self.m_tables is not None:
+                tables = ", tables=%s (%s)" % (self.m_tables.describe(), self.m_tables_source)
+            return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s%s]"
                     % (self.m_filename, self.m_table.format, self.m_eta, self.m_transmits,
-                       self.m_mode,
+                       self.m_mode, tables,
                        "".join(", %s=%s" % (n, v) for n, v in self.m_params)))
 
     _CLASSES[variant] = LayerlabBSDF

@@ -373,7 +373,7 @@ class BSDFStorage:
     @property
     def format(self):
         """Which format the file is in: "fourier" (a .bsdf) or "tables" (the
-        `measured` format of Mitsuba 3 and pbrt-v4, docs/measured-format.md)"""
+        `measured` format of Mitsuba 3 and pbrt-v4, docs/formats.md)"""
         return "tables" if self._info.format == 1 else "fourier"
 
     @property

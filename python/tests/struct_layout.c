@@ -74,6 +74,19 @@ int main(void)
     FIELD(ll_bsdf_tables, parameter_counts);
     FIELD(ll_bsdf_tables, parameter_positions);
 
+    STRUCT(ll_tables_options, LL_TABLES_OPTIONS_INIT);
+    FIELD(ll_tables_options, struct_size);
+    FIELD(ll_tables_options, n_theta_i);
+    FIELD(ll_tables_options, vndf_size);
+    FIELD(ll_tables_options, sample_size);
+    FIELD(ll_tables_options, format);
+    FIELD(ll_tables_options, description);
+    FIELD(ll_tables_options, wavelengths);
+    FIELD(ll_tables_options, n_wavelengths);
+    FIELD(ll_tables_options, spectrum);
+    FIELD(ll_tables_options, spectrum_user);
+    FIELD(ll_tables_options, tolerance);
+
     STRUCT(ll_build_options, LL_BUILD_OPTIONS_INIT);
     FIELD(ll_build_options, struct_size);
     FIELD(ll_build_options, n_nodes);

@@ -9,7 +9,6 @@ Needs mitsuba (python/tests/run.sh installs it) and, for the LLVM variant,
 LLVM 19 (scripts/deps.sh test). Skipped without mitsuba.
 """
 
-import math
 import os
 
 import numpy as np
@@ -221,7 +220,7 @@ def test_traced_sampling_of_a_coated_file(files):
     _use("llvm_ad_rgb")
     path = files["coated"]
     wis, wos, us = _inputs(64)
-    bsdf = mi.load_dict({"type": "layerlab", "filename": path})
+    bsdf = mi.load_dict({"type": "layerlab", "filename": path, "mode": "traced"})
     _check_against_c(bsdf, _Table(path), wis, wos, us, "llvm_ad_rgb", 3e-3, 3e-4,
                      name_of_file=path)
 
@@ -270,40 +269,8 @@ def test_missing_file_is_a_clear_error(tmp_path):
         mi.load_dict({"type": "layerlab", "filename": str(tmp_path / "nothing.bsdf")})
 
 
-def _sq_stats(a, b, scale):
-    """Mean of the squared differences over scale, and the standard error
-    of that mean (pixels are independent samples)."""
-    sq = ((a - b) ** 2).ravel()
-    return np.mean(sq) / scale, np.std(sq) / math.sqrt(sq.size) / scale
-
-
-# Standard errors of the excess that the check allows. The per-pixel
-# formula underestimates the spread of squared differences of rendered
-# pixels, whose distribution has a heavy tail (rare bright paths through
-# the glass): at 16 spp over 4 seed sets the glass's excess spread about 2.7
-# times its formula error. 10 leaves room for that: the matching BSDFs stay
-# below 0.15 of the threshold (gold over 3 seed sets at 64 spp, glass over 6
-# at 32 spp), and the check keeps its power (gold at alpha 0.35 for 0.2
-# lands at 1.5-1.6 times the threshold over 3 seed sets, alpha 0.4 at 1.7).
-SIGMAS = 10
-BIAS_ALLOWANCE = 0.015  # relative RMS of discretisation error tolerated
-
-
-def _check_within_noise(native, ours, native2, ours2):
-    """D^2 = mean (ours - native)^2 estimates noise_native + noise_ours +
-    bias^2; the two same-BSDF pairs estimate 2 noise_native and
-    2 noise_ours. The excess E = D^2 - (N_native^2 + N_ours^2) / 2 (all
-    relative to the native image's mean square) estimates bias^2. Pass when
-    E < SIGMAS standard errors + BIAS_ALLOWANCE^2. Returns (relative RMSE,
-    noise-only RMSE, E, threshold)."""
-    scale = np.mean(native ** 2)
-    d2, sd = _sq_stats(ours, native, scale)
-    n2, sn = _sq_stats(native2, native, scale)
-    l2, sl = _sq_stats(ours2, ours, scale)
-    excess = d2 - (n2 + l2) / 2
-    sigma = math.sqrt(sd ** 2 + (sn ** 2 + sl ** 2) / 4)
-    return (math.sqrt(d2), math.sqrt((n2 + l2) / 2), excess,
-            SIGMAS * sigma + BIAS_ALLOWANCE ** 2)
+# The check that two renders agree within the noise: mitsuba_scenes.check_within_noise.
+_check_within_noise = S.check_within_noise
 
 
 def _render_in_subprocess(path, mode, spp, seeds):
@@ -344,15 +311,20 @@ def renders(files):
     for kind in ("conductor", "dielectric"):
         spp = SPP[kind]
         native = S.scene(mi, S.native_bsdf(kind), SIZE, spp)
-        ours = S.scene(mi, {"type": "layerlab", "filename": files[kind]}, SIZE, spp)
+        ours = S.scene(mi, {"type": "layerlab", "filename": files[kind], "mode": "traced"},
+                       SIZE, spp)
         out[kind] = [S.render(mi, native, spp, 0), S.render(mi, ours, spp, 2),
                      S.render(mi, native, spp, 1), S.render(mi, ours, spp, 3)]
+    # The default mode on the gold .bsdf: tables made on load, traced.
+    spp = SPP["conductor"]
+    tables = S.scene(mi, {"type": "layerlab", "filename": files["conductor"]}, SIZE, spp)
+    out["tables"] = [S.render(mi, tables, spp, 9), S.render(mi, tables, spp, 10)]
     # Mitsuba's own `measured` on our table file of the same gold.
     spp = SPP["conductor"]
     measured = S.scene(mi, {"type": "measured", "filename": files["table"]}, SIZE, spp)
     out["measured"] = [S.render(mi, measured, spp, 7), S.render(mi, measured, spp, 8)]
-    wrong = S.scene(mi, {"type": "layerlab", "filename": files["wrong"]}, SIZE,
-                    SPP["conductor"])
+    wrong = S.scene(mi, {"type": "layerlab", "filename": files["wrong"], "mode": "traced"},
+                    SIZE, SPP["conductor"])
     out["wrong"] = [S.render(mi, wrong, SPP["conductor"], 4),
                     S.render(mi, wrong, SPP["conductor"], 5)]
     # The textured file at a sample value of its parameter, and the
@@ -360,7 +332,8 @@ def renders(files):
     spp = SPP["conductor"]
     for key, bsdf in (("textured", {"type": "layerlab", "filename": files["textured"],
                                     "alpha": 0.2}),
-                      ("reference", {"type": "layerlab", "filename": files["reference"]})):
+                      ("reference", {"type": "layerlab", "filename": files["reference"],
+                                     "mode": "traced"})):
         out[key] = S.render(mi, S.scene(mi, bsdf, SIZE, spp), spp, 6)
     return out
 
@@ -408,6 +381,43 @@ def test_measured_on_our_table_matches_native_within_noise(renders, timings):
         excess / limit, "")
     assert excess < limit, ("measured on our table: relative RMSE %.4f vs %.4f from noise; "
                             "excess %.3g > %.3g" % (d, noise, excess, limit))
+
+
+def test_tables_made_on_load_render_as_native_within_noise(renders, timings):
+    """The default mode on the gold .bsdf (tables made on load, sizes by the default table
+    tolerance, traced) renders as Mitsuba's native roughconductor, within the noise."""
+    native, _, native2, _ = renders["conductor"]
+    ours, ours2 = renders["tables"]
+    d, noise, excess, limit = _check_within_noise(native, ours, native2, ours2)
+    timings["mitsuba gold, tables made on load: relative RMSE vs native"] = (d, "")
+    timings["mitsuba gold, tables made on load: squared-bias estimate / limit"] = (
+        excess / limit, "")
+    assert excess < limit, ("tables made on load: relative RMSE %.4f vs %.4f from noise; "
+                            "excess %.3g > %.3g" % (d, noise, excess, limit))
+
+
+def test_default_modes(files):
+    """Which path a file takes by default, and what is refused: an opaque untextured .bsdf
+    and a table file render from tables in every RGB variant; the glass (it transmits) and
+    a textured file keep the Fourier path ("traced" in LLVM, "batch" in scalar) and refuse
+    "tables" with the reason."""
+    _use("scalar_rgb")
+    assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
+                                              "filename": files["conductor"]}))
+    assert "mode=batch" in str(mi.load_dict({"type": "layerlab",
+                                             "filename": files["dielectric"]}))
+    with pytest.raises(Exception, match="transmits"):
+        mi.load_dict({"type": "layerlab", "filename": files["dielectric"], "mode": "tables"})
+    _use("llvm_ad_rgb")
+    assert "mode=traced" in str(mi.load_dict({"type": "layerlab",
+                                              "filename": files["dielectric"]}))
+    assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
+                                              "filename": files["table"]}))
+    with pytest.raises(Exception, match="textured"):
+        mi.load_dict({"type": "layerlab", "filename": files["textured"], "alpha": 0.2,
+                      "mode": "tables"})
+    assert "mode=traced" in str(mi.load_dict({"type": "layerlab",
+                                              "filename": files["textured"], "alpha": 0.2}))
 
 
 def test_render_of_another_roughness_is_told_apart(renders, timings):

@@ -33,6 +33,9 @@ try:
     # The traced Mitsuba path's view of ll_bsdf_tables (it needs Mitsuba 3).
     from layerlab.mitsuba_traced import Tables
     STRUCTS["ll_bsdf_tables"] = Tables
+    # and the table path's view of ll_tables_options (tables made on load)
+    from layerlab.mitsuba_tables import TablesOptions
+    STRUCTS["ll_tables_options"] = TablesOptions
 except ImportError:
     pass
 

@@ -1,6 +1,6 @@
 /*
  * The basis weights of a textured .bsdf file for one point of parameter
- * space (ll_bsdf_basis_coefficients; bsdf-format.md, "Weights for a point
+ * space (ll_bsdf_basis_coefficients; formats.md, "Weights for a point
  * of parameter space").
  *
  * A textured file stores one BSDF per point of a grid over its parameters
@@ -9,7 +9,7 @@
  * of 1-D piecewise-linear ("hat") weights over each parameter's sample
  * positions. Linear and not Catmull-Rom (the node spline of the cosines,
  * numerics/spline.c), after measuring both (bench/basis_interp.c, numbers
- * in docs/bsdf-format.md): on a rough conductor and a dielectric textured
+ * in docs/formats.md): on a rough conductor and a dielectric textured
  * over alpha, Catmull-Rom's mean error is 25-50% lower but its maximum is
  * higher in 2 of 8 cases and, above all, its negative weights can make f
  * and the combined CDF rows negative or decreasing between samples, which

@@ -3,7 +3,7 @@
  * stored, and the sampling density in mu_o where a row was flattened.
  *
  * A row is the running integral over mu_o of the luminance a_0's
- * Catmull-Rom spline (bsdf-format.md, "CDF"). That spline can be negative:
+ * Catmull-Rom spline (formats.md, "CDF"). That spline can be negative:
  * the original layerlab's writer (BSDFStorage::fromLayerGeneral) sums the
  * segment integrals as they come, so a row dips wherever a_0 overshoots
  * below 0 next to a zero. Its coated-gold file (198 nodes) dips by 3.1e-4
@@ -33,7 +33,7 @@
 #define LL_BSDF_CDF_ROUNDING (1.0 / 1048576.0)
 
 /* The spline integral of a_0 over segment j of row values f (stride nb),
- * as the writers compute it (bsdf-format.md, "CDF"), and its rounding
+ * as the writers compute it (formats.md, "CDF"), and its rounding
  * bound: what a float32 evaluation of that integral over float32 nodes
  * can be off by.
  *

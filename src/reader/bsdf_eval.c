@@ -1,7 +1,7 @@
 /*
  * Evaluating an opened .bsdf file in the layer convention (the file's own
  * axes; ll_bsdf.h): f and the sampling density, as pbrt-v3's FourierBSDF::f
- * and ::Pdf compute them (Jakob et al. 2014, sec. 7; bsdf-format.md,
+ * and ::Pdf compute them (Jakob et al. 2014, sec. 7; formats.md,
  * "Evaluation").
  */
 #include "reader/bsdf_internal.h"
@@ -166,7 +166,7 @@ void ll_bsdf_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi
         ll_measured_eval_cos(b, mu_i, mu_o, cos_phi, basis, extra_scale, rgb);
         return;
     }
-    /* The stored series is f * |mu_o| (bsdf-format.md); at mu_o = 0 the
+    /* The stored series is f * |mu_o| (formats.md); at mu_o = 0 the
      * value is taken as 0, as pbrt-v3 does. */
     if (mu_o == 0.0 || !ll_bsdf_gather(b, mu_i, mu_o, basis, &s) || s.count == 0)
         return;

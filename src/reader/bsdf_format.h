@@ -1,5 +1,5 @@
 /*
- * The .bsdf file layout ("SCATFUN" version 1; docs/bsdf-format.md),
+ * The .bsdf file layout ("SCATFUN" version 1; docs/formats.md),
  * shared by the writer and the reader, and explicit little-endian
  * (de)serialisation of its 32-bit fields: the file is never read or written
  * by casting a struct over bytes, so the code is independent of the host's

@@ -2,7 +2,7 @@
  * Names of a textured file's parameters (ll_bsdf_get_parameter_name), read
  * from its metadata when the file is opened.
  *
- * The format itself has no names (docs/bsdf-format.md, "Metadata": free
+ * The format itself has no names (docs/formats.md, "Metadata": free
  * text). layerlab's textured builds write a JSON object whose top-level key
  * "parameters" is an array of the axis names as strings, in file order
  * (`["coat.alpha", "base.alpha"]`). The metadata comes from the file, so it

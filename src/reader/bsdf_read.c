@@ -35,7 +35,7 @@ typedef struct bsdf_header {
     float eta, alpha[2];
 } bsdf_header;
 
-/* Byte offset of each part (bsdf-format.md, "Layout"). */
+/* Byte offset of each part (formats.md, "Layout"). */
 typedef struct bsdf_layout {
     size_t nodes, param_counts, param_positions, cdf, table, coeffs, metadata, end;
 } bsdf_layout;

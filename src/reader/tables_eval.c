@@ -1,6 +1,6 @@
 /*
  * Evaluating and sampling a table file (tables_internal.h) as the
- * renderers' `measured` readers do (docs/measured-format.md, "Evaluation
+ * renderers' `measured` readers do (docs/formats.md, "Evaluation
  * and sampling"): the half vector's coordinates on the unit square, the
  * VNDF warp's inverse to the sample square, the stored values there times
  * D / (4 sigma) under the jacobian rule; sampling by the luminance warp,
@@ -23,38 +23,81 @@ static double theta_to_u(double theta) { return sqrt(theta * (2.0 / LL_PI)); }
 
 static double phi_to_u(double phi) { return (phi + LL_PI) * (0.5 / LL_PI); }
 
-/* The unit-square coordinates (u_theta, u_phi) are stored with u_theta as
- * the last axis: warp x = u_theta, y = u_phi. */
-static void normal_coords(const double m[3], double phi_i, double um[2], double *theta_m)
+/* The fixed direction wi as every look-up of a call needs it: its
+ * elevation, the slices of its parameters, and its azimuth phi_i in the
+ * forms that are used. The half vector's azimuth is only ever read
+ * relative to phi_i (the files are isotropic), and that difference is one
+ * atan2 of the half vector in wi's own azimuthal frame; phi_i itself is
+ * taken only where a table depends on it (a file with two incident
+ * azimuths, or a sigma that varies along the azimuth), and wi's unit
+ * azimuth vector only where the sampler turns a normal by it. */
+/* Below this |x| + |y| of wi, products with wi's azimuth vector could
+ * underflow: such a wi takes the plain form with phi_i itself. */
+#define LL_TABLES_MIN_AZIMUTH 1e-100
+
+typedef struct incident {
+    double theta, u_theta, u_phi;
+    double ax, ay;            /* wi's azimuth vector (unit if asked for)   */
+    int has_azimuth;          /* wi is not (next to) the normal            */
+    double phi;               /* phi_i where it is read, else 0            */
+    ll_warp_slices sl;
+} incident;
+
+static void incident_of(const ll_measured *t, const double wi[3], int unit, incident *in)
 {
-    double u;
+    double param[2];
+    int need_phi = t->vndf.param_size[0] > 1 || (t->jacobian && !t->sigma.rows_equal);
+    in->theta = elevation(wi);
+    in->u_theta = theta_to_u(in->theta);
+    in->ax = wi[0];
+    in->ay = wi[1];
+    in->has_azimuth = fabs(wi[0]) + fabs(wi[1]) > LL_TABLES_MIN_AZIMUTH;
+    in->phi = need_phi || !in->has_azimuth ? atan2(wi[1], wi[0]) : 0.0;
+    in->u_phi = phi_to_u(in->phi);
+    if (!in->has_azimuth) {
+        /* At the pole phi_i is atan2's of what is left, as the renderers
+         * take it. */
+        in->ax = cos(in->phi);
+        in->ay = sin(in->phi);
+    } else if (unit) {
+        double r = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
+        in->ax = wi[0] / r;
+        in->ay = wi[1] / r;
+    }
+    /* The vndf, luminance and (with the channel appended) rgb tables have
+     * the file's theta_i and phi_i alike as parameter lists. */
+    param[0] = in->phi;
+    param[1] = in->theta;
+    ll_warp2d_slices(&t->vndf, param, &in->sl);
+}
+
+/* The unit-square coordinates (u_theta, u_phi) of the normal m, with its
+ * azimuth relative to phi_i, are stored with u_theta as the last axis:
+ * warp x = u_theta, y = u_phi. */
+static void normal_coords(const double m[3], const incident *in, double um[2], double *theta_m)
+{
+    double u, phi;
     *theta_m = elevation(m);
     um[0] = theta_to_u(*theta_m);
-    u = phi_to_u(atan2(m[1], m[0]) - phi_i);
+    if (in->has_azimuth)
+        phi = atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
+    else
+        phi = atan2(m[1], m[0]) - in->phi;
+    u = phi_to_u(phi);
     um[1] = u - floor(u);
 }
 
 /* The jacobian factor D(m) / (4 sigma(wi)) (1 for a file without it); 0
  * if it is not finite. */
-static double jacobian(const ll_measured *t, const double um[2], const double uwi[2])
+static double jacobian(const ll_measured *t, const double um[2], const incident *in)
 {
-    ll_warp_slices one;
-    double r;
+    double r, uwi[2];
     if (!t->jacobian)
         return 1.0;
-    ll_warp_slices_single(&one);
-    r = ll_warp2d_eval_at(&t->ndf, &one, um) / (4.0 * ll_warp2d_eval_at(&t->sigma, &one, uwi));
-    return ll_is_finite(r) ? r : 0.0;
-}
-
-/* The slices of an incident direction: the same for the vndf, luminance
- * and (with the channel appended) rgb tables, whose parameter lists are
- * the file's theta_i and phi_i alike. */
-static void incident_slices(const ll_measured *t, double phi_i, double theta_i,
-                            ll_warp_slices *sl)
-{
-    double param[2] = { phi_i, theta_i };
-    ll_warp2d_slices(&t->vndf, param, sl);
+    uwi[0] = in->u_theta;
+    uwi[1] = in->u_phi;
+    r = ll_warp2d_eval_single(&t->ndf, um) / (4.0 * ll_warp2d_eval_single(&t->sigma, uwi));
+    return isfinite(r) ? r : 0.0;
 }
 
 /* The channels at s; channel c hits node c of the 3 exactly (as the
@@ -79,55 +122,49 @@ static double reflected_pdf(double p_v, double p_l, double u_theta_m, double the
     if (area < 1e-6)
         area = 1e-6;
     pdf = p_v * p_l / (area * 4.0 * wi_dot_m);
-    return ll_is_finite(pdf) && pdf > 0.0 ? pdf : 0.0;
+    return isfinite(pdf) && pdf > 0.0 ? pdf : 0.0;
 }
 
 /* The half vector of wi and wo, or 0 if both do not lie above the surface. */
 static int half_vector(const double wi[3], const double wo[3], double m[3])
 {
-    double len;
+    double inv;
     if (!(wi[2] > 0.0 && wo[2] > 0.0))
         return 0;
     m[0] = wi[0] + wo[0];
     m[1] = wi[1] + wo[1];
     m[2] = wi[2] + wo[2];
-    len = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    m[0] /= len;
-    m[1] /= len;
-    m[2] /= len;
+    inv = 1.0 / sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    m[0] *= inv;
+    m[1] *= inv;
+    m[2] *= inv;
     return 1;
 }
 
 void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[3],
                       double value[3])
 {
-    double m[3], um[2], uwi[2], s[2], theta_m, theta_i, phi_i, p_v;
-    ll_warp_slices sl;
+    double m[3], um[2], s[2], theta_m, p_v;
+    incident in;
     value[0] = value[1] = value[2] = 0.0;
     if (!half_vector(wi, wo, m))
         return;
-    theta_i = elevation(wi);
-    phi_i = atan2(wi[1], wi[0]);
-    uwi[0] = theta_to_u(theta_i);
-    uwi[1] = phi_to_u(phi_i);
-    normal_coords(m, phi_i, um, &theta_m);
-    incident_slices(t, phi_i, theta_i, &sl);
-    ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
-    values_at(t, &sl, s, jacobian(t, um, uwi), value);
+    incident_of(t, wi, 0, &in);
+    normal_coords(m, &in, um, &theta_m);
+    ll_warp2d_invert_at(&t->vndf, &in.sl, um, s, &p_v);
+    values_at(t, &in.sl, s, jacobian(t, um, &in), value);
 }
 
 double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo[3])
 {
-    double m[3], um[2], s[2], theta_m, theta_i, phi_i, p_v, p_l;
-    ll_warp_slices sl;
+    double m[3], um[2], s[2], theta_m, p_v, p_l;
+    incident in;
     if (!half_vector(wi, wo, m))
         return 0.0;
-    theta_i = elevation(wi);
-    phi_i = atan2(wi[1], wi[0]);
-    normal_coords(m, phi_i, um, &theta_m);
-    incident_slices(t, phi_i, theta_i, &sl);
-    ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
-    p_l = ll_warp2d_eval_at(&t->luminance, &sl, s);
+    incident_of(t, wi, 0, &in);
+    normal_coords(m, &in, um, &theta_m);
+    ll_warp2d_invert_at(&t->vndf, &in.sl, um, s, &p_v);
+    p_l = ll_warp2d_eval_at(&t->luminance, &in.sl, s);
     return reflected_pdf(p_v, p_l, um[0], theta_m,
                          wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
 }
@@ -135,25 +172,25 @@ double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo
 int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[2],
                        double wo[3], double *pdf, double value[3])
 {
-    double theta_i, phi_i, pt[2], s[2], um[2], p_l, p_v, theta_m, m[3], d;
-    double uwi[2];
-    ll_warp_slices sl;
+    double pt[2], s[2], um[2], p_l, p_v, theta_m, m[3], d;
+    incident in;
     wo[0] = wo[1] = 0.0;
     wo[2] = 1.0;
     *pdf = 0.0;
     value[0] = value[1] = value[2] = 0.0;
     if (!(wi[2] > 0.0))
         return 0;
-    theta_i = elevation(wi);
-    phi_i = atan2(wi[1], wi[0]);
-    incident_slices(t, phi_i, theta_i, &sl);
+    incident_of(t, wi, 1, &in);
     /* The second number drives the warps' x (the elevation-like axis), as
      * Mitsuba's swap of the two does. */
     pt[0] = u[1];
     pt[1] = u[0];
-    ll_warp2d_sample_at(&t->luminance, &sl, pt, s, &p_l);
-    ll_warp2d_sample_at(&t->vndf, &sl, s, um, &p_v);
-    d = ll_tables_mirror(wi, um, phi_i, &theta_m, m, wo);
+    ll_warp2d_sample_at(&t->luminance, &in.sl, pt, s, &p_l);
+    /* The values are read at s after the vndf's sampling, which does not
+     * depend on them: their fetch from memory runs meanwhile. */
+    ll_warp2d_prefetch_nodes(&t->rgb, &in.sl, s);
+    ll_warp2d_sample_at(&t->vndf, &in.sl, s, um, &p_v);
+    d = ll_tables_mirror_dir(wi, um, in.ax, in.ay, &theta_m, m, wo);
     if (!(wo[2] > 0.0) || !(d > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;
@@ -165,9 +202,7 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
         wo[2] = 1.0;
         return 0;
     }
-    uwi[0] = theta_to_u(theta_i);
-    uwi[1] = phi_to_u(phi_i);
-    values_at(t, &sl, s, jacobian(t, um, uwi), value);
+    values_at(t, &in.sl, s, jacobian(t, um, &in), value);
     return 1;
 }
 

@@ -1,5 +1,5 @@
 /*
- * An opened table file of the `measured` format (docs/measured-format.md)
+ * An opened table file of the `measured` format (docs/formats.md)
  * behind an ll_bsdf handle: the 2D warps of its fields, and evaluation and
  * sampling as the renderers' `measured` readers do them. Reader side.
  *

@@ -1,5 +1,5 @@
 /*
- * Opening a table file of the `measured` format (docs/measured-format.md)
+ * Opening a table file of the `measured` format (docs/formats.md)
  * as an ll_bsdf: the container is parsed (tensor_read.c), then every field
  * the evaluation reads is checked -- presence, dtype, rank, the shapes that
  * must agree, every value finite and non-negative, the parameter lists

@@ -21,9 +21,9 @@ void ll_warp2d_free(ll_warp2d *wp)
         return;
     for (p = 0; p < LL_WARP_MAX_PARAMS; ++p)
         ll_free(wp->param_values[p]);
-    ll_free(wp->data);
-    ll_free(wp->cond);
+    ll_free(wp->data); /* cond points into it */
     ll_free(wp->marg);
+    ll_free(wp->row_total);
     memset(wp, 0, sizeof *wp);
 }
 
@@ -33,15 +33,16 @@ void ll_warp2d_free(ll_warp2d *wp)
 static int build_slice(ll_warp2d *wp, size_t k)
 {
     size_t w = wp->w, h = wp->h, x, y;
-    float *v = wp->data + k * w * h, *c = wp->cond + k * w * h, *m = wp->marg + k * h;
+    float *v = wp->data + k * w * h * 2, *c = wp->cond + k * w * h * 2, *m = wp->marg + k * h;
     double total = 0.0, scale, sum, prev_row = 0.0;
-    /* The total first (sums in double), then every table divided by it and
+    /* Node i of the slice holds its value v[2 i] and its running integral
+     * c[2 i] side by side (ll_warp2d.step). The total first (sums in double), then every table divided by it and
      * the running integrals taken over the divided values, so that they
      * are exactly those of the stored density. */
     for (y = 0; y < h; ++y) {
         double row = 0.0;
         for (x = 0; x + 1 < w; ++x)
-            row += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
+            row += 0.5 * ((double)v[2 * (y * w + x)] + (double)v[2 * (y * w + x + 1)]);
         if (y > 0)
             total += 0.5 * (prev_row + row);
         prev_row = row;
@@ -50,21 +51,34 @@ static int build_slice(ll_warp2d *wp, size_t k)
         return 0;
     scale = 1.0 / total;
     for (x = 0; x < w * h; ++x)
-        v[x] = (float)((double)v[x] * scale);
+        v[2 * x] = (float)((double)v[2 * x] * scale);
     for (y = 0; y < h; ++y) {
         sum = 0.0;
-        c[y * w] = 0.0f;
+        c[2 * (y * w)] = 0.0f;
         for (x = 0; x + 1 < w; ++x) {
-            sum += 0.5 * ((double)v[y * w + x] + (double)v[y * w + x + 1]);
-            c[y * w + x + 1] = (float)sum;
+            sum += 0.5 * ((double)v[2 * (y * w + x)] + (double)v[2 * (y * w + x + 1)]);
+            c[2 * (y * w + x + 1)] = (float)sum;
         }
     }
     sum = 0.0;
     m[0] = 0.0f;
     for (y = 0; y + 1 < h; ++y) {
-        sum += 0.5 * ((double)c[y * w + w - 1] + (double)c[(y + 1) * w + w - 1]);
+        sum += 0.5 * ((double)c[2 * (y * w + w - 1)] + (double)c[2 * ((y + 1) * w + w - 1)]);
         m[y + 1] = (float)sum;
     }
+    return 1;
+}
+
+/* Whether every row of every slice repeats the first row of its slice
+ * (compared as stored, all inner values of a node at once). */
+static int rows_equal(const ll_warp2d *wp)
+{
+    size_t row = wp->w * wp->step, plane = row * wp->h, k, y;
+    for (k = 0; k < wp->n_slices / wp->inner; ++k)
+        for (y = 1; y < wp->h; ++y)
+            if (memcmp(wp->data + k * plane, wp->data + k * plane + y * row,
+                       row * sizeof(float)) != 0)
+                return 0;
     return 1;
 }
 
@@ -89,53 +103,60 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->n_slices = n;
     if (!ll_size_mul(w, h, &total) || !ll_size_mul(total, n, &total))
         return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
+    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
+    wp->step = sampling ? 2 : wp->inner;
+    if (sampling && !ll_size_mul(total, 2, &total))
+        return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
     wp->data = ll_alloc_array(total, sizeof(float));
     if (!wp->data)
         goto oom;
-    wp->inner = !sampling && n_params > 0 ? param_size[n_params - 1] : 1;
     {
         /* Entry k of the caller's layout, slice (outer, j) at node at, goes
-         * to ((outer w h) + at) inner + j. */
-        size_t area = w * h, in = wp->inner, outer, j, at;
+         * to ((outer w h) + at) step + j. */
+        size_t area = w * h, in = wp->inner, st = wp->step, outer, j, at;
         for (k = 0, outer = 0; outer < n / in; ++outer)
             for (j = 0; j < in; ++j) {
-                float *to = wp->data + outer * area * in + j;
+                float *to = wp->data + outer * area * st + j;
                 for (at = 0; at < area; ++at, ++k)
-                    to[at * in] = (float)get(ctx, k);
+                    to[at * st] = (float)get(ctx, k);
             }
     }
+    wp->rows_equal = rows_equal(wp);
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
-    wp->cond = ll_alloc_array(total, sizeof(float));
+    wp->cond = wp->data + 1;
     wp->marg = ll_alloc_array(n * h, sizeof(float));
-    if (!wp->cond || !wp->marg)
+    wp->row_total = ll_alloc_array(n * h, sizeof(float));
+    if (!wp->marg || !wp->row_total)
         goto oom;
     for (k = 0; k < n; ++k)
         if (!build_slice(wp, k))
             return ll_fail(LL_ERROR_FORMAT, "slice %zu has no positive finite integral", k);
+    for (k = 0; k < n * h; ++k)
+        wp->row_total[k] = wp->cond[(k * w + w - 1) * 2];
     return LL_OK;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
 }
 
 /* The interval of an ascending list that holds x, and the weight of its
- * upper end, clamped to the list's ends; a single value needs no weight. */
+ * upper end, clamped to the list's ends; a single value needs no weight.
+ * The halving runs over a length that does not depend on x (as SEARCH
+ * below): every call looks up a new elevation, whose comparisons a
+ * branch would mispredict half the time. */
 static void locate(const double *v, size_t n, double x, size_t *i, double *t)
 {
-    size_t lo = 0, hi;
+    size_t lo = 0, len;
     if (n < 2) {
         *i = 0;
         *t = 0.0;
         return;
     }
-    hi = n - 2;
-    while (lo < hi) {
-        size_t mid = (lo + hi + 1) / 2;
-        if (v[mid] <= x)
-            lo = mid;
-        else
-            hi = mid - 1;
+    for (len = n - 1; len > 1;) {
+        size_t half = len / 2, mid = lo + half;
+        lo = v[mid] <= x ? mid : lo;
+        len -= half;
     }
     *i = lo;
     *t = (x - v[lo]) / (v[lo + 1] - v[lo]);
@@ -194,9 +215,8 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 
 /* One array's slices of a slice set, as pointers: a look-up mixes the
  * same slices at many places (a search reads a row at every step), so
- * the offsets are taken once. Two slices (an isotropic file: two
- * elevations) is the common case and has its own path; its sum is the
- * general loop's to the bit (0 + a + b is a + b). */
+ * the offsets are taken once. This general form serves sets of more than
+ * two slices (anisotropic files); two or fewer take the pair below. */
 typedef struct slice_rows {
     size_t count;
     size_t step;                              /* floats from one node to the next */
@@ -204,11 +224,12 @@ typedef struct slice_rows {
     double w[1 << LL_WARP_MAX_PARAMS];
 } slice_rows;
 
-static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_rows *out)
+static void rows_of(const slice_set *s, const float *arr, size_t stride, size_t step,
+                    slice_rows *out)
 {
     size_t c;
     out->count = s->count;
-    out->step = 1;
+    out->step = step;
     for (c = 0; c < s->count; ++c) {
         out->p[c] = arr + s->index[c] * stride;
         out->w[c] = s->weight[c];
@@ -218,11 +239,11 @@ static void rows_of(const slice_set *s, const float *arr, size_t stride, slice_r
 /* The values' slices (ll_warp2d.inner: slice i is (i / inner, i % inner)). */
 static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *out)
 {
-    size_t c, in = wp->inner, area = wp->w * wp->h;
+    size_t c, in = wp->inner, area = wp->w * wp->h, st = wp->step;
     out->count = s->count;
-    out->step = in;
+    out->step = st;
     for (c = 0; c < s->count; ++c) {
-        out->p[c] = wp->data + (s->index[c] / in) * area * in + s->index[c] % in;
+        out->p[c] = wp->data + (s->index[c] / in) * area * st + s->index[c] % in;
         out->w[c] = s->weight[c];
     }
 }
@@ -230,17 +251,67 @@ static void data_rows_of(const ll_warp2d *wp, const slice_set *s, slice_rows *ou
 static inline double mix(const slice_rows *r, size_t node)
 {
     size_t c, at = node * r->step;
-    double v;
-    if (r->count == 2)
-        return r->w[0] * (double)r->p[0][at] + r->w[1] * (double)r->p[1][at];
-    v = 0.0;
+    double v = 0.0;
     for (c = 0; c < r->count; ++c)
         v += r->w[c] * (double)r->p[c][at];
     return v;
 }
 
+/* Two slices (an isotropic file's two neighbouring elevations; one slice
+ * is the pair with a second of weight 0 at the same place): the common
+ * look-up, without loops or branches. w0 a + w1 b is the general sum to
+ * the bit (0 + w0 a + w1 b, and w0 a + 0 b = 0 + w0 a for the finite
+ * values stored), so both forms give the same numbers. */
+typedef struct slice_pair {
+    const float *p0, *p1;
+    double w0, w1;
+    size_t step;                              /* floats from one node to the next */
+} slice_pair;
+
+static inline double pmix(const slice_pair *q, size_t at)
+{
+    return q->w0 * (double)q->p0[at] + q->w1 * (double)q->p1[at];
+}
+
+/* The pair of an array whose slice i starts at arr + i * stride, for a
+ * set of one or two slices. */
+static void pair_of(const slice_set *s, const float *arr, size_t stride, size_t step,
+                    slice_pair *q)
+{
+    q->step = step;
+    q->p0 = arr + s->index[0] * stride;
+    q->w0 = s->weight[0];
+    if (s->count == 2) {
+        q->p1 = arr + s->index[1] * stride;
+        q->w1 = s->weight[1];
+    } else {
+        q->p1 = q->p0;
+        q->w1 = 0.0;
+    }
+}
+
+/* The same for the values (ll_warp2d.inner), the division only where an
+ * inner parameter makes it needed. */
+static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
+{
+    size_t in = wp->inner, area = wp->w * wp->h, st = wp->step;
+    if (s->count > 2)
+        return 0;
+    if (in == 1) {
+        pair_of(s, wp->data, area * st, st, q);
+        return 1;
+    }
+    q->step = st;
+    q->p0 = wp->data + (s->index[0] / in) * area * st + s->index[0] % in;
+    q->w0 = s->weight[0];
+    q->p1 = s->count == 2 ? wp->data + (s->index[1] / in) * area * st + s->index[1] % in
+                          : q->p0;
+    q->w1 = s->count == 2 ? s->weight[1] : 0.0;
+    return 1;
+}
+
 /* Cell and fraction of coordinate x in [0, 1] over n nodes. */
-static size_t cell(double x, size_t n, double *t)
+static inline size_t cell(double x, size_t n, double *t)
 {
     double f;
     size_t i;
@@ -266,12 +337,14 @@ static double bilinear_rows(const slice_rows *d, size_t w, size_t r, double ty, 
     return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
 }
 
-static double bilinear(const ll_warp2d *wp, const slice_set *s, size_t r, double ty, size_t c,
-                       double tx)
+/* The same for a pair whose nodes lie step floats apart. */
+static inline double bilinear_pair(const slice_pair *q, size_t step, size_t w, size_t r,
+                                   double ty, size_t c, double tx)
 {
-    slice_rows d;
-    data_rows_of(wp, s, &d);
-    return bilinear_rows(&d, wp->w, r, ty, c, tx);
+    size_t at = (r * w + c) * step, down = w * step;
+    double v00 = pmix(q, at), v01 = pmix(q, at + step), v10 = pmix(q, at + down);
+    double v11 = pmix(q, at + down + step);
+    return (1.0 - ty) * ((1.0 - tx) * v00 + tx * v01) + ty * ((1.0 - tx) * v10 + tx * v11);
 }
 
 /* Density per unit area of the square for a sampling warp (slices hold
@@ -295,7 +368,38 @@ double ll_warp2d_eval_at(const ll_warp2d *wp, const slice_set *s, const double p
 {
     double tx, ty;
     size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty);
-    return bilinear(wp, s, r, ty, c, tx) * area_scale(wp);
+    slice_pair q;
+    slice_rows d;
+    if (data_pair_of(wp, s, &q))
+        return bilinear_pair(&q, q.step, wp->w, r, ty, c, tx) * area_scale(wp);
+    data_rows_of(wp, s, &d);
+    return bilinear_rows(&d, wp->w, r, ty, c, tx) * area_scale(wp);
+}
+
+/* The four corner nodes of cell (r, c) of a pair whose nodes lie step
+ * floats apart, and the weights that give the bilinear value of the pair
+ * there as one sum: sum_j w[j] p[j][0]. */
+static void corners(const slice_pair *q, size_t step, size_t w, size_t r, double ty, size_t c,
+                    double tx, const float *p[8], double wt[8])
+{
+    size_t at = (r * w + c) * step, down = w * step;
+    double a = (1.0 - ty) * (1.0 - tx), b = (1.0 - ty) * tx, d = ty * (1.0 - tx), e = ty * tx;
+    p[0] = q->p0 + at;
+    p[1] = q->p0 + at + step;
+    p[2] = q->p0 + at + down;
+    p[3] = q->p0 + at + down + step;
+    p[4] = q->p1 + at;
+    p[5] = q->p1 + at + step;
+    p[6] = q->p1 + at + down;
+    p[7] = q->p1 + at + down + step;
+    wt[0] = q->w0 * a;
+    wt[1] = q->w0 * b;
+    wt[2] = q->w0 * d;
+    wt[3] = q->w0 * e;
+    wt[4] = q->w1 * a;
+    wt[5] = q->w1 * b;
+    wt[6] = q->w1 * d;
+    wt[7] = q->w1 * e;
 }
 
 void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
@@ -309,6 +413,44 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
      * channel 0 at every node, else a whole table after it. */
     size_t next = n == wp->inner ? 1 : st;
     slice_set first;
+    if (n == wp->inner && s->count <= 2) {
+        /* The channels of a node share its cache line, and the weights of
+         * the eight (slice, corner) nodes are the same for each: one sum of
+         * eight products per channel (the bilinear value of the mixed
+         * slices to rounding). */
+        slice_pair q;
+        const float *p[8];
+        double wt[8];
+        size_t plane = st * n;
+        q.p0 = wp->data + s->index[0] * plane;
+        q.w0 = s->weight[0];
+        q.p1 = s->count == 2 ? wp->data + s->index[1] * plane : q.p0;
+        q.w1 = s->count == 2 ? s->weight[1] : 0.0;
+        if (n == 3) {
+            /* An RGB table: the three sums side by side, straight. */
+            size_t at = (r * wp->w + c) * 3, down = wp->w * 3;
+            const float *a = q.p0 + at, *b = q.p1 + at;
+            double ty1 = 1.0 - ty, tx1 = 1.0 - tx;
+            double a0 = q.w0 * ty1 * tx1, a1 = q.w0 * ty1 * tx, a2 = q.w0 * ty * tx1;
+            double a3 = q.w0 * ty * tx, b0 = q.w1 * ty1 * tx1, b1 = q.w1 * ty1 * tx;
+            double b2 = q.w1 * ty * tx1, b3 = q.w1 * ty * tx;
+            for (k = 0; k < 3; ++k)
+                out[k] = (a0 * (double)a[k] + a1 * (double)a[3 + k] + a2 * (double)a[down + k] +
+                          a3 * (double)a[down + 3 + k] + b0 * (double)b[k] +
+                          b1 * (double)b[3 + k] + b2 * (double)b[down + k] +
+                          b3 * (double)b[down + 3 + k]) *
+                         scale;
+            return;
+        }
+        corners(&q, n, wp->w, r, ty, c, tx, p, wt);
+        for (k = 0; k < n; ++k) {
+            double v = 0.0;
+            for (j = 0; j < 8; ++j)
+                v += wt[j] * (double)p[j][k];
+            out[k] = v * scale;
+        }
+        return;
+    }
     ll_warp_slices_append(s, 0, n, &first);
     data_rows_of(wp, &first, &d);
     for (k = 0; k < n; ++k) {
@@ -316,6 +458,43 @@ void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
         for (j = 0; j < d.count; ++j)
             d.p[j] += next;
     }
+}
+
+void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const slice_set *s, const double pos[2])
+{
+#if defined(__GNUC__)
+    double tx, ty;
+    size_t c = cell(pos[0], wp->w, &tx), r = cell(pos[1], wp->h, &ty), in = wp->step, j;
+    size_t plane = wp->w * wp->h * in, at = (r * wp->w + c) * in, down = wp->w * in;
+    if (s->count > 2)
+        return;
+    for (j = 0; j < s->count; ++j) {
+        /* Both nodes of each row: their first and last floats. */
+        const float *p = wp->data + s->index[j] * plane + at;
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + 2 * in - 1);
+        __builtin_prefetch(p + down);
+        __builtin_prefetch(p + down + 2 * in - 1);
+    }
+#else
+    (void)wp;
+    (void)s;
+    (void)pos;
+#endif
+}
+
+double ll_warp2d_eval_single(const ll_warp2d *wp, const double pos[2])
+{
+    double tx, ty, scale = area_scale(wp);
+    size_t st = wp->step, w = wp->w * st, c = cell(pos[0], wp->w, &tx), r;
+    const float *d = wp->data + c * st;
+    if (wp->rows_equal)
+        return ((1.0 - tx) * (double)d[0] + tx * (double)d[st]) * scale;
+    r = cell(pos[1], wp->h, &ty);
+    d += r * w;
+    return ((1.0 - ty) * ((1.0 - tx) * (double)d[0] + tx * (double)d[st]) +
+            ty * ((1.0 - tx) * (double)d[w] + tx * (double)d[w + st])) *
+           scale;
 }
 
 void ll_warp_slices_single(slice_set *s)
@@ -380,6 +559,26 @@ static inline double pair_at(const slice_rows *a, size_t r0, size_t w, double ty
     return (1.0 - ty) * mix(a, r0 + i) + ty * mix(a, r0 + w + i);
 }
 
+static inline double pair_at2(const slice_pair *a, size_t r0, size_t w, double ty, size_t i)
+{
+    return (1.0 - ty) * pmix(a, (r0 + i) * a->step) + ty * pmix(a, (r0 + w + i) * a->step);
+}
+
+/* Ask for the bytes [p, p + n) ahead of their use: the rows a search is
+ * about to read lie in tables of megabytes, and fetched one halving step
+ * at a time each would wait for memory in turn. */
+static inline void prefetch(const float *p, size_t n)
+{
+#if defined(__GNUC__)
+    const char *c = (const char *)p, *end = (const char *)(p + n);
+    for (; c < end; c += 64)
+        __builtin_prefetch(c);
+#else
+    (void)p;
+    (void)n;
+#endif
+}
+
 void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
                       double pos[2], double *pdf)
 {
@@ -396,6 +595,41 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
 }
 
+/* sample_at for a pair of slices: the general form's arithmetic, in the
+ * same order, so both give the same numbers. */
+static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[2],
+                        double pos[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h, r, c, at;
+    double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
+    slice_pair marg, tot, cond, data;
+    pair_of(s, wp->marg, h, 1, &marg);
+    pair_of(s, wp->row_total, h, 1, &tot);
+    pair_of(s, wp->cond, 2 * st, 2, &cond);
+    pair_of(s, wp->data, 2 * st, 2, &data);
+    target = u[1];
+    SEARCH(h, pmix(&marg, i), target, r);
+    at = r * w;
+    prefetch(cond.p0 + 2 * at, 4 * w);
+    prefetch(cond.p1 + 2 * at, 4 * w);
+    r0 = pmix(&tot, r);
+    r1 = pmix(&tot, r + 1);
+    m0 = pmix(&marg, r);
+    m1 = pmix(&marg, r + 1);
+    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    row_total = (1.0 - ty) * r0 + ty * r1;
+    target = u[0] * row_total;
+    SEARCH(w, pair_at2(&cond, at, w, ty, i), target, c);
+    cdf_c = pair_at2(&cond, at, w, ty, c);
+    cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
+    v0 = pair_at2(&data, at, w, ty, c);
+    v1 = pair_at2(&data, at, w, ty, c + 1);
+    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
+    pos[0] = ((double)c + tx) / (double)(w - 1);
+    pos[1] = ((double)r + ty) / (double)(h - 1);
+    *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
+}
+
 void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
                          double pos[2], double *pdf)
 {
@@ -410,8 +644,12 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
         if (u[k] > 1.0 - LL_WARP_EPSILON)
             u[k] = 1.0 - LL_WARP_EPSILON;
     }
-    rows_of(s, wp->marg, h, &marg);
-    rows_of(s, wp->cond, st, &cond);
+    if (s->count <= 2) {
+        sample_pair(wp, s, u, pos, pdf);
+        return;
+    }
+    rows_of(s, wp->marg, h, 1, &marg);
+    rows_of(s, wp->cond, 2 * st, 2, &cond);
     data_rows_of(wp, s, &data);
     /* Row interval from the marginal (slices are normalised: total 1). */
     target = u[1];
@@ -435,15 +673,50 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
+/* invert_at for a pair of slices, as sample_pair. */
+static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double pos[2],
+                        double u[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h;
+    double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
+    size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty), at = r * w;
+    slice_pair marg, tot, cond, data;
+    pair_of(s, wp->marg, h, 1, &marg);
+    pair_of(s, wp->row_total, h, 1, &tot);
+    pair_of(s, wp->cond, 2 * st, 2, &cond);
+    pair_of(s, wp->data, 2 * st, 2, &data);
+    r0 = pmix(&tot, r);
+    r1 = pmix(&tot, r + 1);
+    m0 = pmix(&marg, r);
+    m1 = pmix(&marg, r + 1);
+    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    row_total = (1.0 - ty) * r0 + ty * r1;
+    cdf_c = pair_at2(&cond, at, w, ty, c);
+    cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
+    v0 = pair_at2(&data, at, w, ty, c);
+    v1 = pair_at2(&data, at, w, ty, c + 1);
+    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
+                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
+                                 row_total
+                           : 0.0;
+    *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
+}
+
 void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
     double tx, ty, r0, r1, v0, v1, cdf_c, cdf_c1, row_total, m0, m1;
-    size_t c = cell(pos[0], w, &tx), r = cell(pos[1], h, &ty);
+    size_t c, r;
     slice_rows marg, cond, data;
-    rows_of(s, wp->marg, h, &marg);
-    rows_of(s, wp->cond, st, &cond);
+    if (s->count <= 2) {
+        invert_pair(wp, s, pos, u, pdf);
+        return;
+    }
+    c = cell(pos[0], w, &tx);
+    r = cell(pos[1], h, &ty);
+    rows_of(s, wp->marg, h, 1, &marg);
+    rows_of(s, wp->cond, 2 * st, 2, &cond);
     data_rows_of(wp, s, &data);
     r0 = mix(&cond, r * w + w - 1);
     r1 = mix(&cond, (r + 1) * w + w - 1);

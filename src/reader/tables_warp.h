@@ -1,6 +1,6 @@
 /*
  * The piecewise-bilinear 2D warp of the `measured` format
- * (docs/measured-format.md, "The 2D warp"): a density given by its values
+ * (docs/formats.md, "The 2D warp"): a density given by its values
  * at the nodes of a W x H grid over the unit square, interpolated
  * bilinearly, with conditional slices selected by up to three parameters
  * and interpolated linearly between them. The one implementation that both
@@ -34,7 +34,8 @@ typedef struct ll_warp2d {
     /* Stored as float, as the renderers store them: a look-up reads a few
      * scattered rows of tables of megabytes, so their size is what costs;
      * every sum over them is in double. */
-    float *data;                              /* [n_slices][h][w], but see inner  */
+    float *data;                              /* [n_slices][h][w], but see inner
+                                                 and step                         */
     /* A warp that only interpolates stores its last parameter innermost,
      * [outer slices][h][w][inner]: the channels of an RGB table (or the
      * neighbouring wavelengths of a spectral one) that a look-up reads
@@ -42,12 +43,28 @@ typedef struct ll_warp2d {
      * inner is that parameter's count, or 1 (sampling warps, no
      * parameters). */
     size_t inner;
-    float *cond;                              /* [n_slices][h][w] running trapezoid
-                                                 integrals along x (NULL if the
-                                                 warp only interpolates)          */
+    /* A sampling warp keeps each node's running integral next to its
+     * value: a look-up reads both at the same nodes, which then share
+     * their cache lines (an evaluation reads half the lines it would from
+     * two tables). step is the floats from one node to the next in data:
+     * 2 for a sampling warp, inner otherwise. */
+    size_t step;
+    float *cond;                              /* data + 1, read with step 2: the
+                                                 running trapezoid integrals
+                                                 along x (NULL if the warp only
+                                                 interpolates)                    */
     float *marg;                              /* [n_slices][h] the same along y of
                                                  the row totals                   */
     int normalized;                           /* each slice divided by its total  */
+    float *row_total;                         /* [n_slices][h] the last entry of
+                                                 each row of cond: the totals a
+                                                 look-up reads every time, in a
+                                                 table small enough to stay in
+                                                 cache (NULL with cond)           */
+    int rows_equal;                           /* every row of every slice holds
+                                                 the same values: y does not
+                                                 matter (an isotropic file's ndf
+                                                 and sigma)                       */
 } ll_warp2d;
 
 /* The slices around one parameter point and their weights (only those of
@@ -97,6 +114,15 @@ LL_INTERNAL double ll_warp2d_eval_at(const ll_warp2d *wp, const ll_warp_slices *
  * for slices s extended by k. One cell look-up for all n (n <= 3). */
 LL_INTERNAL void ll_warp2d_eval_nodes(const ll_warp2d *wp, const ll_warp_slices *s, size_t n,
                                       const double pos[2], double *out);
+/* The value at pos of a warp without parameters (n_params 0); one whose
+ * rows are equal (rows_equal) interpolates along x only. The value of
+ * ll_warp2d_eval to rounding. */
+LL_INTERNAL double ll_warp2d_eval_single(const ll_warp2d *wp, const double pos[2]);
+/* Ask the memory for the nodes that ll_warp2d_eval_nodes will read at
+ * pos for the slices s (without the inner parameter), so that their fetch
+ * overlaps other work; a hint that changes no result. */
+LL_INTERNAL void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const ll_warp_slices *s,
+                                          const double pos[2]);
 /* The one slice of a warp without parameters. */
 LL_INTERNAL void ll_warp_slices_single(ll_warp_slices *s);
 LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *s,
@@ -106,15 +132,37 @@ LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *
 
 /* The microfacet normal m of a point um of the visible-normal square
  * (theta_m = u_theta^2 pi / 2, phi_m = (2 u_phi - 1) pi + phi_i) and wi
- * reflected about it into wo; returns wi.m. One mapping for the reader's
- * sampler and the writer's sample grid: the writer stores values at the
- * very directions the readers' warps produce. */
+ * reflected about it into wo; returns wi.m. The writer's sample grid
+ * (at phi_i = 0) stores values at the very directions the readers' warps
+ * produce; the reader's sampler uses the same mapping in the form below,
+ * which takes phi_i as a unit vector. */
 static inline double ll_tables_mirror(const double wi[3], const double um[2], double phi_i,
                                       double *theta_m, double m[3], double wo[3])
 {
     double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI + phi_i, d;
     m[0] = sin(tm) * cos(pm);
     m[1] = sin(tm) * sin(pm);
+    m[2] = cos(tm);
+    d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    wo[0] = 2.0 * d * m[0] - wi[0];
+    wo[1] = 2.0 * d * m[1] - wi[1];
+    wo[2] = 2.0 * d * m[2] - wi[2];
+    *theta_m = tm;
+    return d;
+}
+
+/* The same mapping for a wi of any azimuth phi_i, given as its unit
+ * vector (cos phi_i, sin phi_i): the normal is made at phi_i = 0 and
+ * turned, which spares the reader's sampler an atan2 of wi; the
+ * directions are those of ll_tables_mirror to rounding. */
+static inline double ll_tables_mirror_dir(const double wi[3], const double um[2],
+                                          double cos_phi_i, double sin_phi_i, double *theta_m,
+                                          double m[3], double wo[3])
+{
+    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI, d;
+    double st = sin(tm), x = st * cos(pm), y = st * sin(pm);
+    m[0] = x * cos_phi_i - y * sin_phi_i;
+    m[1] = y * cos_phi_i + x * sin_phi_i;
     m[2] = cos(tm);
     d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
     wo[0] = 2.0 * d * m[0] - wi[0];

@@ -1,5 +1,5 @@
 /*
- * The tensor container of the `measured` BRDF format (docs/measured-format.md):
+ * The tensor container of the `measured` BRDF format (docs/formats.md):
  * a little-endian file of named, typed, dense arrays. Reader side: parsing
  * validates the whole field table against the real size before anything it
  * sizes is allocated; the fields then point into the caller's bytes.

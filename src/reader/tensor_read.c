@@ -1,5 +1,5 @@
 /*
- * Parsing the tensor container (tensor.h, docs/measured-format.md), byte by
+ * Parsing the tensor container (tensor.h, docs/formats.md), byte by
  * byte in little-endian order (style.md rule 10). Every count, extent and
  * offset of the field table is checked against the real size of the file,
  * with overflow-checked arithmetic, before the one allocation sized by the

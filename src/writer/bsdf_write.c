@@ -1,5 +1,5 @@
 /*
- * Writing layers as a .bsdf file (docs/bsdf-format.md), what the
+ * Writing layers as a .bsdf file (docs/formats.md), what the
  * original layerlab's BSDFStorage::fromLayerGeneral stores:
  *
  *  - nodes: the layer's, ascending, with two explicit mu = 0 nodes in the

@@ -2,7 +2,7 @@
  * The microfacet normal distribution of an isotropic BSDF from its
  * retro-reflection (Dupuy et al. 2015, "Extracting Microfacet-based BRDF
  * Parameters from Arbitrary Materials with Power Iterations"; the operator
- * as docs/measured-format.md states it): with masking and shadowing of the
+ * as docs/formats.md states it): with masking and shadowing of the
  * retro-reflected ray fully correlated, f(k, k) = F D(k) / (4 cos(theta_k)
  * sigma(k)), so D(k) = c cos(theta_k) f(k, k) sigma[D](k), sigma[D](k) =
  * integral of max(0, k.m) D(m) dm, linear in D: D is the dominant

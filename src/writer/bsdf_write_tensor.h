@@ -1,6 +1,6 @@
 /*
  * Writing the tensor container of the `measured` format
- * (docs/measured-format.md) atomically, through the .bsdf writer's
+ * (docs/formats.md) atomically, through the .bsdf writer's
  * temporary-file-and-rename output (bsdf_file_out.h). Writer side only.
  */
 #ifndef LL_BSDF_WRITE_TENSOR_H

@@ -610,7 +610,7 @@ static ll_status put_end(ll_bsdf_out *out, const write_job *job, ll_status s)
  * default metadata (unless the options give one) from the final lengths,
  * the commit's scratch, all of which can fail for want of memory or of a
  * valid total before the output is begun; then the parts in the order
- * docs/bsdf-format.md stores them. Progress: the offsets in [0, 0.05] of
+ * docs/formats.md stores them. Progress: the offsets in [0, 0.05] of
  * the commit's share of "writing" a node row a unit, the CDF in
  * [0.05, 0.1], the pair table in [0.1, 0.15] a node row a unit, the
  * coefficient block in [0.15, 1] a column a unit; the report of 1 comes

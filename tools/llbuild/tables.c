@@ -1,7 +1,7 @@
 /*
  * llbuild --format measured: the material built as usual, then written as
  * the warped tables that Mitsuba 3's and pbrt-v4's `measured` BSDF read
- * (docs/measured-format.md) instead of a .bsdf file.
+ * (docs/formats.md) instead of a .bsdf file.
  *
  * With --wavelengths START:END:STEP the file is spectral: the library
  * builds it all (ll_material_write_tables: the warp from the RGB build, the

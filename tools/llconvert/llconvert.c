@@ -6,7 +6,7 @@
  * A thin program over the public API: ll_bsdf_open, then
  * ll_tables_write_from_bsdf (atomic output), then a summary read back from
  * the written file. The one target format is `measured`, the table files
- * that Mitsuba 3 and pbrt-v4 read natively (docs/measured-format.md); the
+ * that Mitsuba 3 and pbrt-v4 read natively (docs/formats.md); the
  * source must be opaque and untextured.
  * Exit codes: 0 done, 1 bad input (including a source the format cannot
  * hold, with the reason), 2 I/O, 3 out of memory.
@@ -25,7 +25,7 @@
 static const char usage[] =
     "usage: llconvert [options] IN.bsdf -o OUT [--format measured]\n"
     "Convert an opaque, untextured .bsdf (or table) file into the tables of the\n"
-    "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/measured-format.md).\n"
+    "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/formats.md).\n"
     "  -o, --output FILE  the file to write (required unless --dry-run)\n"
     "  --format NAME      the output format: measured (the default and only one)\n"
     "  --theta-i N        incident elevations (default: chosen by the tolerance)\n"

@@ -18,7 +18,7 @@
 #define PREVIEW_MAX_ORDERS 200
 
 /* A file ll_bsdf_open reads: a .bsdf ("SCATFUN") or a table file of the
- * `measured` format ("tensor_file" and a NUL; docs/measured-format.md). */
+ * `measured` format ("tensor_file" and a NUL; docs/formats.md). */
 static int is_bsdf_file(const char *path, int *is_bsdf)
 {
     char magic[12];

@@ -324,8 +324,8 @@ void llplot_sphere_paint(const llplot_options *o, const llplot_image *img, unsig
 }
 
 /* title: --title, else the input's file name (PNG figures have titles,
- * docs/llplot.md); vary: the caption of --vary ("NAME: LO (left) to HI
- * (right)"), or NULL. */
+ * docs/material-language.md, "`llplot`"); vary: the caption of --vary
+ * ("NAME: LO (left) to HI (right)"), or NULL. */
 static int write_png(const llplot_options *o, const llplot_image *img, const char *title,
                      const char *vary)
 {

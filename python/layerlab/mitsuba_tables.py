@@ -1,0 +1,368 @@
+"""Warped tables (the `measured` format of Dupuy & Jakob 2018,
+docs/formats.md) evaluated and sampled in Dr.Jit operations, as
+Mitsuba 3's own `measured` BSDF does, so that in Mitsuba's default
+(symbolic, megakernel) mode the calls trace into the rendering kernel; in
+the scalar variants the same code runs on scalars.
+
+What is read: the `rgb` field of an RGB table file, opened first by the C
+reader (ll_bsdf_open validates every field, shape and value; the fields are
+then read with numpy, layerlab.tensor_file). Isotropic files only (one or two
+incident azimuths), as the C reader. A spectral file (`spectra`,
+`wavelengths`) is not read here: the C reader turns its spectra into linear
+sRGB (docs/formats.md, "Spectral files"), which this module would
+have to repeat; the plugin renders such a file through the C reader.
+
+The 2D warps are Mitsuba's own (mi.MarginalContinuous2D0/1/2, the
+Marginal2D<Float, Dim, true> that its `measured` plugin builds from the same
+fields): the VNDF and luminance warps normalised, the NDF and sigma tables
+evaluated as stored. Where the file has one incident azimuth the warps take
+the elevation as their only parameter (Mitsuba's take the azimuth too and
+give it the weights 1 and 0 over one slice, the same values with twice the
+memory reads). The values (`rgb`) are interpolated here, all three channels
+of a node in one 4-float read (the layout below), with the same arithmetic
+as Mitsuba's interpolation per channel: per corner of the sample's cell
+fma(v0, w0, v1 w1) over the two incident elevations, then bilinear in the
+cell (which is what Mitsuba's three separate look-ups over channel, azimuth
+and elevation reduce to at a channel's own index).
+
+Conventions (Mitsuba's, which the C reader's renderer convention follows):
+wi = si.wi is the direction held fixed (the viewer on a camera path), wo the
+one evaluated or sampled; both in the shading frame; one-sided: zero unless
+both are above the surface.
+"""
+
+import ctypes
+import hashlib
+import math
+import os
+import tempfile
+
+import numpy as np
+
+from . import _native
+from ._native import lib
+from .tensor_file import TensorFileError, read_tensor_file
+
+import drjit as dr
+import mitsuba as mi
+
+PI = math.pi
+# Mitsuba's square coordinates of a direction: u_theta = sqrt(theta / (pi/2)),
+# u_phi = (phi + pi) / (2 pi).
+TWO_OVER_PI = 2.0 / PI
+INV_TWO_PI = 1.0 / (2.0 * PI)
+TWO_PI_SQUARED = 2.0 * PI * PI
+
+def _elevation(d):
+    """The elevation of a unit vector, 2 asin(|d - n| / 2): stable at the
+    pole (Mitsuba's `measured` computes it so)."""
+    dist = dr.sqrt(dr.square(d.x) + dr.square(d.y) + dr.square(d.z - 1.0))
+    return 2.0 * dr.safe_asin(0.5 * dist)
+
+
+def _theta_to_u(theta):
+    return dr.sqrt(theta * TWO_OVER_PI)
+
+
+def _phi_to_u(phi):
+    return (phi + PI) * INV_TWO_PI
+
+
+class TracedTables:
+    """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
+    current variant, and eval / pdf / sample in Mitsuba's convention."""
+
+    def __init__(self, fields, name=""):
+        for key in ("theta_i", "phi_i", "ndf", "sigma", "vndf", "luminance", "rgb", "jacobian"):
+            if key not in fields:
+                raise TensorFileError("%s: no field `%s` (an RGB table file has it)"
+                                      % (name, key))
+        theta = np.asarray(fields["theta_i"], dtype=np.float32)
+        phi = np.asarray(fields["phi_i"], dtype=np.float32)
+        vndf = np.asarray(fields["vndf"], dtype=np.float32)
+        lum = np.asarray(fields["luminance"], dtype=np.float32)
+        rgb = np.asarray(fields["rgb"], dtype=np.float32)
+        n_pi, n_ti = len(phi), len(theta)
+        if n_pi > 2:
+            raise TensorFileError("%s: %d incident azimuths (anisotropic); the traced path "
+                                  "reads isotropic files" % (name, n_pi))
+        if rgb.ndim != 5 or rgb.shape[:3] != (n_pi, n_ti, 3):
+            raise TensorFileError("%s: field `rgb` of shape %s" % (name, rgb.shape))
+        self.jacobian = bool(int(fields["jacobian"].ravel()[0]))
+        self.jit = dr.is_jit_v(mi.Float)
+        # One azimuth: the elevation is the warps' one parameter.
+        self.use_phi = n_pi > 1
+        self.theta_host = theta.astype(np.float64)
+        self.phi_host = phi.astype(np.float64)
+        if self.use_phi:
+            params = [phi.tolist(), theta.tolist()]
+            self.vndf = mi.MarginalContinuous2D2(np.ascontiguousarray(vndf), params)
+            self.luminance = mi.MarginalContinuous2D2(np.ascontiguousarray(lum), params)
+        else:
+            params = [theta.tolist()]
+            self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
+            self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
+        self.ndf = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["ndf"],
+                                                                 dtype=np.float32),
+                                            [], False, False)
+        self.sigma = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["sigma"],
+                                                                   dtype=np.float32),
+                                              [], False, False)
+        # The values: per slice (azimuth, elevation), node (y, x), the three
+        # channels and a zero, so that a node is one aligned 4-float read.
+        self.size = int(rgb.shape[4]), int(rgb.shape[3])   # (x, y) as Mitsuba's warps
+        packed = np.zeros((n_pi, n_ti, rgb.shape[3], rgb.shape[4], 4), dtype=np.float32)
+        packed[..., :3] = np.moveaxis(rgb, 2, -1)
+        self.values_host = packed.reshape(-1, 4)
+        if self.jit:
+            self.values = mi.Float(packed.ravel())
+            self.theta = mi.Float(theta)
+            self.phi = mi.Float(phi)
+        self.grid_text = "%d x %dx%d x %dx%d" % (n_ti, vndf.shape[2], vndf.shape[3],
+                                                rgb.shape[3], rgb.shape[4])
+        self.name = name
+
+    # ------------------------------------------------------------ helpers
+
+    def _params(self, phi_i, theta_i):
+        return [phi_i, theta_i] if self.use_phi else [theta_i]
+
+    def _weights(self, values_host, values, x):
+        """Mitsuba's interpolation over one parameter (Distribution2D's
+        interpolate_weights): the interval [j, j + 1] by binary search
+        (values[j] < x) and the weights (1 - t, t), t clamped to [0, 1]."""
+        n = len(values_host)
+        if n == 1:
+            return 0, 1.0, 0.0
+        if self.jit:
+            Float, UInt32 = mi.Float, mi.UInt32
+            j = dr.binary_search(1, n - 1, lambda i: dr.gather(Float, values, i) < x) - 1
+            j = UInt32(j)
+            p0 = dr.gather(Float, values, j)
+            p1 = dr.gather(Float, values, j + 1)
+        else:
+            # the first index in [1, n - 1] whose value is not below x, minus 1
+            k = 1
+            while k < n - 1 and values_host[k] < x:
+                k += 1
+            j = k - 1
+            p0, p1 = float(np.float32(values_host[j])), float(np.float32(values_host[j + 1]))
+        t = dr.clip((x - p0) / (p1 - p0), 0.0, 1.0)
+        return j, 1.0 - t, t
+
+    def _gather(self, index, active):
+        """The 4 floats (R, G, B, 0) of a node: one packet read."""
+        if self.jit:
+            return dr.gather(mi.Vector4f, self.values, index, active)
+        row = self.values_host[int(index)]
+        return [float(row[0]), float(row[1]), float(row[2])]
+
+    def rgb(self, sample, phi_i, theta_i, active):
+        """The stored values (R, G, B) at the point sample of the sample
+        square for the incident direction (phi_i, theta_i): Mitsuba's
+        Marginal2D::eval per channel, with all channels at once."""
+        nx, ny = self.size
+        n_ti = len(self.theta_host)
+        jt, wt0, wt1 = self._weights(self.theta_host, self.theta if self.jit else None, theta_i)
+        if self.use_phi:
+            jp, wp0, wp1 = self._weights(self.phi_host, self.phi if self.jit else None, phi_i)
+        px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
+        py = dr.clip(sample.y, 0.0, 1.0) * float(ny - 1)
+        if self.jit:
+            UInt32, Int32 = mi.UInt32, mi.Int32
+            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
+            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
+        else:
+            ox = min(int(px), nx - 2)
+            oy = min(int(py), ny - 2)
+        fx = px - ox
+        fy = py - oy
+        node = oy * nx + ox
+        size = nx * ny
+
+        def at(theta_index, offset):
+            # Mitsuba's nesting: the azimuth innermost, fma(v0, w0, v1 w1).
+            if not self.use_phi:
+                return self._gather(theta_index * size + node + offset, active)
+            v0 = self._gather((jp * n_ti + theta_index) * size + node + offset, active)
+            v1 = self._gather(((jp + 1) * n_ti + theta_index) * size + node + offset, active)
+            return [dr.fma(v0[c], wp0, v1[c] * wp1) for c in range(3)]
+
+        def corner(offset):
+            v0, v1 = at(jt, offset), at(jt + 1, offset)
+            return [dr.fma(v0[c], wt0, v1[c] * wt1) for c in range(3)]
+
+        v00, v10 = corner(0), corner(1)
+        v01, v11 = corner(nx), corner(nx + 1)
+        return [dr.lerp(dr.lerp(v00[c], v10[c], fx), dr.lerp(v01[c], v11[c], fx), fy)
+                for c in range(3)]
+
+    def _incident(self, wi):
+        theta_i = _elevation(wi)
+        phi_i = dr.atan2(wi.y, wi.x)
+        u_wi = mi.Point2f(_theta_to_u(theta_i), _phi_to_u(phi_i))
+        return theta_i, phi_i, u_wi
+
+    def _jacobian_scale(self, u_m, u_wi, active):
+        """D(m) / (4 sigma(wi)): the factor of values stored with the
+        jacobian rule (docs/formats.md)."""
+        return self.ndf.eval(u_m, active=active) / (4.0 * self.sigma.eval(u_wi, active=active))
+
+    # ------------------------------------------------------ the three calls
+
+    def eval_pdf(self, wi, wo, active, want_value=True, want_pdf=True):
+        """(f cos theta_o as a list of 3 Float, or None; the pdf per solid
+        angle of wo, or None), zero where not active or below the surface."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+        m = dr.normalize(wo + wi)
+        theta_i, phi_i, u_wi = self._incident(wi)
+        theta_m = _elevation(m)
+        phi_m = dr.atan2(m.y, m.x)
+        u_phi = _phi_to_u(phi_m - phi_i)
+        u_m = mi.Point2f(_theta_to_u(theta_m), u_phi - dr.floor(u_phi))
+        params = self._params(phi_i, theta_i)
+        sample, vndf_pdf = self.vndf.invert(u_m, params, active)
+        value = pdf = None
+        if want_value:
+            value = self.rgb(sample, phi_i, theta_i, active)
+            if self.jacobian:
+                scale = self._jacobian_scale(u_m, u_wi, active)
+                value = [v * scale for v in value]
+            value = [dr.select(active, v, 0.0) for v in value]
+        if want_pdf:
+            lum = self.luminance.eval(sample, params, active)
+            jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * mi.Frame3f.sin_theta(m), 1e-6) * \
+                4.0 * dr.dot(wi, m)
+            pdf = dr.select(active, vndf_pdf * lum / jacobian, 0.0)
+        return value, pdf
+
+    def sample(self, wi, sample2, active):
+        """(wo, pdf, f cos theta_o / pdf as a list of 3 Float, ok) for the
+        two random numbers sample2 (Mitsuba's `measured` takes them as
+        (sample2.y, sample2.x) into the luminance warp)."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+        theta_i, phi_i, u_wi = self._incident(wi)
+        params = self._params(phi_i, theta_i)
+        sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
+                                                active)
+        u_m, vndf_pdf = self.vndf.sample(sample, params, active)
+        phi_m = (2.0 * u_m.y - 1.0) * PI + phi_i
+        theta_m = dr.square(u_m.x) * (0.5 * PI)
+        sin_phi, cos_phi = dr.sincos(phi_m)
+        sin_theta, cos_theta = dr.sincos(theta_m)
+        m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
+        dot = dr.dot(wi, m)
+        jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * sin_theta, 1e-6) * 4.0 * dot
+        wo = dr.fma(m, 2.0 * dot, -wi)
+        pdf = vndf_pdf * lum_pdf / jacobian
+        value = self.rgb(sample, phi_i, theta_i, active)
+        if self.jacobian:
+            scale = self._jacobian_scale(u_m, u_wi, active)
+            value = [v * scale for v in value]
+        ok = active & (mi.Frame3f.cos_theta(wo) > 0) & (pdf > 0)
+        weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
+        return wo, dr.select(ok, pdf, 0.0), weight, ok
+
+    def describe(self):
+        """The grid: incident elevations x VNDF grid x sample grid."""
+        return self.grid_text
+
+
+# ------------------------------------------------------- tables made on load
+
+
+class TablesOptions(ctypes.Structure):
+    """``ll_tables_options`` (size-tagged; include/layerlab/ll_tables.h,
+    experimental); a new instance is LL_TABLES_OPTIONS_INIT."""
+
+    _fields_ = [("struct_size", ctypes.c_size_t), ("n_theta_i", ctypes.c_size_t),
+                ("vndf_size", ctypes.c_size_t), ("sample_size", ctypes.c_size_t),
+                ("format", ctypes.c_int), ("description", ctypes.c_char_p),
+                ("wavelengths", ctypes.POINTER(ctypes.c_double)),
+                ("n_wavelengths", ctypes.c_size_t), ("spectrum", ctypes.c_void_p),
+                ("spectrum_user", ctypes.c_void_p), ("tolerance", ctypes.c_double)]
+
+    def __init__(self):
+        super().__init__()
+        self.struct_size = ctypes.sizeof(TablesOptions)
+
+
+def _write_tables(handle, path, tolerance, description):
+    """ll_tables_write_from_bsdf(handle, path): an RGB file, every grid size
+    chosen by the tolerance (0: the library's default)."""
+    try:
+        fn = getattr(lib._cdll, "ll_tables_write_from_bsdf")
+    except AttributeError:
+        raise _native.UnsupportedError(
+            "ll_tables_write_from_bsdf is not exported by the loaded liblayerlab (%s); the "
+            "Mitsuba plugin's \"tables\" mode on a .bsdf needs a newer library (or give "
+            "\"mode\": \"traced\")" % lib.path, 6) from None
+    fn.restype = ctypes.c_int
+    fn.argtypes = [_native.bsdf_p, ctypes.c_char_p, ctypes.POINTER(TablesOptions),
+                   ctypes.c_void_p]
+    opts = TablesOptions()
+    opts.tolerance = tolerance
+    opts.description = description.encode("utf-8")
+    _native.check(fn(handle, os.fsencode(path), ctypes.byref(opts), None))
+
+
+def _cache_key(source, tolerance):
+    """What the tables made from source depend on: its bytes, the tolerance
+    and the library that writes them (its version and, when it is a file
+    here, its size and time, so that a rebuilt writer is not served the
+    tables of the old one)."""
+    digest = hashlib.sha256()
+    with open(source, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    digest.update(lib.ll_version_string())
+    digest.update(repr(float(tolerance)).encode())
+    try:
+        st = os.stat(lib.path)
+        digest.update(("%d %d" % (st.st_size, st.st_mtime_ns)).encode())
+    except (OSError, TypeError):
+        pass
+    return digest.hexdigest()[:40]
+
+
+def tables_from_bsdf(handle, source, tolerance=0.0, cache=True):
+    """The fields of the table file made from the opened, opaque, untextured
+    .bsdf handle (its path source) by ll_tables_write_from_bsdf, with grid
+    sizes chosen by the tolerance, and where they came from. With cache,
+    the file is kept in the user's cache directory (layerlab.user_cache_dir(),
+    subfolder "mitsuba-tables", named by a hash of the source's bytes, the
+    tolerance and the library) and read from there by later loads: the
+    tolerance search measures each grid it tries against the source and
+    takes seconds (2.6 s of CPU for rough gold, 9.4 s for
+    examples/coated-gold.layers), which a scene load should pay once, not at
+    every load. Without cache, or when the cache cannot be
+    written, a temporary file, removed once read. Every table file read is
+    opened by the C reader first (ll_bsdf_open validates it)."""
+    from ._errors import InvalidArgumentError
+    from .material import user_cache_dir
+    from .storage import BSDFStorage
+    description = "layerlab: tables of %s" % os.path.basename(source)
+    folder = None
+    if cache:
+        try:
+            folder = os.path.join(user_cache_dir(), "mitsuba-tables")
+            os.makedirs(folder, exist_ok=True)
+        except (OSError, InvalidArgumentError):
+            folder = None  # (no cache directory: a temporary file below)
+    if folder is not None:
+        path = os.path.join(folder, _cache_key(source, tolerance) + ".tab")
+        try:
+            made = False
+            if not os.path.exists(path):
+                _write_tables(handle, path, tolerance, description)
+                made = True
+            BSDFStorage(path).close()
+            return read_tensor_file(path), ("made and cached in %s" if made else
+                                            "cached in %s") % path
+        except OSError:
+            pass  # (the cache cannot be written or read: a temporary file below)
+    with tempfile.TemporaryDirectory(prefix="layerlab-tables-") as scratch:
+        path = os.path.join(scratch, "tables.tab")
+        _write_tables(handle, path, tolerance, description)
+        BSDFStorage(path).close()
+        return read_tensor_file(path), "made on load"
