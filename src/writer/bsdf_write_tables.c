@@ -22,6 +22,7 @@
 #include "writer/bsdf_write_tables.h"
 #include "writer/bsdf_write_tensor.h"
 #include "reader/tables_warp.h"
+#include "reader/tables_internal.h"
 #include "reader/cie.h"
 #include "support/watch.h"
 
@@ -119,9 +120,15 @@ int ll_tables_transmits(const ll_bsdf *b)
     return transmitted > TRANSMISSION_TOLERANCE * reflected;
 }
 
-/* The format holds one untextured material. */
+/* The format holds one untextured material; an extended table file (a
+ * transmissive material's) has no order-0 series to weigh its lobes by,
+ * so it converts from its .bsdf only. */
 static ll_status check_source(const ll_bsdf *b)
 {
+    if (b->measured && b->measured->extended)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file is a transmissive table file (a set of tables per "
+                       "lobe); write its tables from the .bsdf it came from");
     if (b->n_bases != 1)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        FN ": the file is textured (%zu basis functions); a table file holds "
