@@ -166,12 +166,25 @@ static void vndf_slice(const writer *w, lobe *l, size_t t)
 }
 
 /* The direction the reader's sampler gives for the normal's point um:
- * 1 and wo, or 0 if none. */
-static int direction(const lobe *l, const double wi[3], const double um[2], double wo[3])
+ * 1 and wo, or 0 if none. *sampling receives the factor by which the
+ * sampler's density over wo differs from p_l p_v / area (the density of
+ * the two squares per steradian of normals) times the stored value's
+ * D / (4 sigma wi.m) (the value's own share): 1 for a reflection (d omega_m
+ * / d omega_o = 1 / (4 wi.m)), 4 wi.m d omega_m / d omega_o for a
+ * refraction. The luminance table is divided by it, so that the sampler
+ * follows f |cos| for refraction as it does for reflection. */
+static int direction(const lobe *l, const double wi[3], const double um[2], double wo[3],
+                     double *sampling)
 {
     double tm, m[3], d;
-    if (l->transmit && l->refract_eta > 0.0)
-        return ll_tables_refract(wi, um, 0.0, l->refract_eta, &tm, m, wo) > 0.0 && wo[2] < 0.0;
+    *sampling = 1.0;
+    if (l->transmit && l->refract_eta > 0.0) {
+        d = ll_tables_refract(wi, um, 0.0, l->refract_eta, &tm, m, wo);
+        if (!(d > 0.0) || !(wo[2] < 0.0))
+            return 0;
+        *sampling = 4.0 * d * ll_tables_refract_jacobian(wi, wo, m, l->refract_eta);
+        return *sampling > 0.0 && ll_is_finite(*sampling);
+    }
     d = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
     if (!(d > 0.0) || !(wo[2] > 0.0))
         return 0;
@@ -191,8 +204,9 @@ static void value_slice(const writer *w, lobe *l, size_t t)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
+            double sampling = 1.0;
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
-            if (wi[2] > 0.0 && direction(l, wi, um, wo)) {
+            if (wi[2] > 0.0 && direction(l, wi, um, wo, &sampling)) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
                 scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
                 if (!ll_is_finite(scale))
@@ -203,7 +217,7 @@ static void value_slice(const writer *w, lobe *l, size_t t)
                 f[c] = v > 0.0 ? v : 0.0;
                 rgb[c * plane + y * ns + x] = (float)f[c];
             }
-            y_lum = ll_tables_luminance(f);
+            y_lum = ll_tables_luminance(f) / sampling;
             lum[y * ns + x] = (float)y_lum;
             if (y_lum > top)
                 top = y_lum;
