@@ -237,7 +237,10 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
         return ll_tables_write_grid(b, path, &s.o, NULL, monitor);
     s.tolerance = s.o.tolerance != 0.0 ? s.o.tolerance : DEFAULT_TOLERANCE;
     s.sets = ll_tables_transmits(b) ? 4.0 : 1.0;
-    s.cap = (double)b->file_size > SIZE_CAP_FLOOR ? (double)b->file_size : SIZE_CAP_FLOOR;
+    /* The floor per set: a transmissive file holds four. */
+    s.cap = (double)b->file_size > s.sets * SIZE_CAP_FLOOR ? (double)b->file_size
+                                                          : s.sets * SIZE_CAP_FLOOR;
+
     if (!(s.tolerance >= 0.005 && s.tolerance <= 1.0))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": tolerance %g out of range (0.005..1)",
                        s.o.tolerance);
