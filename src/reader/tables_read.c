@@ -216,7 +216,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *prefix, const sha
                           ll_measured *m)
 {
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
-    const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL;
+    char ne[NAME_CAP];
+    const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
+    int transmit = strncmp(prefix, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
     size_t n, n_ti = sh->n_ti, n_pi = sh->n_pi;
@@ -227,13 +229,24 @@ static ll_status read_set(const ll_tensor_file *t, const char *prefix, const sha
     field_name(nl, sizeof nl, prefix, "luminance");
     field_name(nr, sizeof nr, prefix, sh->spectral ? "spectra" : "rgb");
     field_name(na, sizeof na, prefix, "albedo");
+    field_name(ne, sizeof ne, prefix, "warp_eta");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
         (s = require(t, nv, 4, file, &vndf)) != LL_OK ||
         (s = require(t, nl, 4, file, &lum)) != LL_OK ||
         (s = require(t, nr, 5, file, &rgb)) != LL_OK ||
-        (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK))
+        (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK) ||
+        (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK))
         return s;
+    /* The refraction warp's relative index, or 0: the z-flipped
+     * direction's (tables_lobes.c). */
+    if (warp && (warp->count != 1 || (ll_tensor_f32(warp, 0) != 0.0f &&
+                                      !(ll_tensor_f32(warp, 0) >= 1e-3f &&
+                                        ll_tensor_f32(warp, 0) <= 1e3f) ) ||
+                 ll_tensor_f32(warp, 0) == 1.0f))
+        return shape_error(file, ne, "must be one value: 0 (the warp of the z-flipped "
+                                     "direction) or a relative index in [0.001, 1000] other "
+                                     "than 1");
     if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
         return shape_error(file, nn, "each extent must be >= 2");
     if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
@@ -286,6 +299,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *prefix, const sha
         for (n = 0; n < n_ti; ++n)
             m->weight[n] = (double)ll_tensor_f32(alb, n);
     }
+    if (warp)
+        m->refract_eta = (double)ll_tensor_f32(warp, 0);
     return LL_OK;
 }
 
@@ -431,9 +446,6 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
                 FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
             if ((s = read_set(&t, ll_measured_lobe_prefix(k), &sh, m->lobe[k])) != LL_OK)
                 goto done;
-            /* A net interface: the refraction warp (tables_lobes.c). */
-            if (k >= LL_LOBE_TRANSMIT_TOP && fabs(eta - 1.0) > 1e-6)
-                m->lobe[k]->refract_eta = k == LL_LOBE_TRANSMIT_TOP ? eta : 1.0 / eta;
         }
     }
     s = copy_metadata(b, &t, file);

@@ -16,6 +16,9 @@
  * reflected and z-flipped (eta 1: tables_lobes.c says why), and f |cos|
  * 4 sigma / D stored there. The values are the .bsdf's own (importance
  * transport); the reader applies radiance's eta^2 as for the .bsdf.
+ * A transmitted set's "warp_eta" names its warp: the refraction's
+ * relative index, or 0 for the z-flipped direction's (the reader takes
+ * either, so a writer may choose per set).
  * A set's "albedo" field holds its luminance albedo per incident
  * elevation (the .bsdf's order-0 integral), by which the reader's sampler
  * picks between the reflected and the transmitted lobe.
@@ -34,7 +37,7 @@
 #define FN "ll_tables_write_from_bsdf"
 #define LUMINANCE_FLOOR 1e-3
 #define LOBES 4
-#define FIELDS_PER_LOBE 6
+#define FIELDS_PER_LOBE 7
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
@@ -42,7 +45,7 @@ static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", 
 typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
-    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo;
+    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1];
     ll_warp2d ndf_w, sigma_w, vndf_w;
     double alpha;
     char names[FIELDS_PER_LOBE][40];
@@ -200,7 +203,7 @@ static void value_slice(const writer *w, lobe *l, size_t t)
     double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
     double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(l, th), top = 0.0, floor_v;
     float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
-    for (y = 0; y < ns; ++y)
+    for (y = 0; y < ns; ++y) {
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
@@ -222,6 +225,7 @@ static void value_slice(const writer *w, lobe *l, size_t t)
             if (y_lum > top)
                 top = y_lum;
         }
+    }
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
@@ -341,6 +345,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         l->transmit = k >= 2;
         if (l->transmit && fabs(b->eta - 1.0) > 1e-6)
             l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
+        l->warp_eta[0] = (float)l->refract_eta;
     }
     albedos(&w);
     ll_watch_stage(&watch, "tables", 0.0, 0.9, LOBES * w.n_ti);
@@ -370,8 +375,9 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     }
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w.l[k];
-        static const char *const base[FIELDS_PER_LOBE] = { "ndf", "sigma", "vndf",
-                                                           "luminance", "rgb", "albedo" };
+        static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
+                                                           "luminance", "rgb",   "albedo",
+                                                           "warp_eta" };
         int j;
         for (j = 0; j < FIELDS_PER_LOBE; ++j)
             snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
@@ -386,8 +392,10 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                 { l->names[4], LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, l->rgb, NULL,
                   NULL },
                 { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
+                { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
             };
-            for (j = 0; j < FIELDS_PER_LOBE; ++j)
+            /* warp_eta: transmitted sets only. */
+            for (j = 0; j < (l->transmit ? FIELDS_PER_LOBE : FIELDS_PER_LOBE - 1); ++j)
                 f[nf++] = set[j];
         }
     }
