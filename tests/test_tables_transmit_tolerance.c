@@ -24,6 +24,17 @@ typedef struct bounds {
     double r, t, p50, p95, p99;
 } bounds;
 
+/* What the tables reach (64 x 96^2 x 96^2 for both, the largest grid the
+ * size cap lets the search take), with a margin: glass R 0.199%, T 3.37%
+ * (0.10% from the top; from below 1.3..3.4% at 30..60 degrees), median
+ * 0.054%, 95th 1.75%, 99th 14.9% (by lobe: reflection above 1.6%,
+ * transmission from above 1.8%, reflection below 28%, transmission from
+ * below 20%); pane R 1.37% (at 85 degrees; 0.13% up to 80), T 0.32%,
+ * median 0.080%, 95th 0.85%, 99th 5.6% (reflection 3.3%, transmission
+ * 10%). */
+#define BOUND_GLASS 0.003, 0.04, 0.002, 0.02, 0.16
+#define BOUND_PANE 0.016, 0.004, 0.002, 0.01, 0.065
+
 static void check(const char *text, const char *name, const bounds *at_most)
 {
     char bsdf_path[600], tab_path[600];
