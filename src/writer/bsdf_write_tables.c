@@ -1,6 +1,7 @@
 /*
  * ll_tables_write_from_bsdf (ll_tables.h): the tables of the `measured`
- * format from an opened opaque, untextured file, following the producer's
+ * format from an opened opaque, untextured file (a transmissive one goes
+ * to bsdf_write_tables_lobes.c), following the producer's
  * steps of docs/measured-format.md:
  *  1. D and sigma from retro-reflection (bsdf_write_tables_ndf.c), stored
  *     as float tables over (u_phi, u_theta) with two equal rows;

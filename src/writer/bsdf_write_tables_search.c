@@ -233,6 +233,10 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     s.o = defaults;
     if (opts && (st = ll_struct_read(&s.o, sizeof s.o, opts, FN, "ll_tables_options")) != LL_OK)
         return st;
+    if (s.o.format == LL_TABLES_SPECTRAL && ll_tables_transmits(b))
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       FN ": spectral tables of a transmissive file are not written by this "
+                       "version (LL_TABLES_RGB writes them)");
     if (s.o.n_theta_i && s.o.vndf_size && s.o.sample_size)
         return ll_tables_write_grid(b, path, &s.o, NULL, monitor);
     s.tolerance = s.o.tolerance != 0.0 ? s.o.tolerance : DEFAULT_TOLERANCE;
