@@ -200,6 +200,11 @@ typedef struct shared {
     double *theta_v, *phi_v, *lambda_v;
 } shared;
 
+static int warp_eta_ok(double e)
+{
+    return e == 0.0 || (e >= 1e-3 && e <= 1e3 && e != 1.0);
+}
+
 /* prefix + base into name (prefixes are the reader's own, short). */
 static const char *field_name(char *name, size_t cap, const char *prefix, const char *base)
 {
@@ -239,11 +244,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *prefix, const sha
         (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK))
         return s;
     /* The refraction warp's relative index, or 0: the z-flipped
-     * direction's (tables_lobes.c). */
-    if (warp && (warp->count != 1 || (ll_tensor_f32(warp, 0) != 0.0f &&
-                                      !(ll_tensor_f32(warp, 0) >= 1e-3f &&
-                                        ll_tensor_f32(warp, 0) <= 1e3f) ) ||
-                 ll_tensor_f32(warp, 0) == 1.0f))
+     * direction's (tables_lobes.c); 1 would have no refraction half
+     * vector. require() has checked it finite and >= 0. */
+    if (warp && (warp->count != 1 || !warp_eta_ok((double)ll_tensor_f32(warp, 0))))
         return shape_error(file, ne, "must be one value: 0 (the warp of the z-flipped "
                                      "direction) or a relative index in [0.001, 1000] other "
                                      "than 1");
