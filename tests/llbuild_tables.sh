@@ -1,8 +1,9 @@
 #!/bin/sh
 # llbuild --format measured: the table file written instead of the .bsdf
 # (byte for byte what llconvert makes of the .bsdf of the same build), the
-# grid options, --dry-run's size of the tables, the refusal of transmissive
-# and swept stacks before any build, and that a failed or interrupted run
+# grid options, --dry-run's size of the tables, transmissive stacks (RGB
+# tables of every lobe), the refusal of spectral transmissive and of swept
+# stacks before any build, and that a failed or interrupted run
 # leaves neither the output nor a temporary beside it.
 # Run by `make test` from the checkout with BUILD set.
 set -u
@@ -72,17 +73,17 @@ only_layers "--dry-run"
 
 # --- refused before building, saying why
 printf 'dielectric eta=1.5 alpha=0.1\n' >"$tmp/w/glass.layers"
-expect 1 "a transmissive stack" -- "$llbuild" --format measured "$tmp/w/glass.layers" \
-    -o "$tmp/w/glass.tab"
+expect 1 "a transmissive stack, spectral" -- "$llbuild" --format measured \
+    --wavelengths 400:700:100 "$tmp/w/glass.layers" -o "$tmp/w/glass.tab"
 contains "$tmp/err" "transmissive stack" "transmissive refusal names it"
-contains "$tmp/err" "reflection only" "transmissive refusal says why"
+contains "$tmp/err" "RGB tables only" "transmissive refusal says what is written"
 if grep -q "%" "$tmp/err"; then bad "a transmissive stack was built before its refusal"; else ok; fi
 printf 'conductor eta=Au alpha=[0.1 0.2]\n' >"$tmp/w/swept.layers"
 expect 1 "a swept stack" -- "$llbuild" --format measured "$tmp/w/swept.layers" \
     -o "$tmp/w/swept.tab"
 contains "$tmp/err" "swept (textured) material" "swept refusal names it"
-expect 1 "a transmissive stack, --dry-run" -- "$llbuild" --format measured --dry-run \
-    "$tmp/w/glass.layers"
+expect 1 "a transmissive stack, spectral, --dry-run" -- "$llbuild" --format measured \
+    --dry-run --wavelengths 400:700:100 "$tmp/w/glass.layers"
 expect 1 "grid options without measured" -- "$llbuild" --vndf 16 "$tmp/w/gold.layers" \
     -o "$tmp/w/x.bsdf"
 contains "$tmp/err" "size the tables of --format measured" "grid option message"
@@ -91,6 +92,17 @@ expect 1 "a grid size out of range" -- "$llbuild" --format measured --sample 1 \
     "$tmp/w/gold.layers" -o "$tmp/w/x"
 contains "$tmp/err" "--sample wants a whole number in 2..4096" "grid range message"
 only_layers "refusals"
+
+# --- a transmissive stack: RGB tables of every lobe, read back transmissive
+expect 0 "--dry-run, a transmissive stack" -- "$llbuild" --format measured --dry-run \
+    --vndf 64 --sample 32 --theta-i 16 $small "$tmp/w/glass.layers"
+contains "$tmp/out" "16 incident elevations x 64^2 visible-normal x 32^2 sample grid: about 2.02 MiB" \
+    "--dry-run size counts every lobe's set"
+expect 0 "a transmissive stack" -- "$llbuild" --format measured $grid $small \
+    "$tmp/w/glass.layers" -o "$tmp/w/glass.tab"
+contains "$tmp/out" "(format measured)" "transmissive: summary names the format"
+expect 0 "llconvert of a transmissive table" -- "$llconvert" --dry-run "$tmp/w/glass.tab"
+rm -f "$tmp/w/glass.tab"
 
 # --- --wavelengths: a spectral file (the material at each wavelength), no
 # temporary left; the range checked before any work, saying what is wrong

@@ -1,8 +1,9 @@
 #!/bin/sh
 # llconvert, the command: help, version, exit codes (0 done, 1 bad input,
 # 2 I/O), --dry-run, a conversion to the `measured` tables that reads back
-# as such, and the refusal, with the reason, of transmissive and textured
-# sources (built here by llbuild on a tiny grid).
+# as such, transmissive sources written as a set of tables per lobe, and
+# the refusal, with the reason, of textured sources and of transmissive
+# table files (built here by llbuild on a tiny grid).
 # Run by `make test` from the checkout with BUILD set.
 set -u
 BUILD=${BUILD:-build}
@@ -50,15 +51,23 @@ if [ -x "$llbuild" ]; then
     # A medium alone: eta 1, but light goes through.
     printf 'set nodes=12 orders=6\nmedium albedo=0.9 tau=1 g=0.5\n' >"$tmp/medium.layers"
     if "$llbuild" --quiet "$tmp/medium.layers" -o "$tmp/medium.bsdf"; then
-        expect 1 "transmitting source of eta 1" -- "$llconvert" "$tmp/medium.bsdf" -o "$tmp/m.tab"
-        contains "$tmp/err" "transmits light" "transmission refusal says why"
+        # transmissive: every lobe's tables (the warp of the z-flipped
+        # direction: eta 1), read back as a transmissive file
+        expect 0 "transmitting source of eta 1" -- "$llconvert" "$tmp/medium.bsdf" \
+            -o "$tmp/m.tab" --theta-i 4 --vndf 16 --sample 8
+        expect 1 "a transmissive table converts from its .bsdf only" -- "$llconvert" \
+            "$tmp/m.tab" -o "$tmp/m2.tab"
+        contains "$tmp/err" "transmissive table file" "transmissive table refusal says why"
     else
         bad "llbuild could not build the medium"
     fi
     if "$llbuild" --quiet "$tmp/glass.layers" -o "$tmp/glass.bsdf" &&
        "$llbuild" --quiet "$tmp/textured.layers" -o "$tmp/textured.bsdf"; then
-        expect 1 "transmissive source" -- "$llconvert" "$tmp/glass.bsdf" -o "$tmp/glass.tab"
-        contains "$tmp/err" "reflection only" "transmissive refusal says why"
+        expect 0 "transmissive source" -- "$llconvert" "$tmp/glass.bsdf" -o "$tmp/glass.tab" \
+            --theta-i 4 --vndf 16 --sample 8
+        expect 0 "llplot draws a transmissive table" -- "$BUILD/bin/llplot" --polar \
+            "$tmp/glass.tab" -o "$tmp/glass-polar.png"
+        rm -f "$tmp/glass.tab"
         expect 1 "textured source" -- "$llconvert" "$tmp/textured.bsdf" -o "$tmp/tex.tab"
         contains "$tmp/err" "textured" "textured refusal says why"
         [ ! -e "$tmp/glass.tab" ] && [ ! -e "$tmp/tex.tab" ] && ok || bad "a refused file exists"

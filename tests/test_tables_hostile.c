@@ -3,13 +3,15 @@
  * version, shapes that disagree, offsets outside the file, NaN and negative
  * values, absurd sizes, the max_bytes limit, random damage. Each gives a
  * clear error naming what is wrong, never a crash; the damaged bytes are a
- * small valid table written by ll_tables_write_from_bsdf.
+ * small valid table written by ll_tables_write_from_bsdf. The same for a
+ * transmissive (extended) table: its layout, eta and the fields of its
+ * sets, which errors name with their prefix.
  */
 #include "test_bsdf_util.h"
 #include "support/support.h"
 
-static unsigned char *good;
-static size_t good_size;
+static unsigned char *good, *tgood;
+static size_t good_size, tgood_size;
 
 static int setup(void **state)
 {
@@ -26,12 +28,30 @@ static int setup(void **state)
         return 1;
     ll_bsdf_release(src);
     good = ll_test_read_file(path, &good_size);
+    /* A transmissive table: a small rough glass. */
+    {
+        ll_material *m = NULL;
+        char bsdf[600];
+        snprintf(bsdf, sizeof bsdf, "%s/glass.bsdf", ll_test_dir());
+        snprintf(path, sizeof path, "%s/glass.tab", ll_test_dir());
+        if (ll_material_parse("set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n", "glass",
+                              &m) != LL_OK ||
+            ll_material_build(m, NULL, NULL, bsdf) != LL_OK)
+            return 1;
+        ll_material_destroy(m);
+        if (ll_bsdf_open(bsdf, NULL, &src) != LL_OK ||
+            ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
+            return 1;
+        ll_bsdf_release(src);
+        tgood = ll_test_read_file(path, &tgood_size);
+    }
     return 0;
 }
 
 static int teardown(void **state)
 {
     free(good);
+    free(tgood);
     return ll_test_dir_teardown(state);
 }
 
@@ -361,6 +381,126 @@ static void test_cancel(void **state)
     ll_bsdf_release(src);
 }
 
+static unsigned char *tcopy(void)
+{
+    unsigned char *d = malloc(tgood_size);
+    assert_non_null(d);
+    memcpy(d, tgood, tgood_size);
+    return d;
+}
+
+/* The first byte of field name's data. */
+static size_t data_at(const unsigned char *d, const char *name)
+{
+    size_t off, shape, rank;
+    locate(d, name, &off, &shape, &rank);
+    return (size_t)get_u64(d + off);
+}
+
+static void test_transmissive_fields(void **state)
+{
+    static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
+    ll_bsdf *b = NULL;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    unsigned char *d;
+    size_t off, shape, rank, at;
+    (void)state;
+    assert_int_equal(ll_bsdf_open_memory(tgood, tgood_size, NULL, &b), LL_OK);
+    assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+    assert_int_equal(info.format, LL_BSDF_FORMAT_TABLES);
+    assert_true(fabs(info.eta - 1.5) < 1e-6);
+    ll_bsdf_release(b);
+    /* A set this reader does not know. */
+    d = tcopy();
+    d[data_at(d, "layerlab_layout")] = 'x';
+    expect(d, tgood_size, LL_ERROR_UNSUPPORTED, "\"layerlab_layout\": set \"xeflect_top\"");
+    free(d);
+    /* A set named twice. */
+    d = tcopy();
+    at = data_at(d, "layerlab_layout");
+    memcpy(d + at + strlen("reflect_top "), "reflect_top   ", strlen("reflect_top   "));
+    expect(d, tgood_size, LL_ERROR_FORMAT, "named twice");
+    free(d);
+    /* eta not a number. */
+    d = tcopy();
+    memcpy(d + data_at(d, "eta"), nan_bytes, 4);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"eta\"");
+    free(d);
+    /* A set's field missing: its name damaged. */
+    d = tcopy();
+    locate(d, "transmit_top.ndf", &off, &shape, &rank);
+    d[off - 4] = 'x';
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.ndf\" is missing");
+    free(d);
+    /* A NaN in a set's luminance. */
+    d = tcopy();
+    memcpy(d + data_at(d, "transmit_bottom.luminance") + 4, nan_bytes, 4);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
+    free(d);
+    /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
+    d = tcopy();
+    locate(d, "reflect_bottom.rgb", &off, &shape, &rank);
+    put_u64(d + shape + 16, 2);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.rgb\"");
+    free(d);
+    d = tcopy();
+    locate(d, "transmit_top.albedo", &off, &shape, &rank);
+    put_u64(d + shape, 2);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.albedo\"");
+    free(d);
+}
+
+/* Random damage and out of memory on the transmissive table, as on the
+ * opaque one. */
+static void test_transmissive_damage(void **state)
+{
+    uint64_t rng = 78;
+    int k, j, opened = 0;
+    size_t n, a;
+    ll_bsdf *b = NULL;
+    (void)state;
+    for (k = 0; k < 2000; ++k) {
+        unsigned char *d = tcopy();
+        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
+        b = NULL;
+        for (j = 0; j < flips; ++j)
+            d[(size_t)(ll_test_uniform(&rng) * (double)tgood_size)] ^=
+                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
+        if (ll_bsdf_open_memory(d, tgood_size, NULL, &b) == LL_OK) {
+            double wo[3] = { 0.3, 0.1, -0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
+            ++opened;
+            assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, NULL, f), LL_OK);
+            assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+            u[0] = ll_test_uniform(&rng);
+            u[1] = ll_test_uniform(&rng);
+            assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf,
+                                                f),
+                             LL_OK);
+            assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+            ll_bsdf_release(b);
+        }
+        free(d);
+    }
+    printf("%d of 2000 damaged transmissive copies opened\n", opened);
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_bsdf_open_memory(tgood, tgood_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    for (a = 1; a <= n; ++a) {
+        ll_status s;
+        long long live;
+        b = (ll_bsdf *)1;
+        ll_alloc_fail_after(a);
+        s = ll_bsdf_open_memory(tgood, tgood_size, NULL, &b);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
+        assert_null(b);
+        assert_true(live == 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -375,6 +515,8 @@ int main(void)
         cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_writer_out_of_memory),
         cmocka_unit_test(test_cancel),
+        cmocka_unit_test(test_transmissive_fields),
+        cmocka_unit_test(test_transmissive_damage),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

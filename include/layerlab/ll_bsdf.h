@@ -179,8 +179,13 @@ typedef struct ll_bsdf_info {
  *    the layer convention, both directions above the surface in the
  *    renderer convention; elsewhere 0); the _dir calls evaluate it on the
  *    two directions themselves (wo is the format's fixed direction), not
- *    through (mu_i, mu_o, cos phi_d). Its info has n_channels 3, n_bases
- *    1, eta 1, n_nodes, max_order, n_coeffs 0 and flags 0, and metadata is
+ *    through (mu_i, mu_o, cos phi_d). A transmissive material's table file
+ *    (layerlab's extension: field "layerlab_layout", a set of tables per
+ *    lobe and side; RGB) reflects and transmits on both sides as a .bsdf
+ *    does, transmitted values with the .bsdf's eta^2 in radiance mode, and
+ *    its info's eta is the file's. Its info has n_channels 3, n_bases
+ *    1, eta 1 (an extended file: its own), n_nodes, max_order, n_coeffs 0
+ *    and flags 0, and metadata is
  *    the file's "layerlab_metadata" field (else its "description");
  *    ll_bsdf_nodes gives NULL and ll_bsdf_get_tables LL_ERROR_UNSUPPORTED. */
 #define LL_BSDF_FORMAT_FOURIER 0u

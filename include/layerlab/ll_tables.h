@@ -103,7 +103,7 @@ typedef struct ll_tables_options {
 #define LL_TABLES_OPTIONS_INIT { sizeof(ll_tables_options), 0, 0, 0, LL_TABLES_RGB, NULL, \
                                  NULL, 0, NULL, NULL, 0.0 }
 
-/* Write the tables of an opened, untextured, opaque file b (a .bsdf, or a
+/* Write the tables of an opened, untextured file b (a .bsdf, or an opaque
  * table file) to path, atomically (a temporary file renamed over path when
  * complete; on failure path is untouched). The microfacet normal
  * distribution is derived from b's retro-reflection (the dominant
@@ -130,16 +130,26 @@ typedef struct ll_tables_options {
  * values are held at a time: the values go to a scratch file and are
  * copied into place when the file is written, so memory holds the warp,
  * the luminance and the sample directions, not n_wavelengths tables.
+ *
+ * A transmissive b (eta != 1, or light transmitted) gives an extended
+ * file, which only layerlab reads (Mitsuba 3's and pbrt-v4's `measured`
+ * refuse it: it has no field of the plain names): a set of the tables
+ * above per lobe and side, prefixed reflect_top., reflect_bottom.,
+ * transmit_top., transmit_bottom. (the side of the fixed direction), the
+ * field "layerlab_layout" naming them and "eta" the relative index; the
+ * transmitted lobes warped about the refraction half vector (eta != 1) or
+ * the z-flipped direction (eta 1); RGB only.
  * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured file
- * (several basis functions) or a transmissive one (eta != 1, or light
- * transmitted), all with a message saying why the format cannot hold it;
+ * (several basis functions), a transmissive table file (write its tables
+ * from its .bsdf), all with a message saying why; LL_ERROR_UNSUPPORTED for
+ * LL_TABLES_SPECTRAL with a transmissive b;
  * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY; LL_ERROR_CANCELLED. Thread-safe (b is
  * only read). */
 LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts,
                                            const ll_monitor *monitor);
 
-/* The table file of an opaque, untextured material (ll_material.h) at
+/* The table file of an untextured material (ll_material.h) at
  * path, atomically. rgb (nullable) is the opened file of its RGB build
  * (ll_material_build_layers, then a .bsdf), from which the warp is made; a
  * NULL rgb makes the library build it (written to a temporary .bsdf beside
@@ -170,7 +180,8 @@ LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
  * fifth of a spectral file's, the first 0.8 of an RGB file's); a cancel is
  * seen between wavelengths.
  * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
- * LL_ERROR_INVALID_ARGUMENT for a swept or transmissive material. */
+ * LL_ERROR_INVALID_ARGUMENT for a swept material, and for a transmissive
+ * one with LL_TABLES_SPECTRAL (its tables are written in RGB only). */
 LL_API ll_status ll_material_write_tables(const ll_material *material,
                                           const ll_build_options *build, const ll_bsdf *rgb,
                                           const char *path, const ll_tables_options *tables,

@@ -218,10 +218,13 @@ ll_status ll_material_write_tables(const ll_material *m, const ll_build_options 
                        FN ": %s is swept (textured): a table file holds one material without "
                        "parameters",
                        m->source);
-    if (!ll_material_is_opaque(m))
+    /* A transmissive stack's tables (a set per lobe and side) are written
+     * in RGB only. */
+    if (!ll_material_is_opaque(m) && t.format == LL_TABLES_SPECTRAL)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": %s transmits light (its bottom word is not opaque): the `measured` "
-                       "format stores reflection only",
+                       FN ": %s transmits light (its bottom word is not opaque): its tables "
+                       "of every lobe are written in RGB only (LL_TABLES_RGB); the `measured` "
+                       "format itself stores reflection only",
                        m->source);
     if (monitor && (s = ll_struct_check(monitor, FN, "ll_monitor")) != LL_OK)
         return s;

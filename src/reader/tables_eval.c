@@ -146,6 +146,10 @@ void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[
 {
     double m[3], um[2], s[2], theta_m, p_v;
     incident in;
+    if (t->extended) {
+        ll_measured_lobes_eval(t, wi, wo, value);
+        return;
+    }
     value[0] = value[1] = value[2] = 0.0;
     if (!half_vector(wi, wo, m))
         return;
@@ -159,6 +163,8 @@ double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo
 {
     double m[3], um[2], s[2], theta_m, p_v, p_l;
     incident in;
+    if (t->extended)
+        return ll_measured_lobes_pdf(t, wi, wo);
     if (!half_vector(wi, wo, m))
         return 0.0;
     incident_of(t, wi, 0, &in);
@@ -174,6 +180,8 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
 {
     double pt[2], s[2], um[2], p_l, p_v, theta_m, m[3], d;
     incident in;
+    if (t->extended)
+        return ll_measured_lobes_sample(t, wi, u, wo, pdf, value);
     wo[0] = wo[1] = 0.0;
     wo[2] = 1.0;
     *pdf = 0.0;
@@ -210,7 +218,16 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
 
 /* The viewer at azimuth 0 (the files are isotropic): wi of the format is
  * our incident direction reversed, wo the outgoing one reversed, with the
- * azimuth phi_d measured from the mirror direction (ll_bsdf.h). */
+ * azimuth phi_d measured from the mirror direction (ll_bsdf.h). A plain
+ * file reflects from the top only; an extended one (tables_lobes.c) has
+ * every pair of sides. */
+static int covers(const ll_bsdf *b, double mu_i, double mu_o)
+{
+    if (b->measured->extended)
+        return mu_i != 0.0 && mu_o != 0.0 && ll_is_finite(mu_i) && ll_is_finite(mu_o);
+    return mu_i > 0.0 && mu_o < 0.0;
+}
+
 static void viewer(double mu_i, double wi[3])
 {
     double s = 1.0 - mu_i * mu_i;
@@ -234,7 +251,7 @@ void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos
     double wi[3], wo[3], v[3], scale;
     int c;
     rgb[0] = rgb[1] = rgb[2] = 0.0;
-    if (!(mu_i > 0.0 && mu_o < 0.0))
+    if (!covers(b, mu_i, mu_o))
         return;
     viewer(mu_i, wi);
     light(mu_o, cos_phi, wo);
@@ -250,7 +267,7 @@ void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos
 double ll_measured_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi)
 {
     double wi[3], wo[3];
-    if (!(mu_i > 0.0 && mu_o < 0.0))
+    if (!covers(b, mu_i, mu_o))
         return 0.0;
     viewer(mu_i, wi);
     light(mu_o, cos_phi, wo);
@@ -264,7 +281,7 @@ int ll_measured_sample_core(const ll_bsdf *b, double mu_i, const double u[2],
     double wi[3], wo[3], v[3], w = (double)basis[0], phi;
     *mu_o = *phi_d = *pdf = 0.0;
     sums[0] = sums[1] = sums[2] = 0.0;
-    if (!(mu_i > 0.0))
+    if (!(b->measured->extended ? mu_i != 0.0 && ll_is_finite(mu_i) : mu_i > 0.0))
         return 0;
     viewer(mu_i, wi);
     if (!ll_measured_sample(b->measured, wi, u, wo, pdf, v))

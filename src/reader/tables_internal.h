@@ -23,7 +23,52 @@ typedef struct ll_measured {
     ll_warp2d rgb;        /* values, parameters (phi_i, theta_i, channel)   */
     int jacobian;         /* stored values are f cos over D / (4 sigma)     */
     size_t n_wavelengths; /* a spectral file's (its rgb: converted), or 0   */
+    /* An extended file (field "layerlab_layout", tables_lobes.c) holds a
+     * set of the tables above per lobe, each an ll_measured of its own,
+     * indexed by ll_measured_lobe (NULL where the file has none); its own
+     * tables above are then empty. All NULL in a plain file. */
+    struct ll_measured *lobe[4];
+    int extended;
+    double eta;           /* extended: index below over index above       */
+    /* A lobe's: its luminance albedo at each incident elevation of the
+     * file (the weight by which the sampler picks it), and for a
+     * transmitted lobe across a net interface the relative index of the
+     * far side over the fixed direction's side, which selects the
+     * refraction warp (0: reflection, or the warp of the z-flipped
+     * direction where the stack has no net interface). */
+    double *weight;
+    double refract_eta;
 } ll_measured;
+
+/* The lobes of an extended file, by the side of the fixed direction. */
+typedef enum {
+    LL_LOBE_REFLECT_TOP = 0,
+    LL_LOBE_REFLECT_BOTTOM = 1,
+    LL_LOBE_TRANSMIT_TOP = 2,
+    LL_LOBE_TRANSMIT_BOTTOM = 3
+} ll_measured_lobe;
+#define LL_MEASURED_LOBES 4
+/* Their field-name prefixes ("reflect_top." ...). */
+LL_INTERNAL const char *ll_measured_lobe_prefix(int lobe);
+
+/* The extended file's calls behind ll_measured_eval, _pdf and _sample
+ * (tables_lobes.c): wi and wo on any sides. */
+LL_INTERNAL void ll_measured_lobes_eval(const ll_measured *m, const double wi[3],
+                                        const double wo[3], double value[3]);
+LL_INTERNAL double ll_measured_lobes_pdf(const ll_measured *m, const double wi[3],
+                                         const double wo[3]);
+LL_INTERNAL int ll_measured_lobes_sample(const ll_measured *m, const double wi[3],
+                                         const double u[2], double wo[3], double *pdf,
+                                         double value[3]);
+/* One transmitted lobe with the refraction warp (tables_refract.c), in its
+ * own frame: wi above, wo below, relative index m->refract_eta. */
+LL_INTERNAL void ll_measured_refract_eval(const ll_measured *m, const double wi[3],
+                                          const double wo[3], double value[3]);
+LL_INTERNAL double ll_measured_refract_pdf(const ll_measured *m, const double wi[3],
+                                           const double wo[3]);
+LL_INTERNAL int ll_measured_refract_sample(const ll_measured *m, const double wi[3],
+                                           const double u[2], double wo[3], double *pdf,
+                                           double value[3]);
 
 /* Open a table file held in data[0 .. size) (validated completely; the
  * bytes are not kept). file names it in messages. */

@@ -19,6 +19,7 @@
 #include "reader/cie.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* Values beyond this are not a reflectance, and would let the products of
@@ -189,86 +190,239 @@ static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *la
     return LL_OK;
 }
 
+/* What every set of a file shares: the incident directions, the
+ * wavelengths of a spectral file, the jacobian rule. */
+typedef struct shared {
+    const char *file;
+    int spectral, jacobian, extended;
+    size_t n_ti, n_pi;
+    const ll_tensor_field *lam;
+    double *theta_v, *phi_v, *lambda_v;
+} shared;
+
+static int warp_eta_ok(double e)
+{
+    return e == 0.0 || (e >= 1e-3 && e <= 1e3 && e != 1.0);
+}
+
+/* prefix + base into name (prefixes are the reader's own, short). */
+static const char *field_name(char *name, size_t cap, const char *prefix, const char *base)
+{
+    snprintf(name, cap, "%s%s", prefix, base);
+    return name;
+}
+
+#define NAME_CAP (LL_TENSOR_MAX_NAME + 1)
+
+/* The fields of one set (prefix + "ndf", ...): checked completely, then,
+ * if m is not NULL, the warps built into m. An extended file's set also
+ * has its "albedo" over the incident elevations. */
+static ll_status read_set(const ll_tensor_file *t, const char *prefix, const shared *sh,
+                          ll_measured *m)
+{
+    char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
+    char ne[NAME_CAP];
+    const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
+    int transmit = strncmp(prefix, "transmit_", 9) == 0;
+    const char *file = sh->file;
+    double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
+    size_t n, n_ti = sh->n_ti, n_pi = sh->n_pi;
+    ll_status s;
+    field_name(nn, sizeof nn, prefix, "ndf");
+    field_name(ns, sizeof ns, prefix, "sigma");
+    field_name(nv, sizeof nv, prefix, "vndf");
+    field_name(nl, sizeof nl, prefix, "luminance");
+    field_name(nr, sizeof nr, prefix, sh->spectral ? "spectra" : "rgb");
+    field_name(na, sizeof na, prefix, "albedo");
+    field_name(ne, sizeof ne, prefix, "warp_eta");
+    if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
+        (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
+        (s = require(t, nv, 4, file, &vndf)) != LL_OK ||
+        (s = require(t, nl, 4, file, &lum)) != LL_OK ||
+        (s = require(t, nr, 5, file, &rgb)) != LL_OK ||
+        (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK) ||
+        (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK))
+        return s;
+    /* The refraction warp's relative index, or 0: the z-flipped
+     * direction's (tables_lobes.c); 1 would have no refraction half
+     * vector. require() has checked it finite and >= 0. */
+    if (warp && (warp->count != 1 || !warp_eta_ok((double)ll_tensor_f32(warp, 0))))
+        return shape_error(file, ne, "must be one value: 0 (the warp of the z-flipped "
+                                     "direction) or a relative index in [0.001, 1000] other "
+                                     "than 1");
+    if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
+        return shape_error(file, nn, "each extent must be >= 2");
+    if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
+        return shape_error(file, ns, "each extent must be >= 2");
+    if (vndf->shape[0] != n_pi || vndf->shape[1] != n_ti || vndf->shape[2] < 2 ||
+        vndf->shape[3] < 2)
+        return shape_error(file, nv, "shape must be [phi_i, theta_i, >= 2, >= 2]");
+    n = lum->shape[3];
+    if (lum->shape[0] != n_pi || lum->shape[1] != n_ti || lum->shape[2] != n || n < 2)
+        return shape_error(file, nl, "shape must be [phi_i, theta_i, N, N], N >= 2");
+    if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti ||
+        rgb->shape[2] != (sh->spectral ? sh->lam->count : 3) || rgb->shape[3] != n ||
+        rgb->shape[4] != n)
+        return shape_error(file, nr,
+                           sh->spectral ? "shape must be [phi_i, theta_i, n, N, N] with the n "
+                                          "of \"wavelengths\" and the N of the luminance"
+                                        : "shape must be [phi_i, theta_i, 3, N, N] with the N "
+                                          "of the luminance");
+    if (alb && alb->count != n_ti)
+        return shape_error(file, na, "must have one value per element of \"theta_i\"");
+    for (n = 0; n < sigma->count; ++n)
+        if (!(ll_tensor_f32(sigma, n) > 0.0f))
+            return ll_fail(LL_ERROR_FORMAT,
+                           "ll_bsdf_open: %s: field \"%s\": element %zu is 0 (a projected "
+                           "area is positive)",
+                           file, ns, n);
+    if (!m)
+        return LL_OK;
+    if (sh->spectral && (s = spectra_to_rgb(rgb, sh->lambda_v, file, &converted)) != LL_OK)
+        return s;
+    m->jacobian = sh->jacobian;
+    {
+        const double *params[3] = { sh->phi_v, sh->theta_v, channels };
+        size_t sizes[3] = { n_pi, n_ti, 3 };
+        if ((s = build(&m->ndf, ndf, 0, NULL, NULL, 0, file)) != LL_OK ||
+            (s = build(&m->sigma, sigma, 0, NULL, NULL, 0, file)) != LL_OK ||
+            (s = build(&m->vndf, vndf, 2, sizes, params, 1, file)) != LL_OK ||
+            (s = build(&m->luminance, lum, 2, sizes, params, 1, file)) != LL_OK ||
+            (s = sh->spectral ? build_rgb(&m->rgb, rgb, converted, sizes, params, file)
+                              : build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK) {
+            ll_free(converted);
+            return s;
+        }
+    }
+    ll_free(converted);
+    if (alb) {
+        m->weight = ll_alloc_array(n_ti, sizeof(double));
+        if (!m->weight)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+        for (n = 0; n < n_ti; ++n)
+            m->weight[n] = (double)ll_tensor_f32(alb, n);
+    }
+    if (warp)
+        m->refract_eta = (double)ll_tensor_f32(warp, 0);
+    return LL_OK;
+}
+
+/* An extended file's "layerlab_layout": the names of its sets, separated
+ * by spaces or commas, each at most once; present[k] for lobe k. */
+static ll_status read_layout(const ll_tensor_field *f, const char *file, int present[4])
+{
+    size_t at = 0, k, count = 0;
+    if (f->dtype != LL_TENSOR_U8 || f->rank != 1)
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"layerlab_layout\" must be uint8 text", file);
+    for (k = 0; k < LL_MEASURED_LOBES; ++k)
+        present[k] = 0;
+    while (at < f->count) {
+        size_t len = 0;
+        int found = -1;
+        while (at < f->count && (f->data[at] == ' ' || f->data[at] == ','))
+            ++at;
+        while (at + len < f->count && f->data[at + len] != ' ' && f->data[at + len] != ',')
+            ++len;
+        if (len == 0)
+            break;
+        for (k = 0; k < LL_MEASURED_LOBES; ++k) {
+            const char *p = ll_measured_lobe_prefix((int)k);
+            if (strlen(p) == len + 1 && memcmp(p, f->data + at, len) == 0)
+                found = (int)k;
+        }
+        if (found < 0)
+            return ll_fail(LL_ERROR_UNSUPPORTED,
+                           "ll_bsdf_open: %s: field \"layerlab_layout\": set \"%.*s\" is not "
+                           "read by this version (reflect_top, reflect_bottom, transmit_top, "
+                           "transmit_bottom)",
+                           file, (int)(len > 64 ? 64 : len), (const char *)f->data + at);
+        if (present[found])
+            return ll_fail(LL_ERROR_FORMAT,
+                           "ll_bsdf_open: %s: field \"layerlab_layout\": set \"%.*s\" named "
+                           "twice",
+                           file, (int)len, (const char *)f->data + at);
+        present[found] = 1;
+        ++count;
+        at += len;
+    }
+    if (count == 0)
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"layerlab_layout\" names no set", file);
+    return LL_OK;
+}
+
+/* An extended file's "eta": one float32, the index below over above. */
+static ll_status read_eta(const ll_tensor_file *t, const char *file, double *eta)
+{
+    const ll_tensor_field *f = ll_tensor_find(t, "eta");
+    double v;
+    if (!f || f->dtype != LL_TENSOR_F32 || f->count != 1)
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"eta\" must be one float32 (an extended "
+                       "file's relative index)",
+                       file);
+    v = (double)ll_tensor_f32(f, 0);
+    if (!(v >= 1e-3 && v <= 1e3))
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"eta\" = %g must lie in [0.001, 1000]", file,
+                       v);
+    *eta = v;
+    return LL_OK;
+}
+
 ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
                            ll_bsdf **out)
 {
     ll_tensor_file t = { 0, NULL };
-    const ll_tensor_field *theta, *phi, *ndf, *sigma, *vndf, *lum, *rgb, *jac, *lam = NULL;
-    double *theta_v = NULL, *phi_v = NULL, channels[3] = { 0.0, 1.0, 2.0 };
-    double *lambda_v = NULL, *converted = NULL;
-    int spectral;
+    const ll_tensor_field *theta, *phi, *jac, *layout;
+    shared sh;
+    int present[LL_MEASURED_LOBES] = { 1, 0, 0, 0 }, k;
+    double eta = 1.0;
     ll_bsdf *b = NULL;
     ll_measured *m;
-    size_t n_ti, n_pi, n;
     ll_status s = ll_tensor_parse(data, size, file, &t);
     if (s != LL_OK)
         return s;
+    memset(&sh, 0, sizeof sh);
+    sh.file = file;
     /* As Mitsuba: "wavelengths" makes the file spectral (pbrt reads only
      * such files). */
-    spectral = ll_tensor_find(&t, "wavelengths") != NULL;
+    sh.spectral = ll_tensor_find(&t, "wavelengths") != NULL;
+    layout = ll_tensor_find(&t, "layerlab_layout");
+    sh.extended = layout != NULL;
     if ((s = require(&t, "theta_i", 1, file, &theta)) != LL_OK ||
         (s = require(&t, "phi_i", 1, file, &phi)) != LL_OK ||
-        (s = require(&t, "ndf", 2, file, &ndf)) != LL_OK ||
-        (s = require(&t, "sigma", 2, file, &sigma)) != LL_OK ||
-        (s = require(&t, "vndf", 4, file, &vndf)) != LL_OK ||
-        (s = require(&t, "luminance", 4, file, &lum)) != LL_OK ||
-        (s = require(&t, spectral ? "spectra" : "rgb", 5, file, &rgb)) != LL_OK ||
-        (spectral && (s = require(&t, "wavelengths", 1, file, &lam)) != LL_OK))
+        (sh.spectral && (s = require(&t, "wavelengths", 1, file, &sh.lam)) != LL_OK) ||
+        (layout && (s = read_layout(layout, file, present)) != LL_OK) ||
+        (layout && (s = read_eta(&t, file, &eta)) != LL_OK))
         goto done;
     jac = ll_tensor_find(&t, "jacobian");
     if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
         FAIL(LL_ERROR_FORMAT,
              "ll_bsdf_open: %s: field \"jacobian\" must be one uint8 of value 0 or 1", file);
-    n_ti = theta->count;
-    n_pi = phi->count;
-    if (n_pi > 2)
+    sh.jacobian = jac->data[0];
+    sh.n_ti = theta->count;
+    sh.n_pi = phi->count;
+    if (sh.n_pi > 2)
         FAIL(LL_ERROR_UNSUPPORTED,
              "ll_bsdf_open: %s: field \"phi_i\": %zu incident azimuths (an anisotropic table) "
              "are not read by this version",
-             file, n_pi);
-    if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
-        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"ndf\": each extent must be >= 2", file);
-    if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
-        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"sigma\": each extent must be >= 2",
-             file);
-    if (vndf->shape[0] != n_pi || vndf->shape[1] != n_ti || vndf->shape[2] < 2 ||
-        vndf->shape[3] < 2) {
-        s = shape_error(file, "vndf", "shape must be [phi_i, theta_i, >= 2, >= 2]");
-        goto done;
-    }
-    n = lum->shape[3];
-    if (lum->shape[0] != n_pi || lum->shape[1] != n_ti || lum->shape[2] != n || n < 2) {
-        s = shape_error(file, "luminance", "shape must be [phi_i, theta_i, N, N], N >= 2");
-        goto done;
-    }
-    if (spectral && lam->count > LL_MEASURED_MAX_WAVELENGTHS) {
+             file, sh.n_pi);
+    if (sh.spectral && sh.lam->count > LL_MEASURED_MAX_WAVELENGTHS) {
         s = shape_error(file, "wavelengths", "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
                                              " wavelengths");
         goto done;
     }
-    if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti ||
-        rgb->shape[2] != (spectral ? lam->count : 3) || rgb->shape[3] != n ||
-        rgb->shape[4] != n) {
-        s = spectral ? shape_error(file, "spectra",
-                                   "shape must be [phi_i, theta_i, n, N, N] with the n of "
-                                   "\"wavelengths\" and the N of \"luminance\"")
-                     : shape_error(file, "rgb",
-                                   "shape must be [phi_i, theta_i, 3, N, N] with the N of "
-                                   "\"luminance\"");
+    /* Every set checked before anything is allocated. */
+    for (k = 0; k < LL_MEASURED_LOBES; ++k)
+        if (present[k] &&
+            (s = read_set(&t, sh.extended ? ll_measured_lobe_prefix(k) : "", &sh, NULL)) != LL_OK)
+            goto done;
+    if ((s = read_list(theta, file, 0.0, LL_PI / 2 + 1e-6, &sh.theta_v)) != LL_OK ||
+        (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &sh.phi_v)) != LL_OK ||
+        (sh.spectral && (s = read_list(sh.lam, file, 1e-3, 1e6, &sh.lambda_v)) != LL_OK))
         goto done;
-    }
-    if ((s = read_list(theta, file, 0.0, LL_PI / 2 + 1e-6, &theta_v)) != LL_OK ||
-        (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &phi_v)) != LL_OK ||
-        (spectral && (s = read_list(lam, file, 1e-3, 1e6, &lambda_v)) != LL_OK))
-        goto done;
-    if (spectral && (s = spectra_to_rgb(rgb, lambda_v, file, &converted)) != LL_OK)
-        goto done;
-    for (n = 0; n < sigma->count; ++n)
-        if (!(ll_tensor_f32(sigma, n) > 0.0f))
-            FAIL(LL_ERROR_FORMAT,
-                 "ll_bsdf_open: %s: field \"sigma\": element %zu is 0 (a projected area is "
-                 "positive)",
-                 file, n);
 
     b = ll_calloc(1, sizeof *b);
     m = b ? ll_calloc(1, sizeof *m) : NULL;
@@ -278,27 +432,30 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
     b->refcount = 1;
     b->n_channels = 3;
     b->n_bases = 1;
-    b->eta = 1.0;
+    b->eta = eta;
     b->file_size = size;
-    m->jacobian = jac->data[0];
-    m->n_wavelengths = spectral ? lam->count : 0;
-    {
-        const double *params[3] = { phi_v, theta_v, channels };
-        size_t sizes[3] = { n_pi, n_ti, 3 };
-        if ((s = build(&m->ndf, ndf, 0, NULL, NULL, 0, file)) != LL_OK ||
-            (s = build(&m->sigma, sigma, 0, NULL, NULL, 0, file)) != LL_OK ||
-            (s = build(&m->vndf, vndf, 2, sizes, params, 1, file)) != LL_OK ||
-            (s = build(&m->luminance, lum, 2, sizes, params, 1, file)) != LL_OK ||
-            (s = spectral ? build_rgb(&m->rgb, rgb, converted, sizes, params, file)
-                          : build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK)
+    m->jacobian = sh.jacobian;
+    m->n_wavelengths = sh.spectral ? sh.lam->count : 0;
+    m->extended = sh.extended;
+    m->eta = eta;
+    if (!sh.extended) {
+        if ((s = read_set(&t, "", &sh, m)) != LL_OK)
             goto done;
+    } else {
+        for (k = 0; k < LL_MEASURED_LOBES; ++k) {
+            if (!present[k])
+                continue;
+            if (!(m->lobe[k] = ll_calloc(1, sizeof *m->lobe[k])))
+                FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+            if ((s = read_set(&t, ll_measured_lobe_prefix(k), &sh, m->lobe[k])) != LL_OK)
+                goto done;
+        }
     }
     s = copy_metadata(b, &t, file);
 done:
-    ll_free(theta_v);
-    ll_free(phi_v);
-    ll_free(lambda_v);
-    ll_free(converted);
+    ll_free(sh.theta_v);
+    ll_free(sh.phi_v);
+    ll_free(sh.lambda_v);
     ll_tensor_file_free(&t);
     if (s != LL_OK) {
         ll_bsdf_free(b);
@@ -310,6 +467,7 @@ done:
 
 void ll_measured_free(ll_measured *m)
 {
+    int k;
     if (!m)
         return;
     ll_warp2d_free(&m->ndf);
@@ -317,5 +475,8 @@ void ll_measured_free(ll_measured *m)
     ll_warp2d_free(&m->vndf);
     ll_warp2d_free(&m->luminance);
     ll_warp2d_free(&m->rgb);
+    for (k = 0; k < LL_MEASURED_LOBES; ++k)
+        ll_measured_free(m->lobe[k]);
+    ll_free(m->weight);
     ll_free(m);
 }

@@ -1,6 +1,7 @@
 /*
  * ll_tables_write_from_bsdf (ll_tables.h): the tables of the `measured`
- * format from an opened opaque, untextured file, following the producer's
+ * format from an opened opaque, untextured file (a transmissive one goes
+ * to bsdf_write_tables_lobes.c), following the producer's
  * steps of docs/formats.md:
  *  1. D and sigma from retro-reflection (bsdf_write_tables_ndf.c), stored
  *     as float tables over (u_phi, u_theta) with two equal rows;
@@ -22,6 +23,7 @@
 #include "writer/bsdf_write_tables.h"
 #include "writer/bsdf_write_tensor.h"
 #include "reader/tables_warp.h"
+#include "reader/tables_internal.h"
 #include "reader/cie.h"
 #include "support/watch.h"
 
@@ -102,21 +104,12 @@ static ll_status check_options(const ll_tables_options *opts, ll_tables_options 
     return LL_OK;
 }
 
-/* The format holds one opaque, untextured, reflecting material. */
-static ll_status check_source(const ll_bsdf *b)
+int ll_tables_transmits(const ll_bsdf *b)
 {
     size_t n = b->n_nodes, i, o;
     double reflected = 0.0, transmitted = 0.0;
-    if (b->n_bases != 1)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": the file is textured (%zu basis functions); a table file holds "
-                       "one material without parameters",
-                       b->n_bases);
     if (fabs(b->eta - 1.0) > 1e-6)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": the file transmits (eta = %g); the `measured` format stores "
-                       "reflection only",
-                       b->eta);
+        return 1;
     for (i = 0; i < n; ++i)
         for (o = 0; o < n; ++o) {
             double a = fabs(b->a0[i * n + o]);
@@ -125,11 +118,23 @@ static ll_status check_source(const ll_bsdf *b)
             else
                 reflected = a > reflected ? a : reflected;
         }
-    if (transmitted > TRANSMISSION_TOLERANCE * reflected)
+    return transmitted > TRANSMISSION_TOLERANCE * reflected;
+}
+
+/* The format holds one untextured material; an extended table file (a
+ * transmissive material's) has no order-0 series to weigh its lobes by,
+ * so it converts from its .bsdf only. */
+static ll_status check_source(const ll_bsdf *b)
+{
+    if (b->measured && b->measured->extended)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": the file transmits light (a transmitted series of %g against %g "
-                       "reflected); the `measured` format stores reflection only",
-                       transmitted, reflected);
+                       FN ": the file is a transmissive table file (a set of tables per "
+                       "lobe); write its tables from the .bsdf it came from");
+    if (b->n_bases != 1)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file is textured (%zu basis functions); a table file holds "
+                       "one material without parameters",
+                       b->n_bases);
     return LL_OK;
 }
 
@@ -285,7 +290,7 @@ static void value_slice(writer *w, size_t t)
 }
 
 /* JSON text of a string (quotes and escapes), appended to buf. */
-static size_t json_string(char *buf, size_t at, size_t cap, const char *s)
+size_t ll_tables_json_string(char *buf, size_t at, size_t cap, const char *s)
 {
     if (at < cap) buf[at] = '"';
     ++at;
@@ -329,7 +334,7 @@ static char *metadata_text(const writer *w, double alpha, const char *figures, s
                           "%s\"bsdf_metadata\": ",
                           ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns, alpha,
                           w->spectral ? w->spectra.n_l : (size_t)0, figures);
-    at = json_string(buf, at, cap, src);
+    at = ll_tables_json_string(buf, at, cap, src);
     buf[at++] = '}';
     buf[at] = '\0';
     *size = at;
@@ -349,8 +354,12 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
     memset(&w, 0, sizeof w);
     if (!b || !path)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": bsdf or path is NULL");
-    if ((s = check_options(opts, &o)) != LL_OK || (s = check_source(b)) != LL_OK ||
-        (s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
+    if ((s = check_options(opts, &o)) != LL_OK || (s = check_source(b)) != LL_OK)
+        return s;
+    /* A transmissive file: every lobe, both sides, in an extended file. */
+    if (ll_tables_transmits(b))
+        return ll_tables_write_lobes(b, path, &o, figures, monitor);
+    if ((s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
         return s;
     w.b = b;
     w.spectral = o.format == LL_TABLES_SPECTRAL;

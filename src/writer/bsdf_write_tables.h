@@ -32,6 +32,46 @@ LL_INTERNAL double ll_tables_luminance(const double rgb[3]);
 LL_INTERNAL ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma,
                                            double *alpha);
 
+/* The same for the reflection of the bottom side (side -1: the
+ * retro-reflected direction below the surface), or the top (side 1). */
+LL_INTERNAL ll_status ll_tables_derive_ndf_side(const ll_bsdf *b, int side, double *d,
+                                                double *sigma, double *alpha);
+/* The pieces of the derivation that the transmitted lobes' D shares
+ * (bsdf_write_tables_tndf.c): the quadrature nodes theta_j = u_j^2 pi / 2
+ * and their weights (sin theta included), sigma from D at the nodes, and
+ * Beckmann's D. */
+LL_INTERNAL void ll_tables_ndf_quadrature(size_t n, double *theta, double *w);
+LL_INTERNAL void ll_tables_projected_area(size_t n, const double *theta, const double *w,
+                                          const double *d, double *sigma);
+LL_INTERNAL double ll_tables_beckmann(double theta, double alpha);
+
+/* f (without cosine, importance transport: the .bsdf's own values) of b
+ * at a pair in a lobe's frame, where the fixed direction wi lies above:
+ * bottom negates both z before evaluating (bsdf_write_tables_lobes.c). 0
+ * where the evaluation fails. */
+LL_INTERNAL void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[3],
+                                  const double wo[3], double f[3]);
+/* D and sigma at the LL_TABLES_NDF_NODES nodes for a transmitted lobe
+ * (bsdf_write_tables_tndf.c): from its density over the half vector at
+ * normal incidence; refract_eta > 0 the refraction warp's relative index,
+ * 0 the warp of the z-flipped direction. LL_ERROR_INVALID_ARGUMENT if the
+ * lobe transmits nothing at normal incidence. */
+LL_INTERNAL ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom,
+                                                    double refract_eta, double *d,
+                                                    double *sigma, double *alpha);
+/* s as JSON text (quotes and escapes) at buf[at], cap bytes at most
+ * written; returns the end it would have without the cap. */
+LL_INTERNAL size_t ll_tables_json_string(char *buf, size_t at, size_t cap, const char *s);
+/* Whether b transmits light (eta != 1, or transmitted series beyond a
+ * millionth of the reflected). */
+LL_INTERNAL int ll_tables_transmits(const ll_bsdf *b);
+/* The tables of every lobe of a transmissive b, both sides
+ * (bsdf_write_tables_lobes.c), at the grid opts gives; as
+ * ll_tables_write_grid. */
+LL_INTERNAL ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path,
+                                            const ll_tables_options *opts, const char *figures,
+                                            const ll_monitor *monitor);
+
 /* The values of a spectral table file (bsdf_write_tables_spectra.c): per
  * wavelength, f cos of the source's file at the sample nodes, whose
  * directions and jacobian factors geom holds (per slice t and node q of

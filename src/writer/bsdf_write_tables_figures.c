@@ -12,11 +12,18 @@
  * mirror direction (where f changes fastest and renders look); relative
  * errors where f cos is above 1% of its largest value over the pairs,
  * per channel, pooled.
+ *
+ * A transmissive source (its tables a set per lobe and side): the albedo
+ * of reflection and of transmission apart, for a viewer above and below;
+ * the pairs a quarter per lobe and side, the light near the lobe's peak
+ * (the mirror, the refracted, or the straight-through direction) for
+ * half of them, and 1% of the largest f cos taken per lobe and side.
  */
 #include "writer/bsdf_write_tables.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define STRATA 256
 #define PAIRS 20000
@@ -38,13 +45,18 @@ static void direction(double theta, double phi, double w[3])
     w[2] = cos(theta);
 }
 
-static ll_status albedo(const ll_bsdf *b, double theta, double out[3])
+/* out[0..2] the reflected albedo per channel, out[3..5] the transmitted
+ * (a viewer below if bottom); an opaque source's out[3..5] stay 0. */
+static ll_status albedo(const ll_bsdf *b, double theta, int bottom, double out[6])
 {
     double wo[3];
     int i, j, c;
     ll_status s;
     direction(theta, 0.0, wo);
-    out[0] = out[1] = out[2] = 0.0;
+    if (bottom)
+        wo[2] = -wo[2];
+    for (c = 0; c < 6; ++c)
+        out[c] = 0.0;
     for (i = 0; i < STRATA; ++i)
         for (j = 0; j < STRATA; ++j) {
             double u[2] = { (i + 0.5) / STRATA, (j + 0.5) / STRATA }, wi[3], pdf, f[3];
@@ -53,9 +65,9 @@ static ll_status albedo(const ll_bsdf *b, double theta, double out[3])
                 return s;
             if (pdf > 0.0)
                 for (c = 0; c < 3; ++c)
-                    out[c] += f[c] * fabs(wi[2]) / pdf;
+                    out[(wi[2] * wo[2] < 0.0 ? 3 : 0) + c] += f[c] * fabs(wi[2]) / pdf;
         }
-    for (c = 0; c < 3; ++c)
+    for (c = 0; c < 6; ++c)
         out[c] /= (double)STRATA * STRATA;
     return LL_OK;
 }
@@ -66,49 +78,76 @@ static int compare(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* The light direction of pair k for the viewer wo (elevation tv): an
+ * opaque source's (transmissive 0) as always; a transmissive source's
+ * lobe (k / 4) % 2, its side k % 4 / 2 (wo already there). */
+static void light_of(size_t k, const double wo[3], double tv, int transmissive, double eta,
+                     uint64_t *rng, double wi[3])
+{
+    const double lim = LIMIT_DEG * LL_PI / 180.0;
+    int transmit = transmissive && (k / 4) % 2, bottom = wo[2] < 0.0;
+    double e = bottom ? 1.0 / eta : eta, st = sin(tv) / e, peak_t = 0.0;
+    int peak = k % 2 == 1 && (!transmit || st < 1.0);
+    if (transmit && st < 1.0)
+        peak_t = asin(st);
+    do {
+        if (!peak) {
+            double tl = acos(1.0 - uniform(rng) * (1.0 - cos(lim)));
+            direction(tl, 2.0 * LL_PI * uniform(rng), wi);
+        } else {
+            /* Near the mirror or transmitted peak: the same azimuth
+             * (phi pi), elevation tv or its refraction. */
+            double c = transmit ? peak_t : tv;
+            double dt = 0.4 * (2.0 * uniform(rng) - 1.0);
+            double dp = 0.4 * (2.0 * uniform(rng) - 1.0) / (sin(c) + 0.2);
+            direction(fabs(c + dt), LL_PI + dp, wi);
+        }
+    } while (acos(wi[2]) > lim);
+    if (bottom != transmit)
+        wi[2] = -wi[2];
+}
+
 static ll_status f_errors(const ll_bsdf *src, const ll_bsdf *table, ll_tables_figures *out)
 {
     const double lim = LIMIT_DEG * LL_PI / 180.0;
     double *ref = ll_alloc_array(PAIRS, 4 * sizeof(double));
     double *got = ll_alloc_array(PAIRS, 3 * sizeof(double));
-    double *err = ll_alloc_array(PAIRS, 3 * sizeof(double)), top[3] = { 0.0, 0.0, 0.0 };
+    double *err = ll_alloc_array(PAIRS, 3 * sizeof(double)), top[4][3];
+    int transmissive = ll_tables_transmits(src);
     uint64_t rng = 0x7ab1e5;
     size_t k, n = 0;
-    int c;
+    int c, g;
     ll_status s = LL_OK;
     if (!ref || !got || !err) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_tables_write_from_bsdf: out of memory (figures)");
         goto done;
     }
+    memset(top, 0, sizeof top);
     for (k = 0; k < PAIRS && s == LL_OK; ++k) {
         double wo[3], wi[3], tv = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
         direction(tv, 0.0, wo);
-        do {
-            if (k % 2 == 0) {
-                double tl = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
-                direction(tl, 2.0 * LL_PI * uniform(&rng), wi);
-            } else {
-                double dt = 0.4 * (2.0 * uniform(&rng) - 1.0);
-                double dp = 0.4 * (2.0 * uniform(&rng) - 1.0) / (sin(tv) + 0.2);
-                direction(fabs(tv + dt), LL_PI + dp, wi);
-            }
-        } while (acos(wi[2]) > lim);
+        if (transmissive && k % 4 >= 2)
+            wo[2] = -wo[2];
+        light_of(k, wo, tv, transmissive, src->eta, &rng, wi);
         if ((s = ll_bsdf_eval_dir(src, wo, wi, LL_TRANSPORT_RADIANCE, NULL, ref + 4 * k)) !=
                 LL_OK ||
             (s = ll_bsdf_eval_dir(table, wo, wi, LL_TRANSPORT_RADIANCE, NULL, got + 3 * k)) !=
                 LL_OK)
             break;
-        ref[4 * k + 3] = wi[2];
+        ref[4 * k + 3] = fabs(wi[2]);
+        g = transmissive ? (int)(k % 4 / 2 * 2 + (k / 4) % 2) : 0;
         for (c = 0; c < 3; ++c)
-            if (ref[4 * k + c] * wi[2] > top[c])
-                top[c] = ref[4 * k + c] * wi[2];
+            if (ref[4 * k + c] * ref[4 * k + 3] > top[g][c])
+                top[g][c] = ref[4 * k + c] * ref[4 * k + 3];
     }
     if (s != LL_OK)
         goto done;
-    for (k = 0; k < PAIRS; ++k)
+    for (k = 0; k < PAIRS; ++k) {
+        g = transmissive ? (int)(k % 4 / 2 * 2 + (k / 4) % 2) : 0;
         for (c = 0; c < 3; ++c)
-            if (ref[4 * k + c] * ref[4 * k + 3] > 0.01 * top[c])
+            if (ref[4 * k + c] * ref[4 * k + 3] > 0.01 * top[g][c])
                 err[n++] = fabs(got[3 * k + c] / ref[4 * k + c] - 1.0);
+    }
     if (n == 0) {
         s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
                     "ll_tables_write_from_bsdf: the file reflects nothing to compare");
@@ -127,18 +166,20 @@ done:
 
 ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table, ll_tables_figures *out)
 {
-    int k, c;
+    int k, c, bottom, sides = ll_tables_transmits(src) ? 2 : 1;
     ll_status s;
     out->albedo = 0.0;
-    for (k = 0; k < ANGLES; ++k) {
-        double theta = angles_deg[k] * LL_PI / 180.0, at[3], as[3];
-        if ((s = albedo(table, theta, at)) != LL_OK || (s = albedo(src, theta, as)) != LL_OK)
-            return s;
-        for (c = 0; c < 3; ++c) {
-            double r = as[c] > 0.0 ? fabs(at[c] / as[c] - 1.0) : 0.0;
-            if (!(r <= out->albedo))
-                out->albedo = r;
+    for (bottom = 0; bottom < sides; ++bottom)
+        for (k = 0; k < ANGLES; ++k) {
+            double theta = angles_deg[k] * LL_PI / 180.0, at[6], as[6];
+            if ((s = albedo(table, theta, bottom, at)) != LL_OK ||
+                (s = albedo(src, theta, bottom, as)) != LL_OK)
+                return s;
+            for (c = 0; c < 6; ++c) {
+                double r = as[c] > 0.0 ? fabs(at[c] / as[c] - 1.0) : 0.0;
+                if (!(r <= out->albedo))
+                    out->albedo = r;
+            }
         }
-    }
     return f_errors(src, table, out);
 }

@@ -90,7 +90,7 @@ static double ring(double a, double b)
 /* Quadrature over the hemisphere of normals: the integral of g(theta) over
  * theta in [0, pi/2] is that of g(theta(u)) pi u du (theta = u^2 pi / 2),
  * by trapezoids in u; the weight of node j includes sin(theta_j). */
-static void weights(size_t n, double *theta, double *w)
+void ll_tables_ndf_quadrature(size_t n, double *theta, double *w)
 {
     size_t j;
     for (j = 0; j < n; ++j) {
@@ -101,8 +101,8 @@ static void weights(size_t n, double *theta, double *w)
 }
 
 /* sigma at each node from D at the nodes. */
-static void projected_area(size_t n, const double *theta, const double *w, const double *d,
-                           double *sigma)
+void ll_tables_projected_area(size_t n, const double *theta, const double *w, const double *d,
+                              double *sigma)
 {
     size_t k, j;
     for (k = 0; k < n; ++k) {
@@ -114,7 +114,7 @@ static void projected_area(size_t n, const double *theta, const double *w, const
     }
 }
 
-static double beckmann(double theta, double alpha)
+double ll_tables_beckmann(double theta, double alpha)
 {
     double c = cos(theta), t2;
     if (c < 1e-6)
@@ -140,14 +140,20 @@ static double peak_roughness(const double *d, const double *theta, double fallba
 
 ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma, double *alpha)
 {
+    return ll_tables_derive_ndf_side(b, 1, d, sigma, alpha);
+}
+
+ll_status ll_tables_derive_ndf_side(const ll_bsdf *b, int side, double *d, double *sigma,
+                                    double *alpha)
+{
     enum { N = LL_TABLES_NDF_NODES };
     double theta[N], w[N], g[N], next[N], norm, peak, peak_alpha;
     size_t j, it;
-    weights(N, theta, w);
+    ll_tables_ndf_quadrature(N, theta, w);
     /* g = cos(theta) f(k, k) in luminance, k at azimuth 0. */
     peak = 0.0;
     for (j = 0; j < N; ++j) {
-        double k[3] = { sin(theta[j]), 0.0, cos(theta[j]) }, rgb[3];
+        double k[3] = { sin(theta[j]), 0.0, side * cos(theta[j]) }, rgb[3];
         if (ll_bsdf_eval_dir(b, k, k, LL_TRANSPORT_RADIANCE, NULL, rgb) != LL_OK)
             rgb[0] = rgb[1] = rgb[2] = 0.0;
         g[j] = cos(theta[j]) * ll_tables_luminance(rgb);
@@ -163,7 +169,7 @@ ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma, doubl
                        "the light, so no normal distribution can be derived");
     for (it = 0; it < POWER_ITERATIONS; ++it) {
         double top = 0.0;
-        projected_area(N, theta, w, d, sigma);
+        ll_tables_projected_area(N, theta, w, d, sigma);
         for (j = 0; j < N; ++j) {
             next[j] = g[j] * sigma[j];
             if (next[j] > top)
@@ -185,8 +191,8 @@ ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma, doubl
     peak_alpha = peak_roughness(d, theta, *alpha);
     for (j = 0; j < N; ++j)
         d[j] = (1.0 - BECKMANN_WEIGHT - PEAK_WEIGHT - FLOOR_WEIGHT) * d[j] +
-               BECKMANN_WEIGHT * beckmann(theta[j], BECKMANN_WIDTH * *alpha) +
-               PEAK_WEIGHT * beckmann(theta[j], peak_alpha) + FLOOR_WEIGHT / LL_PI;
-    projected_area(N, theta, w, d, sigma);
+               BECKMANN_WEIGHT * ll_tables_beckmann(theta[j], BECKMANN_WIDTH * *alpha) +
+               PEAK_WEIGHT * ll_tables_beckmann(theta[j], peak_alpha) + FLOOR_WEIGHT / LL_PI;
+    ll_tables_projected_area(N, theta, w, d, sigma);
     return LL_OK;
 }

@@ -62,6 +62,7 @@ typedef struct search {
     size_t ti, si;            /* positions on the ladders                    */
     int albedo_grows_sample;  /* whose turn an albedo miss is                */
     double tolerance;
+    double sets;              /* table sets: 4 for a transmissive source     */
 } search;
 
 static void grid_at(const search *s, ll_tables_options *g)
@@ -132,7 +133,7 @@ static int grow(search *s, const ll_tables_figures *f)
     if (!grow_ladders(&next, f))
         return 0;
     grid_at(&next, &g);
-    if (grid_bytes(&g) > s->cap)
+    if (s->sets * grid_bytes(&g) > s->cap)
         return 0;
     *s = next;
     return 1;
@@ -232,10 +233,18 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     s.o = defaults;
     if (opts && (st = ll_struct_read(&s.o, sizeof s.o, opts, FN, "ll_tables_options")) != LL_OK)
         return st;
+    if (s.o.format == LL_TABLES_SPECTRAL && ll_tables_transmits(b))
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       FN ": spectral tables of a transmissive file are not written by this "
+                       "version (LL_TABLES_RGB writes them)");
     if (s.o.n_theta_i && s.o.vndf_size && s.o.sample_size)
         return ll_tables_write_grid(b, path, &s.o, NULL, monitor);
     s.tolerance = s.o.tolerance != 0.0 ? s.o.tolerance : DEFAULT_TOLERANCE;
-    s.cap = (double)b->file_size > SIZE_CAP_FLOOR ? (double)b->file_size : SIZE_CAP_FLOOR;
+    s.sets = ll_tables_transmits(b) ? 4.0 : 1.0;
+    /* The floor per set: a transmissive file holds four. */
+    s.cap = (double)b->file_size > s.sets * SIZE_CAP_FLOOR ? (double)b->file_size
+                                                          : s.sets * SIZE_CAP_FLOOR;
+
     if (!(s.tolerance >= 0.005 && s.tolerance <= 1.0))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": tolerance %g out of range (0.005..1)",
                        s.o.tolerance);

@@ -162,7 +162,7 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t)
     return -1;
 }
 
-int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const char *input)
+int llbuild_tables_check(llbuild_tables *t, const ll_material *m, const char *input)
 {
     if (!t->measured)
         return -1;
@@ -174,12 +174,13 @@ int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const ch
                 input);
         return 1;
     }
-    if (!ll_material_is_opaque(m)) {
+    t->transmissive = !ll_material_is_opaque(m);
+    if (t->transmissive && t->opts.format == LL_TABLES_SPECTRAL) {
         fprintf(stderr,
-                "llbuild: %s: a transmissive stack (its bottom word lets light through) "
-                "cannot be written in the `measured` format: its tables hold reflection only; "
-                "end the stack with an opaque word (conductor, diffuse, measured) or build it "
-                "as a .bsdf (--format bsdf)\n",
+                "llbuild: %s: a transmissive stack (its bottom word lets light through) is "
+                "written as RGB tables only (its tables of every lobe are not written "
+                "spectral by this version; the `measured` format itself stores reflection only); "
+                "leave out --wavelengths or build it as a .bsdf (--format bsdf)\n",
                 input);
         return 1;
     }
@@ -189,13 +190,17 @@ int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const ch
 /* The data the tables hold (the field table and text add a few hundred
  * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb (or
  * spectra and wavelengths). */
-static double table_bytes(const ll_tables_options *o)
+static double table_bytes(const ll_tables_options *o, int transmissive)
 {
     double n_ti = (double)o->n_theta_i, nv = (double)o->vndf_size,
            ns = (double)o->sample_size;
     double values = o->format == LL_TABLES_SPECTRAL ? (double)o->n_wavelengths : 3.0;
-    return 4.0 * (2.0 * 2 * 256 + n_ti + 1 + n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns +
-                  (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
+    /* A transmissive stack: a set per lobe and side, each with its
+     * albedo per elevation. */
+    double sets = transmissive ? 4.0 : 1.0;
+    return 4.0 * (sets * (2.0 * 2 * 256 + n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns +
+                          (transmissive ? n_ti : 0.0)) +
+                  n_ti + 1 + (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
 }
 
 /* " x N wavelengths (A..B nm)" of a spectral file, nothing otherwise. */
@@ -217,7 +222,7 @@ void llbuild_tables_dry_run(const llbuild_tables *t)
                o->n_theta_i, o->vndf_size, o->sample_size);
         spectral_suffix(t);
         printf(": about %.2f MiB (the `measured` file written instead of the .bsdf above)\n",
-               table_bytes(o) / 1048576.0);
+               table_bytes(o, t->transmissive) / 1048576.0);
         return;
     }
     /* The library's ladders (ll_tables.h): 16..192 elevations, sample
@@ -237,8 +242,8 @@ void llbuild_tables_dry_run(const llbuild_tables *t)
     printf("tables       sized by the tolerance %g, known once measured: from %zu x %zu^2 x "
            "%zu^2 (about %.2f MiB) up to %zu x %zu^2 x %zu^2 (about %.2f MiB)",
            o->tolerance != 0.0 ? o->tolerance : 0.05, lo.n_theta_i, lo.vndf_size,
-           lo.sample_size, table_bytes(&lo) / 1048576.0, hi.n_theta_i, hi.vndf_size,
-           hi.sample_size, table_bytes(&hi) / 1048576.0);
+           lo.sample_size, table_bytes(&lo, t->transmissive) / 1048576.0, hi.n_theta_i, hi.vndf_size,
+           hi.sample_size, table_bytes(&hi, t->transmissive) / 1048576.0);
     spectral_suffix(t);
     printf(" (the `measured` file written instead of the .bsdf above)\n");
 }

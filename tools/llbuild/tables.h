@@ -20,6 +20,8 @@ typedef struct llbuild_tables {
     /* Filled by llbuild_tables_build for the summary: */
     size_t n_nodes, n_orders, n_channels, bsdf_bytes;
     double albedo[3][4];   /* reflected, at 0, 30, 60, 80 degrees          */
+    int transmissive;      /* set by llbuild_tables_check: a set of tables
+                              per lobe and side (four times the sets)     */
 } llbuild_tables;
 
 /* Take --format, --theta-i, --vndf, --sample and --wavelengths out of argv (the rest is
@@ -29,7 +31,7 @@ int llbuild_tables_take_args(int *argc, char **argv, llbuild_tables *t);
 
 /* Before building: a textured or transmissive stack is refused for
  * --format measured, saying why. Returns -1 to go on, else an exit code. */
-int llbuild_tables_check(const llbuild_tables *t, const ll_material *m, const char *input);
+int llbuild_tables_check(llbuild_tables *t, const ll_material *m, const char *input);
 
 /* --dry-run: the table file's size for the grid (nothing for bsdf). */
 void llbuild_tables_dry_run(const llbuild_tables *t);

@@ -7,7 +7,8 @@
  * ll_tables_write_from_bsdf (atomic output), then a summary read back from
  * the written file. The one target format is `measured`, the table files
  * that Mitsuba 3 and pbrt-v4 read natively (docs/formats.md); the
- * source must be opaque and untextured.
+ * source must be untextured. A transmissive source gives our extension of
+ * it (a set of tables per lobe and side), which those renderers refuse.
  * Exit codes: 0 done, 1 bad input (including a source the format cannot
  * hold, with the reason), 2 I/O, 3 out of memory.
  */
@@ -24,8 +25,10 @@
 
 static const char usage[] =
     "usage: llconvert [options] IN.bsdf -o OUT [--format measured]\n"
-    "Convert an opaque, untextured .bsdf (or table) file into the tables of the\n"
-    "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/formats.md).\n"
+    "Convert an untextured .bsdf (or opaque table) file into the tables of the\n"
+    "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/formats.md);\n"
+    "a transmissive source gives a set of tables per lobe and side, which only\n"
+    "layerlab reads (those renderers refuse the file).\n"
     "  -o, --output FILE  the file to write (required unless --dry-run)\n"
     "  --format NAME      the output format: measured (the default and only one)\n"
     "  --theta-i N        incident elevations (default: chosen by the tolerance)\n"
@@ -95,10 +98,29 @@ static void print_written(const char *out, const ll_bsdf_info *info, double sour
 
 /* The data the tables hold (the field table and text add a few hundred
  * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb. */
-static double table_bytes(size_t n_ti, size_t nv, size_t ns)
+static double table_bytes(size_t n_ti, size_t nv, size_t ns, int transmissive)
 {
-    return 4.0 * (2.0 * 2 * 256 + (double)n_ti + 1 + (double)n_ti * nv * nv +
-                  4.0 * (double)n_ti * ns * ns);
+    double sets = transmissive ? 4.0 : 1.0;
+    return 4.0 * (sets * (2.0 * 2 * 256 + (double)n_ti * nv * nv + 4.0 * (double)n_ti * ns * ns +
+                          (transmissive ? (double)n_ti : 0.0)) +
+                  (double)n_ti + 1);
+}
+
+/* Whether the source transmits (its tables are then a set per lobe and
+ * side): eta differs from 1, or light goes through at some elevation. */
+static int transmits(const ll_bsdf *b, const ll_bsdf_info *info)
+{
+    static const double mu[3] = { 1.0, 0.5, -0.5 };
+    int k;
+    if (info->eta < 1.0 - 1e-6 || info->eta > 1.0 + 1e-6)
+        return 1;
+    for (k = 0; k < 3; ++k) {
+        double r[3], t[3];
+        if (ll_bsdf_albedo(b, mu[k], NULL, r, t) == LL_OK &&
+            t[0] + t[1] + t[2] > 1e-6 * (r[0] + r[1] + r[2]))
+            return 1;
+    }
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -164,7 +186,7 @@ int main(int argc, char **argv)
     if (dry_run && opts.n_theta_i && opts.vndf_size && opts.sample_size) {
         printf("%s: %zu x %zu^2 x %zu^2 tables, about %.2f MB (the source: %.2f MB)\n", in,
                opts.n_theta_i, opts.vndf_size, opts.sample_size,
-               table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size) / 1e6,
+               table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size, transmits(b, &info)) / 1e6,
                (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
@@ -180,8 +202,8 @@ int main(int argc, char **argv)
                "up to %zu x %zu^2 x %zu^2 (about %.2f MB), known once measured (the source: "
                "%.2f MB)\n",
                in, opts.tolerance != 0.0 ? opts.tolerance : 0.05, lo_ti, lo_nv, lo_ns,
-               table_bytes(lo_ti, lo_nv, lo_ns) / 1e6, hi_ti, hi_nv, hi_ns,
-               table_bytes(hi_ti, hi_nv, hi_ns) / 1e6, (double)info.file_size / 1e6);
+               table_bytes(lo_ti, lo_nv, lo_ns, transmits(b, &info)) / 1e6, hi_ti, hi_nv, hi_ns,
+               table_bytes(hi_ti, hi_nv, hi_ns, transmits(b, &info)) / 1e6, (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
     }

@@ -1,0 +1,206 @@
+/*
+ * The lobes of an extended table file (tables_internal.h): a direction
+ * pair goes to the set of its lobe -- reflection or transmission, by the
+ * side of the fixed direction wi -- in that set's own frame, where wi lies
+ * above: a set of the bottom side sees both directions with z negated.
+ *
+ * Transmitted lobes. Across a net interface (file eta != 1) the set is
+ * warped about the refraction half vector (tables_refract.c). Where the
+ * stack has none (eta 1: a pane, glass between air and air) there is no
+ * refraction half vector: wi + wo vanishes at the straight-through
+ * direction wo = -wi, which is the lobe's peak. Negating wo's z turns that
+ * peak into wi's mirror direction, and the transmitted lobe of a pane
+ * (two rough interfaces whose deviations largely cancel) into a lobe about
+ * it like a reflected one, so such a set is a reflection set of the
+ * z-flipped direction and reuses its warp, evaluation and sampler
+ * unchanged.
+ *
+ * Sampling picks the reflected or the transmitted lobe of wi's side in
+ * proportion to their luminance albedos at wi's elevation (stored per
+ * incident elevation, interpolated linearly as the slices are), reusing
+ * u[0] rescaled into the chosen share; the pdf is the share times the
+ * lobe's.
+ */
+#include "reader/tables_internal.h"
+
+#include <math.h>
+
+static const char *const prefixes[LL_MEASURED_LOBES] = {
+    "reflect_top.", "reflect_bottom.", "transmit_top.", "transmit_bottom."
+};
+
+const char *ll_measured_lobe_prefix(int lobe)
+{
+    return lobe >= 0 && lobe < LL_MEASURED_LOBES ? prefixes[lobe] : "";
+}
+
+static void flip(const double in[3], double out[3])
+{
+    out[0] = in[0];
+    out[1] = in[1];
+    out[2] = -in[2];
+}
+
+/* The set's value at (wi, wo) in its frame (wi above). */
+static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
+                      const double wo[3], double value[3])
+{
+    double f[3];
+    if (!transmit) {
+        ll_measured_eval(set, wi, wo, value);
+    } else if (set->refract_eta > 0.0) {
+        ll_measured_refract_eval(set, wi, wo, value);
+    } else {
+        flip(wo, f);
+        ll_measured_eval(set, wi, f, value);
+    }
+}
+
+static double lobe_pdf(const ll_measured *set, int transmit, const double wi[3],
+                       const double wo[3])
+{
+    double f[3];
+    if (!transmit)
+        return ll_measured_pdf(set, wi, wo);
+    if (set->refract_eta > 0.0)
+        return ll_measured_refract_pdf(set, wi, wo);
+    flip(wo, f);
+    return ll_measured_pdf(set, wi, f);
+}
+
+/* The set's luminance albedo at wi's elevation. */
+static double weight_at(const ll_measured *set, const double wi[3])
+{
+    const double *th;
+    double theta, t;
+    size_t n, lo = 0, hi;
+    if (!set)
+        return 0.0;
+    th = set->vndf.param_values[1];
+    n = set->vndf.param_size[1];
+    theta = acos(wi[2] > 1.0 ? 1.0 : wi[2]);
+    if (n < 2 || theta <= th[0])
+        return set->weight[0];
+    if (theta >= th[n - 1])
+        return set->weight[n - 1];
+    hi = n - 1;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (th[mid] <= theta)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    t = (theta - th[lo]) / (th[hi] - th[lo]);
+    return (1.0 - t) * set->weight[lo] + t * set->weight[hi];
+}
+
+/* wi in the frame of its side's sets, and the sets. 0 if wi lies in the
+ * surface. */
+static int side_of(const ll_measured *m, const double wi[3], double w[3],
+                   const ll_measured **reflect, const ll_measured **transmit)
+{
+    int bottom = wi[2] < 0.0;
+    if (wi[2] == 0.0)
+        return 0;
+    if (bottom)
+        flip(wi, w);
+    else {
+        w[0] = wi[0];
+        w[1] = wi[1];
+        w[2] = wi[2];
+    }
+    *reflect = m->lobe[bottom ? LL_LOBE_REFLECT_BOTTOM : LL_LOBE_REFLECT_TOP];
+    *transmit = m->lobe[bottom ? LL_LOBE_TRANSMIT_BOTTOM : LL_LOBE_TRANSMIT_TOP];
+    return bottom ? -1 : 1;
+}
+
+/* The share of the reflected lobe in sampling at w (its frame). */
+static double reflect_share(const ll_measured *r, const ll_measured *t, const double w[3])
+{
+    double a = weight_at(r, w), b = weight_at(t, w);
+    if (!(a > 0.0) && !(b > 0.0))
+        return r ? 1.0 : 0.0;
+    return a / (a + b);
+}
+
+void ll_measured_lobes_eval(const ll_measured *m, const double wi[3], const double wo[3],
+                            double value[3])
+{
+    const ll_measured *r, *t;
+    double w[3], o[3];
+    int side = side_of(m, wi, w, &r, &t), transmit;
+    value[0] = value[1] = value[2] = 0.0;
+    if (!side || wo[2] == 0.0)
+        return;
+    transmit = wi[2] * wo[2] < 0.0;
+    if (side < 0)
+        flip(wo, o);
+    else {
+        o[0] = wo[0];
+        o[1] = wo[1];
+        o[2] = wo[2];
+    }
+    if (transmit ? t != NULL : r != NULL)
+        lobe_eval(transmit ? t : r, transmit, w, o, value);
+}
+
+double ll_measured_lobes_pdf(const ll_measured *m, const double wi[3], const double wo[3])
+{
+    const ll_measured *r, *t;
+    double w[3], o[3], share;
+    int side = side_of(m, wi, w, &r, &t), transmit;
+    if (!side || wo[2] == 0.0)
+        return 0.0;
+    transmit = wi[2] * wo[2] < 0.0;
+    if (side < 0)
+        flip(wo, o);
+    else {
+        o[0] = wo[0];
+        o[1] = wo[1];
+        o[2] = wo[2];
+    }
+    share = reflect_share(r, t, w);
+    if (transmit)
+        return t && share < 1.0 ? (1.0 - share) * lobe_pdf(t, 1, w, o) : 0.0;
+    return r && share > 0.0 ? share * lobe_pdf(r, 0, w, o) : 0.0;
+}
+
+int ll_measured_lobes_sample(const ll_measured *m, const double wi[3], const double u[2],
+                             double wo[3], double *pdf, double value[3])
+{
+    const ll_measured *r, *t;
+    double w[3], v[2], share;
+    int side = side_of(m, wi, w, &r, &t), transmit, ok;
+    wo[0] = wo[1] = 0.0;
+    wo[2] = 1.0;
+    *pdf = 0.0;
+    value[0] = value[1] = value[2] = 0.0;
+    if (!side)
+        return 0;
+    share = reflect_share(r, t, w);
+    transmit = !(u[0] < share);
+    v[0] = transmit ? (u[0] - share) / (1.0 - share) : u[0] / share;
+    v[0] = v[0] < 0.0 ? 0.0 : (v[0] > 1.0 ? 1.0 : v[0]);
+    v[1] = u[1];
+    if (transmit ? !t : !r)
+        return 0;
+    if (!transmit)
+        ok = ll_measured_sample(r, w, v, wo, pdf, value);
+    else if (t->refract_eta > 0.0)
+        ok = ll_measured_refract_sample(t, w, v, wo, pdf, value);
+    else {
+        ok = ll_measured_sample(t, w, v, wo, pdf, value);
+        wo[2] = -wo[2];
+    }
+    if (!ok) {
+        wo[0] = wo[1] = 0.0;
+        wo[2] = 1.0;
+        *pdf = 0.0;
+        return 0;
+    }
+    *pdf *= transmit ? 1.0 - share : share;
+    if (side < 0)
+        wo[2] = -wo[2];
+    return *pdf > 0.0;
+}

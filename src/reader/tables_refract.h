@@ -1,0 +1,77 @@
+/*
+ * The refraction warp of a transmitted lobe across a net interface
+ * (tables_internal.h): the generalised half vector of Walter et al. 2007,
+ * "Microfacet Models for Refraction through Rough Surfaces", sec. 5.2,
+ * m = -(wi + eta wo) / |wi + eta wo| turned above the surface, with wi
+ * above (index 1) and wo below (relative index eta); wo is wi refracted
+ * through m. Shared by the reader's sampler and the writer's sample grid,
+ * as ll_tables_mirror is for reflection: the writer stores values at the
+ * very directions the readers' warps produce.
+ */
+#ifndef LL_TABLES_REFRACT_H
+#define LL_TABLES_REFRACT_H
+
+#include "support/support.h"
+
+#include <math.h>
+
+/* The normal m of the visible-normal square's point um (as
+ * ll_tables_mirror maps it) and wi refracted through it; returns wi.m, or
+ * 0 where wi.m <= 0 or total internal reflection leaves no refracted
+ * direction (wo then (0, 0, 1)). */
+static inline double ll_tables_refract(const double wi[3], const double um[2], double phi_i,
+                                       double eta, double *theta_m, double m[3], double wo[3])
+{
+    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI + phi_i;
+    double c, k, inv = 1.0 / eta, a;
+    m[0] = sin(tm) * cos(pm);
+    m[1] = sin(tm) * sin(pm);
+    m[2] = cos(tm);
+    *theta_m = tm;
+    c = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    k = 1.0 - inv * inv * (1.0 - c * c);
+    wo[0] = wo[1] = 0.0;
+    wo[2] = 1.0;
+    if (!(c > 0.0) || !(k > 0.0))
+        return 0.0;
+    a = inv * c - sqrt(k);
+    wo[0] = a * m[0] - inv * wi[0];
+    wo[1] = a * m[1] - inv * wi[1];
+    wo[2] = a * m[2] - inv * wi[2];
+    return c;
+}
+
+/* The half vector of the pair (wi above, wo below), and 1; 0 if the pair
+ * is not one of a refraction through it (wi.m > 0 > wo.m). */
+static inline int ll_tables_refract_half(const double wi[3], const double wo[3], double eta,
+                                         double m[3])
+{
+    double len;
+    int k;
+    if (!(wi[2] > 0.0 && wo[2] < 0.0))
+        return 0;
+    for (k = 0; k < 3; ++k)
+        m[k] = -(wi[k] + eta * wo[k]);
+    len = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    if (!(len > 0.0))
+        return 0;
+    if (m[2] < 0.0)
+        len = -len;
+    for (k = 0; k < 3; ++k)
+        m[k] /= len;
+    return wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2] > 0.0 &&
+           wo[0] * m[0] + wo[1] * m[1] + wo[2] * m[2] < 0.0;
+}
+
+/* d omega_m / d omega_o of the refraction (Walter et al. eq. 16):
+ * eta^2 |wo.m| / (wi.m + eta wo.m)^2; 0 where it is not finite. */
+static inline double ll_tables_refract_jacobian(const double wi[3], const double wo[3],
+                                                const double m[3], double eta)
+{
+    double im = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    double om = wo[0] * m[0] + wo[1] * m[1] + wo[2] * m[2], d = im + eta * om;
+    double j = eta * eta * fabs(om) / (d * d);
+    return ll_is_finite(j) ? j : 0.0;
+}
+
+#endif /* LL_TABLES_REFRACT_H */

@@ -1,0 +1,409 @@
+/*
+ * The table file of a transmissive material (bsdf_write_tables.h): an
+ * extended file (docs: "layerlab_layout") with a set of tables per lobe,
+ * reflect_top., reflect_bottom., transmit_top. and transmit_bottom. (the
+ * side of the fixed direction), and no table of the plain names, so that
+ * a renderer that knows only the `measured` format refuses the file
+ * instead of rendering its reflection as an opaque material.
+ *
+ * Each set follows the opaque writer's steps (bsdf_write_tables.c) in its
+ * own frame, where the fixed direction lies above (a bottom set sees the
+ * material with z negated): D and sigma (retro-reflection for a reflected
+ * lobe, ll_tables_derive_ndf_side; the lobe at normal incidence for a
+ * transmitted one, bsdf_write_tables_tndf.c), the VNDF slices, the sample
+ * grid pushed through the reader's own warp, then reflected about the
+ * normal, refracted through it (net interface: tables_refract.h), or
+ * reflected and z-flipped (eta 1: tables_lobes.c says why), and f |cos|
+ * 4 sigma / D stored there. The values are the .bsdf's own (importance
+ * transport); the reader applies radiance's eta^2 as for the .bsdf.
+ * A transmitted set's "warp_eta" names its warp: the refraction's
+ * relative index, or 0 for the z-flipped direction's (the reader takes
+ * either, so a writer may choose per set).
+ * A set's "albedo" field holds its luminance albedo per incident
+ * elevation (the .bsdf's order-0 integral), by which the reader's sampler
+ * picks between the reflected and the transmitted lobe.
+ */
+#include "layerlab/ll_tables.h"
+#include "writer/bsdf_write_tables.h"
+#include "writer/bsdf_write_tensor.h"
+#include "reader/tables_warp.h"
+#include "reader/tables_refract.h"
+#include "support/watch.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define FN "ll_tables_write_from_bsdf"
+#define LUMINANCE_FLOOR 1e-3
+#define LOBES 4
+#define FIELDS_PER_LOBE 7
+
+static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
+                                             "transmit_bottom." };
+
+typedef struct lobe {
+    int bottom, transmit;
+    double refract_eta;                     /* > 0: the refraction warp      */
+    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1];
+    ll_warp2d ndf_w, sigma_w, vndf_w;
+    double alpha;
+    char names[FIELDS_PER_LOBE][40];
+} lobe;
+
+typedef struct writer {
+    const ll_bsdf *b;
+    size_t n_ti, nv, ns;
+    float *theta_i, phi_i[1], eta[1];
+    double *theta_d;
+    lobe l[LOBES];
+} writer;
+
+static double get_float(const void *ctx, size_t i) { return (double)((const float *)ctx)[i]; }
+
+void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[3], const double wo[3],
+                      double f[3])
+{
+    double a[3] = { wi[0], wi[1], bottom ? -wi[2] : wi[2] };
+    double c[3] = { wo[0], wo[1], bottom ? -wo[2] : wo[2] };
+    int k;
+    if (ll_bsdf_eval_dir(b, a, c, LL_TRANSPORT_IMPORTANCE, NULL, f) != LL_OK)
+        f[0] = f[1] = f[2] = 0.0;
+    for (k = 0; k < 3; ++k)
+        if (!(f[k] > 0.0) || !ll_is_finite(f[k]))
+            f[k] = 0.0;
+}
+
+static ll_status allocate(writer *w)
+{
+    size_t nd = LL_TABLES_NDF_NODES, v, s;
+    int k;
+    if (!ll_size_mul(w->nv, w->nv, &v) || !ll_size_mul(v, w->n_ti, &v) ||
+        !ll_size_mul(w->ns, w->ns, &s) || !ll_size_mul(s, w->n_ti, &s))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": the tables' size overflows");
+    w->theta_i = ll_alloc_array(w->n_ti, sizeof(float));
+    w->theta_d = ll_alloc_array(w->n_ti, sizeof(double));
+    if (!w->theta_i || !w->theta_d)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
+    for (k = 0; k < LOBES; ++k) {
+        lobe *l = &w->l[k];
+        l->ndf = ll_alloc_array(2 * nd, sizeof(float));
+        l->sigma = ll_alloc_array(2 * nd, sizeof(float));
+        l->vndf = ll_alloc_array(v, sizeof(float));
+        l->lum = ll_alloc_array(s, sizeof(float));
+        l->rgb = ll_alloc_array(s, 3 * sizeof(float));
+        l->albedo = ll_alloc_array(w->n_ti, sizeof(float));
+        if (!l->ndf || !l->sigma || !l->vndf || !l->lum || !l->rgb || !l->albedo)
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
+    }
+    return LL_OK;
+}
+
+static void release(writer *w)
+{
+    int k;
+    ll_free(w->theta_i);
+    ll_free(w->theta_d);
+    for (k = 0; k < LOBES; ++k) {
+        lobe *l = &w->l[k];
+        ll_free(l->ndf);
+        ll_free(l->sigma);
+        ll_free(l->vndf);
+        ll_free(l->lum);
+        ll_free(l->rgb);
+        ll_free(l->albedo);
+        ll_warp2d_free(&l->ndf_w);
+        ll_warp2d_free(&l->sigma_w);
+        ll_warp2d_free(&l->vndf_w);
+    }
+}
+
+/* D and sigma of lobe l as float tables of two equal rows and their warps. */
+static ll_status ndf_tables(const writer *w, lobe *l)
+{
+    enum { N = LL_TABLES_NDF_NODES };
+    double d[N], sigma[N];
+    size_t j;
+    ll_status s = l->transmit ? ll_tables_derive_transmit_ndf(w->b, l->bottom, l->refract_eta, d,
+                                                              sigma, &l->alpha)
+                              : ll_tables_derive_ndf_side(w->b, l->bottom ? -1 : 1, d, sigma,
+                                                          &l->alpha);
+    if (s != LL_OK)
+        return s;
+    for (j = 0; j < N; ++j) {
+        l->ndf[j] = l->ndf[N + j] = (float)d[j];
+        l->sigma[j] = l->sigma[N + j] = (float)sigma[j];
+    }
+    if ((s = ll_warp2d_init(&l->ndf_w, N, 2, 0, NULL, NULL, get_float, l->ndf, 0)) != LL_OK ||
+        (s = ll_warp2d_init(&l->sigma_w, N, 2, 0, NULL, NULL, get_float, l->sigma, 0)) != LL_OK)
+        return s;
+    return LL_OK;
+}
+
+static double sigma_at(const lobe *l, double theta)
+{
+    double u[2] = { sqrt(theta * (2.0 / LL_PI)), 0.5 };
+    return ll_warp2d_eval(&l->sigma_w, u, NULL);
+}
+
+/* The visible-normal density of slice t over the normal's square. */
+static void vndf_slice(const writer *w, lobe *l, size_t t)
+{
+    size_t nv = w->nv, x, y;
+    double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
+    double inv_sigma = 1.0 / sigma_at(l, th);
+    float *out = l->vndf + t * nv * nv;
+    for (y = 0; y < nv; ++y) {
+        double phi = (2.0 * (double)y / (double)(nv - 1) - 1.0) * LL_PI;
+        for (x = 0; x < nv; ++x) {
+            double u[2] = { (double)x / (double)(nv - 1), 0.5 };
+            double tm = u[0] * u[0] * (LL_PI / 2);
+            double m[3] = { sin(tm) * cos(phi), sin(tm) * sin(phi), cos(tm) };
+            double dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+            double v = dot > 0.0 ? dot * ll_warp2d_eval(&l->ndf_w, u, NULL) * inv_sigma *
+                                       2.0 * LL_PI * LL_PI * u[0] * sin(tm)
+                                 : 0.0;
+            out[y * nv + x] = (float)v;
+        }
+    }
+}
+
+/* The direction the reader's sampler gives for the normal's point um:
+ * 1 and wo, or 0 if none. *sampling receives the factor by which the
+ * sampler's density over wo differs from p_l p_v / area (the density of
+ * the two squares per steradian of normals) times the stored value's
+ * D / (4 sigma wi.m) (the value's own share): 1 for a reflection (d omega_m
+ * / d omega_o = 1 / (4 wi.m)), 4 wi.m d omega_m / d omega_o for a
+ * refraction. The luminance table is divided by it, so that the sampler
+ * follows f |cos| for refraction as it does for reflection. */
+static int direction(const lobe *l, const double wi[3], const double um[2], double wo[3],
+                     double *sampling)
+{
+    double tm, m[3], d;
+    *sampling = 1.0;
+    if (l->transmit && l->refract_eta > 0.0) {
+        d = ll_tables_refract(wi, um, 0.0, l->refract_eta, &tm, m, wo);
+        if (!(d > 0.0) || !(wo[2] < 0.0))
+            return 0;
+        *sampling = 4.0 * d * ll_tables_refract_jacobian(wi, wo, m, l->refract_eta);
+        return *sampling > 0.0 && ll_is_finite(*sampling);
+    }
+    d = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
+    if (!(d > 0.0) || !(wo[2] > 0.0))
+        return 0;
+    if (l->transmit)
+        wo[2] = -wo[2];
+    return 1;
+}
+
+/* The values and luminance of slice t at the sample grid's nodes. */
+static void value_slice(const writer *w, lobe *l, size_t t)
+{
+    size_t ns = w->ns, x, y, c, plane = ns * ns;
+    double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
+    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(l, th), top = 0.0, floor_v;
+    float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
+    for (y = 0; y < ns; ++y) {
+        for (x = 0; x < ns; ++x) {
+            double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
+            double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
+            double sampling = 1.0;
+            ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
+            if (wi[2] > 0.0 && direction(l, wi, um, wo, &sampling)) {
+                ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
+                scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
+                if (!ll_is_finite(scale))
+                    scale = 0.0;
+            }
+            for (c = 0; c < 3; ++c) {
+                double v = f[c] * scale;
+                f[c] = v > 0.0 ? v : 0.0;
+                rgb[c * plane + y * ns + x] = (float)f[c];
+            }
+            y_lum = ll_tables_luminance(f) / sampling;
+            lum[y * ns + x] = (float)y_lum;
+            if (y_lum > top)
+                top = y_lum;
+        }
+    }
+    floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
+    for (x = 0; x < plane; ++x)
+        if (!((double)lum[x] >= floor_v))
+            lum[x] = (float)floor_v;
+}
+
+/* The luminance albedo of each lobe at each incident elevation, from the
+ * .bsdf's order-0 integral (the file's incident cosine is the fixed
+ * direction's z, negative from the bottom). */
+static void albedos(writer *w)
+{
+    size_t t;
+    int bottom;
+    for (bottom = 0; bottom < 2; ++bottom)
+        for (t = 0; t < w->n_ti; ++t) {
+            double mu = cos(w->theta_d[t]), r[3] = { 0.0, 0.0, 0.0 }, tr[3] = { 0.0, 0.0, 0.0 };
+            double a, b;
+            if (mu < 1e-4)
+                mu = 1e-4;
+            if (ll_bsdf_albedo(w->b, bottom ? -mu : mu, NULL, r, tr) != LL_OK)
+                r[0] = r[1] = r[2] = tr[0] = tr[1] = tr[2] = 0.0;
+            a = ll_tables_luminance(r);
+            b = ll_tables_luminance(tr);
+            w->l[bottom ? 1 : 0].albedo[t] = (float)(a > 0.0 ? a : 0.0);
+            w->l[bottom ? 3 : 2].albedo[t] = (float)(b > 0.0 ? b : 0.0);
+        }
+}
+
+static char *metadata_text(const writer *w, const char *figures, size_t *size)
+{
+    size_t cap = 640, at;
+    char *buf;
+    const char *src = w->b->metadata ? w->b->metadata : "";
+    if (!figures)
+        figures = "";
+    if (!ll_size_add(cap, w->b->metadata_size, &cap) || !ll_size_mul(cap, 6, &cap) ||
+        !ll_size_add(cap, strlen(figures), &cap))
+        return NULL;
+    if (!(buf = ll_malloc(cap)))
+        return NULL;
+    at = (size_t)snprintf(buf, cap,
+                          "{\"writer\": \"layerlab %s\", \"layout\": \"transmissive\", "
+                          "\"theta_i\": %zu, \"vndf\": [%zu, %zu], \"sample\": [%zu, %zu], "
+                          "\"ndf_alpha\": [%.6g, %.6g, %.6g, %.6g], \"eta\": %.9g, "
+                          "\"wavelengths\": 0, %s\"bsdf_metadata\": ",
+                          ll_version_string(), w->n_ti, w->nv, w->nv, w->ns, w->ns,
+                          w->l[0].alpha, w->l[1].alpha, w->l[2].alpha, w->l[3].alpha, w->b->eta,
+                          figures);
+    at = ll_tables_json_string(buf, at, cap, src);
+    buf[at++] = '}';
+    buf[at] = '\0';
+    *size = at;
+    return buf;
+}
+
+static ll_status build_lobe(writer *w, lobe *l, ll_watch *watch)
+{
+    const double phi[1] = { 0.0 }, *params[2];
+    size_t sizes[2], t;
+    ll_status s;
+    if ((s = ndf_tables(w, l)) != LL_OK)
+        return s;
+    for (t = 0; t < w->n_ti; ++t)
+        vndf_slice(w, l, t);
+    params[0] = phi;
+    params[1] = w->theta_d;
+    sizes[0] = 1;
+    sizes[1] = w->n_ti;
+    if ((s = ll_warp2d_init(&l->vndf_w, w->nv, w->nv, 2, sizes, params, get_float, l->vndf,
+                            1)) != LL_OK)
+        return s;
+    for (t = 0; t < w->n_ti; ++t) {
+        value_slice(w, l, t);
+        ll_watch_advance(watch, 1);
+        if ((s = ll_watch_check(watch, FN)) != LL_OK)
+            return s;
+    }
+    return LL_OK;
+}
+
+ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tables_options *o,
+                                const char *figures, const ll_monitor *monitor)
+{
+    static const unsigned char jacobian[1] = { 1 };
+    static const char layout[] = "reflect_top reflect_bottom transmit_top transmit_bottom";
+    writer w;
+    ll_watch watch;
+    char *meta = NULL;
+    size_t meta_size = 0, t, nd = LL_TABLES_NDF_NODES, nf = 0;
+    ll_tensor_out_field f[7 + LOBES * FIELDS_PER_LOBE];
+    const char *desc;
+    int k;
+    ll_status s;
+    if (o->format != LL_TABLES_RGB)
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       FN ": spectral tables of a transmissive file are not written by this "
+                       "version (LL_TABLES_RGB writes them)");
+    if ((s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
+        return s;
+    memset(&w, 0, sizeof w);
+    w.b = b;
+    w.n_ti = o->n_theta_i;
+    w.nv = o->vndf_size;
+    w.ns = o->sample_size;
+    w.eta[0] = (float)b->eta;
+    if ((s = allocate(&w)) != LL_OK)
+        goto done;
+    /* The opaque writer's incident elevations (bsdf_write_tables.c). */
+    for (t = 0; t < w.n_ti; ++t) {
+        w.theta_i[t] =
+            (float)(sin((double)t / (double)(w.n_ti - 1) * (LL_PI / 2)) * (LL_PI / 2));
+        w.theta_d[t] = (double)w.theta_i[t];
+    }
+    for (k = 0; k < LOBES; ++k) {
+        lobe *l = &w.l[k];
+        l->bottom = k == 1 || k == 3;
+        l->transmit = k >= 2;
+        if (l->transmit && fabs(b->eta - 1.0) > 1e-6)
+            l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
+        l->warp_eta[0] = (float)l->refract_eta;
+    }
+    albedos(&w);
+    ll_watch_stage(&watch, "tables", 0.0, 0.9, LOBES * w.n_ti);
+    for (k = 0; k < LOBES; ++k)
+        if ((s = build_lobe(&w, &w.l[k], &watch)) != LL_OK)
+            goto done;
+    if (!(meta = metadata_text(&w, figures, &meta_size))) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (metadata)");
+        goto done;
+    }
+    ll_watch_stage(&watch, "writing", 0.9, 0.1, 1);
+    desc = o->description ? o->description
+                          : "layerlab: warped tables of a transmissive layered material (RGB; "
+                            "an extension of the measured format: see layerlab_layout)";
+    {
+        ll_tensor_out_field shared[7] = {
+            { "description", LL_TENSOR_U8, 1, { strlen(desc) }, desc, NULL, NULL },
+            { "jacobian", LL_TENSOR_U8, 1, { 1 }, jacobian, NULL, NULL },
+            { "theta_i", LL_TENSOR_F32, 1, { w.n_ti }, w.theta_i, NULL, NULL },
+            { "phi_i", LL_TENSOR_F32, 1, { 1 }, w.phi_i, NULL, NULL },
+            { "eta", LL_TENSOR_F32, 1, { 1 }, w.eta, NULL, NULL },
+            { "layerlab_layout", LL_TENSOR_U8, 1, { sizeof layout - 1 }, layout, NULL, NULL },
+            { "layerlab_metadata", LL_TENSOR_U8, 1, { meta_size }, meta, NULL, NULL },
+        };
+        for (nf = 0; nf < 7; ++nf)
+            f[nf] = shared[nf];
+    }
+    for (k = 0; k < LOBES; ++k) {
+        lobe *l = &w.l[k];
+        static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
+                                                           "luminance", "rgb",   "albedo",
+                                                           "warp_eta" };
+        int j;
+        for (j = 0; j < FIELDS_PER_LOBE; ++j)
+            snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
+        {
+            ll_tensor_out_field set[FIELDS_PER_LOBE] = {
+                { l->names[0], LL_TENSOR_F32, 2, { 2, nd }, l->ndf, NULL, NULL },
+                { l->names[1], LL_TENSOR_F32, 2, { 2, nd }, l->sigma, NULL, NULL },
+                { l->names[2], LL_TENSOR_F32, 4, { 1, w.n_ti, w.nv, w.nv }, l->vndf, NULL,
+                  NULL },
+                { l->names[3], LL_TENSOR_F32, 4, { 1, w.n_ti, w.ns, w.ns }, l->lum, NULL,
+                  NULL },
+                { l->names[4], LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, l->rgb, NULL,
+                  NULL },
+                { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
+                { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
+            };
+            /* warp_eta: transmitted sets only. */
+            for (j = 0; j < (l->transmit ? FIELDS_PER_LOBE : FIELDS_PER_LOBE - 1); ++j)
+                f[nf++] = set[j];
+        }
+    }
+    if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
+        goto done;
+    s = ll_tensor_write(path, FN, f, nf);
+done:
+    ll_free(meta);
+    release(&w);
+    return s;
+}

@@ -1,0 +1,108 @@
+/*
+ * The normal distribution that parameterises a transmitted lobe's tables
+ * (bsdf_write_tables.h). Retro-reflection (bsdf_write_tables_ndf.c) sees
+ * nothing of a transmitted lobe; its own shape at normal incidence does:
+ * with wi the normal, the visible normals' density is cos(theta_m) D(m)
+ * (sigma(n) = 1), so the lobe's density over the half vector of its warp,
+ * f |cos theta_o| times d omega_o / d omega_m, divided by cos(theta_m), is
+ * D up to a constant. d omega_o / d omega_m is the refraction's (Walter
+ * et al. 2007, tables_refract.h) for the refraction warp, 4 |wo'.m| for the
+ * warp of the z-flipped direction wo' (a reflection's).
+ *
+ * Where normal incidence gives no direction (beyond the critical angle from
+ * the denser side, beyond 45 degrees for the flipped warp) and where the
+ * lobe has sunk to the numerical floor of the Fourier series (about 1e-4
+ * of its peak: below it a series' ringing, not the lobe, sets the value,
+ * and f / D would follow the ringing), D continues as a Beckmann lobe of
+ * the peak's width, joined continuously. As for the reflected lobes, a
+ * wider Beckmann lobe and a uniform floor are mixed in so that the tails
+ * get grid cells of their own and f / D stays bounded; D only shapes the
+ * tables (the values carry f cos / D), not the BSDF.
+ */
+#include "writer/bsdf_write_tables.h"
+#include "reader/tables_refract.h"
+#include "reader/tables_warp.h"
+
+#include <math.h>
+
+/* Below this fraction of the peak a Fourier evaluation is its ringing. */
+#define FOURIER_FLOOR 1e-4
+#define SHAPE_WEIGHT 0.58
+#define WIDE_WEIGHT 0.2
+#define WIDE_WIDTH 3.0 /* times the peak's roughness */
+#define PEAK_WEIGHT 0.2
+#define FLOOR_WEIGHT 0.02
+
+ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom, double refract_eta,
+                                        double *d, double *sigma, double *alpha)
+{
+    enum { N = LL_TABLES_NDF_NODES };
+    double theta[N], w[N], peak = 0.0, norm, join, peak_alpha = 1.0;
+    const double wi[3] = { 0.0, 0.0, 1.0 };
+    size_t j, last;
+    int valid[N];
+    ll_tables_ndf_quadrature(N, theta, w);
+    for (j = 0; j < N; ++j) {
+        double um[2] = { (double)j / (double)(N - 1), 0.5 }, m[3], wo[3], f[3], tm, dens = 0.0;
+        valid[j] = 0;
+        d[j] = 0.0;
+        if (refract_eta > 0.0) {
+            if (ll_tables_refract(wi, um, 0.0, refract_eta, &tm, m, wo) > 0.0 && wo[2] < 0.0) {
+                double jac = ll_tables_refract_jacobian(wi, wo, m, refract_eta);
+                ll_tables_lobe_f(b, bottom, wi, wo, f);
+                if (jac > 0.0)
+                    dens = ll_tables_luminance(f) * fabs(wo[2]) / jac;
+                valid[j] = 1;
+            }
+        } else {
+            double dot = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
+            if (wo[2] > 0.0 && dot > 0.0) {
+                double flipped[3] = { wo[0], wo[1], -wo[2] };
+                ll_tables_lobe_f(b, bottom, wi, flipped, f);
+                dens = ll_tables_luminance(f) * wo[2] * 4.0 * dot;
+                valid[j] = 1;
+            }
+        }
+        if (valid[j] && cos(theta[j]) > 1e-6 && dens > 0.0 && ll_is_finite(dens))
+            d[j] = dens / cos(theta[j]);
+        if (d[j] > peak)
+            peak = d[j];
+    }
+    if (!(peak > 0.0))
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       "ll_tables_write_from_bsdf: the file transmits nothing at normal "
+                       "incidence from the %s, so no normal distribution can be derived",
+                       bottom ? "bottom" : "top");
+    /* The measured part: from the normal up to where it leaves the
+     * geometry or sinks to the floor. */
+    for (last = 0; last + 1 < N && valid[last + 1] && d[last + 1] > FOURIER_FLOOR * peak; ++last)
+        ;
+    for (j = 1; j <= last; ++j) {
+        double c = cos(theta[j]);
+        if (d[j] * c * c * c * c <= d[0] * exp(-1.0)) {
+            peak_alpha = tan(theta[j]);
+            break;
+        }
+    }
+    if (j > last)
+        peak_alpha = last > 0 ? tan(theta[last]) : 0.05;
+    if (!(peak_alpha >= 1e-3))
+        peak_alpha = 1e-3;
+    if (peak_alpha > 1.0)
+        peak_alpha = 1.0;
+    join = d[last] / ll_tables_beckmann(theta[last], peak_alpha);
+    if (!ll_is_finite(join) || !(join > 0.0))
+        join = 0.0;
+    for (j = last + 1; j < N; ++j)
+        d[j] = join * ll_tables_beckmann(theta[j], peak_alpha);
+    norm = 0.0;
+    for (j = 0; j < N; ++j)
+        norm += 2.0 * LL_PI * w[j] * d[j] * cos(theta[j]);
+    for (j = 0; j < N; ++j)
+        d[j] = SHAPE_WEIGHT * d[j] / norm +
+               WIDE_WEIGHT * ll_tables_beckmann(theta[j], WIDE_WIDTH * peak_alpha) +
+               PEAK_WEIGHT * ll_tables_beckmann(theta[j], peak_alpha) + FLOOR_WEIGHT / LL_PI;
+    *alpha = peak_alpha;
+    ll_tables_projected_area(N, theta, w, d, sigma);
+    return LL_OK;
+}
