@@ -315,7 +315,7 @@ def _make_class():
             self.m_params = self._parameters(props, path)
             self.m_eta = self.m_table.eta
             tables_file = self.m_table.format == "tables"
-            self.m_transmits = False if tables_file else self.m_table.transmits()
+            self.m_transmits = self.m_table.transmits()
             mode = self._choose_mode(props, path, current)
             self.m_mode = mode
             self.m_tables = None
@@ -354,7 +354,11 @@ def _make_class():
             spectral = tables_file and table.n_wavelengths > 0
             # What the traced tables can render: an RGB table file, or an
             # opaque, untextured .bsdf (made into tables on load).
-            if tables_file:
+            if tables_file and (self.m_transmits or table.n_bases > 1):
+                why_not = ("it is an extended table file (%s: a table set per lobe or "
+                           "basis, which only the C reader evaluates)"
+                           % ("textured" if table.n_bases > 1 else "transmissive"))
+            elif tables_file:
                 why_not = ("it is a spectral table file (its RGB is the C reader's "
                            "conversion of the spectra)" if spectral else None)
             elif table.n_bases > 1:
