@@ -89,15 +89,63 @@ typedef struct pair_stencil {
     size_t co, ci;
 } pair_stencil;
 
+/* What an evaluation does with the memo's series. */
+enum { MEMO_NONE, MEMO_FILL, MEMO_REUSE };
+
 typedef struct eval_job {
     const ll_microfacet_model *mf;
     const ll_probe_set *set;
     const pair_stencil *stencils;
     const ll_probe_compensation *compensation; /* nullable */
+    ll_probe_series_memo *memo;                /* nullable */
+    int mode;                                  /* MEMO_* */
     size_t m;
     double *values;
     ll_watch *watch;
 } eval_job;
+
+/* The terms of a series of len terms (computed with more orders) that a
+ * series of m orders keeps: ll_microfacet_series' truncation after the
+ * last term that matters, within the first m. */
+static size_t kept_terms(const double *c, size_t len, size_t m)
+{
+    size_t k = len < m ? len : m, l, last = 0;
+    if (k == 0 || !(c[0] > 0.0))
+        return 0;
+    for (l = 1; l < k; ++l)
+        if (fabs(c[l]) >= LL_MICROFACET_RELERR * c[0])
+            last = l;
+    return last + 1;
+}
+
+/* The series of stencil slot `slot` (node cosines mu_o, mu_i as the
+ * series takes them): from the memo where it holds them unwidened for
+ * orders at least m, else computed (and kept when filling). */
+static ll_status slot_series(const eval_job *job, size_t slot, double mu_o, double mu_i,
+                             double *series, double *scratch, const double **c, size_t *len)
+{
+    ll_probe_series_memo *memo = job->memo;
+    ll_status s;
+    if (job->mode == MEMO_REUSE && !memo->widened[slot] &&
+        !ll_microfacet_widened(job->mf, mu_o, mu_i)) {
+        *c = memo->series[slot];
+        *len = kept_terms(*c, memo->len[slot], job->m);
+        return LL_OK;
+    }
+    s = ll_microfacet_series(job->mf, mu_o, mu_i, job->m, series, len, NULL, scratch);
+    *c = series;
+    if (s != LL_OK || job->mode != MEMO_FILL)
+        return s;
+    memo->len[slot] = *len;
+    memo->widened[slot] = (unsigned char)ll_microfacet_widened(job->mf, mu_o, mu_i);
+    if (*len > 0) {
+        memo->series[slot] = ll_alloc_array(*len, sizeof(double));
+        if (!memo->series[slot])
+            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+        memcpy(memo->series[slot], series, *len * sizeof(double));
+    }
+    return LL_OK;
+}
 
 /* The values of probe pair p (on a worker thread: the model is only read). */
 static ll_status eval_pair(size_t p, void *ctx)
@@ -120,11 +168,12 @@ static ll_status eval_pair(size_t p, void *ctx)
     memset(acc, 0, job->set->n_phi * sizeof(double));
     for (a = 0; a < st->co && s == LL_OK; ++a)
         for (b = 0; b < st->ci && s == LL_OK; ++b) {
+            const double *c = NULL;
             /* Depth grows opposite to the normal: the series takes -mu. */
-            s = ll_microfacet_series(job->mf, -st->no[a], -st->ni[b], job->m, series, &len, NULL,
-                                     scratch);
+            s = slot_series(job, 16 * p + 4 * a + b, -st->no[a], -st->ni[b], series, scratch, &c,
+                            &len);
             if (s == LL_OK)
-                ll_probe_add_series(series, len, job->set->phi, job->set->n_phi,
+                ll_probe_add_series(c, len, job->set->phi, job->set->n_phi,
                                     st->wo[a] * st->wi[b], acc);
             /* The compensation is order 0: the same at every azimuth. */
             term += st->wo[a] * st->wi[b] *
@@ -139,9 +188,57 @@ static ll_status eval_pair(size_t p, void *ctx)
     return s;
 }
 
+void ll_probe_series_memo_free(ll_probe_series_memo *memo)
+{
+    size_t k;
+    if (memo->series)
+        for (k = 0; k < memo->slots; ++k)
+            ll_free(memo->series[k]);
+    ll_free(memo->series);
+    ll_free(memo->len);
+    ll_free(memo->widened);
+    memset(memo, 0, sizeof *memo);
+}
+
+/* Ready memo for an evaluation at (n, m): MEMO_REUSE when it holds n's
+ * series for at least m orders, else emptied and sized for filling. */
+static ll_status memo_mode(ll_probe_series_memo *memo, size_t n, size_t m,
+                           const ll_probe_set *set, int *mode)
+{
+    size_t slots;
+    *mode = MEMO_NONE;
+    if (!memo)
+        return LL_OK;
+    if (memo->n == n && m <= memo->m) {
+        *mode = MEMO_REUSE;
+        return LL_OK;
+    }
+    ll_probe_series_memo_free(memo);
+    if (!ll_size_mul(16, set->n_pairs, &slots))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    memo->series = ll_calloc_array(slots + 1, sizeof *memo->series);
+    memo->len = ll_calloc_array(slots + 1, sizeof *memo->len);
+    memo->widened = ll_calloc_array(slots + 1, 1);
+    if (!memo->series || !memo->len || !memo->widened) {
+        ll_probe_series_memo_free(memo);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    }
+    memo->slots = slots;
+    *mode = MEMO_FILL;
+    return LL_OK;
+}
+
 ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compensation *compensation,
                                   size_t n, size_t m, const ll_probe_set *set, ll_watch *watch,
                                   double *values)
+{
+    return ll_probe_interface_eval_memo(mf, compensation, NULL, n, m, set, watch, values);
+}
+
+ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
+                                       const ll_probe_compensation *compensation,
+                                       ll_probe_series_memo *memo, size_t n, size_t m,
+                                       const ll_probe_set *set, ll_watch *watch, double *values)
 {
     double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
     pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
@@ -178,8 +275,21 @@ ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compen
     job.m = m;
     job.values = values;
     job.watch = watch;
+    job.memo = memo;
+    job.mode = MEMO_NONE;
+    if (s == LL_OK)
+        s = memo_mode(memo, n, m, set, &job.mode);
     if (s == LL_OK)
         s = ll_parallel_for_watched(set->n_pairs, eval_pair, &job, watch);
+    if (job.mode == MEMO_FILL) {
+        /* (A fill that failed part way holds a part: empty it.) */
+        if (s == LL_OK) {
+            memo->n = n;
+            memo->m = m;
+        } else {
+            ll_probe_series_memo_free(memo);
+        }
+    }
 done:
     ll_free(nodes);
     ll_free(weights);

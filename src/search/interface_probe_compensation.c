@@ -26,17 +26,87 @@ typedef struct albedo_job {
     size_t n;
     int conductor;
     double *albedo[4];
+    /* The reflection values of the two halves' columns (index col < h),
+     * each pair once: reciprocity makes the reflection of row i, column
+     * j (indices within their halves) that of row j, column i, bit for
+     * bit (the series of (mu_o, mu_i) and (-mu_i, -mu_o) are computed
+     * by the same operations). Packed lower triangles, [j (j + 1) / 2 + i]
+     * for i <= j; ref: the conductor's mirror (F = 1). NULL: computed
+     * where needed. */
+    double *tri[2], *tri_ref;
     ll_watch *watch;
 } albedo_job;
+
+/* At most this many positive nodes keep the triangles (8 h^2 bytes: 34 MB
+ * here); beyond, each column computes its reflection rows itself. */
+#define TRIANGLE_NODES 2048
+
+/* Is row `row` a reflection row of column col (and not a transmission
+ * one)? Rows and columns in the layer's order. */
+static int reflects(const albedo_job *job, size_t row, size_t col)
+{
+    size_t h = job->n / 2;
+    return job->conductor ? col >= h : (row < h) != (col < h);
+}
+
+/* The reflection triangles' part of column col: rows i <= j. */
+static ll_status triangle_column(size_t col, void *ctx)
+{
+    const albedo_job *job = ctx;
+    size_t n = job->n, h = n / 2, i, len;
+    size_t j = col < h ? col : col - h, at = j * (j + 1) / 2;
+    double *scratch, *tri = job->tri[col < h ? 0 : 1], v, ref = 0.0;
+    ll_status s = LL_OK;
+    if (job->conductor && col < h)
+        return LL_OK;
+    scratch = ll_alloc_array(ll_microfacet_scratch_size(1), sizeof(double));
+    if (!scratch)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    if (ll_watch_poll(job->watch))
+        s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+    for (i = 0; i <= j && s == LL_OK; ++i) {
+        size_t row = col < h ? i + h : i;
+        s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &v, &len,
+                                 job->conductor ? &ref : NULL, scratch);
+        tri[at + i] = len == 0 ? 0.0 : v;
+        if (job->conductor)
+            job->tri_ref[at + i] = ref;
+    }
+    ll_free(scratch);
+    return s;
+}
+
+/* The order-0 value of row, column col (and the conductor's mirror's in
+ * *ref): from the triangles where they hold it. */
+static ll_status pair_value(const albedo_job *job, size_t row, size_t col, double *v,
+                            double *ref, double *scratch)
+{
+    size_t h = job->n / 2, len;
+    ll_status s;
+    if (job->tri[0] && reflects(job, row, col)) {
+        size_t i = row < h ? row : row - h, j = col < h ? col : col - h;
+        size_t at = i <= j ? j * (j + 1) / 2 + i : i * (i + 1) / 2 + j;
+        *v = job->tri[col < h ? 0 : 1][at];
+        if (job->conductor)
+            *ref = job->tri_ref[at];
+        return LL_OK;
+    }
+    /* Depth grows opposite to the normal: the series takes -mu. */
+    s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, v, &len,
+                             job->conductor ? ref : NULL, scratch);
+    if (len == 0)
+        *v = 0.0;
+    return s;
+}
 
 /* Column col's albedos: one per block it is the input column of. */
 static ll_status albedo_column(size_t col, void *ctx)
 {
     const albedo_job *job = ctx;
-    size_t n = job->n, h = n / 2, row, len;
+    size_t n = job->n, h = n / 2, row;
     size_t j = col < h ? col : col - h;
     double *scratch = ll_alloc_array(ll_microfacet_scratch_size(1), sizeof(double));
-    double up = 0.0, down = 0.0, v, ref;
+    double up = 0.0, down = 0.0, v, ref = 0.0;
     ll_status s = LL_OK;
     if (!scratch)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
@@ -47,11 +117,7 @@ static ll_status albedo_column(size_t col, void *ctx)
     /* Rows of the negative half first, then the positive, each summed in
      * the order of ll_layer_set_microfacet's block_albedo. */
     for (row = 0; row < (job->conductor ? h : n) && s == LL_OK; ++row) {
-        /* Depth grows opposite to the normal: the series takes -mu. */
-        s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &v, &len,
-                                 job->conductor ? &ref : NULL, scratch);
-        if (len == 0)
-            v = 0.0;
+        s = pair_value(job, row, col, &v, &ref, scratch);
         if (job->conductor) {
             up += job->w[row] * ref; /* the mirror's (F = 1) */
             down += job->w[row] * v; /* the interface's own */
@@ -136,8 +202,27 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
     job.watch = watch;
     for (q = 0; q < 4; ++q)
         job.albedo[q] = out->memory + (4 + q) * h;
+    job.tri[0] = job.tri[1] = job.tri_ref = NULL;
+    if (s == LL_OK && h <= TRIANGLE_NODES) {
+        size_t packed = h * (h + 1) / 2 + 1;
+        job.tri[0] = ll_alloc_array(packed, sizeof(double));
+        job.tri[1] = ll_alloc_array(packed, sizeof(double));
+        job.tri_ref = job.conductor ? ll_alloc_array(packed, sizeof(double)) : NULL;
+        if (!job.tri[0] || !job.tri[1] || (job.conductor && !job.tri_ref)) {
+            /* (Then every column computes its own rows.) */
+            ll_free(job.tri[0]);
+            ll_free(job.tri[1]);
+            ll_free(job.tri_ref);
+            job.tri[0] = job.tri[1] = job.tri_ref = NULL;
+        }
+    }
+    if (s == LL_OK && job.tri[0])
+        s = ll_parallel_for_watched(n, triangle_column, &job, watch);
     if (s == LL_OK)
         s = ll_parallel_for_watched(n, albedo_column, &job, watch);
+    ll_free(job.tri[0]);
+    ll_free(job.tri[1]);
+    ll_free(job.tri_ref);
     if (s != LL_OK)
         goto done;
     if (job.conductor)

@@ -128,6 +128,30 @@ LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, in
                                            size_t n, size_t m, const ll_probe_set *set,
                                            const ll_monitor *monitor, double *values);
 
+/* The series of the stencils of one node count, kept for evaluations at
+ * other order counts (ll_probe_interface_eval_memo): the search asks for
+ * each n at several m, and where a lobe is not widened the series of fewer
+ * orders is a prefix of the one with more (ll_microfacet_widened). Slots:
+ * 16 per probe pair, by stencil position. Zeroed: empty. */
+typedef struct ll_probe_series_memo {
+    size_t n;               /* the node count; 0: empty                    */
+    size_t m;               /* the orders the series were computed with    */
+    size_t slots;
+    double **series;        /* [slots] (NULL where len is 0)               */
+    size_t *len;            /* [slots] terms after the truncation          */
+    unsigned char *widened; /* [slots] the lobe was widened at m           */
+} ll_probe_series_memo;
+LL_INTERNAL void ll_probe_series_memo_free(ll_probe_series_memo *memo);
+
+/* ll_probe_interface_eval, reusing the series that memo (nullable) holds
+ * for n when m is at most its orders, and refilling it otherwise: the
+ * values are those of ll_probe_interface_eval bit for bit. */
+LL_INTERNAL ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
+                                                   const ll_probe_compensation *compensation,
+                                                   ll_probe_series_memo *memo, size_t n,
+                                                   size_t m, const ll_probe_set *set,
+                                                   ll_watch *watch, double *values);
+
 /* The Fourier orders the lobes themselves need: at every probe pair, the
  * true series (no widening) truncated after L terms is within tolerance / 2
  * of the whole series at every azimuth where it is above LL_PROBE_FLOOR of

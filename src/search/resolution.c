@@ -13,6 +13,7 @@
 #include "layerlab/ll_layer.h"
 
 #include <math.h>
+#include <string.h>
 
 /* Fewer nodes than this are never chosen: the quadrature itself is then
  * off by more than 1% in an albedo (src/material/material_resolution.c,
@@ -52,6 +53,10 @@ static ll_status read_goal(const char *fn, double *tolerance, double *mu_min)
 /* The compensations made so far, one per node count (the search asks
  * for each n at several m; the term depends on n alone). */
 #define MAX_COMPENSATIONS 64
+/* The node counts whose probe series are kept (search/probe.h,
+ * ll_probe_series_memo): a few MB each; the search's shrinking visits
+ * n and 2n at a few order counts each, about four node counts at once. */
+#define MAX_MEMOS 6
 
 typedef struct interface_ctx {
     ll_microfacet_model *mf;
@@ -61,7 +66,30 @@ typedef struct interface_ctx {
     const ll_probe_set *set;
     ll_probe_compensation made[MAX_COMPENSATIONS];
     size_t n_made;
+    ll_probe_series_memo memo[MAX_MEMOS];
+    size_t n_memos;
 } interface_ctx;
+
+/* The memo of node count n's series: the one kept, else a new one (the
+ * oldest forgotten when all are taken: the search has moved past it). */
+static ll_probe_series_memo *memo_for(interface_ctx *c, size_t n)
+{
+    ll_probe_series_memo spare;
+    size_t k;
+    for (k = 0; k < c->n_memos; ++k)
+        if (c->memo[k].n == n)
+            return &c->memo[k];
+    if (c->n_memos < MAX_MEMOS) {
+        memset(&c->memo[c->n_memos], 0, sizeof c->memo[0]);
+        return &c->memo[c->n_memos++];
+    }
+    ll_probe_series_memo_free(&c->memo[0]);
+    spare = c->memo[0];
+    for (k = 1; k < MAX_MEMOS; ++k)
+        c->memo[k - 1] = c->memo[k];
+    c->memo[MAX_MEMOS - 1] = spare;
+    return &c->memo[MAX_MEMOS - 1];
+}
 
 static ll_status compensation_for(interface_ctx *c, size_t n, ll_watch *watch,
                                   const ll_probe_compensation **out)
@@ -93,7 +121,8 @@ static ll_status interface_eval(void *ctx, size_t n, size_t m, ll_watch *watch, 
     const ll_probe_compensation *compensation = NULL;
     ll_status s = c->compensate ? compensation_for(c, n, watch, &compensation) : LL_OK;
     return s == LL_OK
-               ? ll_probe_interface_eval(c->mf, compensation, n, m, c->set, watch, values)
+               ? ll_probe_interface_eval_memo(c->mf, compensation, memo_for(c, n), n, m, c->set,
+                                              watch, values)
                : s;
 }
 
@@ -164,6 +193,7 @@ ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double 
     ctx.mf = NULL;
     ctx.mf0 = NULL;
     ctx.n_made = 0;
+    ctx.n_memos = 0;
     ctx.eta_re = eta_re;
     ctx.eta_im = eta_im;
     ctx.compensate = compensate;
@@ -180,6 +210,8 @@ ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double 
                             SEARCH_LIMIT, fn, &n, &m, &e);
     while (ctx.n_made > 0)
         ll_probe_compensation_free(&ctx.made[--ctx.n_made]);
+    while (ctx.n_memos > 0)
+        ll_probe_series_memo_free(&ctx.memo[--ctx.n_memos]);
     ll_microfacet_destroy(ctx.mf);
     ll_microfacet_destroy(ctx.mf0);
     ll_probe_free(&set);

@@ -84,6 +84,12 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double
                                            size_t max_len, double *out, size_t *len,
                                            double *ref0, double *scratch);
 
+/* Does ll_microfacet_series widen the lobe of this pair at the orders in
+ * effect (ll_microfacet_set_orders)? Where it does not, the series of a
+ * model with fewer orders is a prefix of the one with more (the terms
+ * do not depend on how many are asked for), truncated by the same rule:
+ * the resolution search reuses them between the order counts it tries. */
+LL_INTERNAL int ll_microfacet_widened(const ll_microfacet_model *mf, double mu_o, double mu_i);
 /* The Smith shadowing-masking term G1 of a direction with |tan theta| =
  * tan_theta for Beckmann roughness alpha, by the rational approximation of
  * Walter et al. 2007 (eq. 27; below 0.35% error), as the original uses. */

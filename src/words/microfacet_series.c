@@ -169,3 +169,10 @@ ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, doubl
     *len = last + 1;
     return LL_OK;
 }
+
+int ll_microfacet_widened(const ll_microfacet_model *mf, double mu_o, double mu_i)
+{
+    pair_plan p;
+    return mf->max_len > 0 && ll_microfacet_plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p) &&
+           p.b > mf->b_max;
+}
