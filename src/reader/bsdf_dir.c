@@ -79,9 +79,9 @@ static int unit_pair(const double wo[3], const double wi[3], double v[3], double
     return 1;
 }
 
-static void measured_rgb(const double value[3], double cos_light, double weight, double rgb[3])
+static void measured_rgb(const double value[3], double cos_light, double rgb[3])
 {
-    double scale = weight * ll_bsdf_cosine_scale(cos_light);
+    double scale = ll_bsdf_cosine_scale(cos_light);
     int c;
     for (c = 0; c < 3; ++c) {
         rgb[c] = value[c] * scale;
@@ -116,8 +116,8 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
         if (!unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
-        ll_measured_eval(b->measured, v, l, value);
-        measured_rgb(value, l[2], (double)basis[0], rgb);
+        ll_measured_blend_eval(b, v, l, basis, value);
+        measured_rgb(value, l[2], rgb);
         return LL_OK;
     }
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
@@ -143,7 +143,7 @@ ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[
         if (!unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
-        *pdf = ll_measured_pdf(b->measured, v, l);
+        *pdf = ll_measured_blend_pdf(b, v, l, basis);
         return LL_OK;
     }
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
@@ -181,8 +181,8 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
         int k;
         for (k = 0; k < 3; ++k)
             v[k] = wo[k] / lo;
-        if (ll_measured_sample(b->measured, v, u, wi, pdf, value))
-            measured_rgb(value, wi[2], (double)basis[0], rgb);
+        if (ll_measured_blend_sample(b, v, u, basis, wi, pdf, value))
+            measured_rgb(value, wi[2], rgb);
         return LL_OK;
     }
     mu_i = clamp_unit(wo[2] / lo);

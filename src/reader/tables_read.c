@@ -124,7 +124,7 @@ static ll_status build_rgb(ll_warp2d *wp, const ll_tensor_field *f, const double
 }
 
 /* The metadata the handle reports: our own field, else the description. */
-static ll_status copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
+ll_status ll_measured_copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
 {
     const ll_tensor_field *f = ll_tensor_find(t, "layerlab_metadata");
     if (!f)
@@ -189,70 +189,98 @@ static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *la
     return LL_OK;
 }
 
-ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
-                           ll_bsdf **out)
+/* prefix + base into buf (a field name of the container's length), or 0
+ * if it does not fit. */
+static int field_name(const char *prefix, const char *base, char buf[LL_TENSOR_MAX_NAME + 1])
 {
-    ll_tensor_file t = { 0, NULL };
+    size_t a = strlen(prefix), c = strlen(base);
+    if (a + c > LL_TENSOR_MAX_NAME)
+        return 0;
+    memcpy(buf, prefix, a);
+    memcpy(buf + a, base, c + 1);
+    return 1;
+}
+
+/* require() of the field prefix + base. */
+static ll_status require_set(const ll_tensor_file *t, const char *prefix, const char *base,
+                             size_t rank, const char *file, const ll_tensor_field **out)
+{
+    char name[LL_TENSOR_MAX_NAME + 1];
+    if (!field_name(prefix, base, name))
+        return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field name \"%s%s\" is too long",
+                       file, prefix, base);
+    return require(t, name, rank, file, out);
+}
+
+static const ll_tensor_field *find_set(const ll_tensor_file *t, const char *prefix,
+                                       const char *base)
+{
+    char name[LL_TENSOR_MAX_NAME + 1];
+    return field_name(prefix, base, name) ? ll_tensor_find(t, name) : NULL;
+}
+
+ll_status ll_measured_read_set(const ll_tensor_file *t, const char *prefix, const char *file,
+                               ll_measured **out)
+{
     const ll_tensor_field *theta, *phi, *ndf, *sigma, *vndf, *lum, *rgb, *jac, *lam = NULL;
     double *theta_v = NULL, *phi_v = NULL, channels[3] = { 0.0, 1.0, 2.0 };
     double *lambda_v = NULL, *converted = NULL;
     int spectral;
-    ll_bsdf *b = NULL;
-    ll_measured *m;
+    ll_measured *m = NULL;
     size_t n_ti, n_pi, n;
-    ll_status s = ll_tensor_parse(data, size, file, &t);
-    if (s != LL_OK)
-        return s;
+    ll_status s;
     /* As Mitsuba: "wavelengths" makes the file spectral (pbrt reads only
      * such files). */
-    spectral = ll_tensor_find(&t, "wavelengths") != NULL;
-    if ((s = require(&t, "theta_i", 1, file, &theta)) != LL_OK ||
-        (s = require(&t, "phi_i", 1, file, &phi)) != LL_OK ||
-        (s = require(&t, "ndf", 2, file, &ndf)) != LL_OK ||
-        (s = require(&t, "sigma", 2, file, &sigma)) != LL_OK ||
-        (s = require(&t, "vndf", 4, file, &vndf)) != LL_OK ||
-        (s = require(&t, "luminance", 4, file, &lum)) != LL_OK ||
-        (s = require(&t, spectral ? "spectra" : "rgb", 5, file, &rgb)) != LL_OK ||
-        (spectral && (s = require(&t, "wavelengths", 1, file, &lam)) != LL_OK))
+    spectral = find_set(t, prefix, "wavelengths") != NULL;
+    if ((s = require_set(t, prefix, "theta_i", 1, file, &theta)) != LL_OK ||
+        (s = require_set(t, prefix, "phi_i", 1, file, &phi)) != LL_OK ||
+        (s = require_set(t, prefix, "ndf", 2, file, &ndf)) != LL_OK ||
+        (s = require_set(t, prefix, "sigma", 2, file, &sigma)) != LL_OK ||
+        (s = require_set(t, prefix, "vndf", 4, file, &vndf)) != LL_OK ||
+        (s = require_set(t, prefix, "luminance", 4, file, &lum)) != LL_OK ||
+        (s = require_set(t, prefix, spectral ? "spectra" : "rgb", 5, file, &rgb)) != LL_OK ||
+        (spectral && (s = require_set(t, prefix, "wavelengths", 1, file, &lam)) != LL_OK))
         goto done;
-    jac = ll_tensor_find(&t, "jacobian");
+    jac = find_set(t, prefix, "jacobian");
     if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
         FAIL(LL_ERROR_FORMAT,
-             "ll_bsdf_open: %s: field \"jacobian\" must be one uint8 of value 0 or 1", file);
+             "ll_bsdf_open: %s: field \"%sjacobian\" must be one uint8 of value 0 or 1", file,
+             prefix);
     n_ti = theta->count;
     n_pi = phi->count;
     if (n_pi > 2)
         FAIL(LL_ERROR_UNSUPPORTED,
-             "ll_bsdf_open: %s: field \"phi_i\": %zu incident azimuths (an anisotropic table) "
+             "ll_bsdf_open: %s: field \"%s\": %zu incident azimuths (an anisotropic table) "
              "are not read by this version",
-             file, n_pi);
+             file, phi->name, n_pi);
     if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
-        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"ndf\": each extent must be >= 2", file);
+        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\": each extent must be >= 2", file,
+             ndf->name);
     if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
-        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"sigma\": each extent must be >= 2",
-             file);
+        FAIL(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\": each extent must be >= 2",
+             file, sigma->name);
     if (vndf->shape[0] != n_pi || vndf->shape[1] != n_ti || vndf->shape[2] < 2 ||
         vndf->shape[3] < 2) {
-        s = shape_error(file, "vndf", "shape must be [phi_i, theta_i, >= 2, >= 2]");
+        s = shape_error(file, vndf->name, "shape must be [phi_i, theta_i, >= 2, >= 2]");
         goto done;
     }
     n = lum->shape[3];
     if (lum->shape[0] != n_pi || lum->shape[1] != n_ti || lum->shape[2] != n || n < 2) {
-        s = shape_error(file, "luminance", "shape must be [phi_i, theta_i, N, N], N >= 2");
+        s = shape_error(file, lum->name, "shape must be [phi_i, theta_i, N, N], N >= 2");
         goto done;
     }
     if (spectral && lam->count > LL_MEASURED_MAX_WAVELENGTHS) {
-        s = shape_error(file, "wavelengths", "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
-                                             " wavelengths");
+        s = shape_error(file, lam->name, "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
+                                         " wavelengths");
         goto done;
     }
     if (rgb->shape[0] != n_pi || rgb->shape[1] != n_ti ||
         rgb->shape[2] != (spectral ? lam->count : 3) || rgb->shape[3] != n ||
         rgb->shape[4] != n) {
-        s = spectral ? shape_error(file, "spectra",
+        s = spectral ? shape_error(file, rgb->name,
                                    "shape must be [phi_i, theta_i, n, N, N] with the n of "
                                    "\"wavelengths\" and the N of \"luminance\"")
-                     : shape_error(file, "rgb",
+                     : shape_error(file, rgb->name,
                                    "shape must be [phi_i, theta_i, 3, N, N] with the N of "
                                    "\"luminance\"");
         goto done;
@@ -266,20 +294,13 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
     for (n = 0; n < sigma->count; ++n)
         if (!(ll_tensor_f32(sigma, n) > 0.0f))
             FAIL(LL_ERROR_FORMAT,
-                 "ll_bsdf_open: %s: field \"sigma\": element %zu is 0 (a projected area is "
+                 "ll_bsdf_open: %s: field \"%s\": element %zu is 0 (a projected area is "
                  "positive)",
-                 file, n);
+                 file, sigma->name, n);
 
-    b = ll_calloc(1, sizeof *b);
-    m = b ? ll_calloc(1, sizeof *m) : NULL;
+    m = ll_calloc(1, sizeof *m);
     if (!m)
         FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
-    b->measured = m;
-    b->refcount = 1;
-    b->n_channels = 3;
-    b->n_bases = 1;
-    b->eta = 1.0;
-    b->file_size = size;
     m->jacobian = jac->data[0];
     m->n_wavelengths = spectral ? lam->count : 0;
     {
@@ -293,12 +314,45 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
                           : build(&m->rgb, rgb, 3, sizes, params, 0, file)) != LL_OK)
             goto done;
     }
-    s = copy_metadata(b, &t, file);
 done:
     ll_free(theta_v);
     ll_free(phi_v);
     ll_free(lambda_v);
     ll_free(converted);
+    if (s != LL_OK) {
+        ll_measured_free(m);
+        return s;
+    }
+    *out = m;
+    return LL_OK;
+}
+
+ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
+                           ll_bsdf **out)
+{
+    ll_tensor_file t = { 0, NULL };
+    ll_bsdf *b = NULL;
+    ll_status s = ll_tensor_parse(data, size, file, &t);
+    if (s != LL_OK)
+        return s;
+    /* An extended file (textured, ...) names its sets in this field and
+     * has no plain table fields. */
+    if (ll_tensor_find(&t, "layerlab_layout")) {
+        s = ll_measured_open_extended(&t, size, file, &b);
+        goto done;
+    }
+    b = ll_calloc(1, sizeof *b);
+    if (!b)
+        FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    b->refcount = 1;
+    b->n_channels = 3;
+    b->n_bases = 1;
+    b->eta = 1.0;
+    b->file_size = size;
+    if ((s = ll_measured_read_set(&t, "", file, &b->measured)) != LL_OK)
+        goto done;
+    s = ll_measured_copy_metadata(b, &t, file);
+done:
     ll_tensor_file_free(&t);
     if (s != LL_OK) {
         ll_bsdf_free(b);

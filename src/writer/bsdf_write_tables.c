@@ -102,16 +102,12 @@ static ll_status check_options(const ll_tables_options *opts, ll_tables_options 
     return LL_OK;
 }
 
-/* The format holds one opaque, untextured, reflecting material. */
+/* A table set holds one opaque, reflecting material (a textured file
+ * comes here one basis at a time, bsdf_write_tables_textured.c). */
 static ll_status check_source(const ll_bsdf *b)
 {
     size_t n = b->n_nodes, i, o;
     double reflected = 0.0, transmitted = 0.0;
-    if (b->n_bases != 1)
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": the file is textured (%zu basis functions); a table file holds "
-                       "one material without parameters",
-                       b->n_bases);
     if (fabs(b->eta - 1.0) > 1e-6)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        FN ": the file transmits (eta = %g); the `measured` format stores "

@@ -232,6 +232,14 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     s.o = defaults;
     if (opts && (st = ll_struct_read(&s.o, sizeof s.o, opts, FN, "ll_tables_options")) != LL_OK)
         return st;
+    /* A textured file: this search for each basis (its own grid). A
+     * textured table file is made from its .bsdf, whose bases it holds. */
+    if (b->n_parameters > 0 && b->measured)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file is a textured table file; convert the textured .bsdf it "
+                       "was made from");
+    if (b->n_parameters > 0)
+        return ll_tables_write_textured(b, path, &s.o, monitor);
     if (s.o.n_theta_i && s.o.vndf_size && s.o.sample_size)
         return ll_tables_write_grid(b, path, &s.o, NULL, monitor);
     s.tolerance = s.o.tolerance != 0.0 ? s.o.tolerance : DEFAULT_TOLERANCE;
