@@ -1,8 +1,9 @@
 #!/bin/sh
 # llconvert, the command: help, version, exit codes (0 done, 1 bad input,
 # 2 I/O), --dry-run, a conversion to the `measured` tables that reads back
-# as such, and the refusal, with the reason, of transmissive and textured
-# sources (built here by llbuild on a tiny grid).
+# as such, textured sources (a table set per basis), and the refusal, with
+# the reason, of transmissive sources and textured table files (built here
+# by llbuild on a tiny grid).
 # Run by `make test` from the checkout with BUILD set.
 set -u
 BUILD=${BUILD:-build}
@@ -59,9 +60,14 @@ if [ -x "$llbuild" ]; then
        "$llbuild" --quiet "$tmp/textured.layers" -o "$tmp/textured.bsdf"; then
         expect 1 "transmissive source" -- "$llconvert" "$tmp/glass.bsdf" -o "$tmp/glass.tab"
         contains "$tmp/err" "reflection only" "transmissive refusal says why"
-        expect 1 "textured source" -- "$llconvert" "$tmp/textured.bsdf" -o "$tmp/tex.tab"
-        contains "$tmp/err" "textured" "textured refusal says why"
-        [ ! -e "$tmp/glass.tab" ] && [ ! -e "$tmp/tex.tab" ] && ok || bad "a refused file exists"
+        [ ! -e "$tmp/glass.tab" ] && ok || bad "a refused file exists"
+        # A textured source: a table set per basis.
+        expect 0 "textured source" -- "$llconvert" "$tmp/textured.bsdf" -o "$tmp/tex.tab" \
+            --theta-i 6 --vndf 16 --sample 12
+        contains "$tmp/out" "textured tables, 2 bases of 1 parameters" "textured summary"
+        # Made from its .bsdf, not converted again.
+        expect 1 "textured table source" -- "$llconvert" "$tmp/tex.tab" -o "$tmp/tex2.tab"
+        contains "$tmp/err" "textured table file" "textured table refusal says why"
     else
         bad "llbuild could not build the refusal sources"
     fi

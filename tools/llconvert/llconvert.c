@@ -24,7 +24,7 @@
 
 static const char usage[] =
     "usage: llconvert [options] IN.bsdf -o OUT [--format measured]\n"
-    "Convert an opaque, untextured .bsdf (or table) file into the tables of the\n"
+    "Convert an opaque .bsdf (or untextured table) file into the tables of the\n"
     "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/measured-format.md).\n"
     "  -o, --output FILE  the file to write (required unless --dry-run)\n"
     "  --format NAME      the output format: measured (the default and only one)\n"
@@ -82,6 +82,14 @@ static void print_written(const char *out, const ll_bsdf_info *info, double sour
     const char *g = info->metadata ? strstr(info->metadata, "\"theta_i\": ") : NULL;
     const char *f = info->metadata ? strstr(info->metadata, "\"figures\": {") : NULL;
     unsigned long n_ti = 0, nv = 0, ns = 0;
+    if (info->n_bases > 1) {
+        /* A textured file: a set per basis, each with its own grid. */
+        printf("%s: textured tables, %zu bases of %zu parameters, %.2f MB (the source: %.2f "
+               "MB)\n",
+               out, info->n_bases, info->n_parameters, (double)info->file_size / 1e6,
+               source_bytes / 1e6);
+        return;
+    }
     if (g)
         sscanf(g, "\"theta_i\": %lu, \"vndf\": [%lu, %*u], \"sample\": [%lu", &n_ti, &nv, &ns);
     printf("%s: %lu x %lu^2 x %lu^2 tables, %.2f MB (the source: %.2f MB)\n", out, n_ti, nv, ns,
@@ -162,9 +170,11 @@ int main(int argc, char **argv)
     }
     ll_bsdf_get_info(b, &info);
     if (dry_run && opts.n_theta_i && opts.vndf_size && opts.sample_size) {
-        printf("%s: %zu x %zu^2 x %zu^2 tables, about %.2f MB (the source: %.2f MB)\n", in,
-               opts.n_theta_i, opts.vndf_size, opts.sample_size,
-               table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size) / 1e6,
+        printf("%s: %s%zu x %zu^2 x %zu^2 tables, about %.2f MB (the source: %.2f MB)\n", in,
+               info.n_bases > 1 ? "per basis " : "", opts.n_theta_i, opts.vndf_size,
+               opts.sample_size,
+               (double)info.n_bases *
+                   table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size) / 1e6,
                (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
@@ -176,12 +186,14 @@ int main(int argc, char **argv)
         size_t lo_ns = opts.sample_size ? opts.sample_size : 32, hi_ns = opts.sample_size ? opts.sample_size : 256;
         size_t lo_nv = opts.vndf_size ? opts.vndf_size : (lo_ns > 64 ? lo_ns : 64);
         size_t hi_nv = opts.vndf_size ? opts.vndf_size : (hi_ns > 64 ? hi_ns : 64);
-        printf("%s: tables sized by the tolerance %g: from %zu x %zu^2 x %zu^2 (about %.2f MB) "
+        printf("%s: tables sized by the tolerance %g: from %zu x %zu^2 x %zu^2 per basis (about "
+               "%.2f MB) "
                "up to %zu x %zu^2 x %zu^2 (about %.2f MB), known once measured (the source: "
                "%.2f MB)\n",
                in, opts.tolerance != 0.0 ? opts.tolerance : 0.05, lo_ti, lo_nv, lo_ns,
-               table_bytes(lo_ti, lo_nv, lo_ns) / 1e6, hi_ti, hi_nv, hi_ns,
-               table_bytes(hi_ti, hi_nv, hi_ns) / 1e6, (double)info.file_size / 1e6);
+               (double)info.n_bases * table_bytes(lo_ti, lo_nv, lo_ns) / 1e6, hi_ti, hi_nv,
+               hi_ns, (double)info.n_bases * table_bytes(hi_ti, hi_nv, hi_ns) / 1e6,
+               (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
     }
