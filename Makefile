@@ -144,7 +144,8 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # Two tiers. A new test is in the fast one (`make test`) unless named here:
 # the slow tier (`make check`) holds what takes minutes, needs MPI or
 # Mitsuba, signals running processes, or installs the cross-checks' codes.
-SLOW_TESTS   := test_convergence test_material_fuzz_replay test_ms_walk test_tables_tolerance
+SLOW_TESTS   := test_convergence test_material_fuzz_replay test_ms_walk test_tables_tolerance \
+                test_tables_textured_seed
 SLOW_SCRIPTS := tests/llbuild_signals.sh tests/llbuild_mpi.sh tests/reference.sh \
                 tests/llbuild_time.sh \
                 tests/pbrt_shim.sh
