@@ -36,7 +36,10 @@ LL_BSDF_FORMAT_TABLES, BSDFStorage.format "tables") open like .bsdf files and
 render through "batch", the default for them in every variant: the traced
 path reads Fourier series (ll_bsdf_get_tables), which a table file does not
 hold, so "mode": "traced" on one is refused with that reason. (Mitsuba's own
-{"type": "measured"} reads the same file natively.)
+{"type": "measured"} reads the same file natively.) A textured table file (a
+table set per basis of a textured .bsdf) takes the same per-parameter
+properties as that .bsdf (below); its basis weights go to the C batch calls
+per lane. Mitsuba's `measured` refuses such a file (it has no plain tables).
 CUDA variants are refused: "batch" would move the directions to the CPU and
 back at every bounce, and "traced" is not tested there.
 
