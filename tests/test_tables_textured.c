@@ -15,7 +15,7 @@
 #include "tables_figures.h"
 #include "writer/bsdf_write_tables.h"
 
-static char bsdf_path[600], tab_path[600];
+static char bsdf_path[600], tab_path[600], golden_path[600] = LL_TEST_GOLDEN;
 
 static int setup(void **state)
 {
@@ -294,6 +294,82 @@ static void test_refusals(void **state)
     ll_bsdf_release(t);
 }
 
+/* A spectral textured file: the source gives a textured file of the same
+ * parameters at each wavelength (here the RGB file itself, whose
+ * luminance is taken); one without the basis is refused. */
+static ll_status same_file(void *user, size_t index, double nm, ll_bsdf **out)
+{
+    (void)index;
+    (void)nm;
+    return ll_bsdf_open((const char *)user, NULL, out);
+}
+
+static void test_spectral(void **state)
+{
+    ll_bsdf *src = open_file(bsdf_path), *t;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    double nm[3] = { 450.0, 550.0, 650.0 };
+    char out[600];
+    (void)state;
+    snprintf(out, sizeof out, "%s/spectral.tab", ll_test_dir());
+    o.n_theta_i = 6;
+    o.vndf_size = 16;
+    o.sample_size = 12;
+    o.format = LL_TABLES_SPECTRAL;
+    o.wavelengths = nm;
+    o.n_wavelengths = 3;
+    o.spectrum = same_file;
+    o.spectrum_user = bsdf_path;
+    assert_int_equal(ll_tables_write_from_bsdf(src, out, &o, NULL), LL_OK);
+    t = open_file(out);
+    assert_int_equal(ll_bsdf_get_info(t, &info), LL_OK);
+    assert_int_equal(info.n_bases, 2);
+    assert_int_equal(info.n_wavelengths, 3);
+    ll_bsdf_release(t);
+    unlink(out);
+    o.spectrum_user = golden_path;
+    assert_int_equal(ll_tables_write_from_bsdf(src, out, &o, NULL), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "no basis"));
+    assert_int_equal(access(out, F_OK), -1);
+    ll_bsdf_release(src);
+}
+
+/* ll_material_write_tables of a sweep: its textured .bsdf's tables (RGB);
+ * spectral is refused saying so. */
+static void test_material_sweep(void **state)
+{
+    ll_material *m = NULL;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    double nm[2] = { 500.0, 600.0 };
+    char out[600];
+    ll_bsdf *t;
+    (void)state;
+    snprintf(out, sizeof out, "%s/sweep.tab", ll_test_dir());
+    assert_int_equal(ll_material_parse("set nodes=20 orders=20\n"
+                                       "conductor name=gold eta=Au alpha=[0.2 0.3]\n",
+                                       "sweep.layers", &m),
+                     LL_OK);
+    o.n_theta_i = 6;
+    o.vndf_size = 16;
+    o.sample_size = 12;
+    assert_int_equal(ll_material_write_tables(m, NULL, NULL, out, &o, NULL), LL_OK);
+    t = open_file(out);
+    assert_int_equal(ll_bsdf_get_info(t, &info), LL_OK);
+    assert_int_equal(info.n_bases, 2);
+    ll_bsdf_release(t);
+    unlink(out);
+    o.format = LL_TABLES_SPECTRAL;
+    o.wavelengths = nm;
+    o.n_wavelengths = 2;
+    assert_int_equal(ll_material_write_tables(m, NULL, NULL, out, &o, NULL),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "spectral textured"));
+    assert_int_equal(access(out, F_OK), -1);
+    ll_material_destroy(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -304,6 +380,8 @@ int main(void)
         cmocka_unit_test(test_batches),
         cmocka_unit_test(test_against_fourier),
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_spectral),
+        cmocka_unit_test(test_material_sweep),
     };
     return cmocka_run_group_tests(tests, setup, ll_test_dir_teardown);
 }

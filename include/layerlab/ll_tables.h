@@ -130,16 +130,28 @@ typedef struct ll_tables_options {
  * values are held at a time: the values go to a scratch file and are
  * copied into place when the file is written, so memory holds the warp,
  * the luminance and the sample directions, not n_wavelengths tables.
- * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured file
- * (several basis functions) or a transmissive one (eta != 1, or light
- * transmitted), all with a message saying why the format cannot hold it;
+ * A textured b (a .bsdf with parameters) gives a textured table file: no
+ * plain table fields (so a renderer that reads only `measured` refuses it),
+ * "layerlab_layout" = "textured", the parameter block as the .bsdf holds it
+ * ("layerlab_parameter_counts", "layerlab_parameter_positions", float32),
+ * b's metadata as "layerlab_metadata", and for each basis k a complete set
+ * of the format's fields named "basis<k>." + name, written as the tables of
+ * that basis alone (its own grid chosen by the tolerance). ll_bsdf_open
+ * reads it as a textured handle: the parameters, names and
+ * ll_bsdf_basis_coefficients as on b; evaluation blends the bases' tables
+ * with the caller's basis weights, sampling picks a basis with probability
+ * |w_k| / sum |w_j| (the pdf is that mixture). A spectral textured file
+ * takes a textured file of b's parameters from opts->spectrum.
+ * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured table
+ * file (made from its .bsdf instead) or a transmissive one (eta != 1, or
+ * light transmitted), all with a message saying why;
  * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY; LL_ERROR_CANCELLED. Thread-safe (b is
  * only read). */
 LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts,
                                            const ll_monitor *monitor);
 
-/* The table file of an opaque, untextured material (ll_material.h) at
+/* The table file of an opaque material (ll_material.h) at
  * path, atomically. rgb (nullable) is the opened file of its RGB build
  * (ll_material_build_layers, then a .bsdf), from which the warp is made; a
  * NULL rgb makes the library build it (written to a temporary .bsdf beside
@@ -169,8 +181,12 @@ LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
  * to 1 over the whole call (with rgb NULL, the RGB build takes the first
  * fifth of a spectral file's, the first 0.8 of an RGB file's); a cancel is
  * seen between wavelengths.
+ * A swept material (rgb NULL, LL_TABLES_RGB) is built to its textured
+ * .bsdf (ll_material_build, a temporary file beside path) and written as a
+ * textured table file (ll_tables_write_from_bsdf).
  * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
- * LL_ERROR_INVALID_ARGUMENT for a swept or transmissive material. */
+ * LL_ERROR_INVALID_ARGUMENT for a transmissive material, or a swept one in
+ * LL_TABLES_SPECTRAL. */
 LL_API ll_status ll_material_write_tables(const ll_material *material,
                                           const ll_build_options *build, const ll_bsdf *rgb,
                                           const char *path, const ll_tables_options *tables,
