@@ -12,8 +12,9 @@
 
 static unsigned char *good;
 static size_t good_size;
-/* A textured table file (two bases of one parameter, coat alpha 0.1 and
- * 0.2 over a conductor), as tiny. */
+/* A textured table file (seven bases of one parameter, coat alpha 0.1 to
+ * 0.22 over a conductor: more fields than an opaque file's writer ever
+ * wrote), as tiny. */
 static unsigned char *tex;
 static size_t tex_size;
 
@@ -39,7 +40,8 @@ static int setup(void **state)
         snprintf(path, sizeof path, "%s/textured.tab", ll_test_dir());
         src = NULL;
         if (ll_material_parse("set nodes=12 orders=6\n"
-                              "dielectric name=coat eta=1.5 alpha=[0.1 0.2]\n"
+                              "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 "
+                              "0.22]\n"
                               "conductor eta=2+3i alpha=0.2\n",
                               "textured.layers", &m) != LL_OK ||
             ll_material_build(m, NULL, NULL, bsdf) != LL_OK ||
@@ -412,7 +414,7 @@ static void test_textured_opens(void **state)
     assert_int_equal(ll_bsdf_open_memory(tex, tex_size, NULL, &b), LL_OK);
     assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
     assert_int_equal(info.format, LL_BSDF_FORMAT_TABLES);
-    assert_int_equal(info.n_bases, 2);
+    assert_int_equal(info.n_bases, 7);
     assert_int_equal(info.n_parameters, 1);
     ll_bsdf_release(b);
 }
@@ -422,8 +424,8 @@ static void test_textured_fields(void **state)
     unsigned char *d = copy_tex();
     size_t off, shape, rank, at;
     (void)state;
-    /* Three sample positions: a third basis the file does not have. */
-    set_f32(d, "layerlab_parameter_counts", 0, 3.0f);
+    /* Eight sample positions: a basis the file does not have. */
+    set_f32(d, "layerlab_parameter_counts", 0, 8.0f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
     free(d);
     d = copy_tex();
@@ -492,11 +494,11 @@ static void test_textured_truncated_and_damaged(void **state)
                 (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
         if (ll_bsdf_open_memory(d, tex_size, NULL, &b) == LL_OK) {
             double wo[3] = { 0.3, 0.1, 0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
-            float w[2] = { 0.25f, 0.75f };
+            float w[7] = { 0.0f, 0.25f, 0.75f, 0.0f, 0.0f, 0.0f, 0.0f };
             ll_bsdf_info info = LL_BSDF_INFO_INIT;
             ++opened;
             assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
-            if (info.n_bases == 2) {
+            if (info.n_bases == 7) {
                 assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, w, f), LL_OK);
                 assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
                 u[0] = ll_test_uniform(&rng);
