@@ -71,6 +71,7 @@ def main():
     size = int(sys.argv[4]) if len(sys.argv) > 4 else 256
     spp = int(sys.argv[5]) if len(sys.argv) > 5 else 64
     llmi.register()
+    llmi.wavefront_mode()  # the batch mode renders in wavefront mode
     print("size %dx%d, spp %d, variant %s, Mitsuba %s, load average %s"
           % (size, size, spp, mi.variant(), mi.__version__, os.getloadavg()), flush=True)
     fourier = S.scene(mi, bsdf(bsdf_path), size, spp)
