@@ -146,7 +146,8 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # the slow tier (`make check`) holds what takes minutes, needs MPI or
 # Mitsuba, signals running processes, or installs the cross-checks' codes.
 SLOW_TESTS   := test_convergence test_material_fuzz_replay test_ms_walk test_tables_tolerance \
-                test_tables_transmit_tolerance
+                test_tables_transmit_tolerance \
+                test_tables_textured_seed
 SLOW_SCRIPTS := tests/llbuild_signals.sh tests/llbuild_mpi.sh tests/reference.sh \
                 tests/llbuild_time.sh \
                 tests/pbrt_shim.sh

@@ -49,6 +49,17 @@ expect 0 "llconvert of the .bsdf" -- "$llconvert" --quiet $grid "$tmp/gold.bsdf"
     -o "$tmp/conv.tab"
 if cmp -s "$tmp/w/gold.tab" "$tmp/conv.tab"; then ok; else
     bad "llbuild --format measured differs from llconvert of the same build"; fi
+# A swept material: a table set per basis, as llconvert makes them from
+# the textured .bsdf of the same build.
+printf 'conductor eta=Au alpha=[0.2 0.3]\n' >"$tmp/w/swept2.layers"
+expect 0 "a swept stack" -- "$llbuild" --format measured $grid $small "$tmp/w/swept2.layers" \
+    -o "$tmp/swept2.tab"
+contains "$tmp/out" "textured: a set per basis, 2 bases of 1 parameters" "swept summary"
+expect 0 "the swept .bsdf" -- "$llbuild" -q $small "$tmp/w/swept2.layers" -o "$tmp/swept2.bsdf"
+expect 0 "llconvert of the swept .bsdf" -- "$llconvert" --quiet $grid "$tmp/swept2.bsdf" \
+    -o "$tmp/swept2conv.tab"
+if cmp -s "$tmp/swept2.tab" "$tmp/swept2conv.tab"; then ok; else
+    bad "llbuild --format measured of a sweep differs from llconvert of the same build"; fi
 rm -f "$tmp/w/gold.tab"
 only_layers "a finished build"
 
@@ -79,9 +90,9 @@ contains "$tmp/err" "transmissive stack" "transmissive refusal names it"
 contains "$tmp/err" "RGB tables only" "transmissive refusal says what is written"
 if grep -q "%" "$tmp/err"; then bad "a transmissive stack was built before its refusal"; else ok; fi
 printf 'conductor eta=Au alpha=[0.1 0.2]\n' >"$tmp/w/swept.layers"
-expect 1 "a swept stack" -- "$llbuild" --format measured "$tmp/w/swept.layers" \
-    -o "$tmp/w/swept.tab"
-contains "$tmp/err" "swept (textured) material" "swept refusal names it"
+expect 1 "a swept stack, spectral" -- "$llbuild" --format measured --wavelengths 400:700:100 \
+    "$tmp/w/swept.layers" -o "$tmp/w/swept.tab"
+contains "$tmp/err" "swept (textured) material" "swept spectral refusal names it"
 expect 1 "a transmissive stack, spectral, --dry-run" -- "$llbuild" --format measured \
     --dry-run --wavelengths 400:700:100 "$tmp/w/glass.layers"
 expect 1 "grid options without measured" -- "$llbuild" --vndf 16 "$tmp/w/gold.layers" \

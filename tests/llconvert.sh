@@ -1,9 +1,10 @@
 #!/bin/sh
 # llconvert, the command: help, version, exit codes (0 done, 1 bad input,
 # 2 I/O), --dry-run, a conversion to the `measured` tables that reads back
-# as such, transmissive sources written as a set of tables per lobe, and
-# the refusal, with the reason, of textured sources and of transmissive
-# table files (built here by llbuild on a tiny grid).
+# as such, transmissive sources (a set of tables per lobe), textured
+# sources (a table set per basis), and the refusal, with the reason, of
+# transmissive and textured table files (built here by llbuild on a tiny
+# grid).
 # Run by `make test` from the checkout with BUILD set.
 set -u
 BUILD=${BUILD:-build}
@@ -68,9 +69,14 @@ if [ -x "$llbuild" ]; then
         expect 0 "llplot draws a transmissive table" -- "$BUILD/bin/llplot" --polar \
             "$tmp/glass.tab" -o "$tmp/glass-polar.png"
         rm -f "$tmp/glass.tab"
-        expect 1 "textured source" -- "$llconvert" "$tmp/textured.bsdf" -o "$tmp/tex.tab"
-        contains "$tmp/err" "textured" "textured refusal says why"
-        [ ! -e "$tmp/glass.tab" ] && [ ! -e "$tmp/tex.tab" ] && ok || bad "a refused file exists"
+        # A textured source: a table set per basis.
+        expect 0 "textured source" -- "$llconvert" "$tmp/textured.bsdf" -o "$tmp/tex.tab" \
+            --theta-i 6 --vndf 16 --sample 12
+        contains "$tmp/out" "textured tables, 2 bases of 1 parameters" "textured summary"
+        # Made from its .bsdf, not converted again.
+        expect 1 "textured table source" -- "$llconvert" "$tmp/tex.tab" -o "$tmp/tex2.tab"
+        contains "$tmp/err" "textured table file" "textured table refusal says why"
+        [ ! -e "$tmp/tex2.tab" ] && ok || bad "a refused file exists"
     else
         bad "llbuild could not build the refusal sources"
     fi

@@ -55,7 +55,8 @@ static inline void tf_direction(double theta, double phi, double w[3])
 
 /* Albedo per channel for light seen along wo (cos theta = mu); 0 if a
  * call failed. */
-static inline int tf_albedo(const ll_bsdf *b, double mu, double out[3])
+static inline int tf_albedo_weighted(const ll_bsdf *b, double mu, const float *basis,
+                                     double out[3])
 {
     const int n = 256;
     double wo[3] = { sqrt(1.0 - mu * mu), 0.0, mu };
@@ -64,7 +65,7 @@ static inline int tf_albedo(const ll_bsdf *b, double mu, double out[3])
     for (i = 0; i < n; ++i)
         for (j = 0; j < n; ++j) {
             double u[2] = { (i + 0.5) / n, (j + 0.5) / n }, wi[3], pdf, f[3];
-            if (ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf, f) != LL_OK)
+            if (ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, basis, wi, &pdf, f) != LL_OK)
                 return 0;
             if (pdf > 0.0)
                 for (c = 0; c < 3; ++c)
@@ -75,6 +76,11 @@ static inline int tf_albedo(const ll_bsdf *b, double mu, double out[3])
     return 1;
 }
 
+static inline int tf_albedo(const ll_bsdf *b, double mu, double out[3])
+{
+    return tf_albedo_weighted(b, mu, NULL, out);
+}
+
 static inline int tf_compare(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -83,8 +89,9 @@ static inline int tf_compare(const void *a, const void *b)
 
 /* fig's relative f errors (p50, p95, p99, n_values), with the pairs drawn
  * by `uniform` from a fixed seed; 0 if a call failed or no value counted. */
-static inline int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig,
-                              double (*uniform)(uint64_t *))
+static inline int tf_f_errors_weighted(const ll_bsdf *src, const ll_bsdf *table,
+                                       const float *basis, tf_figures *fig,
+                                       double (*uniform)(uint64_t *))
 {
     const double lim = 80.0 * TF_PI / 180.0;
     double(*wo)[3] = malloc(TF_PAIRS * sizeof *wo), (*wi)[3] = malloc(TF_PAIRS * sizeof *wi);
@@ -108,8 +115,9 @@ static inline int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figur
                 tf_direction(fabs(tv + dt), TF_PI + dp, wi[k]);
             }
         } while (acos(wi[k][2]) > lim);
-        ok = ll_bsdf_eval_dir(src, wo[k], wi[k], LL_TRANSPORT_RADIANCE, NULL, ref[k]) == LL_OK &&
-             ll_bsdf_eval_dir(table, wo[k], wi[k], LL_TRANSPORT_RADIANCE, NULL, got[k]) == LL_OK;
+        ok = ll_bsdf_eval_dir(src, wo[k], wi[k], LL_TRANSPORT_RADIANCE, basis, ref[k]) ==
+                 LL_OK &&
+             ll_bsdf_eval_dir(table, wo[k], wi[k], LL_TRANSPORT_RADIANCE, basis, got[k]) == LL_OK;
         for (c = 0; c < 3; ++c)
             if (ref[k][c] * wi[k][2] > top[c])
                 top[c] = ref[k][c] * wi[k][2];
@@ -133,14 +141,22 @@ static inline int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figur
     return ok && n > 0;
 }
 
-/* All the figures of table against src; fig->failed if a call failed. */
-static inline void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig)
+static inline int tf_f_errors(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig,
+                              double (*uniform)(uint64_t *))
+{
+    return tf_f_errors_weighted(src, table, NULL, fig, uniform);
+}
+
+/* All the figures of table against src, both evaluated with the basis
+ * weights basis (NULL: an untextured pair); fig->failed if a call failed. */
+static inline void tf_measure_weighted(const ll_bsdf *src, const ll_bsdf *table,
+                                       const float *basis, tf_figures *fig)
 {
     int k, c;
     memset(fig, 0, sizeof *fig);
     for (k = 0; k < TF_ANGLES; ++k) {
         double mu = cos(tf_angles_deg[k] * TF_PI / 180.0), at[3], as[3];
-        if (!tf_albedo(table, mu, at) || !tf_albedo(src, mu, as)) {
+        if (!tf_albedo_weighted(table, mu, basis, at) || !tf_albedo_weighted(src, mu, basis, as)) {
             fig->failed = 1;
             return;
         }
@@ -151,8 +167,13 @@ static inline void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figur
                 fig->worst_albedo = fabs(r - 1.0);
         }
     }
-    if (!tf_f_errors(src, table, fig, tf_uniform))
+    if (!tf_f_errors_weighted(src, table, basis, fig, tf_uniform))
         fig->failed = 1;
+}
+
+static inline void tf_measure(const ll_bsdf *src, const ll_bsdf *table, tf_figures *fig)
+{
+    tf_measure_weighted(src, table, NULL, fig);
 }
 
 static inline void tf_print(const char *label, const tf_figures *fig)

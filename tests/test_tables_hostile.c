@@ -5,13 +5,20 @@
  * clear error naming what is wrong, never a crash; the damaged bytes are a
  * small valid table written by ll_tables_write_from_bsdf. The same for a
  * transmissive (extended) table: its layout, eta and the fields of its
- * sets, which errors name with their prefix.
+ * sets, which errors name with their prefix. A textured table file too:
+ * its parameter block, its layout, each basis' fields named in full
+ * (reader/tables_textured.c).
  */
 #include "test_bsdf_util.h"
 #include "support/support.h"
 
 static unsigned char *good, *tgood;
 static size_t good_size, tgood_size;
+/* A textured table file (seven bases of one parameter, coat alpha 0.1 to
+ * 0.22 over a conductor: more fields than an opaque file's writer ever
+ * wrote), as tiny. */
+static unsigned char *tex;
+static size_t tex_size;
 
 static int setup(void **state)
 {
@@ -45,13 +52,33 @@ static int setup(void **state)
         ll_bsdf_release(src);
         tgood = ll_test_read_file(path, &tgood_size);
     }
-    return 0;
+    {
+        ll_material *m = NULL;
+        char bsdf[600];
+        snprintf(bsdf, sizeof bsdf, "%s/textured.bsdf", ll_test_dir());
+        snprintf(path, sizeof path, "%s/textured.tab", ll_test_dir());
+        src = NULL;
+        if (ll_material_parse("set nodes=12 orders=6\n"
+                              "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 "
+                              "0.22]\n"
+                              "conductor eta=2+3i alpha=0.2\n",
+                              "textured.layers", &m) != LL_OK ||
+            ll_material_build(m, NULL, NULL, bsdf) != LL_OK ||
+            ll_bsdf_open(bsdf, NULL, &src) != LL_OK ||
+            ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
+            return 1;
+        ll_material_destroy(m);
+        ll_bsdf_release(src);
+        tex = ll_test_read_file(path, &tex_size);
+    }
+    return good && tgood && tex ? 0 : 1;
 }
 
 static int teardown(void **state)
 {
     free(good);
     free(tgood);
+    free(tex);
     return ll_test_dir_teardown(state);
 }
 
@@ -501,6 +528,156 @@ static void test_transmissive_damage(void **state)
     }
 }
 
+static unsigned char *copy_tex(void)
+{
+    unsigned char *d = malloc(tex_size);
+    assert_non_null(d);
+    memcpy(d, tex, tex_size);
+    return d;
+}
+
+/* The float32 element i of field name in d. */
+static void set_f32(unsigned char *d, const char *name, size_t i, float v)
+{
+    size_t off, shape, rank;
+    locate(d, name, &off, &shape, &rank);
+    memcpy(d + (size_t)get_u64(d + off) + 4 * i, &v, 4); /* little-endian host */
+}
+
+static void test_textured_opens(void **state)
+{
+    ll_bsdf *b = NULL;
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    (void)state;
+    assert_int_equal(ll_bsdf_open_memory(tex, tex_size, NULL, &b), LL_OK);
+    assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+    assert_int_equal(info.format, LL_BSDF_FORMAT_TABLES);
+    assert_int_equal(info.n_bases, 7);
+    assert_int_equal(info.n_parameters, 1);
+    ll_bsdf_release(b);
+}
+
+static void test_textured_fields(void **state)
+{
+    unsigned char *d = copy_tex();
+    size_t off, shape, rank, at;
+    (void)state;
+    /* Eight sample positions: a basis the file does not have. */
+    set_f32(d, "layerlab_parameter_counts", 0, 8.0f);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
+    free(d);
+    d = copy_tex();
+    set_f32(d, "layerlab_parameter_counts", 0, 1.5f);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_counts\": element 0");
+    set_f32(d, "layerlab_parameter_counts", 0, 1e9f);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_counts\": element 0");
+    free(d);
+    d = copy_tex();
+    /* Positions not ascending, or not finite. */
+    set_f32(d, "layerlab_parameter_positions", 1, 0.05f);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
+    set_f32(d, "layerlab_parameter_positions", 1, NAN);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
+    free(d);
+    d = copy_tex();
+    /* A layout this reader does not know; an empty one. */
+    locate(d, "layerlab_layout", &off, &shape, &rank);
+    at = (size_t)get_u64(d + off);
+    d[at] = 'X';
+    expect(d, tex_size, LL_ERROR_UNSUPPORTED, "\"layerlab_layout\"");
+    memset(d + at, ' ', 8);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_layout\"");
+    free(d);
+    d = copy_tex();
+    /* A field of basis 1 that disagrees with its set, named in full. */
+    locate(d, "basis1.vndf", &off, &shape, &rank);
+    put_u64(d + shape + 24, 1);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.vndf\"");
+    free(d);
+    d = copy_tex();
+    set_f32(d, "basis1.sigma", 0, 0.0f);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.sigma\"");
+    free(d);
+    d = copy_tex();
+    /* basis1's theta_i renamed away: the set is missing. */
+    locate(d, "basis1.theta_i", &off, &shape, &rank);
+    d[off - 3 - 7] = 'X'; /* "basis1.theta_i" -> "basis1.Xheta_i" */
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.theta_i\" is missing");
+    free(d);
+    d = copy_tex();
+    /* The parameter block renamed away. */
+    locate(d, "layerlab_parameter_counts", &off, &shape, &rank);
+    d[off - 3 - 1] = 'X';
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_counts\" is missing");
+    free(d);
+}
+
+static void test_textured_truncated_and_damaged(void **state)
+{
+    uint64_t rng = 5;
+    size_t n;
+    int k, j, opened = 0;
+    (void)state;
+    for (n = 12; n < tex_size; n += 1 + n / 64) {
+        ll_bsdf *b = NULL;
+        assert_int_equal(ll_bsdf_open_memory(tex, n, NULL, &b), LL_ERROR_FORMAT);
+        assert_null(b);
+    }
+    for (k = 0; k < 2000; ++k) {
+        unsigned char *d = copy_tex();
+        ll_bsdf *b = NULL;
+        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
+        for (j = 0; j < flips; ++j)
+            d[(size_t)(ll_test_uniform(&rng) * (double)tex_size)] ^=
+                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
+        if (ll_bsdf_open_memory(d, tex_size, NULL, &b) == LL_OK) {
+            double wo[3] = { 0.3, 0.1, 0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
+            float w[7] = { 0.0f, 0.25f, 0.75f, 0.0f, 0.0f, 0.0f, 0.0f };
+            ll_bsdf_info info = LL_BSDF_INFO_INIT;
+            ++opened;
+            assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+            if (info.n_bases == 7) {
+                assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, w, f), LL_OK);
+                assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+                u[0] = ll_test_uniform(&rng);
+                u[1] = ll_test_uniform(&rng);
+                assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, w, wi,
+                                                    &pdf, f),
+                                 LL_OK);
+                assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) &&
+                            isfinite(f[2]));
+            }
+            ll_bsdf_release(b);
+        }
+        free(d);
+    }
+    printf("%d of 2000 damaged textured copies opened\n", opened);
+}
+
+static void test_textured_out_of_memory(void **state)
+{
+    size_t n, k;
+    ll_bsdf *b = NULL;
+    (void)state;
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_bsdf_open_memory(tex, tex_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        b = (ll_bsdf *)1;
+        ll_alloc_fail_after(k);
+        s = ll_bsdf_open_memory(tex, tex_size, NULL, &b);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
+        assert_null(b);
+        assert_true(live == 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -517,6 +694,10 @@ int main(void)
         cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_transmissive_fields),
         cmocka_unit_test(test_transmissive_damage),
+        cmocka_unit_test(test_textured_opens),
+        cmocka_unit_test(test_textured_fields),
+        cmocka_unit_test(test_textured_truncated_and_damaged),
+        cmocka_unit_test(test_textured_out_of_memory),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -139,17 +139,29 @@ typedef struct ll_tables_options {
  * field "layerlab_layout" naming them and "eta" the relative index; the
  * transmitted lobes warped about the refraction half vector (eta != 1) or
  * the z-flipped direction (eta 1); RGB only.
- * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured file
- * (several basis functions), a transmissive table file (write its tables
- * from its .bsdf), all with a message saying why; LL_ERROR_UNSUPPORTED for
- * LL_TABLES_SPECTRAL with a transmissive b;
+ * A textured b (a .bsdf with parameters) gives a textured table file, also
+ * extended: "layerlab_layout" = "textured", the parameter block as the .bsdf
+ * holds it ("layerlab_parameter_counts", "layerlab_parameter_positions",
+ * float32), b's metadata as "layerlab_metadata", and for each basis k a
+ * complete set of the format's fields named "basis<k>." + name, written as
+ * the tables of that basis alone (its own grid chosen by the tolerance).
+ * ll_bsdf_open reads it as a textured handle: the parameters, names and
+ * ll_bsdf_basis_coefficients as on b; evaluation blends the bases' tables
+ * with the caller's basis weights, sampling picks a basis with probability
+ * |w_k| / sum |w_j| (the pdf is that mixture). A spectral textured file
+ * takes a textured file of b's parameters from opts->spectrum. A b both
+ * textured and transmissive is refused (LL_ERROR_UNSUPPORTED).
+ * LL_ERROR_INVALID_ARGUMENT: NULL b or path, bad options, a textured or
+ * transmissive table file (write its tables from its .bsdf), all with a
+ * message saying why; LL_ERROR_UNSUPPORTED for LL_TABLES_SPECTRAL with a
+ * transmissive b;
  * LL_ERROR_IO; LL_ERROR_OUT_OF_MEMORY; LL_ERROR_CANCELLED. Thread-safe (b is
  * only read). */
 LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts,
                                            const ll_monitor *monitor);
 
-/* The table file of an untextured material (ll_material.h) at
+/* The table file of a material (ll_material.h) at
  * path, atomically. rgb (nullable) is the opened file of its RGB build
  * (ll_material_build_layers, then a .bsdf), from which the warp is made; a
  * NULL rgb makes the library build it (written to a temporary .bsdf beside
@@ -179,9 +191,14 @@ LL_API ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
  * to 1 over the whole call (with rgb NULL, the RGB build takes the first
  * fifth of a spectral file's, the first 0.8 of an RGB file's); a cancel is
  * seen between wavelengths.
+ * A swept material (rgb NULL, LL_TABLES_RGB) is built to its textured
+ * .bsdf (ll_material_build, a temporary file beside path) and written as a
+ * textured table file (ll_tables_write_from_bsdf).
  * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
- * LL_ERROR_INVALID_ARGUMENT for a swept material, and for a transmissive
- * one with LL_TABLES_SPECTRAL (its tables are written in RGB only). */
+ * Statuses: those of ll_material_build_layers and ll_tables_write_from_bsdf;
+ * LL_ERROR_INVALID_ARGUMENT for a transmissive material with
+ * LL_TABLES_SPECTRAL (its tables are written in RGB only) and for a swept
+ * one in LL_TABLES_SPECTRAL. */
 LL_API ll_status ll_material_write_tables(const ll_material *material,
                                           const ll_build_options *build, const ll_bsdf *rgb,
                                           const char *path, const ll_tables_options *tables,

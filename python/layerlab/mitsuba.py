@@ -60,6 +60,11 @@ no Fourier series) are refused with the reason. The CUDA variants take
 bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
 "tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
 Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
+An extended table file (transmissive: a table set per lobe and side; textured:
+a table set per basis of a textured .bsdf) renders through "batch"; a textured
+one takes the same per-parameter properties as that .bsdf (below), its basis
+weights going to the C batch calls per lane. Mitsuba's `measured` refuses such
+a file (it has no plain tables).
 
 Textured files (more than one basis function): one property per textured
 parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a

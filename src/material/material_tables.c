@@ -122,6 +122,37 @@ static ll_status build_rgb(const ll_material *m, const ll_build_options *build,
     return s;
 }
 
+/* A swept material's textured .bsdf, built beside path under a unique
+ * name, opened and unlinked. */
+static ll_status build_swept(const ll_material *m, const ll_build_options *build,
+                             const ll_monitor *monitor, const char *path, ll_bsdf **out)
+{
+    static const char suffix[] = ".sweep-XXXXXX";
+    size_t n = strlen(path), total;
+    char *name;
+    ll_status s;
+    int fd;
+    *out = NULL;
+    if (!ll_size_add(n, sizeof suffix, &total) || !(name = ll_malloc(total)))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
+    memcpy(name, path, n);
+    memcpy(name + n, suffix, sizeof suffix);
+    fd = mkstemp(name);
+    if (fd < 0) {
+        s = ll_fail(LL_ERROR_IO, FN ": cannot create a temporary file beside %s: %s", path,
+                    strerror(errno));
+        ll_free(name);
+        return s;
+    }
+    close(fd);
+    s = ll_material_build(m, build, monitor, name);
+    if (s == LL_OK)
+        s = ll_bsdf_open(name, NULL, out);
+    unlink(name);
+    ll_free(name);
+    return s;
+}
+
 /* One step's share [lo, lo + span] of the caller's progress (each library
  * call reports 0..1 for itself). */
 typedef struct share {
@@ -213,10 +244,10 @@ ll_status ll_material_write_tables(const ll_material *m, const ll_build_options 
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": material or path is NULL");
     if (tables && (s = ll_struct_read(&t, sizeof t, tables, FN, "ll_tables_options")) != LL_OK)
         return s;
-    if (m->n_axes > 0)
+    if (m->n_axes > 0 && t.format == LL_TABLES_SPECTRAL)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
-                       FN ": %s is swept (textured): a table file holds one material without "
-                       "parameters",
+                       FN ": %s is swept (textured): its tables are written in RGB (a set per "
+                       "basis); spectral textured tables are not made by this version",
                        m->source);
     /* A transmissive stack's tables (a set per lobe and side) are written
      * in RGB only. */
@@ -231,6 +262,17 @@ ll_status ll_material_write_tables(const ll_material *m, const ll_build_options 
     /* A word without a spectrum is refused before anything is built. */
     if (t.format == LL_TABLES_SPECTRAL && (s = ll_spectral_plan_init(m, &plan, FN)) != LL_OK)
         return s;
+    if (!rgb && m->n_axes > 0) {
+        /* A sweep: its textured .bsdf, then a table set per basis. */
+        part = monitor_share(&sh, monitor, 0.0, 0.8);
+        s = build_swept(m, build, monitor ? &part : NULL, path, &own);
+        if (s != LL_OK)
+            return s;
+        part = monitor_share(&sh, monitor, 0.8, 0.2);
+        s = ll_tables_write_from_bsdf(own, path, &t, monitor ? &part : NULL);
+        ll_bsdf_release(own);
+        return s;
+    }
     if (!rgb) {
         /* The progress: the RGB build a share, the tables (for a spectral
          * file: a build per wavelength) the rest. */

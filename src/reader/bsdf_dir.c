@@ -116,11 +116,10 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
         if (!unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
-        ll_measured_eval(b->measured, v, l, value);
-        /* A transmitted value is stored as the .bsdf stores it: radiance
-         * takes the same eta^2 as there. */
-        measured_rgb(value, l[2],
-                     (double)basis[0] * transport_scale(b, v[2], -l[2], mode), rgb);
+        /* The bases blended with their weights; a transmitted value is
+         * stored as the .bsdf stores it: radiance takes the same eta^2. */
+        ll_measured_blend_eval(b, v, l, basis, value);
+        measured_rgb(value, l[2], transport_scale(b, v[2], -l[2], mode), rgb);
         return LL_OK;
     }
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
@@ -146,7 +145,7 @@ ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[
         if (!unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
-        *pdf = ll_measured_pdf(b->measured, v, l);
+        *pdf = ll_measured_blend_pdf(b, v, l, basis);
         return LL_OK;
     }
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
@@ -184,9 +183,8 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
         int k;
         for (k = 0; k < 3; ++k)
             v[k] = wo[k] / lo;
-        if (ll_measured_sample(b->measured, v, u, wi, pdf, value))
-            measured_rgb(value, wi[2],
-                         (double)basis[0] * transport_scale(b, v[2], -wi[2], mode), rgb);
+        if (ll_measured_blend_sample(b, v, u, basis, wi, pdf, value))
+            measured_rgb(value, wi[2], transport_scale(b, v[2], -wi[2], mode), rgb);
         return LL_OK;
     }
     mu_i = clamp_unit(wo[2] / lo);

@@ -182,7 +182,7 @@ double ll_bsdf_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_ph
     double w_i[4], sums[3], rho;
     size_t idx;
     if (b->measured)
-        return ll_measured_pdf_cos(b, mu_i, mu_o, cos_phi);
+        return ll_measured_pdf_cos(b, mu_i, mu_o, cos_phi, basis);
     if (!ll_bsdf_weights(b, mu_i, &off_i, w_i) ||
         !ll_bsdf_gather_weighted(b, off_i, w_i, mu_o, basis, &s) || s.count == 0)
         return 0.0;

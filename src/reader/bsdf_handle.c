@@ -15,7 +15,14 @@ void ll_bsdf_free(ll_bsdf *b)
 {
     if (!b)
         return;
-    ll_measured_free(b->measured);
+    if (b->measured_bases) {
+        size_t k;
+        for (k = 0; k < b->n_bases; ++k)
+            ll_measured_free(b->measured_bases[k]);
+        ll_free(b->measured_bases);
+    } else {
+        ll_measured_free(b->measured);
+    }
     ll_free(b->nodes_f);
     ll_free(b->nodes);
     ll_free(b->param_counts);

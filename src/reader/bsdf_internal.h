@@ -35,6 +35,9 @@ struct ll_bsdf {
                                    (tables_internal.h), or NULL for a .bsdf;
                                    a table handle has no Fourier parts (no
                                    nodes, series or CDF): n_nodes is 0      */
+    struct ll_measured **measured_bases; /* a textured table file: [n_bases]
+                                   sets, measured_bases[0] also in measured;
+                                   NULL otherwise                             */
     size_t n_nodes;
     size_t max_order;
     size_t n_channels;          /* 1 or 3 (stored as Y, R, B)                  */

@@ -255,8 +255,8 @@ void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos
         return;
     viewer(mu_i, wi);
     light(mu_o, cos_phi, wo);
-    ll_measured_eval(b->measured, wi, wo, v);
-    scale = extra_scale * (double)basis[0] * ll_bsdf_cosine_scale(mu_o);
+    ll_measured_blend_eval(b, wi, wo, basis, v);
+    scale = extra_scale * ll_bsdf_cosine_scale(mu_o);
     for (c = 0; c < 3; ++c) {
         rgb[c] = v[c] * scale;
         if (!(rgb[c] > 0.0) || !ll_is_finite(rgb[c]))
@@ -264,36 +264,37 @@ void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos
     }
 }
 
-double ll_measured_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi)
+double ll_measured_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
+                          const float *basis)
 {
     double wi[3], wo[3];
     if (!covers(b, mu_i, mu_o))
         return 0.0;
     viewer(mu_i, wi);
     light(mu_o, cos_phi, wo);
-    return ll_measured_pdf(b->measured, wi, wo);
+    return ll_measured_blend_pdf(b, wi, wo, basis);
 }
 
 int ll_measured_sample_core(const ll_bsdf *b, double mu_i, const double u[2],
                             const float *basis, double *mu_o, double *phi_d, double *pdf,
                             double sums[3])
 {
-    double wi[3], wo[3], v[3], w = (double)basis[0], phi;
+    double wi[3], wo[3], v[3], phi;
     *mu_o = *phi_d = *pdf = 0.0;
     sums[0] = sums[1] = sums[2] = 0.0;
     if (!(b->measured->extended ? mu_i != 0.0 && ll_is_finite(mu_i) : mu_i > 0.0))
         return 0;
     viewer(mu_i, wi);
-    if (!ll_measured_sample(b->measured, wi, u, wo, pdf, v))
+    if (!ll_measured_blend_sample(b, wi, u, basis, wo, pdf, v))
         return 0;
     *mu_o = -wo[2];
     phi = atan2(-wo[1], -wo[0]);
     *phi_d = phi < 0.0 ? phi + 2.0 * LL_PI : phi;
     /* The callers turn (Y, R, B) sums into RGB with the green of
      * ll_bsdf_to_rgb; this Y gives the stored green back. */
-    sums[1] = v[0] * w;
-    sums[2] = v[2] * w;
-    sums[0] = (v[1] * w - LL_BSDF_G_FROM_B * sums[2] - LL_BSDF_G_FROM_R * sums[1]) /
+    sums[1] = v[0];
+    sums[2] = v[2];
+    sums[0] = (v[1] - LL_BSDF_G_FROM_B * sums[2] - LL_BSDF_G_FROM_R * sums[1]) /
               LL_BSDF_G_FROM_Y;
     return 1;
 }

@@ -14,6 +14,7 @@
 
 #include "reader/bsdf_internal.h"
 #include "reader/tables_warp.h"
+#include "reader/tensor.h"
 
 typedef struct ll_measured {
     ll_warp2d ndf;        /* D over (u_phi, u_theta) of the normal          */
@@ -76,6 +77,44 @@ LL_INTERNAL ll_status ll_measured_open(const unsigned char *data, size_t size, c
                                        ll_bsdf **out);
 LL_INTERNAL void ll_measured_free(ll_measured *m);
 
+/* One material of a parsed file: its fields named prefix +
+ * the format's names ("" the plain file, "basis3." a textured file's
+ * basis 3), every one checked as ll_measured_open checks them (errors
+ * name the field in full). */
+LL_INTERNAL ll_status ll_measured_read_set(const ll_tensor_file *t, const char *prefix,
+                                           const char *file, ll_measured **out);
+/* b->metadata from the field "layerlab_metadata" (else "description"). */
+LL_INTERNAL ll_status ll_measured_copy_metadata(ll_bsdf *b, const ll_tensor_file *t,
+                                                const char *file);
+/* A file with the field "layerlab_layout" (tables_textured.c): the sets
+ * the layout names, the parameters of a textured one. file_size: the
+ * file's bytes. */
+LL_INTERNAL ll_status ll_measured_open_extended(const ll_tensor_file *t, size_t file_size,
+                                                const char *file, ll_bsdf **out);
+
+/* Set k of a table handle: basis k of a textured table file, the only
+ * set of an untextured one (k = 0). */
+static inline const ll_measured *ll_measured_basis(const ll_bsdf *b, size_t k)
+{
+    return b->measured_bases ? b->measured_bases[k] : b->measured;
+}
+
+/* The blend of a table handle's bases with the weights basis[0 ..
+ * n_bases) (tables_textured.c; bases of weight 0 are not visited), in
+ * the format's convention as the single-set calls above:
+ * eval: sum_k w_k f_k cos;
+ * pdf: the density of sample, sum_k |w_k| pdf_k / sum_k |w_k|;
+ * sample: a basis picked with probability |w_k| / sum |w_k| by u[0]
+ *   (rescaled to [0, 1) and passed on), wo sampled from it; the pdf and
+ *   value of the blend there. 0 if no direction (or every weight 0). */
+LL_INTERNAL void ll_measured_blend_eval(const ll_bsdf *b, const double wi[3], const double wo[3],
+                                        const float *basis, double value[3]);
+LL_INTERNAL double ll_measured_blend_pdf(const ll_bsdf *b, const double wi[3],
+                                         const double wo[3], const float *basis);
+LL_INTERNAL int ll_measured_blend_sample(const ll_bsdf *b, const double wi[3], const double u[2],
+                                         const float *basis, double wo[3], double *pdf,
+                                         double value[3]);
+
 /* f cos(theta_o) of the channels R, G, B at (wi, wo); 0 below the surface. */
 LL_INTERNAL void ll_measured_eval(const ll_measured *m, const double wi[3], const double wo[3],
                                   double value[3]);
@@ -91,7 +130,7 @@ LL_INTERNAL int ll_measured_sample(const ll_measured *m, const double wi[3], con
 LL_INTERNAL void ll_measured_eval_cos(const ll_bsdf *b, double mu_i, double mu_o, double cos_phi,
                                       const float *basis, double extra_scale, double rgb[3]);
 LL_INTERNAL double ll_measured_pdf_cos(const ll_bsdf *b, double mu_i, double mu_o,
-                                       double cos_phi);
+                                       double cos_phi, const float *basis);
 LL_INTERNAL int ll_measured_sample_core(const ll_bsdf *b, double mu_i, const double u[2],
                                         const float *basis, double *mu_o, double *phi_d,
                                         double *pdf, double sums[3]);

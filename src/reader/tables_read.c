@@ -125,7 +125,7 @@ static ll_status build_rgb(ll_warp2d *wp, const ll_tensor_field *f, const double
 }
 
 /* The metadata the handle reports: our own field, else the description. */
-static ll_status copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
+ll_status ll_measured_copy_metadata(ll_bsdf *b, const ll_tensor_file *t, const char *file)
 {
     const ll_tensor_field *f = ll_tensor_find(t, "layerlab_metadata");
     if (!f)
@@ -205,36 +205,64 @@ static int warp_eta_ok(double e)
     return e == 0.0 || (e >= 1e-3 && e <= 1e3 && e != 1.0);
 }
 
-/* prefix + base into name (prefixes are the reader's own, short). */
-static const char *field_name(char *name, size_t cap, const char *prefix, const char *base)
+#define NAME_CAP (LL_TENSOR_MAX_NAME + 1)
+
+/* a + b into name, or 0 if the result is longer than a field name may be
+ * (a textured file's basis prefix comes from the file's own counts). */
+static int join_name(char name[NAME_CAP], const char *a, const char *b)
 {
-    snprintf(name, cap, "%s%s", prefix, base);
-    return name;
+    size_t la = strlen(a), lb = strlen(b);
+    if (la + lb > LL_TENSOR_MAX_NAME)
+        return 0;
+    memcpy(name, a, la);
+    memcpy(name + la, b, lb + 1);
+    return 1;
 }
 
-#define NAME_CAP (LL_TENSOR_MAX_NAME + 1)
+static ll_status name_error(const char *file, const char *a, const char *b)
+{
+    return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field name \"%s%s\" is too long", file,
+                   a, b);
+}
+
+/* require() of the field a + b. */
+static ll_status require_named(const ll_tensor_file *t, const char *a, const char *b,
+                               size_t rank, const char *file, const ll_tensor_field **out)
+{
+    char name[NAME_CAP];
+    if (!join_name(name, a, b))
+        return name_error(file, a, b);
+    return require(t, name, rank, file, out);
+}
+
+static const ll_tensor_field *find_named(const ll_tensor_file *t, const char *a, const char *b)
+{
+    char name[NAME_CAP];
+    return join_name(name, a, b) ? ll_tensor_find(t, name) : NULL;
+}
 
 /* The fields of one set (prefix + "ndf", ...): checked completely, then,
  * if m is not NULL, the warps built into m. An extended file's set also
  * has its "albedo" over the incident elevations. */
-static ll_status read_set(const ll_tensor_file *t, const char *prefix, const shared *sh,
-                          ll_measured *m)
+static ll_status read_set(const ll_tensor_file *t, const char *base, const char *lobe,
+                          const shared *sh, ll_measured *m)
 {
+    char prefix[NAME_CAP];
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
     char ne[NAME_CAP];
     const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
-    int transmit = strncmp(prefix, "transmit_", 9) == 0;
+    int transmit = strncmp(lobe, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
     size_t n, n_ti = sh->n_ti, n_pi = sh->n_pi;
     ll_status s;
-    field_name(nn, sizeof nn, prefix, "ndf");
-    field_name(ns, sizeof ns, prefix, "sigma");
-    field_name(nv, sizeof nv, prefix, "vndf");
-    field_name(nl, sizeof nl, prefix, "luminance");
-    field_name(nr, sizeof nr, prefix, sh->spectral ? "spectra" : "rgb");
-    field_name(na, sizeof na, prefix, "albedo");
-    field_name(ne, sizeof ne, prefix, "warp_eta");
+    if (!join_name(prefix, base, lobe))
+        return name_error(sh->file, base, lobe);
+    if (!join_name(nn, prefix, "ndf") || !join_name(ns, prefix, "sigma") ||
+        !join_name(nv, prefix, "vndf") || !join_name(nl, prefix, "luminance") ||
+        !join_name(nr, prefix, sh->spectral ? "spectra" : "rgb") ||
+        !join_name(na, prefix, "albedo") || !join_name(ne, prefix, "warp_eta"))
+        return name_error(sh->file, prefix, "luminance");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
         (s = require(t, nv, 4, file, &vndf)) != LL_OK ||
@@ -353,93 +381,106 @@ static ll_status read_layout(const ll_tensor_field *f, const char *file, int pre
 }
 
 /* An extended file's "eta": one float32, the index below over above. */
-static ll_status read_eta(const ll_tensor_file *t, const char *file, double *eta)
+static ll_status read_eta(const ll_tensor_file *t, const char *base, const char *file,
+                         double *eta)
 {
-    const ll_tensor_field *f = ll_tensor_find(t, "eta");
+    const ll_tensor_field *f = find_named(t, base, "eta");
     double v;
     if (!f || f->dtype != LL_TENSOR_F32 || f->count != 1)
         return ll_fail(LL_ERROR_FORMAT,
-                       "ll_bsdf_open: %s: field \"eta\" must be one float32 (an extended "
+                       "ll_bsdf_open: %s: field \"%seta\" must be one float32 (an extended "
                        "file's relative index)",
-                       file);
+                       file, base);
     v = (double)ll_tensor_f32(f, 0);
     if (!(v >= 1e-3 && v <= 1e3))
         return ll_fail(LL_ERROR_FORMAT,
-                       "ll_bsdf_open: %s: field \"eta\" = %g must lie in [0.001, 1000]", file,
-                       v);
+                       "ll_bsdf_open: %s: field \"%seta\" = %g must lie in [0.001, 1000]", file,
+                       base, v);
     *eta = v;
     return LL_OK;
 }
 
-ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
-                           ll_bsdf **out)
+/* Whether an extended file's layout names a textured file (its sets are
+ * whole materials, one per basis: tables_textured.c) rather than the lobe
+ * sets of one material (read here). */
+static int layout_is_textured(const ll_tensor_field *f)
 {
-    ll_tensor_file t = { 0, NULL };
+    size_t i = 0, start;
+    if (f->dtype != LL_TENSOR_U8 || f->rank != 1)
+        return 0;
+    while (i < f->count) {
+        while (i < f->count && (f->data[i] == ' ' || f->data[i] == ','))
+            ++i;
+        start = i;
+        while (i < f->count && f->data[i] != ' ' && f->data[i] != ',')
+            ++i;
+        if (i - start == 8 && memcmp(f->data + start, "textured", 8) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const char *file,
+                               ll_measured **out)
+{
     const ll_tensor_field *theta, *phi, *jac, *layout;
     shared sh;
     int present[LL_MEASURED_LOBES] = { 1, 0, 0, 0 }, k;
     double eta = 1.0;
-    ll_bsdf *b = NULL;
-    ll_measured *m;
-    ll_status s = ll_tensor_parse(data, size, file, &t);
-    if (s != LL_OK)
-        return s;
+    ll_measured *m = NULL;
+    ll_status s;
     memset(&sh, 0, sizeof sh);
     sh.file = file;
     /* As Mitsuba: "wavelengths" makes the file spectral (pbrt reads only
      * such files). */
-    sh.spectral = ll_tensor_find(&t, "wavelengths") != NULL;
-    layout = ll_tensor_find(&t, "layerlab_layout");
+    sh.spectral = find_named(t, base, "wavelengths") != NULL;
+    layout = find_named(t, base, "layerlab_layout");
     sh.extended = layout != NULL;
-    if ((s = require(&t, "theta_i", 1, file, &theta)) != LL_OK ||
-        (s = require(&t, "phi_i", 1, file, &phi)) != LL_OK ||
-        (sh.spectral && (s = require(&t, "wavelengths", 1, file, &sh.lam)) != LL_OK) ||
-        (layout && (s = read_layout(layout, file, present)) != LL_OK) ||
-        (layout && (s = read_eta(&t, file, &eta)) != LL_OK))
+    /* The layout first: a file this version does not read is said so. */
+    if ((layout && (s = read_layout(layout, file, present)) != LL_OK) ||
+        (s = require_named(t, base, "theta_i", 1, file, &theta)) != LL_OK ||
+        (s = require_named(t, base, "phi_i", 1, file, &phi)) != LL_OK ||
+        (sh.spectral && (s = require_named(t, base, "wavelengths", 1, file, &sh.lam)) != LL_OK) ||
+        (layout && (s = read_eta(t, base, file, &eta)) != LL_OK))
         goto done;
-    jac = ll_tensor_find(&t, "jacobian");
+    jac = find_named(t, base, "jacobian");
     if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
         FAIL(LL_ERROR_FORMAT,
-             "ll_bsdf_open: %s: field \"jacobian\" must be one uint8 of value 0 or 1", file);
+             "ll_bsdf_open: %s: field \"%sjacobian\" must be one uint8 of value 0 or 1", file,
+             base);
     sh.jacobian = jac->data[0];
     sh.n_ti = theta->count;
     sh.n_pi = phi->count;
     if (sh.n_pi > 2)
         FAIL(LL_ERROR_UNSUPPORTED,
-             "ll_bsdf_open: %s: field \"phi_i\": %zu incident azimuths (an anisotropic table) "
-             "are not read by this version",
-             file, sh.n_pi);
+             "ll_bsdf_open: %s: field \"%sphi_i\": %zu incident azimuths (an anisotropic "
+             "table) are not read by this version",
+             file, base, sh.n_pi);
     if (sh.spectral && sh.lam->count > LL_MEASURED_MAX_WAVELENGTHS) {
-        s = shape_error(file, "wavelengths", "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
-                                             " wavelengths");
+        s = shape_error(file, sh.lam->name, "more than " LL_MEASURED_MAX_WAVELENGTHS_TEXT
+                                            " wavelengths");
         goto done;
     }
     /* Every set checked before anything is allocated. */
     for (k = 0; k < LL_MEASURED_LOBES; ++k)
         if (present[k] &&
-            (s = read_set(&t, sh.extended ? ll_measured_lobe_prefix(k) : "", &sh, NULL)) != LL_OK)
+            (s = read_set(t, base, sh.extended ? ll_measured_lobe_prefix(k) : "", &sh, NULL)) !=
+                LL_OK)
             goto done;
     if ((s = read_list(theta, file, 0.0, LL_PI / 2 + 1e-6, &sh.theta_v)) != LL_OK ||
         (s = read_list(phi, file, -2.0 * LL_PI - 1e-6, 2.0 * LL_PI + 1e-6, &sh.phi_v)) != LL_OK ||
         (sh.spectral && (s = read_list(sh.lam, file, 1e-3, 1e6, &sh.lambda_v)) != LL_OK))
         goto done;
 
-    b = ll_calloc(1, sizeof *b);
-    m = b ? ll_calloc(1, sizeof *m) : NULL;
+    m = ll_calloc(1, sizeof *m);
     if (!m)
         FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
-    b->measured = m;
-    b->refcount = 1;
-    b->n_channels = 3;
-    b->n_bases = 1;
-    b->eta = eta;
-    b->file_size = size;
     m->jacobian = sh.jacobian;
     m->n_wavelengths = sh.spectral ? sh.lam->count : 0;
     m->extended = sh.extended;
     m->eta = eta;
     if (!sh.extended) {
-        if ((s = read_set(&t, "", &sh, m)) != LL_OK)
+        if ((s = read_set(t, base, "", &sh, m)) != LL_OK)
             goto done;
     } else {
         for (k = 0; k < LL_MEASURED_LOBES; ++k) {
@@ -447,15 +488,48 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
                 continue;
             if (!(m->lobe[k] = ll_calloc(1, sizeof *m->lobe[k])))
                 FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
-            if ((s = read_set(&t, ll_measured_lobe_prefix(k), &sh, m->lobe[k])) != LL_OK)
+            if ((s = read_set(t, base, ll_measured_lobe_prefix(k), &sh, m->lobe[k])) != LL_OK)
                 goto done;
         }
     }
-    s = copy_metadata(b, &t, file);
 done:
     ll_free(sh.theta_v);
     ll_free(sh.phi_v);
     ll_free(sh.lambda_v);
+    if (s != LL_OK) {
+        ll_measured_free(m);
+        return s;
+    }
+    *out = m;
+    return LL_OK;
+}
+
+ll_status ll_measured_open(const unsigned char *data, size_t size, const char *file,
+                           ll_bsdf **out)
+{
+    ll_tensor_file t = { 0, NULL };
+    const ll_tensor_field *layout;
+    ll_bsdf *b = NULL;
+    ll_status s = ll_tensor_parse(data, size, file, &t);
+    if (s != LL_OK)
+        return s;
+    layout = ll_tensor_find(&t, "layerlab_layout");
+    if (layout && layout_is_textured(layout)) {
+        s = ll_measured_open_extended(&t, size, file, &b);
+        goto done;
+    }
+    b = ll_calloc(1, sizeof *b);
+    if (!b)
+        FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
+    b->refcount = 1;
+    b->n_channels = 3;
+    b->n_bases = 1;
+    b->file_size = size;
+    if ((s = ll_measured_read_set(&t, "", file, &b->measured)) != LL_OK)
+        goto done;
+    b->eta = b->measured->eta;
+    s = ll_measured_copy_metadata(b, &t, file);
+done:
     ll_tensor_file_free(&t);
     if (s != LL_OK) {
         ll_bsdf_free(b);

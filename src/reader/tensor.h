@@ -25,8 +25,9 @@ enum {
  * dozen bytes), which keeps a field's description fixed-size. */
 #define LL_TENSOR_MAX_RANK 8
 #define LL_TENSOR_MAX_NAME 255
-/* Fields a file may have (the format's files have about ten). */
-#define LL_TENSOR_MAX_FIELDS 1024
+/* Fields a file may have (the format's files have about ten; a textured
+ * table file ten per basis, up to 1024 bases). */
+#define LL_TENSOR_MAX_FIELDS 16384
 
 typedef struct ll_tensor_field {
     char name[LL_TENSOR_MAX_NAME + 1];

@@ -120,4 +120,15 @@ typedef struct ll_tables_figures {
 LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table,
                                         ll_tables_figures *out);
 
+/* Basis k of the textured b as an untextured handle of its own (its
+ * coefficients and per-row tables copied; release it with
+ * ll_bsdf_release): bsdf_write_tables_basis.c. */
+LL_INTERNAL ll_status ll_tables_basis_view(const ll_bsdf *b, size_t k, ll_bsdf **out);
+
+/* ll_tables_write_from_bsdf of a textured b (opts read and complete): a
+ * table set per basis (bsdf_write_tables_textured.c). */
+LL_INTERNAL ll_status ll_tables_write_textured(const ll_bsdf *b, const char *path,
+                                               const ll_tables_options *opts,
+                                               const ll_monitor *monitor);
+
 #endif /* LL_BSDF_WRITE_TABLES_H */

@@ -233,6 +233,14 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     s.o = defaults;
     if (opts && (st = ll_struct_read(&s.o, sizeof s.o, opts, FN, "ll_tables_options")) != LL_OK)
         return st;
+    /* A textured file: the search for each basis (its own grid). A
+     * textured table file is made from its .bsdf, whose bases it holds. */
+    if (b->n_parameters > 0 && b->measured)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                       FN ": the file is a textured table file; convert the textured .bsdf it "
+                       "was made from");
+    if (b->n_parameters > 0)
+        return ll_tables_write_textured(b, path, &s.o, monitor);
     if (s.o.format == LL_TABLES_SPECTRAL && ll_tables_transmits(b))
         return ll_fail(LL_ERROR_UNSUPPORTED,
                        FN ": spectral tables of a transmissive file are not written by this "

@@ -67,15 +67,14 @@ static ll_status fill_blocks(ll_bsdf_out *o, const ll_tensor_out_field *f)
     return s;
 }
 
-ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_field *fields,
-                          size_t n_fields)
+/* ll_tensor_write with offset[n_fields] to fill. */
+static ll_status write_fields(const char *path, const char *fn, const ll_tensor_out_field *fields,
+                              size_t n_fields, size_t *offset)
 {
-    size_t k, r, at = LL_TENSOR_HEADER_SIZE, data_at, offset[64];
+    size_t k, r, at = LL_TENSOR_HEADER_SIZE, data_at;
     int ok = 1;
     ll_bsdf_out *o;
     ll_status s;
-    if (n_fields == 0 || n_fields > sizeof offset / sizeof offset[0])
-        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu fields (1..64)", fn, n_fields);
     for (k = 0; k < n_fields; ++k) {
         size_t len = strlen(fields[k].name);
         if ((fields[k].dtype != LL_TENSOR_F32 && fields[k].dtype != LL_TENSOR_U8) ||
@@ -140,4 +139,20 @@ ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_
         at += bytes;
     }
     return ll_bsdf_out_commit(o);
+}
+
+ll_status ll_tensor_write(const char *path, const char *fn, const ll_tensor_out_field *fields,
+                          size_t n_fields)
+{
+    size_t *offset;
+    ll_status s;
+    if (n_fields == 0 || n_fields > LL_TENSOR_MAX_FIELDS)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: %zu fields (1..%d)", fn, n_fields,
+                       LL_TENSOR_MAX_FIELDS);
+    offset = ll_alloc_array(n_fields, sizeof *offset);
+    if (!offset)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory", fn);
+    s = write_fields(path, fn, fields, n_fields, offset);
+    ll_free(offset);
+    return s;
 }

@@ -166,11 +166,11 @@ int llbuild_tables_check(llbuild_tables *t, const ll_material *m, const char *in
 {
     if (!t->measured)
         return -1;
-    if (ll_material_axis_count(m) > 0) {
+    if (ll_material_axis_count(m) > 0 && t->opts.format == LL_TABLES_SPECTRAL) {
         fprintf(stderr,
-                "llbuild: %s: a swept (textured) material cannot be written in the `measured` "
-                "format: its tables hold the reflection of one material only, with no "
-                "parameters; build it as a .bsdf (--format bsdf)\n",
+                "llbuild: %s: a swept (textured) material is written as RGB tables (a set "
+                "per basis); spectral textured tables are not made by this version: leave out "
+                "--wavelengths, or build it as a .bsdf (--format bsdf)\n",
                 input);
         return 1;
     }
@@ -301,6 +301,16 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
         return;
     }
     printf("%s -> %s (format measured)\n", input, output);
+    if (info.n_bases > 1) {
+        printf("tables       textured: a set per basis, %zu bases of %zu parameters, each "
+               "grid chosen by the tolerance\n",
+               info.n_bases, info.n_parameters);
+        printf("file         %zu bytes (the textured .bsdf: %zu bytes)\n", info.file_size,
+               t->bsdf_bytes);
+        printf("wall time    %.2f s\n", seconds);
+        ll_bsdf_release(b);
+        return;
+    }
     if (info.n_wavelengths > 0)
         printf("resolution   %zu nodes x %zu Fourier orders (the layers of the warp, 3 "
                "channels, and of each wavelength, 1)\n",
@@ -392,6 +402,42 @@ static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
     return LL_OK;
 }
 
+/* A swept material built to its textured .bsdf beside output (as
+ * open_as_bsdf), opened and unlinked. */
+static ll_status open_swept(const ll_material *m, const ll_build_options *o, const char *output,
+                            const ll_monitor *monitor, ll_bsdf **out, size_t *bytes)
+{
+    static const char suffix[] = ".llbuild-XXXXXX";
+    size_t n = strlen(output);
+    char *name = malloc(n + sizeof suffix);
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    ll_status s;
+    int fd;
+    *out = NULL;
+    if (!name)
+        return LL_ERROR_OUT_OF_MEMORY;
+    memcpy(name, output, n);
+    memcpy(name + n, suffix, sizeof suffix);
+    fd = mkstemp(name);
+    if (fd < 0) {
+        fprintf(stderr, "llbuild: cannot create a file beside %s: %s\n", output,
+                strerror(errno));
+        free(name);
+        return LL_ERROR_IO;
+    }
+    close(fd);
+    s = ll_material_build(m, o, monitor, name);
+    if (s == LL_OK)
+        s = ll_bsdf_open(name, NULL, out);
+    unlink(name);
+    free(name);
+    if (s != LL_OK)
+        return s;
+    ll_bsdf_get_info(*out, &info);
+    *bytes = info.file_size;
+    return LL_OK;
+}
+
 /* One step's share [lo, hi] of the whole run's progress: each library
  * call reports 0..1 for itself, and the bar should go once from 0 to 1. */
 typedef struct step {
@@ -436,6 +482,15 @@ ll_status llbuild_tables_build(llbuild_tables *t, const ll_material *m,
         t->n_orders = o->n_orders;
         t->n_channels = 3;
         return ll_material_write_tables(m, o, NULL, output, &t->opts, monitor);
+    }
+    if (ll_material_axis_count(m) > 0) {
+        /* A swept material: its textured .bsdf, then a table set per basis. */
+        s = open_swept(m, o, output, &building, &b, &t->bsdf_bytes);
+        building = monitor_of(&st, monitor, 0.8, 1.0);
+        if (s == LL_OK)
+            s = ll_tables_write_from_bsdf(b, output, &t->opts, &building);
+        ll_bsdf_release(b);
+        return s;
     }
     s = ll_material_build_layers(m, o, &building, layers, &n_channels, NULL);
     if (s != LL_OK)

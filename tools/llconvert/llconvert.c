@@ -7,7 +7,7 @@
  * ll_tables_write_from_bsdf (atomic output), then a summary read back from
  * the written file. The one target format is `measured`, the table files
  * that Mitsuba 3 and pbrt-v4 read natively (docs/formats.md); the
- * source must be untextured. A transmissive source gives our extension of
+ * source may be transmissive or textured: it then gives our extension of
  * it (a set of tables per lobe and side), which those renderers refuse.
  * Exit codes: 0 done, 1 bad input (including a source the format cannot
  * hold, with the reason), 2 I/O, 3 out of memory.
@@ -25,10 +25,10 @@
 
 static const char usage[] =
     "usage: llconvert [options] IN.bsdf -o OUT [--format measured]\n"
-    "Convert an untextured .bsdf (or opaque table) file into the tables of the\n"
-    "`measured` format that Mitsuba 3 and pbrt-v4 read (docs/formats.md);\n"
-    "a transmissive source gives a set of tables per lobe and side, which only\n"
-    "layerlab reads (those renderers refuse the file).\n"
+    "Convert a .bsdf (or an opaque, untextured table) file into the tables of\n"
+    "the `measured` format that Mitsuba 3 and pbrt-v4 read (docs/formats.md);\n"
+    "a transmissive source gives a set of tables per lobe and side, a textured\n"
+    "one a set per basis, which only layerlab reads (those renderers refuse them).\n"
     "  -o, --output FILE  the file to write (required unless --dry-run)\n"
     "  --format NAME      the output format: measured (the default and only one)\n"
     "  --theta-i N        incident elevations (default: chosen by the tolerance)\n"
@@ -85,6 +85,14 @@ static void print_written(const char *out, const ll_bsdf_info *info, double sour
     const char *g = info->metadata ? strstr(info->metadata, "\"theta_i\": ") : NULL;
     const char *f = info->metadata ? strstr(info->metadata, "\"figures\": {") : NULL;
     unsigned long n_ti = 0, nv = 0, ns = 0;
+    if (info->n_bases > 1) {
+        /* A textured file: a set per basis, each with its own grid. */
+        printf("%s: textured tables, %zu bases of %zu parameters, %.2f MB (the source: %.2f "
+               "MB)\n",
+               out, info->n_bases, info->n_parameters, (double)info->file_size / 1e6,
+               source_bytes / 1e6);
+        return;
+    }
     if (g)
         sscanf(g, "\"theta_i\": %lu, \"vndf\": [%lu, %*u], \"sample\": [%lu", &n_ti, &nv, &ns);
     printf("%s: %lu x %lu^2 x %lu^2 tables, %.2f MB (the source: %.2f MB)\n", out, n_ti, nv, ns,
@@ -184,9 +192,12 @@ int main(int argc, char **argv)
     }
     ll_bsdf_get_info(b, &info);
     if (dry_run && opts.n_theta_i && opts.vndf_size && opts.sample_size) {
-        printf("%s: %zu x %zu^2 x %zu^2 tables, about %.2f MB (the source: %.2f MB)\n", in,
-               opts.n_theta_i, opts.vndf_size, opts.sample_size,
-               table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size, transmits(b, &info)) / 1e6,
+        printf("%s: %s%zu x %zu^2 x %zu^2 tables, about %.2f MB (the source: %.2f MB)\n", in,
+               info.n_bases > 1 ? "per basis " : "", opts.n_theta_i, opts.vndf_size,
+               opts.sample_size,
+               (double)info.n_bases *
+                   table_bytes(opts.n_theta_i, opts.vndf_size, opts.sample_size,
+                               transmits(b, &info)) / 1e6,
                (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
@@ -198,12 +209,15 @@ int main(int argc, char **argv)
         size_t lo_ns = opts.sample_size ? opts.sample_size : 32, hi_ns = opts.sample_size ? opts.sample_size : 256;
         size_t lo_nv = opts.vndf_size ? opts.vndf_size : (lo_ns > 64 ? lo_ns : 64);
         size_t hi_nv = opts.vndf_size ? opts.vndf_size : (hi_ns > 64 ? hi_ns : 64);
-        printf("%s: tables sized by the tolerance %g: from %zu x %zu^2 x %zu^2 (about %.2f MB) "
+        printf("%s: tables sized by the tolerance %g: from %zu x %zu^2 x %zu^2 per basis (about "
+               "%.2f MB) "
                "up to %zu x %zu^2 x %zu^2 (about %.2f MB), known once measured (the source: "
                "%.2f MB)\n",
                in, opts.tolerance != 0.0 ? opts.tolerance : 0.05, lo_ti, lo_nv, lo_ns,
-               table_bytes(lo_ti, lo_nv, lo_ns, transmits(b, &info)) / 1e6, hi_ti, hi_nv, hi_ns,
-               table_bytes(hi_ti, hi_nv, hi_ns, transmits(b, &info)) / 1e6, (double)info.file_size / 1e6);
+               (double)info.n_bases * table_bytes(lo_ti, lo_nv, lo_ns, transmits(b, &info)) / 1e6,
+               hi_ti, hi_nv, hi_ns,
+               (double)info.n_bases * table_bytes(hi_ti, hi_nv, hi_ns, transmits(b, &info)) / 1e6,
+               (double)info.file_size / 1e6);
         ll_bsdf_release(b);
         return 0;
     }

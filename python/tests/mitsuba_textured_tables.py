@@ -1,0 +1,94 @@
+"""A textured material rendered from its table file against its .bsdf
+(the Fourier path), both through the layerlab plugin's "batch" mode in
+llvm_ad_rgb: the seed's grid (examples/seed-two-roughnesses.layers, coat
+alpha x gold alpha) on the sphere of mitsuba_scenes.py, a bitmap (stripes
+and a ramp over the sphere's uv) driving the coat's alpha, the gold's fixed.
+Not part of `make test` (minutes); run by hand:
+
+    python3 python/tests/mitsuba_textured_tables.py SEED.bsdf SEED.tab OUT.png [SIZE [SPP]]
+
+SEED.tab: `llconvert SEED.bsdf -o SEED.tab` (or the slow test
+test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). Prints each
+render's wall and CPU time (the process's, all threads: on a shared
+machine the CPU-time ratio is the steadier figure), the relative RMSE
+between the two, and the noise: the relative RMSE between two renders of
+the Fourier path with different seeds. Writes the pair side by side
+(Fourier left, tables right; sRGB, clipped) to OUT.png.
+"""
+
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+
+import numpy as np  # noqa: E402
+import mitsuba as mi  # noqa: E402
+
+mi.set_variant("llvm_ad_rgb")
+import layerlab.mitsuba as llmi  # noqa: E402
+import mitsuba_scenes as S  # noqa: E402
+
+GOLD_ALPHA = 0.1
+
+
+def coat_alpha_bitmap(n=64):
+    """Coat alpha over uv: eight stripes along u alternating 0.02 / 0.2,
+    and a ramp from 0.02 to 0.2 along v blended in (values between the
+    grid's nodes)."""
+    u = (np.arange(n) + 0.5) / n
+    uu, vv = np.meshgrid(u, u, indexing="xy")
+    stripes = np.where(np.floor(uu * 8) % 2 == 0, 0.02, 0.2)
+    ramp = 0.02 + 0.18 * vv
+    return np.ascontiguousarray((0.5 * stripes + 0.5 * ramp)[..., None], dtype=np.float32)
+
+
+def bsdf(path):
+    return {"type": "layerlab", "filename": path, "mode": "batch",
+            "coat_alpha": {"type": "bitmap", "bitmap": mi.Bitmap(coat_alpha_bitmap()),
+                           "raw": True, "filter_type": "bilinear"},
+            "gold_alpha": GOLD_ALPHA}
+
+
+def timed(scene, spp, seed):
+    S.render(mi, scene, spp=1, seed=99)
+    wall, cpu = time.perf_counter(), time.process_time()
+    img = S.render(mi, scene, spp=spp, seed=seed)
+    return img, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def to_png(images, path):
+    img = np.concatenate(images, axis=1)
+    img = np.clip(img[..., :3], 0.0, 1.0)
+    img = np.where(img <= 0.0031308, 12.92 * img, 1.055 * img ** (1 / 2.4) - 0.055)
+    mi.Bitmap((img * 255 + 0.5).astype(np.uint8)).write(path)
+
+
+def main():
+    bsdf_path, tab_path, out = sys.argv[1:4]
+    size = int(sys.argv[4]) if len(sys.argv) > 4 else 256
+    spp = int(sys.argv[5]) if len(sys.argv) > 5 else 64
+    llmi.register()
+    llmi.wavefront_mode()  # the batch mode renders in wavefront mode
+    print("size %dx%d, spp %d, variant %s, Mitsuba %s, load average %s"
+          % (size, size, spp, mi.variant(), mi.__version__, os.getloadavg()), flush=True)
+    fourier = S.scene(mi, bsdf(bsdf_path), size, spp)
+    tables = S.scene(mi, bsdf(tab_path), size, spp)
+    img_t, wall_t, cpu_t = timed(tables, spp, 1)
+    print("tables:  wall %.1f s, CPU %.1f s" % (wall_t, cpu_t), flush=True)
+    img_f, wall_f, cpu_f = timed(fourier, spp, 1)
+    print("fourier: wall %.1f s, CPU %.1f s" % (wall_f, cpu_f), flush=True)
+    img_f2 = S.render(mi, fourier, spp=spp, seed=2)
+    print("CPU-time ratio fourier / tables: %.2f (wall %.2f)" % (cpu_f / cpu_t, wall_f / wall_t))
+    print("relative RMSE tables vs fourier: %.4f; fourier vs fourier (other seed, the noise): "
+          "%.4f" % (S.relative_rmse(img_t, img_f), S.relative_rmse(img_f2, img_f)))
+    print("mean (R G B): tables %s, fourier %s" % (img_t[..., :3].mean(axis=(0, 1)),
+                                                   img_f[..., :3].mean(axis=(0, 1))))
+    print("load average %s" % (os.getloadavg(),))
+    to_png([img_f, img_t], out)
+
+
+if __name__ == "__main__":
+    main()
