@@ -146,8 +146,11 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # the slow tier (`make check`) holds what takes minutes, needs MPI or
 # Mitsuba, signals running processes, or installs the cross-checks' codes.
 SLOW_TESTS   := test_convergence test_material_fuzz_replay test_ms_walk test_tables_tolerance \
-                test_tables_transmit_tolerance \
-                test_tables_textured_seed
+                test_tables_transmit_tolerance
+# Measurements that take longer than a CI run allows (`make figures`, not in
+# either tier): they print the figures docs/formats.md quotes and hold what
+# is met.
+FIGURE_TESTS := test_tables_textured_seed
 SLOW_SCRIPTS := tests/llbuild_signals.sh tests/llbuild_mpi.sh tests/reference.sh \
                 tests/llbuild_time.sh \
                 tests/pbrt_shim.sh
@@ -155,7 +158,8 @@ TEST_SRC := $(sort $(wildcard tests/test_*.c))
 TESTS    := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 # The tests reach into the library (its internal headers use the
 # experimental tier) and test the experimental calls too.
-FAST_TESTS := $(filter-out $(SLOW_TESTS:%=$(BUILD)/tests/%),$(TESTS))
+FAST_TESTS := $(filter-out $(SLOW_TESTS:%=$(BUILD)/tests/%) $(FIGURE_TESTS:%=$(BUILD)/tests/%),\
+                $(TESTS))
 CHECK_TESTS := $(filter $(SLOW_TESTS:%=$(BUILD)/tests/%),$(TESTS))
 FAST_SCRIPTS := $(filter-out $(SLOW_SCRIPTS),$(sort $(wildcard tests/*.sh)))
 CHECK_SCRIPTS := $(filter $(SLOW_SCRIPTS),$(sort $(wildcard tests/*.sh)))
@@ -350,6 +354,10 @@ test-c: all $(FAST_TESTS)
 # The slow C tier (make check).
 check-c: all $(CHECK_TESTS) | need-check venv-check
 	@$(call run_tests,$(CHECK_TESTS),$(CHECK_SCRIPTS))
+
+# The long measurements (FIGURE_TESTS).
+figures: all $(FIGURE_TESTS:%=$(BUILD)/tests/%)
+	@$(call run_tests,$(FIGURE_TESTS:%=$(BUILD)/tests/%),)
 
 # The Python package against this build's library; the Mitsuba renders
 # only in `make check`.
