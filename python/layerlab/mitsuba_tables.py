@@ -333,9 +333,8 @@ def tables_from_bsdf(handle, source, tolerance=0.0, cache=True):
     subfolder "mitsuba-tables", named by a hash of the source's bytes, the
     tolerance and the library) and read from there by later loads: the
     tolerance search measures each grid it tries against the source and
-    takes seconds (2.6 s of CPU for rough gold, 9.4 s for
-    examples/coated-gold.layers), which a scene load should pay once, not at
-    every load. Without cache, or when the cache cannot be
+    takes seconds (docs/benchmarks.md, "Rendering in Mitsuba 3"), which a
+    scene load should pay once, not at every load. Without cache, or when the cache cannot be
     written, a temporary file, removed once read. Every table file read is
     opened by the C reader first (ll_bsdf_open validates it)."""
     from ._errors import InvalidArgumentError

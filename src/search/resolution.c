@@ -295,8 +295,8 @@ ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
     ctx.set = &set;
     /* The fit is the first guess of both. Beyond |g| = 0.95 the fit is the
      * answer, unverified: each evaluation there makes phase matrices of
-     * O(n^2 m) work at 2n, 2m (n = 2 x 860, m = 2 x 539 at |g| = 0.99), and
-     * already g = -0.95 takes 86 s of CPU (426 x 261). */
+     * O(n^2 m) work at 2n, 2m, where n and m grow without bound as |g|
+     * approaches 1 (docs/method.md, "Resolution", has the cost at g = -0.95). */
     if (fabs(g) > HG_SEARCHED) {
         ll_probe_free(&set);
         *n_nodes = n;
