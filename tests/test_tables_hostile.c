@@ -128,12 +128,84 @@ static void expect(const unsigned char *data, size_t size, ll_status status, con
     assert_null(b);
 }
 
-static unsigned char *copy(void)
+/* A copy of a table file's bytes to damage. */
+static unsigned char *copy_of(const unsigned char *bytes, size_t size)
 {
-    unsigned char *d = malloc(good_size);
+    unsigned char *d = malloc(size);
     assert_non_null(d);
-    memcpy(d, good, good_size);
+    memcpy(d, bytes, size);
     return d;
+}
+
+/* Random damage: copies of bytes with one to four bits flipped each, drawn
+ * from seed. Whatever the bytes, an answer and no crash; what opens
+ * evaluates and samples at wo to finite values. With weights, only a copy
+ * that still has n_bases bases is evaluated, with those weights. Returns
+ * how many copies opened. */
+static int damage(const unsigned char *bytes, size_t size, uint64_t seed, int copies,
+                  const double wo[3], const float *weights, size_t n_bases)
+{
+    uint64_t rng = seed;
+    int k, j, opened = 0;
+    for (k = 0; k < copies; ++k) {
+        unsigned char *d = copy_of(bytes, size);
+        ll_bsdf *b = NULL;
+        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
+        for (j = 0; j < flips; ++j)
+            d[(size_t)(ll_test_uniform(&rng) * (double)size)] ^=
+                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
+        if (ll_bsdf_open_memory(d, size, NULL, &b) == LL_OK) {
+            double wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
+            int evaluate = 1;
+            ++opened;
+            if (weights) {
+                ll_bsdf_info info = LL_BSDF_INFO_INIT;
+                assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
+                evaluate = info.n_bases == n_bases;
+            }
+            if (evaluate) {
+                assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, weights, f),
+                                 LL_OK);
+                assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
+                u[0] = ll_test_uniform(&rng);
+                u[1] = ll_test_uniform(&rng);
+                assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, weights, wi,
+                                                    &pdf, f),
+                                 LL_OK);
+                assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) &&
+                            isfinite(f[2]));
+            }
+            ll_bsdf_release(b);
+        }
+        free(d);
+    }
+    return opened;
+}
+
+/* Out of memory at each allocation of opening bytes: the error, no handle,
+ * every block freed again. Returns how many allocations an opening makes. */
+static size_t open_out_of_memory(const unsigned char *bytes, size_t size)
+{
+    size_t n, k;
+    ll_bsdf *b = NULL;
+    ll_alloc_fail_after(0);
+    assert_int_equal(ll_bsdf_open_memory(bytes, size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    n = ll_alloc_count();
+    ll_alloc_hook_off();
+    for (k = 1; k <= n; ++k) {
+        ll_status s;
+        long long live;
+        b = (ll_bsdf *)1;
+        ll_alloc_fail_after(k);
+        s = ll_bsdf_open_memory(bytes, size, NULL, &b);
+        live = ll_alloc_live();
+        ll_alloc_hook_off();
+        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
+        assert_null(b);
+        assert_true(live == 0);
+    }
+    return n;
 }
 
 static void test_good_opens(void **state)
@@ -162,7 +234,7 @@ static void test_truncated(void **state)
 
 static void test_magic_and_version(void **state)
 {
-    unsigned char *d = copy();
+    unsigned char *d = copy_of(good, good_size);
     (void)state;
     d[12] = 2;
     expect(d, good_size, LL_ERROR_FORMAT, "version 2.0");
@@ -178,7 +250,7 @@ static void test_magic_and_version(void **state)
 
 static void test_shapes_disagree(void **state)
 {
-    unsigned char *d = copy();
+    unsigned char *d = copy_of(good, good_size);
     size_t off, shape, rank;
     (void)state;
     /* rgb with 2 channels (its data then still lies inside the file). */
@@ -187,13 +259,13 @@ static void test_shapes_disagree(void **state)
     put_u64(d + shape + 16, 2);
     expect(d, good_size, LL_ERROR_FORMAT, "\"rgb\"");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     /* luminance with one incident elevation less than theta_i. */
     locate(d, "luminance", &off, &shape, &rank);
     put_u64(d + shape + 8, 2);
     expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\"");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     /* a vndf of one node per row */
     locate(d, "vndf", &off, &shape, &rank);
     put_u64(d + shape + 24, 1);
@@ -203,7 +275,7 @@ static void test_shapes_disagree(void **state)
 
 static void test_offsets_and_sizes(void **state)
 {
-    unsigned char *d = copy();
+    unsigned char *d = copy_of(good, good_size);
     size_t off, shape, rank;
     (void)state;
     locate(d, "sigma", &off, &shape, &rank);
@@ -214,7 +286,7 @@ static void test_offsets_and_sizes(void **state)
     put_u64(d + off, 0);
     expect(d, good_size, LL_ERROR_FORMAT, "overlaps the field table");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     locate(d, "vndf", &off, &shape, &rank);
     put_u64(d + shape, (uint64_t)1 << 62);
     expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\"");
@@ -223,7 +295,7 @@ static void test_offsets_and_sizes(void **state)
     put_u64(d + shape + 16, (uint64_t)1 << 40);
     expect(d, good_size, LL_ERROR_FORMAT, "overflows");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     d[14] = d[15] = d[16] = 0xff;
     d[17] = 0x7f;
     expect(d, good_size, LL_ERROR_FORMAT, "field count");
@@ -237,7 +309,7 @@ static void test_values(void **state)
     static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
     static const unsigned char minus_one[4] = { 0x00, 0x00, 0x80, 0xbf };
     static const unsigned char zero[4] = { 0, 0, 0, 0 };
-    unsigned char *d = copy();
+    unsigned char *d = copy_of(good, good_size);
     size_t off, shape, rank, at;
     (void)state;
     locate(d, "luminance", &off, &shape, &rank);
@@ -247,18 +319,18 @@ static void test_values(void **state)
     memcpy(d + at + 4, minus_one, 4);
     expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\": element 1");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     locate(d, "sigma", &off, &shape, &rank);
     memcpy(d + (size_t)get_u64(d + off), zero, 4);
     expect(d, good_size, LL_ERROR_FORMAT, "\"sigma\"");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     /* theta_i not ascending */
     locate(d, "theta_i", &off, &shape, &rank);
     memcpy(d + (size_t)get_u64(d + off) + 4, zero, 4);
     expect(d, good_size, LL_ERROR_FORMAT, "\"theta_i\"");
     free(d);
-    d = copy();
+    d = copy_of(good, good_size);
     /* a jacobian of 2 */
     locate(d, "jacobian", &off, &shape, &rank);
     d[(size_t)get_u64(d + off)] = 2;
@@ -277,63 +349,18 @@ static void test_limits(void **state)
     assert_null(b);
 }
 
-/* Random damage: whatever the bytes, an answer and no crash; what opens
- * evaluates and samples to finite values. */
 static void test_random_damage(void **state)
 {
-    uint64_t rng = 77;
-    int k, j, opened = 0;
+    static const double wo[3] = { 0.3, 0.1, 0.9 };
     (void)state;
-    for (k = 0; k < 3000; ++k) {
-        unsigned char *d = copy();
-        ll_bsdf *b = NULL;
-        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
-        for (j = 0; j < flips; ++j)
-            d[(size_t)(ll_test_uniform(&rng) * (double)good_size)] ^=
-                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
-        if (ll_bsdf_open_memory(d, good_size, NULL, &b) == LL_OK) {
-            double wo[3] = { 0.3, 0.1, 0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
-            ++opened;
-            assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, NULL, f), LL_OK);
-            assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
-            u[0] = ll_test_uniform(&rng);
-            u[1] = ll_test_uniform(&rng);
-            assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf,
-                                                f),
-                             LL_OK);
-            assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
-            ll_bsdf_release(b);
-        }
-        free(d);
-    }
-    printf("%d of 3000 damaged copies opened (damage in values or padding)\n", opened);
+    printf("%d of 3000 damaged copies opened (damage in values or padding)\n",
+           damage(good, good_size, 77, 3000, wo, NULL, 0));
 }
 
-/* Out of memory at each allocation of opening a table: the error, no
- * handle, every block freed again. */
 static void test_out_of_memory(void **state)
 {
-    size_t n, k;
-    ll_bsdf *b = NULL;
     (void)state;
-    ll_alloc_fail_after(0);
-    assert_int_equal(ll_bsdf_open_memory(good, good_size, NULL, &b), LL_OK);
-    ll_bsdf_release(b);
-    n = ll_alloc_count();
-    ll_alloc_hook_off();
-    assert_true(n > 5);
-    for (k = 1; k <= n; ++k) {
-        ll_status s;
-        long long live;
-        b = (ll_bsdf *)1;
-        ll_alloc_fail_after(k);
-        s = ll_bsdf_open_memory(good, good_size, NULL, &b);
-        live = ll_alloc_live();
-        ll_alloc_hook_off();
-        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
-        assert_null(b);
-        assert_true(live == 0);
-    }
+    assert_true(open_out_of_memory(good, good_size) > 5);
 }
 
 /* Out of memory at each allocation of writing a table: the error, every
@@ -408,14 +435,6 @@ static void test_cancel(void **state)
     ll_bsdf_release(src);
 }
 
-static unsigned char *tcopy(void)
-{
-    unsigned char *d = malloc(tgood_size);
-    assert_non_null(d);
-    memcpy(d, tgood, tgood_size);
-    return d;
-}
-
 /* The first byte of field name's data. */
 static size_t data_at(const unsigned char *d, const char *name)
 {
@@ -438,39 +457,39 @@ static void test_transmissive_fields(void **state)
     assert_true(fabs(info.eta - 1.5) < 1e-6);
     ll_bsdf_release(b);
     /* A set this reader does not know. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     d[data_at(d, "layerlab_layout")] = 'x';
     expect(d, tgood_size, LL_ERROR_UNSUPPORTED, "\"layerlab_layout\": set \"xeflect_top\"");
     free(d);
     /* A set named twice. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     at = data_at(d, "layerlab_layout");
     memcpy(d + at + strlen("reflect_top "), "reflect_top   ", strlen("reflect_top   "));
     expect(d, tgood_size, LL_ERROR_FORMAT, "named twice");
     free(d);
     /* eta not a number. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     memcpy(d + data_at(d, "eta"), nan_bytes, 4);
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"eta\"");
     free(d);
     /* A set's field missing: its name damaged. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     locate(d, "transmit_top.ndf", &off, &shape, &rank);
     d[off - 4] = 'x';
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.ndf\" is missing");
     free(d);
     /* A NaN in a set's luminance. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     memcpy(d + data_at(d, "transmit_bottom.luminance") + 4, nan_bytes, 4);
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
     free(d);
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     locate(d, "reflect_bottom.rgb", &off, &shape, &rank);
     put_u64(d + shape + 16, 2);
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.rgb\"");
     free(d);
-    d = tcopy();
+    d = copy_of(tgood, tgood_size);
     locate(d, "transmit_top.albedo", &off, &shape, &rank);
     put_u64(d + shape, 2);
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.albedo\"");
@@ -481,59 +500,11 @@ static void test_transmissive_fields(void **state)
  * opaque one. */
 static void test_transmissive_damage(void **state)
 {
-    uint64_t rng = 78;
-    int k, j, opened = 0;
-    size_t n, a;
-    ll_bsdf *b = NULL;
+    static const double wo[3] = { 0.3, 0.1, -0.9 };
     (void)state;
-    for (k = 0; k < 2000; ++k) {
-        unsigned char *d = tcopy();
-        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
-        b = NULL;
-        for (j = 0; j < flips; ++j)
-            d[(size_t)(ll_test_uniform(&rng) * (double)tgood_size)] ^=
-                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
-        if (ll_bsdf_open_memory(d, tgood_size, NULL, &b) == LL_OK) {
-            double wo[3] = { 0.3, 0.1, -0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
-            ++opened;
-            assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, NULL, f), LL_OK);
-            assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
-            u[0] = ll_test_uniform(&rng);
-            u[1] = ll_test_uniform(&rng);
-            assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, NULL, wi, &pdf,
-                                                f),
-                             LL_OK);
-            assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
-            ll_bsdf_release(b);
-        }
-        free(d);
-    }
-    printf("%d of 2000 damaged transmissive copies opened\n", opened);
-    ll_alloc_fail_after(0);
-    assert_int_equal(ll_bsdf_open_memory(tgood, tgood_size, NULL, &b), LL_OK);
-    ll_bsdf_release(b);
-    n = ll_alloc_count();
-    ll_alloc_hook_off();
-    for (a = 1; a <= n; ++a) {
-        ll_status s;
-        long long live;
-        b = (ll_bsdf *)1;
-        ll_alloc_fail_after(a);
-        s = ll_bsdf_open_memory(tgood, tgood_size, NULL, &b);
-        live = ll_alloc_live();
-        ll_alloc_hook_off();
-        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
-        assert_null(b);
-        assert_true(live == 0);
-    }
-}
-
-static unsigned char *copy_tex(void)
-{
-    unsigned char *d = malloc(tex_size);
-    assert_non_null(d);
-    memcpy(d, tex, tex_size);
-    return d;
+    printf("%d of 2000 damaged transmissive copies opened\n",
+           damage(tgood, tgood_size, 78, 2000, wo, NULL, 0));
+    open_out_of_memory(tgood, tgood_size);
 }
 
 /* The float32 element i of field name in d. */
@@ -559,27 +530,27 @@ static void test_textured_opens(void **state)
 
 static void test_textured_fields(void **state)
 {
-    unsigned char *d = copy_tex();
+    unsigned char *d = copy_of(tex, tex_size);
     size_t off, shape, rank, at;
     (void)state;
     /* Eight sample positions: a basis the file does not have. */
     set_f32(d, "layerlab_parameter_counts", 0, 8.0f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     set_f32(d, "layerlab_parameter_counts", 0, 1.5f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_counts\": element 0");
     set_f32(d, "layerlab_parameter_counts", 0, 1e9f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_counts\": element 0");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     /* Positions not ascending, or not finite. */
     set_f32(d, "layerlab_parameter_positions", 1, 0.05f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
     set_f32(d, "layerlab_parameter_positions", 1, NAN);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_parameter_positions\"");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     /* A layout this reader does not know; an empty one. */
     locate(d, "layerlab_layout", &off, &shape, &rank);
     at = (size_t)get_u64(d + off);
@@ -588,23 +559,23 @@ static void test_textured_fields(void **state)
     memset(d + at, ' ', 8);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_layout\"");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     /* A field of basis 1 that disagrees with its set, named in full. */
     locate(d, "basis1.vndf", &off, &shape, &rank);
     put_u64(d + shape + 24, 1);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.vndf\"");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     set_f32(d, "basis1.sigma", 0, 0.0f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.sigma\"");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     /* basis1's theta_i renamed away: the set is missing. */
     locate(d, "basis1.theta_i", &off, &shape, &rank);
     d[off - 3 - 7] = 'X'; /* "basis1.theta_i" -> "basis1.Xheta_i" */
     expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.theta_i\" is missing");
     free(d);
-    d = copy_tex();
+    d = copy_of(tex, tex_size);
     /* The parameter block renamed away. */
     locate(d, "layerlab_parameter_counts", &off, &shape, &rank);
     d[off - 3 - 1] = 'X';
@@ -614,68 +585,23 @@ static void test_textured_fields(void **state)
 
 static void test_textured_truncated_and_damaged(void **state)
 {
-    uint64_t rng = 5;
+    static const double wo[3] = { 0.3, 0.1, 0.9 };
+    static const float w[7] = { 0.0f, 0.25f, 0.75f, 0.0f, 0.0f, 0.0f, 0.0f };
     size_t n;
-    int k, j, opened = 0;
     (void)state;
     for (n = 12; n < tex_size; n += 1 + n / 64) {
         ll_bsdf *b = NULL;
         assert_int_equal(ll_bsdf_open_memory(tex, n, NULL, &b), LL_ERROR_FORMAT);
         assert_null(b);
     }
-    for (k = 0; k < 2000; ++k) {
-        unsigned char *d = copy_tex();
-        ll_bsdf *b = NULL;
-        int flips = 1 + (int)(ll_test_uniform(&rng) * 4);
-        for (j = 0; j < flips; ++j)
-            d[(size_t)(ll_test_uniform(&rng) * (double)tex_size)] ^=
-                (unsigned char)(1u << (int)(ll_test_uniform(&rng) * 8));
-        if (ll_bsdf_open_memory(d, tex_size, NULL, &b) == LL_OK) {
-            double wo[3] = { 0.3, 0.1, 0.9 }, wi[3] = { -0.4, 0.0, 0.8 }, f[3], pdf, u[2];
-            float w[7] = { 0.0f, 0.25f, 0.75f, 0.0f, 0.0f, 0.0f, 0.0f };
-            ll_bsdf_info info = LL_BSDF_INFO_INIT;
-            ++opened;
-            assert_int_equal(ll_bsdf_get_info(b, &info), LL_OK);
-            if (info.n_bases == 7) {
-                assert_int_equal(ll_bsdf_eval_dir(b, wo, wi, LL_TRANSPORT_RADIANCE, w, f), LL_OK);
-                assert_true(isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]));
-                u[0] = ll_test_uniform(&rng);
-                u[1] = ll_test_uniform(&rng);
-                assert_int_equal(ll_bsdf_sample_dir(b, wo, u, LL_TRANSPORT_RADIANCE, w, wi,
-                                                    &pdf, f),
-                                 LL_OK);
-                assert_true(isfinite(pdf) && isfinite(f[0]) && isfinite(f[1]) &&
-                            isfinite(f[2]));
-            }
-            ll_bsdf_release(b);
-        }
-        free(d);
-    }
-    printf("%d of 2000 damaged textured copies opened\n", opened);
+    printf("%d of 2000 damaged textured copies opened\n",
+           damage(tex, tex_size, 5, 2000, wo, w, 7));
 }
 
 static void test_textured_out_of_memory(void **state)
 {
-    size_t n, k;
-    ll_bsdf *b = NULL;
     (void)state;
-    ll_alloc_fail_after(0);
-    assert_int_equal(ll_bsdf_open_memory(tex, tex_size, NULL, &b), LL_OK);
-    ll_bsdf_release(b);
-    n = ll_alloc_count();
-    ll_alloc_hook_off();
-    for (k = 1; k <= n; ++k) {
-        ll_status s;
-        long long live;
-        b = (ll_bsdf *)1;
-        ll_alloc_fail_after(k);
-        s = ll_bsdf_open_memory(tex, tex_size, NULL, &b);
-        live = ll_alloc_live();
-        ll_alloc_hook_off();
-        assert_int_equal(s, LL_ERROR_OUT_OF_MEMORY);
-        assert_null(b);
-        assert_true(live == 0);
-    }
+    open_out_of_memory(tex, tex_size);
 }
 
 int main(void)
