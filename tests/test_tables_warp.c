@@ -15,16 +15,36 @@
 
 static double get_table(const void *ctx, size_t i) { return ((const double *)ctx)[i]; }
 
+/* n positive, lumpy values drawn from rng. */
+static void fill_lumpy(double *data, size_t n, uint64_t *rng)
+{
+    size_t k;
+    for (k = 0; k < n; ++k)
+        data[k] = 0.05 + ll_test_uniform(rng) * (k % 3 == 0 ? 4.0 : 1.0);
+}
+
+/* Sample at u and invert the point: u again (sample clamps u into
+ * [2^-24, 1 - 2^-24]), and both densities that of eval at the point. */
+static void check_inverse(const ll_warp2d *wp, const double u[2], const double param[2])
+{
+    double pos[2], back[2], pdf_s, pdf_i;
+    ll_warp2d_sample(wp, u, param, pos, &pdf_s);
+    ll_warp2d_invert(wp, pos, param, back, &pdf_i);
+    assert_true(fabs(back[0] - u[0]) < 1e-7);
+    assert_true(fabs(back[1] - u[1]) < 1e-7);
+    assert_true(ll_test_close(pdf_s, pdf_i, 1e-9, 1e-12));
+    assert_true(ll_test_close(pdf_s, ll_warp2d_eval(wp, pos, param), 1e-9, 1e-12));
+}
+
 /* A positive, lumpy table with 2 x 3 slices (parameter 0 outermost). */
 static void make(ll_warp2d *wp, int sampling)
 {
     static double data[P0 * P1 * H * W];
     static const double p0[P0] = { 0.0, 1.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
     const double *params[2] = { p0, p1 };
-    size_t sizes[2] = { P0, P1 }, k;
+    size_t sizes[2] = { P0, P1 };
     uint64_t rng = 12345;
-    for (k = 0; k < P0 * P1 * H * W; ++k)
-        data[k] = 0.05 + ll_test_uniform(&rng) * (k % 3 == 0 ? 4.0 : 1.0);
+    fill_lumpy(data, P0 * P1 * H * W, &rng);
     assert_int_equal(ll_warp2d_init(wp, W, H, 2, sizes, params, get_table, data, sampling),
                      LL_OK);
 }
@@ -39,14 +59,7 @@ static void test_invert_of_sample(void **state)
     for (k = 0; k < 20000; ++k) {
         double u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
         double param[2] = { ll_test_uniform(&rng), -1.2 + 3.5 * ll_test_uniform(&rng) };
-        double pos[2], back[2], pdf_s, pdf_i;
-        ll_warp2d_sample(&wp, u, param, pos, &pdf_s);
-        ll_warp2d_invert(&wp, pos, param, back, &pdf_i);
-        /* u is clamped into [2^-24, 1 - 2^-24] by sample. */
-        assert_true(fabs(back[0] - u[0]) < 1e-7);
-        assert_true(fabs(back[1] - u[1]) < 1e-7);
-        assert_true(ll_test_close(pdf_s, pdf_i, 1e-9, 1e-12));
-        assert_true(ll_test_close(pdf_s, ll_warp2d_eval(&wp, pos, param), 1e-9, 1e-12));
+        check_inverse(&wp, u, param);
     }
     ll_warp2d_free(&wp);
 }
@@ -65,22 +78,15 @@ static void test_two_slices(void **state)
     ll_warp2d wp;
     ll_warp_slices s;
     (void)state;
-    for (k = 0; k < P1 * H * W; ++k)
-        data[k] = 0.05 + ll_test_uniform(&rng) * (k % 3 == 0 ? 4.0 : 1.0);
+    fill_lumpy(data, P1 * H * W, &rng);
     assert_int_equal(ll_warp2d_init(&wp, W, H, 2, sizes, params, get_table, data, 1), LL_OK);
     for (k = 0; k < 20000; ++k) {
         double u[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
         /* Every fifth parameter on a node exactly: one slice of weight 1. */
         double param[2] = { 0.0, k % 5 == 0 ? p1[k % P1] : -1.2 + 3.5 * ll_test_uniform(&rng) };
-        double pos[2], back[2], pdf_s, pdf_i;
         ll_warp2d_slices(&wp, param, &s);
         assert_true(s.count >= 1 && s.count <= 2);
-        ll_warp2d_sample(&wp, u, param, pos, &pdf_s);
-        ll_warp2d_invert(&wp, pos, param, back, &pdf_i);
-        assert_true(fabs(back[0] - u[0]) < 1e-7);
-        assert_true(fabs(back[1] - u[1]) < 1e-7);
-        assert_true(ll_test_close(pdf_s, pdf_i, 1e-9, 1e-12));
-        assert_true(ll_test_close(pdf_s, ll_warp2d_eval(&wp, pos, param), 1e-9, 1e-12));
+        check_inverse(&wp, u, param);
     }
     ll_warp2d_free(&wp);
 }
