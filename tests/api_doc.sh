@@ -10,28 +10,23 @@
 # exits non-zero when a check fails. Needs python3 (standard library only).
 set -u
 
+. "$(dirname "$0")/lib/tool_test.sh"
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC" || exit 1
 
-passed=0
-failed=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
-
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/layerlab-api-doc.XXXXXX") || exit 1
-trap 'rm -rf "$tmp"' EXIT
+tool_test_begin layerlab-api-doc
 trap 'exit 1' HUP INT TERM
 
 # --- the page regenerated into a temporary file, compared
 if ! python3 scripts/api_doc.py -o "$tmp/generated" 2>"$tmp/err"; then
-    fail "scripts/api_doc.py failed:"
+    bad "scripts/api_doc.py failed:"
     sed 's/^/    /' "$tmp/err"
 elif [ ! -f docs/api.md ]; then
-    fail "docs/api.md is missing: run \`make api-doc\` and commit it"
+    bad "docs/api.md is missing: run \`make api-doc\` and commit it"
 elif cmp -s "$tmp/generated" docs/api.md; then
     pass "docs/api.md is current with the headers"
 else
-    fail "docs/api.md is not current with the headers: run \`make api-doc\` and commit it"
+    bad "docs/api.md is not current with the headers: run \`make api-doc\` and commit it"
     diff -u docs/api.md "$tmp/generated" | head -n 40 | sed 's/^/    /'
 fi
 
@@ -43,8 +38,7 @@ done
 if [ -z "$missing" ]; then
     pass "every function of src/*.map is documented on the page"
 else
-    fail "exported but not declared with a comment in a public header:$missing"
+    bad "exported but not declared with a comment in a public header:$missing"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

@@ -26,16 +26,11 @@
 #                                         (relative to the top of the tree)
 set -u
 
+. "$(dirname "$0")/lib/tool_test.sh"
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC" || exit 1
 
-passed=0
-failed=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
-
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/layerlab-history.XXXXXX") || exit 1
-trap 'rm -rf "$tmp"' EXIT
+tool_test_begin layerlab-history
 trap 'exit 1' HUP INT TERM
 
 # What is checked by default: every text file of the project (data/ holds
@@ -78,7 +73,7 @@ fi
 # shellcheck disable=SC2086
 scan "$SRC" $paths >"$tmp/hits"
 if [ -s "$tmp/hits" ]; then
-    fail "history or workplace words ($(wc -l <"$tmp/hits") lines; say what is, or move the figure to docs/benchmarks.md):"
+    bad "history or workplace words ($(wc -l <"$tmp/hits") lines; say what is, or move the figure to docs/benchmarks.md):"
     cut -c1-200 "$tmp/hits" | sed 's/^/    /'
 else
     pass "no issue numbers, machine loads, dates of work or session words in: $(echo $paths)"
@@ -123,15 +118,14 @@ got=$(grep -c '^docs/bad\.txt:' "$tmp/planted")
 if [ "$got" -eq "$want" ]; then
     pass "every planted word is found ($got lines)"
 else
-    fail "the patterns found $got of $want planted lines:"
+    bad "the patterns found $got of $want planted lines:"
     sed 's/^/    /' "$tmp/planted"
 fi
 if grep -q '^src/good\.c:' "$tmp/planted"; then
-    fail "the patterns flag lines that are fine:"
+    bad "the patterns flag lines that are fine:"
     grep '^src/good\.c:' "$tmp/planted" | sed 's/^/    /'
 else
     pass "colours, format flags, pytest scopes and external citations are not flagged"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

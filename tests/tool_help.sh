@@ -16,50 +16,44 @@ case "$BUILD" in
 esac
 page="$root/docs/"material-language.md
 
-passed=0
-failed=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() { echo "FAIL: $1"; failed=$((failed + 1)); }
-
-work=$(mktemp -d "${TMPDIR:-/tmp}/tool-help.XXXXXX") || exit 1
-trap 'rm -rf "$work"' EXIT
+. "$(dirname "$0")/lib/tool_test.sh"
+tool_test_begin tool-help
 trap 'exit 1' HUP INT TERM
 
-: >"$work/all-help"
+: >"$tmp/all-help"
 for tool in llbuild llconvert llplot; do
-    if ! "$build/bin/$tool" --help >"$work/$tool.help" 2>"$work/$tool.err"; then
-        fail "$tool --help fails (is $build/bin/$tool built?)"
+    if ! "$build/bin/$tool" --help >"$tmp/$tool.help" 2>"$tmp/$tool.err"; then
+        bad "$tool --help fails (is $build/bin/$tool built?)"
         continue
     fi
-    cat "$work/$tool.help" >>"$work/all-help"
+    cat "$tmp/$tool.help" >>"$tmp/all-help"
     # The block: after the marker, from the line after its opening fence to
     # the closing fence.
     awk -v marker="<!-- help: $tool -->" '
         $0 == marker { found = 1; next }
         found == 1 && /^```/ { found = 2; next }
         found == 2 && /^```$/ { exit }
-        found == 2 { print }' "$page" >"$work/$tool.page"
+        found == 2 { print }' "$page" >"$tmp/$tool.page"
     if ! grep -q "<!-- help: $tool -->" "$page"; then
-        fail "docs/material-language.md has no block for $tool --help"
-    elif cmp -s "$work/$tool.help" "$work/$tool.page"; then
-        pass "docs/material-language.md shows $tool --help as it prints ($(wc -l <"$work/$tool.help") lines)"
+        bad "docs/material-language.md has no block for $tool --help"
+    elif cmp -s "$tmp/$tool.help" "$tmp/$tool.page"; then
+        pass "docs/material-language.md shows $tool --help as it prints ($(wc -l <"$tmp/$tool.help") lines)"
     else
-        fail "docs/material-language.md differs from $tool --help (- page, + tool):"
-        diff "$work/$tool.page" "$work/$tool.help" | sed 's/^/    /' | head -40
+        bad "docs/material-language.md differs from $tool --help (- page, + tool):"
+        diff "$tmp/$tool.page" "$tmp/$tool.help" | sed 's/^/    /' | head -40
     fi
 done
 
 # Options named in the prose, outside the help blocks.
-grep -oE -- '--[a-z][a-z-]*' "$work/all-help" | sort -u >"$work/known"
+grep -oE -- '--[a-z][a-z-]*' "$tmp/all-help" | sort -u >"$tmp/known"
 awk '/^<!-- help: / { skip = 1 } skip && /^```$/ && ++fences == 2 { skip = 0; fences = 0; next }
      !skip' "$page" | grep -oE -- '(^|[^A-Za-z0-9-])--[a-z][a-z-]*' |
-    sed 's/^[^-]*//' | sort -u >"$work/named"
-unknown=$(comm -23 "$work/named" "$work/known" | tr '\n' ' ')
+    sed 's/^[^-]*//' | sort -u >"$tmp/named"
+unknown=$(comm -23 "$tmp/named" "$tmp/known" | tr '\n' ' ')
 if [ -z "$unknown" ]; then
-    pass "every option the page names ($(wc -l <"$work/named")) is in a tool's --help"
+    pass "every option the page names ($(wc -l <"$tmp/named")) is in a tool's --help"
 else
-    fail "the page names options no tool accepts: $unknown"
+    bad "the page names options no tool accepts: $unknown"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+tool_test_end

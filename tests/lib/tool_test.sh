@@ -1,6 +1,7 @@
 # Sourced by the shell checks of the command-line tools (llbuild.sh,
 # llbuild_tables.sh, llbuild_signals.sh, llbuild_time.sh, llbuild_mpi.sh,
-# llconvert.sh; kept out of tests/*.sh, which the suite runs): their scratch
+# llconvert.sh) and of the tree (api_doc.sh, history_words.sh,
+# tool_help.sh); kept out of tests/*.sh, which the suite runs: their scratch
 # directory, their counters and the checks they all make, in one place so
 # that each script counts and reports the same way. The Makefile and CI read
 # the last line a script prints ("N passed, M failed") and its exit status.
@@ -11,6 +12,8 @@
 #   tool_test_need NAME TOOL...  unless every TOOL is built: say so as NAME,
 #                              report one failure and exit 1
 #   ok / bad TEXT              count a pass / count a failure and print it
+#   pass TEXT                  count a pass and print it (for scripts that
+#                              print one line per check)
 #   expect CODE DESCRIPTION -- command...
 #                              the command's exit status must be CODE; its
 #                              stdout goes to $tmp/out, stderr to $tmp/err
@@ -58,6 +61,7 @@ tool_test_need() {
 }
 
 ok() { passed=$((passed + 1)); }
+pass() { echo "PASS: $*"; ok; }
 bad() { failed=$((failed + 1)); echo "FAIL: $*"; }
 
 expect() {
