@@ -12,6 +12,7 @@
  */
 #include "test_util.h"
 #include "tables_figures.h"
+#include "tables_build.h"
 
 #include <sys/stat.h>
 
@@ -25,20 +26,12 @@ static long long file_size(const char *path)
 /* Build text to NAME.bsdf, write its tables to NAME.tab, measure. */
 static void check(const char *text, const char *name, double size_share)
 {
-    char bsdf_path[600], tab_path[600];
-    ll_material *m = NULL;
+    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
     ll_bsdf *src = NULL, *tab = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     tf_figures fig;
     long long bsdf_bytes, tab_bytes;
-    snprintf(bsdf_path, sizeof bsdf_path, "%s/%s.bsdf", ll_test_dir(), name);
-    snprintf(tab_path, sizeof tab_path, "%s/%s.tab", ll_test_dir(), name);
-    assert_int_equal(ll_material_parse(text, name, &m), LL_OK);
-    assert_int_equal(ll_material_build(m, NULL, NULL, bsdf_path), LL_OK);
-    ll_material_destroy(m);
-    assert_int_equal(ll_bsdf_open(bsdf_path, NULL, &src), LL_OK);
-    assert_int_equal(ll_tables_write_from_bsdf(src, tab_path, NULL, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_open(tab_path, NULL, &tab), LL_OK);
+    ll_test_build_tables(text, name, NULL, bsdf_path, tab_path, &src, &tab);
     assert_int_equal(ll_bsdf_get_info(tab, &info), LL_OK);
     bsdf_bytes = file_size(bsdf_path);
     tab_bytes = file_size(tab_path);

@@ -13,6 +13,7 @@
  */
 #include "test_util.h"
 #include "tables_lobe_figures.h"
+#include "tables_build.h"
 
 typedef struct source {
     const char *name, *text;
@@ -27,20 +28,12 @@ static const source sources[2] = {
 
 static void open_pair(const source *sc, ll_bsdf **src, ll_bsdf **tab)
 {
-    char bsdf_path[600], tab_path[600];
-    ll_material *m = NULL;
+    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
     ll_tables_options o = LL_TABLES_OPTIONS_INIT;
-    snprintf(bsdf_path, sizeof bsdf_path, "%s/%s.bsdf", ll_test_dir(), sc->name);
-    snprintf(tab_path, sizeof tab_path, "%s/%s.tab", ll_test_dir(), sc->name);
-    assert_int_equal(ll_material_parse(sc->text, sc->name, &m), LL_OK);
-    assert_int_equal(ll_material_build(m, NULL, NULL, bsdf_path), LL_OK);
-    ll_material_destroy(m);
-    assert_int_equal(ll_bsdf_open(bsdf_path, NULL, src), LL_OK);
     o.n_theta_i = 24;
     o.vndf_size = 48;
     o.sample_size = 32;
-    assert_int_equal(ll_tables_write_from_bsdf(*src, tab_path, &o, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_open(tab_path, NULL, tab), LL_OK);
+    ll_test_build_tables(sc->text, sc->name, &o, bsdf_path, tab_path, src, tab);
 }
 
 static void check_info(const source *sc, const ll_bsdf *tab)

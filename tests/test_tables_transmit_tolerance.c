@@ -17,6 +17,7 @@
  */
 #include "test_util.h"
 #include "tables_lobe_figures.h"
+#include "tables_build.h"
 
 #include <sys/stat.h>
 
@@ -37,20 +38,12 @@ typedef struct bounds {
 
 static void check(const char *text, const char *name, const bounds *at_most)
 {
-    char bsdf_path[600], tab_path[600];
-    ll_material *m = NULL;
+    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
     ll_bsdf *src = NULL, *tab = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     struct stat st_b, st_t;
     tl_figures fig;
-    snprintf(bsdf_path, sizeof bsdf_path, "%s/%s.bsdf", ll_test_dir(), name);
-    snprintf(tab_path, sizeof tab_path, "%s/%s.tab", ll_test_dir(), name);
-    assert_int_equal(ll_material_parse(text, name, &m), LL_OK);
-    assert_int_equal(ll_material_build(m, NULL, NULL, bsdf_path), LL_OK);
-    ll_material_destroy(m);
-    assert_int_equal(ll_bsdf_open(bsdf_path, NULL, &src), LL_OK);
-    assert_int_equal(ll_tables_write_from_bsdf(src, tab_path, NULL, NULL), LL_OK);
-    assert_int_equal(ll_bsdf_open(tab_path, NULL, &tab), LL_OK);
+    ll_test_build_tables(text, name, NULL, bsdf_path, tab_path, &src, &tab);
     assert_int_equal(ll_bsdf_get_info(tab, &info), LL_OK);
     assert_int_equal(stat(bsdf_path, &st_b), 0);
     assert_int_equal(stat(tab_path, &st_t), 0);
