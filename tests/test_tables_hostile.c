@@ -20,6 +20,30 @@ static size_t good_size, tgood_size;
 static unsigned char *tex;
 static size_t tex_size;
 
+/* The table file of a material (built to NAME.bsdf, written to NAME.tab
+ * with options o), as bytes; NULL when a step fails (a group fixture
+ * returns a failure rather than asserting). */
+static unsigned char *table_of(const char *text, const char *name, const ll_tables_options *o,
+                               size_t *size)
+{
+    ll_material *m = NULL;
+    ll_bsdf *src = NULL;
+    char bsdf[600], path[600];
+    ll_status s;
+    snprintf(bsdf, sizeof bsdf, "%s/%s.bsdf", ll_test_dir(), name);
+    snprintf(path, sizeof path, "%s/%s.tab", ll_test_dir(), name);
+    s = ll_material_parse(text, name, &m);
+    if (s == LL_OK)
+        s = ll_material_build(m, NULL, NULL, bsdf);
+    ll_material_destroy(m);
+    if (s == LL_OK)
+        s = ll_bsdf_open(bsdf, NULL, &src);
+    if (s == LL_OK)
+        s = ll_tables_write_from_bsdf(src, path, o, NULL);
+    ll_bsdf_release(src);
+    return s == LL_OK ? ll_test_read_file(path, size) : NULL;
+}
+
 static int setup(void **state)
 {
     ll_bsdf *src = NULL;
@@ -36,41 +60,12 @@ static int setup(void **state)
     ll_bsdf_release(src);
     good = ll_test_read_file(path, &good_size);
     /* A transmissive table: a small rough glass. */
-    {
-        ll_material *m = NULL;
-        char bsdf[600];
-        snprintf(bsdf, sizeof bsdf, "%s/glass.bsdf", ll_test_dir());
-        snprintf(path, sizeof path, "%s/glass.tab", ll_test_dir());
-        if (ll_material_parse("set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n", "glass",
-                              &m) != LL_OK ||
-            ll_material_build(m, NULL, NULL, bsdf) != LL_OK)
-            return 1;
-        ll_material_destroy(m);
-        if (ll_bsdf_open(bsdf, NULL, &src) != LL_OK ||
-            ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
-            return 1;
-        ll_bsdf_release(src);
-        tgood = ll_test_read_file(path, &tgood_size);
-    }
-    {
-        ll_material *m = NULL;
-        char bsdf[600];
-        snprintf(bsdf, sizeof bsdf, "%s/textured.bsdf", ll_test_dir());
-        snprintf(path, sizeof path, "%s/textured.tab", ll_test_dir());
-        src = NULL;
-        if (ll_material_parse("set nodes=12 orders=6\n"
-                              "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 "
-                              "0.22]\n"
-                              "conductor eta=2+3i alpha=0.2\n",
-                              "textured.layers", &m) != LL_OK ||
-            ll_material_build(m, NULL, NULL, bsdf) != LL_OK ||
-            ll_bsdf_open(bsdf, NULL, &src) != LL_OK ||
-            ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
-            return 1;
-        ll_material_destroy(m);
-        ll_bsdf_release(src);
-        tex = ll_test_read_file(path, &tex_size);
-    }
+    tgood = table_of("set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n", "glass", &o,
+                     &tgood_size);
+    tex = table_of("set nodes=12 orders=6\n"
+                   "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 0.22]\n"
+                   "conductor eta=2+3i alpha=0.2\n",
+                   "textured", &o, &tex_size);
     return good && tgood && tex ? 0 : 1;
 }
 
