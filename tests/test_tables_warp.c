@@ -91,6 +91,18 @@ static void test_two_slices(void **state)
     ll_warp2d_free(&wp);
 }
 
+/* The single-slice look-up of a warp without parameters is the general
+ * one to rounding, at 1000 points drawn from rng. */
+static void check_eval_single(const ll_warp2d *wp, uint64_t *rng)
+{
+    int k;
+    for (k = 0; k < 1000; ++k) {
+        double pos[2] = { ll_test_uniform(rng), ll_test_uniform(rng) };
+        assert_true(ll_test_close(ll_warp2d_eval_single(wp, pos), ll_warp2d_eval(wp, pos, NULL),
+                                  1e-14, 1e-15));
+    }
+}
+
 /* A warp without parameters whose rows are equal (an isotropic file's ndf
  * and sigma) is read along x only: the bilinear value to rounding. */
 static void test_equal_rows(void **state)
@@ -99,7 +111,6 @@ static void test_equal_rows(void **state)
     ll_warp2d wp;
     uint64_t rng = 77;
     size_t x, y;
-    int k;
     (void)state;
     for (x = 0; x < W; ++x) {
         double v = 0.1 + ll_test_uniform(&rng);
@@ -108,20 +119,12 @@ static void test_equal_rows(void **state)
     }
     assert_int_equal(ll_warp2d_init(&wp, W, H, 0, NULL, NULL, get_table, data, 0), LL_OK);
     assert_true(wp.rows_equal);
-    for (k = 0; k < 1000; ++k) {
-        double pos[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
-        assert_true(ll_test_close(ll_warp2d_eval_single(&wp, pos), ll_warp2d_eval(&wp, pos, NULL),
-                                  1e-14, 1e-15));
-    }
+    check_eval_single(&wp, &rng);
     ll_warp2d_free(&wp);
     data[W + 2] += 0.5;
     assert_int_equal(ll_warp2d_init(&wp, W, H, 0, NULL, NULL, get_table, data, 0), LL_OK);
     assert_false(wp.rows_equal);
-    for (k = 0; k < 1000; ++k) {
-        double pos[2] = { ll_test_uniform(&rng), ll_test_uniform(&rng) };
-        assert_true(ll_test_close(ll_warp2d_eval_single(&wp, pos), ll_warp2d_eval(&wp, pos, NULL),
-                                  1e-14, 1e-15));
-    }
+    check_eval_single(&wp, &rng);
     ll_warp2d_free(&wp);
 }
 
