@@ -165,6 +165,18 @@ def _plugin_pairs(rng, n):
     return pairs
 
 
+def _plugin_in(variant):
+    """Mitsuba set to variant (the test skipped where this Mitsuba build has
+    none) with the `layerlab` BSDF registered; returns layerlab.mitsuba."""
+    try:
+        mi.set_variant(variant)
+    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
+        pytest.skip("%s: %s" % (variant, error))
+    import layerlab.mitsuba as llmi
+    llmi.register()
+    return llmi
+
+
 def _close(ours, theirs, what, atol=1e-30):
     # The plugin hands the C reader's doubles to Mitsuba as float32.
     assert np.allclose(ours, theirs, rtol=2e-6, atol=atol), (what, ours, theirs)
@@ -213,13 +225,8 @@ def test_plugin_renders_tables_llvm(table):
     """The same in llvm_ad_rgb with "mode": "batch" ("traced", the Fourier series, is
     refused on a table file with the reason): a wavefront of pairs matches the C reader,
     and a small scene renders to finite, non-zero pixels."""
-    try:
-        mi.set_variant("llvm_ad_rgb")
-    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
-        pytest.skip("llvm_ad_rgb: %s" % error)
+    llmi = _plugin_in("llvm_ad_rgb")
     import drjit as dr
-    import layerlab.mitsuba as llmi
-    llmi.register()
     lib, tab, path = table
     with pytest.raises(Exception, match="table file"):
         mi.load_dict({"type": "layerlab", "filename": path, "mode": "traced"})
@@ -326,12 +333,7 @@ def test_traced_tables_are_the_c_reader(table, variant, timings):
     pdf, at its direction, can then differ from ours by more than 1e-4 where the density is
     steep (near the pole of the VNDF warp), hence the pdf at our direction."""
     import time
-    try:
-        mi.set_variant(variant)
-    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
-        pytest.skip("%s: %s" % (variant, error))
-    import layerlab.mitsuba as llmi
-    llmi.register()
+    _plugin_in(variant)
     _, _, path = table
     bsdf = mi.load_dict({"type": "layerlab", "filename": path})
     assert "mode=tables" in str(bsdf) and "(the file)" in str(bsdf)
@@ -394,12 +396,7 @@ def test_traced_tables_with_two_azimuths(table, tmp_path):
     `measured` does), give the one-azimuth file's values, pdfs and directions."""
     from layerlab.tensor_file import read_tensor_file
     from test_tensor_file import write_tensor_file
-    try:
-        mi.set_variant("llvm_ad_rgb")
-    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
-        pytest.skip("llvm_ad_rgb: %s" % error)
-    import layerlab.mitsuba as llmi
-    llmi.register()
+    _plugin_in("llvm_ad_rgb")
     _, _, path = table
     fields = read_tensor_file(path)
     for key in ("vndf", "luminance", "rgb"):
@@ -474,14 +471,9 @@ def test_traced_tables_render_as_measured(table, timings):
     same file, llvm_ad_rgb: within the noise for different seeds (the check of
     test_mitsuba.py), and for the same seed the same image up to float rounding (the same
     random numbers pick the same directions)."""
-    try:
-        mi.set_variant("llvm_ad_rgb")
-    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
-        pytest.skip("llvm_ad_rgb: %s" % error)
+    _plugin_in("llvm_ad_rgb")
     import drjit as dr
-    import layerlab.mitsuba as llmi
     import mitsuba_scenes as S
-    llmi.register()
     # (a batch-mode test before may have left the symbolic modes off)
     dr.set_flag(dr.JitFlag.SymbolicLoops, True)
     dr.set_flag(dr.JitFlag.SymbolicCalls, True)
