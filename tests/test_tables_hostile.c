@@ -243,29 +243,33 @@ static void test_magic_and_version(void **state)
     free(d);
 }
 
+/* A copy of bytes in which extent `extent` of field name's shape is value:
+ * a format error naming the field. */
+static void expect_extent(const unsigned char *bytes, size_t size, const char *name,
+                          size_t extent, uint64_t value)
+{
+    unsigned char *d = copy_of(bytes, size);
+    size_t off, shape, rank;
+    char what[64];
+    locate(d, name, &off, &shape, &rank);
+    put_u64(d + shape + 8 * extent, value);
+    snprintf(what, sizeof what, "\"%s\"", name);
+    expect(d, size, LL_ERROR_FORMAT, what);
+    free(d);
+}
+
 static void test_shapes_disagree(void **state)
 {
-    unsigned char *d = copy_of(good, good_size);
     size_t off, shape, rank;
     (void)state;
     /* rgb with 2 channels (its data then still lies inside the file). */
-    locate(d, "rgb", &off, &shape, &rank);
+    locate(good, "rgb", &off, &shape, &rank);
     assert_int_equal(rank, 5);
-    put_u64(d + shape + 16, 2);
-    expect(d, good_size, LL_ERROR_FORMAT, "\"rgb\"");
-    free(d);
-    d = copy_of(good, good_size);
+    expect_extent(good, good_size, "rgb", 2, 2);
     /* luminance with one incident elevation less than theta_i. */
-    locate(d, "luminance", &off, &shape, &rank);
-    put_u64(d + shape + 8, 2);
-    expect(d, good_size, LL_ERROR_FORMAT, "\"luminance\"");
-    free(d);
-    d = copy_of(good, good_size);
+    expect_extent(good, good_size, "luminance", 1, 2);
     /* a vndf of one node per row */
-    locate(d, "vndf", &off, &shape, &rank);
-    put_u64(d + shape + 24, 1);
-    expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\"");
-    free(d);
+    expect_extent(good, good_size, "vndf", 3, 1);
 }
 
 static void test_offsets_and_sizes(void **state)
@@ -479,16 +483,8 @@ static void test_transmissive_fields(void **state)
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
     free(d);
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
-    d = copy_of(tgood, tgood_size);
-    locate(d, "reflect_bottom.rgb", &off, &shape, &rank);
-    put_u64(d + shape + 16, 2);
-    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.rgb\"");
-    free(d);
-    d = copy_of(tgood, tgood_size);
-    locate(d, "transmit_top.albedo", &off, &shape, &rank);
-    put_u64(d + shape, 2);
-    expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.albedo\"");
-    free(d);
+    expect_extent(tgood, tgood_size, "reflect_bottom.rgb", 2, 2);
+    expect_extent(tgood, tgood_size, "transmit_top.albedo", 0, 2);
 }
 
 /* Random damage and out of memory on the transmissive table, as on the
@@ -554,12 +550,8 @@ static void test_textured_fields(void **state)
     memset(d + at, ' ', 8);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"layerlab_layout\"");
     free(d);
-    d = copy_of(tex, tex_size);
     /* A field of basis 1 that disagrees with its set, named in full. */
-    locate(d, "basis1.vndf", &off, &shape, &rank);
-    put_u64(d + shape + 24, 1);
-    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.vndf\"");
-    free(d);
+    expect_extent(tex, tex_size, "basis1.vndf", 3, 1);
     d = copy_of(tex, tex_size);
     set_f32(d, "basis1.sigma", 0, 0.0f);
     expect(d, tex_size, LL_ERROR_FORMAT, "\"basis1.sigma\"");
