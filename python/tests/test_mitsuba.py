@@ -369,31 +369,32 @@ def test_render_matches_native_within_noise(renders, kind, timings):
         % (kind, d, noise, excess, limit))
 
 
+def _assert_gold_within_noise(renders, kind, label, what, timings):
+    """The gold renders of renders[kind] within the noise of Mitsuba's native
+    roughconductor; the relative RMSE and the squared-bias estimate / limit
+    recorded as "mitsuba LABEL: ...", a failure named by what."""
+    native, _, native2, _ = renders["conductor"]
+    ours, ours2 = renders[kind]
+    d, noise, excess, limit = _check_within_noise(native, ours, native2, ours2)
+    timings["mitsuba %s: relative RMSE vs native" % label] = (d, "")
+    timings["mitsuba %s: squared-bias estimate / limit" % label] = (excess / limit, "")
+    assert excess < limit, ("%s: relative RMSE %.4f vs %.4f from noise; excess %.3g > %.3g"
+                            % (what, d, noise, excess, limit))
+
+
 def test_measured_on_our_table_matches_native_within_noise(renders, timings):
     """Mitsuba's built-in `measured` BSDF on the table file of our gold
     (compensate=0, sizes chosen by the default table tolerance) renders as
     Mitsuba's native roughconductor does, within the noise."""
-    native, _, native2, _ = renders["conductor"]
-    ours, ours2 = renders["measured"]
-    d, noise, excess, limit = _check_within_noise(native, ours, native2, ours2)
-    timings["mitsuba measured on our gold table: relative RMSE vs native"] = (d, "")
-    timings["mitsuba measured on our gold table: squared-bias estimate / limit"] = (
-        excess / limit, "")
-    assert excess < limit, ("measured on our table: relative RMSE %.4f vs %.4f from noise; "
-                            "excess %.3g > %.3g" % (d, noise, excess, limit))
+    _assert_gold_within_noise(renders, "measured", "measured on our gold table",
+                              "measured on our table", timings)
 
 
 def test_tables_made_on_load_render_as_native_within_noise(renders, timings):
     """The default mode on the gold .bsdf (tables made on load, sizes by the default table
     tolerance, traced) renders as Mitsuba's native roughconductor, within the noise."""
-    native, _, native2, _ = renders["conductor"]
-    ours, ours2 = renders["tables"]
-    d, noise, excess, limit = _check_within_noise(native, ours, native2, ours2)
-    timings["mitsuba gold, tables made on load: relative RMSE vs native"] = (d, "")
-    timings["mitsuba gold, tables made on load: squared-bias estimate / limit"] = (
-        excess / limit, "")
-    assert excess < limit, ("tables made on load: relative RMSE %.4f vs %.4f from noise; "
-                            "excess %.3g > %.3g" % (d, noise, excess, limit))
+    _assert_gold_within_noise(renders, "tables", "gold, tables made on load",
+                              "tables made on load", timings)
 
 
 def test_default_modes(files):
