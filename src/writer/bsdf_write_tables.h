@@ -35,6 +35,16 @@ LL_INTERNAL double ll_tables_sigma_at(const ll_warp2d *sigma_w, double theta);
 LL_INTERNAL void ll_tables_vndf_slice(const ll_warp2d *ndf_w, const ll_warp2d *sigma_w,
                                       double theta, size_t nv, float *out);
 
+/* The caller's monitor whole seen through one part of the work
+ * (bsdf_write_tables_share.c): the part reports 0..1 for itself, whole
+ * sees [lo, lo + width]. ll_tables_share_of sets sh's share and returns
+ * the part's monitor, valid while sh lives. */
+typedef struct ll_tables_share {
+    ll_monitor whole;
+    double lo, width;
+} ll_tables_share;
+LL_INTERNAL ll_monitor ll_tables_share_of(ll_tables_share *sh, double lo, double width);
+
 /* Luminance of an RGB value (the Rec. 709 / sRGB weights Mitsuba uses). */
 LL_INTERNAL double ll_tables_luminance(const double rgb[3]);
 
