@@ -56,36 +56,52 @@ typedef struct spectral_source {
     ll_monitor poll;             /* a wavelength's build: relay_poll */
 } spectral_source;
 
+/* A new empty file beside path, named path + suffix with its XXXXXX made
+ * unique, into *name (free with ll_free). */
+static ll_status temp_beside(const char *path, const char *suffix, char **name)
+{
+    size_t n = strlen(path), k = strlen(suffix) + 1, total;
+    ll_status s;
+    int fd;
+    if (!ll_size_add(n, k, &total) || !(*name = ll_malloc(total)))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
+    memcpy(*name, path, n);
+    memcpy(*name + n, suffix, k);
+    fd = mkstemp(*name);
+    if (fd < 0) {
+        s = ll_fail(LL_ERROR_IO, FN ": cannot create a temporary file beside %s: %s", path,
+                    strerror(errno));
+        ll_free(*name);
+        *name = NULL;
+        return s;
+    }
+    close(fd);
+    return LL_OK;
+}
+
+/* The file name, written with status s, opened into *out if s is LL_OK;
+ * name is unlinked and freed whatever the outcome. */
+static ll_status open_temp(char *name, ll_status s, ll_bsdf **out)
+{
+    if (s == LL_OK)
+        s = ll_bsdf_open(name, NULL, out);
+    unlink(name);
+    ll_free(name);
+    return s;
+}
+
 /* layers (n_channels) of the material m as an opened file, through a
  * temporary .bsdf beside path that is gone when this returns. */
 static ll_status open_layers(const ll_material *m, const ll_build_options *o,
                              ll_layer *const *layers, size_t n_channels, const char *path,
                              ll_bsdf **out)
 {
-    static const char suffix[] = ".layers-XXXXXX";
-    size_t n = strlen(path), total;
     char *name;
     ll_status s;
-    int fd;
     *out = NULL;
-    if (!ll_size_add(n, sizeof suffix, &total) || !(name = ll_malloc(total)))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
-    memcpy(name, path, n);
-    memcpy(name + n, suffix, sizeof suffix);
-    fd = mkstemp(name);
-    if (fd < 0) {
-        s = ll_fail(LL_ERROR_IO, FN ": cannot create a temporary file beside %s: %s", path,
-                    strerror(errno));
-        ll_free(name);
+    if ((s = temp_beside(path, ".layers-XXXXXX", &name)) != LL_OK)
         return s;
-    }
-    close(fd);
-    s = ll_material_write(m, o, layers, n_channels, name, NULL);
-    if (s == LL_OK)
-        s = ll_bsdf_open(name, NULL, out);
-    unlink(name);
-    ll_free(name);
-    return s;
+    return open_temp(name, ll_material_write(m, o, layers, n_channels, name, NULL), out);
 }
 
 static ll_status build_at(void *user, size_t index, double nm, ll_bsdf **out)
@@ -127,30 +143,12 @@ static ll_status build_rgb(const ll_material *m, const ll_build_options *build,
 static ll_status build_swept(const ll_material *m, const ll_build_options *build,
                              const ll_monitor *monitor, const char *path, ll_bsdf **out)
 {
-    static const char suffix[] = ".sweep-XXXXXX";
-    size_t n = strlen(path), total;
     char *name;
     ll_status s;
-    int fd;
     *out = NULL;
-    if (!ll_size_add(n, sizeof suffix, &total) || !(name = ll_malloc(total)))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
-    memcpy(name, path, n);
-    memcpy(name + n, suffix, sizeof suffix);
-    fd = mkstemp(name);
-    if (fd < 0) {
-        s = ll_fail(LL_ERROR_IO, FN ": cannot create a temporary file beside %s: %s", path,
-                    strerror(errno));
-        ll_free(name);
+    if ((s = temp_beside(path, ".sweep-XXXXXX", &name)) != LL_OK)
         return s;
-    }
-    close(fd);
-    s = ll_material_build(m, build, monitor, name);
-    if (s == LL_OK)
-        s = ll_bsdf_open(name, NULL, out);
-    unlink(name);
-    ll_free(name);
-    return s;
+    return open_temp(name, ll_material_build(m, build, monitor, name), out);
 }
 
 /* One step's share [lo, lo + span] of the caller's progress (each library

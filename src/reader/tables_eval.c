@@ -12,17 +12,6 @@
 
 #include <math.h>
 
-/* Elevation of a unit vector, stable near the pole: 2 asin(|d - n| / 2). */
-static double elevation(const double d[3])
-{
-    double x = d[0], y = d[1], z = d[2] - 1.0, r = 0.5 * sqrt(x * x + y * y + z * z);
-    return 2.0 * asin(r > 1.0 ? 1.0 : r);
-}
-
-static double theta_to_u(double theta) { return sqrt(theta * (2.0 / LL_PI)); }
-
-static double phi_to_u(double phi) { return (phi + LL_PI) * (0.5 / LL_PI); }
-
 /* The fixed direction wi as every look-up of a call needs it: its
  * elevation, the slices of its parameters, and its azimuth phi_i in the
  * forms that are used. The half vector's azimuth is only ever read
@@ -47,13 +36,13 @@ static void incident_of(const ll_measured *t, const double wi[3], int unit, inci
 {
     double param[2];
     int need_phi = t->vndf.param_size[0] > 1 || (t->jacobian && !t->sigma.rows_equal);
-    in->theta = elevation(wi);
-    in->u_theta = theta_to_u(in->theta);
+    in->theta = ll_tables_elevation(wi);
+    in->u_theta = ll_tables_theta_to_u(in->theta);
     in->ax = wi[0];
     in->ay = wi[1];
     in->has_azimuth = fabs(wi[0]) + fabs(wi[1]) > LL_TABLES_MIN_AZIMUTH;
     in->phi = need_phi || !in->has_azimuth ? atan2(wi[1], wi[0]) : 0.0;
-    in->u_phi = phi_to_u(in->phi);
+    in->u_phi = ll_tables_phi_to_u(in->phi);
     if (!in->has_azimuth) {
         /* At the pole phi_i is atan2's of what is left, as the renderers
          * take it. */
@@ -77,13 +66,13 @@ static void incident_of(const ll_measured *t, const double wi[3], int unit, inci
 static void normal_coords(const double m[3], const incident *in, double um[2], double *theta_m)
 {
     double u, phi;
-    *theta_m = elevation(m);
-    um[0] = theta_to_u(*theta_m);
+    *theta_m = ll_tables_elevation(m);
+    um[0] = ll_tables_theta_to_u(*theta_m);
     if (in->has_azimuth)
         phi = atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
     else
         phi = atan2(m[1], m[0]) - in->phi;
-    u = phi_to_u(phi);
+    u = ll_tables_phi_to_u(phi);
     um[1] = u - floor(u);
 }
 
@@ -100,28 +89,11 @@ static double jacobian(const ll_measured *t, const double um[2], const incident 
     return isfinite(r) ? r : 0.0;
 }
 
-/* The channels at s; channel c hits node c of the 3 exactly (as the
- * renderers evaluate an RGB file at 0, 1, 2). */
-static void values_at(const ll_measured *t, const ll_warp_slices *sl, const double s[2],
-                      double scale, double value[3])
-{
-    size_t c;
-    ll_warp2d_eval_nodes(&t->rgb, sl, 3, s, value);
-    for (c = 0; c < 3; ++c) {
-        double v = value[c] * scale;
-        value[c] = v > 0.0 ? v : 0.0;
-    }
-}
-
 /* pdf of the reflected direction from the densities over the two squares. */
 static double reflected_pdf(double p_v, double p_l, double u_theta_m, double theta_m,
                             double wi_dot_m)
 {
-    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin(theta_m);
-    double pdf;
-    if (area < 1e-6)
-        area = 1e-6;
-    pdf = p_v * p_l / (area * 4.0 * wi_dot_m);
+    double pdf = p_v * p_l / (ll_measured_normal_area(u_theta_m, theta_m) * 4.0 * wi_dot_m);
     return isfinite(pdf) && pdf > 0.0 ? pdf : 0.0;
 }
 
@@ -156,7 +128,7 @@ void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[
     incident_of(t, wi, 0, &in);
     normal_coords(m, &in, um, &theta_m);
     ll_warp2d_invert_at(&t->vndf, &in.sl, um, s, &p_v);
-    values_at(t, &in.sl, s, jacobian(t, um, &in), value);
+    ll_measured_values_at(t, &in.sl, s, jacobian(t, um, &in), value);
 }
 
 double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo[3])
@@ -210,7 +182,7 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
         wo[2] = 1.0;
         return 0;
     }
-    values_at(t, &in.sl, s, jacobian(t, um, &in), value);
+    ll_measured_values_at(t, &in.sl, s, jacobian(t, um, &in), value);
     return 1;
 }
 

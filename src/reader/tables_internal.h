@@ -135,4 +135,27 @@ LL_INTERNAL int ll_measured_sample_core(const ll_bsdf *b, double mu_i, const dou
                                         const float *basis, double *mu_o, double *phi_d,
                                         double *pdf, double sums[3]);
 
+/* What the reflected (tables_eval.c) and refracted (tables_refract.c)
+ * lobes share. ll_measured_values_at: the channels of t at s times scale,
+ * negatives cut to 0; channel c hits node c of the 3 exactly (as the
+ * renderers evaluate an RGB file at 0, 1, 2). ll_measured_normal_area:
+ * the area of the normal's square per steradian of normals, 2 pi^2
+ * u_theta sin theta_m, kept from 0 (the pole) so that a pdf stays finite. */
+static inline void ll_measured_values_at(const ll_measured *t, const ll_warp_slices *sl,
+                                         const double s[2], double scale, double value[3])
+{
+    size_t c;
+    ll_warp2d_eval_nodes(&t->rgb, sl, 3, s, value);
+    for (c = 0; c < 3; ++c) {
+        double v = value[c] * scale;
+        value[c] = v > 0.0 ? v : 0.0;
+    }
+}
+
+static inline double ll_measured_normal_area(double u_theta_m, double theta_m)
+{
+    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin(theta_m);
+    return area < 1e-6 ? 1e-6 : area;
+}
+
 #endif /* LL_TABLES_INTERNAL_H */

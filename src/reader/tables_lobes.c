@@ -41,6 +41,19 @@ static void flip(const double in[3], double out[3])
     out[2] = -in[2];
 }
 
+/* in as seen from the side below the surface (bottom: z negated), or as
+ * it is. */
+static void to_side(int bottom, const double in[3], double out[3])
+{
+    if (bottom)
+        flip(in, out);
+    else {
+        out[0] = in[0];
+        out[1] = in[1];
+        out[2] = in[2];
+    }
+}
+
 /* The set's value at (wi, wo) in its frame (wi above). */
 static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
                       const double wo[3], double value[3])
@@ -103,16 +116,24 @@ static int side_of(const ll_measured *m, const double wi[3], double w[3],
     int bottom = wi[2] < 0.0;
     if (wi[2] == 0.0)
         return 0;
-    if (bottom)
-        flip(wi, w);
-    else {
-        w[0] = wi[0];
-        w[1] = wi[1];
-        w[2] = wi[2];
-    }
+    to_side(bottom, wi, w);
     *reflect = m->lobe[bottom ? LL_LOBE_REFLECT_BOTTOM : LL_LOBE_REFLECT_TOP];
     *transmit = m->lobe[bottom ? LL_LOBE_TRANSMIT_BOTTOM : LL_LOBE_TRANSMIT_TOP];
     return bottom ? -1 : 1;
+}
+
+/* wi and wo in the frame of wi's side, that side's sets, and whether the
+ * pair transmits. 0 if either lies in the surface. */
+static int pair_of(const ll_measured *m, const double wi[3], const double wo[3], double w[3],
+                   double o[3], const ll_measured **reflect, const ll_measured **transmit,
+                   int *transmits)
+{
+    int side = side_of(m, wi, w, reflect, transmit);
+    if (!side || wo[2] == 0.0)
+        return 0;
+    *transmits = wi[2] * wo[2] < 0.0;
+    to_side(side < 0, wo, o);
+    return 1;
 }
 
 /* The share of the reflected lobe in sampling at w (its frame). */
@@ -129,18 +150,10 @@ void ll_measured_lobes_eval(const ll_measured *m, const double wi[3], const doub
 {
     const ll_measured *r, *t;
     double w[3], o[3];
-    int side = side_of(m, wi, w, &r, &t), transmit;
+    int transmit;
     value[0] = value[1] = value[2] = 0.0;
-    if (!side || wo[2] == 0.0)
+    if (!pair_of(m, wi, wo, w, o, &r, &t, &transmit))
         return;
-    transmit = wi[2] * wo[2] < 0.0;
-    if (side < 0)
-        flip(wo, o);
-    else {
-        o[0] = wo[0];
-        o[1] = wo[1];
-        o[2] = wo[2];
-    }
     if (transmit ? t != NULL : r != NULL)
         lobe_eval(transmit ? t : r, transmit, w, o, value);
 }
@@ -149,17 +162,9 @@ double ll_measured_lobes_pdf(const ll_measured *m, const double wi[3], const dou
 {
     const ll_measured *r, *t;
     double w[3], o[3], share;
-    int side = side_of(m, wi, w, &r, &t), transmit;
-    if (!side || wo[2] == 0.0)
+    int transmit;
+    if (!pair_of(m, wi, wo, w, o, &r, &t, &transmit))
         return 0.0;
-    transmit = wi[2] * wo[2] < 0.0;
-    if (side < 0)
-        flip(wo, o);
-    else {
-        o[0] = wo[0];
-        o[1] = wo[1];
-        o[2] = wo[2];
-    }
     share = reflect_share(r, t, w);
     if (transmit)
         return t && share < 1.0 ? (1.0 - share) * lobe_pdf(t, 1, w, o) : 0.0;

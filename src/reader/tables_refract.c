@@ -13,22 +13,12 @@
 
 #include <math.h>
 
-static double elevation(const double d[3])
-{
-    double x = d[0], y = d[1], z = d[2] - 1.0, r = 0.5 * sqrt(x * x + y * y + z * z);
-    return 2.0 * asin(r > 1.0 ? 1.0 : r);
-}
-
-static double theta_to_u(double theta) { return sqrt(theta * (2.0 / LL_PI)); }
-
-static double phi_to_u(double phi) { return (phi + LL_PI) * (0.5 / LL_PI); }
-
 static void normal_coords(const double m[3], double phi_i, double um[2], double *theta_m)
 {
     double u;
-    *theta_m = elevation(m);
-    um[0] = theta_to_u(*theta_m);
-    u = phi_to_u(atan2(m[1], m[0]) - phi_i);
+    *theta_m = ll_tables_elevation(m);
+    um[0] = ll_tables_theta_to_u(*theta_m);
+    u = ll_tables_phi_to_u(atan2(m[1], m[0]) - phi_i);
     um[1] = u - floor(u);
 }
 
@@ -36,10 +26,10 @@ static void normal_coords(const double m[3], double phi_i, double um[2], double 
 static void incident(const ll_measured *t, const double wi[3], double *phi_i, double uwi[2],
                      ll_warp_slices *sl)
 {
-    double theta_i = elevation(wi), param[2];
+    double theta_i = ll_tables_elevation(wi), param[2];
     *phi_i = atan2(wi[1], wi[0]);
-    uwi[0] = theta_to_u(theta_i);
-    uwi[1] = phi_to_u(*phi_i);
+    uwi[0] = ll_tables_theta_to_u(theta_i);
+    uwi[1] = ll_tables_phi_to_u(*phi_i);
     param[0] = *phi_i;
     param[1] = theta_i;
     ll_warp2d_slices(&t->vndf, param, sl);
@@ -51,7 +41,6 @@ static void values_at(const ll_measured *t, const ll_warp_slices *sl, const doub
 {
     ll_warp_slices one;
     double scale = 1.0;
-    int c;
     if (t->jacobian) {
         ll_warp_slices_single(&one);
         scale = ll_warp2d_eval_at(&t->ndf, &one, um) /
@@ -59,11 +48,7 @@ static void values_at(const ll_measured *t, const ll_warp_slices *sl, const doub
         if (!ll_is_finite(scale))
             scale = 0.0;
     }
-    ll_warp2d_eval_nodes(&t->rgb, sl, 3, s, value);
-    for (c = 0; c < 3; ++c) {
-        double v = value[c] * scale;
-        value[c] = v > 0.0 ? v : 0.0;
-    }
+    ll_measured_values_at(t, sl, s, scale, value);
 }
 
 /* pdf of wo from the densities over the two squares: per unit area of the
@@ -72,10 +57,7 @@ static void values_at(const ll_measured *t, const ll_warp_slices *sl, const doub
 static double refracted_pdf(double p_v, double p_l, double u_theta_m, double theta_m,
                             double jac)
 {
-    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin(theta_m), pdf;
-    if (area < 1e-6)
-        area = 1e-6;
-    pdf = p_v * p_l / area * jac;
+    double pdf = p_v * p_l / ll_measured_normal_area(u_theta_m, theta_m) * jac;
     return ll_is_finite(pdf) && pdf > 0.0 ? pdf : 0.0;
 }
 

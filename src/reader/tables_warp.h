@@ -130,6 +130,31 @@ LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *
 LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double pos[2], double u[2], double *pdf);
 
+/* The square coordinates of a direction, shared by the reflected
+ * (tables_eval.c) and refracted (tables_refract.c) lobes: the elevation
+ * of unit d from its chord to the pole (exact near the pole, where acos
+ * loses digits), and u_theta = sqrt(theta 2 / pi), u_phi = (phi + pi) /
+ * 2 pi. */
+static inline double ll_tables_elevation(const double d[3])
+{
+    double x = d[0], y = d[1], z = d[2] - 1.0, r = 0.5 * sqrt(x * x + y * y + z * z);
+    return 2.0 * asin(r > 1.0 ? 1.0 : r);
+}
+
+static inline double ll_tables_theta_to_u(double theta) { return sqrt(theta * (2.0 / LL_PI)); }
+
+static inline double ll_tables_phi_to_u(double phi) { return (phi + LL_PI) * (0.5 / LL_PI); }
+
+/* wi reflected about the unit normal m into wo; returns wi.m. */
+static inline double ll_tables_reflect_about(const double wi[3], const double m[3], double wo[3])
+{
+    double d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    wo[0] = 2.0 * d * m[0] - wi[0];
+    wo[1] = 2.0 * d * m[1] - wi[1];
+    wo[2] = 2.0 * d * m[2] - wi[2];
+    return d;
+}
+
 /* The microfacet normal m of a point um of the visible-normal square
  * (theta_m = u_theta^2 pi / 2, phi_m = (2 u_phi - 1) pi + phi_i) and wi
  * reflected about it into wo; returns wi.m. The writer's sample grid
@@ -139,16 +164,12 @@ LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *
 static inline double ll_tables_mirror(const double wi[3], const double um[2], double phi_i,
                                       double *theta_m, double m[3], double wo[3])
 {
-    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI + phi_i, d;
+    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI + phi_i;
     m[0] = sin(tm) * cos(pm);
     m[1] = sin(tm) * sin(pm);
     m[2] = cos(tm);
-    d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-    wo[0] = 2.0 * d * m[0] - wi[0];
-    wo[1] = 2.0 * d * m[1] - wi[1];
-    wo[2] = 2.0 * d * m[2] - wi[2];
     *theta_m = tm;
-    return d;
+    return ll_tables_reflect_about(wi, m, wo);
 }
 
 /* The same mapping for a wi of any azimuth phi_i, given as its unit
@@ -159,17 +180,13 @@ static inline double ll_tables_mirror_dir(const double wi[3], const double um[2]
                                           double cos_phi_i, double sin_phi_i, double *theta_m,
                                           double m[3], double wo[3])
 {
-    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI, d;
+    double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI;
     double st = sin(tm), x = st * cos(pm), y = st * sin(pm);
     m[0] = x * cos_phi_i - y * sin_phi_i;
     m[1] = y * cos_phi_i + x * sin_phi_i;
     m[2] = cos(tm);
-    d = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-    wo[0] = 2.0 * d * m[0] - wi[0];
-    wo[1] = 2.0 * d * m[1] - wi[1];
-    wo[2] = 2.0 * d * m[2] - wi[2];
     *theta_m = tm;
-    return d;
+    return ll_tables_reflect_about(wi, m, wo);
 }
 
 #endif /* LL_TABLES_WARP_H */

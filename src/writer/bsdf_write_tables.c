@@ -50,8 +50,6 @@ typedef struct writer {
     ll_tables_spectra spectra;
 } writer;
 
-static double get_float(const void *ctx, size_t i) { return (double)((const float *)ctx)[i]; }
-
 /* A spectral file's wavelengths: where the CIE tables that read them back
  * are defined, strictly increasing, and a source to build them from. */
 static ll_status check_wavelengths(const ll_tables_options *o)
@@ -182,48 +180,19 @@ static void release(writer *w)
  * them exactly as a reader will. */
 static ll_status ndf_tables(writer *w, double *alpha)
 {
-    enum { N = LL_TABLES_NDF_NODES };
-    double d[N], sigma[N];
-    size_t j;
+    double d[LL_TABLES_NDF_NODES], sigma[LL_TABLES_NDF_NODES];
     ll_status s = ll_tables_derive_ndf(w->b, d, sigma, alpha);
     if (s != LL_OK)
         return s;
-    for (j = 0; j < N; ++j) {
-        w->ndf[j] = w->ndf[N + j] = (float)d[j];
-        w->sigma[j] = w->sigma[N + j] = (float)sigma[j];
-    }
-    if ((s = ll_warp2d_init(&w->ndf_w, N, 2, 0, NULL, NULL, get_float, w->ndf, 0)) != LL_OK ||
-        (s = ll_warp2d_init(&w->sigma_w, N, 2, 0, NULL, NULL, get_float, w->sigma, 0)) != LL_OK)
-        return s;
-    return LL_OK;
-}
-
-static double sigma_at(const writer *w, double theta)
-{
-    double u[2] = { sqrt(theta * (2.0 / LL_PI)), 0.5 };
-    return ll_warp2d_eval(&w->sigma_w, u, NULL);
+    return ll_tables_ndf_warps(d, sigma, w->ndf, w->sigma, &w->ndf_w, &w->sigma_w);
 }
 
 /* Step 2 for slice t. */
 static void vndf_slice(writer *w, size_t t)
 {
-    size_t nv = w->nv, x, y;
-    double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double inv_sigma = 1.0 / sigma_at(w, th);
-    float *out = w->vndf + t * nv * nv;
-    for (y = 0; y < nv; ++y) {
-        double phi = (2.0 * (double)y / (double)(nv - 1) - 1.0) * LL_PI;
-        for (x = 0; x < nv; ++x) {
-            double u[2] = { (double)x / (double)(nv - 1), 0.5 };
-            double tm = u[0] * u[0] * (LL_PI / 2);
-            double m[3] = { sin(tm) * cos(phi), sin(tm) * sin(phi), cos(tm) };
-            double dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-            double v = dot > 0.0 ? dot * ll_warp2d_eval(&w->ndf_w, u, NULL) * inv_sigma *
-                                       2.0 * LL_PI * LL_PI * u[0] * sin(tm)
-                                 : 0.0;
-            out[y * nv + x] = (float)v;
-        }
-    }
+    size_t nv = w->nv;
+    ll_tables_vndf_slice(&w->ndf_w, &w->sigma_w, (double)w->theta_i[t], nv,
+                         w->vndf + t * nv * nv);
 }
 
 /* The luminance floor of slice t (every slice normalisable), relative to
@@ -249,7 +218,8 @@ static void value_slice(writer *w, size_t t)
 {
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(w, th), top = 0.0;
+    double param[2] = { 0.0, th }, top = 0.0;
+    double four_sigma = 4.0 * ll_tables_sigma_at(&w->sigma_w, th);
     float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
@@ -402,7 +372,8 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         params[1] = theta;
         sizes[0] = 1;
         sizes[1] = w.n_ti;
-        s = ll_warp2d_init(&w.vndf_w, w.nv, w.nv, 2, sizes, params, get_float, w.vndf, 1);
+        s = ll_warp2d_init(&w.vndf_w, w.nv, w.nv, 2, sizes, params, ll_tables_get_float, w.vndf,
+                           1);
         ll_free(theta);
         if (s != LL_OK)
             goto done;

@@ -10,6 +10,7 @@
 #define LL_EXPERIMENTAL /* the library's build defines it for every file */
 #endif
 #include "layerlab/ll_tables.h"
+#include "reader/tables_warp.h"
 #include "support/watch.h"
 
 #include <stdio.h>
@@ -17,6 +18,32 @@
 /* Nodes of the NDF and sigma tables along u_theta (uniform in u_theta;
  * also the quadrature of the derivation). */
 #define LL_TABLES_NDF_NODES 256
+
+/* Steps 1 and 2 of a table (bsdf_write_tables_vndf.c), shared by the
+ * opaque writer and the lobes of a transmissive one. ll_tables_ndf_warps:
+ * D and sigma at the LL_TABLES_NDF_NODES nodes as float tables of two
+ * equal rows (ndf_f and sigma_f, 2 LL_TABLES_NDF_NODES each) and the warps
+ * that interpolate them exactly as a reader will. ll_tables_sigma_at:
+ * sigma of the elevation theta through its warp. ll_tables_vndf_slice:
+ * the visible-normal density of incident elevation theta over the
+ * normal's nv x nv square, into out. ll_tables_get_float: the warps'
+ * reader of a float table. */
+LL_INTERNAL double ll_tables_get_float(const void *ctx, size_t i);
+LL_INTERNAL ll_status ll_tables_ndf_warps(const double *d, const double *sigma, float *ndf_f,
+                                          float *sigma_f, ll_warp2d *ndf_w, ll_warp2d *sigma_w);
+LL_INTERNAL double ll_tables_sigma_at(const ll_warp2d *sigma_w, double theta);
+LL_INTERNAL void ll_tables_vndf_slice(const ll_warp2d *ndf_w, const ll_warp2d *sigma_w,
+                                      double theta, size_t nv, float *out);
+
+/* The caller's monitor whole seen through one part of the work
+ * (bsdf_write_tables_share.c): the part reports 0..1 for itself, whole
+ * sees [lo, lo + width]. ll_tables_share_of sets sh's share and returns
+ * the part's monitor, valid while sh lives. */
+typedef struct ll_tables_share {
+    ll_monitor whole;
+    double lo, width;
+} ll_tables_share;
+LL_INTERNAL ll_monitor ll_tables_share_of(ll_tables_share *sh, double lo, double width);
 
 /* Luminance of an RGB value (the Rec. 709 / sRGB weights Mitsuba uses). */
 LL_INTERNAL double ll_tables_luminance(const double rgb[3]);

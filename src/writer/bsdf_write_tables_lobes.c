@@ -59,8 +59,6 @@ typedef struct writer {
     lobe l[LOBES];
 } writer;
 
-static double get_float(const void *ctx, size_t i) { return (double)((const float *)ctx)[i]; }
-
 void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[3], const double wo[3],
                       double f[3])
 {
@@ -121,51 +119,21 @@ static void release(writer *w)
 /* D and sigma of lobe l as float tables of two equal rows and their warps. */
 static ll_status ndf_tables(const writer *w, lobe *l)
 {
-    enum { N = LL_TABLES_NDF_NODES };
-    double d[N], sigma[N];
-    size_t j;
+    double d[LL_TABLES_NDF_NODES], sigma[LL_TABLES_NDF_NODES];
     ll_status s = l->transmit ? ll_tables_derive_transmit_ndf(w->b, l->bottom, l->refract_eta, d,
                                                               sigma, &l->alpha)
                               : ll_tables_derive_ndf_side(w->b, l->bottom ? -1 : 1, d, sigma,
                                                           &l->alpha);
     if (s != LL_OK)
         return s;
-    for (j = 0; j < N; ++j) {
-        l->ndf[j] = l->ndf[N + j] = (float)d[j];
-        l->sigma[j] = l->sigma[N + j] = (float)sigma[j];
-    }
-    if ((s = ll_warp2d_init(&l->ndf_w, N, 2, 0, NULL, NULL, get_float, l->ndf, 0)) != LL_OK ||
-        (s = ll_warp2d_init(&l->sigma_w, N, 2, 0, NULL, NULL, get_float, l->sigma, 0)) != LL_OK)
-        return s;
-    return LL_OK;
-}
-
-static double sigma_at(const lobe *l, double theta)
-{
-    double u[2] = { sqrt(theta * (2.0 / LL_PI)), 0.5 };
-    return ll_warp2d_eval(&l->sigma_w, u, NULL);
+    return ll_tables_ndf_warps(d, sigma, l->ndf, l->sigma, &l->ndf_w, &l->sigma_w);
 }
 
 /* The visible-normal density of slice t over the normal's square. */
 static void vndf_slice(const writer *w, lobe *l, size_t t)
 {
-    size_t nv = w->nv, x, y;
-    double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double inv_sigma = 1.0 / sigma_at(l, th);
-    float *out = l->vndf + t * nv * nv;
-    for (y = 0; y < nv; ++y) {
-        double phi = (2.0 * (double)y / (double)(nv - 1) - 1.0) * LL_PI;
-        for (x = 0; x < nv; ++x) {
-            double u[2] = { (double)x / (double)(nv - 1), 0.5 };
-            double tm = u[0] * u[0] * (LL_PI / 2);
-            double m[3] = { sin(tm) * cos(phi), sin(tm) * sin(phi), cos(tm) };
-            double dot = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-            double v = dot > 0.0 ? dot * ll_warp2d_eval(&l->ndf_w, u, NULL) * inv_sigma *
-                                       2.0 * LL_PI * LL_PI * u[0] * sin(tm)
-                                 : 0.0;
-            out[y * nv + x] = (float)v;
-        }
-    }
+    size_t nv = w->nv;
+    ll_tables_vndf_slice(&l->ndf_w, &l->sigma_w, w->theta_d[t], nv, l->vndf + t * nv * nv);
 }
 
 /* The direction the reader's sampler gives for the normal's point um:
@@ -201,7 +169,8 @@ static void value_slice(const writer *w, lobe *l, size_t t)
 {
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double param[2] = { 0.0, th }, four_sigma = 4.0 * sigma_at(l, th), top = 0.0, floor_v;
+    double param[2] = { 0.0, th }, top = 0.0, floor_v;
+    double four_sigma = 4.0 * ll_tables_sigma_at(&l->sigma_w, th);
     float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
     for (y = 0; y < ns; ++y) {
         for (x = 0; x < ns; ++x) {
@@ -294,8 +263,8 @@ static ll_status build_lobe(writer *w, lobe *l, ll_watch *watch)
     params[1] = w->theta_d;
     sizes[0] = 1;
     sizes[1] = w->n_ti;
-    if ((s = ll_warp2d_init(&l->vndf_w, w->nv, w->nv, 2, sizes, params, get_float, l->vndf,
-                            1)) != LL_OK)
+    if ((s = ll_warp2d_init(&l->vndf_w, w->nv, w->nv, 2, sizes, params, ll_tables_get_float,
+                            l->vndf, 1)) != LL_OK)
         return s;
     for (t = 0; t < w->n_ti; ++t) {
         value_slice(w, l, t);

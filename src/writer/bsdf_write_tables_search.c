@@ -144,27 +144,9 @@ static int grow(search *s, const ll_tables_figures *f)
  * number of grids is not known in advance, so grid i gets the half of
  * what is left ([1 - 2^-i, 1 - 2^-(i+1)] of 0.9), and the final write the
  * last tenth. */
-typedef struct step {
-    ll_monitor whole;
-    double lo, hi;
-} step;
-
-static int report_step(void *user, double fraction, const char *stage)
+static ll_monitor monitor_of(ll_tables_share *st, double lo, double hi)
 {
-    const step *st = user;
-    return st->whole.progress ? st->whole.progress(st->whole.user,
-                                                   st->lo + fraction * (st->hi - st->lo), stage)
-                              : 0;
-}
-
-static ll_monitor monitor_of(step *st, double lo, double hi)
-{
-    ll_monitor m = LL_MONITOR_INIT;
-    st->lo = lo;
-    st->hi = hi;
-    m.progress = report_step;
-    m.user = st;
-    return m;
+    return ll_tables_share_of(st, lo, hi - lo);
 }
 
 /* Write the grid g to at, open it, measure it against b. */
@@ -189,7 +171,7 @@ static ll_status try_grid(const ll_bsdf *b, const char *at, const ll_tables_opti
 }
 
 static ll_status run(const ll_bsdf *b, const char *path, search *s, const char *scratch,
-                     step *progress)
+                     ll_tables_share *progress)
 {
     ll_tables_options g;
     ll_tables_figures f;
@@ -223,7 +205,7 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
     ll_monitor none = LL_MONITOR_INIT;
     search s;
-    step progress;
+    ll_tables_share progress;
     char *scratch = NULL;
     size_t len;
     ll_status st;

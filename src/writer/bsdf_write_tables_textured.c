@@ -65,20 +65,6 @@ static ll_status source_basis(void *user, size_t index, double wavelength_nm, ll
     return s;
 }
 
-/* The caller's monitor over basis k's share of the work. */
-typedef struct share {
-    ll_monitor whole;
-    double lo, width;
-} share;
-
-static int report_share(void *user, double fraction, const char *stage)
-{
-    const share *sh = user;
-    return sh->whole.progress ? sh->whole.progress(sh->whole.user, sh->lo + fraction * sh->width,
-                                                   stage)
-                              : 0;
-}
-
 static ll_status read_back(const char *path, basis_set *set)
 {
     FILE *f = fopen(path, "rb");
@@ -214,7 +200,7 @@ ll_status ll_tables_write_textured(const ll_bsdf *b, const char *path,
     ll_monitor none = LL_MONITOR_INIT, sub = LL_MONITOR_INIT;
     basis_set *sets;
     basis_source bs;
-    share sh;
+    ll_tables_share sh;
     char *scratch;
     size_t nb = b->n_bases, k, len = strlen(path) + 64;
     ll_status s = LL_OK;
@@ -239,8 +225,6 @@ ll_status ll_tables_write_textured(const ll_bsdf *b, const char *path,
         o.spectrum = source_basis;
         o.spectrum_user = &bs;
     }
-    sub.progress = report_share;
-    sub.user = &sh;
     snprintf(scratch, len, "%s.%ld.basis", path, (long)getpid());
     /* Every basis opaque, before any is written: a basis' tables are one
      * set of the plain names, and the reader reads a textured file's bases
@@ -259,8 +243,7 @@ ll_status ll_tables_write_textured(const ll_bsdf *b, const char *path,
     }
     for (k = 0; k < nb && s == LL_OK; ++k) {
         ll_bsdf *view = NULL;
-        sh.lo = 0.95 * (double)k / (double)nb;
-        sh.width = 0.95 / (double)nb;
+        sub = ll_tables_share_of(&sh, 0.95 * (double)k / (double)nb, 0.95 / (double)nb);
         bs.k = k;
         if ((s = ll_tables_basis_view(b, k, &view)) != LL_OK)
             break;

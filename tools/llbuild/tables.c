@@ -364,33 +364,35 @@ void llbuild_tables_summary(const llbuild_tables *t, const char *input, const ch
     ll_bsdf_release(b);
 }
 
-/* The built layers as an opened .bsdf: written beside output (where the
- * user chose to have room) under a unique name, opened, and unlinked
- * before returning whatever the outcome. */
-static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
-                              ll_layer *const *layers, size_t n_channels, const char *output,
-                              const ll_monitor *monitor, ll_bsdf **out, size_t *bytes)
+/* A new empty file beside output (where the user chose to have room)
+ * under a unique name, into *name (free with free). */
+static ll_status temp_beside(const char *output, char **name)
 {
     static const char suffix[] = ".llbuild-XXXXXX";
     size_t n = strlen(output);
-    char *name = malloc(n + sizeof suffix);
-    ll_bsdf_info info = LL_BSDF_INFO_INIT;
-    ll_status s;
     int fd;
-    *out = NULL;
-    if (!name)
+    if (!(*name = malloc(n + sizeof suffix)))
         return LL_ERROR_OUT_OF_MEMORY;
-    memcpy(name, output, n);
-    memcpy(name + n, suffix, sizeof suffix);
-    fd = mkstemp(name);
+    memcpy(*name, output, n);
+    memcpy(*name + n, suffix, sizeof suffix);
+    fd = mkstemp(*name);
     if (fd < 0) {
         fprintf(stderr, "llbuild: cannot create a file beside %s: %s\n", output,
                 strerror(errno));
-        free(name);
+        free(*name);
+        *name = NULL;
         return LL_ERROR_IO;
     }
     close(fd);
-    s = ll_material_write(m, o, layers, n_channels, name, monitor);
+    return LL_OK;
+}
+
+/* The file name, written with status s, opened into *out and its size
+ * into *bytes if s is LL_OK; name is unlinked and freed before returning
+ * whatever the outcome. */
+static ll_status open_temp(char *name, ll_status s, ll_bsdf **out, size_t *bytes)
+{
+    ll_bsdf_info info = LL_BSDF_INFO_INIT;
     if (s == LL_OK)
         s = ll_bsdf_open(name, NULL, out);
     unlink(name);
@@ -402,40 +404,31 @@ static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
     return LL_OK;
 }
 
+/* The built layers as an opened .bsdf, through a temporary beside output. */
+static ll_status open_as_bsdf(const ll_material *m, const ll_build_options *o,
+                              ll_layer *const *layers, size_t n_channels, const char *output,
+                              const ll_monitor *monitor, ll_bsdf **out, size_t *bytes)
+{
+    char *name;
+    ll_status s;
+    *out = NULL;
+    if ((s = temp_beside(output, &name)) != LL_OK)
+        return s;
+    return open_temp(name, ll_material_write(m, o, layers, n_channels, name, monitor), out,
+                     bytes);
+}
+
 /* A swept material built to its textured .bsdf beside output (as
  * open_as_bsdf), opened and unlinked. */
 static ll_status open_swept(const ll_material *m, const ll_build_options *o, const char *output,
                             const ll_monitor *monitor, ll_bsdf **out, size_t *bytes)
 {
-    static const char suffix[] = ".llbuild-XXXXXX";
-    size_t n = strlen(output);
-    char *name = malloc(n + sizeof suffix);
-    ll_bsdf_info info = LL_BSDF_INFO_INIT;
+    char *name;
     ll_status s;
-    int fd;
     *out = NULL;
-    if (!name)
-        return LL_ERROR_OUT_OF_MEMORY;
-    memcpy(name, output, n);
-    memcpy(name + n, suffix, sizeof suffix);
-    fd = mkstemp(name);
-    if (fd < 0) {
-        fprintf(stderr, "llbuild: cannot create a file beside %s: %s\n", output,
-                strerror(errno));
-        free(name);
-        return LL_ERROR_IO;
-    }
-    close(fd);
-    s = ll_material_build(m, o, monitor, name);
-    if (s == LL_OK)
-        s = ll_bsdf_open(name, NULL, out);
-    unlink(name);
-    free(name);
-    if (s != LL_OK)
+    if ((s = temp_beside(output, &name)) != LL_OK)
         return s;
-    ll_bsdf_get_info(*out, &info);
-    *bytes = info.file_size;
-    return LL_OK;
+    return open_temp(name, ll_material_build(m, o, monitor, name), out, bytes);
 }
 
 /* One step's share [lo, hi] of the whole run's progress: each library
