@@ -174,7 +174,7 @@ TEST_LIBS := $(STATIC) -lcmocka $(LDLIBS_LIB)
 
 .PHONY: all deps deps-lib deps-tools deps-test deps-fuzz deps-ci lib tools test check \
         test-c test-python check-c check-python test-tsan coverage clang cmake-check \
-        bench bench-full install uninstall clean fuzz demo abi-baseline api-doc print-reader-src print-blas-libs tests \
+        bench bench-full figures install uninstall clean fuzz demo abi-baseline api-doc print-reader-src print-blas-libs tests \
         need-lib need-tools need-test need-check need-coverage need-cmake \
         venv-test venv-check
 all: lib tools
