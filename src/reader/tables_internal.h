@@ -86,10 +86,14 @@ LL_INTERNAL ll_status ll_measured_read_set(const ll_tensor_file *t, const char *
 /* b->metadata from the field "layerlab_metadata" (else "description"). */
 LL_INTERNAL ll_status ll_measured_copy_metadata(ll_bsdf *b, const ll_tensor_file *t,
                                                 const char *file);
-/* A file with the field "layerlab_layout" (tables_textured.c): the sets
- * the layout names, the parameters of a textured one. file_size: the
- * file's bytes. */
-LL_INTERNAL ll_status ll_measured_open_extended(const ll_tensor_file *t, size_t file_size,
+/* An extended file's "layerlab_layout" field f: the lobe sets it names
+ * (present[k]) or "textured" (*textured), each at most once, nothing else
+ * (tables_read.c). */
+LL_INTERNAL ll_status ll_measured_read_layout(const ll_tensor_field *f, const char *file,
+                                              int present[LL_MEASURED_LOBES], int *textured);
+/* A textured table file (its layout "textured", tables_textured.c): the
+ * parameters and a set per basis. file_size: the file's bytes. */
+LL_INTERNAL ll_status ll_measured_open_textured(const ll_tensor_file *t, size_t file_size,
                                                 const char *file, ll_bsdf **out);
 
 /* Set k of a table handle: basis k of a textured table file, the only

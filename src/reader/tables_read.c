@@ -335,9 +335,12 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
     return LL_OK;
 }
 
-/* An extended file's "layerlab_layout": the names of its sets, separated
- * by spaces or commas, each at most once; present[k] for lobe k. */
-static ll_status read_layout(const ll_tensor_field *f, const char *file, int present[4])
+/* An extended file's "layerlab_layout": the names of what it holds,
+ * separated by spaces or commas, each at most once: the lobe sets of one
+ * material (present[k] for lobe k), or "textured" (*textured: a set per
+ * basis, tables_textured.c). One parser for both kinds of file. */
+ll_status ll_measured_read_layout(const ll_tensor_field *f, const char *file,
+                                  int present[LL_MEASURED_LOBES], int *textured)
 {
     size_t at = 0, k, count = 0;
     if (f->dtype != LL_TENSOR_U8 || f->rank != 1)
@@ -345,9 +348,10 @@ static ll_status read_layout(const ll_tensor_field *f, const char *file, int pre
                        "ll_bsdf_open: %s: field \"layerlab_layout\" must be uint8 text", file);
     for (k = 0; k < LL_MEASURED_LOBES; ++k)
         present[k] = 0;
+    *textured = 0;
     while (at < f->count) {
         size_t len = 0;
-        int found = -1;
+        int found = -1, *seen;
         while (at < f->count && (f->data[at] == ' ' || f->data[at] == ','))
             ++at;
         while (at + len < f->count && f->data[at + len] != ' ' && f->data[at + len] != ',')
@@ -359,24 +363,30 @@ static ll_status read_layout(const ll_tensor_field *f, const char *file, int pre
             if (strlen(p) == len + 1 && memcmp(p, f->data + at, len) == 0)
                 found = (int)k;
         }
-        if (found < 0)
+        if (found < 0 && !(len == 8 && memcmp(f->data + at, "textured", 8) == 0))
             return ll_fail(LL_ERROR_UNSUPPORTED,
                            "ll_bsdf_open: %s: field \"layerlab_layout\": set \"%.*s\" is not "
                            "read by this version (reflect_top, reflect_bottom, transmit_top, "
-                           "transmit_bottom)",
+                           "transmit_bottom, textured)",
                            file, (int)(len > 64 ? 64 : len), (const char *)f->data + at);
-        if (present[found])
+        seen = found < 0 ? textured : &present[found];
+        if (*seen)
             return ll_fail(LL_ERROR_FORMAT,
                            "ll_bsdf_open: %s: field \"layerlab_layout\": set \"%.*s\" named "
                            "twice",
                            file, (int)len, (const char *)f->data + at);
-        present[found] = 1;
+        *seen = 1;
         ++count;
         at += len;
     }
     if (count == 0)
         return ll_fail(LL_ERROR_FORMAT,
                        "ll_bsdf_open: %s: field \"layerlab_layout\" names no set", file);
+    if (*textured && count > 1)
+        return ll_fail(LL_ERROR_UNSUPPORTED,
+                       "ll_bsdf_open: %s: field \"layerlab_layout\": a textured file of lobe "
+                       "sets is not read by this version",
+                       file);
     return LL_OK;
 }
 
@@ -400,32 +410,12 @@ static ll_status read_eta(const ll_tensor_file *t, const char *base, const char 
     return LL_OK;
 }
 
-/* Whether an extended file's layout names a textured file (its sets are
- * whole materials, one per basis: tables_textured.c) rather than the lobe
- * sets of one material (read here). */
-static int layout_is_textured(const ll_tensor_field *f)
-{
-    size_t i = 0, start;
-    if (f->dtype != LL_TENSOR_U8 || f->rank != 1)
-        return 0;
-    while (i < f->count) {
-        while (i < f->count && (f->data[i] == ' ' || f->data[i] == ','))
-            ++i;
-        start = i;
-        while (i < f->count && f->data[i] != ' ' && f->data[i] != ',')
-            ++i;
-        if (i - start == 8 && memcmp(f->data + start, "textured", 8) == 0)
-            return 1;
-    }
-    return 0;
-}
-
 ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const char *file,
                                ll_measured **out)
 {
     const ll_tensor_field *theta, *phi, *jac, *layout;
     shared sh;
-    int present[LL_MEASURED_LOBES] = { 1, 0, 0, 0 }, k;
+    int present[LL_MEASURED_LOBES] = { 1, 0, 0, 0 }, k, textured = 0;
     double eta = 1.0;
     ll_measured *m = NULL;
     ll_status s;
@@ -437,12 +427,17 @@ ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const 
     layout = find_named(t, base, "layerlab_layout");
     sh.extended = layout != NULL;
     /* The layout first: a file this version does not read is said so. */
-    if ((layout && (s = read_layout(layout, file, present)) != LL_OK) ||
+    if ((layout && (s = ll_measured_read_layout(layout, file, present, &textured)) != LL_OK) ||
         (s = require_named(t, base, "theta_i", 1, file, &theta)) != LL_OK ||
         (s = require_named(t, base, "phi_i", 1, file, &phi)) != LL_OK ||
         (sh.spectral && (s = require_named(t, base, "wavelengths", 1, file, &sh.lam)) != LL_OK) ||
         (layout && (s = read_eta(t, base, file, &eta)) != LL_OK))
         goto done;
+    if (textured)
+        FAIL(LL_ERROR_UNSUPPORTED,
+             "ll_bsdf_open: %s: field \"%slayerlab_layout\": a textured set inside a set is "
+             "not read by this version",
+             file, base);
     jac = find_named(t, base, "jacobian");
     if (!jac || jac->dtype != LL_TENSOR_U8 || jac->count != 1 || jac->data[0] > 1)
         FAIL(LL_ERROR_FORMAT,
@@ -509,13 +504,16 @@ ll_status ll_measured_open(const unsigned char *data, size_t size, const char *f
 {
     ll_tensor_file t = { 0, NULL };
     const ll_tensor_field *layout;
+    int present[LL_MEASURED_LOBES], textured = 0;
     ll_bsdf *b = NULL;
     ll_status s = ll_tensor_parse(data, size, file, &t);
     if (s != LL_OK)
         return s;
     layout = ll_tensor_find(&t, "layerlab_layout");
-    if (layout && layout_is_textured(layout)) {
-        s = ll_measured_open_extended(&t, size, file, &b);
+    if (layout && (s = ll_measured_read_layout(layout, file, present, &textured)) != LL_OK)
+        goto done;
+    if (textured) {
+        s = ll_measured_open_textured(&t, size, file, &b);
         goto done;
     }
     b = ll_calloc(1, sizeof *b);

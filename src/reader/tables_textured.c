@@ -38,40 +38,6 @@
 
 #define FAIL(status, ...) do { s = ll_fail(status, __VA_ARGS__); goto done; } while (0)
 
-/* The layout: words separated by spaces; this reader knows "textured". */
-static ll_status read_layout(const ll_tensor_file *t, const char *file, int *textured)
-{
-    const ll_tensor_field *f = ll_tensor_find(t, "layerlab_layout");
-    size_t i = 0, n;
-    *textured = 0;
-    if (f->dtype != LL_TENSOR_U8 || f->rank != 1)
-        return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"layerlab_layout\" must be "
-                       "uint8 text", file);
-    n = f->count;
-    while (i < n) {
-        size_t start;
-        while (i < n && f->data[i] == ' ')
-            ++i;
-        start = i;
-        while (i < n && f->data[i] != ' ')
-            ++i;
-        if (i == start)
-            break;
-        if (i - start == 8 && !memcmp(f->data + start, "textured", 8))
-            *textured = 1;
-        else
-            return ll_fail(LL_ERROR_UNSUPPORTED,
-                           "ll_bsdf_open: %s: field \"layerlab_layout\": \"%.*s\" is not read "
-                           "by this version (it reads \"textured\")",
-                           file, (int)(i - start > 64 ? 64 : i - start),
-                           (const char *)f->data + start);
-    }
-    if (!*textured)
-        return ll_fail(LL_ERROR_FORMAT,
-                       "ll_bsdf_open: %s: field \"layerlab_layout\" names no set", file);
-    return LL_OK;
-}
-
 /* The parameter block, checked as the .bsdf reader checks its own, into
  * b (n_parameters, n_parameter_values, n_bases and their arrays). */
 static ll_status read_parameters(const ll_tensor_file *t, const char *file, ll_bsdf *b)
@@ -133,15 +99,12 @@ static ll_status read_parameters(const ll_tensor_file *t, const char *file, ll_b
     return LL_OK;
 }
 
-ll_status ll_measured_open_extended(const ll_tensor_file *t, size_t file_size,
+ll_status ll_measured_open_textured(const ll_tensor_file *t, size_t file_size,
                                     const char *file, ll_bsdf **out)
 {
     ll_bsdf *b = NULL;
-    int textured;
     size_t k;
-    ll_status s = read_layout(t, file, &textured);
-    if (s != LL_OK)
-        return s;
+    ll_status s = LL_OK;
     b = ll_calloc(1, sizeof *b);
     if (!b)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
