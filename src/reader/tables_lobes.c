@@ -81,31 +81,17 @@ static double lobe_pdf(const ll_measured *set, int transmit, const double wi[3],
     return ll_measured_pdf(set, wi, f);
 }
 
-/* The set's luminance albedo at wi's elevation. */
+/* The set's luminance albedo at wi's elevation, interpolated as the
+ * set's slices are. */
 static double weight_at(const ll_measured *set, const double wi[3])
 {
-    const double *th;
-    double theta, t;
-    size_t n, lo = 0, hi;
+    size_t lo;
+    double t;
     if (!set)
         return 0.0;
-    th = set->vndf.param_values[1];
-    n = set->vndf.param_size[1];
-    theta = acos(wi[2] > 1.0 ? 1.0 : wi[2]);
-    if (n < 2 || theta <= th[0])
-        return set->weight[0];
-    if (theta >= th[n - 1])
-        return set->weight[n - 1];
-    hi = n - 1;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (th[mid] <= theta)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    t = (theta - th[lo]) / (th[hi] - th[lo]);
-    return (1.0 - t) * set->weight[lo] + t * set->weight[hi];
+    ll_warp_locate(set->vndf.param_values[1], set->vndf.param_size[1],
+                   acos(wi[2] > 1.0 ? 1.0 : wi[2]), &lo, &t);
+    return t == 0.0 ? set->weight[lo] : (1.0 - t) * set->weight[lo] + t * set->weight[lo + 1];
 }
 
 /* wi in the frame of its side's sets, and the sets. 0 if wi lies in the

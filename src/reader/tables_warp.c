@@ -140,32 +140,6 @@ oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
 }
 
-/* The interval of an ascending list that holds x, and the weight of its
- * upper end, clamped to the list's ends; a single value needs no weight.
- * The halving runs over a length that does not depend on x (as SEARCH
- * below): every call looks up a new elevation, whose comparisons a
- * branch would mispredict half the time. */
-static void locate(const double *v, size_t n, double x, size_t *i, double *t)
-{
-    size_t lo = 0, len;
-    if (n < 2) {
-        *i = 0;
-        *t = 0.0;
-        return;
-    }
-    for (len = n - 1; len > 1;) {
-        size_t half = len / 2, mid = lo + half;
-        lo = v[mid] <= x ? mid : lo;
-        len -= half;
-    }
-    *i = lo;
-    *t = (x - v[lo]) / (v[lo + 1] - v[lo]);
-    if (!(*t > 0.0))
-        *t = 0.0;
-    if (*t > 1.0)
-        *t = 1.0;
-}
-
 void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
 {
     size_t p, c, idx[LL_WARP_MAX_PARAMS];
@@ -174,7 +148,7 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
      * elevation's two neighbours, with the weights the general loop below
      * gives them (1 (1 - t) and 1 t), without its eight corners. */
     if (wp->n_params == 2 && wp->param_size[0] == 1) {
-        locate(wp->param_values[1], wp->param_size[1], param[1], &idx[1], &t[1]);
+        ll_warp_locate(wp->param_values[1], wp->param_size[1], param[1], &idx[1], &t[1]);
         s->count = 0;
         if (1.0 - t[1] != 0.0) {
             s->index[s->count] = idx[1];
@@ -187,7 +161,7 @@ void ll_warp2d_slices(const ll_warp2d *wp, const double *param, slice_set *s)
         return;
     }
     for (p = 0; p < wp->n_params; ++p)
-        locate(wp->param_values[p], wp->param_size[p], param[p], &idx[p], &t[p]);
+        ll_warp_locate(wp->param_values[p], wp->param_size[p], param[p], &idx[p], &t[p]);
     /* Only the corners of non-zero weight are kept: an isotropic file's
      * single azimuth and a channel index that hits its node exactly leave
      * two of the eight, and every look-up then reads two slices. */

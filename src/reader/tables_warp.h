@@ -130,6 +130,32 @@ LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *
 LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double pos[2], double u[2], double *pdf);
 
+/* The interval of an ascending list v[0 .. n) that holds x, and the weight
+ * of its upper end, clamped to the list's ends; a single value needs no
+ * weight. The halving runs over a length that does not depend on x: every
+ * call looks up a new elevation, whose comparisons a branch would
+ * mispredict half the time. */
+static inline void ll_warp_locate(const double *v, size_t n, double x, size_t *i, double *t)
+{
+    size_t lo = 0, len;
+    if (n < 2) {
+        *i = 0;
+        *t = 0.0;
+        return;
+    }
+    for (len = n - 1; len > 1;) {
+        size_t half = len / 2, mid = lo + half;
+        lo = v[mid] <= x ? mid : lo;
+        len -= half;
+    }
+    *i = lo;
+    *t = (x - v[lo]) / (v[lo + 1] - v[lo]);
+    if (!(*t > 0.0))
+        *t = 0.0;
+    if (*t > 1.0)
+        *t = 1.0;
+}
+
 /* The square coordinates of a direction, shared by the reflected
  * (tables_eval.c) and refracted (tables_refract.c) lobes: the elevation
  * of unit d from its chord to the pole (exact near the pole, where acos
