@@ -145,12 +145,13 @@ LL_API ll_status ll_layer_set_von_mises_fisher(ll_layer *layer, double albedo, d
  *
  * compensate != 0 adds the paper's multiple-scattering compensation to
  * order 0 (recommended: on): the energy that single scattering loses to
- * shadowing returns as a low-rank term, split between reflection and
- * transmission by their current ratio (and eta^2-reciprocal) for a
- * dielectric; for a conductor coloured by the Fresnel reflectance of the
- * facets where each direction loses it and of the bounces after, fitted to
- * a random walk on the Smith microsurface (docs/method.md, "Energy
- * compensation against a random walk"); a non-absorbing dielectric then
+ * shadowing returns as a low-rank term. For a dielectric it is split
+ * between reflection and transmission (eta^2-reciprocal) by the share of
+ * the lost light that leaves on either side, tabulated from a random walk
+ * on the Smith microsurface; for a conductor it is coloured by the Fresnel
+ * reflectance of the facets where each direction loses it and of the
+ * bounces after, fitted to the same walk (docs/method.md, "Energy
+ * compensation against a random walk"). A non-absorbing dielectric then
  * conserves energy (R + T = 1 per incident direction) wherever its lobes
  * are resolved, and so does a conductor with F = 1.
  *

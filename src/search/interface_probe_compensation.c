@@ -3,7 +3,7 @@
  * (search/probe.h): the albedos of the single-scattering layer of n nodes
  * (order 0 only, every node pair, as ll_layer_set_microfacet computes them:
  * the same series, nodes, weights and order of summation), then the same
- * rank-one terms (words/microfacet_compensation.c).
+ * rank-one terms (words/microfacet_compensation*.c).
  *
  * Unlike the lobe, the term cannot be had from the stencils alone: it is
  * made from every node's albedo, O(n^2) order-0 series per evaluation
@@ -229,8 +229,9 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
         ll_microfacet_compensate_conductor(mf, h, x + h, job.w, job.albedo[LL_BLOCK_RT],
                                            job.albedo[LL_BLOCK_RB], out->memory, &out->terms);
     else
-        ll_microfacet_compensate_dielectric(h, job.w, eta_re, (const double *const *)job.albedo,
-                                            out->memory, &out->terms);
+        ll_microfacet_compensate_dielectric(mf, h, x + h, job.w, eta_re,
+                                            (const double *const *)job.albedo, out->memory,
+                                            &out->terms);
 done:
     ll_free(rule);
     ll_free(x);

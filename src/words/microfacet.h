@@ -109,12 +109,15 @@ typedef struct ll_microfacet_compensation {
     double scale[4];
 } ll_microfacet_compensation;
 
-/* A dielectric's terms from the albedos (indexed by block: column sums of
- * the unweighted order 0 with the weights w[i] = 2 pi w_i mu_i of the
- * positive nodes) of the single-scattering layer; work holds 4 h doubles
- * and must outlive *out. */
-LL_INTERNAL void ll_microfacet_compensate_dielectric(size_t h, const double *w, double eta,
-                                                     const double *const albedo[4],
+/* A dielectric's terms (words/microfacet_compensation_dielectric.c) from
+ * the albedos (indexed by block: column sums of the unweighted order 0
+ * with the weights w[i] = 2 pi w_i mu_i of the positive nodes) of the
+ * single-scattering layer at the positive node cosines mu; mf is a model
+ * of the interface (its distribution and roughness). work holds 4 h
+ * doubles and must outlive *out. */
+LL_INTERNAL void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h,
+                                                     const double *mu, const double *w,
+                                                     double eta, const double *const albedo[4],
                                                      double *work,
                                                      ll_microfacet_compensation *out);
 /* A conductor's from the albedos of reflection from above of the same

@@ -140,7 +140,7 @@ static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, cons
             m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
 }
 
-/* Energy compensation (words/microfacet_compensation.c) of the unweighted
+/* Energy compensation (words/microfacet_compensation*.c) of the unweighted
  * order 0. Blocks of m0 (column-major): R^t rows < h, columns >= h; R^b
  * rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. work
  * holds 8 h doubles. */
@@ -154,8 +154,9 @@ static void compensate(const ll_microfacet_job *job, size_t n, double *work)
     if (job->eta_im == 0.0) {
         for (q = 0; q < 4; ++q) /* (block q: rows >= h when q > 1, columns when q odd) */
             block_albedo(job->order0, n, job->w, (q >> 1) * h, (q & 1) * h, albedo[q]);
-        ll_microfacet_compensate_dielectric(h, job->w, job->eta_re,
-                                            (const double *const *)albedo, work, &c);
+        ll_microfacet_compensate_dielectric(job->mf, h, job->layer->nodes + h, job->w,
+                                            job->eta_re, (const double *const *)albedo, work,
+                                            &c);
     } else {
         /* (Reflection from above: rows < h, columns >= h; the mirror's
          * albedo in R^t's slot, the layer's in R^b's.) */
