@@ -33,79 +33,66 @@
  * of our loss, not the walk's: it also carries the difference between our
  * separable Smith G (rational G1) and the walk's first bounce (height-
  * correlated, exact Lambda), up to 0.17 in T at GGX alpha 1, 75 degrees.
- * Where our loss is below 0.001 the share is that of the nearest angle
- * with a larger loss (it then moves R and T by less than 0.001); shares
- * are clamped to [0, 1] (from the denser side at GGX alpha >= 0.7, 75
- * degrees, the walk reflects more than all of our loss could give). */
+ * Shares are clamped to [0, 1] (from the denser side at GGX alpha >= 0.7,
+ * 75 degrees, the walk reflects more than all of our loss could give).
+ *
+ * P: our loss is below 0.002 there, too little to measure a share by (the
+ * walk's standard error is 0.0003); what a layer loses there is mostly its
+ * own quadrature's error at a coarse resolution, which goes back in
+ * proportion to what the layer scatters, R / (R + T) of the direction. */
+#define P (-1.0)
 static const double share_beckmann[2][10][6] = {
     {
-    { 0.599, 0.599, 0.599, 0.599, 0.599, 0.599 },
-    { 0.396, 0.396, 0.396, 0.396, 0.396, 0.377 },
-    { 0.225, 0.225, 0.225, 0.225, 0.252, 0.295 },
-    { 0.590, 0.590, 0.192, 0.189, 0.208, 0.223 },
-    { 0.117, 0.194, 0.196, 0.153, 0.174, 0.189 },
-    { 0.182, 0.141, 0.152, 0.110, 0.127, 0.151 },
-    { 0.154, 0.116, 0.124, 0.104, 0.111, 0.101 },
-    { 0.116, 0.081, 0.100, 0.101, 0.088, 0.072 },
-    { 0.096, 0.085, 0.073, 0.074, 0.061, 0.055 },
-    { 0.084, 0.067, 0.069, 0.065, 0.045, 0.046 },
+        {     P,     P,     P,     P,     P, 0.599 },
+        {     P,     P,     P,     P, 0.396, 0.377 },
+        {     P,     P,     P, 0.225, 0.252, 0.295 },
+        {     P,     P, 0.192, 0.189, 0.208, 0.223 },
+        { 0.117, 0.194, 0.196, 0.153, 0.174, 0.189 },
+        { 0.182, 0.141, 0.152, 0.110, 0.127, 0.151 },
+        { 0.154, 0.116, 0.124, 0.104, 0.111, 0.101 },
+        { 0.116, 0.081, 0.100, 0.101, 0.088, 0.072 },
+        { 0.096, 0.085, 0.073, 0.074, 0.061, 0.055 },
+        { 0.084, 0.067, 0.069, 0.065, 0.045, 0.046 },
     },
     {
-    { 0.131, 0.131, 0.131, 0.131, 1.000, 1.000 },
-    { 0.648, 0.648, 0.648, 0.648, 0.923, 1.000 },
-    { 0.825, 0.825, 0.872, 0.921, 0.895, 0.997 },
-    { 0.983, 1.000, 1.000, 0.947, 0.901, 0.977 },
-    { 1.000, 1.000, 0.987, 0.946, 0.908, 0.952 },
-    { 0.997, 0.984, 0.976, 0.941, 0.915, 0.941 },
-    { 0.972, 0.961, 0.952, 0.936, 0.919, 0.941 },
-    { 0.947, 0.938, 0.924, 0.928, 0.927, 0.946 },
-    { 0.911, 0.899, 0.897, 0.912, 0.934, 0.956 },
-    { 0.870, 0.866, 0.875, 0.902, 0.940, 0.968 },
+        {     P,     P,     P, 0.131,     P, 1.000 },
+        {     P,     P,     P, 0.648, 0.923, 1.000 },
+        {     P,     P, 0.872, 0.921, 0.895, 0.997 },
+        { 0.983, 1.000, 1.000, 0.947, 0.901, 0.977 },
+        { 1.000, 1.000, 0.987, 0.946, 0.908, 0.952 },
+        { 0.997, 0.984, 0.976, 0.941, 0.915, 0.941 },
+        { 0.972, 0.961, 0.952, 0.936, 0.919, 0.941 },
+        { 0.947, 0.938, 0.924, 0.928, 0.927, 0.946 },
+        { 0.911, 0.899, 0.897, 0.912, 0.934, 0.956 },
+        { 0.870, 0.866, 0.875, 0.902, 0.940, 0.968 },
     },
 };
 static const double share_ggx[2][10][6] = {
     {
-    { 0.216, 0.216, 0.000, 0.125, 0.284, 0.297 },
-    { 0.000, 0.049, 0.137, 0.119, 0.157, 0.184 },
-    { 0.095, 0.095, 0.070, 0.079, 0.104, 0.119 },
-    { 0.070, 0.067, 0.067, 0.073, 0.068, 0.078 },
-    { 0.058, 0.064, 0.040, 0.042, 0.046, 0.061 },
-    { 0.043, 0.045, 0.042, 0.034, 0.037, 0.047 },
-    { 0.046, 0.042, 0.036, 0.031, 0.031, 0.041 },
-    { 0.034, 0.032, 0.033, 0.025, 0.027, 0.037 },
-    { 0.033, 0.027, 0.024, 0.023, 0.025, 0.033 },
-    { 0.026, 0.022, 0.019, 0.019, 0.021, 0.031 },
+        {     P,     P,     P, 0.125, 0.284, 0.297 },
+        { 0.000, 0.049, 0.137, 0.119, 0.157, 0.184 },
+        { 0.095, 0.095, 0.070, 0.079, 0.104, 0.119 },
+        { 0.070, 0.067, 0.067, 0.073, 0.068, 0.078 },
+        { 0.058, 0.064, 0.040, 0.042, 0.046, 0.061 },
+        { 0.043, 0.045, 0.042, 0.034, 0.037, 0.047 },
+        { 0.046, 0.042, 0.036, 0.031, 0.031, 0.041 },
+        { 0.034, 0.032, 0.033, 0.025, 0.027, 0.037 },
+        { 0.033, 0.027, 0.024, 0.023, 0.025, 0.033 },
+        { 0.026, 0.022, 0.019, 0.019, 0.021, 0.031 },
     },
     {
-    { 0.873, 0.907, 0.881, 0.859, 0.914, 0.955 },
-    { 0.842, 0.842, 0.878, 0.906, 0.931, 0.948 },
-    { 0.813, 0.823, 0.861, 0.907, 0.932, 0.954 },
-    { 0.798, 0.802, 0.836, 0.886, 0.926, 0.961 },
-    { 0.772, 0.772, 0.811, 0.867, 0.928, 0.980 },
-    { 0.745, 0.749, 0.784, 0.847, 0.923, 0.996 },
-    { 0.720, 0.727, 0.758, 0.823, 0.921, 1.000 },
-    { 0.696, 0.698, 0.729, 0.800, 0.917, 1.000 },
-    { 0.673, 0.678, 0.703, 0.777, 0.914, 1.000 },
-    { 0.652, 0.653, 0.677, 0.757, 0.909, 1.000 },
+        { 0.873, 0.907, 0.881, 0.859, 0.914, 0.955 },
+        { 0.842, 0.842, 0.878, 0.906, 0.931, 0.948 },
+        { 0.813, 0.823, 0.861, 0.907, 0.932, 0.954 },
+        { 0.798, 0.802, 0.836, 0.886, 0.926, 0.961 },
+        { 0.772, 0.772, 0.811, 0.867, 0.928, 0.980 },
+        { 0.745, 0.749, 0.784, 0.847, 0.923, 0.996 },
+        { 0.720, 0.727, 0.758, 0.823, 0.921, 1.000 },
+        { 0.696, 0.698, 0.729, 0.800, 0.917, 1.000 },
+        { 0.673, 0.678, 0.703, 0.777, 0.914, 1.000 },
+        { 0.652, 0.653, 0.677, 0.757, 0.909, 1.000 },
     },
 };
-
-/* The share for light from the denser side (denser = 1) or the rarer along
- * mu: linear in alpha and in the angle, held beyond the measured range
- * (alpha outside 0.1 .. 1, incidence beyond 75 degrees). The walk was run
- * for eta 1.5; other indices use the same shares, by which side is the
- * denser. */
-static double share(const ll_microfacet_model *mf, int denser, double mu)
-{
-    const double(*t)[6] = mf->ggx ? share_ggx[denser] : share_beckmann[denser];
-    double x = fmin(9.0, fmax(0.0, mf->alpha * 10.0 - 1.0));
-    double y = fmin(5.0, acos(fmin(1.0, fmax(0.0, mu))) * (180.0 / LL_PI) / 15.0);
-    size_t a = x >= 9.0 ? 8 : (size_t)x, b = y >= 5.0 ? 4 : (size_t)y;
-    double fa = x - (double)a, fb = y - (double)b;
-    double lo = t[a][b] + fb * (t[a][b + 1] - t[a][b]);
-    double hi = t[a + 1][b] + fb * (t[a + 1][b + 1] - t[a + 1][b]);
-    return lo + fa * (hi - lo);
-}
 
 /* Cosine of the most grazing incidence the shares were measured at. */
 #define MEASURED_MU 0.25881904510252076 /* cos 75 degrees */
@@ -117,6 +104,34 @@ static double ramp(double mu)
     return fmin(1.0, fmax(0.0, (theta - 75.0) / 15.0));
 }
 
+/* The share for light from the denser side (denser = 1) or the rarer along
+ * mu, where the layer reflects the fraction prop of what it scatters (for
+ * P): linear in alpha and in the angle, held beyond the measured alphas
+ * (0.1 .. 1). Beyond 75 degrees, where the walk was not run and a layer's
+ * quadrature loses most (its lobes are sharpest there), the rarer side's
+ * goes over to prop by the ramp, reaching it at grazing incidence; the
+ * denser side's stays at its 75 degrees' value (near 1: there the lost
+ * light is reflected totally). The walk was run for eta 1.5; other indices
+ * use the same shares, by which side is the denser. */
+static double entry(double v, double prop)
+{
+    return v < 0.0 ? prop : v;
+}
+
+static double share(const ll_microfacet_model *mf, int denser, double mu, double prop)
+{
+    const double(*t)[6] = mf->ggx ? share_ggx[denser] : share_beckmann[denser];
+    double x = fmin(9.0, fmax(0.0, mf->alpha * 10.0 - 1.0));
+    double y = fmin(5.0, acos(fmin(1.0, fmax(0.0, mu))) * (180.0 / LL_PI) / 15.0);
+    size_t a = x >= 9.0 ? 8 : (size_t)x, b = y >= 5.0 ? 4 : (size_t)y;
+    double fa = x - (double)a, fb = y - (double)b;
+    double lo = entry(t[a][b], prop) + fb * (entry(t[a][b + 1], prop) - entry(t[a][b], prop));
+    double hi = entry(t[a + 1][b], prop) +
+                fb * (entry(t[a + 1][b + 1], prop) - entry(t[a + 1][b], prop));
+    double v = lo + fa * (hi - lo);
+    return denser ? v : v + ramp(mu) * (prop - v);
+}
+
 static double dot(const double *a, const double *b, size_t n)
 {
     double sum = 0.0;
@@ -126,23 +141,24 @@ static double dot(const double *a, const double *b, size_t n)
     return sum;
 }
 
-/* Moves a towards target beyond 75 degrees by the ramp above, a[j] +=
- * lambda ramp(mu_j) (target[j] - a[j]) (target NULL: 0), lambda at most 1,
- * so that W.a changes by up to `amount`; returns what is left of it. */
+/* Moves a towards target beyond 75 degrees, a[j] += lambda g(mu_j)
+ * (target[j] - a[j]) (target NULL: 0) with g the ramp above (flat: 1),
+ * lambda at most 1, so that W.a changes by up to `amount`; returns what is
+ * left of it. */
 static double balance(size_t h, const double *mu, const double *w, double amount,
-                      const double *target, double *a)
+                      const double *target, int flat, double *a)
 {
     double room = 0.0, lambda;
     size_t j;
     for (j = 0; j < h; ++j)
         if (mu[j] < MEASURED_MU)
-            room += w[j] * ramp(mu[j]) * fabs((target ? target[j] : 0.0) - a[j]);
+            room += w[j] * (flat ? 1.0 : ramp(mu[j])) * fabs((target ? target[j] : 0.0) - a[j]);
     if (!(room > 0.0) || !(amount > 0.0))
         return fmax(0.0, amount);
     lambda = fmin(1.0, amount / room);
     for (j = 0; j < h; ++j)
         if (mu[j] < MEASURED_MU)
-            a[j] += lambda * ramp(mu[j]) * ((target ? target[j] : 0.0) - a[j]);
+            a[j] += lambda * (flat ? 1.0 : ramp(mu[j])) * ((target ? target[j] : 0.0) - a[j]);
     return amount - lambda * room;
 }
 
@@ -165,29 +181,37 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
 
     memset(out, 0, sizeof *out);
     for (j = 0; j < h; ++j) {
-        r_t[j] = fmax(0.0, 1.0 - rt[j] - ttb[j]); /* the losses, top and bottom */
-        r_b[j] = fmax(0.0, 1.0 - rb[j] - tbt[j]);
-        a_tb[j] = r_t[j] * (1.0 - share(mf, top_denser, mu[j]));
-        a_bt[j] = r_b[j] * (1.0 - share(mf, !top_denser, mu[j]));
+        double sum_t = rt[j] + ttb[j], sum_b = rb[j] + tbt[j];
+        double prop_t = sum_t > 0.0 ? rt[j] / sum_t : 0.0;
+        double prop_b = sum_b > 0.0 ? rb[j] / sum_b : 0.0;
+        r_t[j] = fmax(0.0, 1.0 - sum_t); /* the losses, top and bottom */
+        r_b[j] = fmax(0.0, 1.0 - sum_b);
+        a_tb[j] = r_t[j] * (1.0 - share(mf, top_denser, mu[j], prop_t));
+        a_bt[j] = r_b[j] * (1.0 - share(mf, !top_denser, mu[j], prop_b));
     }
     /* Reciprocity asks W.a_tb = eta^2 W.a_bt. The walk's own transmission
-     * holds it, but the shares hold it only where they were measured:
-     * beyond 75 degrees they are the 75 degrees' values, and from the
-     * denser side at GGX alpha >= 0.7 no share reaches the walk (our single
-     * scattering alone transmits more there than the walk's total). So the
-     * difference is settled beyond 75 degrees, by a ramp from nothing at 75
-     * to the most at grazing incidence (continuous where the measurements
-     * end): the side with the larger total gives up transmitted light
-     * there, and what that cannot settle the other side's transmission
-     * takes from its reflection there. */
+     * holds it, but the shares hold it only where they were measured, and
+     * from the denser side at GGX alpha >= 0.7 no share reaches the walk
+     * (our single scattering alone transmits more there than the walk's
+     * total), which leaves the denser side with too much. That is settled
+     * beyond 75 degrees, where the walk was not run: the denser side gives
+     * up transmitted light there by the ramp (continuous where the
+     * measurements end), then the rarer side's transmission takes from its
+     * reflection there, by the ramp and, if that is not enough, evenly
+     * (from the rarer side at grazing incidence the lost light mostly
+     * enters the denser medium). Where the rarer side has too much (mostly
+     * a coarse layer's own quadrature losses), the normalisation below
+     * scales it down, as a term in proportion to R / (R + T) would. */
     w_bt = dot(w, a_bt, h);
     w_tb = dot(w, a_tb, h);
-    if (w_bt > w_tb / eta2) {
-        double left = balance(h, mu, w, w_bt - w_tb / eta2, NULL, a_bt);
-        (void)balance(h, mu, w, left * eta2, r_t, a_tb);
-    } else {
-        double left = balance(h, mu, w, w_tb - w_bt * eta2, NULL, a_tb);
-        (void)balance(h, mu, w, left / eta2, r_b, a_bt);
+    if (!top_denser && w_bt > w_tb / eta2) {
+        double left = balance(h, mu, w, w_bt - w_tb / eta2, NULL, 0, a_bt);
+        left = balance(h, mu, w, left * eta2, r_t, 0, a_tb);
+        (void)balance(h, mu, w, left, r_t, 1, a_tb);
+    } else if (top_denser && w_tb > w_bt * eta2) {
+        double left = balance(h, mu, w, w_tb - w_bt * eta2, NULL, 0, a_tb);
+        left = balance(h, mu, w, left / eta2, r_b, 0, a_bt);
+        (void)balance(h, mu, w, left, r_b, 1, a_bt);
     }
     /* C^tb = a_bt a_tb^T / norm; column j of W C^tb sums to a_tb[j] (W.a_bt)
      * / norm <= a_tb[j], and C^bt = (C^tb)^T / eta^2 sums to at most
