@@ -152,13 +152,12 @@ static ll_status eval_pair(size_t p, void *ctx)
 {
     const eval_job *job = ctx;
     const pair_stencil *st = job->stencils + p;
-    double *series = ll_alloc_array(job->m, sizeof(double));
+    double *series = ll_alloc_array(job->m, 2 * sizeof(double)), *term = series + job->m;
     double *scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
     double *acc = job->values + p * job->set->n_phi;
     const ll_probe_pair *pair = job->set->pairs + p;
     int block = LL_BLOCK_OF(pair->mu_o, pair->mu_i);
     size_t a, b, k, len;
-    double term = 0.0;
     ll_status s = LL_OK;
     if (!series || !scratch)
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu orders",
@@ -175,14 +174,15 @@ static ll_status eval_pair(size_t p, void *ctx)
             if (s == LL_OK)
                 ll_probe_add_series(c, len, job->set->phi, job->set->n_phi,
                                     st->wo[a] * st->wi[b], acc);
-            /* The compensation is order 0: the same at every azimuth. */
-            term += st->wo[a] * st->wi[b] *
-                    ll_probe_compensation_at(job->compensation, block, st->io[a], st->ii[b]);
+            if (s == LL_OK) {
+                len = ll_probe_compensation_series(job->compensation, block, st->io[a],
+                                                   st->ii[b], job->m, term);
+                ll_probe_add_series(term, len, job->set->phi, job->set->n_phi,
+                                    st->wo[a] * st->wi[b], acc);
+            }
         }
-    for (k = 0; k < job->set->n_phi; ++k) {
-        acc[k] += term;
+    for (k = 0; k < job->set->n_phi; ++k)
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
-    }
     ll_free(series);
     ll_free(scratch);
     return s;

@@ -140,11 +140,59 @@ static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, cons
             m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
 }
 
+/* The orders past 0 of the terms (ll_microfacet_compensation_series) into
+ * the builders that hold the columns of the single-scattering lobe: per
+ * column of a block, every row's series first, then each order's column
+ * read back, added to and set again (weighted as fill_column's). Orders
+ * whose builder this process does not hold are left as they are. */
+static ll_status spread_orders(const ll_microfacet_job *job, const ll_microfacet_compensation *c)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, m = l->m, h = n / 2, cells, i, j, k;
+    double *series, *column;
+    ll_status s = LL_OK;
+    int q;
+    if (m < 2 || !c->mu || !ll_size_mul(h, m, &cells) || !ll_size_add(cells, n, &cells))
+        return m < 2 || !c->mu ? LL_OK
+                               : ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                                         "ll_layer_set_microfacet: out of memory");
+    series = ll_alloc_array(cells, sizeof(double));
+    if (!series)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
+    column = series + h * m;
+    for (q = 0; q < 4 && s == LL_OK; ++q) {
+        size_t row0 = (size_t)(q >> 1) * h, col0 = (size_t)(q & 1) * h;
+        if (c->scale[q] == 0.0)
+            continue;
+        for (j = 0; j < h && s == LL_OK; ++j) {
+            size_t col = col0 + j, longest = 0;
+            double factor = ll_layer_surface_factor(l, col, 1);
+            for (i = 0; i < h; ++i) {
+                size_t got = ll_microfacet_compensation_series(c, q, i, j, m, series + i * m);
+                for (k = got; k < m; ++k)
+                    series[i * m + k] = 0.0;
+                if (got > longest)
+                    longest = got;
+            }
+            for (k = 1; k < longest && s == LL_OK; ++k) {
+                if (!job->builders[k])
+                    continue;
+                ll_order_builder_get_column(job->builders[k], col, column);
+                for (i = 0; i < h; ++i)
+                    column[row0 + i] += series[i * m + k] * factor;
+                s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
+            }
+        }
+    }
+    ll_free(series);
+    return s;
+}
+
 /* Energy compensation (words/microfacet_compensation.c) of the unweighted
- * order 0. Blocks of m0 (column-major): R^t rows < h, columns >= h; R^b
- * rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. work
- * holds 8 h doubles. */
-static void compensate(const ll_microfacet_job *job, size_t n, double *work)
+ * order 0, and its spread over the other orders. Blocks of m0
+ * (column-major): R^t rows < h, columns >= h; R^b rows >= h, columns < h;
+ * T^tb rows, columns >= h; T^bt both < h. work holds 8 h doubles. */
+static ll_status compensate(const ll_microfacet_job *job, size_t n, double *work)
 {
     size_t h = n / 2, q;
     double *albedo[4];
@@ -168,6 +216,7 @@ static void compensate(const ll_microfacet_job *job, size_t n, double *work)
         if (c.scale[q] != 0.0)
             block_add_outer(job->order0, n, (q >> 1) * h, (q & 1) * h, c.u[q], c.v[q],
                             c.scale[q]);
+    return spread_orders(job, &c);
 }
 
 /* After the columns: energy compensation on the unweighted order 0, then
@@ -181,7 +230,7 @@ ll_status ll_microfacet_finish_order0(void *ctx)
     if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
         return ll_watch_check(job->watch, "ll_layer_set_microfacet");
     if (job->conserve_energy)
-        compensate(job, n, job->work);
+        s = compensate(job, n, job->work);
     for (col = 0; col < n && s == LL_OK; ++col) {
         double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
         size_t row;

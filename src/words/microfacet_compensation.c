@@ -168,6 +168,31 @@ static double chain(const ll_microfacet_model *mf, int which)
     return t[k] + f * (t[k + 1] - t[k]);
 }
 
+/* How the returned light spreads over the azimuth
+ * (ll_microfacet_compensation_series): fitted to the walk's multiple part
+ * (tests/data/ms_walk.txt, F rows: Beckmann alpha 0.3 .. 1, GGX 0.5 and
+ * 1, incidence 0 .. 60 degrees, exitance 0 .. 75, azimuths 0 .. 180). A
+ * Beckmann metal's is a peak toward the mirror side whose concentration
+ * grows as the roughness falls (alpha 0.5, 60 / 60 degrees: about 8.5;
+ * 1.25 sin_i sin_j / alpha^3 / (mu_i + mu_j)^0.75 here) over a floor of a
+ * tenth; GGX's long tails leave most of it flat, a fifth in a peak
+ * of concentration 0.5 sin_i sin_j / alpha^3. */
+static void spread(const ll_microfacet_model *mf, const double *mu,
+                   ll_microfacet_compensation *out)
+{
+    double a3 = mf->alpha * mf->alpha * mf->alpha;
+    out->mu = mu;
+    if (mf->ggx) {
+        out->spread = 0.5 / a3;
+        out->power = 0.0;
+        out->peaked = 0.2;
+    } else {
+        out->spread = 1.25 / a3;
+        out->power = 0.75;
+        out->peaked = 0.9;
+    }
+}
+
 /* The light that single scattering loses along mu has been reflected once
  * already, at a facet that mu sees: of the mirror's loss 1 - E(mu) (F = 1,
  * the same roughness), the metal's is A(mu) - E_F(mu), with A the Fresnel
@@ -212,4 +237,5 @@ void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
     out->u[LL_BLOCK_RT] = out->v[LL_BLOCK_RT] = first;
     out->u[LL_BLOCK_RB] = out->v[LL_BLOCK_RB] = first;
     out->scale[LL_BLOCK_RT] = out->scale[LL_BLOCK_RB] = factor / wf;
+    spread(mf, mu, out);
 }
