@@ -140,39 +140,48 @@ static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, cons
             m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
 }
 
+/* Do blocks p and q of c hold the same term? */
+static int same_term(const ll_microfacet_compensation *c, int p, int q)
+{
+    return c->scale[p] == c->scale[q] && c->u[p] == c->u[q] && c->v[p] == c->v[q];
+}
+
 /* The orders past 0 of the terms (ll_microfacet_compensation_series) into
  * the builders that hold the columns of the single-scattering lobe: per
- * column of a block, every row's series first, then each order's column
- * read back, added to and set again (weighted as fill_column's). Orders
- * whose builder this process does not hold are left as they are. */
+ * incident node j, every row's series of a block's column first (once for
+ * blocks that hold the same term: a conductor's two), then each order's
+ * column read back, added to and set again (weighted as fill_column's).
+ * Orders whose builder this process does not hold are left as they are. */
 static ll_status spread_orders(const ll_microfacet_job *job, const ll_microfacet_compensation *c)
 {
     const ll_layer *l = job->layer;
-    size_t n = l->n, m = l->m, h = n / 2, cells, i, j, k;
+    size_t n = l->n, m = l->m, h = n / 2, cells, i, j, k, longest = 0;
     double *series, *column;
     ll_status s = LL_OK;
-    int q;
-    if (m < 2 || !c->mu || !ll_size_mul(h, m, &cells) || !ll_size_add(cells, n, &cells))
-        return m < 2 || !c->mu ? LL_OK
-                               : ll_fail(LL_ERROR_OUT_OF_MEMORY,
-                                         "ll_layer_set_microfacet: out of memory");
-    series = ll_alloc_array(cells, sizeof(double));
-    if (!series)
+    int q, made;
+    if (m < 2 || !c->mu)
+        return LL_OK;
+    if (!ll_size_mul(h, m, &cells) || !ll_size_add(cells, n, &cells) ||
+        !(series = ll_alloc_array(cells, sizeof(double))))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
     column = series + h * m;
-    for (q = 0; q < 4 && s == LL_OK; ++q) {
-        size_t row0 = (size_t)(q >> 1) * h, col0 = (size_t)(q & 1) * h;
-        if (c->scale[q] == 0.0)
-            continue;
-        for (j = 0; j < h && s == LL_OK; ++j) {
-            size_t col = col0 + j, longest = 0;
+    for (j = 0; j < h && s == LL_OK; ++j) {
+        made = -1;
+        for (q = 0; q < 4 && s == LL_OK; ++q) {
+            size_t row0 = (size_t)(q >> 1) * h, col = (size_t)(q & 1) * h + j;
             double factor = ll_layer_surface_factor(l, col, 1);
-            for (i = 0; i < h; ++i) {
-                size_t got = ll_microfacet_compensation_series(c, q, i, j, m, series + i * m);
-                for (k = got; k < m; ++k)
-                    series[i * m + k] = 0.0;
-                if (got > longest)
-                    longest = got;
+            if (c->scale[q] == 0.0)
+                continue;
+            if (made < 0 || !same_term(c, made, q)) {
+                longest = 0;
+                for (i = 0; i < h; ++i) {
+                    size_t got = ll_microfacet_compensation_series(c, q, i, j, m, series + i * m);
+                    for (k = got; k < m; ++k)
+                        series[i * m + k] = 0.0;
+                    if (got > longest)
+                        longest = got;
+                }
+                made = q;
             }
             for (k = 1; k < longest && s == LL_OK; ++k) {
                 if (!job->builders[k])
