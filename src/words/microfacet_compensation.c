@@ -178,7 +178,7 @@ static double chain(const ll_microfacet_model *mf, int which)
  * 1, incidence 0 .. 60 degrees, exitance 0 .. 75, azimuths 0 .. 180). A
  * Beckmann metal's is a peak toward the mirror side whose concentration
  * grows as the roughness falls (alpha 0.5, 60 / 60 degrees: about 8.5;
- * 1.25 sin_i sin_j / alpha^3 / (mu_i + mu_j)^0.75 here) over a floor of a
+ * 1.3 sin_i sin_j / alpha^3 / (mu_i + mu_j)^0.75 here) over a floor of a
  * tenth; GGX's long tails leave most of it flat, a fifth in a peak
  * of concentration 0.5 sin_i sin_j / alpha^3. */
 static void spread(const ll_microfacet_model *mf, const double *mu,
@@ -191,7 +191,7 @@ static void spread(const ll_microfacet_model *mf, const double *mu,
         out->power = 0.0;
         out->peaked = 0.2;
     } else {
-        out->spread = 1.25 / a3;
+        out->spread = 1.3 / a3;
         out->power = 0.75;
         out->peaked = 0.9;
     }
