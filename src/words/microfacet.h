@@ -122,8 +122,8 @@ typedef struct ll_microfacet_compensation {
  * input node j, m terms at most, in out[m]; returns how many are written
  * (0: no term; the rest are negligible). The concentration is held to
  * what m orders resolve (m^2 / 40: the series truncated at m is within
- * e^-20 of the whole), so a layer of m orders and the probes at m orders
- * carry the same term. */
+ * e^-20 of the whole) and to 100, so a layer of m orders and the probes at
+ * m orders carry the same term, the same for every m of 64 or more. */
 LL_INTERNAL size_t ll_microfacet_compensation_series(const ll_microfacet_compensation *c, int q,
                                                      size_t i, size_t j, size_t m, double *out);
 

@@ -180,11 +180,16 @@ static double chain(const ll_microfacet_model *mf, int which)
  * grows as the roughness falls (alpha 0.5, 60 / 60 degrees: about 8.5;
  * 1.3 sin_i sin_j / alpha^3 / (mu_i + mu_j)^0.75 here) over a floor of a
  * tenth; GGX's long tails leave most of it flat, a fifth in a peak
- * of concentration 0.5 sin_i sin_j / alpha^3. */
+ * of concentration 0.5 sin_i sin_j / alpha^3. Below the fitted range
+ * (alpha 0.3) the concentration stays that of alpha 0.3: alpha^-3 would
+ * make a smooth metal's small term a peak far narrower than its own lobe,
+ * which only the layer's highest orders (and the resolution search's
+ * order count) would pay for. */
+#define SPREAD_ALPHA_MIN 0.3
 static void spread(const ll_microfacet_model *mf, const double *mu,
                    ll_microfacet_compensation *out)
 {
-    double a3 = mf->alpha * mf->alpha * mf->alpha;
+    double alpha = fmax(mf->alpha, SPREAD_ALPHA_MIN), a3 = alpha * alpha * alpha;
     out->mu = mu;
     if (mf->ggx) {
         out->spread = 0.5 / a3;

@@ -16,6 +16,11 @@
  * a smooth metal's small term would otherwise fill every order's
  * reflection columns whole. */
 #define SERIES_FLOOR 1e-12
+/* The concentration's ceiling (about 0.1 radians wide; the walk's peaks at
+ * alpha 0.3 and above stay below it): a layer of 64 orders or more holds
+ * the whole term, so the resolution search's comparison of m against 2m
+ * orders does not see it change. */
+#define KAPPA_MAX 100.0
 #define SERIES_ABSOLUTE 1e-8
 
 /* I_k(kappa) / I_0(kappa), k = 1 .. len - 1, in ratio[k] (ratio[0] = 1),
@@ -70,7 +75,7 @@ size_t ll_microfacet_compensation_series(const ll_microfacet_compensation *c, in
     s_j = sqrt(fmax(0.0, 1.0 - c->mu[j] * c->mu[j]));
     sum = c->mu[i] + c->mu[j];
     kappa = sum > 0.0 ? c->spread * s_i * s_j / pow(sum, c->power) : 0.0;
-    limit = (double)m * (double)m / 40.0;
+    limit = fmin(KAPPA_MAX, (double)m * (double)m / 40.0);
     kappa = fmin(kappa, limit);
     weight = 2.0 * c->peaked * fabs(value);
     len = bessel_ratios(kappa, m, fmax(SERIES_FLOOR, SERIES_ABSOLUTE / weight), out);
