@@ -15,7 +15,7 @@
  * below SERIES_ABSOLUTE (the BSDF's units: a white Lambertian is 1 / pi):
  * a smooth metal's small term would otherwise fill every order's
  * reflection columns whole. */
-#define SERIES_FLOOR 1e-12
+#define SERIES_FLOOR 1e-5
 /* The concentration's ceiling (about 0.1 radians wide; the walk's peaks at
  * alpha 0.3 and above stay below it): a layer of 64 orders or more holds
  * the whole term, so the resolution search's comparison of m against 2m
