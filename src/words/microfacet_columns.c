@@ -240,7 +240,8 @@ ll_status ll_microfacet_finish_order0(void *ctx)
         return ll_watch_check(job->watch, "ll_layer_set_microfacet");
     if (job->conserve_energy)
         s = compensate(job, n, job->work);
-    for (col = 0; col < n && s == LL_OK; ++col) {
+    /* (In a distributed build only the owner of order 0 holds its builder.) */
+    for (col = 0; col < n && s == LL_OK && job->builders[0]; ++col) {
         double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
         size_t row;
         for (row = 0; row < n; ++row)
