@@ -181,24 +181,27 @@ static double chain(const ll_microfacet_model *mf, int which)
  * 1.3 sin_i sin_j / alpha^3 / (mu_i + mu_j)^0.75 here) over a floor of a
  * tenth; GGX's long tails leave most of it flat, a fifth in a peak
  * of concentration 0.5 sin_i sin_j / alpha^3. Below the fitted range
- * (alpha 0.3) the concentration stays that of alpha 0.3: alpha^-3 would
- * make a smooth metal's small term a peak far narrower than its own lobe,
- * which only the layer's highest orders (and the resolution search's
- * order count) would pay for. */
+ * (alpha 0.3; there the multiple scattering is below 1% of the albedo)
+ * the concentration stays that of alpha 0.3, as alpha^-3 would make the
+ * small term a peak far narrower than the lobe, and the peak fades to a
+ * flat term at alpha 0.2, where the walk gives no shape to fit. */
 #define SPREAD_ALPHA_MIN 0.3
+#define SPREAD_ALPHA_FLAT 0.2
 static void spread(const ll_microfacet_model *mf, const double *mu,
                    ll_microfacet_compensation *out)
 {
     double alpha = fmax(mf->alpha, SPREAD_ALPHA_MIN), a3 = alpha * alpha * alpha;
+    double fade = fmin(1.0, fmax(0.0, (mf->alpha - SPREAD_ALPHA_FLAT) /
+                                          (SPREAD_ALPHA_MIN - SPREAD_ALPHA_FLAT)));
     out->mu = mu;
     if (mf->ggx) {
         out->spread = 0.5 / a3;
         out->power = 0.0;
-        out->peaked = 0.2;
+        out->peaked = 0.2 * fade;
     } else {
         out->spread = 1.3 / a3;
         out->power = 0.75;
-        out->peaked = 0.9;
+        out->peaked = 0.9 * fade;
     }
 }
 
