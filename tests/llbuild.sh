@@ -189,7 +189,7 @@ below "$t" 0.5 "--dry-run with --nodes --orders"
 printf 'conductor eta=0.2+3i alpha=0.5\n' >"$tmp/metal.layers"
 expect 0 "--dry-run --cache-dir" -- "$llbuild" --dry-run --cache-dir "$tmp/c" "$tmp/metal.layers"
 cp "$tmp/out" "$tmp/cold.txt"
-contains "$tmp/out" "^resolution   130 nodes x 68" "the metal's resolution"
+contains "$tmp/out" "^resolution   112 nodes x 68" "the metal's resolution"
 [ "$(ls "$tmp/c" | wc -l)" -eq 1 ] && ok || bad "--cache-dir: not one entry in $tmp/c"
 entry=$(ls "$tmp/c"/*)
 cp "$entry" "$tmp/entry.good"

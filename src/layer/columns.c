@@ -41,8 +41,9 @@ static size_t items_of(size_t rank, size_t n_ranks, size_t n_items)
     return n_items > rank ? (n_items - rank + n_ranks - 1) / n_ranks : 0;
 }
 
-/* The bytes this rank sends to rank d: its columns of d's orders, and to
- * the owner of order 0 its columns of the dense arrays. */
+/* The bytes this rank sends to rank d: its columns of d's orders and of
+ * the dense arrays (every rank's finish reads them whole: an interface's
+ * compensation reaches every order). */
 static size_t bytes_for(const ll_split *sh, size_t d, ll_order_builder *const *builders,
                         size_t m, size_t n_items, size_t first, size_t n, size_t n_dense)
 {
@@ -50,8 +51,7 @@ static size_t bytes_for(const ll_split *sh, size_t d, ll_order_builder *const *b
     for (k = d; k < m; k += sh->n_ranks)
         for (i = sh->rank; i < n_items; i += sh->n_ranks)
             total += ll_order_builder_column_bytes(builders[k], first + i);
-    if (d == 0) /* the owner of order 0 */
-        total += items_of(sh->rank, sh->n_ranks, n_items) * n_dense * n * sizeof(double);
+    total += items_of(sh->rank, sh->n_ranks, n_items) * n_dense * n * sizeof(double);
     return total;
 }
 
@@ -63,12 +63,11 @@ static unsigned char *pack_for(const ll_split *sh, size_t d, ll_order_builder *c
     for (k = d; k < m; k += sh->n_ranks)
         for (i = sh->rank; i < n_items; i += sh->n_ranks)
             p = ll_order_builder_pack_column(builders[k], first + i, p);
-    if (d == 0) /* the owner of order 0 */
-        for (a = 0; a < n_dense; ++a)
-            for (i = sh->rank; i < n_items; i += sh->n_ranks) {
-                memcpy(p, dense[a] + i * n, n * sizeof(double));
-                p += n * sizeof(double);
-            }
+    for (a = 0; a < n_dense; ++a)
+        for (i = sh->rank; i < n_items; i += sh->n_ranks) {
+            memcpy(p, dense[a] + i * n, n * sizeof(double));
+            p += n * sizeof(double);
+        }
     return p;
 }
 
@@ -82,7 +81,7 @@ static ll_status unpack_from(const ll_split *sh, size_t src, ll_order_builder *c
     for (k = sh->rank; k < m && s == LL_OK; k += sh->n_ranks)
         for (i = src; i < n_items && s == LL_OK; i += sh->n_ranks)
             s = ll_order_builder_unpack_column(builders[k], first + i, &p, end);
-    if (s == LL_OK && sh->rank == 0) /* the owner of order 0 */
+    if (s == LL_OK)
         for (a = 0; a < n_dense && s == LL_OK; ++a)
             for (i = src; i < n_items && s == LL_OK; i += sh->n_ranks) {
                 if ((size_t)(end - p) < n * sizeof(double))
@@ -98,7 +97,7 @@ static ll_status unpack_from(const ll_split *sh, size_t src, ll_order_builder *c
 /* The all-to-all of a distributed build's columns (s: the columns'
  * outcome on this rank, agreed first): after it, builders[k]
  * holds every column of each order k this rank owns (the others are
- * destroyed: NULL) and the owner of order 0 the dense arrays whole. */
+ * destroyed: NULL) and the dense arrays whole. */
 static ll_status exchange_columns(const ll_split *sh, ll_status s, ll_order_builder **builders,
                                   size_t m, size_t n_items, size_t first, size_t n,
                                   double *const *dense, size_t n_dense)
@@ -181,7 +180,7 @@ ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns, size_t fi
         else
             s = sh->agree(sh->ctx, s);
     }
-    if (s == LL_OK && finish && ll_split_owns(sh, 0))
+    if (s == LL_OK && finish)
         s = finish(ctx);
     /* The last report comes before the layer changes: a cancel there still
      * leaves it as it was. */

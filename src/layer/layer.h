@@ -64,8 +64,8 @@ LL_INTERNAL ll_status ll_layer_set_from_builders(ll_layer *layer, ll_order_build
  * cancel, comes before the layer is set (fn names the call in the cancel
  * message). In a distributed build (the calling thread's split) each rank
  * computes the items i mod n_ranks == rank, one all-to-all gives every rank its orders
- * of every column and the dense columns to the owner of order 0, and
- * finish runs there only (it may write only builder 0). */
+ * of every column and the dense columns whole, and finish runs on every
+ * rank, with the builders of that rank's orders (the others NULL). */
 LL_INTERNAL ll_status ll_layer_build_by_columns(ll_layer *layer, size_t n_columns,
                                                 size_t first_column,
                                                 ll_status (*column)(size_t col, void *ctx),

@@ -431,6 +431,18 @@ ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
     return LL_OK;
 }
 
+void ll_order_builder_get_column(const ll_order_builder *b, size_t col, double *column)
+{
+    size_t h = b->n / 2;
+    int half;
+    memset(column, 0, b->n * sizeof(double));
+    for (half = 0; half < 2; ++half) {
+        size_t s = 2 * col + (size_t)half;
+        if (b->len[s])
+            memcpy(column + (size_t)half * h + b->lo[s], b->seg[s], b->len[s] * sizeof(double));
+    }
+}
+
 ll_status ll_order_builder_set_column(ll_order_builder *b, size_t col, const double *column,
                                       double drop)
 {

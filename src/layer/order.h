@@ -100,6 +100,10 @@ LL_INTERNAL ll_status ll_order_builder_set_column(ll_order_builder *b, size_t co
 LL_INTERNAL ll_status ll_order_builder_set_column_range(ll_order_builder *b, size_t col,
                                                         const double *column, size_t row_lo,
                                                         size_t row_hi, double drop);
+/* The column as set so far (n doubles; zero where nothing is stored): for
+ * a term added to the columns once they are all known. */
+LL_INTERNAL void ll_order_builder_get_column(const ll_order_builder *b, size_t col,
+                                             double *column);
 /* Finish: *out = the order (NULL if all zero); frees the builder. */
 LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
 LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);

@@ -225,9 +225,12 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
     ll_free(job.tri_ref);
     if (s != LL_OK)
         goto done;
+    /* (The conductor's terms keep the node cosines for their spread.) */
+    memcpy(out->memory + 8 * h, x + h, h * sizeof(double));
     if (job.conductor)
-        ll_microfacet_compensate_conductor(mf, h, x + h, job.w, job.albedo[LL_BLOCK_RT],
-                                           job.albedo[LL_BLOCK_RB], out->memory, &out->terms);
+        ll_microfacet_compensate_conductor(mf, h, out->memory + 8 * h, job.w,
+                                           job.albedo[LL_BLOCK_RT], job.albedo[LL_BLOCK_RB],
+                                           out->memory, &out->terms);
     else
         ll_microfacet_compensate_dielectric(mf, h, x + h, job.w, eta_re,
                                             (const double *const *)job.albedo, out->memory,
@@ -240,11 +243,10 @@ done:
     return s;
 }
 
-double ll_probe_compensation_at(const ll_probe_compensation *c, int block, size_t i, size_t j)
+size_t ll_probe_compensation_series(const ll_probe_compensation *c, int block, size_t i,
+                                    size_t j, size_t m, double *out)
 {
-    if (!c || c->terms.scale[block] == 0.0)
-        return 0.0;
-    return c->terms.scale[block] * c->terms.u[block][i] * c->terms.v[block][j];
+    return c ? ll_microfacet_compensation_series(&c->terms, block, i, j, m, out) : 0;
 }
 
 void ll_probe_compensation_free(ll_probe_compensation *c)

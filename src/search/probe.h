@@ -99,10 +99,12 @@ typedef struct ll_probe_compensation {
 LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im,
                                                  size_t n, ll_watch *watch,
                                                  ll_probe_compensation *out);
-/* The term of block (LL_BLOCK_*) at output node i, input node j (indices
- * into the positive half); 0 for c == NULL. */
-LL_INTERNAL double ll_probe_compensation_at(const ll_probe_compensation *c, int block, size_t i,
-                                            size_t j);
+/* The term's Fourier series (ll_microfacet_compensation_series: m terms
+ * at most in out[m], returns how many) of block (LL_BLOCK_*) at output
+ * node i, input node j (indices into the positive half); 0 for c ==
+ * NULL. */
+LL_INTERNAL size_t ll_probe_compensation_series(const ll_probe_compensation *c, int block,
+                                                size_t i, size_t j, size_t m, double *out);
 LL_INTERNAL void ll_probe_compensation_free(ll_probe_compensation *c);
 
 /* What ll_layer_set_microfacet of the model's interface on the

@@ -107,7 +107,25 @@ LL_INTERNAL double ll_microfacet_smith_g1(double tan_theta, double alpha);
 typedef struct ll_microfacet_compensation {
     const double *u[4], *v[4]; /* into the work array of the call          */
     double scale[4];
+    /* The azimuthal spread of the reflection terms (a conductor's; NULL mu:
+     * flat, order 0 only): at node cosines mu[i], mu[j] the term is spread
+     * over the azimuth as (1 - peaked) + peaked vM(phi), vM the von Mises
+     * density of mean 1 about the mirror side with concentration
+     * spread sin_i sin_j / (mu_i + mu_j)^power (symmetric: reciprocal; of
+     * mean 1: the energy of order 0). */
+    const double *mu;
+    double spread, power, peaked;
 } ll_microfacet_compensation;
+
+/* The Fourier series (f = c_0 + sum_k c_k cos(k phi), phi from the mirror
+ * side: as ll_microfacet_series') of block q's term at output node i,
+ * input node j, m terms at most, in out[m]; returns how many are written
+ * (0: no term; the rest are negligible). The concentration is held to
+ * what m orders resolve (m^2 / 40: the series truncated at m is within
+ * e^-20 of the whole) and to 100, so a layer of m orders and the probes at
+ * m orders carry the same term, the same for every m of 64 or more. */
+LL_INTERNAL size_t ll_microfacet_compensation_series(const ll_microfacet_compensation *c, int q,
+                                                     size_t i, size_t j, size_t m, double *out);
 
 /* A dielectric's terms (words/microfacet_compensation_dielectric.c) from
  * the albedos (indexed by block: column sums of the unweighted order 0

@@ -140,11 +140,68 @@ static void block_add_outer(double *m0, size_t n, size_t row0, size_t col0, cons
             m0[(col0 + j) * n + row0 + i] += scale * u[i] * v[j];
 }
 
+/* Do blocks p and q of c hold the same term? */
+static int same_term(const ll_microfacet_compensation *c, int p, int q)
+{
+    return c->scale[p] == c->scale[q] && c->u[p] == c->u[q] && c->v[p] == c->v[q];
+}
+
+/* The orders past 0 of the terms (ll_microfacet_compensation_series) into
+ * the builders that hold the columns of the single-scattering lobe: per
+ * incident node j, every row's series of a block's column first (once for
+ * blocks that hold the same term: a conductor's two), then each order's
+ * column read back, added to and set again (weighted as fill_column's).
+ * Orders whose builder this process does not hold are left as they are. */
+static ll_status spread_orders(const ll_microfacet_job *job, const ll_microfacet_compensation *c)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, m = l->m, h = n / 2, cells, i, j, k, longest = 0;
+    double *series, *column;
+    ll_status s = LL_OK;
+    int q, made;
+    if (m < 2 || !c->mu)
+        return LL_OK;
+    if (!ll_size_mul(h, m, &cells) || !ll_size_add(cells, n, &cells) ||
+        !(series = ll_alloc_array(cells, sizeof(double))))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
+    column = series + h * m;
+    for (j = 0; j < h && s == LL_OK; ++j) {
+        made = -1;
+        for (q = 0; q < 4 && s == LL_OK; ++q) {
+            size_t row0 = (size_t)(q >> 1) * h, col = (size_t)(q & 1) * h + j;
+            double factor = ll_layer_surface_factor(l, col, 1);
+            if (c->scale[q] == 0.0)
+                continue;
+            if (made < 0 || !same_term(c, made, q)) {
+                longest = 0;
+                for (i = 0; i < h; ++i) {
+                    size_t got = ll_microfacet_compensation_series(c, q, i, j, m, series + i * m);
+                    for (k = got; k < m; ++k)
+                        series[i * m + k] = 0.0;
+                    if (got > longest)
+                        longest = got;
+                }
+                made = q;
+            }
+            for (k = 1; k < longest && s == LL_OK; ++k) {
+                if (!job->builders[k])
+                    continue;
+                ll_order_builder_get_column(job->builders[k], col, column);
+                for (i = 0; i < h; ++i)
+                    column[row0 + i] += series[i * m + k] * factor;
+                s = ll_order_builder_set_column(job->builders[k], col, column, 0.0);
+            }
+        }
+    }
+    ll_free(series);
+    return s;
+}
+
 /* Energy compensation (words/microfacet_compensation*.c) of the unweighted
- * order 0. Blocks of m0 (column-major): R^t rows < h, columns >= h; R^b
- * rows >= h, columns < h; T^tb rows, columns >= h; T^bt both < h. work
- * holds 8 h doubles. */
-static void compensate(const ll_microfacet_job *job, size_t n, double *work)
+ * order 0, and its spread over the other orders. Blocks of m0
+ * (column-major): R^t rows < h, columns >= h; R^b rows >= h, columns < h;
+ * T^tb rows, columns >= h; T^bt both < h. work holds 8 h doubles. */
+static ll_status compensate(const ll_microfacet_job *job, size_t n, double *work)
 {
     size_t h = n / 2, q;
     double *albedo[4];
@@ -169,6 +226,7 @@ static void compensate(const ll_microfacet_job *job, size_t n, double *work)
         if (c.scale[q] != 0.0)
             block_add_outer(job->order0, n, (q >> 1) * h, (q & 1) * h, c.u[q], c.v[q],
                             c.scale[q]);
+    return spread_orders(job, &c);
 }
 
 /* After the columns: energy compensation on the unweighted order 0, then
@@ -182,8 +240,9 @@ ll_status ll_microfacet_finish_order0(void *ctx)
     if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
         return ll_watch_check(job->watch, "ll_layer_set_microfacet");
     if (job->conserve_energy)
-        compensate(job, n, job->work);
-    for (col = 0; col < n && s == LL_OK; ++col) {
+        s = compensate(job, n, job->work);
+    /* (In a distributed build only the owner of order 0 holds its builder.) */
+    for (col = 0; col < n && s == LL_OK && job->builders[0]; ++col) {
         double factor = ll_layer_surface_factor(layer, col, 0), *column = job->order0 + col * n;
         size_t row;
         for (row = 0; row < n; ++row)
