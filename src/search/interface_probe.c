@@ -152,12 +152,14 @@ static ll_status eval_pair(size_t p, void *ctx)
 {
     const eval_job *job = ctx;
     const pair_stencil *st = job->stencils + p;
-    double *series = ll_alloc_array(job->m, sizeof(double));
+    /* series, then the stencil's weighted sum of its series */
+    double *series = ll_alloc_array(job->m, 2 * sizeof(double));
+    double *sum = series ? series + job->m : NULL;
     double *scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
     double *acc = job->values + p * job->set->n_phi;
     const ll_probe_pair *pair = job->set->pairs + p;
     int block = LL_BLOCK_OF(pair->mu_o, pair->mu_i);
-    size_t a, b, k, len;
+    size_t a, b, k, l, len, sum_len = 0;
     double term = 0.0;
     ll_status s = LL_OK;
     if (!series || !scratch)
@@ -165,6 +167,8 @@ static ll_status eval_pair(size_t p, void *ctx)
                     job->m);
     else if (ll_watch_poll(job->watch))
         s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+    else
+        memset(sum, 0, job->m * sizeof(double));
     memset(acc, 0, job->set->n_phi * sizeof(double));
     for (a = 0; a < st->co && s == LL_OK; ++a)
         for (b = 0; b < st->ci && s == LL_OK; ++b) {
@@ -172,13 +176,18 @@ static ll_status eval_pair(size_t p, void *ctx)
             /* Depth grows opposite to the normal: the series takes -mu. */
             s = slot_series(job, 16 * p + 4 * a + b, -st->no[a], -st->ni[b], series, scratch, &c,
                             &len);
-            if (s == LL_OK)
-                ll_probe_add_series(c, len, job->set->phi, job->set->n_phi,
-                                    st->wo[a] * st->wi[b], acc);
+            /* (The stencil's series summed first and then evaluated at
+             * the azimuths: 16 times fewer terms than evaluating each.) */
+            for (l = 0; s == LL_OK && l < len; ++l)
+                sum[l] += st->wo[a] * st->wi[b] * c[l];
+            if (s == LL_OK && len > sum_len)
+                sum_len = len;
             /* The compensation is order 0: the same at every azimuth. */
             term += st->wo[a] * st->wi[b] *
                     ll_probe_compensation_at(job->compensation, block, st->io[a], st->ii[b]);
         }
+    if (s == LL_OK)
+        ll_probe_add_series(sum, sum_len, job->set->phi, job->set->n_phi, 1.0, acc);
     for (k = 0; k < job->set->n_phi; ++k) {
         acc[k] += term;
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
