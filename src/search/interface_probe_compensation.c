@@ -109,6 +109,43 @@ static ll_status transmission_column(size_t col, void *ctx)
     return s;
 }
 
+/* Pairs per ll_microfacet_prepare_pairs call of prepare_tables. */
+#define PREPARE_BATCH 16384
+
+/* Prepare the maps of the pairs that the tables hold (a quarter of all
+ * n^2 for a conductor, half for a dielectric), in batches. */
+static ll_status prepare_tables(ll_microfacet_model *mf, const albedo_job *job)
+{
+    size_t n = job->n, h = n / 2, col, i, count = 0;
+    double *mu = ll_alloc_array(PREPARE_BATCH, 2 * sizeof(double));
+    ll_status s = LL_OK;
+    if (!mu)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    for (col = 0; col < n && s == LL_OK; ++col) {
+        size_t j = col < h ? col : col - h;
+        /* (transmission: rows < h of columns < h; triangles: rows i <= j
+         * of the other half) */
+        size_t rows = job->trans && col < h ? h + j + 1 : j + 1;
+        if (job->conductor && col < h)
+            continue;
+        if (ll_watch_poll(job->watch))
+            s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+        for (i = 0; i < rows && s == LL_OK; ++i) {
+            size_t row = i < (rows - j - 1) ? i : (i - (rows - j - 1)) + (col < h ? h : 0);
+            mu[count] = -job->x[row];
+            mu[PREPARE_BATCH + count] = -job->x[col];
+            if (++count == PREPARE_BATCH) {
+                s = ll_microfacet_prepare_pairs(mf, mu, mu + PREPARE_BATCH, count);
+                count = 0;
+            }
+        }
+    }
+    if (s == LL_OK && count > 0)
+        s = ll_microfacet_prepare_pairs(mf, mu, mu + PREPARE_BATCH, count);
+    ll_free(mu);
+    return s;
+}
+
 /* The order-0 value of row, column col (and the conductor's mirror's in
  * *ref): from the triangles where they hold it. */
 static ll_status pair_value(const albedo_job *job, size_t row, size_t col, double *v,
@@ -233,8 +270,6 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
     /* (Unwatched: ll_microfacet_prepare_watched would start a stage of its
      * own over the search's; the maps it makes are kept by the model.) */
     s = ll_watch_check(watch, "resolution search");
-    if (s == LL_OK)
-        s = ll_microfacet_prepare(mf, x + 2 * n, n);
     job.mf = mf;
     job.x = x;
     job.w = x + n;
@@ -245,11 +280,8 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
         job.albedo[q] = out->memory + (4 + q) * h;
     job.tri[0] = job.tri[1] = job.tri_ref = job.trans = NULL;
     job.eta2 = eta_re * eta_re;
-    if (s == LL_OK && h <= TRIANGLE_NODES && !job.conductor) {
+    if (s == LL_OK && h <= TRIANGLE_NODES && !job.conductor)
         job.trans = ll_alloc_array(h, h * sizeof(double));
-        if (job.trans)
-            s = ll_parallel_for_watched(h, transmission_column, &job, watch);
-    }
     if (s == LL_OK && h <= TRIANGLE_NODES) {
         size_t packed = h * (h + 1) / 2 + 1;
         job.tri[0] = ll_alloc_array(packed, sizeof(double));
@@ -263,6 +295,14 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
             job.tri[0] = job.tri[1] = job.tri_ref = NULL;
         }
     }
+    /* The maps of the pairs to compute: the tables' alone where they are
+     * all there (the pairs of the other halves have the same B), else
+     * every pair's. */
+    if (s == LL_OK)
+        s = job.tri[0] && (job.conductor || job.trans) ? prepare_tables(mf, &job)
+                                                       : ll_microfacet_prepare(mf, x + 2 * n, n);
+    if (s == LL_OK && job.trans)
+        s = ll_parallel_for_watched(h, transmission_column, &job, watch);
     if (s == LL_OK && job.tri[0])
         s = ll_parallel_for_watched(n, triangle_column, &job, watch);
     if (s == LL_OK)
