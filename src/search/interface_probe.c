@@ -152,43 +152,48 @@ static ll_status eval_pair(size_t p, void *ctx)
 {
     const eval_job *job = ctx;
     const pair_stencil *st = job->stencils + p;
+    /* series, the compensation's series, and the stencil's weighted sum
+     * of both */
     double *series = ll_alloc_array(job->m, 3 * sizeof(double));
-    double *term = series + job->m, *terms = series + 2 * job->m;
+    double *term = series ? series + job->m : NULL, *sum = series ? series + 2 * job->m : NULL;
     double *scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
     double *acc = job->values + p * job->set->n_phi;
     const ll_probe_pair *pair = job->set->pairs + p;
     int block = LL_BLOCK_OF(pair->mu_o, pair->mu_i);
-    size_t a, b, k, len, terms_len = 0;
+    size_t a, b, k, l, len, sum_len = 0;
     ll_status s = LL_OK;
     if (!series || !scratch)
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu orders",
                     job->m);
     else if (ll_watch_poll(job->watch))
         s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+    else
+        memset(sum, 0, job->m * sizeof(double));
     memset(acc, 0, job->set->n_phi * sizeof(double));
-    if (series)
-        memset(terms, 0, job->m * sizeof(double));
     for (a = 0; a < st->co && s == LL_OK; ++a)
         for (b = 0; b < st->ci && s == LL_OK; ++b) {
             const double *c = NULL;
             /* Depth grows opposite to the normal: the series takes -mu. */
             s = slot_series(job, 16 * p + 4 * a + b, -st->no[a], -st->ni[b], series, scratch, &c,
                             &len);
-            if (s == LL_OK)
-                ll_probe_add_series(c, len, job->set->phi, job->set->n_phi,
-                                    st->wo[a] * st->wi[b], acc);
+            /* (The stencil's series summed first and then evaluated at
+             * the azimuths: 16 times fewer terms than evaluating each.) */
+            for (l = 0; s == LL_OK && l < len; ++l)
+                sum[l] += st->wo[a] * st->wi[b] * c[l];
+            if (s == LL_OK && len > sum_len)
+                sum_len = len;
             if (s == LL_OK) {
-                /* The compensation's series, summed over the stencil
-                 * before it is evaluated at the azimuths. */
+                /* The compensation's series (same azimuth convention). */
                 len = ll_probe_compensation_series(job->compensation, block, st->io[a],
                                                    st->ii[b], job->m, term);
-                for (k = 0; k < len; ++k)
-                    terms[k] += st->wo[a] * st->wi[b] * term[k];
-                terms_len = len > terms_len ? len : terms_len;
+                for (l = 0; l < len; ++l)
+                    sum[l] += st->wo[a] * st->wi[b] * term[l];
+                if (len > sum_len)
+                    sum_len = len;
             }
         }
     if (s == LL_OK)
-        ll_probe_add_series(terms, terms_len, job->set->phi, job->set->n_phi, 1.0, acc);
+        ll_probe_add_series(sum, sum_len, job->set->phi, job->set->n_phi, 1.0, acc);
     for (k = 0; k < job->set->n_phi; ++k)
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
     ll_free(series);

@@ -186,8 +186,10 @@ typedef ll_status (*ll_probe_eval_fn)(void *ctx, size_t n, size_t m, ll_watch *w
  * are within 0.6 of the tolerance of those at (2n, 2m) (a margin for the
  * directions between the probes): grow n and/or m (by 1.25 to
  * 2, from the error) while the comparison fails, as the comparisons at
- * (2n, m) and (n, 2m) say, then shrink each (by 0.85, up to 3 times)
- * while it still holds. n stays even and
+ * (2n, m) and (n, 2m) say, then shrink n to the smallest of n 0.85^k
+ * (k <= 3) that still holds (the candidates screened against the (2n, 2m)
+ * already made first), then m by 0.85 (up to 3 times) while it still
+ * holds. n stays even and
  * >= min_nodes; either beyond `limit` fails, naming the error reached.
  * *error receives the difference at the answer (nullable). watch
  * (nullable) is polled between and inside the evaluations: a cancel
