@@ -36,7 +36,7 @@
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
                                * this many more ...                            */
-#define GGX_SETTLED 2.5e-4    /* ... extended (doubled) until the last quarter
+#define GGX_SETTLED 2.5e-4    /* ... extended by half until the last quarter
                                * of the block stays below this fraction of the
                                * mean: a quarter of what the layer keeps
                                * (LL_MICROFACET_RELERR)                        */
@@ -127,15 +127,53 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
     return largest;
 }
 
+/* One pass over a pair's pieces: the largest f seen so far, and the
+ * samples each piece took (its stride, 0 if skipped, then the samples),
+ * which the passes of the next blocks of orders replay instead of taking
+ * them again (cache NULL: more pieces than it holds, sampled again). */
+#define GGX_CACHE 1024
+typedef struct ggx_pass {
+    double seen;
+    double *cache;
+    size_t used;
+    int replay;
+} ggx_pass;
+
+/* Record (or, replaying, read) a piece's stride and samples; 0 when a
+ * replayed piece is skipped. */
+static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
+{
+    size_t count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+    if (pass->replay) {
+        stride = (size_t)pass->cache[pass->used];
+        count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+        memcpy(f, pass->cache + pass->used + 1, count * sizeof *f);
+    } else if (pass->cache && pass->used + 1 + count <= GGX_CACHE) {
+        pass->cache[pass->used] = (double)stride;
+        memcpy(pass->cache + pass->used + 1, f, count * sizeof *f);
+    } else {
+        pass->cache = NULL;
+    }
+    pass->used += 1 + count;
+    return stride;
+}
+
 static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                       double b, size_t first, size_t n_out, double *out, double *scratch,
-                      double *seen)
+                      ggx_pass *pass)
 {
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
-    double *filon = scratch + FILON_SCR_FILON, largest;
+    double *filon = scratch + FILON_SCR_FILON, largest, *seen = &pass->seen;
     size_t stride = 4, k;
     if (!(b > a))
         return;
+    if (pass->replay) {
+        stride = ggx_record(pass, 0, f);
+        if (stride)
+            ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
+                                  out, filon);
+        return;
+    }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
     largest = ggx_samples(mf, p, part, cos_phi, 0, 4, 5, f);
     *seen = fmax(*seen, largest);
@@ -149,11 +187,14 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
             *seen = fmax(*seen, largest);
         }
     }
-    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
+    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
+        ggx_record(pass, 0, f);
         return;
+    }
     if (stride > 1) /* the samples taken, side by side */
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
             f[k] = f[k * stride];
+    ggx_record(pass, stride, f);
     ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon);
 }
 
@@ -191,7 +232,7 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
  * levels_a, levels_b: the pieces towards each end (0: not graded). */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                         double b, int levels_a, int levels_b, size_t first, size_t n_out,
-                        double *out, double *scratch, double *seen)
+                        double *out, double *scratch, ggx_pass *pass)
 {
     double d = b - a;
     int level, levels = levels_a ? levels_a : levels_b;
@@ -199,20 +240,20 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
         return;
     if (levels_a && levels_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, seen);
-        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, seen);
+        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, pass);
+        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, pass);
         return;
     }
     if (!levels) {
-        ggx_piece(mf, p, part, a, b, first, n_out, out, scratch, seen);
+        ggx_piece(mf, p, part, a, b, first, n_out, out, scratch, pass);
         return;
     }
     for (level = 0; level < levels; ++level) {
         double near = level == levels - 1 ? 0.0 : 0.25 * d;
         if (levels_a)
-            ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, seen);
+            ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
         else
-            ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, seen);
+            ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
         d = near;
     }
 }
@@ -224,13 +265,16 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
  * near branch points; the orders first .. first + n_out - 1 into out[0 ..
  * n_out - 1]. seen: the largest f known before the first piece. */
 static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int part, double start,
-                      double seen, size_t first, size_t n_out, double *out, double *scratch)
+                      double seen, size_t first, size_t n_out, double *out, double *scratch,
+                      ggx_pass *pass)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
     double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
     /* (a dielectric's reflection: its branch points may be TIR's) */
     int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
+    pass->seen = seen;
+    pass->used = 0;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a, grade_b;
@@ -247,7 +291,7 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
         grade_b = b == p->split && !p->reflect ? kink_levels
                   : b == LL_PI && p->grade_end ? branch_levels
                                                : 0;
-        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
+        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, pass);
         a = b;
     }
 }
@@ -273,19 +317,25 @@ static int ggx_settled(const double *out, size_t n, double moment0)
  * size of the kink, which only the moments tell. Each block costs its
  * orders times the samples, so the first holds the peak's orders and a few
  * more, and the next ones (the orders after it, the same pieces and
- * samples) double it until its last quarter has settled against moment0
- * (0: the moments' own order 0). Returns the orders computed. */
+ * samples, replayed) add half as many again until its last quarter has
+ * settled against moment0 (0: the moments' own order 0). Returns the
+ * orders computed. */
 static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
                          double start, double seen, double moment0, size_t n_out, double *out,
                          double *scratch)
 {
+    double cache[GGX_CACHE];
+    ggx_pass pass;
     size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     if (n > n_out)
         n = n_out;
-    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch);
+    pass.cache = cache;
+    pass.replay = 0;
+    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
+    pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 != 0.0 ? moment0 : out[0])) {
-        size_t next = n_out - n > n ? 2 * n : n_out;
-        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch);
+        size_t step = n / 2 > 8 ? n / 2 : 8, next = n_out - n > step ? n + step : n_out;
+        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch, &pass);
         n = next;
     }
     return n;
