@@ -171,42 +171,62 @@ void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
     ll_filon_moments_from(g, n_samples, a, b, 0, n_moments, moments, scratch);
 }
 
-/* A narrow interval: where l (b - a) / 2 <= NARROW_TAU for every order
- * asked for, cos(l phi) = cos(l x_c) cos(l u) - sin(l x_c) sin(l u),
- * u = phi - x_c about the centre x_c, and the Taylor series of cos(l u)
- * and sin(l u) in l u make every moment
+/* Low orders of a narrow interval: where l (b - a) / 2 <= NARROW_TAU,
+ * cos(l phi) = cos(l x_c) cos(l u) - sin(l x_c) sin(l u), u = phi - x_c
+ * about the centre x_c, and the Taylor series of cos(l u) and sin(l u) in
+ * l u make the moment
  *   cos(l x_c) sum_(k even) (-1)^(k/2) l^k M_k / k!
  *     - sin(l x_c) sum_(k odd) (-1)^((k-1)/2) l^k M_k / k!,
  * M_k = integral q u^k du of the same piecewise quadratic q: the panels
  * are summed once per power instead of once per order (the pieces graded
- * towards a kink are this narrow, and there each order cost its panels).
- * The powers stop at K, the first k with tau^k / k! below NARROW_GOAL
- * (the series' remainder relative to the integral of |q|): K <= 23 for
- * tau <= 2. The moment of the panel [x1 - h, x1 + h] with q = A + B u +
- * C u^2 in u is A P_(k+1) + B P_(k+2) + C P_(k+3), P_j = (beta^j -
- * alpha^j) / j over its ends alpha, beta (the expansion about the
- * centre costs about two digits of cancellation at the outer panels). */
+ * towards a kink are this narrow for every order, and there each order
+ * cost its panels). Each order takes the powers k < K whose bound
+ * (l (b - a) / 2)^k / k! on their share (relative to the integral of |q|)
+ * reaches NARROW_GOAL: term_needed[k - 1] = (NARROW_GOAL k!)^(1/k) is
+ * where term k starts to count, so K <= 23 at NARROW_TAU. Which orders
+ * take this form, and with how many powers, depends on the order and the
+ * interval alone, not on how many orders are asked for: a series computed
+ * to fewer orders is a prefix of one to more, bit for bit. The moment of
+ * the panel [x1 - h, x1 + h] with q = A + B u + C u^2 in u is A P_(k+1) +
+ * B P_(k+2) + C P_(k+3), P_j = (beta^j - alpha^j) / j over its ends alpha,
+ * beta (the expansion about the centre costs about two digits of
+ * cancellation at the outer panels). */
 #define NARROW_TAU 2.0
-#define NARROW_GOAL 1e-15
-#define NARROW_POWERS 26
+#define NARROW_POWERS 23 /* = 1 + the terms of term_needed at most NARROW_TAU */
 
-static int narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                          size_t n, double *moments)
+static const double term_needed[NARROW_POWERS - 1] = {
+    1.0000000000000013e-15, 4.4721359549995863e-08, 1.8171205928321391e-05,
+    0.00039359793425308617, 0.0026051710846973514,  0.0094672115710563581,
+    0.024325484845607006,   0.050198422026142796,   0.089347988868909947,
+    0.14321097559395296,    0.21250922748656381,    0.29741400390991907,
+    0.39770405980972057,    0.51289582984850846,    0.64234247497797614,
+    0.78530565461182733,    0.94100572489375511,    1.1086557743950802,
+    1.287483945295584,      1.4767474542135719,     1.6757408354434047,
+    1.8838002279380828,
+};
+
+/* The powers an order with l (b - a) / 2 = tau takes, from at least k. */
+static size_t narrow_terms(double tau, size_t k)
+{
+    while (k < NARROW_POWERS && tau >= term_needed[k - 1])
+        ++k;
+    return k;
+}
+
+/* The orders first .. first + count - 1 that are narrow (at most n) into
+ * moments; returns count. */
+static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
+                             size_t n, double *moments)
 {
     double half = 0.5 * (b - a), centre = 0.5 * (a + b), h = (b - a) / (double)(n_samples - 1);
-    double tau = (double)(first + n - 1) * half, term = 1.0, inv[NARROW_POWERS + 4];
-    double m[NARROW_POWERS], even[NARROW_POWERS / 2 + 1], odd[NARROW_POWERS / 2 + 1];
-    double cx, sx, c1, s1, fact = 1.0;
-    size_t powers, k, p, j, l, panels = (n_samples - 1) / 2;
-    if (n == 0 || !(tau <= NARROW_TAU))
-        return n == 0;
-    for (powers = 1; powers < NARROW_POWERS; ++powers) {
-        term *= tau / (double)powers;
-        if (term < NARROW_GOAL)
-            break;
-    }
-    if (powers == NARROW_POWERS)
+    double inv[NARROW_POWERS + 3], m[NARROW_POWERS], even[NARROW_POWERS / 2 + 1];
+    double odd[NARROW_POWERS / 2 + 1], cx, sx, c1, s1, fact = 1.0, avail;
+    size_t count, powers, terms = 1, k, p, j, l, panels = (n_samples - 1) / 2;
+    avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
+    count = avail <= 0.0 ? 0 : avail >= (double)n ? n : (size_t)avail;
+    if (count == 0)
         return 0;
+    powers = narrow_terms((double)(first + count - 1) * half, 1);
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -238,27 +258,29 @@ static int narrow_moments(const double *g, size_t n_samples, double a, double b,
     s1 = sin(centre);
     cx = first ? cos((double)first * centre) : 1.0;
     sx = first ? sin((double)first * centre) : 0.0;
-    for (l = 0; l < n; ++l) {
+    for (l = 0; l < count; ++l) {
         double order = (double)(first + l), lambda = order * order, ce = 0.0, so = 0.0, next;
-        for (j = (powers - 1) / 2 + 1; j-- > 0;)
+        terms = narrow_terms(order * half, terms);
+        for (j = (terms - 1) / 2 + 1; j-- > 0;)
             ce = ce * lambda + even[j];
-        for (j = powers / 2; j-- > 0;)
+        for (j = terms / 2; j-- > 0;)
             so = so * lambda + odd[j];
         moments[l] += cx * ce - sx * order * so;
         next = cx * c1 - sx * s1;
         sx = sx * c1 + cx * s1;
         cx = next;
     }
-    return 1;
+    return count;
 }
 
 void ll_filon_moments_from(const double *g, size_t n_samples, double a, double b, size_t first,
                            size_t n_moments, double *moments, double *scratch)
 {
     filon_rule r;
-    if (narrow_moments(g, n_samples, a, b, first, n_moments, moments))
+    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments);
+    if (narrow == n_moments)
         return;
-    rule_init(&r, n_samples, a, b, first, n_moments, scratch);
-    accumulate(r.panels, n_moments, g, moments, r.cos_x, r.sin_x, r.w_end_c, r.w_end_s,
-               r.w_mid, r.rot_c, r.rot_s);
+    rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);
+    accumulate(r.panels, n_moments - narrow, g, moments + narrow, r.cos_x, r.sin_x, r.w_end_c,
+               r.w_end_s, r.w_mid, r.rot_c, r.rot_s);
 }
