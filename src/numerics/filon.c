@@ -223,9 +223,16 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     double odd[NARROW_POWERS / 2 + 1], cx, sx, c1, s1, fact = 1.0, avail;
     size_t count, powers, terms = 1, k, p, j, l, panels = (n_samples - 1) / 2;
     avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
-    count = avail <= 0.0 ? 0 : avail >= (double)n ? n : (size_t)avail;
-    if (count == 0)
+    if (avail <= 0.0)
         return 0;
+    /* Worth it where the narrow orders (all there are, however many are
+     * asked for) save more of the panels' work (about 14 operations per
+     * panel and order, 30 more per order) than the powers' moments cost
+     * (about 10 per panel and power; 50 per order for the sums). */
+    powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
+    if (!(avail * ((double)panels * 14.0 - 20.0) > (double)(panels * powers) * 10.0))
+        return 0;
+    count = avail >= (double)n ? n : (size_t)avail;
     powers = narrow_terms((double)(first + count - 1) * half, 1);
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
