@@ -11,7 +11,10 @@
  * cos(l phi) dphi, l < n_moments: g is replaced by the piecewise quadratic
  * through n_samples (odd, >= 3) equidistant samples g_k = g(a + k h'),
  * h' = (b - a) / (n_samples - 1), and each panel is integrated exactly, so
- * the rule stays exact however fast cos(l phi) oscillates.
+ * the rule stays exact however fast cos(l phi) oscillates (the orders with
+ * l (b - a) / 2 <= 2 of a piece with many of them by the Taylor series of
+ * cos(l phi) about its centre, truncated below 1e-15 of the integral of
+ * |g|: the value of an order never depends on how many are asked for).
  *
  * Adds b_l to moments[l] for l < n_moments; scratch holds 7 n_moments
  * doubles. */

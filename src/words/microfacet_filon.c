@@ -17,10 +17,9 @@
 
 #define FILON_LEVELS 4        /* geometric pieces towards a singular point     */
 #define FILON_LEVEL_SAMPLES 5 /* samples of each of them (odd)                 */
-#define GGX_FILON_SAMPLES 17  /* Filon samples of each of GGX's pieces (odd),
-                               * which double in width away from the peak      */
-#define GGX_KINK_SAMPLES 17   /* samples of each piece towards a singular
-                               * point (odd); the pieces shrink by 4 ...       */
+#define GGX_PIECE_SAMPLES 17  /* Filon samples of each of GGX's pieces, which
+                               * double in width away from the peak and shrink
+                               * by 4 towards a singular point ...             */
 #define GGX_KINK_LEVELS 8     /* ... this many times towards the square root of
                                * total internal reflection, on the circle or
                                * just off it,                                  */
@@ -37,7 +36,7 @@
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
                                * this many more ...                            */
-#define GGX_SETTLED 2.5e-4    /* ... extended (doubled) until the last quarter
+#define GGX_SETTLED 2.5e-4    /* ... extended by half until the last quarter
                                * of the block stays below this fraction of the
                                * mean: a quarter of what the layer keeps
                                * (LL_MICROFACET_RELERR)                        */
@@ -84,34 +83,119 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
  * the series' partial sums too, is below that fraction of the peak (the
  * tails of a sharp lobe and the kinks far out in them cost most of the
  * samples otherwise). part: GGX_WHOLE (f), GGX_REFERENCE (f with F = 1) or
- * GGX_FRESNEL (f minus its reference). */
+ * GGX_FRESNEL (f minus its reference).
+ *
+ * A piece far out in the tail needs fewer samples, as its error counts
+ * against the pair's peak, not its own size: every fourth sample is taken
+ * first, and the rest only where those reach GGX_COARSE of *seen (every
+ * second) or GGX_MEDIUM (all). The quadratic through 5 samples of a
+ * piece over which f falls like phi^-4 (the tails' doubling pieces) errs
+ * by about 12% of the piece's largest f, through 9 by 1.5% and through 17
+ * by 0.2%: so at most about 1.2e-5 and 1.5e-5 of the peak where fewer are
+ * taken (the square root at a kink, graded, errs less). Every order block
+ * of the pair makes the same choices, as they depend on the samples and
+ * *seen alone. */
 enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
 
-static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
-                      double b, size_t samples, size_t first, size_t n_out, double *out,
-                      double *scratch, double *seen)
+#define GGX_COARSE 1e-4
+#define GGX_MEDIUM 1e-3
+#if GGX_PIECE_SAMPLES != 17
+#error "ggx_piece takes every fourth, every second, then all of 17 samples"
+#endif
+/* f (or its part) at the cosines cos_phi[k stride], count of them, into
+ * f[k stride]; returns the largest |f| of them. */
+static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int part,
+                          const double *cos_phi, size_t first, size_t stride, size_t count,
+                          double *f)
 {
-    /* (the reference of GGX_FRESNEL behind f: samples <= FILON_SAMPLES / 2) */
-    double *f = scratch + FILON_SCR_F, *f_ref = f + FILON_SAMPLES / 2;
-    double *cos_phi = scratch + FILON_SCR_COS, *filon = scratch + FILON_SCR_FILON;
+    double c_sub[GGX_PIECE_SAMPLES], f_sub[GGX_PIECE_SAMPLES], ref_sub[GGX_PIECE_SAMPLES];
     double peak = exp(p->a_plus_b), largest = 0.0;
     size_t k;
+    for (k = 0; k < count; ++k)
+        c_sub[k] = cos_phi[first + k * stride];
+    ll_microfacet_sample_profile(mf, p, c_sub, count, part == GGX_REFERENCE ? NULL : f_sub,
+                                 part == GGX_WHOLE ? NULL : part == GGX_REFERENCE ? f_sub
+                                                                                  : ref_sub);
+    for (k = 0; k < count; ++k) {
+        double c = 1.0 + p->b * (1.0 - c_sub[k]), value = f_sub[k];
+        if (part == GGX_FRESNEL)
+            value -= ref_sub[k];
+        value *= peak / (c * c);
+        f[first + k * stride] = value;
+        largest = fmax(largest, fabs(value));
+    }
+    return largest;
+}
+
+/* One pass over a pair's pieces: the largest f seen so far, and the
+ * samples each piece took (its stride, 0 if skipped, then the samples),
+ * which the passes of the next blocks of orders replay instead of taking
+ * them again (cache NULL: more pieces than it holds, sampled again). */
+#define GGX_CACHE 1024
+typedef struct ggx_pass {
+    double seen;
+    double *cache;
+    size_t used;
+    int replay;
+} ggx_pass;
+
+/* Record (or, replaying, read) a piece's stride and samples; 0 when a
+ * replayed piece is skipped. */
+static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
+{
+    size_t count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+    if (pass->replay) {
+        stride = (size_t)pass->cache[pass->used];
+        count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+        memcpy(f, pass->cache + pass->used + 1, count * sizeof *f);
+    } else if (pass->cache && pass->used + 1 + count <= GGX_CACHE) {
+        pass->cache[pass->used] = (double)stride;
+        memcpy(pass->cache + pass->used + 1, f, count * sizeof *f);
+    } else {
+        pass->cache = NULL;
+    }
+    pass->used += 1 + count;
+    return stride;
+}
+
+static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
+                      double b, size_t first, size_t n_out, double *out, double *scratch,
+                      ggx_pass *pass)
+{
+    double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
+    double *filon = scratch + FILON_SCR_FILON, largest, *seen = &pass->seen;
+    size_t stride = 4, k;
     if (!(b > a))
         return;
-    azimuth_cosines(a, b, samples, cos_phi);
-    ll_microfacet_sample_profile(mf, p, cos_phi, samples, part == GGX_REFERENCE ? NULL : f,
-                                 part == GGX_WHOLE ? NULL : part == GGX_REFERENCE ? f : f_ref);
-    for (k = 0; k < samples; ++k) {
-        double c = 1.0 + p->b * (1.0 - cos_phi[k]);
-        if (part == GGX_FRESNEL)
-            f[k] -= f_ref[k];
-        f[k] *= peak / (c * c);
-        largest = fmax(largest, fabs(f[k]));
-    }
-    *seen = fmax(*seen, largest);
-    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0))
+    if (pass->replay) {
+        stride = ggx_record(pass, 0, f);
+        if (stride)
+            ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
+                                  out, filon);
         return;
-    ll_filon_moments_from(f, samples, a, b, first, n_out, out, filon);
+    }
+    azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
+    largest = ggx_samples(mf, p, part, cos_phi, 0, 4, 5, f);
+    *seen = fmax(*seen, largest);
+    if (largest >= GGX_COARSE * *seen) {
+        stride = 2;
+        largest = fmax(largest, ggx_samples(mf, p, part, cos_phi, 2, 4, 4, f));
+        *seen = fmax(*seen, largest);
+        if (largest >= GGX_MEDIUM * *seen) {
+            stride = 1;
+            largest = fmax(largest, ggx_samples(mf, p, part, cos_phi, 1, 2, 8, f));
+            *seen = fmax(*seen, largest);
+        }
+    }
+    if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
+        ggx_record(pass, 0, f);
+        return;
+    }
+    if (stride > 1) /* the samples taken, side by side */
+        for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
+            f[k] = f[k * stride];
+    ggx_record(pass, stride, f);
+    ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon);
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -148,7 +232,7 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
  * levels_a, levels_b: the pieces towards each end (0: not graded). */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                         double b, int levels_a, int levels_b, size_t first, size_t n_out,
-                        double *out, double *scratch, double *seen)
+                        double *out, double *scratch, ggx_pass *pass)
 {
     double d = b - a;
     int level, levels = levels_a ? levels_a : levels_b;
@@ -156,22 +240,20 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
         return;
     if (levels_a && levels_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, seen);
-        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, seen);
+        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, pass);
+        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, pass);
         return;
     }
     if (!levels) {
-        ggx_piece(mf, p, part, a, b, GGX_FILON_SAMPLES, first, n_out, out, scratch, seen);
+        ggx_piece(mf, p, part, a, b, first, n_out, out, scratch, pass);
         return;
     }
     for (level = 0; level < levels; ++level) {
         double near = level == levels - 1 ? 0.0 : 0.25 * d;
         if (levels_a)
-            ggx_piece(mf, p, part, a + near, a + d, GGX_KINK_SAMPLES, first, n_out, out,
-                      scratch, seen);
+            ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
         else
-            ggx_piece(mf, p, part, b - d, b - near, GGX_KINK_SAMPLES, first, n_out, out,
-                      scratch, seen);
+            ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
         d = near;
     }
 }
@@ -183,13 +265,16 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
  * near branch points; the orders first .. first + n_out - 1 into out[0 ..
  * n_out - 1]. seen: the largest f known before the first piece. */
 static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int part, double start,
-                      double seen, size_t first, size_t n_out, double *out, double *scratch)
+                      double seen, size_t first, size_t n_out, double *out, double *scratch,
+                      ggx_pass *pass)
 {
     double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
     double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
     /* (a dielectric's reflection: its branch points may be TIR's) */
     int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
+    pass->seen = seen;
+    pass->used = 0;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a, grade_b;
@@ -206,7 +291,7 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
         grade_b = b == p->split && !p->reflect ? kink_levels
                   : b == LL_PI && p->grade_end ? branch_levels
                                                : 0;
-        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, &seen);
+        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, pass);
         a = b;
     }
 }
@@ -232,19 +317,25 @@ static int ggx_settled(const double *out, size_t n, double moment0)
  * size of the kink, which only the moments tell. Each block costs its
  * orders times the samples, so the first holds the peak's orders and a few
  * more, and the next ones (the orders after it, the same pieces and
- * samples) double it until its last quarter has settled against moment0
- * (0: the moments' own order 0). Returns the orders computed. */
+ * samples, replayed) add half as many again until its last quarter has
+ * settled against moment0 (0: the moments' own order 0). Returns the
+ * orders computed. */
 static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
                          double start, double seen, double moment0, size_t n_out, double *out,
                          double *scratch)
 {
+    double cache[GGX_CACHE];
+    ggx_pass pass;
     size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     if (n > n_out)
         n = n_out;
-    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch);
+    pass.cache = cache;
+    pass.replay = 0;
+    ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
+    pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 != 0.0 ? moment0 : out[0])) {
-        size_t next = n_out - n > n ? 2 * n : n_out;
-        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch);
+        size_t step = n / 2 > 8 ? n / 2 : 8, next = n_out - n > step ? n + step : n_out;
+        ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch, &pass);
         n = next;
     }
     return n;
