@@ -107,7 +107,9 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->step = sampling ? 2 : wp->inner;
     if (sampling && !ll_size_mul(total, 2, &total))
         return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
-    wp->data = ll_alloc_array(total, sizeof(float));
+    if (!ll_size_mul(total, sizeof(float), &total))
+        return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
+    wp->data = ll_malloc_large(total);
     if (!wp->data)
         goto oom;
     {
