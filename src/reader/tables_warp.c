@@ -649,9 +649,13 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
     ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
-    /* Guide rows r and r + 1 of both slices (column j stride at j - 1). */
-    g0 = wp->guide + (s->index[0] * h + r) * gc - 1;
-    g1 = wp->guide + (s->index[s->count == 2] * h + r) * gc - 1;
+    /* Guide rows r and r + 1 of both slices (column j stride at j - 1;
+     * a warp too narrow for a guide reads none). */
+    g0 = g1 = wp->guide;
+    if (gc > 0) {
+        g0 += (s->index[0] * h + r) * gc - 1;
+        g1 += (s->index[s->count == 2] * h + r) * gc - 1;
+    }
     COUNT_SEARCH(w, gs, rows_mix(&cond, ty, g0[j], g1[j], g0[j + gc], g1[j + gc]),
                  pair_at2(&cond, at, w, ty, i), target, c);
     cdf_c = pair_at2(&cond, at, w, ty, c);
