@@ -171,29 +171,28 @@ void *ll_malloc(size_t bytes)
 }
 
 /* Transparent huge pages (Linux, when the system offers them on request):
- * the unit of alignment and of rounding of ll_malloc_large's blocks. */
+ * the alignment of ll_malloc_large's blocks and the unit they are marked
+ * in. */
 #define LL_HUGE_PAGE ((size_t)2 << 20)
 
 void *ll_malloc_large(size_t bytes)
 {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    size_t rounded;
     void *p = NULL;
     /* Only the C library's allocator: a caller's gives blocks of its own
      * making, and a block from posix_memalign is one that free (the default
      * ll_free) takes back. */
-    if (user_allocator.alloc || bytes < LL_HUGE_PAGE / 2)
+    if (user_allocator.alloc || bytes < LL_HUGE_PAGE)
         return ll_malloc(bytes);
-    if (!ll_size_add(bytes, LL_HUGE_PAGE - 1, &rounded))
-        return NULL;
-    rounded -= rounded % LL_HUGE_PAGE;
     if (injected_failure())
         return NULL;
-    if (posix_memalign(&p, LL_HUGE_PAGE, rounded) != 0)
+    if (posix_memalign(&p, LL_HUGE_PAGE, bytes) != 0)
         return NULL;
-    /* Before the first touch, so that the pages are made huge as they are
-     * faulted in; refused (no THP, or "never"), it leaves ordinary pages. */
-    (void)madvise(p, rounded, MADV_HUGEPAGE);
+    /* The whole huge pages of the block only, so that none holds memory
+     * the block does not use; marked before the first touch, so that they
+     * are made huge as they are faulted in. Refused (no THP, or "never"),
+     * the block keeps ordinary pages. */
+    (void)madvise(p, bytes - bytes % LL_HUGE_PAGE, MADV_HUGEPAGE);
     note_block(1);
     return p;
 #else
