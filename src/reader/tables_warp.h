@@ -69,7 +69,7 @@ typedef struct ll_warp2d {
      * integral of every row at the columns guide_stride, 2 guide_stride,
      * ... <= w - 2 (guide_count of them), [n_slices][h][guide_count]. A
      * search reads the columns first from here (rows r and r + 1 side by
-     * side, a line or two that stays in cache), then only the stretch of
+     * side: a line or two per slice), then only the stretch of
      * guide_stride nodes it falls in from the table of megabytes: two
      * rounds of independent reads instead of a halving step's chain of
      * dependent ones. The values are cond's own, so the search finds what
