@@ -24,6 +24,7 @@ void ll_warp2d_free(ll_warp2d *wp)
     ll_free(wp->data); /* cond points into it */
     ll_free(wp->marg);
     ll_free(wp->row_total);
+    ll_free(wp->guide);
     memset(wp, 0, sizeof *wp);
 }
 
@@ -82,6 +83,16 @@ static int rows_equal(const ll_warp2d *wp)
     return 1;
 }
 
+/* The stride of the first round of a search over n nodes (COUNT_SEARCH):
+ * about sqrt(n - 1), so that both rounds read about as many values. */
+static size_t search_stride(size_t n)
+{
+    size_t s = 1;
+    while (s * s < n - 1)
+        ++s;
+    return s;
+}
+
 ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
                          const size_t *param_size, const double *const *params, ll_warp_get get,
                          const void *ctx, int sampling)
@@ -107,7 +118,9 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     wp->step = sampling ? 2 : wp->inner;
     if (sampling && !ll_size_mul(total, 2, &total))
         return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
-    wp->data = ll_alloc_array(total, sizeof(float));
+    if (!ll_size_mul(total, sizeof(float), &total))
+        return ll_fail(LL_ERROR_FORMAT, "the table size overflows");
+    wp->data = ll_malloc_large(total);
     if (!wp->data)
         goto oom;
     {
@@ -135,6 +148,19 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
             return ll_fail(LL_ERROR_FORMAT, "slice %zu has no positive finite integral", k);
     for (k = 0; k < n * h; ++k)
         wp->row_total[k] = wp->cond[(k * w + w - 1) * 2];
+    wp->marg_stride = search_stride(h);
+    wp->guide_stride = search_stride(w);
+    wp->guide_count = (w - 2) / wp->guide_stride;
+    if (wp->guide_count > 0) {
+        size_t j;
+        if (!ll_size_mul(n * h, wp->guide_count, &total) ||
+            !(wp->guide = ll_alloc_array(total, sizeof(float))))
+            goto oom;
+        for (k = 0; k < n * h; ++k)
+            for (j = 0; j < wp->guide_count; ++j)
+                wp->guide[k * wp->guide_count + j] =
+                    wp->cond[(k * w + (j + 1) * wp->guide_stride) * 2];
+    }
     return LL_OK;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
@@ -538,21 +564,6 @@ static inline double pair_at2(const slice_pair *a, size_t r0, size_t w, double t
     return (1.0 - ty) * pmix(a, (r0 + i) * a->step) + ty * pmix(a, (r0 + w + i) * a->step);
 }
 
-/* Ask for the bytes [p, p + n) ahead of their use: the rows a search is
- * about to read lie in tables of megabytes, and fetched one halving step
- * at a time each would wait for memory in turn. */
-static inline void prefetch(const float *p, size_t n)
-{
-#if defined(__GNUC__)
-    const char *c = (const char *)p, *end = (const char *)(p + n);
-    for (; c < end; c += 64)
-        __builtin_prefetch(c);
-#else
-    (void)p;
-    (void)n;
-#endif
-}
-
 void ll_warp2d_sample(const ll_warp2d *wp, const double u[2], const double *param,
                       double pos[2], double *pdf)
 {
@@ -569,21 +580,66 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
 }
 
+/* Ask for the bytes [p, p + n) ahead of their use. */
+static inline void prefetch(const float *p, size_t n)
+{
+#if defined(__GNUC__)
+    const char *c = (const char *)p, *end = (const char *)(p + n);
+    for (; c < end; c += 64)
+        __builtin_prefetch(c);
+#else
+    (void)p;
+    (void)n;
+#endif
+}
+
+/* SEARCH's answer for values that do not decrease with i, found as the
+ * count of i in [1, n - 2] with value(i) <= target (which is what the
+ * halving finds for such values), in two rounds: the multiples of stride
+ * first (first(j): value(j stride), j >= 1), then the stride - 1 nodes
+ * after the last of them that is <= target. Every value of a round is
+ * independent of the others, so their reads overlap, where a halving
+ * waits for each before it knows the next; whatever the values, out
+ * stays in [0, n - 2]. */
+#define COUNT_SEARCH(n, stride, first, value, target, out)                                \
+    do {                                                                                  \
+        size_t last_ = (n) - 2, base_ = 0, count_ = 0, j, i;                              \
+        for (j = 1; j * (stride) <= last_; ++j)                                           \
+            base_ += (first) <= (target) ? (stride) : 0;                                  \
+        for (i = base_ + 1; i < base_ + (stride) && i <= last_; ++i)                      \
+            count_ += (value) <= (target);                                                \
+        (out) = base_ + count_;                                                           \
+    } while (0)
+
+/* Rows r and r + 1 of a pair at ty from values a (row r) and b (row r +
+ * 1) of both slices: pair_at2's arithmetic, in its order. */
+static inline double rows_mix(const slice_pair *q, double ty, float a0, float a1, float b0,
+                              float b1)
+{
+    return (1.0 - ty) * (q->w0 * (double)a0 + q->w1 * (double)a1) +
+           ty * (q->w0 * (double)b0 + q->w1 * (double)b1);
+}
+
 /* sample_at for a pair of slices: the general form's arithmetic, in the
- * same order, so both give the same numbers. */
+ * same order, so both give the same numbers; the searches by
+ * COUNT_SEARCH, the conditional one's first round from the guide. */
 static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[2],
                         double pos[2], double *pdf)
 {
-    size_t w = wp->w, h = wp->h, st = w * h, r, c, at;
+    size_t w = wp->w, h = wp->h, st = w * h, r, c, at, gs = wp->guide_stride;
+    size_t gc = wp->guide_count, hs = wp->marg_stride;
     double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
     slice_pair marg, tot, cond, data;
+    const float *g0, *g1;
     pair_of(s, wp->marg, h, 1, &marg);
     pair_of(s, wp->row_total, h, 1, &tot);
     pair_of(s, wp->cond, 2 * st, 2, &cond);
     pair_of(s, wp->data, 2 * st, 2, &data);
     target = u[1];
-    SEARCH(h, pmix(&marg, i), target, r);
+    COUNT_SEARCH(h, hs, pmix(&marg, j * hs), pmix(&marg, i), target, r);
     at = r * w;
+    /* Rows r and r + 1 of both slices, while the guide is read: their
+     * fetch from memory then overlaps the guide's instead of following it. */
     prefetch(cond.p0 + 2 * at, 4 * w);
     prefetch(cond.p1 + 2 * at, 4 * w);
     r0 = pmix(&tot, r);
@@ -593,7 +649,15 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
     ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
-    SEARCH(w, pair_at2(&cond, at, w, ty, i), target, c);
+    /* Guide rows r and r + 1 of both slices (column j stride at j - 1;
+     * a warp too narrow for a guide reads none). */
+    g0 = g1 = wp->guide;
+    if (gc > 0) {
+        g0 += (s->index[0] * h + r) * gc - 1;
+        g1 += (s->index[s->count == 2] * h + r) * gc - 1;
+    }
+    COUNT_SEARCH(w, gs, rows_mix(&cond, ty, g0[j], g1[j], g0[j + gc], g1[j + gc]),
+                 pair_at2(&cond, at, w, ty, i), target, c);
     cdf_c = pair_at2(&cond, at, w, ty, c);
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);

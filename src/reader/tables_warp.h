@@ -65,6 +65,19 @@ typedef struct ll_warp2d {
                                                  the same values: y does not
                                                  matter (an isotropic file's ndf
                                                  and sigma)                       */
+    /* A sampling warp's guide to its conditional searches: the running
+     * integral of every row at the columns guide_stride, 2 guide_stride,
+     * ... <= w - 2 (guide_count of them), [n_slices][h][guide_count]. A
+     * search reads the columns first from here (rows r and r + 1 side by
+     * side: a line or two per slice), then only the stretch of
+     * guide_stride nodes it falls in from the table of megabytes: two
+     * rounds of independent reads instead of a halving step's chain of
+     * dependent ones. The values are cond's own, so the search finds what
+     * a halving finds. NULL if the warp only interpolates. marg_stride:
+     * the first round's stride of the search along y (the marginal, small
+     * enough to be read in place). */
+    size_t guide_stride, guide_count, marg_stride;
+    float *guide;
 } ll_warp2d;
 
 /* The slices around one parameter point and their weights (only those of

@@ -24,11 +24,15 @@
  * only by tests.
  */
 #define _XOPEN_SOURCE 700 /* realpath (ll_realpath) */
+#define _DEFAULT_SOURCE 1  /* madvise, MADV_HUGEPAGE (ll_malloc_large) */
 #include "support/support.h"
 
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__linux__)
+#  include <sys/mman.h>
+#endif
 
 int ll_size_mul(size_t a, size_t b, size_t *out)
 {
@@ -164,6 +168,36 @@ void *ll_malloc(size_t bytes)
     if (p)
         note_block(1);
     return p;
+}
+
+/* Transparent huge pages (Linux, when the system offers them on request):
+ * the alignment of ll_malloc_large's blocks and the unit they are marked
+ * in. */
+#define LL_HUGE_PAGE ((size_t)2 << 20)
+
+void *ll_malloc_large(size_t bytes)
+{
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    void *p = NULL;
+    /* Only the C library's allocator: a caller's gives blocks of its own
+     * making, and a block from posix_memalign is one that free (the default
+     * ll_free) takes back. */
+    if (user_allocator.alloc || bytes < LL_HUGE_PAGE)
+        return ll_malloc(bytes);
+    if (injected_failure())
+        return NULL;
+    if (posix_memalign(&p, LL_HUGE_PAGE, bytes) != 0)
+        return NULL;
+    /* The whole huge pages of the block only, so that none holds memory
+     * the block does not use; marked before the first touch, so that they
+     * are made huge as they are faulted in. Refused (no THP, or "never"),
+     * the block keeps ordinary pages. */
+    (void)madvise(p, bytes - bytes % LL_HUGE_PAGE, MADV_HUGEPAGE);
+    note_block(1);
+    return p;
+#else
+    return ll_malloc(bytes);
+#endif
 }
 
 void *ll_calloc(size_t count, size_t size)

@@ -39,6 +39,12 @@ LL_INTERNAL void *ll_malloc(size_t bytes);
 LL_INTERNAL void *ll_calloc(size_t count, size_t size); /* checks count * size */
 LL_INTERNAL void *ll_realloc(void *block, size_t bytes);
 LL_INTERNAL void ll_free(void *block);
+/* A block of megabytes that look-ups read at random (the tables of a table
+ * file): with the C library's allocator on Linux, aligned to 2 MiB and its
+ * whole 2 MiB pages marked for transparent huge pages, so that a look-up's
+ * scattered reads do not also miss the TLB and walk the page tables; else,
+ * and for blocks under 2 MiB, ll_malloc. Freed with ll_free. */
+LL_INTERNAL void *ll_malloc_large(size_t bytes);
 LL_INTERNAL char *ll_strdup(const char *s);
 /* getline(3) through ll_realloc: the length read, -1 at end of file, -2 when
  * out of memory (*line stays valid and is the caller's to ll_free). */
