@@ -37,7 +37,7 @@
 #define FN "ll_tables_write_from_bsdf"
 #define LUMINANCE_FLOOR 1e-3
 #define LOBES 4
-#define FIELDS_PER_LOBE 7
+#define FIELDS_PER_LOBE 8
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
@@ -45,7 +45,8 @@ static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", 
 typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
-    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1];
+    double fresnel_eta;                     /* > 0: values over F (reflected) */
+    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
     ll_warp2d ndf_w, sigma_w, vndf_w;
     double alpha;
     char names[FIELDS_PER_LOBE][40];
@@ -176,18 +177,20 @@ static void value_slice(const writer *w, lobe *l, size_t t)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
-            double sampling = 1.0;
+            double sampling = 1.0, over = 1.0;
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
             if (wi[2] > 0.0 && direction(l, wi, um, wo, &sampling)) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
                 scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
                 if (!ll_is_finite(scale))
                     scale = 0.0;
+                if (l->fresnel_eta > 0.0)
+                    over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
             }
             for (c = 0; c < 3; ++c) {
                 double v = f[c] * scale;
                 f[c] = v > 0.0 ? v : 0.0;
-                rgb[c * plane + y * ns + x] = (float)f[c];
+                rgb[c * plane + y * ns + x] = (float)(f[c] * over);
             }
             y_lum = ll_tables_luminance(f) / sampling;
             lum[y * ns + x] = (float)y_lum;
@@ -315,6 +318,13 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         if (l->transmit && fabs(b->eta - 1.0) > 1e-6)
             l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->warp_eta[0] = (float)l->refract_eta;
+        /* Reflection seen from the denser side has the edge of total
+         * internal reflection, where F, and with it f, rises to 1 with an
+         * infinite slope: stored over F(wi.h) the values are smooth
+         * across it, and the reader multiplies F back exactly. */
+        if (!l->transmit && fabs(b->eta - 1.0) > 1e-6 && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
+            l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
+        l->fresnel_f[0] = (float)l->fresnel_eta;
     }
     albedos(&w);
     ll_watch_stage(&watch, "tables", 0.0, 0.9, LOBES * w.n_ti);
@@ -346,7 +356,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         lobe *l = &w.l[k];
         static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
                                                            "luminance", "rgb",   "albedo",
-                                                           "warp_eta" };
+                                                           "warp_eta",  "fresnel_eta" };
         int j;
         for (j = 0; j < FIELDS_PER_LOBE; ++j)
             snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
@@ -362,10 +372,16 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                   NULL },
                 { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
                 { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
+                { l->names[7], LL_TENSOR_F32, 1, { 1 }, l->fresnel_f, NULL, NULL },
             };
-            /* warp_eta: transmitted sets only. */
-            for (j = 0; j < (l->transmit ? FIELDS_PER_LOBE : FIELDS_PER_LOBE - 1); ++j)
+            /* warp_eta: transmitted sets only; fresnel_eta: reflected sets
+             * stored over F only. */
+            for (j = 0; j < FIELDS_PER_LOBE - 2; ++j)
                 f[nf++] = set[j];
+            if (l->transmit)
+                f[nf++] = set[6];
+            if (l->fresnel_eta > 0.0)
+                f[nf++] = set[7];
         }
     }
     if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
