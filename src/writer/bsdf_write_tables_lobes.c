@@ -284,6 +284,44 @@ static void elevations(writer *w)
     }
 }
 
+/* Whether the refraction half vector of relative index eta reaches the
+ * transmitted lobe of a side: the share of f |cos| (over the transmitted
+ * hemisphere, at incident elevations 0..80 degrees) at pairs that have a
+ * refraction half vector is at least REACHED. A rough interface's lobe
+ * lies there entirely (its microfacets refract through that very half
+ * vector: rough glass, at most 0.03% unreached); light scattered by a
+ * medium under a coat leaves in directions it cannot give (the coat over
+ * a medium without a base of docs/formats.md: 4% to 96% unreached), which
+ * the warp of the z-flipped direction, defined for every pair, covers. */
+#define REACHED 0.995
+#define REACH_ELEVATIONS 5
+#define REACH_NODES 48
+
+static int refraction_reaches(const ll_bsdf *b, int bottom, double eta)
+{
+    static const double deg[REACH_ELEVATIONS] = { 0.0, 20.0, 40.0, 60.0, 80.0 };
+    size_t e, i, j;
+    for (e = 0; e < REACH_ELEVATIONS; ++e) {
+        double th = deg[e] * (LL_PI / 180), wi[3] = { sin(th), 0.0, cos(th) };
+        double all = 0.0, reached = 0.0;
+        for (i = 0; i < REACH_NODES; ++i) {
+            double to = ((double)i + 0.5) / REACH_NODES * (LL_PI / 2);
+            for (j = 0; j < REACH_NODES; ++j) {
+                double po = ((double)j + 0.5) / REACH_NODES * LL_PI, m[3], f[3], y;
+                double wo[3] = { sin(to) * cos(po), sin(to) * sin(po), -cos(to) };
+                ll_tables_lobe_f(b, bottom, wi, wo, f);
+                y = ll_tables_luminance(f) * cos(to) * sin(to);
+                all += y;
+                if (ll_tables_refract_half(wi, wo, eta, m))
+                    reached += y;
+            }
+        }
+        if (all > 0.0 && reached < REACHED * all)
+            return 0;
+    }
+    return 1;
+}
+
 static char *metadata_text(const writer *w, const char *figures, size_t *size)
 {
     size_t cap = 640, at;
@@ -368,7 +406,8 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         lobe *l = &w.l[k];
         l->bottom = k == 1 || k == 3;
         l->transmit = k >= 2;
-        if (l->transmit && fabs(b->eta - 1.0) > 1e-6)
+        if (l->transmit && fabs(b->eta - 1.0) > 1e-6 &&
+            refraction_reaches(b, l->bottom, l->bottom ? 1.0 / b->eta : b->eta))
             l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->warp_eta[0] = (float)l->refract_eta;
         /* Reflection seen from the denser side has the edge of total
