@@ -15,6 +15,11 @@
  * z-flipped direction and reuses its warp, evaluation and sampler
  * unchanged.
  *
+ * A reflected set with a "fresnel_eta" (one seen from the denser side)
+ * holds its values over the Fresnel reflectance at its half vector, which
+ * is multiplied back here: f over F is smooth across the edge of total
+ * internal reflection, which F restores exactly.
+ *
  * Sampling picks the reflected or the transmitted lobe of wi's side in
  * proportion to their luminance albedos at wi's elevation (stored per
  * incident elevation, interpolated linearly as the slices are), reusing

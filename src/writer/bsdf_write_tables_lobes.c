@@ -17,8 +17,11 @@
  * 4 sigma / D stored there. The values are the .bsdf's own (importance
  * transport); the reader applies radiance's eta^2 as for the .bsdf.
  * A transmitted set's "warp_eta" names its warp: the refraction's
- * relative index, or 0 for the z-flipped direction's (the reader takes
- * either, so a writer may choose per set).
+ * relative index where the stack has a net interface and the refraction
+ * half vector reaches the lobe, else 0 for the z-flipped direction's (the
+ * reader takes either per set). A reflected set seen from the denser side
+ * stores its values over the Fresnel reflectance of its half vector and
+ * names that index in "fresnel_eta" (the reader multiplies it back).
  * A set's "albedo" field holds its luminance albedo per incident
  * elevation (the .bsdf's order-0 integral), by which the reader's sampler
  * picks between the reflected and the transmitted lobe.
@@ -234,16 +237,14 @@ static void albedos(writer *w)
  * the horizon; beyond it the edge of total internal reflection moves
  * through the lobe's normals as fast as theta. The tables, interpolated
  * between elevations at the same normal, smear both. There the nodes are
- * the inverse of a mixture of the opaque grid's distribution (share 0.6),
- * one uniform in that exit angle (0.2), which packs them towards the
+ * the inverse of a mixture of the opaque grid's distribution (share 0.75),
+ * one uniform in that exit angle (0.15), which packs them towards the
  * critical angle from below, and one uniform over the 30 degrees beyond it
- * (0.2). The shares were chosen by measuring rough glass (eta 1.5, alpha
- * 0.3; docs/formats.md). A grid of fewer than MIN_PACKED elevations keeps
- * the opaque one: it has too few to spare (at 24, T from 30 degrees below
- * the glass was 5.6% off packed against 2.0% on the opaque grid). */
-#define MIN_PACKED 48
-#define EXIT_SHARE 0.2
-#define BEYOND_SHARE 0.2
+ * (0.1). The shares were chosen by measuring rough glass (eta 1.5, alpha
+ * 0.3; docs/formats.md): larger ones left the reflection from below,
+ * whose sampling needs the opaque grid's elevations, further off. */
+#define EXIT_SHARE 0.15
+#define BEYOND_SHARE 0.1
 #define BEYOND_SPAN 30.0 /* degrees */
 
 static double elevation_cdf(double th, double dense)
@@ -264,7 +265,7 @@ static void elevations(writer *w)
     double eta = w->b->eta, dense = eta > 1.0 ? eta : 1.0 / eta;
     size_t t;
     int it;
-    if (fabs(eta - 1.0) <= 1e-6 || w->n_ti < MIN_PACKED)
+    if (fabs(eta - 1.0) <= 1e-6)
         dense = 1.0;
     for (t = 0; t < w->n_ti; ++t) {
         double v = (double)t / (double)(w->n_ti - 1), lo = 0.0, hi = LL_PI / 2;
