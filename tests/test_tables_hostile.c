@@ -445,6 +445,7 @@ static size_t data_at(const unsigned char *d, const char *name)
 static void test_transmissive_fields(void **state)
 {
     static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
+    static const unsigned char one_bytes[4] = { 0x00, 0x00, 0x80, 0x3f };
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     unsigned char *d;
@@ -481,6 +482,18 @@ static void test_transmissive_fields(void **state)
     d = copy_of(tgood, tgood_size);
     memcpy(d + data_at(d, "transmit_bottom.luminance") + 4, nan_bytes, 4);
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
+    free(d);
+    /* A reflected set's Fresnel index of 1 (no interface); without the
+     * field (its name damaged) the file opens, its values then f's own. */
+    d = copy_of(tgood, tgood_size);
+    memcpy(d + data_at(d, "reflect_bottom.fresnel_eta"), one_bytes, 4);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.fresnel_eta\"");
+    free(d);
+    d = copy_of(tgood, tgood_size);
+    locate(d, "reflect_bottom.fresnel_eta", &off, &shape, &rank);
+    d[off - 4] = 'x';
+    assert_int_equal(ll_bsdf_open_memory(d, tgood_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
     free(d);
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
     expect_extent(tgood, tgood_size, "reflect_bottom.rgb", 2, 2);

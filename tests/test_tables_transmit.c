@@ -102,7 +102,7 @@ static void check_sampling(const ll_bsdf *src, const ll_bsdf *tab)
 static void check_batch(const ll_bsdf *src, const ll_bsdf *tab, double eta)
 {
     double wo[4 * 3] = { 0.3, 0.1, 0.948683, 0.5, 0.0, -0.866025, 0.0, 0.0, 1.0, 0.6, 0.0, 0.8 };
-    double wi[4 * 3] = { -0.2, 0.0, -0.979796, -0.3, 0.0, 0.953939, 0.1, 0.0, -0.994987,
+    double wi[4 * 3] = { -0.2, 0.0, -0.979796, -0.642788, 0.0, 0.766044, 0.1, 0.0, -0.994987,
                          -0.6, 0.0, 0.8 };
     double rgb[4 * 3], pdf[4], f[3], p, ft[3], fs[3];
     double st = 0.3 / eta, mu_o = sqrt(1.0 - st * st);

@@ -52,7 +52,8 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  * the fields struct_size covers.
  *  n_theta_i: incident elevations over [0, 90] degrees, denser towards
  *    grazing: theta = 90 sin(90 v) degrees for v uniform in [0, 1]
- *    (2..1024);
+ *    (2..1024); a transmissive file across a net interface packs some of
+ *    them around its critical angle instead (docs/formats.md);
  *  vndf_size: side of the visible-normal grid, nodes in u_theta and u_phi
  *    (2..4096);
  *  sample_size: side N of the sample grid at which the values are stored

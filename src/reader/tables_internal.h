@@ -36,9 +36,13 @@ typedef struct ll_measured {
      * transmitted lobe across a net interface the relative index of the
      * far side over the fixed direction's side, which selects the
      * refraction warp (0: reflection, or the warp of the z-flipped
-     * direction where the stack has no net interface). */
+     * direction where the stack has no net interface); for a reflected
+     * lobe whose values are stored over the Fresnel reflectance of its
+     * half vector (field "fresnel_eta", tables_lobes.c), that relative
+     * index, else 0. */
     double *weight;
     double refract_eta;
+    double fresnel_eta;
 } ll_measured;
 
 /* The lobes of an extended file, by the side of the fixed direction. */

@@ -15,6 +15,11 @@
  * z-flipped direction and reuses its warp, evaluation and sampler
  * unchanged.
  *
+ * A reflected set with a "fresnel_eta" (one seen from the denser side)
+ * holds its values over the Fresnel reflectance at its half vector, which
+ * is multiplied back here: f over F is smooth across the edge of total
+ * internal reflection, which F restores exactly.
+ *
  * Sampling picks the reflected or the transmitted lobe of wi's side in
  * proportion to their luminance albedos at wi's elevation (stored per
  * incident elevation, interpolated linearly as the slices are), reusing
@@ -22,6 +27,7 @@
  * lobe's.
  */
 #include "reader/tables_internal.h"
+#include "reader/tables_refract.h"
 
 #include <math.h>
 
@@ -54,6 +60,22 @@ static void to_side(int bottom, const double in[3], double out[3])
     }
 }
 
+/* A reflected set stored over the Fresnel reflectance of its half vector
+ * (a set seen from the denser side, whose reflection has the edge of total
+ * internal reflection: f over F is smooth across it, so the tables need
+ * not resolve the edge, which F puts back exactly): the value times F. */
+static void fresnel(const ll_measured *set, const double wi[3], const double wo[3],
+                    double value[3])
+{
+    double k;
+    if (!(set->fresnel_eta > 0.0))
+        return;
+    k = ll_tables_fresnel_pair(wi, wo, set->fresnel_eta);
+    value[0] *= k;
+    value[1] *= k;
+    value[2] *= k;
+}
+
 /* The set's value at (wi, wo) in its frame (wi above). */
 static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
                       const double wo[3], double value[3])
@@ -61,6 +83,7 @@ static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
     double f[3];
     if (!transmit) {
         ll_measured_eval(set, wi, wo, value);
+        fresnel(set, wi, wo, value);
     } else if (set->refract_eta > 0.0) {
         ll_measured_refract_eval(set, wi, wo, value);
     } else {
@@ -176,9 +199,11 @@ int ll_measured_lobes_sample(const ll_measured *m, const double wi[3], const dou
     v[1] = u[1];
     if (transmit ? !t : !r)
         return 0;
-    if (!transmit)
+    if (!transmit) {
         ok = ll_measured_sample(r, w, v, wo, pdf, value);
-    else if (t->refract_eta > 0.0)
+        if (ok)
+            fresnel(r, w, wo, value);
+    } else if (t->refract_eta > 0.0)
         ok = ll_measured_refract_sample(t, w, v, wo, pdf, value);
     else {
         ok = ll_measured_sample(t, w, v, wo, pdf, value);

@@ -249,8 +249,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
 {
     char prefix[NAME_CAP];
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
-    char ne[NAME_CAP];
+    char ne[NAME_CAP], nf[NAME_CAP];
     const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
+    const ll_tensor_field *fresnel = NULL;
     int transmit = strncmp(lobe, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
@@ -261,7 +262,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
     if (!join_name(nn, prefix, "ndf") || !join_name(ns, prefix, "sigma") ||
         !join_name(nv, prefix, "vndf") || !join_name(nl, prefix, "luminance") ||
         !join_name(nr, prefix, sh->spectral ? "spectra" : "rgb") ||
-        !join_name(na, prefix, "albedo") || !join_name(ne, prefix, "warp_eta"))
+        !join_name(na, prefix, "albedo") || !join_name(ne, prefix, "warp_eta") ||
+        !join_name(nf, prefix, "fresnel_eta"))
         return name_error(sh->file, prefix, "luminance");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
@@ -269,7 +271,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         (s = require(t, nl, 4, file, &lum)) != LL_OK ||
         (s = require(t, nr, 5, file, &rgb)) != LL_OK ||
         (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK) ||
-        (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK))
+        (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK) ||
+        (sh->extended && !transmit && ll_tensor_find(t, nf) &&
+         (s = require(t, nf, 1, file, &fresnel)) != LL_OK))
         return s;
     /* The refraction warp's relative index, or 0: the z-flipped
      * direction's (tables_lobes.c); 1 would have no refraction half
@@ -278,6 +282,12 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         return shape_error(file, ne, "must be one value: 0 (the warp of the z-flipped "
                                      "direction) or a relative index in [0.001, 1000] other "
                                      "than 1");
+    /* A reflected set's values over the Fresnel reflectance of that
+     * relative index (optional: without it the values are f's own). */
+    if (fresnel && (fresnel->count != 1 || !warp_eta_ok((double)ll_tensor_f32(fresnel, 0)) ||
+                    ll_tensor_f32(fresnel, 0) == 0.0f))
+        return shape_error(file, nf, "must be one value: a relative index in [0.001, 1000] "
+                                     "other than 1");
     if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
         return shape_error(file, nn, "each extent must be >= 2");
     if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
@@ -332,6 +342,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
     }
     if (warp)
         m->refract_eta = (double)ll_tensor_f32(warp, 0);
+    if (fresnel)
+        m->fresnel_eta = (double)ll_tensor_f32(fresnel, 0);
     return LL_OK;
 }
 

@@ -74,4 +74,31 @@ static inline double ll_tables_refract_jacobian(const double wi[3], const double
     return ll_is_finite(j) ? j : 0.0;
 }
 
+/* The unpolarised Fresnel reflectance of a smooth interface for light
+ * at cosine c (> 0) to its normal on the side of index 1, the far side of
+ * relative index eta: 1 under total internal reflection. */
+static inline double ll_tables_fresnel(double c, double eta)
+{
+    double s2 = (1.0 - c * c) / (eta * eta), ct, rs, rp;
+    if (!(s2 < 1.0))
+        return 1.0;
+    ct = sqrt(1.0 - s2);
+    rs = (c - eta * ct) / (c + eta * ct);
+    rp = (eta * c - ct) / (eta * c + ct);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+/* That reflectance at the reflection half vector of (wi, wo), both above:
+ * the factor a reflected set stored over it ("fresnel_eta") is
+ * multiplied by; 1 where the pair has no half vector. */
+static inline double ll_tables_fresnel_pair(const double wi[3], const double wo[3], double eta)
+{
+    double h[3] = { wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2] };
+    double len = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]), c;
+    if (!(len > 0.0))
+        return 1.0;
+    c = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / len;
+    return c > 0.0 ? ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta) : 1.0;
+}
+
 #endif /* LL_TABLES_REFRACT_H */

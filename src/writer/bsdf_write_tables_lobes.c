@@ -17,8 +17,11 @@
  * 4 sigma / D stored there. The values are the .bsdf's own (importance
  * transport); the reader applies radiance's eta^2 as for the .bsdf.
  * A transmitted set's "warp_eta" names its warp: the refraction's
- * relative index, or 0 for the z-flipped direction's (the reader takes
- * either, so a writer may choose per set).
+ * relative index where the stack has a net interface and the refraction
+ * half vector reaches the lobe, else 0 for the z-flipped direction's (the
+ * reader takes either per set). A reflected set seen from the denser side
+ * stores its values over the Fresnel reflectance of its half vector and
+ * names that index in "fresnel_eta" (the reader multiplies it back).
  * A set's "albedo" field holds its luminance albedo per incident
  * elevation (the .bsdf's order-0 integral), by which the reader's sampler
  * picks between the reflected and the transmitted lobe.
@@ -37,7 +40,7 @@
 #define FN "ll_tables_write_from_bsdf"
 #define LUMINANCE_FLOOR 1e-3
 #define LOBES 4
-#define FIELDS_PER_LOBE 7
+#define FIELDS_PER_LOBE 8
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
@@ -45,7 +48,8 @@ static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", 
 typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
-    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1];
+    double fresnel_eta;                     /* > 0: values over F (reflected) */
+    float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
     ll_warp2d ndf_w, sigma_w, vndf_w;
     double alpha;
     char names[FIELDS_PER_LOBE][40];
@@ -176,18 +180,20 @@ static void value_slice(const writer *w, lobe *l, size_t t)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
-            double sampling = 1.0;
+            double sampling = 1.0, over = 1.0;
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
             if (wi[2] > 0.0 && direction(l, wi, um, wo, &sampling)) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
                 scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
                 if (!ll_is_finite(scale))
                     scale = 0.0;
+                if (l->fresnel_eta > 0.0)
+                    over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
             }
             for (c = 0; c < 3; ++c) {
                 double v = f[c] * scale;
                 f[c] = v > 0.0 ? v : 0.0;
-                rgb[c * plane + y * ns + x] = (float)f[c];
+                rgb[c * plane + y * ns + x] = (float)(f[c] * over);
             }
             y_lum = ll_tables_luminance(f) / sampling;
             lum[y * ns + x] = (float)y_lum;
@@ -221,6 +227,100 @@ static void albedos(writer *w)
             w->l[bottom ? 1 : 0].albedo[t] = (float)(a > 0.0 ? a : 0.0);
             w->l[bottom ? 3 : 2].albedo[t] = (float)(b > 0.0 ? b : 0.0);
         }
+}
+
+/* The opaque writer's incident elevations (bsdf_write_tables.c),
+ * theta = 90 sin(90 v) degrees for v uniform, where the stack has no net
+ * interface. Across one, light from the denser side leaves at
+ * asin(eta sin theta), whose slope grows without bound at the critical
+ * angle: near it one step of theta sweeps the transmitted lobe towards
+ * the horizon; beyond it the edge of total internal reflection moves
+ * through the lobe's normals as fast as theta. The tables, interpolated
+ * between elevations at the same normal, smear both. There the nodes are
+ * the inverse of a mixture of the opaque grid's distribution (share 0.75),
+ * one uniform in that exit angle (0.15), which packs them towards the
+ * critical angle from below, and one uniform over the 30 degrees beyond it
+ * (0.1). The shares were chosen by measuring rough glass (eta 1.5, alpha
+ * 0.3; docs/formats.md): larger ones left the reflection from below,
+ * whose sampling needs the opaque grid's elevations, further off. */
+#define EXIT_SHARE 0.15
+#define BEYOND_SHARE 0.1
+#define BEYOND_SPAN 30.0 /* degrees */
+
+static double elevation_cdf(double th, double dense)
+{
+    double base = asin(th / (LL_PI / 2)) / (LL_PI / 2), s = dense * sin(th), ex, be;
+    double tc = dense > 1.0 ? asin(1.0 / dense) : LL_PI / 2, span = BEYOND_SPAN * LL_PI / 180;
+    if (dense <= 1.0)
+        return base;
+    ex = s >= 1.0 ? 1.0 : asin(s) / (LL_PI / 2);
+    if (tc + span > LL_PI / 2)
+        span = LL_PI / 2 - tc;
+    be = th <= tc ? 0.0 : (th >= tc + span ? 1.0 : (th - tc) / span);
+    return (1.0 - EXIT_SHARE - BEYOND_SHARE) * base + EXIT_SHARE * ex + BEYOND_SHARE * be;
+}
+
+static void elevations(writer *w)
+{
+    double eta = w->b->eta, dense = eta > 1.0 ? eta : 1.0 / eta;
+    size_t t;
+    int it;
+    if (fabs(eta - 1.0) <= 1e-6)
+        dense = 1.0;
+    for (t = 0; t < w->n_ti; ++t) {
+        double v = (double)t / (double)(w->n_ti - 1), lo = 0.0, hi = LL_PI / 2;
+        for (it = 0; it < 60; ++it) {
+            double mid = 0.5 * (lo + hi);
+            if (elevation_cdf(mid, dense) < v)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        w->theta_i[t] = (float)(t == 0 ? 0.0 : (t + 1 == w->n_ti ? LL_PI / 2 : 0.5 * (lo + hi)));
+        /* Strictly ascending as floats, however many nodes crowd the
+         * critical angle. */
+        if (t > 0 && !(w->theta_i[t] > w->theta_i[t - 1]))
+            w->theta_i[t] = nextafterf(w->theta_i[t - 1], 2.0f);
+        w->theta_d[t] = (double)w->theta_i[t];
+    }
+}
+
+/* Whether the refraction half vector of relative index eta reaches the
+ * transmitted lobe of a side: the share of f |cos| (over the transmitted
+ * hemisphere, at incident elevations 0..80 degrees) at pairs that have a
+ * refraction half vector is at least REACHED. A rough interface's lobe
+ * lies there entirely (its microfacets refract through that very half
+ * vector: rough glass, at most 0.03% unreached); light scattered by a
+ * medium under a coat leaves in directions it cannot give (the coat over
+ * a medium without a base of docs/formats.md: 4% to 96% unreached), which
+ * the warp of the z-flipped direction, defined for every pair, covers. */
+#define REACHED 0.995
+#define REACH_ELEVATIONS 5
+#define REACH_NODES 48
+
+static int refraction_reaches(const ll_bsdf *b, int bottom, double eta)
+{
+    static const double deg[REACH_ELEVATIONS] = { 0.0, 20.0, 40.0, 60.0, 80.0 };
+    size_t e, i, j;
+    for (e = 0; e < REACH_ELEVATIONS; ++e) {
+        double th = deg[e] * (LL_PI / 180), wi[3] = { sin(th), 0.0, cos(th) };
+        double all = 0.0, reached = 0.0;
+        for (i = 0; i < REACH_NODES; ++i) {
+            double to = ((double)i + 0.5) / REACH_NODES * (LL_PI / 2);
+            for (j = 0; j < REACH_NODES; ++j) {
+                double po = ((double)j + 0.5) / REACH_NODES * LL_PI, m[3], f[3], y;
+                double wo[3] = { sin(to) * cos(po), sin(to) * sin(po), -cos(to) };
+                ll_tables_lobe_f(b, bottom, wi, wo, f);
+                y = ll_tables_luminance(f) * cos(to) * sin(to);
+                all += y;
+                if (ll_tables_refract_half(wi, wo, eta, m))
+                    reached += y;
+            }
+        }
+        if (all > 0.0 && reached < REACHED * all)
+            return 0;
+    }
+    return 1;
 }
 
 static char *metadata_text(const writer *w, const char *figures, size_t *size)
@@ -283,7 +383,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     writer w;
     ll_watch watch;
     char *meta = NULL;
-    size_t meta_size = 0, t, nd = LL_TABLES_NDF_NODES, nf = 0;
+    size_t meta_size = 0, nd = LL_TABLES_NDF_NODES, nf = 0;
     ll_tensor_out_field f[7 + LOBES * FIELDS_PER_LOBE];
     const char *desc;
     int k;
@@ -302,19 +402,22 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     w.eta[0] = (float)b->eta;
     if ((s = allocate(&w)) != LL_OK)
         goto done;
-    /* The opaque writer's incident elevations (bsdf_write_tables.c). */
-    for (t = 0; t < w.n_ti; ++t) {
-        w.theta_i[t] =
-            (float)(sin((double)t / (double)(w.n_ti - 1) * (LL_PI / 2)) * (LL_PI / 2));
-        w.theta_d[t] = (double)w.theta_i[t];
-    }
+    elevations(&w);
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w.l[k];
         l->bottom = k == 1 || k == 3;
         l->transmit = k >= 2;
-        if (l->transmit && fabs(b->eta - 1.0) > 1e-6)
+        if (l->transmit && fabs(b->eta - 1.0) > 1e-6 &&
+            refraction_reaches(b, l->bottom, l->bottom ? 1.0 / b->eta : b->eta))
             l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->warp_eta[0] = (float)l->refract_eta;
+        /* Reflection seen from the denser side has the edge of total
+         * internal reflection, where F, and with it f, rises to 1 with an
+         * infinite slope: stored over F(wi.h) the values are smooth
+         * across it, and the reader multiplies F back exactly. */
+        if (!l->transmit && fabs(b->eta - 1.0) > 1e-6 && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
+            l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
+        l->fresnel_f[0] = (float)l->fresnel_eta;
     }
     albedos(&w);
     ll_watch_stage(&watch, "tables", 0.0, 0.9, LOBES * w.n_ti);
@@ -346,7 +449,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         lobe *l = &w.l[k];
         static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
                                                            "luminance", "rgb",   "albedo",
-                                                           "warp_eta" };
+                                                           "warp_eta",  "fresnel_eta" };
         int j;
         for (j = 0; j < FIELDS_PER_LOBE; ++j)
             snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
@@ -362,10 +465,16 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                   NULL },
                 { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
                 { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
+                { l->names[7], LL_TENSOR_F32, 1, { 1 }, l->fresnel_f, NULL, NULL },
             };
-            /* warp_eta: transmitted sets only. */
-            for (j = 0; j < (l->transmit ? FIELDS_PER_LOBE : FIELDS_PER_LOBE - 1); ++j)
+            /* warp_eta: transmitted sets only; fresnel_eta: reflected sets
+             * stored over F only. */
+            for (j = 0; j < FIELDS_PER_LOBE - 2; ++j)
                 f[nf++] = set[j];
+            if (l->transmit)
+                f[nf++] = set[6];
+            if (l->fresnel_eta > 0.0)
+                f[nf++] = set[7];
         }
     }
     if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
