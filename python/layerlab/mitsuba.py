@@ -97,6 +97,7 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
+from .mitsuba_lobes import TracedLobes, layout_names  # noqa: E402
 from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
 from .tensor_file import read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
@@ -324,6 +325,7 @@ def _make_class():
             mode = self._choose_mode(props, path, current)
             self.m_mode = mode
             self.m_tables = None
+            self.m_lobes = False
             self.m_tables_source = ""
             if mode == "tables":
                 if tables_file:
@@ -333,10 +335,18 @@ def _make_class():
                     cache = bool(props["cache"]) if "cache" in props else True
                     fields, self.m_tables_source = tables_from_bsdf(
                         self.m_table.handle, path, tolerance, cache)
-                self.m_tables = TracedTables(fields, path)
-                # One-sided reflection, as Mitsuba's `measured` (the format
-                # holds the reflection above the surface).
-                components = [Flags.GlossyReflection | Flags.FrontSide]
+                self.m_lobes = layout_names(fields) is not None
+                if self.m_lobes:
+                    # A transmissive file: a table set per lobe and side.
+                    self.m_tables = TracedLobes(fields, path)
+                    both = Flags.FrontSide | Flags.BackSide
+                    components = [Flags.GlossyReflection | both,
+                                  Flags.GlossyTransmission | both]
+                else:
+                    self.m_tables = TracedTables(fields, path)
+                    # One-sided reflection, as Mitsuba's `measured` (the
+                    # format holds the reflection above the surface).
+                    components = [Flags.GlossyReflection | Flags.FrontSide]
             else:
                 both = Flags.FrontSide | Flags.BackSide
                 components = [Flags.GlossyReflection | both]
@@ -357,19 +367,20 @@ def _make_class():
             table = self.m_table
             tables_file = table.format == "tables"
             spectral = tables_file and table.n_wavelengths > 0
-            # What the traced tables can render: an RGB table file, or an
-            # opaque, untextured .bsdf (made into tables on load).
-            if tables_file and (self.m_transmits or table.n_bases > 1):
-                why_not = ("it is an extended table file (%s: a table set per lobe or "
-                           "basis, which only the C reader evaluates)"
-                           % ("textured" if table.n_bases > 1 else "transmissive"))
+            # What the traced tables can render: an untextured RGB table
+            # file (opaque, or transmissive: a set per lobe and side), or an
+            # untextured .bsdf (made into such a file on load).
+            if tables_file and table.n_bases > 1:
+                why_not = ("it is a textured table file (a table set per basis, blended "
+                           "per lane with the parameters' weights, which only the C reader "
+                           "evaluates)")
             elif tables_file:
                 why_not = ("it is a spectral table file (its RGB is the C reader's "
                            "conversion of the spectra)" if spectral else None)
             elif table.n_bases > 1:
-                why_not = "it is textured (%s)" % ", ".join(table.names)
-            elif self.m_transmits:
-                why_not = "it transmits light (the table format holds reflection only)"
+                why_not = ("it is textured (%s): its tables, a set per basis, are blended "
+                           "per lane with the parameters' weights, which only the C reader "
+                           "evaluates" % ", ".join(table.names))
             else:
                 why_not = None
             if why_not is None:
@@ -513,7 +524,16 @@ def _make_class():
         def _tables_enabled(self, ctx):
             return ctx.is_enabled(Flags.GlossyReflection, 0)
 
+        def _lobes_eval_pdf(self, ctx, si, wo, active, want_value, want_pdf):
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            return self.m_tables.eval_pdf(si.wi, wo, active, radiance,
+                                          ctx.is_enabled(Flags.GlossyReflection, 0),
+                                          ctx.is_enabled(Flags.GlossyTransmission, 1),
+                                          want_value, want_pdf)
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                return mi.Color3f(*self._lobes_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Color3f(0.0)
@@ -529,6 +549,8 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                return self._lobes_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Float(0.0)
@@ -543,6 +565,9 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                value, pdf = self._lobes_eval_pdf(ctx, si, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Color3f(0.0), mi.Float(0.0)
@@ -560,6 +585,22 @@ def _make_class():
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0), dr.select(ok, p, 0.0)
 
+        def _lobes_sample(self, ctx, si, sample2, active):
+            bs = dr.zeros(mi.BSDFSample3f)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            wo, pdf, weight, ok, transmitted = self.m_tables.sample(
+                si.wi, sample2, active, radiance, ctx.is_enabled(Flags.GlossyReflection, 0),
+                ctx.is_enabled(Flags.GlossyTransmission, 1))
+            bs.wo = wo
+            bs.pdf = pdf
+            eta = mi.Float(self.m_tables.eta)
+            entering = mi.Frame3f.cos_theta(si.wi) > 0
+            bs.eta = dr.select(transmitted, dr.select(entering, eta, dr.rcp(eta)), 1.0)
+            bs.sampled_type = dr.select(transmitted, mi.UInt32(+Flags.GlossyTransmission),
+                                        mi.UInt32(+Flags.GlossyReflection))
+            bs.sampled_component = dr.select(transmitted, mi.UInt32(1), mi.UInt32(0))
+            return bs, mi.Color3f(*weight)
+
         def _tables_sample(self, ctx, si, sample2, active):
             bs = dr.zeros(mi.BSDFSample3f)
             if not self._tables_enabled(ctx):
@@ -573,6 +614,8 @@ def _make_class():
             return bs, mi.Color3f(*weight)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
+            if self.m_lobes:
+                return self._lobes_sample(ctx, si, sample2, active)
             if self.m_tables is not None:
                 return self._tables_sample(ctx, si, sample2, active)
             bs = dr.zeros(mi.BSDFSample3f)

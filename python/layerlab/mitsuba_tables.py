@@ -68,20 +68,54 @@ def _phi_to_u(phi):
     return (phi + PI) * INV_TWO_PI
 
 
+def _normal_area(u_theta_m, sin_theta_m):
+    """The area of the normal's square per steradian of normals, 2 pi^2
+    u_theta sin theta_m, kept from 0 (the pole) so that a pdf stays
+    finite."""
+    return dr.maximum(TWO_PI_SQUARED * u_theta_m * sin_theta_m, 1e-6)
+
+
+def _refraction_half(wi, wo, eta):
+    """The refraction half vector of Walter et al. 2007 (sec. 5.2) of wi
+    above and wo below, -(wi + eta wo) normalised and turned above the
+    surface, and whether the pair is a refraction through it (wi.m > 0 >
+    wo.m)."""
+    h = -(wi + eta * wo)
+    length = dr.norm(h)
+    m = h / dr.select(h.z < 0, -length, length)
+    ok = (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) < 0) & (length > 0) & \
+        (dr.dot(wi, m) > 0) & (dr.dot(wo, m) < 0)
+    return m, ok
+
+
+def _refraction_jacobian(wi, wo, m, eta):
+    """d omega_m / d omega_o of the refraction (Walter et al. eq. 16):
+    eta^2 |wo.m| / (wi.m + eta wo.m)^2."""
+    om = dr.dot(wo, m)
+    d = dr.fma(eta, om, dr.dot(wi, m))
+    return eta * eta * dr.abs(om) / (d * d)
+
+
 class TracedTables:
     """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
     current variant, and eval / pdf / sample in Mitsuba's convention."""
 
-    def __init__(self, fields, name=""):
-        for key in ("theta_i", "phi_i", "ndf", "sigma", "vndf", "luminance", "rgb", "jacobian"):
+    def __init__(self, fields, name="", prefix=""):
+        """prefix: the set's (an extended file's "reflect_top." ...,
+        layerlab.mitsuba_lobes); theta_i, phi_i and jacobian are shared."""
+        for key in ("theta_i", "phi_i", "jacobian"):
             if key not in fields:
                 raise TensorFileError("%s: no field `%s` (an RGB table file has it)"
                                       % (name, key))
+        for key in ("ndf", "sigma", "vndf", "luminance", "rgb"):
+            if prefix + key not in fields:
+                raise TensorFileError("%s: no field `%s` (an RGB table file has it)"
+                                      % (name, prefix + key))
         theta = np.asarray(fields["theta_i"], dtype=np.float32)
         phi = np.asarray(fields["phi_i"], dtype=np.float32)
-        vndf = np.asarray(fields["vndf"], dtype=np.float32)
-        lum = np.asarray(fields["luminance"], dtype=np.float32)
-        rgb = np.asarray(fields["rgb"], dtype=np.float32)
+        vndf = np.asarray(fields[prefix + "vndf"], dtype=np.float32)
+        lum = np.asarray(fields[prefix + "luminance"], dtype=np.float32)
+        rgb = np.asarray(fields[prefix + "rgb"], dtype=np.float32)
         n_pi, n_ti = len(phi), len(theta)
         if n_pi > 2:
             raise TensorFileError("%s: %d incident azimuths (anisotropic); the traced path "
@@ -102,10 +136,10 @@ class TracedTables:
             params = [theta.tolist()]
             self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
             self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
-        self.ndf = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["ndf"],
+        self.ndf = mi.MarginalContinuous2D0(np.ascontiguousarray(fields[prefix + "ndf"],
                                                                  dtype=np.float32),
                                             [], False, False)
-        self.sigma = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["sigma"],
+        self.sigma = mi.MarginalContinuous2D0(np.ascontiguousarray(fields[prefix + "sigma"],
                                                                    dtype=np.float32),
                                               [], False, False)
         # The values: per slice (azimuth, elevation), node (y, x), the three
@@ -210,11 +244,10 @@ class TracedTables:
 
     # ------------------------------------------------------ the three calls
 
-    def eval_pdf(self, wi, wo, active, want_value=True, want_pdf=True):
-        """(f cos theta_o as a list of 3 Float, or None; the pdf per solid
-        angle of wo, or None), zero where not active or below the surface."""
-        active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
-        m = dr.normalize(wo + wi)
+    def _at_normal(self, wi, m, active, want_value, want_pdf):
+        """The lobe at the half vector m (of either warp): (f cos theta_o
+        as a list of 3 Float, or None; the density of m per steradian of
+        normals, from the two squares' densities, or None)."""
         theta_i, phi_i, u_wi = self._incident(wi)
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
@@ -222,25 +255,52 @@ class TracedTables:
         u_m = mi.Point2f(_theta_to_u(theta_m), u_phi - dr.floor(u_phi))
         params = self._params(phi_i, theta_i)
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
-        value = pdf = None
+        value = density = None
         if want_value:
             value = self.rgb(sample, phi_i, theta_i, active)
             if self.jacobian:
                 scale = self._jacobian_scale(u_m, u_wi, active)
                 value = [v * scale for v in value]
-            value = [dr.select(active, v, 0.0) for v in value]
         if want_pdf:
             lum = self.luminance.eval(sample, params, active)
-            jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * mi.Frame3f.sin_theta(m), 1e-6) * \
-                4.0 * dr.dot(wi, m)
-            pdf = dr.select(active, vndf_pdf * lum / jacobian, 0.0)
+            density = vndf_pdf * lum / _normal_area(u_m.x, mi.Frame3f.sin_theta(m))
+        return value, density
+
+    def eval_pdf(self, wi, wo, active, want_value=True, want_pdf=True):
+        """(f cos theta_o as a list of 3 Float, or None; the pdf per solid
+        angle of wo, or None), zero where not active or below the surface."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+        m = dr.normalize(wo + wi)
+        value, density = self._at_normal(wi, m, active, want_value, want_pdf)
+        pdf = None
+        if want_value:
+            value = [dr.select(active, v, 0.0) for v in value]
+        if want_pdf:
+            pdf = dr.select(active, density / (4.0 * dr.dot(wi, m)), 0.0)
         return value, pdf
 
-    def sample(self, wi, sample2, active):
-        """(wo, pdf, f cos theta_o / pdf as a list of 3 Float, ok) for the
-        two random numbers sample2 (Mitsuba's `measured` takes them as
-        (sample2.y, sample2.x) into the luminance warp)."""
-        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True):
+        """eval_pdf of a transmitted lobe warped about the refraction half
+        vector (docs/formats.md, "Extended table files"; the C reader's
+        tables_refract.c): wi above, wo below, eta the far side's index over
+        wi's side; the pdf takes the refraction's d omega_m / d omega_o in
+        the place of the reflection's 1 / (4 wi.m)."""
+        m, ok = _refraction_half(wi, wo, eta)
+        active = active & ok
+        value, density = self._at_normal(wi, m, active, want_value, want_pdf)
+        pdf = None
+        if want_value:
+            value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
+        if want_pdf:
+            pdf = density * _refraction_jacobian(wi, wo, m, eta)
+            pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
+        return value, pdf
+
+    def _sample_normal(self, wi, sample2, active):
+        """The normal m drawn from the two warps for the random numbers
+        sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
+        into the luminance warp), its density per steradian of normals and
+        f cos theta_o there (3 Float)."""
         theta_i, phi_i, u_wi = self._incident(wi)
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
@@ -251,17 +311,48 @@ class TracedTables:
         sin_phi, cos_phi = dr.sincos(phi_m)
         sin_theta, cos_theta = dr.sincos(theta_m)
         m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
-        dot = dr.dot(wi, m)
-        jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * sin_theta, 1e-6) * 4.0 * dot
-        wo = dr.fma(m, 2.0 * dot, -wi)
-        pdf = vndf_pdf * lum_pdf / jacobian
+        density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
         value = self.rgb(sample, phi_i, theta_i, active)
         if self.jacobian:
             scale = self._jacobian_scale(u_m, u_wi, active)
             value = [v * scale for v in value]
+        return m, density, value
+
+    def reflect_sample(self, wi, sample2, active):
+        """(wo, pdf, f cos theta_o as a list of 3 Float, ok) for the two
+        random numbers sample2: wi reflected about the sampled normal."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+        m, density, value = self._sample_normal(wi, sample2, active)
+        dot = dr.dot(wi, m)
+        wo = dr.fma(m, 2.0 * dot, -wi)
+        pdf = density / (4.0 * dot)
         ok = active & (mi.Frame3f.cos_theta(wo) > 0) & (pdf > 0)
+        return wo, dr.select(ok, pdf, 0.0), value, ok
+
+    def sample(self, wi, sample2, active):
+        """(wo, pdf, f cos theta_o / pdf as a list of 3 Float, ok) for the
+        two random numbers sample2."""
+        wo, pdf, value, ok = self.reflect_sample(wi, sample2, active)
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
-        return wo, dr.select(ok, pdf, 0.0), weight, ok
+        return wo, pdf, weight, ok
+
+    def refract_sample(self, wi, sample2, eta, active):
+        """sample of a transmitted lobe warped about the refraction half
+        vector (as refract_eval_pdf): m from the warps as for reflection,
+        wo = wi refracted through it (none under total internal
+        reflection). (wo, pdf, f cos theta_o as a list of 3 Float, ok)."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+        m, density, value = self._sample_normal(wi, sample2, active)
+        inv = 1.0 / eta
+        c = dr.dot(wi, m)
+        k = 1.0 - inv * inv * (1.0 - c * c)
+        a = inv * c - dr.safe_sqrt(k)
+        wo = a * m - inv * wi
+        pdf = density * _refraction_jacobian(wi, wo, m, eta)
+        ok = active & (c > 0) & (k > 0) & (mi.Frame3f.cos_theta(wo) < 0) & \
+            dr.isfinite(pdf) & (pdf > 0)
+        value = [dr.select(ok, dr.maximum(v, 0.0), 0.0) for v in value]
+        return wo, dr.select(ok, pdf, 0.0), value, ok
 
     def describe(self):
         """The grid: incident elevations x VNDF grid x sample grid."""
