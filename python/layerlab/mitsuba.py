@@ -97,7 +97,7 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
-from .mitsuba_lobes import TracedLobes, layout_names  # noqa: E402
+from .mitsuba_lobes import layout_names, traced_lobes  # noqa: E402
 from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
 from .tensor_file import read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
@@ -338,7 +338,7 @@ def _make_class():
                 self.m_lobes = layout_names(fields) is not None
                 if self.m_lobes:
                     # A transmissive file: a table set per lobe and side.
-                    self.m_tables = TracedLobes(fields, path)
+                    self.m_tables = traced_lobes(fields, path)
                     both = Flags.FrontSide | Flags.BackSide
                     components = [Flags.GlossyReflection | both,
                                   Flags.GlossyTransmission | both]

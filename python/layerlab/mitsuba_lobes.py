@@ -61,6 +61,22 @@ def _scalar_false(mask):
     return isinstance(mask, bool) and not mask
 
 
+def traced_lobes(fields, name=""):
+    """The lobes of a transmissive table file: its four sets stacked into
+    one table (mitsuba_lobes_stacked.StackedLobes, one pass per call) when
+    the file has all four with the same grids, else set by set
+    (TracedLobes)."""
+    from .mitsuba_lobes_stacked import ORDER, StackedLobes
+    from .mitsuba_tables import stack_sets
+    names = layout_names(fields) or []
+    prefixes = [SETS[k][0] for k in ORDER]
+    if all(p[:-1] in names for p in prefixes) and "eta" in fields:
+        stacked = stack_sets(fields, prefixes)
+        if stacked is not None:
+            return StackedLobes(fields, stacked, SETS, name)
+    return TracedLobes(fields, name)
+
+
 class TracedLobes:
     """The lobe sets of a transmissive table file, and eval / pdf / sample
     in Mitsuba's convention on both sides."""
@@ -131,6 +147,15 @@ class TracedLobes:
         inv = 1.0 / (self.eta * self.eta)
         return dr.select(mi.Frame3f.cos_theta(wi) > 0, inv, self.eta * self.eta)
 
+    def _branch(self, mask, fn, args, zeros):
+        """fn(*args) where mask holds, zeros() elsewhere. In the JIT
+        variants a symbolic conditional (dr.if_stmt), so that a packet of
+        lanes none of which needs the set skips its code; in the scalar
+        variants a plain call (the mask is a bool there)."""
+        if not self.jit:
+            return fn(*args) if mask else zeros()
+        return dr.if_stmt(args, mask, fn, lambda *_: zeros())
+
     def _set_eval_pdf(self, t, transmit, w, o, mask, want_value, want_pdf):
         if not transmit:
             return t.eval_pdf(w, o, mask, want_value, want_pdf)
@@ -160,7 +185,14 @@ class TracedLobes:
                 (transmits if transmit else reflects)
             if _scalar_false(mask):
                 continue
-            v, p = self._set_eval_pdf(t, transmit, w, o, mask, want_value, want_pdf)
+
+            def run(w, o, mask, t=t, transmit=transmit):
+                v, p = self._set_eval_pdf(t, transmit, w, o, mask, want_value, want_pdf)
+                return (tuple(v) if want_value else (mi.Float(0.0),) * 3,
+                        p if want_pdf else mi.Float(0.0))
+
+            v, p = self._branch(mask, run, (w, o, mask),
+                                lambda: ((mi.Float(0.0),) * 3, mi.Float(0.0)))
             if want_value:
                 value = [dr.select(mask, v[c], value[c]) for c in range(3)]
             if want_pdf:
@@ -203,13 +235,21 @@ class TracedLobes:
                 (transmitted if transmit else reflected)
             if _scalar_false(mask):
                 continue
-            if not transmit:
-                o, p, val, found = t.reflect_sample(w, v, mask)
-            elif t.warp_eta > 0.0:
-                o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)
-            else:
-                o, p, val, found = t.reflect_sample(w, v, mask)
-                o = _flip(o)
+
+            def run(w, v, mask, t=t, transmit=transmit):
+                if not transmit:
+                    o, p, val, found = t.reflect_sample(w, v, mask)
+                elif t.warp_eta > 0.0:
+                    o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)
+                else:
+                    o, p, val, found = t.reflect_sample(w, v, mask)
+                    o = _flip(o)
+                return mi.Vector3f(o), mi.Float(p), tuple(val), mi.Bool(found)
+
+            o, p, val, found = self._branch(
+                mask, run, (w, v, mask),
+                lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), (mi.Float(0.0),) * 3,
+                         mi.Bool(False)))
             wo = dr.select(mask, o, wo)
             pdf = dr.select(mask, p, pdf)
             value = [dr.select(mask, val[c], value[c]) for c in range(3)]

@@ -68,6 +68,42 @@ def _phi_to_u(phi):
     return (phi + PI) * INV_TWO_PI
 
 
+# stack_sets: the slices' parameter of the k-th stacked set is its
+# incident elevation plus STACK_SHIFTS[k]: ranges of width pi / 2 apart
+# from each other (the shifts 13/8 apart, exact in float32), as close to 0
+# as four such ranges can be, since a parameter's float32 rounding (its
+# magnitude's) is what moves the interpolation between two slices.
+STACK_SHIFTS = (-3.25, -1.625, 0.0, 1.625)
+
+
+def stack_sets(fields, prefixes):
+    """The fields of the sets named by prefixes (at most four, each with
+    the same grids) as the fields of one table of their slices one after
+    the other: the warps' parameter of the k-th is theta_i +
+    STACK_SHIFTS[k], so that one Mitsuba warp serves every set and a lane
+    reads its own set's slices (two neighbouring slices of one set, never
+    of two); D and sigma become one warp per kind with k as parameter.
+    None if the sets' grids differ."""
+    theta = np.asarray(fields["theta_i"], dtype=np.float32)
+    if len(prefixes) > len(STACK_SHIFTS):
+        return None
+    shapes = set()
+    for p in prefixes:
+        shapes.add(tuple(tuple(np.shape(fields[p + k])) for k in
+                         ("ndf", "sigma", "vndf", "luminance", "rgb")))
+    if len(shapes) != 1:
+        return None
+    out = {"theta_i": np.concatenate([theta.astype(np.float64) + STACK_SHIFTS[k]
+                                      for k in range(len(prefixes))]).astype(np.float32),
+           "phi_i": fields["phi_i"], "jacobian": fields["jacobian"]}
+    for key in ("vndf", "luminance", "rgb"):
+        out[key] = np.concatenate([np.asarray(fields[p + key], dtype=np.float32)
+                                   for p in prefixes], axis=1)
+    for key in ("ndf", "sigma"):
+        out[key] = np.stack([np.asarray(fields[p + key], dtype=np.float32) for p in prefixes])
+    return out
+
+
 def _normal_area(u_theta_m, sin_theta_m):
     """The area of the normal's square per steradian of normals, 2 pi^2
     u_theta sin theta_m, kept from 0 (the pole) so that a pdf stays
@@ -93,7 +129,10 @@ def _refraction_jacobian(wi, wo, m, eta):
     eta^2 |wo.m| / (wi.m + eta wo.m)^2."""
     om = dr.dot(wo, m)
     d = dr.fma(eta, om, dr.dot(wi, m))
-    return eta * eta * dr.abs(om) / (d * d)
+    # (0 where d is: no refraction, as the C reader's 0 for a jacobian that
+    # is not finite.)
+    nonzero = d != 0
+    return dr.select(nonzero, eta * eta * dr.abs(om) / dr.select(nonzero, d * d, 1.0), 0.0)
 
 
 class TracedTables:
@@ -136,12 +175,18 @@ class TracedTables:
             params = [theta.tolist()]
             self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
             self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
-        self.ndf = mi.MarginalContinuous2D0(np.ascontiguousarray(fields[prefix + "ndf"],
-                                                                 dtype=np.float32),
-                                            [], False, False)
-        self.sigma = mi.MarginalContinuous2D0(np.ascontiguousarray(fields[prefix + "sigma"],
-                                                                   dtype=np.float32),
-                                              [], False, False)
+        ndf = np.ascontiguousarray(fields[prefix + "ndf"], dtype=np.float32)
+        sigma = np.ascontiguousarray(fields[prefix + "sigma"], dtype=np.float32)
+        # Sets stacked (stack_sets): D and sigma per set, the set's index
+        # their parameter (whole numbers: one slice exactly).
+        self.stacked = ndf.ndim == 3
+        if self.stacked:
+            sets = [[float(k) for k in range(ndf.shape[0])]]
+            self.ndf = mi.MarginalContinuous2D1(ndf, sets, False, False)
+            self.sigma = mi.MarginalContinuous2D1(sigma, sets, False, False)
+        else:
+            self.ndf = mi.MarginalContinuous2D0(ndf, [], False, False)
+            self.sigma = mi.MarginalContinuous2D0(sigma, [], False, False)
         # The values: per slice (azimuth, elevation), node (y, x), the three
         # channels and a zero, so that a node is one aligned 4-float read.
         self.size = int(rgb.shape[4]), int(rgb.shape[3])   # (x, y) as Mitsuba's warps
@@ -231,24 +276,32 @@ class TracedTables:
         return [dr.lerp(dr.lerp(v00[c], v10[c], fx), dr.lerp(v01[c], v11[c], fx), fy)
                 for c in range(3)]
 
-    def _incident(self, wi):
+    def _incident(self, wi, stack=None):
+        """wi's elevation as the slices' parameter (of stacked sets: stack
+        = (the lane's set, its shift), stack_sets), its azimuth and square
+        coordinates."""
         theta_i = _elevation(wi)
         phi_i = dr.atan2(wi.y, wi.x)
         u_wi = mi.Point2f(_theta_to_u(theta_i), _phi_to_u(phi_i))
+        if stack is not None:
+            theta_i = theta_i + stack[1]
         return theta_i, phi_i, u_wi
 
-    def _jacobian_scale(self, u_m, u_wi, active):
+    def _jacobian_scale(self, u_m, u_wi, active, stack=None):
         """D(m) / (4 sigma(wi)): the factor of values stored with the
         jacobian rule (docs/formats.md)."""
+        if stack is not None:
+            return self.ndf.eval(u_m, [stack[0]], active=active) / \
+                (4.0 * self.sigma.eval(u_wi, [stack[0]], active=active))
         return self.ndf.eval(u_m, active=active) / (4.0 * self.sigma.eval(u_wi, active=active))
 
     # ------------------------------------------------------ the three calls
 
-    def _at_normal(self, wi, m, active, want_value, want_pdf):
+    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None):
         """The lobe at the half vector m (of either warp): (f cos theta_o
         as a list of 3 Float, or None; the density of m per steradian of
         normals, from the two squares' densities, or None)."""
-        theta_i, phi_i, u_wi = self._incident(wi)
+        theta_i, phi_i, u_wi = self._incident(wi, stack)
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
         u_phi = _phi_to_u(phi_m - phi_i)
@@ -259,7 +312,7 @@ class TracedTables:
         if want_value:
             value = self.rgb(sample, phi_i, theta_i, active)
             if self.jacobian:
-                scale = self._jacobian_scale(u_m, u_wi, active)
+                scale = self._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * scale for v in value]
         if want_pdf:
             lum = self.luminance.eval(sample, params, active)
@@ -296,12 +349,12 @@ class TracedTables:
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
         return value, pdf
 
-    def _sample_normal(self, wi, sample2, active):
+    def _sample_normal(self, wi, sample2, active, stack=None):
         """The normal m drawn from the two warps for the random numbers
         sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
         into the luminance warp), its density per steradian of normals and
         f cos theta_o there (3 Float)."""
-        theta_i, phi_i, u_wi = self._incident(wi)
+        theta_i, phi_i, u_wi = self._incident(wi, stack)
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
@@ -314,7 +367,7 @@ class TracedTables:
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
         value = self.rgb(sample, phi_i, theta_i, active)
         if self.jacobian:
-            scale = self._jacobian_scale(u_m, u_wi, active)
+            scale = self._jacobian_scale(u_m, u_wi, active, stack)
             value = [v * scale for v in value]
         return m, density, value
 
