@@ -104,6 +104,47 @@ def stack_sets(fields, prefixes):
     return out
 
 
+class _StackedGrid:
+    """Grids of the same size, one per stacked set ([sets, y, x]), read as
+    Mitsuba's Marginal2D::eval reads a grid evaluated as stored: bilinear
+    over the nodes spread evenly over [0, 1]^2, the cell clamped to the
+    last."""
+
+    def __init__(self, grids):
+        grids = np.ascontiguousarray(grids, dtype=np.float32)
+        self.ny, self.nx = int(grids.shape[1]), int(grids.shape[2])
+        self.jit = dr.is_jit_v(mi.Float)
+        if self.jit:
+            self.data = mi.Float(grids.ravel())
+        else:
+            self.host = grids.reshape(grids.shape[0], -1)
+
+    def eval(self, pos, k, active):
+        """The value at pos of grid k (a whole number per lane)."""
+        nx, ny = self.nx, self.ny
+        px, py = pos.x * float(nx - 1), pos.y * float(ny - 1)
+        if self.jit:
+            UInt32, Int32 = mi.UInt32, mi.Int32
+            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
+            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
+            base = UInt32(k) * (nx * ny) + oy * nx + ox
+
+            def at(offset):
+                return dr.gather(mi.Float, self.data, base + offset, active)
+        else:
+            ox = min(max(int(px), 0), nx - 2)
+            oy = min(max(int(py), 0), ny - 2)
+            row = self.host[int(k)]
+            base = oy * nx + ox
+
+            def at(offset):
+                return float(row[base + offset])
+        wx1, wy1 = px - ox, py - oy
+        wx0, wy0 = 1.0 - wx1, 1.0 - wy1
+        return dr.fma(wy0, dr.fma(wx0, at(0), wx1 * at(1)),
+                      wy1 * dr.fma(wx0, at(nx), wx1 * at(nx + 1)))
+
+
 def _normal_area(u_theta_m, sin_theta_m):
     """The area of the normal's square per steradian of normals, 2 pi^2
     u_theta sin theta_m, kept from 0 (the pole) so that a pdf stays
@@ -181,9 +222,11 @@ class TracedTables:
         # their parameter (whole numbers: one slice exactly).
         self.stacked = ndf.ndim == 3
         if self.stacked:
-            sets = [[float(k) for k in range(ndf.shape[0])]]
-            self.ndf = mi.MarginalContinuous2D1(ndf, sets, False, False)
-            self.sigma = mi.MarginalContinuous2D1(sigma, sets, False, False)
+            # Bilinear look-ups of the lane's set's grid (_grid_eval):
+            # what Mitsuba's warps evaluated as stored compute, without
+            # their interpolation over a parameter.
+            self.ndf = _StackedGrid(ndf)
+            self.sigma = _StackedGrid(sigma)
         else:
             self.ndf = mi.MarginalContinuous2D0(ndf, [], False, False)
             self.sigma = mi.MarginalContinuous2D0(sigma, [], False, False)
@@ -291,8 +334,8 @@ class TracedTables:
         """D(m) / (4 sigma(wi)): the factor of values stored with the
         jacobian rule (docs/formats.md)."""
         if stack is not None:
-            return self.ndf.eval(u_m, [stack[0]], active=active) / \
-                (4.0 * self.sigma.eval(u_wi, [stack[0]], active=active))
+            return self.ndf.eval(u_m, stack[0], active) / \
+                (4.0 * self.sigma.eval(u_wi, stack[0], active))
         return self.ndf.eval(u_m, active=active) / (4.0 * self.sigma.eval(u_wi, active=active))
 
     # ------------------------------------------------------ the three calls
