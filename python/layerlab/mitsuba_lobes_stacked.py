@@ -20,12 +20,16 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import STACK_SHIFTS, TracedTables, _refraction_half, _refraction_jacobian
+from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _refraction_half, \
+    _refraction_jacobian
 from .tensor_file import TensorFileError
 
 # The stacked sets' order, by their index in SETS: reflect_bottom,
 # reflect_top, transmit_top, transmit_bottom.
 ORDER = (1, 0, 2, 3)
+# The albedos (in SETS order) of a side's reflected and transmitted sets.
+SETS_TOP = (0, 2)
+SETS_BOTTOM = (1, 3)
 
 
 def _flip(v):
@@ -69,19 +73,24 @@ class StackedLobes:
 
     # ------------------------------------------------------------ helpers
 
-    def _shares(self, w):
-        """The reflected lobe's share in sampling on wi's side, for the top
-        and the bottom sets (w: wi in its side's frame): the sets' stored
-        albedos at wi's elevation, interpolated as the slices are."""
-        theta = dr.acos(dr.minimum(w.z, 1.0))
-        t = self.table
-        j, w0, w1 = t._weights(self.theta_plain_host, self.theta_plain if self.jit else None,
-                               theta)
+    def _elevation_weights(self, w):
+        """wi's slice among the incident elevations (one grid for every
+        set) and the weights of it and the next: found once per call for
+        the albedos and the values (the warps find their own)."""
+        return self.table._weights(self.theta_plain_host,
+                                   self.theta_plain if self.jit else None, _elevation(w))
+
+    def _share(self, weights, bottom):
+        """The reflected lobe's share in sampling on wi's side: the side's
+        sets' stored albedos at wi's elevation, interpolated as the slices
+        are."""
+        j, w0, w1 = weights
         single = self.n_ti == 1
 
         def albedo(k):
-            base = k * self.n_ti
+            base = dr.select(bottom, SETS_BOTTOM[k] * self.n_ti, SETS_TOP[k] * self.n_ti)
             if self.jit:
+                base = mi.UInt32(base)
                 a0 = dr.gather(mi.Float, self.albedo, j + base)
                 a1 = a0 if single else dr.gather(mi.Float, self.albedo, j + 1 + base)
             else:
@@ -89,19 +98,21 @@ class StackedLobes:
                 a1 = a0 if single else self.albedo_host[j + 1 + base]
             return dr.fma(a0, w0, a1 * w1)
 
-        def share(r, tr):
-            none = (r <= 0) & (tr <= 0)
-            return dr.select(none, 1.0, r / dr.select(none, 1.0, r + tr))
+        r, tr = albedo(0), albedo(1)
+        none = (r <= 0) & (tr <= 0)
+        return dr.select(none, 1.0, r / dr.select(none, 1.0, r + tr))
 
-        return share(albedo(0), albedo(2)), share(albedo(1), albedo(3))
-
-    def _stack(self, bottom, transmit):
-        """The lane's set as stacked: (its index in ORDER, its shift)."""
+    def _stack(self, bottom, transmit, weights):
+        """The lane's set as stacked: (its index in ORDER, its shift, its
+        slice and weights over the stacked elevations)."""
         def pick(values):
             v = [values[ORDER.index(k)] for k in range(4)]   # by SETS index
             return dr.select(bottom, dr.select(transmit, v[3], v[1]),
                              dr.select(transmit, v[2], v[0]))
-        return pick([float(k) for k in range(4)]), pick(STACK_SHIFTS)
+        k = pick([float(k) for k in range(4)])
+        j, w0, w1 = weights
+        j = (mi.UInt32(k) if self.jit else int(k)) * self.n_ti + j
+        return k, pick(STACK_SHIFTS), (j, w0, w1)
 
     def _transport(self, wi, radiance):
         if not radiance:
@@ -128,7 +139,8 @@ class StackedLobes:
         transmits = cos_i * cos_o < 0
         on = dr.select(transmits, bool(transmit_on), bool(reflect_on))
         active = active & (cos_i != 0) & (cos_o != 0) & on
-        stack = self._stack(bottom, transmits)
+        weights = self._elevation_weights(w)
+        stack = self._stack(bottom, transmits, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmits & refracts
         # Reflection and the z-flipped direction: the reflection half vector.
@@ -148,8 +160,7 @@ class StackedLobes:
         if want_pdf:
             lobe = dr.select(refract, density * _refraction_jacobian(w, o, m, e),
                              density / (4.0 * dr.dot(w, m)))
-            top_share, bottom_share = self._shares(w)
-            share = dr.select(bottom, bottom_share, top_share)
+            share = self._share(weights, bottom)
             pdf = lobe * dr.select(transmits, 1.0 - share, share)
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
         return value, pdf
@@ -160,8 +171,8 @@ class StackedLobes:
         bottom = cos_i < 0
         active = active & (cos_i != 0)
         w = mi.Vector3f(wi.x, wi.y, dr.abs(cos_i))
-        top_share, bottom_share = self._shares(w)
-        share = dr.select(bottom, bottom_share, top_share)
+        weights = self._elevation_weights(w)
+        share = self._share(weights, bottom)
         u0 = sample2.x
         transmitted = u0 >= share
         active = active & dr.select(transmitted, bool(transmit_on), bool(reflect_on))
@@ -170,7 +181,7 @@ class StackedLobes:
         v0 = dr.select(transmitted, (u0 - share) / dr.select(share < 1.0, 1.0 - share, 1.0),
                        u0 / dr.select(share > 0.0, share, 1.0))
         v = mi.Point2f(dr.clip(v0, 0.0, 1.0), sample2.y)
-        stack = self._stack(bottom, transmitted)
+        stack = self._stack(bottom, transmitted, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmitted & refracts
         m, density, value = self.table._sample_normal(w, v, active, stack)

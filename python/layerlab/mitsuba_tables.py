@@ -279,13 +279,19 @@ class TracedTables:
         row = self.values_host[int(index)]
         return [float(row[0]), float(row[1]), float(row[2])]
 
-    def rgb(self, sample, phi_i, theta_i, active):
+    def rgb(self, sample, phi_i, theta_i, active, theta_weights=None):
         """The stored values (R, G, B) at the point sample of the sample
         square for the incident direction (phi_i, theta_i): Mitsuba's
-        Marginal2D::eval per channel, with all channels at once."""
+        Marginal2D::eval per channel, with all channels at once.
+        theta_weights: the elevation's slice and weights, if the caller has
+        them (stacked sets), else found here."""
         nx, ny = self.size
         n_ti = len(self.theta_host)
-        jt, wt0, wt1 = self._weights(self.theta_host, self.theta if self.jit else None, theta_i)
+        if theta_weights is not None:
+            jt, wt0, wt1 = theta_weights
+        else:
+            jt, wt0, wt1 = self._weights(self.theta_host, self.theta if self.jit else None,
+                                         theta_i)
         if self.use_phi:
             jp, wp0, wp1 = self._weights(self.phi_host, self.phi if self.jit else None, phi_i)
         px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
@@ -321,8 +327,8 @@ class TracedTables:
 
     def _incident(self, wi, stack=None):
         """wi's elevation as the slices' parameter (of stacked sets: stack
-        = (the lane's set, its shift), stack_sets), its azimuth and square
-        coordinates."""
+        = (the lane's set, its shift, its slice and weights over the
+        elevations), stack_sets), its azimuth and square coordinates."""
         theta_i = _elevation(wi)
         phi_i = dr.atan2(wi.y, wi.x)
         u_wi = mi.Point2f(_theta_to_u(theta_i), _phi_to_u(phi_i))
@@ -353,7 +359,7 @@ class TracedTables:
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active)
+            value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
             if self.jacobian:
                 scale = self._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * scale for v in value]
@@ -408,7 +414,7 @@ class TracedTables:
         sin_theta, cos_theta = dr.sincos(theta_m)
         m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
-        value = self.rgb(sample, phi_i, theta_i, active)
+        value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
         if self.jacobian:
             scale = self._jacobian_scale(u_m, u_wi, active, stack)
             value = [v * scale for v in value]
