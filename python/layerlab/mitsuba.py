@@ -19,8 +19,9 @@ interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
 Three implementations, chosen with the property "mode":
-- "tables" (the default for an RGB table file and for an opaque, untextured
-  .bsdf, in every RGB variant: scalar_rgb, llvm_ad_rgb, cuda_ad_rgb): warped
+- "tables" (the default for an untextured RGB table file and an untextured
+  .bsdf, opaque or transmissive, in every RGB variant: scalar_rgb,
+  llvm_ad_rgb, cuda_ad_rgb): warped
   tables of the `measured` format (docs/formats.md), evaluated and
   sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
   (mi.MarginalContinuous2D*) and Dr.Jit operations (layerlab.mitsuba_tables),
@@ -33,20 +34,25 @@ Three implementations, chosen with the property "mode":
   kept in the user's cache directory (layerlab.user_cache_dir(), folder
   "mitsuba-tables", named by a hash of the .bsdf's bytes, the tolerance and
   the library), so only the first load pays for the writer's tolerance search (docs/benchmarks.md has its cost); "cache": false makes it in a
-  temporary file instead, removed once read. The lobe is one-sided glossy
-  reflection (FrontSide), as in Mitsuba's `measured`: zero unless both
-  directions are above the surface. Values are the C reader's on the same
-  table file up to float32 rounding (python/tests/test_tables_mitsuba.py).
+  temporary file instead, removed once read. An opaque file's lobe is
+  one-sided glossy reflection (FrontSide), as in Mitsuba's `measured`: zero
+  unless both directions are above the surface. A transmissive file (a
+  .bsdf that transmits gives one; layerlab's extension of the format, a
+  table set per lobe and side) has glossy reflection and transmission on
+  both sides, evaluated and sampled as the C reader does
+  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). Values are the C
+  reader's on the same table file up to float32 rounding
+  (python/tests/test_tables_mitsuba.py, test_tables_glass_mitsuba.py).
   A spectral table file is not read by this mode (its RGB is the C reader's
   conversion of the spectra): it renders through "batch".
 - "traced" (the default in the LLVM variants for the .bsdf files that
-  "tables" cannot hold: transmissive or textured ones): the Fourier series'
+  "tables" cannot hold: textured ones): the Fourier series'
   eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
   over the file's tables, uploaded once as Dr.Jit arrays
   (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
   values and sampled directions are the C reader's up to float32 rounding.
 - "batch" (the default for those files in the scalar variants, and for
-  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  spectral and textured table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
   ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
   numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
   and calls: symbolic ones hold no values to hand to C. Creating a
@@ -60,11 +66,11 @@ no Fourier series) are refused with the reason. The CUDA variants take
 bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
 "tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
 Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
-An extended table file (transmissive: a table set per lobe and side; textured:
-a table set per basis of a textured .bsdf) renders through "batch"; a textured
-one takes the same per-parameter properties as that .bsdf (below), its basis
-weights going to the C batch calls per lane. Mitsuba's `measured` refuses such
-a file (it has no plain tables).
+A textured table file (a table set per basis of a textured .bsdf) renders
+through "batch", with the same per-parameter properties as that .bsdf
+(below), its basis weights going to the C batch calls per lane. Mitsuba's
+`measured` refuses such a file, and a transmissive one (they have no plain
+tables).
 
 Textured files (more than one basis function): one property per textured
 parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
@@ -75,8 +81,8 @@ parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
 only the bases of non-zero weight are read. In "batch" mode the same weights
 are computed per element in numpy and passed with a stride.
 
-Lobes ("traced" and "batch"): glossy reflection on both sides, and glossy
-transmission when the file transmits (its eta differs from 1, or it has
+Lobes ("traced", "batch", and "tables" on a transmissive file): glossy
+reflection on both sides, and glossy transmission when the file transmits (its eta differs from 1, or it has
 non-zero transmission values: a probe of directions across the surface at
 load time).
 """
