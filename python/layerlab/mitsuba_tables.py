@@ -233,9 +233,18 @@ class TracedTables:
         # The values: per slice (azimuth, elevation), node (y, x), the three
         # channels and a zero, so that a node is one aligned 4-float read.
         self.size = int(rgb.shape[4]), int(rgb.shape[3])   # (x, y) as Mitsuba's warps
-        packed = np.zeros((n_pi, n_ti, rgb.shape[3], rgb.shape[4], 4), dtype=np.float32)
-        packed[..., :3] = np.moveaxis(rgb, 2, -1)
-        self.values_host = packed.reshape(-1, 4)
+        # A grey file (the three channels equal, as a one-channel .bsdf
+        # gives them: a glass, a pane) keeps one float per node: a quarter
+        # of the memory the look-ups walk through.
+        self.grey = bool(np.array_equal(rgb[:, :, 0], rgb[:, :, 1]) and
+                         np.array_equal(rgb[:, :, 0], rgb[:, :, 2]))
+        if self.grey:
+            packed = np.ascontiguousarray(rgb[:, :, 0])
+            self.values_host = packed.reshape(-1, 1)
+        else:
+            packed = np.zeros((n_pi, n_ti, rgb.shape[3], rgb.shape[4], 4), dtype=np.float32)
+            packed[..., :3] = np.moveaxis(rgb, 2, -1)
+            self.values_host = packed.reshape(-1, 4)
         if self.jit:
             self.values = mi.Float(packed.ravel())
             self.theta = mi.Float(theta)
@@ -273,7 +282,14 @@ class TracedTables:
         return j, 1.0 - t, t
 
     def _gather(self, index, active):
-        """The 4 floats (R, G, B, 0) of a node: one packet read."""
+        """The 4 floats (R, G, B, 0) of a node: one packet read (of a grey
+        file: its one value, for each channel)."""
+        if self.grey:
+            if self.jit:
+                v = dr.gather(mi.Float, self.values, index, active)
+            else:
+                v = float(self.values_host[int(index)][0])
+            return [v, v, v]
         if self.jit:
             return dr.gather(mi.Vector4f, self.values, index, active)
         row = self.values_host[int(index)]
