@@ -82,9 +82,9 @@ only the bases of non-zero weight are read. In "batch" mode the same weights
 are computed per element in numpy and passed with a stride.
 
 Lobes ("traced", "batch", and "tables" on a transmissive file): glossy
-reflection on both sides, and glossy transmission when the file transmits (its eta differs from 1, or it has
-non-zero transmission values: a probe of directions across the surface at
-load time).
+reflection on both sides, and glossy transmission when the file transmits
+(its eta differs from 1, or it has non-zero transmission values: a probe of
+directions across the surface at load time).
 """
 
 import ctypes
