@@ -34,7 +34,9 @@ Three implementations, chosen with the property "mode":
   kept in the user's cache directory (layerlab.user_cache_dir(), folder
   "mitsuba-tables", named by a hash of the .bsdf's bytes, the tolerance and
   the library), so only the first load pays for the writer's tolerance search (docs/benchmarks.md has its cost); "cache": false makes it in a
-  temporary file instead, removed once read. An opaque file's lobe is
+  temporary file instead, removed once read (a transmissive .bsdf whose
+  tables the loaded library cannot write takes the Fourier path instead,
+  the reason in str(bsdf)). An opaque file's lobe is
   one-sided glossy reflection (FrontSide), as in Mitsuba's `measured`: zero
   unless both directions are above the surface. A transmissive file (a
   .bsdf that transmits gives one; layerlab's extension of the format, a
@@ -333,14 +335,26 @@ def _make_class():
             self.m_tables = None
             self.m_lobes = False
             self.m_tables_source = ""
-            if mode == "tables":
-                if tables_file:
-                    fields, self.m_tables_source = read_tensor_file(path), "the file"
-                else:
-                    tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
-                    cache = bool(props["cache"]) if "cache" in props else True
+            self.m_fallback = ""
+            fields = None
+            if mode == "tables" and tables_file:
+                fields, self.m_tables_source = read_tensor_file(path), "the file"
+            elif mode == "tables":
+                tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
+                cache = bool(props["cache"]) if "cache" in props else True
+                try:
                     fields, self.m_tables_source = tables_from_bsdf(
                         self.m_table.handle, path, tolerance, cache)
+                except _native.UnsupportedError as error:
+                    # A transmissive .bsdf whose tables the loaded library
+                    # cannot write stays on the Fourier path by default
+                    # (asked for "tables", it is refused with the reason).
+                    if "mode" in props or not self.m_transmits:
+                        raise
+                    mode = "traced" if self.m_jit else "batch"
+                    self.m_mode = mode
+                    self.m_fallback = "no tables: %s" % error
+            if fields is not None:
                 self.m_lobes = layout_names(fields) is not None
                 if self.m_lobes:
                     # A transmissive file: a table set per lobe and side.
@@ -665,6 +679,8 @@ def _make_class():
             tables = ""
             if self.m_tables is not None:
                 tables = ", tables=%s (%s)" % (self.m_tables.describe(), self.m_tables_source)
+            if self.m_fallback:
+                tables = ", %s" % self.m_fallback
             return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s%s]"
                     % (self.m_filename, self.m_table.format, self.m_eta, self.m_transmits,
                        self.m_mode, tables,

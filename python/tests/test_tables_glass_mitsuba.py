@@ -373,3 +373,27 @@ def test_set_by_set_lobes_are_the_c_reader(tables, name):
     assert np.count_nonzero(found) > 1800
     assert np.array_equal(found, spdf > 0)
     assert np.linalg.norm(swo[found] - cwo[found], axis=1).max() < 1e-3
+
+
+def test_transmissive_bsdf_without_tables_stays_on_the_fourier_path(tmp_path, monkeypatch):
+    """Where the loaded library cannot write a transmissive .bsdf's tables (an older one, or a
+    material its writer refuses), the default is the Fourier path with the reason in
+    str(bsdf); asked for "tables", the load fails with that reason."""
+    import layerlab as ll
+    source = tmp_path / "glass.bsdf"
+    ll.Material.parse("set nodes=40 orders=40\n" + GLASS).build(str(source))
+    _plugin("scalar_rgb", str(source), mode="batch")
+    import layerlab.mitsuba as llmi
+    from layerlab import _native
+
+    def refuse(*args, **kwargs):
+        raise _native.UnsupportedError("ll_tables_write_from_bsdf: not in this library", 6)
+
+    monkeypatch.setattr(llmi, "tables_from_bsdf", refuse)
+    bsdf = _plugin("scalar_rgb", str(source))
+    text = str(bsdf)
+    assert "mode=batch" in text and "no tables: ll_tables_write_from_bsdf" in text, text
+    assert bsdf.flags() & mi.BSDFFlags.GlossyTransmission
+    with pytest.raises(Exception, match="not in this library"):
+        _plugin("scalar_rgb", str(source), mode="tables")
+    assert "mode=traced" in str(_plugin("llvm_ad_rgb", str(source)))
