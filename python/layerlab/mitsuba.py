@@ -19,8 +19,9 @@ interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
 Three implementations, chosen with the property "mode":
-- "tables" (the default for an RGB table file and for an opaque, untextured
-  .bsdf, in every RGB variant: scalar_rgb, llvm_ad_rgb, cuda_ad_rgb): warped
+- "tables" (the default for an untextured RGB table file and an untextured
+  .bsdf, opaque or transmissive, in every RGB variant: scalar_rgb,
+  llvm_ad_rgb, cuda_ad_rgb): warped
   tables of the `measured` format (docs/formats.md), evaluated and
   sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
   (mi.MarginalContinuous2D*) and Dr.Jit operations (layerlab.mitsuba_tables),
@@ -33,20 +34,27 @@ Three implementations, chosen with the property "mode":
   kept in the user's cache directory (layerlab.user_cache_dir(), folder
   "mitsuba-tables", named by a hash of the .bsdf's bytes, the tolerance and
   the library), so only the first load pays for the writer's tolerance search (docs/benchmarks.md has its cost); "cache": false makes it in a
-  temporary file instead, removed once read. The lobe is one-sided glossy
-  reflection (FrontSide), as in Mitsuba's `measured`: zero unless both
-  directions are above the surface. Values are the C reader's on the same
-  table file up to float32 rounding (python/tests/test_tables_mitsuba.py).
+  temporary file instead, removed once read (a transmissive .bsdf whose
+  tables the loaded library cannot write takes the Fourier path instead,
+  the reason in str(bsdf)). An opaque file's lobe is
+  one-sided glossy reflection (FrontSide), as in Mitsuba's `measured`: zero
+  unless both directions are above the surface. A transmissive file (a
+  .bsdf that transmits gives one; layerlab's extension of the format, a
+  table set per lobe and side) has glossy reflection and transmission on
+  both sides, evaluated and sampled as the C reader does
+  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). Values are the C
+  reader's on the same table file up to float32 rounding
+  (python/tests/test_tables_mitsuba.py, test_tables_glass_mitsuba.py).
   A spectral table file is not read by this mode (its RGB is the C reader's
   conversion of the spectra): it renders through "batch".
 - "traced" (the default in the LLVM variants for the .bsdf files that
-  "tables" cannot hold: transmissive or textured ones): the Fourier series'
+  "tables" cannot hold: textured ones): the Fourier series'
   eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
   over the file's tables, uploaded once as Dr.Jit arrays
   (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
   values and sampled directions are the C reader's up to float32 rounding.
 - "batch" (the default for those files in the scalar variants, and for
-  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  spectral and textured table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
   ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
   numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
   and calls: symbolic ones hold no values to hand to C. Creating a
@@ -60,11 +68,11 @@ no Fourier series) are refused with the reason. The CUDA variants take
 bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
 "tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
 Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
-An extended table file (transmissive: a table set per lobe and side; textured:
-a table set per basis of a textured .bsdf) renders through "batch"; a textured
-one takes the same per-parameter properties as that .bsdf (below), its basis
-weights going to the C batch calls per lane. Mitsuba's `measured` refuses such
-a file (it has no plain tables).
+A textured table file (a table set per basis of a textured .bsdf) renders
+through "batch", with the same per-parameter properties as that .bsdf
+(below), its basis weights going to the C batch calls per lane. Mitsuba's
+`measured` refuses such a file, and a transmissive one (they have no plain
+tables).
 
 Textured files (more than one basis function): one property per textured
 parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
@@ -75,10 +83,10 @@ parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
 only the bases of non-zero weight are read. In "batch" mode the same weights
 are computed per element in numpy and passed with a stride.
 
-Lobes ("traced" and "batch"): glossy reflection on both sides, and glossy
-transmission when the file transmits (its eta differs from 1, or it has
-non-zero transmission values: a probe of directions across the surface at
-load time).
+Lobes ("traced", "batch", and "tables" on a transmissive file): glossy
+reflection on both sides, and glossy transmission when the file transmits
+(its eta differs from 1, or it has non-zero transmission values: a probe of
+directions across the surface at load time).
 """
 
 import ctypes
@@ -97,6 +105,7 @@ except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError("layerlab.mitsuba needs Mitsuba 3: pip install 'layerlab[mitsuba]' "
                       "(or pip install mitsuba)") from error
 
+from .mitsuba_lobes import layout_names, traced_lobes  # noqa: E402
 from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
 from .tensor_file import read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
@@ -324,19 +333,40 @@ def _make_class():
             mode = self._choose_mode(props, path, current)
             self.m_mode = mode
             self.m_tables = None
+            self.m_lobes = False
             self.m_tables_source = ""
-            if mode == "tables":
-                if tables_file:
-                    fields, self.m_tables_source = read_tensor_file(path), "the file"
-                else:
-                    tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
-                    cache = bool(props["cache"]) if "cache" in props else True
+            self.m_fallback = ""
+            fields = None
+            if mode == "tables" and tables_file:
+                fields, self.m_tables_source = read_tensor_file(path), "the file"
+            elif mode == "tables":
+                tolerance = float(props["tolerance"]) if "tolerance" in props else 0.0
+                cache = bool(props["cache"]) if "cache" in props else True
+                try:
                     fields, self.m_tables_source = tables_from_bsdf(
                         self.m_table.handle, path, tolerance, cache)
-                self.m_tables = TracedTables(fields, path)
-                # One-sided reflection, as Mitsuba's `measured` (the format
-                # holds the reflection above the surface).
-                components = [Flags.GlossyReflection | Flags.FrontSide]
+                except _native.UnsupportedError as error:
+                    # A transmissive .bsdf whose tables the loaded library
+                    # cannot write stays on the Fourier path by default
+                    # (asked for "tables", it is refused with the reason).
+                    if "mode" in props or not self.m_transmits:
+                        raise
+                    mode = "traced" if self.m_jit else "batch"
+                    self.m_mode = mode
+                    self.m_fallback = "no tables: %s" % error
+            if fields is not None:
+                self.m_lobes = layout_names(fields) is not None
+                if self.m_lobes:
+                    # A transmissive file: a table set per lobe and side.
+                    self.m_tables = traced_lobes(fields, path)
+                    both = Flags.FrontSide | Flags.BackSide
+                    components = [Flags.GlossyReflection | both,
+                                  Flags.GlossyTransmission | both]
+                else:
+                    self.m_tables = TracedTables(fields, path)
+                    # One-sided reflection, as Mitsuba's `measured` (the
+                    # format holds the reflection above the surface).
+                    components = [Flags.GlossyReflection | Flags.FrontSide]
             else:
                 both = Flags.FrontSide | Flags.BackSide
                 components = [Flags.GlossyReflection | both]
@@ -357,19 +387,20 @@ def _make_class():
             table = self.m_table
             tables_file = table.format == "tables"
             spectral = tables_file and table.n_wavelengths > 0
-            # What the traced tables can render: an RGB table file, or an
-            # opaque, untextured .bsdf (made into tables on load).
-            if tables_file and (self.m_transmits or table.n_bases > 1):
-                why_not = ("it is an extended table file (%s: a table set per lobe or "
-                           "basis, which only the C reader evaluates)"
-                           % ("textured" if table.n_bases > 1 else "transmissive"))
+            # What the traced tables can render: an untextured RGB table
+            # file (opaque, or transmissive: a set per lobe and side), or an
+            # untextured .bsdf (made into such a file on load).
+            if tables_file and table.n_bases > 1:
+                why_not = ("it is a textured table file (a table set per basis, blended "
+                           "per lane with the parameters' weights, which only the C reader "
+                           "evaluates)")
             elif tables_file:
                 why_not = ("it is a spectral table file (its RGB is the C reader's "
                            "conversion of the spectra)" if spectral else None)
             elif table.n_bases > 1:
-                why_not = "it is textured (%s)" % ", ".join(table.names)
-            elif self.m_transmits:
-                why_not = "it transmits light (the table format holds reflection only)"
+                why_not = ("it is textured (%s): its tables, a set per basis, are blended "
+                           "per lane with the parameters' weights, which only the C reader "
+                           "evaluates" % ", ".join(table.names))
             else:
                 why_not = None
             if why_not is None:
@@ -513,7 +544,16 @@ def _make_class():
         def _tables_enabled(self, ctx):
             return ctx.is_enabled(Flags.GlossyReflection, 0)
 
+        def _lobes_eval_pdf(self, ctx, si, wo, active, want_value, want_pdf):
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            return self.m_tables.eval_pdf(si.wi, wo, active, radiance,
+                                          ctx.is_enabled(Flags.GlossyReflection, 0),
+                                          ctx.is_enabled(Flags.GlossyTransmission, 1),
+                                          want_value, want_pdf)
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                return mi.Color3f(*self._lobes_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Color3f(0.0)
@@ -529,6 +569,8 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                return self._lobes_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Float(0.0)
@@ -543,6 +585,9 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_lobes:
+                value, pdf = self._lobes_eval_pdf(ctx, si, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_tables is not None:
                 if not self._tables_enabled(ctx):
                     return mi.Color3f(0.0), mi.Float(0.0)
@@ -560,6 +605,22 @@ def _make_class():
             ok = active & self._lobe_mask(ctx, mi.Frame3f.cos_theta(si.wi), cos_o)
             return dr.select(ok, f * dr.abs(cos_o), 0.0), dr.select(ok, p, 0.0)
 
+        def _lobes_sample(self, ctx, si, sample2, active):
+            bs = dr.zeros(mi.BSDFSample3f)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            wo, pdf, weight, ok, transmitted = self.m_tables.sample(
+                si.wi, sample2, active, radiance, ctx.is_enabled(Flags.GlossyReflection, 0),
+                ctx.is_enabled(Flags.GlossyTransmission, 1))
+            bs.wo = wo
+            bs.pdf = pdf
+            eta = mi.Float(self.m_tables.eta)
+            entering = mi.Frame3f.cos_theta(si.wi) > 0
+            bs.eta = dr.select(transmitted, dr.select(entering, eta, dr.rcp(eta)), 1.0)
+            bs.sampled_type = dr.select(transmitted, mi.UInt32(+Flags.GlossyTransmission),
+                                        mi.UInt32(+Flags.GlossyReflection))
+            bs.sampled_component = dr.select(transmitted, mi.UInt32(1), mi.UInt32(0))
+            return bs, mi.Color3f(*weight)
+
         def _tables_sample(self, ctx, si, sample2, active):
             bs = dr.zeros(mi.BSDFSample3f)
             if not self._tables_enabled(ctx):
@@ -573,6 +634,8 @@ def _make_class():
             return bs, mi.Color3f(*weight)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
+            if self.m_lobes:
+                return self._lobes_sample(ctx, si, sample2, active)
             if self.m_tables is not None:
                 return self._tables_sample(ctx, si, sample2, active)
             bs = dr.zeros(mi.BSDFSample3f)
@@ -616,6 +679,8 @@ def _make_class():
             tables = ""
             if self.m_tables is not None:
                 tables = ", tables=%s (%s)" % (self.m_tables.describe(), self.m_tables_source)
+            if self.m_fallback:
+                tables = ", %s" % self.m_fallback
             return ("LayerlabBSDF[filename=\"%s\", format=%s, eta=%g, transmission=%s, mode=%s%s%s]"
                     % (self.m_filename, self.m_table.format, self.m_eta, self.m_transmits,
                        self.m_mode, tables,

@@ -68,20 +68,134 @@ def _phi_to_u(phi):
     return (phi + PI) * INV_TWO_PI
 
 
+# stack_sets: the slices' parameter of the k-th stacked set is its
+# incident elevation plus STACK_SHIFTS[k]: ranges of width pi / 2 apart
+# from each other (the shifts 13/8 apart, exact in float32), as close to 0
+# as four such ranges can be, since a parameter's float32 rounding (its
+# magnitude's) is what moves the interpolation between two slices.
+STACK_SHIFTS = (-3.25, -1.625, 0.0, 1.625)
+
+
+def stack_sets(fields, prefixes):
+    """The fields of the sets named by prefixes (at most four, each with
+    the same grids) as the fields of one table of their slices one after
+    the other: the warps' parameter of the k-th is theta_i +
+    STACK_SHIFTS[k], so that one Mitsuba warp serves every set and a lane
+    reads its own set's slices (two neighbouring slices of one set, never
+    of two); D and sigma become one warp per kind with k as parameter.
+    None if the sets' grids differ."""
+    theta = np.asarray(fields["theta_i"], dtype=np.float32)
+    if len(prefixes) > len(STACK_SHIFTS):
+        return None
+    shapes = set()
+    for p in prefixes:
+        shapes.add(tuple(tuple(np.shape(fields[p + k])) for k in
+                         ("ndf", "sigma", "vndf", "luminance", "rgb")))
+    if len(shapes) != 1:
+        return None
+    out = {"theta_i": np.concatenate([theta.astype(np.float64) + STACK_SHIFTS[k]
+                                      for k in range(len(prefixes))]).astype(np.float32),
+           "phi_i": fields["phi_i"], "jacobian": fields["jacobian"]}
+    for key in ("vndf", "luminance", "rgb"):
+        out[key] = np.concatenate([np.asarray(fields[p + key], dtype=np.float32)
+                                   for p in prefixes], axis=1)
+    for key in ("ndf", "sigma"):
+        out[key] = np.stack([np.asarray(fields[p + key], dtype=np.float32) for p in prefixes])
+    return out
+
+
+class _StackedGrid:
+    """Grids of the same size, one per stacked set ([sets, y, x]), read as
+    Mitsuba's Marginal2D::eval reads a grid evaluated as stored: bilinear
+    over the nodes spread evenly over [0, 1]^2, the cell clamped to the
+    last."""
+
+    def __init__(self, grids):
+        grids = np.ascontiguousarray(grids, dtype=np.float32)
+        self.ny, self.nx = int(grids.shape[1]), int(grids.shape[2])
+        self.jit = dr.is_jit_v(mi.Float)
+        if self.jit:
+            self.data = mi.Float(grids.ravel())
+        else:
+            self.host = grids.reshape(grids.shape[0], -1)
+
+    def eval(self, pos, k, active):
+        """The value at pos of grid k (a whole number per lane)."""
+        nx, ny = self.nx, self.ny
+        px, py = pos.x * float(nx - 1), pos.y * float(ny - 1)
+        if self.jit:
+            UInt32, Int32 = mi.UInt32, mi.Int32
+            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
+            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
+            base = UInt32(k) * (nx * ny) + oy * nx + ox
+
+            def at(offset):
+                return dr.gather(mi.Float, self.data, base + offset, active)
+        else:
+            ox = min(max(int(px), 0), nx - 2)
+            oy = min(max(int(py), 0), ny - 2)
+            row = self.host[int(k)]
+            base = oy * nx + ox
+
+            def at(offset):
+                return float(row[base + offset])
+        wx1, wy1 = px - ox, py - oy
+        wx0, wy0 = 1.0 - wx1, 1.0 - wy1
+        return dr.fma(wy0, dr.fma(wx0, at(0), wx1 * at(1)),
+                      wy1 * dr.fma(wx0, at(nx), wx1 * at(nx + 1)))
+
+
+def _normal_area(u_theta_m, sin_theta_m):
+    """The area of the normal's square per steradian of normals, 2 pi^2
+    u_theta sin theta_m, kept from 0 (the pole) so that a pdf stays
+    finite."""
+    return dr.maximum(TWO_PI_SQUARED * u_theta_m * sin_theta_m, 1e-6)
+
+
+def _refraction_half(wi, wo, eta):
+    """The refraction half vector of Walter et al. 2007 (sec. 5.2) of wi
+    above and wo below, -(wi + eta wo) normalised and turned above the
+    surface, and whether the pair is a refraction through it (wi.m > 0 >
+    wo.m)."""
+    h = -(wi + eta * wo)
+    length = dr.norm(h)
+    m = h / dr.select(h.z < 0, -length, length)
+    ok = (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) < 0) & (length > 0) & \
+        (dr.dot(wi, m) > 0) & (dr.dot(wo, m) < 0)
+    return m, ok
+
+
+def _refraction_jacobian(wi, wo, m, eta):
+    """d omega_m / d omega_o of the refraction (Walter et al. eq. 16):
+    eta^2 |wo.m| / (wi.m + eta wo.m)^2."""
+    om = dr.dot(wo, m)
+    d = dr.fma(eta, om, dr.dot(wi, m))
+    # (0 where d is: no refraction, as the C reader's 0 for a jacobian that
+    # is not finite.)
+    nonzero = d != 0
+    return dr.select(nonzero, eta * eta * dr.abs(om) / dr.select(nonzero, d * d, 1.0), 0.0)
+
+
 class TracedTables:
     """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
     current variant, and eval / pdf / sample in Mitsuba's convention."""
 
-    def __init__(self, fields, name=""):
-        for key in ("theta_i", "phi_i", "ndf", "sigma", "vndf", "luminance", "rgb", "jacobian"):
+    def __init__(self, fields, name="", prefix=""):
+        """prefix: the set's (an extended file's "reflect_top." ...,
+        layerlab.mitsuba_lobes); theta_i, phi_i and jacobian are shared."""
+        for key in ("theta_i", "phi_i", "jacobian"):
             if key not in fields:
                 raise TensorFileError("%s: no field `%s` (an RGB table file has it)"
                                       % (name, key))
+        for key in ("ndf", "sigma", "vndf", "luminance", "rgb"):
+            if prefix + key not in fields:
+                raise TensorFileError("%s: no field `%s` (an RGB table file has it)"
+                                      % (name, prefix + key))
         theta = np.asarray(fields["theta_i"], dtype=np.float32)
         phi = np.asarray(fields["phi_i"], dtype=np.float32)
-        vndf = np.asarray(fields["vndf"], dtype=np.float32)
-        lum = np.asarray(fields["luminance"], dtype=np.float32)
-        rgb = np.asarray(fields["rgb"], dtype=np.float32)
+        vndf = np.asarray(fields[prefix + "vndf"], dtype=np.float32)
+        lum = np.asarray(fields[prefix + "luminance"], dtype=np.float32)
+        rgb = np.asarray(fields[prefix + "rgb"], dtype=np.float32)
         n_pi, n_ti = len(phi), len(theta)
         if n_pi > 2:
             raise TensorFileError("%s: %d incident azimuths (anisotropic); the traced path "
@@ -102,18 +216,35 @@ class TracedTables:
             params = [theta.tolist()]
             self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
             self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
-        self.ndf = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["ndf"],
-                                                                 dtype=np.float32),
-                                            [], False, False)
-        self.sigma = mi.MarginalContinuous2D0(np.ascontiguousarray(fields["sigma"],
-                                                                   dtype=np.float32),
-                                              [], False, False)
+        ndf = np.ascontiguousarray(fields[prefix + "ndf"], dtype=np.float32)
+        sigma = np.ascontiguousarray(fields[prefix + "sigma"], dtype=np.float32)
+        # Sets stacked (stack_sets): D and sigma per set, the set's index
+        # their parameter (whole numbers: one slice exactly).
+        self.stacked = ndf.ndim == 3
+        if self.stacked:
+            # Bilinear look-ups of the lane's set's grid (_grid_eval):
+            # what Mitsuba's warps evaluated as stored compute, without
+            # their interpolation over a parameter.
+            self.ndf = _StackedGrid(ndf)
+            self.sigma = _StackedGrid(sigma)
+        else:
+            self.ndf = mi.MarginalContinuous2D0(ndf, [], False, False)
+            self.sigma = mi.MarginalContinuous2D0(sigma, [], False, False)
         # The values: per slice (azimuth, elevation), node (y, x), the three
         # channels and a zero, so that a node is one aligned 4-float read.
         self.size = int(rgb.shape[4]), int(rgb.shape[3])   # (x, y) as Mitsuba's warps
-        packed = np.zeros((n_pi, n_ti, rgb.shape[3], rgb.shape[4], 4), dtype=np.float32)
-        packed[..., :3] = np.moveaxis(rgb, 2, -1)
-        self.values_host = packed.reshape(-1, 4)
+        # A grey file (the three channels equal, as a one-channel .bsdf
+        # gives them: a glass, a pane) keeps one float per node: a quarter
+        # of the memory the look-ups walk through.
+        self.grey = bool(np.array_equal(rgb[:, :, 0], rgb[:, :, 1]) and
+                         np.array_equal(rgb[:, :, 0], rgb[:, :, 2]))
+        if self.grey:
+            packed = np.ascontiguousarray(rgb[:, :, 0])
+            self.values_host = packed.reshape(-1, 1)
+        else:
+            packed = np.zeros((n_pi, n_ti, rgb.shape[3], rgb.shape[4], 4), dtype=np.float32)
+            packed[..., :3] = np.moveaxis(rgb, 2, -1)
+            self.values_host = packed.reshape(-1, 4)
         if self.jit:
             self.values = mi.Float(packed.ravel())
             self.theta = mi.Float(theta)
@@ -151,19 +282,32 @@ class TracedTables:
         return j, 1.0 - t, t
 
     def _gather(self, index, active):
-        """The 4 floats (R, G, B, 0) of a node: one packet read."""
+        """The 4 floats (R, G, B, 0) of a node: one packet read (of a grey
+        file: its one value, for each channel)."""
+        if self.grey:
+            if self.jit:
+                v = dr.gather(mi.Float, self.values, index, active)
+            else:
+                v = float(self.values_host[int(index)][0])
+            return [v, v, v]
         if self.jit:
             return dr.gather(mi.Vector4f, self.values, index, active)
         row = self.values_host[int(index)]
         return [float(row[0]), float(row[1]), float(row[2])]
 
-    def rgb(self, sample, phi_i, theta_i, active):
+    def rgb(self, sample, phi_i, theta_i, active, theta_weights=None):
         """The stored values (R, G, B) at the point sample of the sample
         square for the incident direction (phi_i, theta_i): Mitsuba's
-        Marginal2D::eval per channel, with all channels at once."""
+        Marginal2D::eval per channel, with all channels at once.
+        theta_weights: the elevation's slice and weights, if the caller has
+        them (stacked sets), else found here."""
         nx, ny = self.size
         n_ti = len(self.theta_host)
-        jt, wt0, wt1 = self._weights(self.theta_host, self.theta if self.jit else None, theta_i)
+        if theta_weights is not None:
+            jt, wt0, wt1 = theta_weights
+        else:
+            jt, wt0, wt1 = self._weights(self.theta_host, self.theta if self.jit else None,
+                                         theta_i)
         if self.use_phi:
             jp, wp0, wp1 = self._weights(self.phi_host, self.phi if self.jit else None, phi_i)
         px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
@@ -197,51 +341,85 @@ class TracedTables:
         return [dr.lerp(dr.lerp(v00[c], v10[c], fx), dr.lerp(v01[c], v11[c], fx), fy)
                 for c in range(3)]
 
-    def _incident(self, wi):
+    def _incident(self, wi, stack=None):
+        """wi's elevation as the slices' parameter (of stacked sets: stack
+        = (the lane's set, its shift, its slice and weights over the
+        elevations), stack_sets), its azimuth and square coordinates."""
         theta_i = _elevation(wi)
         phi_i = dr.atan2(wi.y, wi.x)
         u_wi = mi.Point2f(_theta_to_u(theta_i), _phi_to_u(phi_i))
+        if stack is not None:
+            theta_i = theta_i + stack[1]
         return theta_i, phi_i, u_wi
 
-    def _jacobian_scale(self, u_m, u_wi, active):
+    def _jacobian_scale(self, u_m, u_wi, active, stack=None):
         """D(m) / (4 sigma(wi)): the factor of values stored with the
         jacobian rule (docs/formats.md)."""
+        if stack is not None:
+            return self.ndf.eval(u_m, stack[0], active) / \
+                (4.0 * self.sigma.eval(u_wi, stack[0], active))
         return self.ndf.eval(u_m, active=active) / (4.0 * self.sigma.eval(u_wi, active=active))
 
     # ------------------------------------------------------ the three calls
 
-    def eval_pdf(self, wi, wo, active, want_value=True, want_pdf=True):
-        """(f cos theta_o as a list of 3 Float, or None; the pdf per solid
-        angle of wo, or None), zero where not active or below the surface."""
-        active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
-        m = dr.normalize(wo + wi)
-        theta_i, phi_i, u_wi = self._incident(wi)
+    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None):
+        """The lobe at the half vector m (of either warp): (f cos theta_o
+        as a list of 3 Float, or None; the density of m per steradian of
+        normals, from the two squares' densities, or None)."""
+        theta_i, phi_i, u_wi = self._incident(wi, stack)
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
         u_phi = _phi_to_u(phi_m - phi_i)
         u_m = mi.Point2f(_theta_to_u(theta_m), u_phi - dr.floor(u_phi))
         params = self._params(phi_i, theta_i)
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
-        value = pdf = None
+        value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active)
+            value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
             if self.jacobian:
-                scale = self._jacobian_scale(u_m, u_wi, active)
+                scale = self._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * scale for v in value]
-            value = [dr.select(active, v, 0.0) for v in value]
         if want_pdf:
             lum = self.luminance.eval(sample, params, active)
-            jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * mi.Frame3f.sin_theta(m), 1e-6) * \
-                4.0 * dr.dot(wi, m)
-            pdf = dr.select(active, vndf_pdf * lum / jacobian, 0.0)
+            density = vndf_pdf * lum / _normal_area(u_m.x, mi.Frame3f.sin_theta(m))
+        return value, density
+
+    def eval_pdf(self, wi, wo, active, want_value=True, want_pdf=True):
+        """(f cos theta_o as a list of 3 Float, or None; the pdf per solid
+        angle of wo, or None), zero where not active or below the surface."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+        m = dr.normalize(wo + wi)
+        value, density = self._at_normal(wi, m, active, want_value, want_pdf)
+        pdf = None
+        if want_value:
+            value = [dr.select(active, v, 0.0) for v in value]
+        if want_pdf:
+            pdf = dr.select(active, density / (4.0 * dr.dot(wi, m)), 0.0)
         return value, pdf
 
-    def sample(self, wi, sample2, active):
-        """(wo, pdf, f cos theta_o / pdf as a list of 3 Float, ok) for the
-        two random numbers sample2 (Mitsuba's `measured` takes them as
-        (sample2.y, sample2.x) into the luminance warp)."""
-        active = active & (mi.Frame3f.cos_theta(wi) > 0)
-        theta_i, phi_i, u_wi = self._incident(wi)
+    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True):
+        """eval_pdf of a transmitted lobe warped about the refraction half
+        vector (docs/formats.md, "Extended table files"; the C reader's
+        tables_refract.c): wi above, wo below, eta the far side's index over
+        wi's side; the pdf takes the refraction's d omega_m / d omega_o in
+        the place of the reflection's 1 / (4 wi.m)."""
+        m, ok = _refraction_half(wi, wo, eta)
+        active = active & ok
+        value, density = self._at_normal(wi, m, active, want_value, want_pdf)
+        pdf = None
+        if want_value:
+            value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
+        if want_pdf:
+            pdf = density * _refraction_jacobian(wi, wo, m, eta)
+            pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
+        return value, pdf
+
+    def _sample_normal(self, wi, sample2, active, stack=None):
+        """The normal m drawn from the two warps for the random numbers
+        sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
+        into the luminance warp), its density per steradian of normals and
+        f cos theta_o there (3 Float)."""
+        theta_i, phi_i, u_wi = self._incident(wi, stack)
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
@@ -251,17 +429,48 @@ class TracedTables:
         sin_phi, cos_phi = dr.sincos(phi_m)
         sin_theta, cos_theta = dr.sincos(theta_m)
         m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
-        dot = dr.dot(wi, m)
-        jacobian = dr.maximum(TWO_PI_SQUARED * u_m.x * sin_theta, 1e-6) * 4.0 * dot
-        wo = dr.fma(m, 2.0 * dot, -wi)
-        pdf = vndf_pdf * lum_pdf / jacobian
-        value = self.rgb(sample, phi_i, theta_i, active)
+        density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
+        value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
         if self.jacobian:
-            scale = self._jacobian_scale(u_m, u_wi, active)
+            scale = self._jacobian_scale(u_m, u_wi, active, stack)
             value = [v * scale for v in value]
+        return m, density, value
+
+    def reflect_sample(self, wi, sample2, active):
+        """(wo, pdf, f cos theta_o as a list of 3 Float, ok) for the two
+        random numbers sample2: wi reflected about the sampled normal."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+        m, density, value = self._sample_normal(wi, sample2, active)
+        dot = dr.dot(wi, m)
+        wo = dr.fma(m, 2.0 * dot, -wi)
+        pdf = density / (4.0 * dot)
         ok = active & (mi.Frame3f.cos_theta(wo) > 0) & (pdf > 0)
+        return wo, dr.select(ok, pdf, 0.0), value, ok
+
+    def sample(self, wi, sample2, active):
+        """(wo, pdf, f cos theta_o / pdf as a list of 3 Float, ok) for the
+        two random numbers sample2."""
+        wo, pdf, value, ok = self.reflect_sample(wi, sample2, active)
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
-        return wo, dr.select(ok, pdf, 0.0), weight, ok
+        return wo, pdf, weight, ok
+
+    def refract_sample(self, wi, sample2, eta, active):
+        """sample of a transmitted lobe warped about the refraction half
+        vector (as refract_eval_pdf): m from the warps as for reflection,
+        wo = wi refracted through it (none under total internal
+        reflection). (wo, pdf, f cos theta_o as a list of 3 Float, ok)."""
+        active = active & (mi.Frame3f.cos_theta(wi) > 0)
+        m, density, value = self._sample_normal(wi, sample2, active)
+        inv = 1.0 / eta
+        c = dr.dot(wi, m)
+        k = 1.0 - inv * inv * (1.0 - c * c)
+        a = inv * c - dr.safe_sqrt(k)
+        wo = a * m - inv * wi
+        pdf = density * _refraction_jacobian(wi, wo, m, eta)
+        ok = active & (c > 0) & (k > 0) & (mi.Frame3f.cos_theta(wo) < 0) & \
+            dr.isfinite(pdf) & (pdf > 0)
+        value = [dr.select(ok, dr.maximum(v, 0.0), 0.0) for v in value]
+        return wo, dr.select(ok, pdf, 0.0), value, ok
 
     def describe(self):
         """The grid: incident elevations x VNDF grid x sample grid."""
@@ -326,8 +535,9 @@ def _cache_key(source, tolerance):
 
 
 def tables_from_bsdf(handle, source, tolerance=0.0, cache=True):
-    """The fields of the table file made from the opened, opaque, untextured
-    .bsdf handle (its path source) by ll_tables_write_from_bsdf, with grid
+    """The fields of the table file made from the opened, untextured .bsdf
+    handle (its path source) by ll_tables_write_from_bsdf (for a
+    transmissive one an extended file, a set per lobe and side), with grid
     sizes chosen by the tolerance, and where they came from. With cache,
     the file is kept in the user's cache directory (layerlab.user_cache_dir(),
     subfolder "mitsuba-tables", named by a hash of the source's bytes, the

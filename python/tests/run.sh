@@ -7,7 +7,10 @@
 #   sh python/tests/run.sh --mitsuba   `make check`: what needs Mitsuba 3:
 #                                      the plugin's renders (test_mitsuba.py)
 #                                      our tables against its `measured`
-#                                      (test_tables_mitsuba.py) and GGX
+#                                      (test_tables_mitsuba.py), transmissive
+#                                      tables against the C reader and
+#                                      roughdielectric
+#                                      (test_tables_glass_mitsuba.py) and GGX
 #                                      files against its roughconductor and
 #                                      roughdielectric (test_ggx_mitsuba.py)
 # Nothing is downloaded once the environment holds its packages: pip is
@@ -53,7 +56,8 @@ export PYTHONPATH
 cd "$root/python"
 if [ $mitsuba = 1 ]; then
   exec "$PYTHON" -m pytest -q -p no:cacheprovider tests/test_mitsuba.py \
-    tests/test_tables_mitsuba.py tests/test_ggx_mitsuba.py
+    tests/test_tables_mitsuba.py tests/test_tables_glass_mitsuba.py tests/test_ggx_mitsuba.py
 fi
 exec "$PYTHON" -m pytest -q -p no:cacheprovider --ignore=tests/test_mitsuba.py \
-  --ignore=tests/test_tables_mitsuba.py --ignore=tests/test_ggx_mitsuba.py tests
+  --ignore=tests/test_tables_mitsuba.py --ignore=tests/test_tables_glass_mitsuba.py \
+  --ignore=tests/test_ggx_mitsuba.py tests

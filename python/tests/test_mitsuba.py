@@ -398,20 +398,24 @@ def test_tables_made_on_load_render_as_native_within_noise(renders, timings):
 
 
 def test_default_modes(files):
-    """Which path a file takes by default, and what is refused: an opaque untextured .bsdf
-    and a table file render from tables in every RGB variant; the glass (it transmits) and
-    a textured file keep the Fourier path ("traced" in LLVM, "batch" in scalar) and refuse
-    "tables" with the reason."""
+    """Which path a file takes by default, and what is refused: an untextured .bsdf (opaque,
+    or the glass, which transmits: a set of tables per lobe and side) and a table file
+    render from tables in every RGB variant, the glass with both lobes; a textured file
+    keeps the Fourier path ("traced" in LLVM, "batch" in scalar) and refuses "tables" with
+    the reason; "traced" stays selectable for the glass."""
     _use("scalar_rgb")
     assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
                                               "filename": files["conductor"]}))
-    assert "mode=batch" in str(mi.load_dict({"type": "layerlab",
-                                             "filename": files["dielectric"]}))
-    with pytest.raises(Exception, match="transmits"):
-        mi.load_dict({"type": "layerlab", "filename": files["dielectric"], "mode": "tables"})
+    glass = mi.load_dict({"type": "layerlab", "filename": files["dielectric"]})
+    assert "mode=tables" in str(glass) and "stacked" in str(glass), str(glass)
+    assert glass.flags() & mi.BSDFFlags.GlossyTransmission
+    assert glass.flags() & mi.BSDFFlags.BackSide
     _use("llvm_ad_rgb")
-    assert "mode=traced" in str(mi.load_dict({"type": "layerlab",
+    assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
                                               "filename": files["dielectric"]}))
+    assert "mode=traced" in str(mi.load_dict({"type": "layerlab",
+                                              "filename": files["dielectric"],
+                                              "mode": "traced"}))
     assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
                                               "filename": files["table"]}))
     with pytest.raises(Exception, match="textured"):

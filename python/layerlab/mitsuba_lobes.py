@@ -1,0 +1,263 @@
+"""A transmissive table file (layerlab's extension of the `measured`
+format, docs/formats.md "Extended table files": a table set per lobe
+and side, reflect_top., reflect_bottom., transmit_top., transmit_bottom.)
+evaluated and sampled in Dr.Jit operations, as the C reader does it
+(src/reader/tables_lobes.c, tables_refract.c), for the Mitsuba plugin's
+"tables" mode. Each set is a layerlab.mitsuba_tables.TracedTables over
+its prefixed fields.
+
+A direction pair goes to the set of its lobe -- reflection or
+transmission, by the sides of the two directions -- and of the side of
+the fixed direction wi (si.wi), in that set's own frame, where wi lies
+above: a bottom set sees both directions with z negated. A transmitted
+set with `warp_eta` > 0 is warped about the refraction half vector of
+that relative index; with 0 (a stack of eta 1, a pane) it is a
+reflection set of the z-flipped direction. Sampling picks the reflected
+or the transmitted lobe of wi's side in proportion to their stored
+luminance albedos (`<set>.albedo`, per incident elevation, interpolated
+linearly) by sample2.x, rescaled into the chosen share; the pdf is the
+share times the lobe's.
+
+Values are the stored f (importance transport) times |cos theta_o|; in
+radiance transport a transmitted value takes the eta^2 of the interface it
+crosses (1 / eta^2 going down from above, eta^2 going up), as the C
+reader's ll_bsdf_eval_dir does.
+
+In the JIT variants each of the four sets is traced once under its lane
+mask (a packet's lanes may be on different sides and lobes): a call costs
+the arithmetic of the sets it could reach, not one.
+"""
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+from .mitsuba_tables import TracedTables
+from .tensor_file import TensorFileError
+
+# (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
+SETS = (("reflect_top.", False, False), ("reflect_bottom.", True, False),
+        ("transmit_top.", False, True), ("transmit_bottom.", True, True))
+
+
+def layout_names(fields):
+    """The names in the file's "layerlab_layout" (separated by spaces or
+    commas), or None for a plain file."""
+    if "layerlab_layout" not in fields:
+        return None
+    text = bytes(np.asarray(fields["layerlab_layout"], dtype=np.uint8)).decode("utf-8",
+                                                                                "replace")
+    return [n for n in text.replace(",", " ").split(" ") if n]
+
+
+def _flip(v):
+    return mi.Vector3f(v.x, v.y, -v.z)
+
+
+def _scalar_false(mask):
+    """A mask of the scalar variants that is plainly False (its set's code
+    is skipped there; the JIT variants trace every set under its mask)."""
+    return isinstance(mask, bool) and not mask
+
+
+def traced_lobes(fields, name=""):
+    """The lobes of a transmissive table file: its four sets stacked into
+    one table (mitsuba_lobes_stacked.StackedLobes, one pass per call) when
+    the file has all four with the same grids, else set by set
+    (TracedLobes)."""
+    from .mitsuba_lobes_stacked import ORDER, StackedLobes
+    from .mitsuba_tables import stack_sets
+    names = layout_names(fields) or []
+    prefixes = [SETS[k][0] for k in ORDER]
+    if all(p[:-1] in names for p in prefixes) and "eta" in fields:
+        stacked = stack_sets(fields, prefixes)
+        if stacked is not None:
+            return StackedLobes(fields, stacked, SETS, name)
+    return TracedLobes(fields, name)
+
+
+class TracedLobes:
+    """The lobe sets of a transmissive table file, and eval / pdf / sample
+    in Mitsuba's convention on both sides."""
+
+    def __init__(self, fields, name=""):
+        names = layout_names(fields)
+        if names is None or "textured" in names:
+            raise TensorFileError("%s: not a transmissive table file (its layerlab_layout "
+                                  "names no lobe sets)" % name)
+        if "eta" not in fields:
+            raise TensorFileError("%s: no field `eta` (an extended table file has it)" % name)
+        self.eta = float(np.asarray(fields["eta"], dtype=np.float32).ravel()[0])
+        self.jit = dr.is_jit_v(mi.Float)
+        self.sets = []
+        for prefix, bottom, transmit in SETS:
+            if prefix[:-1] not in names:
+                self.sets.append(None)
+                continue
+            t = TracedTables(fields, name, prefix)
+            albedo = np.asarray(fields[prefix + "albedo"], dtype=np.float32)
+            if albedo.shape != (len(t.theta_host),):
+                raise TensorFileError("%s: field `%salbedo` of shape %s" % (name, prefix,
+                                                                          albedo.shape))
+            t.albedo_host = albedo.astype(np.float64)
+            if self.jit:
+                t.albedo = mi.Float(albedo)
+            t.warp_eta = 0.0
+            if transmit:
+                t.warp_eta = float(np.asarray(fields[prefix + "warp_eta"],
+                                              dtype=np.float32).ravel()[0])
+            self.sets.append(t)
+        self.grid_text = "; ".join("%s %s" % (p[:-1], t.describe())
+                                   for (p, _, _), t in zip(SETS, self.sets) if t is not None)
+
+    def describe(self):
+        return self.grid_text
+
+    # ------------------------------------------------------------ helpers
+
+    def _albedo(self, t, theta):
+        """The set's stored albedo at the incident elevation theta,
+        interpolated as its slices are (0 without the set)."""
+        if t is None:
+            return 0.0
+        j, w0, w1 = t._weights(t.theta_host, t.theta if self.jit else None, theta)
+        if self.jit:
+            a0 = dr.gather(mi.Float, t.albedo, j)
+            a1 = dr.gather(mi.Float, t.albedo, j + 1) if len(t.theta_host) > 1 else a0
+        else:
+            a0 = t.albedo_host[j]
+            a1 = t.albedo_host[j + 1] if len(t.theta_host) > 1 else a0
+        return dr.fma(a0, w0, a1 * w1)
+
+    def _reflect_share(self, w, bottom):
+        """The reflected lobe's share in sampling on wi's side (w: wi in
+        that side's frame)."""
+        theta = dr.acos(dr.minimum(w.z, 1.0))
+        r, t = (self.sets[1], self.sets[3]) if bottom else (self.sets[0], self.sets[2])
+        a, b = self._albedo(r, theta), self._albedo(t, theta)
+        none = (a <= 0) & (b <= 0)
+        return dr.select(none, 1.0 if r is not None else 0.0, a / dr.select(none, 1.0, a + b))
+
+    def _transport(self, wi, radiance):
+        """The factor of a transmitted value: radiance's eta^2 of the
+        interface crossed."""
+        if not radiance:
+            return 1.0
+        inv = 1.0 / (self.eta * self.eta)
+        return dr.select(mi.Frame3f.cos_theta(wi) > 0, inv, self.eta * self.eta)
+
+    def _branch(self, mask, fn, args, zeros):
+        """fn(*args) where mask holds, zeros() elsewhere. In the JIT
+        variants a symbolic conditional (dr.if_stmt), so that a packet of
+        lanes none of which needs the set skips its code; in the scalar
+        variants a plain call (the mask is a bool there)."""
+        if not self.jit:
+            return fn(*args) if mask else zeros()
+        return dr.if_stmt(args, mask, fn, lambda *_: zeros())
+
+    def _set_eval_pdf(self, t, transmit, w, o, mask, want_value, want_pdf):
+        if not transmit:
+            return t.eval_pdf(w, o, mask, want_value, want_pdf)
+        if t.warp_eta > 0.0:
+            return t.refract_eval_pdf(w, o, t.warp_eta, mask, want_value, want_pdf)
+        return t.eval_pdf(w, _flip(o), mask, want_value, want_pdf)
+
+    # ------------------------------------------------------ the three calls
+
+    def eval_pdf(self, wi, wo, active, radiance, reflect_on=True, transmit_on=True,
+                 want_value=True, want_pdf=True):
+        """(f |cos theta_o| as a list of 3 Float, or None; the pdf per solid
+        angle of wo, or None); the lobes not on are zero."""
+        cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+        bottom, top = cos_i < 0, cos_i > 0
+        w = mi.Vector3f(wi.x, wi.y, dr.abs(cos_i))
+        o = mi.Vector3f(wo.x, wo.y, dr.select(bottom, -cos_o, cos_o))
+        transmits, reflects = cos_i * cos_o < 0, cos_i * cos_o > 0
+        active = active & (cos_i != 0) & (cos_o != 0)
+        value = [0.0, 0.0, 0.0] if want_value else None
+        pdf = 0.0 if want_pdf else None
+        shares = {}
+        for (prefix, on_bottom, transmit), t in zip(SETS, self.sets):
+            if t is None or not (transmit_on if transmit else reflect_on):
+                continue
+            mask = active & (bottom if on_bottom else top) & \
+                (transmits if transmit else reflects)
+            if _scalar_false(mask):
+                continue
+
+            def run(w, o, mask, t=t, transmit=transmit):
+                v, p = self._set_eval_pdf(t, transmit, w, o, mask, want_value, want_pdf)
+                return (tuple(v) if want_value else (mi.Float(0.0),) * 3,
+                        p if want_pdf else mi.Float(0.0))
+
+            v, p = self._branch(mask, run, (w, o, mask),
+                                lambda: ((mi.Float(0.0),) * 3, mi.Float(0.0)))
+            if want_value:
+                value = [dr.select(mask, v[c], value[c]) for c in range(3)]
+            if want_pdf:
+                if on_bottom not in shares:
+                    shares[on_bottom] = self._reflect_share(w, on_bottom)
+                share = shares[on_bottom]
+                p = p * (1.0 - share if transmit else share)
+                pdf = dr.select(mask, p, pdf)
+        if want_value:
+            scale = dr.select(transmits, self._transport(wi, radiance), 1.0)
+            value = [dr.select(active, v * scale, 0.0) for v in value]
+            value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
+        if want_pdf:
+            pdf = dr.select(active, pdf, 0.0)
+        return value, pdf
+
+    def sample(self, wi, sample2, active, radiance, reflect_on=True, transmit_on=True):
+        """(wo, pdf, f |cos theta_o| / pdf as a list of 3 Float, ok, whether
+        wo is transmitted) for the random numbers sample2 (sample2.x picks
+        the lobe and is passed on rescaled, as the C reader's u[0])."""
+        cos_i = mi.Frame3f.cos_theta(wi)
+        bottom, top = cos_i < 0, cos_i > 0
+        active = active & (cos_i != 0)
+        w = mi.Vector3f(wi.x, wi.y, dr.abs(cos_i))
+        share = dr.select(bottom, self._reflect_share(w, True), self._reflect_share(w, False))
+        u0 = sample2.x
+        reflected = u0 < share
+        transmitted = u0 >= share
+        # (A share of 0 or 1 leaves the other branch unpicked: its
+        # division is kept finite for the scalar variants.)
+        v0 = dr.select(transmitted, (u0 - share) / dr.select(share < 1.0, 1.0 - share, 1.0),
+                       u0 / dr.select(share > 0.0, share, 1.0))
+        v = mi.Point2f(dr.clip(v0, 0.0, 1.0), sample2.y)
+        wo = mi.Vector3f(0.0, 0.0, 1.0)
+        pdf, value, ok = 0.0, [0.0, 0.0, 0.0], active & False
+        for (prefix, on_bottom, transmit), t in zip(SETS, self.sets):
+            if t is None or not (transmit_on if transmit else reflect_on):
+                continue
+            mask = active & (bottom if on_bottom else top) & \
+                (transmitted if transmit else reflected)
+            if _scalar_false(mask):
+                continue
+
+            def run(w, v, mask, t=t, transmit=transmit):
+                if not transmit:
+                    o, p, val, found = t.reflect_sample(w, v, mask)
+                elif t.warp_eta > 0.0:
+                    o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)
+                else:
+                    o, p, val, found = t.reflect_sample(w, v, mask)
+                    o = _flip(o)
+                return mi.Vector3f(o), mi.Float(p), tuple(val), mi.Bool(found)
+
+            o, p, val, found = self._branch(
+                mask, run, (w, v, mask),
+                lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), (mi.Float(0.0),) * 3,
+                         mi.Bool(False)))
+            wo = dr.select(mask, o, wo)
+            pdf = dr.select(mask, p, pdf)
+            value = [dr.select(mask, val[c], value[c]) for c in range(3)]
+            ok = dr.select(mask, found, ok)
+        pdf = pdf * dr.select(transmitted, 1.0 - share, share)
+        wo = dr.select(bottom, _flip(wo), wo)
+        ok = ok & (pdf > 0)
+        scale = dr.select(transmitted, self._transport(wi, radiance), 1.0)
+        weight = [v * scale / dr.select(ok, pdf, 1.0) for v in value]
+        weight = [dr.select(ok & dr.isfinite(x) & (x > 0), x, 0.0) for x in weight]
+        return wo, dr.select(ok, pdf, 0.0), weight, ok, transmitted

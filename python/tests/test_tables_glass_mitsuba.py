@@ -1,0 +1,399 @@
+"""Transmissive table files (a set of tables per lobe and side, docs/formats.md "Extended
+table files") in the Mitsuba plugin's "tables" mode (layerlab.mitsuba_lobes,
+mitsuba_lobes_stacked) against the C reader (ll_bsdf_eval_dir, ll_bsdf_pdf_dir,
+ll_bsdf_sample_dir through layerlab.BSDFStorage) on the same file, and a render of rough glass
+from its tables against Mitsuba's native roughdielectric.
+
+Files: rough glass (eta 1.5, alpha 0.3, compensate=0: the refraction half vector's warp) and
+a frosted pane (the same interface and its inverse, eta 1 overall: the z-flipped direction's
+warp), written by `llbuild --format measured`.
+
+Pairs: 10^4 per file, wi on either side, wo on either side, half of them about the lobe (wi
+reflected or refracted about a normal drawn about the surface's), both with |cos theta| in
+[0.05, 1] (as test_tables_mitsuba.py: nearer the horizon the elevation of a float32 direction
+moves the warps' look-up by more than 1e-4); as float32, the precision Mitsuba hands the
+plugin. Values (f |cos theta_o|, radiance transport: a transmitted value takes eta^2 as the C
+reader gives it) and pdfs within 1e-4 relative where f |cos theta_o| is above 1e-3 of its
+largest (1e-3 within POLE of the warp's pole, below); the sampled direction for the same two
+random numbers within 1e-3 (the plugin's warps work in float32, the C reader's in double), its
+pdf and weight within 1e-4 of the C reader's pdf and f |cos| / pdf at that direction where
+above 1e-3 of their largest (against the C sampler's own pdf, at its own slightly different
+direction, the refraction's change of variables amplifies the direction's difference: that
+figure is printed, not checked), and Mitsuba's bookkeeping of the sample (transmission or
+reflection, the relative index crossed).
+"""
+
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+mi = pytest.importorskip("mitsuba")
+
+ETA = 1.5
+GLASS = "dielectric eta=1.5 alpha=0.3 compensate=0\n"
+PANE = "set nodes=60 orders=60\ndielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n"
+
+
+def _llbuild(text, out, *grid):
+    """`llbuild --format measured` of the material text (grid: --theta-i N --vndf N --sample N
+    or nothing: the tolerance's choice), the llbuild of the library under test."""
+    lib = pathlib.Path(os.environ["LAYERLAB_LIBRARY"]).resolve()
+    tool = lib.parent.parent / "bin" / "llbuild"
+    if not tool.exists():
+        pytest.skip("%s not built" % tool)
+    src = out.with_suffix(".layers")
+    src.write_text(text)
+    subprocess.run([str(tool), "--format", "measured", *grid, str(src), "-o", str(out)],
+                   check=True, capture_output=True)
+    return str(out)
+
+
+@pytest.fixture(scope="module")
+def tables(tmp_path_factory):
+    d = tmp_path_factory.mktemp("glass-tables")
+    grid = ("--theta-i", "24", "--vndf", "48", "--sample", "32")
+    return {"glass": _llbuild(GLASS, d / "glass.tab", *grid),
+            "pane": _llbuild(PANE, d / "pane.tab", *grid)}
+
+
+def _plugin(variant, path, **props):
+    try:
+        mi.set_variant(variant)
+    except Exception as error:  # pragma: no cover - depends on the Mitsuba build
+        pytest.skip("%s: %s" % (variant, error))
+    import layerlab.mitsuba as llmi
+    llmi.register()
+    return mi.load_dict(dict({"type": "layerlab", "filename": path}, **props))
+
+
+def _unit_cos(rng, n):
+    """n unit vectors with cos theta uniform in [0.05, 1], on a random side."""
+    c = rng.uniform(0.05, 1.0, n)
+    phi = rng.uniform(0, 2 * np.pi, n)
+    s = np.sqrt(1 - c * c)
+    side = np.where(rng.uniform(size=n) < 0.5, 1.0, -1.0)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), c * side], axis=1)
+
+
+def _pairs(rng, n, eta):
+    """n (wi, wo) pairs as float32 values in float64: half uniform, half about the lobe
+    (reflected or, for eta != 1, refracted about a normal drawn about the surface's;
+    for eta 1 the straight-through direction about it)."""
+    wi, wo = [], []
+    while len(wi) < n:
+        a = _unit_cos(rng, 1)[0]
+        if len(wi) % 2:
+            m = np.array([rng.normal(0, 0.3), rng.normal(0, 0.3), 1.0])
+            m /= np.linalg.norm(m)
+            m = m if a[2] > 0 else -m
+            c = np.dot(a, m)
+            if rng.uniform() < 0.5:
+                b = 2 * c * m - a
+            elif eta == 1.0:
+                # a pane's transmitted peak: the mirror direction, z flipped
+                b = (2 * c * m - a) * np.array([1.0, 1.0, -1.0])
+            else:
+                e = ETA if a[2] > 0 else 1.0 / ETA
+                k = 1 - (1 - c * c) / (e * e)
+                if k <= 0:
+                    continue
+                b = (c / e - np.sqrt(k)) * m - a / e
+        else:
+            b = _unit_cos(rng, 1)[0]
+        if not 0.05 <= abs(b[2]) <= 1.0:
+            continue
+        b /= np.linalg.norm(b)
+        wi.append(a.astype(np.float32).astype(np.float64))
+        wo.append(b.astype(np.float32).astype(np.float64))
+    return np.array(wi), np.array(wo)
+
+
+def _warp_elevation(wi, wo, eta):
+    """The elevation of the half vector the file's warp reads for each pair (in wi's side's
+    frame: reflection's, the refraction's for eta != 1, the z-flipped direction's for
+    eta 1)."""
+    flip = np.where(wi[:, 2:3] < 0, np.array([1.0, 1.0, -1.0]), 1.0)
+    w, o = wi * flip, wo * flip
+    transmitted = o[:, 2] < 0
+    if eta == 1.0:
+        h = w + o * np.where(transmitted[:, None], np.array([1.0, 1.0, -1.0]), 1.0)
+    else:
+        e = np.where(wi[:, 2] > 0, eta, 1.0 / eta)[:, None]
+        h = np.where(transmitted[:, None], -(w + e * o), w + o)
+    h = h / np.linalg.norm(h, axis=1)[:, None]
+    return np.arccos(np.clip(np.abs(h[:, 2]), -1.0, 1.0))
+
+
+# Within this of the warp's pole (theta_m, radians) the format's u_theta = sqrt(theta_m)
+# parametrisation is singular and a float32 look-up moves by more than 1e-4 (worst measured:
+# 7.3e-4 at theta_m = 1.9e-4, a pane's pair 0.011 degrees from its transmitted peak); such
+# pairs are checked to 1e-3.
+POLE = 1e-3
+
+
+def _close_where_strong(ours, theirs, strong, rtol, what):
+    err = np.abs(ours[strong] - theirs[strong]) / theirs[strong]
+    worst = float(err.max()) if err.size else 0.0
+    assert worst <= rtol, (what, worst)
+    return worst
+
+
+@pytest.mark.parametrize("name", ["glass", "pane"])
+def test_tables_are_the_c_reader_llvm(tables, name, timings):
+    """eval, pdf and sample of the plugin's "tables" mode (llvm_ad_rgb, 10^4 pairs) against the
+    C reader on the same transmissive table file, radiance transport."""
+    import layerlab as ll
+    path = tables[name]
+    bsdf = _plugin("llvm_ad_rgb", path)
+    assert "mode=tables" in str(bsdf) and "stacked" in str(bsdf), str(bsdf)
+    assert bsdf.flags() & mi.BSDFFlags.GlossyTransmission
+    assert bsdf.flags() & mi.BSDFFlags.BackSide
+    c = ll.BSDFStorage(path)
+    rng = np.random.default_rng(17 if name == "glass" else 19)
+    n = 10000
+    wi, wo = _pairs(rng, n, ETA if name == "glass" else 1.0)
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f(wi.T)
+    si.n = mi.Normal3f(0, 0, 1)
+    si.sh_frame = mi.Frame3f(si.n)
+    ctx = mi.BSDFContext()
+    value, pdf = bsdf.eval_pdf(ctx, si, mi.Vector3f(wo.T))
+    value = np.array(value).reshape(3, -1).T
+    pdf = np.array(pdf)
+    only_value = np.array(bsdf.eval(ctx, si, mi.Vector3f(wo.T))).reshape(3, -1).T
+    only_pdf = np.array(bsdf.pdf(ctx, si, mi.Vector3f(wo.T)))
+    want = np.array([c.evalDir(a, b) * abs(b[2]) for a, b in zip(wi, wo)])
+    want_pdf = np.array([c.pdfDir(a, b) for a, b in zip(wi, wo)])
+    strong = want[:, 1] > 1e-3 * want[:, 1].max()
+    transmitted = wi[:, 2] * wo[:, 2] < 0
+    # both sides, both lobes, enough of each
+    for side in (wi[:, 2] > 0, wi[:, 2] < 0):
+        for lobe in (transmitted, ~transmitted):
+            assert np.count_nonzero(strong & side & lobe) > 200
+    pole = _warp_elevation(wi, wo, ETA if name == "glass" else 1.0) < POLE
+    worst_value = max(_close_where_strong(value[:, k], want[:, k], strong & ~pole, 1e-4,
+                                          "eval") for k in range(3))
+    worst_pdf = _close_where_strong(pdf, want_pdf, strong & ~pole, 1e-4, "pdf")
+    near_pole = max([_close_where_strong(value[:, k], want[:, k], strong & pole, 1e-3,
+                                         "eval at the pole") for k in range(3)] +
+                    [_close_where_strong(pdf, want_pdf, strong & pole, 1e-3, "pdf at the pole")])
+    timings["glass tables (%s) vs C reader: pairs within %g rad of the warp's pole"
+            % (name, POLE)] = (float(np.count_nonzero(strong & pole)), "")
+    timings["glass tables (%s) vs C reader: worst there" % name] = (near_pole * 1e6, "x 1e-6")
+    np.testing.assert_array_equal(only_value, value)
+    np.testing.assert_array_equal(only_pdf, pdf)
+    # zero where the C reader has nothing (within float32 rounding of the tail)
+    weak = ~strong
+    assert np.all(value[weak] <= 1e-3 * want[:, 1].max() * 1.01)
+
+    u = rng.uniform(size=(n, 2))
+    bs, weight = bsdf.sample(ctx, si, mi.Float(0.5), mi.Point2f(u.T))
+    swo = np.array(bs.wo).reshape(3, -1).T
+    spdf = np.array(bs.pdf)
+    sw = np.array(weight).reshape(3, -1).T
+    seta = np.array(bs.eta)
+    stype = np.array(bs.sampled_type)
+    res = [c.sampleDir(a, b) for a, b in zip(wi, u)]
+    cf = np.array([r[0] for r in res])
+    cwo = np.array([r[1] for r in res])
+    cpdf = np.array([r[2] for r in res])
+    found = cpdf > 0
+    assert np.count_nonzero(found) > 0.9 * n
+    assert np.array_equal(found, spdf > 0)
+    dist = np.linalg.norm(swo[found] - cwo[found], axis=1)
+    assert dist.max() < 1e-3, dist.max()
+    # The pdf and weight of our sample: the C reader's pdf and f |cos| / pdf at our sampled
+    # direction (the same direction: the C sampler's own differs by the float32 warps' rounding
+    # of the direction, which the refraction's change of variables amplifies in the pdf).
+    ours_wo = swo[found].astype(np.float32).astype(np.float64)
+    ours_wi = wi[found]
+    at_pdf = np.array([c.pdfDir(a, b) for a, b in zip(ours_wi, ours_wo)])
+    at_f = np.array([c.evalDir(a, b) * abs(b[2]) for a, b in zip(ours_wi, ours_wo)])
+    strong_pdf = at_pdf > 1e-3 * at_pdf.max()
+    worst_spdf = _close_where_strong(spdf[found], at_pdf, strong_pdf, 1e-4, "sample pdf")
+    at_w = at_f[:, 1] / np.where(at_pdf > 0, at_pdf, 1.0)
+    strong_w = strong_pdf & (at_f[:, 1] > 1e-3 * at_f[:, 1].max())
+    worst_w = _close_where_strong(sw[found, 1], at_w, strong_w, 1e-4, "sample weight")
+    # and against the C sampler's own pdf for the same random numbers
+    direct = np.abs(spdf[found] - cpdf[found]) / cpdf[found]
+    direct_strong = cpdf[found] > 1e-3 * cpdf[found].max()
+    timings["glass tables (%s): sample pdf vs the C sampler's, worst where above 1e-3 of the "
+            "largest" % name] = (float(direct[direct_strong].max()) * 1e6, "x 1e-6")
+    crossed = found & (wi[:, 2] * cwo[:, 2] < 0)
+    assert np.any(crossed) and np.any(found & ~crossed)
+    glossy_t = int(mi.BSDFFlags.GlossyTransmission)
+    glossy_r = int(mi.BSDFFlags.GlossyReflection)
+    assert np.all(stype[crossed] == glossy_t) and np.all(stype[found & ~crossed] == glossy_r)
+    eta = ETA if name == "glass" else 1.0
+    want_eta = np.where(wi[:, 2] > 0, eta, 1.0 / eta)
+    np.testing.assert_allclose(seta[crossed], want_eta[crossed], rtol=1e-6)
+    assert np.all(seta[found & ~crossed] == 1.0)
+    timings["glass tables (%s) vs C reader: worst eval, pdf, sample pdf, weight" % name] = (
+        max(worst_value, worst_pdf, worst_spdf, worst_w) * 1e6, "x 1e-6")
+    timings["glass tables (%s) vs C reader: worst sampled direction" % name] = (
+        float(dist.max()) * 1e6, "x 1e-6")
+
+
+@pytest.mark.parametrize("name", ["glass", "pane"])
+def test_tables_are_the_c_reader_scalar(tables, name):
+    """The same in scalar_rgb (500 pairs), and importance transport (no eta^2)."""
+    import layerlab as ll
+    path = tables[name]
+    bsdf = _plugin("scalar_rgb", path)
+    assert "mode=tables" in str(bsdf)
+    c = ll.BSDFStorage(path)
+    rng = np.random.default_rng(23)
+    wi, wo = _pairs(rng, 500, ETA if name == "glass" else 1.0)
+    rows = []
+    for mode, ctx in (("radiance", mi.BSDFContext()),
+                      ("importance", mi.BSDFContext(mi.TransportMode.Importance))):
+        for a, b in zip(wi, wo):
+            si = mi.SurfaceInteraction3f()
+            si.wi = mi.Vector3f(*a)
+            si.n = mi.Normal3f(0, 0, 1)
+            si.sh_frame = mi.Frame3f(si.n)
+            v = bsdf.eval(ctx, si, mi.Vector3f(*b))
+            rows.append((mode, np.array([v[0], v[1], v[2]]), bsdf.pdf(ctx, si, mi.Vector3f(*b)),
+                         c.evalDir(a, b, mode) * abs(b[2]), c.pdfDir(a, b)))
+    top = max(r[3][1] for r in rows)
+    kept = [r for r in rows if r[3][1] > 1e-3 * top]
+    assert len(kept) > 200
+    for mode, v, p, want, want_pdf in kept:
+        assert np.all(np.abs(v - want) <= 1e-4 * want), (mode, v, want)
+        assert abs(p - want_pdf) <= 1e-4 * want_pdf, (mode, p, want_pdf)
+    # radiance is importance times the eta^2 of the interface crossed: 1 / eta^2 from above
+    if name == "glass":
+        half = len(wi)
+        crossed = 0
+        for k in range(half):
+            rad, imp = rows[k][1][1], rows[half + k][1][1]
+            if wi[k][2] * wo[k][2] < 0 and imp > 1e-3 * top:
+                want = 1.0 / ETA ** 2 if wi[k][2] > 0 else ETA ** 2
+                assert abs(rad / imp - want) <= 1e-5 * want, (rad, imp, want)
+                crossed += 1
+        assert crossed > 50
+
+
+def test_transmissive_bsdf_renders_from_tables_made_on_load(tmp_path):
+    """A transmissive .bsdf opened in the plugin renders from tables by default: made on load
+    by ll_tables_write_from_bsdf (an extended file, a set per lobe and side), kept in the cache
+    and read from there by the next load; its values are the C reader's on that file."""
+    import layerlab as ll
+    source = tmp_path / "glass.bsdf"
+    ll.Material.parse("set nodes=40 orders=40\n" + GLASS).build(str(source))
+    first = _plugin("scalar_rgb", str(source))
+    text = str(first)
+    assert "mode=tables" in text and "made and cached in" in text, text
+    assert first.flags() & mi.BSDFFlags.GlossyTransmission
+    cached = text.split("cached in ")[1].split(")")[0]
+    assert "(cached in %s)" % cached in str(_plugin("scalar_rgb", str(source)))
+    c = ll.BSDFStorage(cached)
+    assert c.format == "tables"
+    rng = np.random.default_rng(31)
+    wi, wo = _pairs(rng, 200, ETA)
+    ctx = mi.BSDFContext()
+    got, want = [], []
+    for a, b in zip(wi, wo):
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*a)
+        si.n = mi.Normal3f(0, 0, 1)
+        si.sh_frame = mi.Frame3f(si.n)
+        v = first.eval(ctx, si, mi.Vector3f(*b))
+        got.append([v[0], v[1], v[2]])
+        want.append(c.evalDir(a, b) * abs(b[2]))
+    got, want = np.array(got), np.array(want)
+    np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-3 * want.max())
+    assert np.count_nonzero(want[:, 1] > 1e-3 * want[:, 1].max()) > 50
+
+
+def test_glass_tables_render_as_roughdielectric(tmp_path, timings):
+    """Rough glass from its tables (`llbuild --format measured`, the grid the tolerance
+    chooses) in the default "tables" mode against Mitsuba's native roughdielectric (Beckmann,
+    the material's own distribution), 64^2, llvm_ad_rgb, default symbolic mode: within the
+    noise of two renders of different seeds (mitsuba_scenes.check_within_noise)."""
+    import drjit as dr
+    import mitsuba_scenes as S
+    path = _llbuild(GLASS, tmp_path / "glass-default.tab")
+    _plugin("llvm_ad_rgb", path)
+    # (a batch-mode test before may have left the symbolic modes off)
+    dr.set_flag(dr.JitFlag.SymbolicLoops, True)
+    dr.set_flag(dr.JitFlag.SymbolicCalls, True)
+    spp = 64
+    ours = S.scene(mi, {"type": "layerlab", "filename": path}, 64, spp)
+    assert "mode=tables" in str(ours.shapes()[0].bsdf())
+    native = S.scene(mi, S.native_bsdf("dielectric"), 64, spp)
+    a = [S.render(mi, ours, spp, s) for s in (1, 2)]
+    b = [S.render(mi, native, spp, s) for s in (3, 4)]
+    d, noise, excess, limit = S.check_within_noise(b[0], a[0], b[1], a[1])
+    timings["glass tables vs roughdielectric 64^2 %d spp: relative RMSE" % spp] = (d, "")
+    timings["glass tables vs roughdielectric: squared-bias estimate / limit"] = (
+        excess / limit, "")
+    assert excess < limit, ("glass tables vs roughdielectric: relative RMSE %.4f vs %.4f from "
+                            "noise" % (d, noise))
+    assert abs(np.mean(a[0]) / np.mean(b[0]) - 1) < 0.03
+
+
+@pytest.mark.parametrize("name", ["glass", "pane"])
+def test_set_by_set_lobes_are_the_c_reader(tables, name):
+    """The set-by-set evaluation (layerlab.mitsuba_lobes.TracedLobes, which the plugin uses
+    for files whose sets' grids differ, so cannot be stacked) on the same files, llvm_ad_rgb,
+    2000 pairs: as the stacked one, the C reader's values and pdfs within 1e-4 and sampled
+    directions within 1e-3."""
+    import layerlab as ll
+    _plugin("llvm_ad_rgb", tables[name])
+    from layerlab.mitsuba_lobes import TracedLobes
+    from layerlab.tensor_file import read_tensor_file
+    path = tables[name]
+    lobes = TracedLobes(read_tensor_file(path), path)
+    c = ll.BSDFStorage(path)
+    rng = np.random.default_rng(37)
+    wi, wo = _pairs(rng, 2000, ETA if name == "glass" else 1.0)
+    value, pdf = lobes.eval_pdf(mi.Vector3f(wi.T), mi.Vector3f(wo.T), mi.Bool(True), True)
+    value = np.array([np.array(v) for v in value]).T
+    pdf = np.array(pdf)
+    want = np.array([c.evalDir(a, b) * abs(b[2]) for a, b in zip(wi, wo)])
+    want_pdf = np.array([c.pdfDir(a, b) for a, b in zip(wi, wo)])
+    strong = (want[:, 1] > 1e-3 * want[:, 1].max()) & \
+        (_warp_elevation(wi, wo, ETA if name == "glass" else 1.0) >= POLE)
+    assert np.count_nonzero(strong) > 300
+    for k in range(3):
+        _close_where_strong(value[:, k], want[:, k], strong, 1e-4, "eval")
+    _close_where_strong(pdf, want_pdf, strong, 1e-4, "pdf")
+    u = rng.uniform(size=(2000, 2))
+    swo, spdf, _, ok, _ = lobes.sample(mi.Vector3f(wi.T), mi.Point2f(u.T), mi.Bool(True), True)
+    swo = np.array(swo).reshape(3, -1).T
+    spdf = np.array(spdf)
+    res = [c.sampleDir(a, b) for a, b in zip(wi, u)]
+    cwo = np.array([r[1] for r in res])
+    cpdf = np.array([r[2] for r in res])
+    found = cpdf > 0
+    assert np.count_nonzero(found) > 1800
+    assert np.array_equal(found, spdf > 0)
+    assert np.linalg.norm(swo[found] - cwo[found], axis=1).max() < 1e-3
+
+
+def test_transmissive_bsdf_without_tables_stays_on_the_fourier_path(tmp_path, monkeypatch):
+    """Where the loaded library cannot write a transmissive .bsdf's tables (an older one, or a
+    material its writer refuses), the default is the Fourier path with the reason in
+    str(bsdf); asked for "tables", the load fails with that reason."""
+    import layerlab as ll
+    source = tmp_path / "glass.bsdf"
+    ll.Material.parse("set nodes=40 orders=40\n" + GLASS).build(str(source))
+    _plugin("scalar_rgb", str(source), mode="batch")
+    import layerlab.mitsuba as llmi
+    from layerlab import _native
+
+    def refuse(*args, **kwargs):
+        raise _native.UnsupportedError("ll_tables_write_from_bsdf: not in this library", 6)
+
+    monkeypatch.setattr(llmi, "tables_from_bsdf", refuse)
+    bsdf = _plugin("scalar_rgb", str(source))
+    text = str(bsdf)
+    assert "mode=batch" in text and "no tables: ll_tables_write_from_bsdf" in text, text
+    assert bsdf.flags() & mi.BSDFFlags.GlossyTransmission
+    with pytest.raises(Exception, match="not in this library"):
+        _plugin("scalar_rgb", str(source), mode="tables")
+    assert "mode=traced" in str(_plugin("llvm_ad_rgb", str(source)))
