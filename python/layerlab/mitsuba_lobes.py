@@ -33,7 +33,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables
+from .mitsuba_tables import TracedTables, _fresnel_at, _fresnel_eta
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -107,6 +107,7 @@ class TracedLobes:
             if transmit:
                 t.warp_eta = float(np.asarray(fields[prefix + "warp_eta"],
                                               dtype=np.float32).ravel()[0])
+            t.fresnel_eta = _fresnel_eta(fields, prefix, transmit, name)
             self.sets.append(t)
         self.grid_text = "; ".join("%s %s" % (p[:-1], t.describe())
                                    for (p, _, _), t in zip(SETS, self.sets) if t is not None)
@@ -158,7 +159,11 @@ class TracedLobes:
 
     def _set_eval_pdf(self, t, transmit, w, o, mask, want_value, want_pdf):
         if not transmit:
-            return t.eval_pdf(w, o, mask, want_value, want_pdf)
+            v, p = t.eval_pdf(w, o, mask, want_value, want_pdf)
+            if want_value and t.fresnel_eta > 0.0:
+                k = _fresnel_at(w, dr.normalize(w + o), t.fresnel_eta)
+                v = [x * k for x in v]
+            return v, p
         if t.warp_eta > 0.0:
             return t.refract_eval_pdf(w, o, t.warp_eta, mask, want_value, want_pdf)
         return t.eval_pdf(w, _flip(o), mask, want_value, want_pdf)
@@ -239,6 +244,9 @@ class TracedLobes:
             def run(w, v, mask, t=t, transmit=transmit):
                 if not transmit:
                     o, p, val, found = t.reflect_sample(w, v, mask)
+                    if t.fresnel_eta > 0.0:
+                        k = _fresnel_at(w, dr.normalize(w + o), t.fresnel_eta)
+                        val = [x * k for x in val]
                 elif t.warp_eta > 0.0:
                     o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)
                 else:

@@ -20,8 +20,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _refraction_half, \
-    _refraction_jacobian
+from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _fresnel_at, \
+    _fresnel_eta, _refraction_half, _refraction_jacobian
 from .tensor_file import TensorFileError
 
 # The stacked sets' order, by their index in SETS: reflect_bottom,
@@ -64,6 +64,10 @@ class StackedLobes:
         # 0 the z-flipped direction's.
         self.warp_eta = [float(np.asarray(fields[p + "warp_eta"], dtype=np.float32).ravel()[0])
                          for p, _, transmit in sets if transmit]
+        # The reflected sets' fresnel_eta (top, bottom): > 0 their values are
+        # stored over the Fresnel reflectance of the half vector.
+        self.fresnel_eta = [_fresnel_eta(fields, p, transmit, name)
+                            for p, _, transmit in sets if not transmit]
         self.grid_text = "4 sets of %d x %dx%d x %dx%d, stacked" % (
             n_ti, stacked["vndf"].shape[2], stacked["vndf"].shape[3], stacked["rgb"].shape[3],
             stacked["rgb"].shape[4])
@@ -127,6 +131,16 @@ class StackedLobes:
         e = dr.select(bottom, bottom_e, top_e)
         return e, e > 0
 
+    def _fresnel(self, w, m, bottom, reflected):
+        """The factor of a reflected lane's value: the Fresnel reflectance
+        at m where its side's set is stored over it, else 1."""
+        top_e, bottom_e = self.fresnel_eta
+        if top_e <= 0.0 and bottom_e <= 0.0:
+            return 1.0
+        e = dr.select(bottom, bottom_e, top_e)
+        stored = reflected & (e > 0)
+        return dr.select(stored, _fresnel_at(w, m, dr.select(e > 0, e, 1.5)), 1.0)
+
     # ------------------------------------------------------ the three calls
 
     def eval_pdf(self, wi, wo, active, radiance, reflect_on=True, transmit_on=True,
@@ -154,7 +168,9 @@ class StackedLobes:
         value, density = self.table._at_normal(w, m, active, want_value, want_pdf, stack)
         pdf = None
         if want_value:
-            scale = dr.select(transmits, self._transport(wi, radiance), 1.0)
+            scale = dr.select(transmits, self._transport(wi, radiance),
+                              self._fresnel(w, m, bottom, ~transmits if self.jit
+                                            else not transmits))
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
             value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
         if want_pdf:
@@ -203,7 +219,9 @@ class StackedLobes:
         pdf = pdf * dr.select(transmitted, 1.0 - share, share)
         ok = ok & (pdf > 0)
         wo = dr.select(bottom, _flip(wo), wo)
-        scale = dr.select(transmitted, self._transport(wi, radiance), 1.0)
+        scale = dr.select(transmitted, self._transport(wi, radiance),
+                          self._fresnel(w, m, bottom, ~transmitted if self.jit
+                                        else not transmitted))
         weight = [dr.maximum(x, 0.0) * scale / dr.select(ok, pdf, 1.0) for x in value]
         weight = [dr.select(ok & dr.isfinite(x) & (x > 0), x, 0.0) for x in weight]
         return (dr.select(ok, wo, mi.Vector3f(0.0, 0.0, 1.0)), dr.select(ok, pdf, 0.0), weight,

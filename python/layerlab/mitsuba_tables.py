@@ -176,6 +176,44 @@ def _refraction_jacobian(wi, wo, m, eta):
     return dr.select(nonzero, eta * eta * dr.abs(om) / dr.select(nonzero, d * d, 1.0), 0.0)
 
 
+def _fresnel(c, eta):
+    """The unpolarised Fresnel reflectance of a smooth interface for light
+    at cosine c (> 0) to its normal on the side of index 1, the far side of
+    relative index eta; 1 under total internal reflection (as the C
+    reader's ll_tables_fresnel)."""
+    s2 = (1.0 - c * c) / (eta * eta)
+    refracts = s2 < 1.0
+    # (Under total internal reflection the quotients are not formed: both
+    # denominators may vanish there, which the scalar variants raise on.)
+    ct = dr.select(refracts, dr.safe_sqrt(1.0 - s2), 1.0)
+    c = dr.select(refracts, c, 1.0)
+    rs = (c - eta * ct) / (c + eta * ct)
+    rp = (eta * c - ct) / (eta * c + ct)
+    return dr.select(refracts, 0.5 * (rs * rs + rp * rp), 1.0)
+
+
+def _fresnel_at(wi, m, eta):
+    """That reflectance at the normal m of a reflection of wi (the factor a
+    reflected set stored over it, field "fresnel_eta", is multiplied by);
+    1 where wi does not face m."""
+    c = dr.minimum(dr.dot(wi, m), 1.0)
+    return dr.select(c > 0, _fresnel(dr.maximum(c, 0.0), eta), 1.0)
+
+
+def _fresnel_eta(fields, prefix, transmit, name):
+    """A reflected set's "fresnel_eta" (> 0: its values are stored over the
+    Fresnel reflectance of their half vector at that relative index, which
+    eval and sample multiply back), or 0 where the set has none."""
+    key = prefix + "fresnel_eta"
+    if transmit or key not in fields:
+        return 0.0
+    value = np.asarray(fields[key], dtype=np.float32).ravel()
+    if value.shape != (1,) or not (0.001 <= float(value[0]) <= 1000.0) or value[0] == 1.0:
+        raise TensorFileError("%s: field `%s` is not one relative index in [0.001, 1000] "
+                              "other than 1" % (name, key))
+    return float(value[0])
+
+
 class TracedTables:
     """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
     current variant, and eval / pdf / sample in Mitsuba's convention."""
