@@ -31,12 +31,13 @@ typedef struct bounds {
  * 0.035%, 95th 0.48%, 99th 3.13% (by lobe: reflection above 1.6%,
  * transmission from above 2.3%, reflection below 4.0%, transmission from
  * below 10.8%); pane R 1.37% (at 85 degrees), T 0.31%, median 0.090%,
- * 95th 0.78%, 99th 2.79% (reflection 3.2%, transmission 2.2%); coat over
- * a medium R 1.33% (at 85 degrees from above), T 1.05%, median 0.11%, 95th
- * 2.5%, 99th 13.7% (reflection from below 19%, the rest 3.0..3.9%). */
+ * 95th 0.81%, 99th 2.91% (reflection 3.5%, transmission 2.1%); coat over
+ * a medium R 2.43% (from below at 30 degrees, where the coat's compensation
+ * returns its lost light as reflection), T 1.05%, median 0.11%, 95th 2.7%,
+ * 99th 14.2% (reflection from below 20%, the rest 3.0..4.5%). */
 #define BOUND_GLASS 0.003, 0.03, 0.001, 0.007, 0.045
 #define BOUND_PANE 0.016, 0.004, 0.002, 0.01, 0.035
-#define BOUND_COAT 0.016, 0.013, 0.002, 0.03, 0.16
+#define BOUND_COAT 0.03, 0.013, 0.002, 0.03, 0.16
 
 /* text's tables by the sizes of o (NULL: chosen by the tolerance). */
 static void check(const char *text, const char *name, const ll_tables_options *o,
