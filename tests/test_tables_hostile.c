@@ -12,8 +12,8 @@
 #include "test_bsdf_util.h"
 #include "support/support.h"
 
-static unsigned char *good, *tgood;
-static size_t good_size, tgood_size;
+static unsigned char *good, *tgood, *rgood;
+static size_t good_size, tgood_size, rgood_size;
 /* A textured table file (seven bases of one parameter, coat alpha 0.1 to
  * 0.22 over a conductor: more fields than an opaque file's writer ever
  * wrote), as tiny. */
@@ -62,17 +62,22 @@ static int setup(void **state)
     /* A transmissive table: a small rough glass. */
     tgood = table_of("set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n", "glass", &o,
                      &tgood_size);
+    /* One whose transmitted set from above is warped about the refraction
+     * half vector and stored over its transmittance. */
+    rgood = table_of("set nodes=24 orders=16\ndielectric eta=1.5 alpha=0.3 compensate=0\n",
+                     "refracted", &o, &rgood_size);
     tex = table_of("set nodes=12 orders=6\n"
                    "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 0.22]\n"
                    "conductor eta=2+3i alpha=0.2\n",
                    "textured", &o, &tex_size);
-    return good && tgood && tex ? 0 : 1;
+    return good && tgood && rgood && tex ? 0 : 1;
 }
 
 static int teardown(void **state)
 {
     free(good);
     free(tgood);
+    free(rgood);
     free(tex);
     return ll_test_dir_teardown(state);
 }
@@ -495,6 +500,25 @@ static void test_transmissive_fields(void **state)
     assert_int_equal(ll_bsdf_open_memory(d, tgood_size, NULL, &b), LL_OK);
     ll_bsdf_release(b);
     free(d);
+    /* A refracted set's transmittance index other than its warp_eta (1,
+     * where the warp is 1.5's) or not a number; without the field the
+     * file opens, its values then f's own. */
+    assert_int_equal(ll_bsdf_open_memory(rgood, rgood_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    d = copy_of(rgood, rgood_size);
+    memcpy(d + data_at(d, "transmit_top.transmittance_eta"), one_bytes, 4);
+    expect(d, rgood_size, LL_ERROR_FORMAT, "\"transmit_top.transmittance_eta\"");
+    free(d);
+    d = copy_of(rgood, rgood_size);
+    memcpy(d + data_at(d, "transmit_top.transmittance_eta"), nan_bytes, 4);
+    expect(d, rgood_size, LL_ERROR_FORMAT, "\"transmit_top.transmittance_eta\"");
+    free(d);
+    d = copy_of(rgood, rgood_size);
+    locate(d, "transmit_top.transmittance_eta", &off, &shape, &rank);
+    d[off - 4] = 'x';
+    assert_int_equal(ll_bsdf_open_memory(d, rgood_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    free(d);
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
     expect_extent(tgood, tgood_size, "reflect_bottom.rgb", 2, 2);
     expect_extent(tgood, tgood_size, "transmit_top.albedo", 0, 2);
@@ -505,10 +529,15 @@ static void test_transmissive_fields(void **state)
 static void test_transmissive_damage(void **state)
 {
     static const double wo[3] = { 0.3, 0.1, -0.9 };
+    static const double wo_top[3] = { 0.3, 0.1, 0.9 };
     (void)state;
     printf("%d of 2000 damaged transmissive copies opened\n",
            damage(tgood, tgood_size, 78, 2000, wo, NULL, 0));
     open_out_of_memory(tgood, tgood_size);
+    /* The refracted set stored over its transmittance, seen from above. */
+    printf("%d of 1000 damaged refracted copies opened\n",
+           damage(rgood, rgood_size, 79, 1000, wo_top, NULL, 0));
+    open_out_of_memory(rgood, rgood_size);
 }
 
 /* The float32 element i of field name in d. */

@@ -12,7 +12,12 @@ the fixed direction wi (si.wi), in that set's own frame, where wi lies
 above: a bottom set sees both directions with z negated. A transmitted
 set with `warp_eta` > 0 is warped about the refraction half vector of
 that relative index; with 0 (a stack of eta 1, a pane) it is a
-reflection set of the z-flipped direction. Sampling picks the reflected
+reflection set of the z-flipped direction. A reflected set with
+`fresnel_eta` holds its values over the Fresnel reflectance of its half
+vector, a refracted set with `transmittance_eta` over the Fresnel
+transmittance times the refraction's d omega_m / d omega_o at its
+refraction half vector (transmittance_at); both are multiplied back.
+Sampling picks the reflected
 or the transmitted lobe of wi's side in proportion to their stored
 luminance albedos (`<set>.albedo`, per incident elevation, interpolated
 linearly) by sample2.x, rescaled into the chosen share; the pdf is the
@@ -33,7 +38,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables, _fresnel_at, _fresnel_eta
+from .mitsuba_tables import TracedTables, _fresnel_at, _fresnel_eta, _refraction_half, \
+    _refraction_jacobian
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -49,6 +55,28 @@ def layout_names(fields):
     text = bytes(np.asarray(fields["layerlab_layout"], dtype=np.uint8)).decode("utf-8",
                                                                                 "replace")
     return [n for n in text.replace(",", " ").split(" ") if n]
+
+
+def transmittance_eta(fields, prefix, warp_eta, name):
+    """A refracted set's "transmittance_eta" (> 0: its values are stored
+    over transmittance_at of that relative index, its warp_eta), or 0 where
+    the set has none (as the C reader's checks)."""
+    key = prefix + "transmittance_eta"
+    if key not in fields:
+        return 0.0
+    value = np.asarray(fields[key], dtype=np.float32).ravel()
+    if value.shape != (1,) or value[0] == 0.0 or float(value[0]) != warp_eta:
+        raise TensorFileError("%s: field `%s` is not one value equal to the set's warp_eta "
+                              "(a refraction's relative index)" % (name, key))
+    return float(value[0])
+
+
+def transmittance_at(wi, wo, m, eta):
+    """The factor a refracted set stored over its refraction's
+    transmittance is multiplied by: 1 - F(wi.m) times d omega_m / d omega_o
+    (wi above, wo below, m their refraction half vector), as the C
+    reader's ll_tables_transmittance_pair."""
+    return (1.0 - _fresnel_at(wi, m, eta)) * _refraction_jacobian(wi, wo, m, eta)
 
 
 def _flip(v):
@@ -108,6 +136,8 @@ class TracedLobes:
                 t.warp_eta = float(np.asarray(fields[prefix + "warp_eta"],
                                               dtype=np.float32).ravel()[0])
             t.fresnel_eta = _fresnel_eta(fields, prefix, transmit, name)
+            t.transmittance_eta = transmittance_eta(fields, prefix, t.warp_eta, name) \
+                if transmit and t.warp_eta > 0.0 else 0.0
             self.sets.append(t)
         self.grid_text = "; ".join("%s %s" % (p[:-1], t.describe())
                                    for (p, _, _), t in zip(SETS, self.sets) if t is not None)
@@ -165,7 +195,12 @@ class TracedLobes:
                 v = [x * k for x in v]
             return v, p
         if t.warp_eta > 0.0:
-            return t.refract_eval_pdf(w, o, t.warp_eta, mask, want_value, want_pdf)
+            v, p = t.refract_eval_pdf(w, o, t.warp_eta, mask, want_value, want_pdf)
+            if want_value and t.transmittance_eta > 0.0:
+                m, _ = _refraction_half(w, o, t.warp_eta)
+                k = transmittance_at(w, o, m, t.warp_eta)
+                v = [x * k for x in v]
+            return v, p
         return t.eval_pdf(w, _flip(o), mask, want_value, want_pdf)
 
     # ------------------------------------------------------ the three calls
@@ -249,6 +284,10 @@ class TracedLobes:
                         val = [x * k for x in val]
                 elif t.warp_eta > 0.0:
                     o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)
+                    if t.transmittance_eta > 0.0:
+                        m, _ = _refraction_half(w, o, t.warp_eta)
+                        k = transmittance_at(w, o, m, t.warp_eta)
+                        val = [x * k for x in val]
                 else:
                     o, p, val, found = t.reflect_sample(w, v, mask)
                     o = _flip(o)

@@ -22,6 +22,7 @@ import mitsuba as mi
 
 from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _fresnel_at, \
     _fresnel_eta, _refraction_half, _refraction_jacobian
+from .mitsuba_lobes import transmittance_at, transmittance_eta
 from .tensor_file import TensorFileError
 
 # The stacked sets' order, by their index in SETS: reflect_bottom,
@@ -64,6 +65,11 @@ class StackedLobes:
         # 0 the z-flipped direction's.
         self.warp_eta = [float(np.asarray(fields[p + "warp_eta"], dtype=np.float32).ravel()[0])
                          for p, _, transmit in sets if transmit]
+        # The refracted sets' transmittance_eta (top, bottom): > 0 their
+        # values are stored over transmittance_at.
+        self.transmittance_eta = [
+            transmittance_eta(fields, p, e, name) if e > 0.0 else 0.0
+            for (p, _, _), e in zip([x for x in sets if x[2]], self.warp_eta)]
         # The reflected sets' fresnel_eta (top, bottom): > 0 their values are
         # stored over the Fresnel reflectance of the half vector.
         self.fresnel_eta = [_fresnel_eta(fields, p, transmit, name)
@@ -141,6 +147,16 @@ class StackedLobes:
         stored = reflected & (e > 0)
         return dr.select(stored, _fresnel_at(w, m, dr.select(e > 0, e, 1.5)), 1.0)
 
+    def _transmittance(self, w, o, m, bottom, refract):
+        """The factor of a refracted lane's value: transmittance_at where
+        its side's set is stored over it, else 1."""
+        top_e, bottom_e = self.transmittance_eta
+        if top_e <= 0.0 and bottom_e <= 0.0:
+            return 1.0
+        e = dr.select(bottom, bottom_e, top_e)
+        stored = refract & (e > 0)
+        return dr.select(stored, transmittance_at(w, o, m, dr.select(e > 0, e, 1.5)), 1.0)
+
     # ------------------------------------------------------ the three calls
 
     def eval_pdf(self, wi, wo, active, radiance, reflect_on=True, transmit_on=True,
@@ -168,7 +184,8 @@ class StackedLobes:
         value, density = self.table._at_normal(w, m, active, want_value, want_pdf, stack)
         pdf = None
         if want_value:
-            scale = dr.select(transmits, self._transport(wi, radiance),
+            scale = dr.select(transmits, self._transport(wi, radiance) *
+                              self._transmittance(w, o, m, bottom, refract),
                               self._fresnel(w, m, bottom, ~transmits if self.jit
                                             else not transmits))
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
@@ -218,8 +235,9 @@ class StackedLobes:
         ok = active & dr.select(refract, ok_t, ok_r) & dr.isfinite(pdf) & (pdf > 0)
         pdf = pdf * dr.select(transmitted, 1.0 - share, share)
         ok = ok & (pdf > 0)
+        trans = self._transmittance(w, wo, m, bottom, refract)
         wo = dr.select(bottom, _flip(wo), wo)
-        scale = dr.select(transmitted, self._transport(wi, radiance),
+        scale = dr.select(transmitted, self._transport(wi, radiance) * trans,
                           self._fresnel(w, m, bottom, ~transmitted if self.jit
                                         else not transmitted))
         weight = [dr.maximum(x, 0.0) * scale / dr.select(ok, pdf, 1.0) for x in value]

@@ -39,10 +39,13 @@ typedef struct ll_measured {
      * direction where the stack has no net interface); for a reflected
      * lobe whose values are stored over the Fresnel reflectance of its
      * half vector (field "fresnel_eta", tables_lobes.c), that relative
-     * index, else 0. */
+     * index, else 0; for a refracted lobe whose values are stored over
+     * its refraction's transmittance (field "transmittance_eta",
+     * tables_refract.h), its refract_eta, else 0. */
     double *weight;
     double refract_eta;
     double fresnel_eta;
+    double transmittance_eta;
 } ll_measured;
 
 /* The lobes of an extended file, by the side of the fixed direction. */

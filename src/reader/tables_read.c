@@ -249,9 +249,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
 {
     char prefix[NAME_CAP];
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
-    char ne[NAME_CAP], nf[NAME_CAP];
+    char ne[NAME_CAP], nf[NAME_CAP], nt[NAME_CAP];
     const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
-    const ll_tensor_field *fresnel = NULL;
+    const ll_tensor_field *fresnel = NULL, *trans = NULL;
     int transmit = strncmp(lobe, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
@@ -263,7 +263,7 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         !join_name(nv, prefix, "vndf") || !join_name(nl, prefix, "luminance") ||
         !join_name(nr, prefix, sh->spectral ? "spectra" : "rgb") ||
         !join_name(na, prefix, "albedo") || !join_name(ne, prefix, "warp_eta") ||
-        !join_name(nf, prefix, "fresnel_eta"))
+        !join_name(nf, prefix, "fresnel_eta") || !join_name(nt, prefix, "transmittance_eta"))
         return name_error(sh->file, prefix, "luminance");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
@@ -273,7 +273,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK) ||
         (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK) ||
         (sh->extended && !transmit && ll_tensor_find(t, nf) &&
-         (s = require(t, nf, 1, file, &fresnel)) != LL_OK))
+         (s = require(t, nf, 1, file, &fresnel)) != LL_OK) ||
+        (sh->extended && transmit && ll_tensor_find(t, nt) &&
+         (s = require(t, nt, 1, file, &trans)) != LL_OK))
         return s;
     /* The refraction warp's relative index, or 0: the z-flipped
      * direction's (tables_lobes.c); 1 would have no refraction half
@@ -288,6 +290,14 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
                     ll_tensor_f32(fresnel, 0) == 0.0f))
         return shape_error(file, nf, "must be one value: a relative index in [0.001, 1000] "
                                      "other than 1");
+    /* A refracted set's values over its refraction's transmittance
+     * (optional: without it the values are f's own); the refraction is
+     * the set's warp, so the index is warp_eta's. */
+    if (trans && (trans->count != 1 || warp->count != 1 ||
+                  ll_tensor_f32(trans, 0) != ll_tensor_f32(warp, 0) ||
+                  ll_tensor_f32(trans, 0) == 0.0f))
+        return shape_error(file, nt, "must be one value: the set's warp_eta, a refraction's "
+                                     "relative index (not 0)");
     if (ndf->shape[0] < 2 || ndf->shape[1] < 2)
         return shape_error(file, nn, "each extent must be >= 2");
     if (sigma->shape[0] < 2 || sigma->shape[1] < 2)
@@ -344,6 +354,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         m->refract_eta = (double)ll_tensor_f32(warp, 0);
     if (fresnel)
         m->fresnel_eta = (double)ll_tensor_f32(fresnel, 0);
+    if (trans)
+        m->transmittance_eta = (double)ll_tensor_f32(trans, 0);
     return LL_OK;
 }
 

@@ -101,4 +101,21 @@ static inline double ll_tables_fresnel_pair(const double wi[3], const double wo[
     return c > 0.0 ? ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta) : 1.0;
 }
 
+/* The factor a transmitted set stored over its refraction's transmittance
+ * ("transmittance_eta") is multiplied by: 1 - F(wi.m) times d omega_m /
+ * d omega_o at the refraction half vector m of (wi above, wo below); 0
+ * where the pair has none. Both factors vanish like |wo.m| at the edge of
+ * total internal reflection, where the refracted direction grazes the
+ * microfacet, so f |cos| / D over them is smooth across it. */
+static inline double ll_tables_transmittance_pair(const double wi[3], const double wo[3],
+                                                  double eta)
+{
+    double m[3], c;
+    if (!ll_tables_refract_half(wi, wo, eta, m))
+        return 0.0;
+    c = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    return (1.0 - ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta)) *
+           ll_tables_refract_jacobian(wi, wo, m, eta);
+}
+
 #endif /* LL_TABLES_REFRACT_H */

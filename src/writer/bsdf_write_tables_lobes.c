@@ -40,7 +40,7 @@
 #define FN "ll_tables_write_from_bsdf"
 #define LUMINANCE_FLOOR 1e-3
 #define LOBES 4
-#define FIELDS_PER_LOBE 8
+#define FIELDS_PER_LOBE 9
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
@@ -49,7 +49,9 @@ typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
     double fresnel_eta;                     /* > 0: values over F (reflected) */
+    double transmittance_eta;               /* > 0: values over (1 - F) J     */
     float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
+    float transmittance_f[1];
     ll_warp2d ndf_w, sigma_w, vndf_w;
     double alpha;
     char names[FIELDS_PER_LOBE][40];
@@ -60,6 +62,7 @@ typedef struct writer {
     size_t n_ti, nv, ns;
     float *theta_i, phi_i[1], eta[1];
     double *theta_d;
+    unsigned char *valid, *next;            /* [ns * ns]: extend_slice's     */
     lobe l[LOBES];
 } writer;
 
@@ -85,7 +88,9 @@ static ll_status allocate(writer *w)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": the tables' size overflows");
     w->theta_i = ll_alloc_array(w->n_ti, sizeof(float));
     w->theta_d = ll_alloc_array(w->n_ti, sizeof(double));
-    if (!w->theta_i || !w->theta_d)
+    w->valid = ll_alloc_array(w->ns, w->ns);
+    w->next = ll_alloc_array(w->ns, w->ns);
+    if (!w->theta_i || !w->theta_d || !w->valid || !w->next)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w->l[k];
@@ -106,6 +111,8 @@ static void release(writer *w)
     int k;
     ll_free(w->theta_i);
     ll_free(w->theta_d);
+    ll_free(w->valid);
+    ll_free(w->next);
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w->l[k];
         ll_free(l->ndf);
@@ -168,6 +175,67 @@ static int direction(const lobe *l, const double wi[3], const double um[2], doub
     return 1;
 }
 
+/* A set stored over its refraction's transmittance has no value where
+ * the node's normal refracts nothing (beyond the edge of total internal
+ * reflection, or a refracted direction above the surface). There the
+ * smooth quotient is continued ring after ring outwards until every node
+ * has one: a node next to valid ones takes the mean of their linear
+ * extrapolations (2 v1 - v2 along each line of two valid nodes, at least
+ * 0) or, where no line has two, of their values. A cell across the edge
+ * then interpolates the continued quotient instead of falling to 0 inside
+ * it, and so does the interpolation between two slices, whose edges lie
+ * at different nodes. */
+#define LINE_RINGS 1
+static int valid_at(const writer *w, size_t x, size_t y, int dx, int dy, int k, size_t *j)
+{
+    ptrdiff_t px = (ptrdiff_t)x + k * dx, py = (ptrdiff_t)y + k * dy, ns = (ptrdiff_t)w->ns;
+    if (px < 0 || py < 0 || px >= ns || py >= ns)
+        return 0;
+    *j = (size_t)(py * ns + px);
+    return w->valid[*j];
+}
+
+static void extend_slice(const writer *w, float *rgb)
+{
+    size_t ns = w->ns, plane = ns * ns, x, y, c;
+    int dx, dy, grew = 1, ring = 0;
+    for (; grew; ++ring) {
+        grew = 0;
+        memcpy(w->next, w->valid, plane);
+        for (y = 0; y < ns; ++y)
+            for (x = 0; x < ns; ++x) {
+                double line[3] = { 0.0, 0.0, 0.0 }, near[3] = { 0.0, 0.0, 0.0 };
+                size_t i = y * ns + x, n_line = 0, n_near = 0, j1, j2;
+                if (w->valid[i])
+                    continue;
+                for (dy = -1; dy <= 1; ++dy)
+                    for (dx = -1; dx <= 1; ++dx) {
+                        if ((!dx && !dy) || !valid_at(w, x, y, dx, dy, 1, &j1))
+                            continue;
+                        for (c = 0; c < 3; ++c)
+                            near[c] += (double)rgb[c * plane + j1];
+                        ++n_near;
+                        if (ring >= LINE_RINGS || !valid_at(w, x, y, dx, dy, 2, &j2))
+                            continue;
+                        for (c = 0; c < 3; ++c) {
+                            double v = 2.0 * (double)rgb[c * plane + j1] -
+                                       (double)rgb[c * plane + j2];
+                            line[c] += v > 0.0 ? v : 0.0;
+                        }
+                        ++n_line;
+                    }
+                if (!n_near)
+                    continue;
+                for (c = 0; c < 3; ++c)
+                    rgb[c * plane + i] = (float)(n_line ? line[c] / (double)n_line
+                                                        : near[c] / (double)n_near);
+                w->next[i] = 1;
+                grew = 1;
+            }
+        memcpy(w->valid, w->next, plane);
+    }
+}
+
 /* The values and luminance of slice t at the sample grid's nodes. */
 static void value_slice(const writer *w, lobe *l, size_t t)
 {
@@ -181,6 +249,7 @@ static void value_slice(const writer *w, lobe *l, size_t t)
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale = 0.0, y_lum;
             double sampling = 1.0, over = 1.0;
+            w->valid[y * ns + x] = 0;
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
             if (wi[2] > 0.0 && direction(l, wi, um, wo, &sampling)) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
@@ -189,6 +258,13 @@ static void value_slice(const writer *w, lobe *l, size_t t)
                     scale = 0.0;
                 if (l->fresnel_eta > 0.0)
                     over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
+                if (l->transmittance_eta > 0.0) {
+                    double tr = ll_tables_transmittance_pair(wi, wo, l->transmittance_eta);
+                    over = tr > 0.0 ? 1.0 / tr : 0.0;
+                    w->valid[y * ns + x] = tr > 0.0 && ll_is_finite(over);
+                    if (!ll_is_finite(over))
+                        over = 0.0;
+                }
             }
             for (c = 0; c < 3; ++c) {
                 double v = f[c] * scale;
@@ -201,6 +277,8 @@ static void value_slice(const writer *w, lobe *l, size_t t)
                 top = y_lum;
         }
     }
+    if (l->transmittance_eta > 0.0)
+        extend_slice(w, rgb);
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
@@ -418,6 +496,15 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         if (!l->transmit && fabs(b->eta - 1.0) > 1e-6 && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
             l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->fresnel_f[0] = (float)l->fresnel_eta;
+        /* A refracted set: f |cos| / D vanishes at the edge of total
+         * internal reflection (seen from the denser side) like |wo.m|^2,
+         * as the Fresnel transmittance and the change of variables to
+         * the refracted direction each do, and a thin strip of normals
+         * there spreads over a wide range of directions: stored over
+         * both, the values are smooth to the edge and the reader
+         * multiplies them back exactly (tables_refract.h). */
+        l->transmittance_eta = l->refract_eta;
+        l->transmittance_f[0] = (float)l->transmittance_eta;
     }
     albedos(&w);
     ll_watch_stage(&watch, "tables", 0.0, 0.9, LOBES * w.n_ti);
@@ -449,7 +536,8 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         lobe *l = &w.l[k];
         static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
                                                            "luminance", "rgb",   "albedo",
-                                                           "warp_eta",  "fresnel_eta" };
+                                                           "warp_eta",  "fresnel_eta",
+                                                           "transmittance_eta" };
         int j;
         for (j = 0; j < FIELDS_PER_LOBE; ++j)
             snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
@@ -466,15 +554,19 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                 { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
                 { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
                 { l->names[7], LL_TENSOR_F32, 1, { 1 }, l->fresnel_f, NULL, NULL },
+                { l->names[8], LL_TENSOR_F32, 1, { 1 }, l->transmittance_f, NULL, NULL },
             };
             /* warp_eta: transmitted sets only; fresnel_eta: reflected sets
-             * stored over F only. */
-            for (j = 0; j < FIELDS_PER_LOBE - 2; ++j)
+             * stored over F only; transmittance_eta: refracted sets stored
+             * over (1 - F) J only. */
+            for (j = 0; j < FIELDS_PER_LOBE - 3; ++j)
                 f[nf++] = set[j];
             if (l->transmit)
                 f[nf++] = set[6];
             if (l->fresnel_eta > 0.0)
                 f[nf++] = set[7];
+            if (l->transmittance_eta > 0.0)
+                f[nf++] = set[8];
         }
     }
     if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
