@@ -181,6 +181,8 @@ static void *worker_main(void *arg)
 static void pool_end(void *arg)
 {
     pool *p = arg;
+    if (!p->ready)
+        return; /* (forgotten in a forked child) */
     pthread_mutex_lock(&p->lock);
     p->shutdown = 1;
     pthread_cond_broadcast(&p->wake);
