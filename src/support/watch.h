@@ -78,7 +78,7 @@ LL_INTERNAL ll_status ll_watch_finish(ll_watch *w, ll_status s, const char *fn);
  * once none are left to take, keeps polling (reporting progress, seeing a
  * cancel) every millisecond until the other threads are done, so a long
  * item on a worker does not silence the callback (without a callback it
- * waits at the barrier as ll_parallel_for does). w may be NULL. */
+ * sleeps until the workers are done, as ll_parallel_for does). w may be NULL. */
 LL_INTERNAL ll_status ll_parallel_for_watched(size_t count, ll_parallel_body body, void *ctx,
                                               ll_watch *w);
 
