@@ -235,10 +235,13 @@ $(BUILD)/obj/%.o: src/%.c $(wildcard src/*/*.h) $(wildcard include/*.h include/l
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_LIB) $(CFLAGS_OMP) -c $< -o $@
 
+# -z nodelete: the parallel loops' worker threads (src/support/threads.c)
+# outlive a call, so the library must stay mapped if a host dlclose()s it.
 $(SHARED): $(LIB_OBJ) src/liblayerlab.map
 	@mkdir -p $(dir $@)
 	$(CC) -shared -o $@ $(LIB_OBJ) -Wl,-soname,$(SONAME) \
-	    -Wl,--version-script=src/liblayerlab.map -Wl,--no-undefined $(SAN) $(LDLIBS_LIB)
+	    -Wl,--version-script=src/liblayerlab.map -Wl,--no-undefined -Wl,-z,nodelete \
+	    $(SAN) $(LDLIBS_LIB)
 	ln -sf liblayerlab.so.$(VERSION) $(BUILD)/lib/$(SONAME)
 	ln -sf $(SONAME) $(BUILD)/lib/liblayerlab.so
 

@@ -46,7 +46,9 @@ extern "C" {
  * thread* may use (adding, doubling, building interfaces). 0 means all
  * processors (the default). Results never depend on this number: they are
  * bit-identical for any thread count. The setting is per calling thread, so
- * two renderer threads can use different counts without locking.
+ * two renderer threads can use different counts without locking. The
+ * worker threads a calling thread starts stay, asleep, until that thread
+ * exits.
  * LL_ERROR_INVALID_ARGUMENT (the setting unchanged) above 4096 threads. */
 LL_API ll_status ll_set_thread_count(size_t n_threads);
 /* The effective count for the calling thread (>= 1): its setting, or the
