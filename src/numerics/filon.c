@@ -6,6 +6,10 @@
 #include <math.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 /* The three moments of one panel [x1 - h, x1 + h] in u = phi - x1, for
  * theta = l h:
  *   integral u^0 cos(l u) du = 2 h   sinc(theta)
@@ -120,6 +124,69 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         (s) = s_ * rc[l] + c_ * rs[l];                                             \
     } while (0)
 
+#if defined(__SSE2__)
+/* FILON_STEP for the two orders of each of the vectors c and s (lanes l, l
+ * + 1 of the weights w*): the same operations in the same order per lane,
+ * so the same roundings as one order at a time. */
+#define FILON_STEP2(sum, c, s, w)                                                  \
+    do {                                                                           \
+        __m128d c_ = (c), s_ = (s);                                                \
+        (sum) = _mm_add_pd(                                                        \
+            (sum), _mm_add_pd(_mm_mul_pd(c_, _mm_add_pd(_mm_mul_pd(w##_end_c, ends), \
+                                                          _mm_mul_pd(w##_mid, mid))), \
+                              _mm_mul_pd(_mm_mul_pd(s_, w##_end_s), diff)));       \
+        (c) = _mm_sub_pd(_mm_mul_pd(c_, w##_rot_c), _mm_mul_pd(s_, w##_rot_s));    \
+        (s) = _mm_add_pd(_mm_mul_pd(s_, w##_rot_c), _mm_mul_pd(c_, w##_rot_s));    \
+    } while (0)
+
+/* accumulate's orders in pairs, two pairs at a time while four remain
+ * (the baseline of x86-64 has two doubles per register); returns the
+ * orders done. */
+static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double *restrict acc,
+                               const double *restrict cx, const double *restrict sx,
+                               const double *restrict wc, const double *restrict ws,
+                               const double *restrict wm, const double *restrict rc,
+                               const double *restrict rs)
+{
+    size_t p, l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        __m128d c0 = _mm_loadu_pd(cx + l), c1 = _mm_loadu_pd(cx + l + 2);
+        __m128d s0 = _mm_loadu_pd(sx + l), s1 = _mm_loadu_pd(sx + l + 2);
+        __m128d a0 = _mm_loadu_pd(acc + l), a1 = _mm_loadu_pd(acc + l + 2);
+        __m128d x0_end_c = _mm_loadu_pd(wc + l), x0_end_s = _mm_loadu_pd(ws + l);
+        __m128d x0_mid = _mm_loadu_pd(wm + l), x0_rot_c = _mm_loadu_pd(rc + l);
+        __m128d x0_rot_s = _mm_loadu_pd(rs + l), x1_end_c = _mm_loadu_pd(wc + l + 2);
+        __m128d x1_end_s = _mm_loadu_pd(ws + l + 2), x1_mid = _mm_loadu_pd(wm + l + 2);
+        __m128d x1_rot_c = _mm_loadu_pd(rc + l + 2), x1_rot_s = _mm_loadu_pd(rs + l + 2);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
+            __m128d mid = _mm_set1_pd(g[2 * p + 1]);
+            FILON_STEP2(a0, c0, s0, x0);
+            FILON_STEP2(a1, c1, s1, x1);
+        }
+        _mm_storeu_pd(acc + l, a0);
+        _mm_storeu_pd(acc + l + 2, a1);
+    }
+    for (; l + 2 <= n; l += 2) {
+        __m128d c0 = _mm_loadu_pd(cx + l), s0 = _mm_loadu_pd(sx + l);
+        __m128d a0 = _mm_loadu_pd(acc + l), x0_end_c = _mm_loadu_pd(wc + l);
+        __m128d x0_end_s = _mm_loadu_pd(ws + l), x0_mid = _mm_loadu_pd(wm + l);
+        __m128d x0_rot_c = _mm_loadu_pd(rc + l), x0_rot_s = _mm_loadu_pd(rs + l);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
+            __m128d mid = _mm_set1_pd(g[2 * p + 1]);
+            FILON_STEP2(a0, c0, s0, x0);
+        }
+        _mm_storeu_pd(acc + l, a0);
+    }
+    return l;
+}
+
+#undef FILON_STEP2
+#endif
+
 /* The panels' sum. Four orders at a time keep their phases and sums in
  * registers over all panels (one load and store of each per four orders
  * instead of per panel); per order the operations are those of one panel
@@ -130,8 +197,11 @@ static void accumulate(size_t panels, size_t n, const double *g, double *restric
                        const double *restrict wm, const double *restrict rc,
                        const double *restrict rs)
 {
-    size_t p, l;
-    for (l = 0; l + 4 <= n; l += 4) {
+    size_t p, l = 0;
+#if defined(__SSE2__)
+    l = accumulate_pairs(panels, n, g, acc, cx, sx, wc, ws, wm, rc, rs);
+#endif
+    for (; l + 4 <= n; l += 4) {
         double c0 = cx[l], c1 = cx[l + 1], c2 = cx[l + 2], c3 = cx[l + 3];
         double s0 = sx[l], s1 = sx[l + 1], s2 = sx[l + 2], s3 = sx[l + 3];
         double a0 = acc[l], a1 = acc[l + 1], a2 = acc[l + 2], a3 = acc[l + 3];
