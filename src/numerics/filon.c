@@ -283,15 +283,83 @@ static size_t narrow_terms(double tau, size_t k)
     return k;
 }
 
+/* The narrow sums of one order (lambda = l^2) with terms powers: the even
+ * and odd parts, Horner's in l^2. */
+static void narrow_sums(const double *even, const double *odd, size_t terms, double lambda,
+                        double *ce, double *so)
+{
+    double e = 0.0, o = 0.0;
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = e * lambda + even[j];
+    for (j = terms / 2; j-- > 0;)
+        o = o * lambda + odd[j];
+    *ce = e;
+    *so = o;
+}
+
+/* The narrow terms of the orders first .. first + count - 1 with the
+ * phases cx, sx of each, into moments. Orders go in pairs (2q, 2q + 1),
+ * both with the powers of the odd one, so an order takes the same powers
+ * whether its pair is in the same block of orders or not: the pairs share
+ * Horner's steps (two per SSE2 register, lane by lane the operations of
+ * narrow_sums). */
+static void narrow_orders(const double *even, const double *odd, double half, size_t first,
+                          size_t count, const double *cx, const double *sx, double *moments)
+{
+    size_t l = 0, terms = 1;
+    double ce, so;
+    if (count > 0 && first % 2) {
+        double order = (double)first;
+        terms = narrow_terms(order * half, terms);
+        narrow_sums(even, odd, terms, order * order, &ce, &so);
+        moments[0] += cx[0] * ce - sx[0] * order * so;
+        l = 1;
+    }
+    for (; l + 2 <= count; l += 2) {
+        double o0 = (double)(first + l), o1 = o0 + 1.0;
+        terms = narrow_terms(o1 * half, terms);
+#if defined(__SSE2__)
+        {
+            __m128d lambda = _mm_set_pd(o1 * o1, o0 * o0), e = _mm_setzero_pd();
+            __m128d o = _mm_setzero_pd(), order = _mm_set_pd(o1, o0);
+            size_t j;
+            for (j = (terms - 1) / 2 + 1; j-- > 0;)
+                e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
+            for (j = terms / 2; j-- > 0;)
+                o = _mm_add_pd(_mm_mul_pd(o, lambda), _mm_set1_pd(odd[j]));
+            _mm_storeu_pd(moments + l,
+                          _mm_add_pd(_mm_loadu_pd(moments + l),
+                                     _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx + l), e),
+                                                _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx + l),
+                                                                      order),
+                                                           o))));
+        }
+#else
+        narrow_sums(even, odd, terms, o0 * o0, &ce, &so);
+        moments[l] += cx[l] * ce - sx[l] * o0 * so;
+        narrow_sums(even, odd, terms, o1 * o1, &ce, &so);
+        moments[l + 1] += cx[l + 1] * ce - sx[l + 1] * o1 * so;
+#endif
+    }
+    if (l < count) { /* an even order whose odd partner is not asked for */
+        double order = (double)(first + l);
+        terms = narrow_terms((order + 1.0) * half, terms);
+        narrow_sums(even, odd, terms, order * order, &ce, &so);
+        moments[l] += cx[l] * ce - sx[l] * order * so;
+    }
+}
+
 /* The orders first .. first + count - 1 that are narrow (at most n) into
- * moments; returns count. */
+ * moments; returns count. scratch: 2 n doubles. */
 static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                             size_t n, double *moments)
+                             size_t n, double *moments, double *scratch)
 {
     double half = 0.5 * (b - a), centre = 0.5 * (a + b), h = (b - a) / (double)(n_samples - 1);
     double inv[NARROW_POWERS + 3], m[NARROW_POWERS], even[NARROW_POWERS / 2 + 1];
     double odd[NARROW_POWERS / 2 + 1], cx, sx, c1, s1, fact = 1.0, avail;
-    size_t count, powers, terms = 1, k, p, j, l, panels = (n_samples - 1) / 2;
+    double *cos_l = scratch, *sin_l = scratch + n;
+    size_t count, powers, k, p, j, l, panels = (n_samples - 1) / 2, last;
     avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
     if (avail <= 0.0)
         return 0;
@@ -303,7 +371,9 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     if (!(avail * ((double)panels * 14.0 - 20.0) > (double)(panels * powers) * 10.0))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    powers = narrow_terms((double)(first + count - 1) * half, 1);
+    /* the powers of the last order's odd partner (narrow_orders) */
+    last = (first + count - 1) | 1;
+    powers = narrow_terms((double)last * half, 1);
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -336,17 +406,14 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     cx = first ? cos((double)first * centre) : 1.0;
     sx = first ? sin((double)first * centre) : 0.0;
     for (l = 0; l < count; ++l) {
-        double order = (double)(first + l), lambda = order * order, ce = 0.0, so = 0.0, next;
-        terms = narrow_terms(order * half, terms);
-        for (j = (terms - 1) / 2 + 1; j-- > 0;)
-            ce = ce * lambda + even[j];
-        for (j = terms / 2; j-- > 0;)
-            so = so * lambda + odd[j];
-        moments[l] += cx * ce - sx * order * so;
+        double next;
+        cos_l[l] = cx;
+        sin_l[l] = sx;
         next = cx * c1 - sx * s1;
         sx = sx * c1 + cx * s1;
         cx = next;
     }
+    narrow_orders(even, odd, half, first, count, cos_l, sin_l, moments);
     return count;
 }
 
@@ -354,7 +421,7 @@ void ll_filon_moments_from(const double *g, size_t n_samples, double a, double b
                            size_t n_moments, double *moments, double *scratch)
 {
     filon_rule r;
-    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments);
+    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch);
     if (narrow == n_moments)
         return;
     rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);
