@@ -51,12 +51,15 @@ typedef struct filon_rule {
 } filon_rule;
 
 /* The orders first .. first + n - 1; scratch: 7 n doubles. The sines and
- * cosines of l x1 and l h come from rotations by x1 and h (one rounding
- * per order) instead of 4 n calls to sin and cos; those of the first order
- * are computed directly. The rotations are serial; the weights, which
- * each order has to itself, come after them in loops that vectorise (one
+ * cosines of l x1 and l h come from rotations instead of 4 n calls to sin
+ * and cos: those of the first order are computed directly, the next
+ * order's by one rotation by x1 and h, and from there the two chains of
+ * every other order by rotations by 2 x1 and 2 h (one rounding per two
+ * orders), side by side in an SSE2 register. The weights, which each
+ * order has to itself, come after them, two orders per register (one
  * division per order: the reciprocal of theta), the few orders below
- * SMALL_THETA by their Taylor series first. */
+ * SMALL_THETA by their Taylor series first. Lane by lane the operations
+ * are those of the scalar loops, which do the same where SSE2 is not. */
 static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_t first,
                       size_t n, double *scratch)
 {
@@ -78,19 +81,69 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     r->rot_s = rot_s = scratch + 6 * n;
     /* theta = l h, its cosine and sine wait in w_end_c, rot_c and rot_s
      * for the weights. */
-    for (l = 0; l < n; ++l) {
-        double next;
-        w_end_c[l] = (double)(first + l) * h;
-        r->cos_x[l] = cx;
-        r->sin_x[l] = sx;
-        rot_c[l] = ct;
-        rot_s[l] = st;
-        next = cx * c1 - sx * s1;
-        sx = sx * c1 + cx * s1;
-        cx = next;
-        next = ct * ch - st * sh;
-        st = st * ch + ct * sh;
-        ct = next;
+    {
+        /* lane 0: the orders first + 2q, lane 1: first + 2q + 1 */
+        double c2x = (c1 - s1) * (c1 + s1), s2x = 2.0 * s1 * c1;
+        double c2h = (ch - sh) * (ch + sh), s2h = 2.0 * sh * ch;
+        double cx1 = cx * c1 - sx * s1, sx1 = sx * c1 + cx * s1;
+        double ct1 = ct * ch - st * sh, st1 = st * ch + ct * sh;
+        l = 0;
+#if defined(__SSE2__)
+        {
+            __m128d vcx = _mm_set_pd(cx1, cx), vsx = _mm_set_pd(sx1, sx);
+            __m128d vct = _mm_set_pd(ct1, ct), vst = _mm_set_pd(st1, st);
+            __m128d rxc = _mm_set1_pd(c2x), rxs = _mm_set1_pd(s2x);
+            __m128d rhc = _mm_set1_pd(c2h), rhs = _mm_set1_pd(s2h);
+            __m128d order = _mm_set_pd(l0 + 1.0, l0), two = _mm_set1_pd(2.0);
+            __m128d vh = _mm_set1_pd(h);
+            for (; l + 2 <= n; l += 2) {
+                __m128d next;
+                _mm_storeu_pd(w_end_c + l, _mm_mul_pd(order, vh));
+                _mm_storeu_pd(r->cos_x + l, vcx);
+                _mm_storeu_pd(r->sin_x + l, vsx);
+                _mm_storeu_pd(rot_c + l, vct);
+                _mm_storeu_pd(rot_s + l, vst);
+                order = _mm_add_pd(order, two);
+                next = _mm_sub_pd(_mm_mul_pd(vcx, rxc), _mm_mul_pd(vsx, rxs));
+                vsx = _mm_add_pd(_mm_mul_pd(vsx, rxc), _mm_mul_pd(vcx, rxs));
+                vcx = next;
+                next = _mm_sub_pd(_mm_mul_pd(vct, rhc), _mm_mul_pd(vst, rhs));
+                vst = _mm_add_pd(_mm_mul_pd(vst, rhc), _mm_mul_pd(vct, rhs));
+                vct = next;
+            }
+            cx = _mm_cvtsd_f64(vcx);
+            sx = _mm_cvtsd_f64(vsx);
+            ct = _mm_cvtsd_f64(vct);
+            st = _mm_cvtsd_f64(vst);
+        }
+#endif
+        for (; l < n; l += 2) {
+            double next;
+            w_end_c[l] = (l0 + (double)l) * h;
+            r->cos_x[l] = cx;
+            r->sin_x[l] = sx;
+            rot_c[l] = ct;
+            rot_s[l] = st;
+            if (l + 1 < n) {
+                w_end_c[l + 1] = (l0 + (double)l + 1.0) * h;
+                r->cos_x[l + 1] = cx1;
+                r->sin_x[l + 1] = sx1;
+                rot_c[l + 1] = ct1;
+                rot_s[l + 1] = st1;
+            }
+            next = cx * c2x - sx * s2x;
+            sx = sx * c2x + cx * s2x;
+            cx = next;
+            next = ct * c2h - st * s2h;
+            st = st * c2h + ct * s2h;
+            ct = next;
+            next = cx1 * c2x - sx1 * s2x;
+            sx1 = sx1 * c2x + cx1 * s2x;
+            cx1 = next;
+            next = ct1 * c2h - st1 * s2h;
+            st1 = st1 * c2h + ct1 * s2h;
+            ct1 = next;
+        }
     }
     for (small = 0; small < n && w_end_c[small] <= SMALL_THETA; ++small) {
         double sinc, m1, m2;
@@ -99,7 +152,29 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         w_end_s[small] = h * m1;
         w_mid[small] = 2.0 * h * (sinc - m2);
     }
-    for (l = small; l < n; ++l) {
+    l = small;
+#if defined(__SSE2__)
+    {
+        __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
+        __m128d one = _mm_set1_pd(1.0);
+        for (; l + 2 <= n; l += 2) {
+            __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
+            __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
+            __m128d sinc = _mm_mul_pd(s, inv);
+            __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
+            __m128d m2 = _mm_mul_pd(
+                _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
+                                                 _mm_mul_pd(_mm_mul_pd(two, theta), c)),
+                                      _mm_mul_pd(two, s)),
+                           _mm_mul_pd(inv, inv)),
+                inv);
+            _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
+            _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
+            _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
+        }
+    }
+#endif
+    for (; l < n; ++l) {
         double theta = w_end_c[l], s = rot_s[l], c = rot_c[l];
         double inv = 1.0 / theta, sinc = s * inv, m1 = (s - theta * c) * inv * inv;
         double m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
@@ -107,7 +182,15 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         w_end_s[l] = h * m1;
         w_mid[l] = 2.0 * h * (sinc - m2);
     }
-    for (l = 0; l < n; ++l) {
+    l = 0;
+#if defined(__SSE2__)
+    for (; l + 2 <= n; l += 2) {
+        __m128d s = _mm_loadu_pd(rot_s + l), c = _mm_loadu_pd(rot_c + l);
+        _mm_storeu_pd(rot_c + l, _mm_mul_pd(_mm_sub_pd(c, s), _mm_add_pd(c, s)));
+        _mm_storeu_pd(rot_s + l, _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), s), c));
+    }
+#endif
+    for (; l < n; ++l) {
         double s = rot_s[l], c = rot_c[l];
         rot_c[l] = (c - s) * (c + s);
         rot_s[l] = 2.0 * s * c;
