@@ -9,6 +9,12 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define FILON_HAVE_AVX 1
+#include <immintrin.h>
+#else
+#define FILON_HAVE_AVX 0
+#endif
 
 /* The three moments of one panel [x1 - h, x1 + h] in u = phi - x1, for
  * theta = l h:
@@ -270,6 +276,77 @@ static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double 
 #undef FILON_STEP2
 #endif
 
+#if FILON_HAVE_AVX
+/* FILON_STEP2 for four orders per AVX register, chosen at run time
+ * (docs/style.md, item 12): additions and multiplications alone, no fused
+ * ones, so each order's roundings are those of the other paths. */
+#define FILON_STEP4(sum, c, s, w)                                                  \
+    do {                                                                           \
+        __m256d c_ = (c), s_ = (s);                                                \
+        (sum) = _mm256_add_pd(                                                     \
+            (sum),                                                                 \
+            _mm256_add_pd(_mm256_mul_pd(c_, _mm256_add_pd(_mm256_mul_pd(w##_end_c, ends), \
+                                                          _mm256_mul_pd(w##_mid, mid))), \
+                          _mm256_mul_pd(_mm256_mul_pd(s_, w##_end_s), diff)));     \
+        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, w##_rot_c), _mm256_mul_pd(s_, w##_rot_s)); \
+        (s) = _mm256_add_pd(_mm256_mul_pd(s_, w##_rot_c), _mm256_mul_pd(c_, w##_rot_s)); \
+    } while (0)
+
+/* accumulate's orders four at a time, eight while eight remain; returns
+ * the orders done. */
+__attribute__((target("avx"))) static size_t
+accumulate_quads(size_t panels, size_t n, const double *g, double *restrict acc,
+                 const double *restrict cx, const double *restrict sx,
+                 const double *restrict wc, const double *restrict ws,
+                 const double *restrict wm, const double *restrict rc,
+                 const double *restrict rs)
+{
+    size_t p, l;
+    for (l = 0; l + 8 <= n; l += 8) {
+        __m256d c0 = _mm256_loadu_pd(cx + l), c1 = _mm256_loadu_pd(cx + l + 4);
+        __m256d s0 = _mm256_loadu_pd(sx + l), s1 = _mm256_loadu_pd(sx + l + 4);
+        __m256d a0 = _mm256_loadu_pd(acc + l), a1 = _mm256_loadu_pd(acc + l + 4);
+        __m256d x0_end_c = _mm256_loadu_pd(wc + l), x0_end_s = _mm256_loadu_pd(ws + l);
+        __m256d x0_mid = _mm256_loadu_pd(wm + l), x0_rot_c = _mm256_loadu_pd(rc + l);
+        __m256d x0_rot_s = _mm256_loadu_pd(rs + l), x1_end_c = _mm256_loadu_pd(wc + l + 4);
+        __m256d x1_end_s = _mm256_loadu_pd(ws + l + 4), x1_mid = _mm256_loadu_pd(wm + l + 4);
+        __m256d x1_rot_c = _mm256_loadu_pd(rc + l + 4), x1_rot_s = _mm256_loadu_pd(rs + l + 4);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
+            __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
+            FILON_STEP4(a0, c0, s0, x0);
+            FILON_STEP4(a1, c1, s1, x1);
+        }
+        _mm256_storeu_pd(acc + l, a0);
+        _mm256_storeu_pd(acc + l + 4, a1);
+    }
+    for (; l + 4 <= n; l += 4) {
+        __m256d c0 = _mm256_loadu_pd(cx + l), s0 = _mm256_loadu_pd(sx + l);
+        __m256d a0 = _mm256_loadu_pd(acc + l), x0_end_c = _mm256_loadu_pd(wc + l);
+        __m256d x0_end_s = _mm256_loadu_pd(ws + l), x0_mid = _mm256_loadu_pd(wm + l);
+        __m256d x0_rot_c = _mm256_loadu_pd(rc + l), x0_rot_s = _mm256_loadu_pd(rs + l);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
+            __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
+            FILON_STEP4(a0, c0, s0, x0);
+        }
+        _mm256_storeu_pd(acc + l, a0);
+    }
+    return l;
+}
+
+#undef FILON_STEP4
+
+/* The processor's features, as the compiler's runtime detected them
+ * before main: read-only here. */
+static int have_avx(void)
+{
+    return __builtin_cpu_supports("avx");
+}
+#endif
+
 /* The panels' sum. Four orders at a time keep their phases and sums in
  * registers over all panels (one load and store of each per four orders
  * instead of per panel); per order the operations are those of one panel
@@ -281,8 +358,13 @@ static void accumulate(size_t panels, size_t n, const double *g, double *restric
                        const double *restrict rs)
 {
     size_t p, l = 0;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l = accumulate_quads(panels, n, g, acc, cx, sx, wc, ws, wm, rc, rs);
+#endif
 #if defined(__SSE2__)
-    l = accumulate_pairs(panels, n, g, acc, cx, sx, wc, ws, wm, rc, rs);
+    l += accumulate_pairs(panels, n - l, g, acc + l, cx + l, sx + l, wc + l, ws + l, wm + l,
+                          rc + l, rs + l);
 #endif
     for (; l + 4 <= n; l += 4) {
         double c0 = cx[l], c1 = cx[l + 1], c2 = cx[l + 2], c3 = cx[l + 3];
