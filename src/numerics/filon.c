@@ -16,6 +16,15 @@
 #define FILON_HAVE_AVX 0
 #endif
 
+#if FILON_HAVE_AVX
+/* The processor's features, as the compiler's runtime detected them
+ * before main: read-only here. */
+static int have_avx(void)
+{
+    return __builtin_cpu_supports("avx");
+}
+#endif
+
 /* The three moments of one panel [x1 - h, x1 + h] in u = phi - x1, for
  * theta = l h:
  *   integral u^0 cos(l u) du = 2 h   sinc(theta)
@@ -56,26 +65,217 @@ typedef struct filon_rule {
     double *rot_c, *rot_s; /* [n] cos, sin(2 l h): advance by one panel      */
 } filon_rule;
 
+/* The phases of four chains of every fourth order, lane j the orders
+ * first + 4 q + j: cos and sin of l x1 into cos_x, sin_x, of theta = l h
+ * into rot_c, rot_s, theta into w_end_c; each chain advanced by rotations
+ * by 4 x1 and 4 h (rx_c, rx_s, rh_c, rh_s). c*, s*, t*: the chains'
+ * first values, by lane. The SSE2 and AVX paths do the same operations
+ * lane by lane. */
+typedef struct phase_chains {
+    double cx[4], sx[4], ct[4], st[4], order[4];
+    double rx_c, rx_s, rh_c, rh_s, h;
+} phase_chains;
+
+static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule *r,
+                          double *w_end_c)
+{
+    double cx[4], sx[4], ct[4], st[4], order[4];
+    size_t j;
+    memcpy(cx, q->cx, sizeof cx);
+    memcpy(sx, q->sx, sizeof sx);
+    memcpy(ct, q->ct, sizeof ct);
+    memcpy(st, q->st, sizeof st);
+    memcpy(order, q->order, sizeof order);
+    for (; l < n; l += 4)
+        for (j = 0; j < 4; ++j) {
+            double next;
+            if (l + j < n) {
+                w_end_c[l + j] = order[j] * q->h;
+                r->cos_x[l + j] = cx[j];
+                r->sin_x[l + j] = sx[j];
+                r->rot_c[l + j] = ct[j];
+                r->rot_s[l + j] = st[j];
+            }
+            order[j] += 4.0;
+            next = cx[j] * q->rx_c - sx[j] * q->rx_s;
+            sx[j] = sx[j] * q->rx_c + cx[j] * q->rx_s;
+            cx[j] = next;
+            next = ct[j] * q->rh_c - st[j] * q->rh_s;
+            st[j] = st[j] * q->rh_c + ct[j] * q->rh_s;
+            ct[j] = next;
+        }
+}
+
+#if defined(__SSE2__)
+#define ROTATE2(c, s, rc, rs)                                                      \
+    do {                                                                           \
+        __m128d next_ = _mm_sub_pd(_mm_mul_pd(c, rc), _mm_mul_pd(s, rs));          \
+        s = _mm_add_pd(_mm_mul_pd(s, rc), _mm_mul_pd(c, rs));                      \
+        c = next_;                                                                 \
+    } while (0)
+
+/* The chains' whole steps of four orders; returns the orders done and
+ * leaves the chains where the scalar rest goes on. */
+static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_end_c)
+{
+    __m128d cx0 = _mm_loadu_pd(q->cx), cx1 = _mm_loadu_pd(q->cx + 2);
+    __m128d sx0 = _mm_loadu_pd(q->sx), sx1 = _mm_loadu_pd(q->sx + 2);
+    __m128d ct0 = _mm_loadu_pd(q->ct), ct1 = _mm_loadu_pd(q->ct + 2);
+    __m128d st0 = _mm_loadu_pd(q->st), st1 = _mm_loadu_pd(q->st + 2);
+    __m128d o0 = _mm_loadu_pd(q->order), o1 = _mm_loadu_pd(q->order + 2);
+    __m128d rxc = _mm_set1_pd(q->rx_c), rxs = _mm_set1_pd(q->rx_s);
+    __m128d rhc = _mm_set1_pd(q->rh_c), rhs = _mm_set1_pd(q->rh_s);
+    __m128d h = _mm_set1_pd(q->h), four = _mm_set1_pd(4.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(o0, h));
+        _mm_storeu_pd(w_end_c + l + 2, _mm_mul_pd(o1, h));
+        _mm_storeu_pd(r->cos_x + l, cx0);
+        _mm_storeu_pd(r->cos_x + l + 2, cx1);
+        _mm_storeu_pd(r->sin_x + l, sx0);
+        _mm_storeu_pd(r->sin_x + l + 2, sx1);
+        _mm_storeu_pd(r->rot_c + l, ct0);
+        _mm_storeu_pd(r->rot_c + l + 2, ct1);
+        _mm_storeu_pd(r->rot_s + l, st0);
+        _mm_storeu_pd(r->rot_s + l + 2, st1);
+        o0 = _mm_add_pd(o0, four);
+        o1 = _mm_add_pd(o1, four);
+        ROTATE2(cx0, sx0, rxc, rxs);
+        ROTATE2(cx1, sx1, rxc, rxs);
+        ROTATE2(ct0, st0, rhc, rhs);
+        ROTATE2(ct1, st1, rhc, rhs);
+    }
+    _mm_storeu_pd(q->cx, cx0);
+    _mm_storeu_pd(q->cx + 2, cx1);
+    _mm_storeu_pd(q->sx, sx0);
+    _mm_storeu_pd(q->sx + 2, sx1);
+    _mm_storeu_pd(q->ct, ct0);
+    _mm_storeu_pd(q->ct + 2, ct1);
+    _mm_storeu_pd(q->st, st0);
+    _mm_storeu_pd(q->st + 2, st1);
+    _mm_storeu_pd(q->order, o0);
+    _mm_storeu_pd(q->order + 2, o1);
+    return l;
+}
+
+#undef ROTATE2
+
+/* The weights of the orders l < n (theta, sin, cos of it in w_end_c,
+ * rot_s, rot_c), two per register; returns the orders done. */
+static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s, double *w_mid,
+                           const double *rot_c, const double *rot_s)
+{
+    __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
+    __m128d one = _mm_set1_pd(1.0);
+    size_t l;
+    for (l = 0; l + 2 <= n; l += 2) {
+        __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
+        __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
+        __m128d sinc = _mm_mul_pd(s, inv);
+        __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
+        __m128d m2 = _mm_mul_pd(
+            _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
+                                             _mm_mul_pd(_mm_mul_pd(two, theta), c)),
+                                  _mm_mul_pd(two, s)),
+                       _mm_mul_pd(inv, inv)),
+            inv);
+        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
+        _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
+        _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
+    }
+    return l;
+}
+#endif
+
+#if FILON_HAVE_AVX
+#define ROTATE4(c, s, rc, rs)                                                      \
+    do {                                                                           \
+        __m256d next_ = _mm256_sub_pd(_mm256_mul_pd(c, rc), _mm256_mul_pd(s, rs)); \
+        s = _mm256_add_pd(_mm256_mul_pd(s, rc), _mm256_mul_pd(c, rs));             \
+        c = next_;                                                                 \
+    } while (0)
+
+/* phases_sse2 with the four chains in one AVX register. */
+__attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t n,
+                                                        filon_rule *r, double *w_end_c)
+{
+    __m256d cx = _mm256_loadu_pd(q->cx), sx = _mm256_loadu_pd(q->sx);
+    __m256d ct = _mm256_loadu_pd(q->ct), st = _mm256_loadu_pd(q->st);
+    __m256d o = _mm256_loadu_pd(q->order);
+    __m256d rxc = _mm256_set1_pd(q->rx_c), rxs = _mm256_set1_pd(q->rx_s);
+    __m256d rhc = _mm256_set1_pd(q->rh_c), rhs = _mm256_set1_pd(q->rh_s);
+    __m256d h = _mm256_set1_pd(q->h), four = _mm256_set1_pd(4.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(o, h));
+        _mm256_storeu_pd(r->cos_x + l, cx);
+        _mm256_storeu_pd(r->sin_x + l, sx);
+        _mm256_storeu_pd(r->rot_c + l, ct);
+        _mm256_storeu_pd(r->rot_s + l, st);
+        o = _mm256_add_pd(o, four);
+        ROTATE4(cx, sx, rxc, rxs);
+        ROTATE4(ct, st, rhc, rhs);
+    }
+    _mm256_storeu_pd(q->cx, cx);
+    _mm256_storeu_pd(q->sx, sx);
+    _mm256_storeu_pd(q->ct, ct);
+    _mm256_storeu_pd(q->st, st);
+    _mm256_storeu_pd(q->order, o);
+    return l;
+}
+
+#undef ROTATE4
+
+/* weights_sse2 four orders per register. */
+__attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, double *w_end_c,
+                                                         double *w_end_s, double *w_mid,
+                                                         const double *rot_c,
+                                                         const double *rot_s)
+{
+    __m256d vh = _mm256_set1_pd(h), h2 = _mm256_set1_pd(2.0 * h), two = _mm256_set1_pd(2.0);
+    __m256d one = _mm256_set1_pd(1.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        __m256d theta = _mm256_loadu_pd(w_end_c + l), s = _mm256_loadu_pd(rot_s + l);
+        __m256d c = _mm256_loadu_pd(rot_c + l), inv = _mm256_div_pd(one, theta);
+        __m256d sinc = _mm256_mul_pd(s, inv);
+        __m256d m1 =
+            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(s, _mm256_mul_pd(theta, c)), inv), inv);
+        __m256d m2 = _mm256_mul_pd(
+            _mm256_mul_pd(
+                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), s),
+                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), c)),
+                              _mm256_mul_pd(two, s)),
+                _mm256_mul_pd(inv, inv)),
+            inv);
+        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(vh, m2));
+        _mm256_storeu_pd(w_end_s + l, _mm256_mul_pd(vh, m1));
+        _mm256_storeu_pd(w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
+    }
+    return l;
+}
+#endif
+
 /* The orders first .. first + n - 1; scratch: 7 n doubles. The sines and
  * cosines of l x1 and l h come from rotations instead of 4 n calls to sin
- * and cos: those of the first order are computed directly, the next
- * order's by one rotation by x1 and h, and from there the two chains of
- * every other order by rotations by 2 x1 and 2 h (one rounding per two
- * orders), side by side in an SSE2 register. The weights, which each
- * order has to itself, come after them, two orders per register (one
- * division per order: the reciprocal of theta), the few orders below
- * SMALL_THETA by their Taylor series first. Lane by lane the operations
- * are those of the scalar loops, which do the same where SSE2 is not. */
+ * and cos: those of the first order are computed directly, the next three
+ * orders' by rotations by x1 and h, and from there the four chains of
+ * every fourth order by rotations by 4 x1 and 4 h (one rounding per four
+ * orders), side by side in vector registers. The weights, which each
+ * order has to itself, come after them, also by vectors (one division per
+ * order: the reciprocal of theta), the few orders below SMALL_THETA by
+ * their Taylor series first. Lane by lane the operations are those of
+ * the scalar loops, which do the same where SSE2 or AVX is not: the
+ * moments do not depend on the processor. */
 static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_t first,
                       size_t n, double *scratch)
 {
     double h = (b - a) / (double)(n_samples - 1), x1 = a + h, l0 = (double)first;
-    double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h);
-    double cx = first ? cos(l0 * x1) : 1.0, sx = first ? sin(l0 * x1) : 0.0;
-    double ct = first ? cos(l0 * h) : 1.0, st = first ? sin(l0 * h) : 0.0;
+    double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h), c2, s2;
     double *restrict w_end_c, *restrict w_end_s, *restrict w_mid, *restrict rot_c,
         *restrict rot_s;
-    size_t l, small;
+    phase_chains q;
+    size_t l = 0, j, small;
     r->n = n;
     r->panels = (n_samples - 1) / 2;
     r->w_end_c = w_end_c = scratch;
@@ -87,70 +287,36 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     r->rot_s = rot_s = scratch + 6 * n;
     /* theta = l h, its cosine and sine wait in w_end_c, rot_c and rot_s
      * for the weights. */
-    {
-        /* lane 0: the orders first + 2q, lane 1: first + 2q + 1 */
-        double c2x = (c1 - s1) * (c1 + s1), s2x = 2.0 * s1 * c1;
-        double c2h = (ch - sh) * (ch + sh), s2h = 2.0 * sh * ch;
-        double cx1 = cx * c1 - sx * s1, sx1 = sx * c1 + cx * s1;
-        double ct1 = ct * ch - st * sh, st1 = st * ch + ct * sh;
-        l = 0;
-#if defined(__SSE2__)
-        {
-            __m128d vcx = _mm_set_pd(cx1, cx), vsx = _mm_set_pd(sx1, sx);
-            __m128d vct = _mm_set_pd(ct1, ct), vst = _mm_set_pd(st1, st);
-            __m128d rxc = _mm_set1_pd(c2x), rxs = _mm_set1_pd(s2x);
-            __m128d rhc = _mm_set1_pd(c2h), rhs = _mm_set1_pd(s2h);
-            __m128d order = _mm_set_pd(l0 + 1.0, l0), two = _mm_set1_pd(2.0);
-            __m128d vh = _mm_set1_pd(h);
-            for (; l + 2 <= n; l += 2) {
-                __m128d next;
-                _mm_storeu_pd(w_end_c + l, _mm_mul_pd(order, vh));
-                _mm_storeu_pd(r->cos_x + l, vcx);
-                _mm_storeu_pd(r->sin_x + l, vsx);
-                _mm_storeu_pd(rot_c + l, vct);
-                _mm_storeu_pd(rot_s + l, vst);
-                order = _mm_add_pd(order, two);
-                next = _mm_sub_pd(_mm_mul_pd(vcx, rxc), _mm_mul_pd(vsx, rxs));
-                vsx = _mm_add_pd(_mm_mul_pd(vsx, rxc), _mm_mul_pd(vcx, rxs));
-                vcx = next;
-                next = _mm_sub_pd(_mm_mul_pd(vct, rhc), _mm_mul_pd(vst, rhs));
-                vst = _mm_add_pd(_mm_mul_pd(vst, rhc), _mm_mul_pd(vct, rhs));
-                vct = next;
-            }
-            cx = _mm_cvtsd_f64(vcx);
-            sx = _mm_cvtsd_f64(vsx);
-            ct = _mm_cvtsd_f64(vct);
-            st = _mm_cvtsd_f64(vst);
-        }
-#endif
-        for (; l < n; l += 2) {
-            double next;
-            w_end_c[l] = (l0 + (double)l) * h;
-            r->cos_x[l] = cx;
-            r->sin_x[l] = sx;
-            rot_c[l] = ct;
-            rot_s[l] = st;
-            if (l + 1 < n) {
-                w_end_c[l + 1] = (l0 + (double)l + 1.0) * h;
-                r->cos_x[l + 1] = cx1;
-                r->sin_x[l + 1] = sx1;
-                rot_c[l + 1] = ct1;
-                rot_s[l + 1] = st1;
-            }
-            next = cx * c2x - sx * s2x;
-            sx = sx * c2x + cx * s2x;
-            cx = next;
-            next = ct * c2h - st * s2h;
-            st = st * c2h + ct * s2h;
-            ct = next;
-            next = cx1 * c2x - sx1 * s2x;
-            sx1 = sx1 * c2x + cx1 * s2x;
-            cx1 = next;
-            next = ct1 * c2h - st1 * s2h;
-            st1 = st1 * c2h + ct1 * s2h;
-            ct1 = next;
-        }
+    q.cx[0] = first ? cos(l0 * x1) : 1.0;
+    q.sx[0] = first ? sin(l0 * x1) : 0.0;
+    q.ct[0] = first ? cos(l0 * h) : 1.0;
+    q.st[0] = first ? sin(l0 * h) : 0.0;
+    q.order[0] = l0;
+    for (j = 1; j < 4; ++j) {
+        q.cx[j] = q.cx[j - 1] * c1 - q.sx[j - 1] * s1;
+        q.sx[j] = q.sx[j - 1] * c1 + q.cx[j - 1] * s1;
+        q.ct[j] = q.ct[j - 1] * ch - q.st[j - 1] * sh;
+        q.st[j] = q.st[j - 1] * ch + q.ct[j - 1] * sh;
+        q.order[j] = l0 + (double)j;
     }
+    c2 = (c1 - s1) * (c1 + s1);
+    s2 = 2.0 * s1 * c1;
+    q.rx_c = (c2 - s2) * (c2 + s2);
+    q.rx_s = 2.0 * s2 * c2;
+    c2 = (ch - sh) * (ch + sh);
+    s2 = 2.0 * sh * ch;
+    q.rh_c = (c2 - s2) * (c2 + s2);
+    q.rh_s = 2.0 * s2 * c2;
+    q.h = h;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l = phases_avx(&q, n, r, w_end_c);
+#endif
+#if defined(__SSE2__)
+    if (l == 0)
+        l = phases_sse2(&q, n, r, w_end_c);
+#endif
+    phases_scalar(&q, l, n, r, w_end_c);
     for (small = 0; small < n && w_end_c[small] <= SMALL_THETA; ++small) {
         double sinc, m1, m2;
         panel_moments(w_end_c[small], rot_s[small], rot_c[small], &sinc, &m1, &m2);
@@ -159,26 +325,12 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         w_mid[small] = 2.0 * h * (sinc - m2);
     }
     l = small;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l += weights_avx(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
+#endif
 #if defined(__SSE2__)
-    {
-        __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
-        __m128d one = _mm_set1_pd(1.0);
-        for (; l + 2 <= n; l += 2) {
-            __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
-            __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
-            __m128d sinc = _mm_mul_pd(s, inv);
-            __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
-            __m128d m2 = _mm_mul_pd(
-                _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
-                                                 _mm_mul_pd(_mm_mul_pd(two, theta), c)),
-                                      _mm_mul_pd(two, s)),
-                           _mm_mul_pd(inv, inv)),
-                inv);
-            _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
-            _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
-            _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
-        }
-    }
+    l += weights_sse2(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
 #endif
     for (; l < n; ++l) {
         double theta = w_end_c[l], s = rot_s[l], c = rot_c[l];
@@ -339,12 +491,6 @@ accumulate_quads(size_t panels, size_t n, const double *g, double *restrict acc,
 
 #undef FILON_STEP4
 
-/* The processor's features, as the compiler's runtime detected them
- * before main: read-only here. */
-static int have_avx(void)
-{
-    return __builtin_cpu_supports("avx");
-}
 #endif
 
 /* The panels' sum. Four orders at a time keep their phases and sums in
