@@ -609,55 +609,90 @@ static void narrow_sums(const double *even, const double *odd, size_t terms, dou
     *so = o;
 }
 
+/* One order's narrow term with terms powers into *moment. */
+static void narrow_one(const double *even, const double *odd, size_t terms, double order,
+                       double cx, double sx, double *moment)
+{
+    double ce, so;
+    narrow_sums(even, odd, terms, order * order, &ce, &so);
+    *moment += cx * ce - sx * order * so;
+}
+
+#if defined(__SSE2__)
+/* narrow_one for the orders order, order + 1 (lane by lane the same). */
+static void narrow_two(const double *even, const double *odd, size_t terms, double order,
+                       const double *cx, const double *sx, double *moments)
+{
+    __m128d o = _mm_set_pd(order + 1.0, order), lambda = _mm_mul_pd(o, o);
+    __m128d e = _mm_setzero_pd(), od = _mm_setzero_pd();
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
+    for (j = terms / 2; j-- > 0;)
+        od = _mm_add_pd(_mm_mul_pd(od, lambda), _mm_set1_pd(odd[j]));
+    _mm_storeu_pd(moments,
+                  _mm_add_pd(_mm_loadu_pd(moments),
+                             _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx), e),
+                                        _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx), o), od))));
+}
+#endif
+
+#if FILON_HAVE_AVX
+/* narrow_one for the orders order .. order + 3, one AVX register. */
+__attribute__((target("avx"))) static void narrow_four(const double *even, const double *odd,
+                                                       size_t terms, double order,
+                                                       const double *cx, const double *sx,
+                                                       double *moments)
+{
+    __m256d o = _mm256_set_pd(order + 3.0, order + 2.0, order + 1.0, order);
+    __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), od = _mm256_setzero_pd();
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_set1_pd(even[j]));
+    for (j = terms / 2; j-- > 0;)
+        od = _mm256_add_pd(_mm256_mul_pd(od, lambda), _mm256_set1_pd(odd[j]));
+    _mm256_storeu_pd(
+        moments,
+        _mm256_add_pd(_mm256_loadu_pd(moments),
+                      _mm256_sub_pd(_mm256_mul_pd(_mm256_loadu_pd(cx), e),
+                                    _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(sx), o), od))));
+}
+#endif
+
 /* The narrow terms of the orders first .. first + count - 1 with the
- * phases cx, sx of each, into moments. Orders go in pairs (2q, 2q + 1),
- * both with the powers of the odd one, so an order takes the same powers
- * whether its pair is in the same block of orders or not: the pairs share
- * Horner's steps (two per SSE2 register, lane by lane the operations of
- * narrow_sums). */
+ * phases cx, sx of each, into moments. Orders go in fours (4q .. 4q + 3),
+ * all with the powers of the last, so an order takes the same powers
+ * whether the rest of its four is in the same block of orders or not:
+ * whole fours share Horner's steps in one AVX register or two SSE2 ones
+ * (lane by lane the operations of narrow_one, as at the ends). */
 static void narrow_orders(const double *even, const double *odd, double half, size_t first,
                           size_t count, const double *cx, const double *sx, double *moments)
 {
     size_t l = 0, terms = 1;
-    double ce, so;
-    if (count > 0 && first % 2) {
-        double order = (double)first;
-        terms = narrow_terms(order * half, terms);
-        narrow_sums(even, odd, terms, order * order, &ce, &so);
-        moments[0] += cx[0] * ce - sx[0] * order * so;
-        l = 1;
-    }
-    for (; l + 2 <= count; l += 2) {
-        double o0 = (double)(first + l), o1 = o0 + 1.0;
-        terms = narrow_terms(o1 * half, terms);
-#if defined(__SSE2__)
-        {
-            __m128d lambda = _mm_set_pd(o1 * o1, o0 * o0), e = _mm_setzero_pd();
-            __m128d o = _mm_setzero_pd(), order = _mm_set_pd(o1, o0);
-            size_t j;
-            for (j = (terms - 1) / 2 + 1; j-- > 0;)
-                e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
-            for (j = terms / 2; j-- > 0;)
-                o = _mm_add_pd(_mm_mul_pd(o, lambda), _mm_set1_pd(odd[j]));
-            _mm_storeu_pd(moments + l,
-                          _mm_add_pd(_mm_loadu_pd(moments + l),
-                                     _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx + l), e),
-                                                _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx + l),
-                                                                      order),
-                                                           o))));
-        }
-#else
-        narrow_sums(even, odd, terms, o0 * o0, &ce, &so);
-        moments[l] += cx[l] * ce - sx[l] * o0 * so;
-        narrow_sums(even, odd, terms, o1 * o1, &ce, &so);
-        moments[l + 1] += cx[l + 1] * ce - sx[l + 1] * o1 * so;
+    while (l < count) {
+        size_t order = first + l, four = order & ~(size_t)3, k, rest;
+        terms = narrow_terms((double)(four + 3) * half, terms);
+        if (order == four && l + 4 <= count) {
+#if FILON_HAVE_AVX
+            if (have_avx()) {
+                narrow_four(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
+                l += 4;
+                continue;
+            }
 #endif
-    }
-    if (l < count) { /* an even order whose odd partner is not asked for */
-        double order = (double)(first + l);
-        terms = narrow_terms((order + 1.0) * half, terms);
-        narrow_sums(even, odd, terms, order * order, &ce, &so);
-        moments[l] += cx[l] * ce - sx[l] * order * so;
+#if defined(__SSE2__)
+            narrow_two(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
+            narrow_two(even, odd, terms, (double)order + 2.0, cx + l + 2, sx + l + 2,
+                       moments + l + 2);
+            l += 4;
+            continue;
+#endif
+        }
+        rest = four + 4 - order;
+        if (rest > count - l)
+            rest = count - l;
+        for (k = 0; k < rest; ++k, ++l)
+            narrow_one(even, odd, terms, (double)(first + l), cx[l], sx[l], moments + l);
     }
 }
 
@@ -682,8 +717,8 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     if (!(avail * ((double)panels * 14.0 - 20.0) > (double)(panels * powers) * 10.0))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    /* the powers of the last order's odd partner (narrow_orders) */
-    last = (first + count - 1) | 1;
+    /* the powers of the last of the last order's four (narrow_orders) */
+    last = (first + count - 1) | 3;
     powers = narrow_terms((double)last * half, 1);
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
