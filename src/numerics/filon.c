@@ -710,11 +710,12 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     if (avail <= 0.0)
         return 0;
     /* Worth it where the narrow orders (all there are, however many are
-     * asked for) save more of the panels' work (about 14 operations per
-     * panel and order, 30 more per order) than the powers' moments cost
-     * (about 10 per panel and power; 50 per order for the sums). */
+     * asked for) save more of the panels' work (about 4 instructions per
+     * panel and order, with the orders side by side in vector registers,
+     * and 10 more per order for the rule's weights and phases) than the
+     * powers' moments cost (about 10 per panel and power). */
     powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
-    if (!(avail * ((double)panels * 14.0 - 20.0) > (double)(panels * powers) * 10.0))
+    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
     /* the powers of the last of the last order's four (narrow_orders) */
