@@ -6,6 +6,25 @@
 #include <math.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define FILON_HAVE_AVX 1
+#include <immintrin.h>
+#else
+#define FILON_HAVE_AVX 0
+#endif
+
+#if FILON_HAVE_AVX
+/* The processor's features, as the compiler's runtime detected them
+ * before main: read-only here. */
+static int have_avx(void)
+{
+    return __builtin_cpu_supports("avx");
+}
+#endif
+
 /* The three moments of one panel [x1 - h, x1 + h] in u = phi - x1, for
  * theta = l h:
  *   integral u^0 cos(l u) du = 2 h   sinc(theta)
@@ -46,23 +65,217 @@ typedef struct filon_rule {
     double *rot_c, *rot_s; /* [n] cos, sin(2 l h): advance by one panel      */
 } filon_rule;
 
+/* The phases of four chains of every fourth order, lane j the orders
+ * first + 4 q + j: cos and sin of l x1 into cos_x, sin_x, of theta = l h
+ * into rot_c, rot_s, theta into w_end_c; each chain advanced by rotations
+ * by 4 x1 and 4 h (rx_c, rx_s, rh_c, rh_s). c*, s*, t*: the chains'
+ * first values, by lane. The SSE2 and AVX paths do the same operations
+ * lane by lane. */
+typedef struct phase_chains {
+    double cx[4], sx[4], ct[4], st[4], order[4];
+    double rx_c, rx_s, rh_c, rh_s, h;
+} phase_chains;
+
+static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule *r,
+                          double *w_end_c)
+{
+    double cx[4], sx[4], ct[4], st[4], order[4];
+    size_t j;
+    memcpy(cx, q->cx, sizeof cx);
+    memcpy(sx, q->sx, sizeof sx);
+    memcpy(ct, q->ct, sizeof ct);
+    memcpy(st, q->st, sizeof st);
+    memcpy(order, q->order, sizeof order);
+    for (; l < n; l += 4)
+        for (j = 0; j < 4; ++j) {
+            double next;
+            if (l + j < n) {
+                w_end_c[l + j] = order[j] * q->h;
+                r->cos_x[l + j] = cx[j];
+                r->sin_x[l + j] = sx[j];
+                r->rot_c[l + j] = ct[j];
+                r->rot_s[l + j] = st[j];
+            }
+            order[j] += 4.0;
+            next = cx[j] * q->rx_c - sx[j] * q->rx_s;
+            sx[j] = sx[j] * q->rx_c + cx[j] * q->rx_s;
+            cx[j] = next;
+            next = ct[j] * q->rh_c - st[j] * q->rh_s;
+            st[j] = st[j] * q->rh_c + ct[j] * q->rh_s;
+            ct[j] = next;
+        }
+}
+
+#if defined(__SSE2__)
+#define ROTATE2(c, s, rc, rs)                                                      \
+    do {                                                                           \
+        __m128d next_ = _mm_sub_pd(_mm_mul_pd(c, rc), _mm_mul_pd(s, rs));          \
+        s = _mm_add_pd(_mm_mul_pd(s, rc), _mm_mul_pd(c, rs));                      \
+        c = next_;                                                                 \
+    } while (0)
+
+/* The chains' whole steps of four orders; returns the orders done and
+ * leaves the chains where the scalar rest goes on. */
+static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_end_c)
+{
+    __m128d cx0 = _mm_loadu_pd(q->cx), cx1 = _mm_loadu_pd(q->cx + 2);
+    __m128d sx0 = _mm_loadu_pd(q->sx), sx1 = _mm_loadu_pd(q->sx + 2);
+    __m128d ct0 = _mm_loadu_pd(q->ct), ct1 = _mm_loadu_pd(q->ct + 2);
+    __m128d st0 = _mm_loadu_pd(q->st), st1 = _mm_loadu_pd(q->st + 2);
+    __m128d o0 = _mm_loadu_pd(q->order), o1 = _mm_loadu_pd(q->order + 2);
+    __m128d rxc = _mm_set1_pd(q->rx_c), rxs = _mm_set1_pd(q->rx_s);
+    __m128d rhc = _mm_set1_pd(q->rh_c), rhs = _mm_set1_pd(q->rh_s);
+    __m128d h = _mm_set1_pd(q->h), four = _mm_set1_pd(4.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(o0, h));
+        _mm_storeu_pd(w_end_c + l + 2, _mm_mul_pd(o1, h));
+        _mm_storeu_pd(r->cos_x + l, cx0);
+        _mm_storeu_pd(r->cos_x + l + 2, cx1);
+        _mm_storeu_pd(r->sin_x + l, sx0);
+        _mm_storeu_pd(r->sin_x + l + 2, sx1);
+        _mm_storeu_pd(r->rot_c + l, ct0);
+        _mm_storeu_pd(r->rot_c + l + 2, ct1);
+        _mm_storeu_pd(r->rot_s + l, st0);
+        _mm_storeu_pd(r->rot_s + l + 2, st1);
+        o0 = _mm_add_pd(o0, four);
+        o1 = _mm_add_pd(o1, four);
+        ROTATE2(cx0, sx0, rxc, rxs);
+        ROTATE2(cx1, sx1, rxc, rxs);
+        ROTATE2(ct0, st0, rhc, rhs);
+        ROTATE2(ct1, st1, rhc, rhs);
+    }
+    _mm_storeu_pd(q->cx, cx0);
+    _mm_storeu_pd(q->cx + 2, cx1);
+    _mm_storeu_pd(q->sx, sx0);
+    _mm_storeu_pd(q->sx + 2, sx1);
+    _mm_storeu_pd(q->ct, ct0);
+    _mm_storeu_pd(q->ct + 2, ct1);
+    _mm_storeu_pd(q->st, st0);
+    _mm_storeu_pd(q->st + 2, st1);
+    _mm_storeu_pd(q->order, o0);
+    _mm_storeu_pd(q->order + 2, o1);
+    return l;
+}
+
+#undef ROTATE2
+
+/* The weights of the orders l < n (theta, sin, cos of it in w_end_c,
+ * rot_s, rot_c), two per register; returns the orders done. */
+static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s, double *w_mid,
+                           const double *rot_c, const double *rot_s)
+{
+    __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
+    __m128d one = _mm_set1_pd(1.0);
+    size_t l;
+    for (l = 0; l + 2 <= n; l += 2) {
+        __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
+        __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
+        __m128d sinc = _mm_mul_pd(s, inv);
+        __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
+        __m128d m2 = _mm_mul_pd(
+            _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
+                                             _mm_mul_pd(_mm_mul_pd(two, theta), c)),
+                                  _mm_mul_pd(two, s)),
+                       _mm_mul_pd(inv, inv)),
+            inv);
+        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
+        _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
+        _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
+    }
+    return l;
+}
+#endif
+
+#if FILON_HAVE_AVX
+#define ROTATE4(c, s, rc, rs)                                                      \
+    do {                                                                           \
+        __m256d next_ = _mm256_sub_pd(_mm256_mul_pd(c, rc), _mm256_mul_pd(s, rs)); \
+        s = _mm256_add_pd(_mm256_mul_pd(s, rc), _mm256_mul_pd(c, rs));             \
+        c = next_;                                                                 \
+    } while (0)
+
+/* phases_sse2 with the four chains in one AVX register. */
+__attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t n,
+                                                        filon_rule *r, double *w_end_c)
+{
+    __m256d cx = _mm256_loadu_pd(q->cx), sx = _mm256_loadu_pd(q->sx);
+    __m256d ct = _mm256_loadu_pd(q->ct), st = _mm256_loadu_pd(q->st);
+    __m256d o = _mm256_loadu_pd(q->order);
+    __m256d rxc = _mm256_set1_pd(q->rx_c), rxs = _mm256_set1_pd(q->rx_s);
+    __m256d rhc = _mm256_set1_pd(q->rh_c), rhs = _mm256_set1_pd(q->rh_s);
+    __m256d h = _mm256_set1_pd(q->h), four = _mm256_set1_pd(4.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(o, h));
+        _mm256_storeu_pd(r->cos_x + l, cx);
+        _mm256_storeu_pd(r->sin_x + l, sx);
+        _mm256_storeu_pd(r->rot_c + l, ct);
+        _mm256_storeu_pd(r->rot_s + l, st);
+        o = _mm256_add_pd(o, four);
+        ROTATE4(cx, sx, rxc, rxs);
+        ROTATE4(ct, st, rhc, rhs);
+    }
+    _mm256_storeu_pd(q->cx, cx);
+    _mm256_storeu_pd(q->sx, sx);
+    _mm256_storeu_pd(q->ct, ct);
+    _mm256_storeu_pd(q->st, st);
+    _mm256_storeu_pd(q->order, o);
+    return l;
+}
+
+#undef ROTATE4
+
+/* weights_sse2 four orders per register. */
+__attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, double *w_end_c,
+                                                         double *w_end_s, double *w_mid,
+                                                         const double *rot_c,
+                                                         const double *rot_s)
+{
+    __m256d vh = _mm256_set1_pd(h), h2 = _mm256_set1_pd(2.0 * h), two = _mm256_set1_pd(2.0);
+    __m256d one = _mm256_set1_pd(1.0);
+    size_t l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        __m256d theta = _mm256_loadu_pd(w_end_c + l), s = _mm256_loadu_pd(rot_s + l);
+        __m256d c = _mm256_loadu_pd(rot_c + l), inv = _mm256_div_pd(one, theta);
+        __m256d sinc = _mm256_mul_pd(s, inv);
+        __m256d m1 =
+            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(s, _mm256_mul_pd(theta, c)), inv), inv);
+        __m256d m2 = _mm256_mul_pd(
+            _mm256_mul_pd(
+                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), s),
+                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), c)),
+                              _mm256_mul_pd(two, s)),
+                _mm256_mul_pd(inv, inv)),
+            inv);
+        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(vh, m2));
+        _mm256_storeu_pd(w_end_s + l, _mm256_mul_pd(vh, m1));
+        _mm256_storeu_pd(w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
+    }
+    return l;
+}
+#endif
+
 /* The orders first .. first + n - 1; scratch: 7 n doubles. The sines and
- * cosines of l x1 and l h come from rotations by x1 and h (one rounding
- * per order) instead of 4 n calls to sin and cos; those of the first order
- * are computed directly. The rotations are serial; the weights, which
- * each order has to itself, come after them in loops that vectorise (one
- * division per order: the reciprocal of theta), the few orders below
- * SMALL_THETA by their Taylor series first. */
+ * cosines of l x1 and l h come from rotations instead of 4 n calls to sin
+ * and cos: those of the first order are computed directly, the next three
+ * orders' by rotations by x1 and h, and from there the four chains of
+ * every fourth order by rotations by 4 x1 and 4 h (one rounding per four
+ * orders), side by side in vector registers. The weights, which each
+ * order has to itself, come after them, also by vectors (one division per
+ * order: the reciprocal of theta), the few orders below SMALL_THETA by
+ * their Taylor series first. Lane by lane the operations are those of
+ * the scalar loops, which do the same where SSE2 or AVX is not: the
+ * moments do not depend on the processor. */
 static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_t first,
                       size_t n, double *scratch)
 {
     double h = (b - a) / (double)(n_samples - 1), x1 = a + h, l0 = (double)first;
-    double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h);
-    double cx = first ? cos(l0 * x1) : 1.0, sx = first ? sin(l0 * x1) : 0.0;
-    double ct = first ? cos(l0 * h) : 1.0, st = first ? sin(l0 * h) : 0.0;
+    double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h), c2, s2;
     double *restrict w_end_c, *restrict w_end_s, *restrict w_mid, *restrict rot_c,
         *restrict rot_s;
-    size_t l, small;
+    phase_chains q;
+    size_t l = 0, j, small;
     r->n = n;
     r->panels = (n_samples - 1) / 2;
     r->w_end_c = w_end_c = scratch;
@@ -74,20 +287,36 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     r->rot_s = rot_s = scratch + 6 * n;
     /* theta = l h, its cosine and sine wait in w_end_c, rot_c and rot_s
      * for the weights. */
-    for (l = 0; l < n; ++l) {
-        double next;
-        w_end_c[l] = (double)(first + l) * h;
-        r->cos_x[l] = cx;
-        r->sin_x[l] = sx;
-        rot_c[l] = ct;
-        rot_s[l] = st;
-        next = cx * c1 - sx * s1;
-        sx = sx * c1 + cx * s1;
-        cx = next;
-        next = ct * ch - st * sh;
-        st = st * ch + ct * sh;
-        ct = next;
+    q.cx[0] = first ? cos(l0 * x1) : 1.0;
+    q.sx[0] = first ? sin(l0 * x1) : 0.0;
+    q.ct[0] = first ? cos(l0 * h) : 1.0;
+    q.st[0] = first ? sin(l0 * h) : 0.0;
+    q.order[0] = l0;
+    for (j = 1; j < 4; ++j) {
+        q.cx[j] = q.cx[j - 1] * c1 - q.sx[j - 1] * s1;
+        q.sx[j] = q.sx[j - 1] * c1 + q.cx[j - 1] * s1;
+        q.ct[j] = q.ct[j - 1] * ch - q.st[j - 1] * sh;
+        q.st[j] = q.st[j - 1] * ch + q.ct[j - 1] * sh;
+        q.order[j] = l0 + (double)j;
     }
+    c2 = (c1 - s1) * (c1 + s1);
+    s2 = 2.0 * s1 * c1;
+    q.rx_c = (c2 - s2) * (c2 + s2);
+    q.rx_s = 2.0 * s2 * c2;
+    c2 = (ch - sh) * (ch + sh);
+    s2 = 2.0 * sh * ch;
+    q.rh_c = (c2 - s2) * (c2 + s2);
+    q.rh_s = 2.0 * s2 * c2;
+    q.h = h;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l = phases_avx(&q, n, r, w_end_c);
+#endif
+#if defined(__SSE2__)
+    if (l == 0)
+        l = phases_sse2(&q, n, r, w_end_c);
+#endif
+    phases_scalar(&q, l, n, r, w_end_c);
     for (small = 0; small < n && w_end_c[small] <= SMALL_THETA; ++small) {
         double sinc, m1, m2;
         panel_moments(w_end_c[small], rot_s[small], rot_c[small], &sinc, &m1, &m2);
@@ -95,7 +324,15 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         w_end_s[small] = h * m1;
         w_mid[small] = 2.0 * h * (sinc - m2);
     }
-    for (l = small; l < n; ++l) {
+    l = small;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l += weights_avx(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
+#endif
+#if defined(__SSE2__)
+    l += weights_sse2(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
+#endif
+    for (; l < n; ++l) {
         double theta = w_end_c[l], s = rot_s[l], c = rot_c[l];
         double inv = 1.0 / theta, sinc = s * inv, m1 = (s - theta * c) * inv * inv;
         double m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
@@ -103,7 +340,15 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         w_end_s[l] = h * m1;
         w_mid[l] = 2.0 * h * (sinc - m2);
     }
-    for (l = 0; l < n; ++l) {
+    l = 0;
+#if defined(__SSE2__)
+    for (; l + 2 <= n; l += 2) {
+        __m128d s = _mm_loadu_pd(rot_s + l), c = _mm_loadu_pd(rot_c + l);
+        _mm_storeu_pd(rot_c + l, _mm_mul_pd(_mm_sub_pd(c, s), _mm_add_pd(c, s)));
+        _mm_storeu_pd(rot_s + l, _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), s), c));
+    }
+#endif
+    for (; l < n; ++l) {
         double s = rot_s[l], c = rot_c[l];
         rot_c[l] = (c - s) * (c + s);
         rot_s[l] = 2.0 * s * c;
@@ -120,6 +365,134 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
         (s) = s_ * rc[l] + c_ * rs[l];                                             \
     } while (0)
 
+#if defined(__SSE2__)
+/* FILON_STEP for the two orders of each of the vectors c and s (lanes l, l
+ * + 1 of the weights w*): the same operations in the same order per lane,
+ * so the same roundings as one order at a time. */
+#define FILON_STEP2(sum, c, s, w)                                                  \
+    do {                                                                           \
+        __m128d c_ = (c), s_ = (s);                                                \
+        (sum) = _mm_add_pd(                                                        \
+            (sum), _mm_add_pd(_mm_mul_pd(c_, _mm_add_pd(_mm_mul_pd(w##_end_c, ends), \
+                                                          _mm_mul_pd(w##_mid, mid))), \
+                              _mm_mul_pd(_mm_mul_pd(s_, w##_end_s), diff)));       \
+        (c) = _mm_sub_pd(_mm_mul_pd(c_, w##_rot_c), _mm_mul_pd(s_, w##_rot_s));    \
+        (s) = _mm_add_pd(_mm_mul_pd(s_, w##_rot_c), _mm_mul_pd(c_, w##_rot_s));    \
+    } while (0)
+
+/* accumulate's orders in pairs, two pairs at a time while four remain
+ * (the baseline of x86-64 has two doubles per register); returns the
+ * orders done. */
+static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double *restrict acc,
+                               const double *restrict cx, const double *restrict sx,
+                               const double *restrict wc, const double *restrict ws,
+                               const double *restrict wm, const double *restrict rc,
+                               const double *restrict rs)
+{
+    size_t p, l;
+    for (l = 0; l + 4 <= n; l += 4) {
+        __m128d c0 = _mm_loadu_pd(cx + l), c1 = _mm_loadu_pd(cx + l + 2);
+        __m128d s0 = _mm_loadu_pd(sx + l), s1 = _mm_loadu_pd(sx + l + 2);
+        __m128d a0 = _mm_loadu_pd(acc + l), a1 = _mm_loadu_pd(acc + l + 2);
+        __m128d x0_end_c = _mm_loadu_pd(wc + l), x0_end_s = _mm_loadu_pd(ws + l);
+        __m128d x0_mid = _mm_loadu_pd(wm + l), x0_rot_c = _mm_loadu_pd(rc + l);
+        __m128d x0_rot_s = _mm_loadu_pd(rs + l), x1_end_c = _mm_loadu_pd(wc + l + 2);
+        __m128d x1_end_s = _mm_loadu_pd(ws + l + 2), x1_mid = _mm_loadu_pd(wm + l + 2);
+        __m128d x1_rot_c = _mm_loadu_pd(rc + l + 2), x1_rot_s = _mm_loadu_pd(rs + l + 2);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
+            __m128d mid = _mm_set1_pd(g[2 * p + 1]);
+            FILON_STEP2(a0, c0, s0, x0);
+            FILON_STEP2(a1, c1, s1, x1);
+        }
+        _mm_storeu_pd(acc + l, a0);
+        _mm_storeu_pd(acc + l + 2, a1);
+    }
+    for (; l + 2 <= n; l += 2) {
+        __m128d c0 = _mm_loadu_pd(cx + l), s0 = _mm_loadu_pd(sx + l);
+        __m128d a0 = _mm_loadu_pd(acc + l), x0_end_c = _mm_loadu_pd(wc + l);
+        __m128d x0_end_s = _mm_loadu_pd(ws + l), x0_mid = _mm_loadu_pd(wm + l);
+        __m128d x0_rot_c = _mm_loadu_pd(rc + l), x0_rot_s = _mm_loadu_pd(rs + l);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
+            __m128d mid = _mm_set1_pd(g[2 * p + 1]);
+            FILON_STEP2(a0, c0, s0, x0);
+        }
+        _mm_storeu_pd(acc + l, a0);
+    }
+    return l;
+}
+
+#undef FILON_STEP2
+#endif
+
+#if FILON_HAVE_AVX
+/* FILON_STEP2 for four orders per AVX register, chosen at run time
+ * (docs/style.md, item 12): additions and multiplications alone, no fused
+ * ones, so each order's roundings are those of the other paths. */
+#define FILON_STEP4(sum, c, s, w)                                                  \
+    do {                                                                           \
+        __m256d c_ = (c), s_ = (s);                                                \
+        (sum) = _mm256_add_pd(                                                     \
+            (sum),                                                                 \
+            _mm256_add_pd(_mm256_mul_pd(c_, _mm256_add_pd(_mm256_mul_pd(w##_end_c, ends), \
+                                                          _mm256_mul_pd(w##_mid, mid))), \
+                          _mm256_mul_pd(_mm256_mul_pd(s_, w##_end_s), diff)));     \
+        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, w##_rot_c), _mm256_mul_pd(s_, w##_rot_s)); \
+        (s) = _mm256_add_pd(_mm256_mul_pd(s_, w##_rot_c), _mm256_mul_pd(c_, w##_rot_s)); \
+    } while (0)
+
+/* accumulate's orders four at a time, eight while eight remain; returns
+ * the orders done. */
+__attribute__((target("avx"))) static size_t
+accumulate_quads(size_t panels, size_t n, const double *g, double *restrict acc,
+                 const double *restrict cx, const double *restrict sx,
+                 const double *restrict wc, const double *restrict ws,
+                 const double *restrict wm, const double *restrict rc,
+                 const double *restrict rs)
+{
+    size_t p, l;
+    for (l = 0; l + 8 <= n; l += 8) {
+        __m256d c0 = _mm256_loadu_pd(cx + l), c1 = _mm256_loadu_pd(cx + l + 4);
+        __m256d s0 = _mm256_loadu_pd(sx + l), s1 = _mm256_loadu_pd(sx + l + 4);
+        __m256d a0 = _mm256_loadu_pd(acc + l), a1 = _mm256_loadu_pd(acc + l + 4);
+        __m256d x0_end_c = _mm256_loadu_pd(wc + l), x0_end_s = _mm256_loadu_pd(ws + l);
+        __m256d x0_mid = _mm256_loadu_pd(wm + l), x0_rot_c = _mm256_loadu_pd(rc + l);
+        __m256d x0_rot_s = _mm256_loadu_pd(rs + l), x1_end_c = _mm256_loadu_pd(wc + l + 4);
+        __m256d x1_end_s = _mm256_loadu_pd(ws + l + 4), x1_mid = _mm256_loadu_pd(wm + l + 4);
+        __m256d x1_rot_c = _mm256_loadu_pd(rc + l + 4), x1_rot_s = _mm256_loadu_pd(rs + l + 4);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
+            __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
+            FILON_STEP4(a0, c0, s0, x0);
+            FILON_STEP4(a1, c1, s1, x1);
+        }
+        _mm256_storeu_pd(acc + l, a0);
+        _mm256_storeu_pd(acc + l + 4, a1);
+    }
+    for (; l + 4 <= n; l += 4) {
+        __m256d c0 = _mm256_loadu_pd(cx + l), s0 = _mm256_loadu_pd(sx + l);
+        __m256d a0 = _mm256_loadu_pd(acc + l), x0_end_c = _mm256_loadu_pd(wc + l);
+        __m256d x0_end_s = _mm256_loadu_pd(ws + l), x0_mid = _mm256_loadu_pd(wm + l);
+        __m256d x0_rot_c = _mm256_loadu_pd(rc + l), x0_rot_s = _mm256_loadu_pd(rs + l);
+        for (p = 0; p < panels; ++p) {
+            double f0 = g[2 * p], f2 = g[2 * p + 2];
+            __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
+            __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
+            FILON_STEP4(a0, c0, s0, x0);
+        }
+        _mm256_storeu_pd(acc + l, a0);
+    }
+    return l;
+}
+
+#undef FILON_STEP4
+
+#endif
+
 /* The panels' sum. Four orders at a time keep their phases and sums in
  * registers over all panels (one load and store of each per four orders
  * instead of per panel); per order the operations are those of one panel
@@ -130,8 +503,16 @@ static void accumulate(size_t panels, size_t n, const double *g, double *restric
                        const double *restrict wm, const double *restrict rc,
                        const double *restrict rs)
 {
-    size_t p, l;
-    for (l = 0; l + 4 <= n; l += 4) {
+    size_t p, l = 0;
+#if FILON_HAVE_AVX
+    if (have_avx())
+        l = accumulate_quads(panels, n, g, acc, cx, sx, wc, ws, wm, rc, rs);
+#endif
+#if defined(__SSE2__)
+    l += accumulate_pairs(panels, n - l, g, acc + l, cx + l, sx + l, wc + l, ws + l, wm + l,
+                          rc + l, rs + l);
+#endif
+    for (; l + 4 <= n; l += 4) {
         double c0 = cx[l], c1 = cx[l + 1], c2 = cx[l + 2], c3 = cx[l + 3];
         double s0 = sx[l], s1 = sx[l + 1], s2 = sx[l + 2], s3 = sx[l + 3];
         double a0 = acc[l], a1 = acc[l + 1], a2 = acc[l + 2], a3 = acc[l + 3];
@@ -213,27 +594,133 @@ static size_t narrow_terms(double tau, size_t k)
     return k;
 }
 
+/* The narrow sums of one order (lambda = l^2) with terms powers: the even
+ * and odd parts, Horner's in l^2. */
+static void narrow_sums(const double *even, const double *odd, size_t terms, double lambda,
+                        double *ce, double *so)
+{
+    double e = 0.0, o = 0.0;
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = e * lambda + even[j];
+    for (j = terms / 2; j-- > 0;)
+        o = o * lambda + odd[j];
+    *ce = e;
+    *so = o;
+}
+
+/* One order's narrow term with terms powers into *moment. */
+static void narrow_one(const double *even, const double *odd, size_t terms, double order,
+                       double cx, double sx, double *moment)
+{
+    double ce, so;
+    narrow_sums(even, odd, terms, order * order, &ce, &so);
+    *moment += cx * ce - sx * order * so;
+}
+
+#if defined(__SSE2__)
+/* narrow_one for the orders order, order + 1 (lane by lane the same). */
+static void narrow_two(const double *even, const double *odd, size_t terms, double order,
+                       const double *cx, const double *sx, double *moments)
+{
+    __m128d o = _mm_set_pd(order + 1.0, order), lambda = _mm_mul_pd(o, o);
+    __m128d e = _mm_setzero_pd(), od = _mm_setzero_pd();
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
+    for (j = terms / 2; j-- > 0;)
+        od = _mm_add_pd(_mm_mul_pd(od, lambda), _mm_set1_pd(odd[j]));
+    _mm_storeu_pd(moments,
+                  _mm_add_pd(_mm_loadu_pd(moments),
+                             _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx), e),
+                                        _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx), o), od))));
+}
+#endif
+
+#if FILON_HAVE_AVX
+/* narrow_one for the orders order .. order + 3, one AVX register. */
+__attribute__((target("avx"))) static void narrow_four(const double *even, const double *odd,
+                                                       size_t terms, double order,
+                                                       const double *cx, const double *sx,
+                                                       double *moments)
+{
+    __m256d o = _mm256_set_pd(order + 3.0, order + 2.0, order + 1.0, order);
+    __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), od = _mm256_setzero_pd();
+    size_t j;
+    for (j = (terms - 1) / 2 + 1; j-- > 0;)
+        e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_set1_pd(even[j]));
+    for (j = terms / 2; j-- > 0;)
+        od = _mm256_add_pd(_mm256_mul_pd(od, lambda), _mm256_set1_pd(odd[j]));
+    _mm256_storeu_pd(
+        moments,
+        _mm256_add_pd(_mm256_loadu_pd(moments),
+                      _mm256_sub_pd(_mm256_mul_pd(_mm256_loadu_pd(cx), e),
+                                    _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(sx), o), od))));
+}
+#endif
+
+/* The narrow terms of the orders first .. first + count - 1 with the
+ * phases cx, sx of each, into moments. Orders go in fours (4q .. 4q + 3),
+ * all with the powers of the last, so an order takes the same powers
+ * whether the rest of its four is in the same block of orders or not:
+ * whole fours share Horner's steps in one AVX register or two SSE2 ones
+ * (lane by lane the operations of narrow_one, as at the ends). */
+static void narrow_orders(const double *even, const double *odd, double half, size_t first,
+                          size_t count, const double *cx, const double *sx, double *moments)
+{
+    size_t l = 0, terms = 1;
+    while (l < count) {
+        size_t order = first + l, four = order & ~(size_t)3, k, rest;
+        terms = narrow_terms((double)(four + 3) * half, terms);
+        if (order == four && l + 4 <= count) {
+#if FILON_HAVE_AVX
+            if (have_avx()) {
+                narrow_four(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
+                l += 4;
+                continue;
+            }
+#endif
+#if defined(__SSE2__)
+            narrow_two(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
+            narrow_two(even, odd, terms, (double)order + 2.0, cx + l + 2, sx + l + 2,
+                       moments + l + 2);
+            l += 4;
+            continue;
+#endif
+        }
+        rest = four + 4 - order;
+        if (rest > count - l)
+            rest = count - l;
+        for (k = 0; k < rest; ++k, ++l)
+            narrow_one(even, odd, terms, (double)(first + l), cx[l], sx[l], moments + l);
+    }
+}
+
 /* The orders first .. first + count - 1 that are narrow (at most n) into
- * moments; returns count. */
+ * moments; returns count. scratch: 2 n doubles. */
 static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                             size_t n, double *moments)
+                             size_t n, double *moments, double *scratch)
 {
     double half = 0.5 * (b - a), centre = 0.5 * (a + b), h = (b - a) / (double)(n_samples - 1);
     double inv[NARROW_POWERS + 3], m[NARROW_POWERS], even[NARROW_POWERS / 2 + 1];
     double odd[NARROW_POWERS / 2 + 1], cx, sx, c1, s1, fact = 1.0, avail;
-    size_t count, powers, terms = 1, k, p, j, l, panels = (n_samples - 1) / 2;
+    double *cos_l = scratch, *sin_l = scratch + n;
+    size_t count, powers, k, p, j, l, panels = (n_samples - 1) / 2, last;
     avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
     if (avail <= 0.0)
         return 0;
     /* Worth it where the narrow orders (all there are, however many are
-     * asked for) save more of the panels' work (about 14 operations per
-     * panel and order, 30 more per order) than the powers' moments cost
-     * (about 10 per panel and power; 50 per order for the sums). */
+     * asked for) save more of the panels' work (about 4 instructions per
+     * panel and order, with the orders side by side in vector registers,
+     * and 10 more per order for the rule's weights and phases) than the
+     * powers' moments cost (about 10 per panel and power). */
     powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
-    if (!(avail * ((double)panels * 14.0 - 20.0) > (double)(panels * powers) * 10.0))
+    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    powers = narrow_terms((double)(first + count - 1) * half, 1);
+    /* the powers of the last of the last order's four (narrow_orders) */
+    last = (first + count - 1) | 3;
+    powers = narrow_terms((double)last * half, 1);
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -266,17 +753,14 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     cx = first ? cos((double)first * centre) : 1.0;
     sx = first ? sin((double)first * centre) : 0.0;
     for (l = 0; l < count; ++l) {
-        double order = (double)(first + l), lambda = order * order, ce = 0.0, so = 0.0, next;
-        terms = narrow_terms(order * half, terms);
-        for (j = (terms - 1) / 2 + 1; j-- > 0;)
-            ce = ce * lambda + even[j];
-        for (j = terms / 2; j-- > 0;)
-            so = so * lambda + odd[j];
-        moments[l] += cx * ce - sx * order * so;
+        double next;
+        cos_l[l] = cx;
+        sin_l[l] = sx;
         next = cx * c1 - sx * s1;
         sx = sx * c1 + cx * s1;
         cx = next;
     }
+    narrow_orders(even, odd, half, first, count, cos_l, sin_l, moments);
     return count;
 }
 
@@ -284,7 +768,7 @@ void ll_filon_moments_from(const double *g, size_t n_samples, double a, double b
                            size_t n_moments, double *moments, double *scratch)
 {
     filon_rule r;
-    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments);
+    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch);
     if (narrow == n_moments)
         return;
     rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);

@@ -223,27 +223,67 @@ static void add_graded(const ll_microfacet_model *mf, const pair_plan *p, int re
     }
 }
 
+/* The pieces towards an end of [a, b] (d = b - a) whose branch point
+ * lies rho off the circle (in phi; 0: on it, a kink): at most max_levels,
+ * and no more than make the last piece, d 4^-(levels - 1) wide, at most
+ * rho. A piece no wider than its distance from the branch point sees an
+ * analytic f, which its 8 quadratic panels resolve as well as the graded
+ * pieces resolve a kink on the circle (the error of a panel goes like
+ * (h / distance)^3, and each piece is as wide as its distance from the
+ * end); pieces finer than that only cost samples and orders (the grazing
+ * reflections next to total internal reflection, whose branch point lies
+ * just off phi = 0, took 8 levels inside the peak's own piece). */
+static int levels_towards(int max_levels, double d, double rho)
+{
+    int levels = 1;
+    if (!(rho > 0.0))
+        return max_levels;
+    while (levels < max_levels && d > rho) {
+        d *= 0.25;
+        ++levels;
+    }
+    return levels;
+}
+
+/* How far off the circle, in phi, the branch point near phi = 0 (at u <=
+ * 0 of the whole circle's v = 2u) or near phi = pi (u >= 1) lies: 1 - cos
+ * phi = 2u at phi = i y, cosh y = 1 - 2u, and at phi = pi + i y, cosh y =
+ * 2u - 1. */
+static double branch_distance(double outside)
+{
+    double x = 2.0 * outside;
+    return outside > 0.0 ? log1p(x + sqrt(x * (2.0 + x))) : 0.0;
+}
+
 /* [a, b] for GGX, graded towards a singular end over its whole length:
  * pieces at distances [d / 4, d] from it, d = b - a, b - a / 4, ..., each
  * with the same samples, so that every piece resolves the square root of
  * Fresnel at the kink to the same relative accuracy (on uniform panels,
  * as add_graded's, the panels next to the graded ones err by O(h^1/2)
  * there, and a kink under a wide GGX lobe is summed over ~100 orders).
- * levels_a, levels_b: the pieces towards each end (0: not graded). */
+ * levels_a, levels_b: the pieces towards each end at most (0: not
+ * graded), as levels_towards allows for a branch point rho_a, rho_b off
+ * the circle. */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
-                        double b, int levels_a, int levels_b, size_t first, size_t n_out,
-                        double *out, double *scratch, ggx_pass *pass)
+                        double b, int levels_a, double rho_a, int levels_b, double rho_b,
+                        size_t first, size_t n_out, double *out, double *scratch,
+                        ggx_pass *pass)
 {
     double d = b - a;
-    int level, levels = levels_a ? levels_a : levels_b;
+    int level, levels;
     if (!(b > a))
         return;
     if (levels_a && levels_b) {
         double mid = 0.5 * (a + b);
-        add_towards(mf, p, part, a, mid, levels_a, 0, first, n_out, out, scratch, pass);
-        add_towards(mf, p, part, mid, b, 0, levels_b, first, n_out, out, scratch, pass);
+        add_towards(mf, p, part, a, mid, levels_a, rho_a, 0, 0.0, first, n_out, out, scratch,
+                    pass);
+        add_towards(mf, p, part, mid, b, 0, 0.0, levels_b, rho_b, first, n_out, out, scratch,
+                    pass);
         return;
     }
+    levels = levels_a ? levels_towards(levels_a, d, rho_a)
+             : levels_b ? levels_towards(levels_b, d, rho_b)
+                        : 0;
     if (!levels) {
         ggx_piece(mf, p, part, a, b, first, n_out, out, scratch, pass);
         return;
@@ -291,7 +331,9 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
         grade_b = b == p->split && !p->reflect ? kink_levels
                   : b == LL_PI && p->grade_end ? branch_levels
                                                : 0;
-        add_towards(mf, p, part, a, b, grade_a, grade_b, first, n_out, out, scratch, pass);
+        add_towards(mf, p, part, a, b, grade_a, a == 0.0 ? branch_distance(-p->near_start) : 0.0,
+                    grade_b, b == LL_PI ? branch_distance(p->near_end - 1.0) : 0.0, first,
+                    n_out, out, scratch, pass);
         a = b;
     }
 }

@@ -61,6 +61,8 @@ typedef struct pair_plan {
     double split;      /* > 0: g has a kink here (inside the window)        */
     int grade_start;   /* a branch point of g lies just before phi = 0 ...  */
     int grade_end;     /* ... or just after phi_end                         */
+    double near_start; /* where that branch point lies: u = v / Delta <= 0 ... */
+    double near_end;   /* ... or >= 1 (classify_window)                      */
     /* g from t = wi . wo = -sin_prod cos phi - mu_prod: */
     double sin_prod, mu_prod;
     double sign_h;     /* sign of the half vector's z                       */

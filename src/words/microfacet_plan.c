@@ -65,15 +65,18 @@ double ll_microfacet_window_angle(double delta)
  * 16 points falls like rho^-16, rho = |y| + sqrt(y^2 - 1), y = 2u - 1: a
  * point 0.1 outside gives rho = 1.86 and 5e-5 times the size of the
  * singular part), so such pairs take the Filon path too, with the panels
- * graded towards that end. */
+ * graded towards that end (and near_start, near_end say how far out the
+ * nearest such point lies, which bounds how fine that grading must be). */
 static void note_branch_point(pair_plan *p, double u, double delta)
 {
     if (u > ANGLE_EPS && u < 1.0 - ANGLE_EPS) {
         p->split = ll_microfacet_window_angle(delta * u);
         p->filon = 1;
     } else if (u > -NEAR_SINGULAR && u <= ANGLE_EPS) {
+        p->near_start = p->grade_start ? fmax(p->near_start, u) : u;
         p->grade_start = p->filon = 1;
     } else if (u >= 1.0 - ANGLE_EPS && u < 1.0 + NEAR_SINGULAR) {
+        p->near_end = p->grade_end ? fmin(p->near_end, u) : u;
         p->grade_end = p->filon = 1;
     }
 }
@@ -93,7 +96,8 @@ int ll_microfacet_classify_window(const ll_microfacet_model *mf, pair_plan *p)
     double span = p->sin_prod * delta;
     p->phi_end = ll_microfacet_window_angle(delta);
     p->filon = p->grade_start = p->grade_end = 0;
-    p->split = 0.0;
+    p->split = p->near_start = 0.0;
+    p->near_end = 1.0;
     if (!p->reflect) {
         double dense = p->eta > 1.0 ? p->eta : 1.0 / p->eta, t_end = -1.0 / dense;
         if (!(t0 < t_end))
