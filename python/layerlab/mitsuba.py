@@ -107,7 +107,8 @@ except ImportError as error:  # pragma: no cover - depends on the environment
 
 from .mitsuba_lobes import layout_names, traced_lobes  # noqa: E402
 from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
-from .tensor_file import read_tensor_file  # noqa: E402
+from .mitsuba_textured import TexturedTables, is_textured  # noqa: E402
+from .tensor_file import TensorFileError, read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0
@@ -334,6 +335,7 @@ def _make_class():
             self.m_mode = mode
             self.m_tables = None
             self.m_lobes = False
+            self.m_textured = False
             self.m_tables_source = ""
             self.m_fallback = ""
             fields = None
@@ -347,14 +349,34 @@ def _make_class():
                         self.m_table.handle, path, tolerance, cache)
                 except _native.UnsupportedError as error:
                     # A transmissive .bsdf whose tables the loaded library
-                    # cannot write stays on the Fourier path by default
-                    # (asked for "tables", it is refused with the reason).
+                    # cannot write (or a textured one whose bases transmit:
+                    # the writer makes opaque bases) stays on the Fourier
+                    # path by default (asked for "tables", it is refused
+                    # with the reason).
                     if "mode" in props or not self.m_transmits:
                         raise
                     mode = "traced" if self.m_jit else "batch"
                     self.m_mode = mode
                     self.m_fallback = "no tables: %s" % error
-            if fields is not None:
+            if fields is not None and is_textured(fields):
+                try:
+                    self.m_tables = TexturedTables(fields, path)
+                except TensorFileError as error:
+                    # A textured table file whose bases the traced tables do
+                    # not read (spectral, or with lobe sets of their own)
+                    # renders through the C reader unless "tables" was asked.
+                    if "mode" in props:
+                        raise ValueError('layerlab: "mode": "tables" cannot render %s: %s'
+                                         % (path, error)) from None
+                    mode = "batch"
+                    self.m_mode = mode
+                    self.m_fallback = "no tables: %s" % error
+                    fields = None
+                else:
+                    self.m_textured = True
+                    # One-sided reflection, as an opaque table file.
+                    components = [Flags.GlossyReflection | Flags.FrontSide]
+            elif fields is not None:
                 self.m_lobes = layout_names(fields) is not None
                 if self.m_lobes:
                     # A transmissive file: a table set per lobe and side.
@@ -367,7 +389,7 @@ def _make_class():
                     # One-sided reflection, as Mitsuba's `measured` (the
                     # format holds the reflection above the surface).
                     components = [Flags.GlossyReflection | Flags.FrontSide]
-            else:
+            if fields is None:
                 both = Flags.FrontSide | Flags.BackSide
                 components = [Flags.GlossyReflection | both]
                 if self.m_transmits:
@@ -387,20 +409,12 @@ def _make_class():
             table = self.m_table
             tables_file = table.format == "tables"
             spectral = tables_file and table.n_wavelengths > 0
-            # What the traced tables can render: an untextured RGB table
-            # file (opaque, or transmissive: a set per lobe and side), or an
-            # untextured .bsdf (made into such a file on load).
-            if tables_file and table.n_bases > 1:
-                why_not = ("it is a textured table file (a table set per basis, blended "
-                           "per lane with the parameters' weights, which only the C reader "
-                           "evaluates)")
-            elif tables_file:
+            # What the traced tables can render: an RGB table file (opaque,
+            # transmissive: a set per lobe and side, or textured: a set per
+            # basis), or a .bsdf (made into such a file on load).
+            if tables_file:
                 why_not = ("it is a spectral table file (its RGB is the C reader's "
                            "conversion of the spectra)" if spectral else None)
-            elif table.n_bases > 1:
-                why_not = ("it is textured (%s): its tables, a set per basis, are blended "
-                           "per lane with the parameters' weights, which only the C reader "
-                           "evaluates" % ", ".join(table.names))
             else:
                 why_not = None
             if why_not is None:
@@ -551,7 +565,16 @@ def _make_class():
                                           ctx.is_enabled(Flags.GlossyTransmission, 1),
                                           want_value, want_pdf)
 
+        def _textured_eval_pdf(self, ctx, si, wo, active, want_value, want_pdf):
+            if not self._tables_enabled(ctx):
+                return [mi.Float(0.0)] * 3, mi.Float(0.0)
+            value, pdf = self.m_tables.eval_pdf(si.wi, wo, self._param_values(si, active),
+                                                active, want_value, want_pdf)
+            return value, pdf
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                return mi.Color3f(*self._textured_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_lobes:
                 return mi.Color3f(*self._lobes_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_tables is not None:
@@ -569,6 +592,8 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                return self._textured_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_lobes:
                 return self._lobes_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_tables is not None:
@@ -585,6 +610,9 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                value, pdf = self._textured_eval_pdf(ctx, si, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_lobes:
                 value, pdf = self._lobes_eval_pdf(ctx, si, wo, active, True, True)
                 return mi.Color3f(*value), pdf
@@ -625,7 +653,11 @@ def _make_class():
             bs = dr.zeros(mi.BSDFSample3f)
             if not self._tables_enabled(ctx):
                 return bs, mi.Color3f(0.0)
-            wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
+            if self.m_textured:
+                wo, pdf, weight, ok = self.m_tables.sample(
+                    si.wi, sample2, self._param_values(si, active), active)
+            else:
+                wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
             bs.wo = wo
             bs.pdf = pdf
             bs.eta = 1.0
