@@ -19,8 +19,8 @@ interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
 Three implementations, chosen with the property "mode":
-- "tables" (the default for an untextured RGB table file and an untextured
-  .bsdf, opaque or transmissive, in every RGB variant: scalar_rgb,
+- "tables" (the default for an RGB table file and a .bsdf, opaque,
+  transmissive or textured, in every RGB variant: scalar_rgb,
   llvm_ad_rgb, cuda_ad_rgb): warped
   tables of the `measured` format (docs/formats.md), evaluated and
   sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
@@ -42,19 +42,23 @@ Three implementations, chosen with the property "mode":
   .bsdf that transmits gives one; layerlab's extension of the format, a
   table set per lobe and side) has glossy reflection and transmission on
   both sides, evaluated and sampled as the C reader does
-  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). Values are the C
-  reader's on the same table file up to float32 rounding
-  (python/tests/test_tables_mitsuba.py, test_tables_glass_mitsuba.py).
+  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). A textured file (a
+  textured .bsdf gives one: a table set per basis) blends its bases per
+  lane with the weights of the lane's parameter values, as the C reader
+  does (layerlab.mitsuba_textured). Values are the C reader's on the same
+  table file up to float32 rounding (python/tests/test_tables_mitsuba.py,
+  test_tables_glass_mitsuba.py, test_textured_tables_mitsuba.py).
   A spectral table file is not read by this mode (its RGB is the C reader's
   conversion of the spectra): it renders through "batch".
-- "traced" (the default in the LLVM variants for the .bsdf files that
-  "tables" cannot hold: textured ones): the Fourier series'
+- "traced" (the default in the LLVM variants for a .bsdf whose tables the
+  loaded library cannot write, e.g. a textured one whose bases transmit):
+  the Fourier series'
   eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
   over the file's tables, uploaded once as Dr.Jit arrays
   (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
   values and sampled directions are the C reader's up to float32 rounding.
 - "batch" (the default for those files in the scalar variants, and for
-  spectral and textured table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
   ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
   numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
   and calls: symbolic ones hold no values to hand to C. Creating a
@@ -68,9 +72,8 @@ no Fourier series) are refused with the reason. The CUDA variants take
 bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
 "tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
 Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
-A textured table file (a table set per basis of a textured .bsdf) renders
-through "batch", with the same per-parameter properties as that .bsdf
-(below), its basis weights going to the C batch calls per lane. Mitsuba's
+A textured table file (a table set per basis of a textured .bsdf) takes
+the same per-parameter properties as that .bsdf (below). Mitsuba's
 `measured` refuses such a file, and a transmissive one (they have no plain
 tables).
 
@@ -79,9 +82,10 @@ parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
 name may be written "_"), a float or any Mitsuba texture
 (so a bitmap drives the roughness). Its value at the shading point gives the
 basis weights: the tensor product of linear hat weights over the
-parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
-only the bases of non-zero weight are read. In "batch" mode the same weights
-are computed per element in numpy and passed with a stride.
+parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane
+(layerlab.mitsuba_basis, one code for "tables" and "traced"); only the bases
+of non-zero weight are read. In "batch" mode the same weights are computed
+per element in numpy and passed with a stride.
 
 Lobes ("traced", "batch", and "tables" on a transmissive file): glossy
 reflection on both sides, and glossy transmission when the file transmits

@@ -299,3 +299,36 @@ def test_textured_tables_are_the_c_reader_scalar(two, timings):
     assert worst["eval, absolute"] < 2e-5, worst
     assert worst["direction"] < 1e-3, worst
     assert worst["sample pdf"] < 1e-4 and worst["sample weight"] < 1e-4, worst
+
+
+def test_textured_tables_render_as_the_fourier_path(files, timings):
+    """The textured gold with a bitmap driving its alpha (stripes between two of its samples
+    and beyond), 48^2, 24 spp, llvm_ad_rgb, default symbolic mode: from its table file in
+    "tables" mode against its .bsdf in "traced" mode (the Fourier path), within the noise of
+    two renders of different seeds (mitsuba_scenes.check_within_noise)."""
+    bsdf_path, tab_path = files
+    mi.set_variant("llvm_ad_rgb")
+    import layerlab.mitsuba as llmi
+    llmi.register()
+    # (a batch-mode test before may have left the symbolic modes off)
+    dr.set_flag(dr.JitFlag.SymbolicLoops, True)
+    dr.set_flag(dr.JitFlag.SymbolicCalls, True)
+    u = (np.arange(16) + 0.5) / 16
+    uu, vv = np.meshgrid(u, u, indexing="xy")
+    alpha = np.where(np.floor(uu * 4) % 2 == 0, 0.14, 0.32) * 0.5 + (0.15 + 0.15 * vv) * 0.5
+    bitmap = mi.Bitmap(np.ascontiguousarray(alpha[..., None], dtype=np.float32))
+
+    def scene(path, mode):
+        return S.scene(mi, {"type": "layerlab", "filename": path, "mode": mode,
+                            "alpha": {"type": "bitmap", "bitmap": bitmap, "raw": True,
+                                      "filter_type": "bilinear"}}, 48, 24)
+
+    tables, fourier = scene(tab_path, "tables"), scene(bsdf_path, "traced")
+    assert "mode=tables" in str(tables.shapes()[0].bsdf())
+    a = [S.render(mi, tables, 24, s) for s in (1, 2)]
+    b = [S.render(mi, fourier, 24, s) for s in (3, 4)]
+    d, noise, excess, limit = S.check_within_noise(b[0], a[0], b[1], a[1])
+    timings["textured tables vs Fourier path (48^2, 24 spp): relative RMSE"] = (d, "")
+    timings["textured tables vs Fourier path: noise alone"] = (noise, "")
+    assert excess < limit, ("textured tables vs Fourier: relative RMSE %.4g, noise %.4g, "
+                            "excess %.3g >= %.3g" % (d, noise, excess, limit))
