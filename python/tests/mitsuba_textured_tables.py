@@ -6,11 +6,14 @@ sphere of mitsuba_scenes.py, a bitmap (stripes and a ramp over the
 sphere's uv) driving the coat's alpha, the gold's fixed. Not part of
 `make test` (minutes); run by hand:
 
-    python3 python/tests/mitsuba_textured_tables.py SEED.bsdf SEED.tab OUT.png [SIZE [SPP [ROUNDS]]]
+    python3 python/tests/mitsuba_textured_tables.py SEED.bsdf SEED.tab OUT.png [SIZE [SPP [ROUNDS [FOURIER]]]]
 
 SEED.tab: `llconvert SEED.bsdf -o SEED.tab` (or the slow test
-test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). The two
-alternate, ROUNDS (default 3) renders each after one to compile; prints
+test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). FOURIER: the
+.bsdf's mode, "traced" (default) or "batch" (its renders in wavefront
+mode, which it needs, after all the tables' renders in symbolic mode: a
+symbolic render traces every BSDF alive, and a batch-mode one refuses to
+be traced, so its scene is made once the tables' are done). The two alternate, ROUNDS (default 3) renders each after one to compile; prints
 each render's CPU time (the process's, all threads: on a shared machine
 the steadier figure) and wall time, the ratio of the smallest CPU times,
 the relative RMSE between the two, and the noise: the relative RMSE
@@ -27,6 +30,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
+import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 
 mi.set_variant("llvm_ad_rgb")
@@ -55,6 +59,11 @@ def bsdf(path, mode):
 
 
 def timed(scene, spp, seed):
+    # The batch mode needs wavefront mode on this thread; the others render
+    # in Mitsuba's default symbolic mode.
+    symbolic = "mode=batch" not in str(scene.shapes()[0].bsdf())
+    dr.set_flag(dr.JitFlag.SymbolicLoops, symbolic)
+    dr.set_flag(dr.JitFlag.SymbolicCalls, symbolic)
     wall, cpu = time.perf_counter(), time.process_time()
     img = S.render(mi, scene, spp=spp, seed=seed)
     return img, time.perf_counter() - wall, time.process_time() - cpu
@@ -72,25 +81,39 @@ def main():
     size = int(sys.argv[4]) if len(sys.argv) > 4 else 256
     spp = int(sys.argv[5]) if len(sys.argv) > 5 else 64
     rounds = int(sys.argv[6]) if len(sys.argv) > 6 else 3
+    mode = sys.argv[7] if len(sys.argv) > 7 else "traced"
     llmi.register()
     print("size %dx%d, spp %d, variant %s, Mitsuba %s, load average %s"
           % (size, size, spp, mi.variant(), mi.__version__, os.getloadavg()), flush=True)
-    fourier = S.scene(mi, bsdf(bsdf_path, "traced"), size, spp)
     tables = S.scene(mi, bsdf(tab_path, "tables"), size, spp)
     print(tables.shapes()[0].bsdf(), flush=True)
-    # One render each to compile the kernels, then alternating rounds.
-    for name, scn in (("tables", tables), ("fourier", fourier)):
-        _, wall, cpu = timed(scn, spp, 1)
-        print("%s (compiling): wall %.1f s, CPU %.1f s" % (name, wall, cpu), flush=True)
+    fourier = None if mode == "batch" else S.scene(mi, bsdf(bsdf_path, mode), size, spp)
     cpu_t, cpu_f = [], []
+
+    def run(name, scn, times):
+        img, wall, cpu = timed(scn, spp, 1)
+        if times is None:
+            name += " (compiling)"
+        else:
+            times.append(cpu)
+        print("%s: wall %.1f s, CPU %.1f s" % (name, wall, cpu), flush=True)
+        return img
+
+    # One render each to compile the kernels, then alternating rounds.
+    run("tables", tables, None)
+    if fourier is not None:
+        run("fourier", fourier, None)
     for r in range(rounds):
-        img_t, wall, cpu = timed(tables, spp, 1)
-        cpu_t.append(cpu)
-        print("tables:  wall %.1f s, CPU %.1f s" % (wall, cpu), flush=True)
-        img_f, wall, cpu = timed(fourier, spp, 1)
-        cpu_f.append(cpu)
-        print("fourier: wall %.1f s, CPU %.1f s" % (wall, cpu), flush=True)
-    img_f2 = S.render(mi, fourier, spp=spp, seed=2)
+        img_t = run("tables", tables, cpu_t)
+        if fourier is not None:
+            img_f = run("fourier (%s)" % mode, fourier, cpu_f)
+    if fourier is None:
+        del tables
+        fourier = S.scene(mi, bsdf(bsdf_path, mode), size, spp)
+        run("fourier", fourier, None)
+        for r in range(rounds):
+            img_f = run("fourier (%s)" % mode, fourier, cpu_f)
+    img_f2 = timed(fourier, spp, 2)[0]
     print("smallest CPU time: tables %.2f s, fourier %.2f s; ratio fourier / tables %.2f"
           % (min(cpu_t), min(cpu_f), min(cpu_f) / min(cpu_t)))
     print("relative RMSE tables vs fourier: %.4f; fourier vs fourier (other seed, the noise): "
