@@ -13,7 +13,10 @@ test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). FOURIER: the
 .bsdf's mode, "traced" (default) or "batch" (its renders in wavefront
 mode, which it needs, after all the tables' renders in symbolic mode: a
 symbolic render traces every BSDF alive, and a batch-mode one refuses to
-be traced, so its scene is made once the tables' are done). The two alternate, ROUNDS (default 3) renders each after one to compile; prints
+be traced, so its scene is made once the tables' are done; then the table
+file also renders through "batch", the C reader, with the tables' seed:
+the relative RMSE between that and the traced tables is their float32
+rounding). The two alternate, ROUNDS (default 3) renders each after one to compile; prints
 each render's CPU time (the process's, all threads: on a shared machine
 the steadier figure) and wall time, the ratio of the smallest CPU times,
 the relative RMSE between the two, and the noise: the relative RMSE
@@ -120,6 +123,10 @@ def main():
           "%.4f" % (S.relative_rmse(img_t, img_f), S.relative_rmse(img_f2, img_f)))
     print("mean (R G B): tables %s, fourier %s" % (img_t[..., :3].mean(axis=(0, 1)),
                                                    img_f[..., :3].mean(axis=(0, 1))))
+    if mode == "batch":
+        img_c = timed(S.scene(mi, bsdf(tab_path, "batch"), size, spp), spp, 1)[0]
+        print("relative RMSE tables vs the C reader on the table file (batch, same seed): %.3g"
+              % S.relative_rmse(img_t, img_c))
     print("load average %s" % (os.getloadavg(),))
     to_png([img_f, img_t], out)
 
