@@ -19,8 +19,8 @@ interface (Veach's non-symmetric scattering), importance mode does not:
 the C library does that (ll_transport).
 
 Three implementations, chosen with the property "mode":
-- "tables" (the default for an untextured RGB table file and an untextured
-  .bsdf, opaque or transmissive, in every RGB variant: scalar_rgb,
+- "tables" (the default for an RGB table file and a .bsdf, opaque,
+  transmissive or textured, in every RGB variant: scalar_rgb,
   llvm_ad_rgb, cuda_ad_rgb): warped
   tables of the `measured` format (docs/formats.md), evaluated and
   sampled as Mitsuba's own {"type": "measured"} does, with Mitsuba's 2D warps
@@ -42,19 +42,23 @@ Three implementations, chosen with the property "mode":
   .bsdf that transmits gives one; layerlab's extension of the format, a
   table set per lobe and side) has glossy reflection and transmission on
   both sides, evaluated and sampled as the C reader does
-  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). Values are the C
-  reader's on the same table file up to float32 rounding
-  (python/tests/test_tables_mitsuba.py, test_tables_glass_mitsuba.py).
+  (layerlab.mitsuba_lobes, mitsuba_lobes_stacked). A textured file (a
+  textured .bsdf gives one: a table set per basis) blends its bases per
+  lane with the weights of the lane's parameter values, as the C reader
+  does (layerlab.mitsuba_textured). Values are the C reader's on the same
+  table file up to float32 rounding (python/tests/test_tables_mitsuba.py,
+  test_tables_glass_mitsuba.py, test_textured_tables_mitsuba.py).
   A spectral table file is not read by this mode (its RGB is the C reader's
   conversion of the spectra): it renders through "batch".
-- "traced" (the default in the LLVM variants for the .bsdf files that
-  "tables" cannot hold: textured ones): the Fourier series'
+- "traced" (the default in the LLVM variants for a .bsdf whose tables the
+  loaded library cannot write, e.g. a textured one whose bases transmit):
+  the Fourier series'
   eval, pdf and sample written in Dr.Jit operations (layerlab.mitsuba_traced)
   over the file's tables, uploaded once as Dr.Jit arrays
   (ll_bsdf_get_tables). They trace into Mitsuba's rendering kernel too;
   values and sampled directions are the C reader's up to float32 rounding.
 - "batch" (the default for those files in the scalar variants, and for
-  spectral and textured table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
+  spectral table files): one call of the C batch API (ll_bsdf_eval_dir_batch,
   ll_bsdf_pdf_dir_batch, ll_bsdf_sample_dir_batch) per wavefront, through
   numpy copies of the Dr.Jit arrays. That needs evaluated (wavefront) loops
   and calls: symbolic ones hold no values to hand to C. Creating a
@@ -68,9 +72,8 @@ no Fourier series) are refused with the reason. The CUDA variants take
 bounce, and "traced" is written and tested for LLVM. (No GPU was at hand: the
 "tables" mode has run in scalar_rgb and llvm_ad_rgb only; it uses nothing but
 Mitsuba's warps and Dr.Jit operations, which exist in the CUDA variants too.)
-A textured table file (a table set per basis of a textured .bsdf) renders
-through "batch", with the same per-parameter properties as that .bsdf
-(below), its basis weights going to the C batch calls per lane. Mitsuba's
+A textured table file (a table set per basis of a textured .bsdf) takes
+the same per-parameter properties as that .bsdf (below). Mitsuba's
 `measured` refuses such a file, and a transmissive one (they have no plain
 tables).
 
@@ -79,9 +82,10 @@ parameter, by the parameter's name (ll_bsdf_get_parameter_name; a "." in a
 name may be written "_"), a float or any Mitsuba texture
 (so a bitmap drives the roughness). Its value at the shading point gives the
 basis weights: the tensor product of linear hat weights over the
-parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane;
-only the bases of non-zero weight are read. In "batch" mode the same weights
-are computed per element in numpy and passed with a stride.
+parameter's sample positions (ll_bsdf_basis_coefficients), traced per lane
+(layerlab.mitsuba_basis, one code for "tables" and "traced"); only the bases
+of non-zero weight are read. In "batch" mode the same weights are computed
+per element in numpy and passed with a stride.
 
 Lobes ("traced", "batch", and "tables" on a transmissive file): glossy
 reflection on both sides, and glossy transmission when the file transmits
@@ -107,7 +111,8 @@ except ImportError as error:  # pragma: no cover - depends on the environment
 
 from .mitsuba_lobes import layout_names, traced_lobes  # noqa: E402
 from .mitsuba_tables import TracedTables, tables_from_bsdf  # noqa: E402
-from .tensor_file import read_tensor_file  # noqa: E402
+from .mitsuba_textured import TexturedTables, is_textured  # noqa: E402
+from .tensor_file import TensorFileError, read_tensor_file  # noqa: E402
 from .mitsuba_traced import TracedBSDF  # noqa: E402
 
 _LL_OK = 0
@@ -334,6 +339,7 @@ def _make_class():
             self.m_mode = mode
             self.m_tables = None
             self.m_lobes = False
+            self.m_textured = False
             self.m_tables_source = ""
             self.m_fallback = ""
             fields = None
@@ -347,14 +353,34 @@ def _make_class():
                         self.m_table.handle, path, tolerance, cache)
                 except _native.UnsupportedError as error:
                     # A transmissive .bsdf whose tables the loaded library
-                    # cannot write stays on the Fourier path by default
-                    # (asked for "tables", it is refused with the reason).
+                    # cannot write (or a textured one whose bases transmit:
+                    # the writer makes opaque bases) stays on the Fourier
+                    # path by default (asked for "tables", it is refused
+                    # with the reason).
                     if "mode" in props or not self.m_transmits:
                         raise
                     mode = "traced" if self.m_jit else "batch"
                     self.m_mode = mode
                     self.m_fallback = "no tables: %s" % error
-            if fields is not None:
+            if fields is not None and is_textured(fields):
+                try:
+                    self.m_tables = TexturedTables(fields, path)
+                except TensorFileError as error:
+                    # A textured table file whose bases the traced tables do
+                    # not read (spectral, or with lobe sets of their own)
+                    # renders through the C reader unless "tables" was asked.
+                    if "mode" in props:
+                        raise ValueError('layerlab: "mode": "tables" cannot render %s: %s'
+                                         % (path, error)) from None
+                    mode = "batch"
+                    self.m_mode = mode
+                    self.m_fallback = "no tables: %s" % error
+                    fields = None
+                else:
+                    self.m_textured = True
+                    # One-sided reflection, as an opaque table file.
+                    components = [Flags.GlossyReflection | Flags.FrontSide]
+            elif fields is not None:
                 self.m_lobes = layout_names(fields) is not None
                 if self.m_lobes:
                     # A transmissive file: a table set per lobe and side.
@@ -367,7 +393,7 @@ def _make_class():
                     # One-sided reflection, as Mitsuba's `measured` (the
                     # format holds the reflection above the surface).
                     components = [Flags.GlossyReflection | Flags.FrontSide]
-            else:
+            if fields is None:
                 both = Flags.FrontSide | Flags.BackSide
                 components = [Flags.GlossyReflection | both]
                 if self.m_transmits:
@@ -387,20 +413,12 @@ def _make_class():
             table = self.m_table
             tables_file = table.format == "tables"
             spectral = tables_file and table.n_wavelengths > 0
-            # What the traced tables can render: an untextured RGB table
-            # file (opaque, or transmissive: a set per lobe and side), or an
-            # untextured .bsdf (made into such a file on load).
-            if tables_file and table.n_bases > 1:
-                why_not = ("it is a textured table file (a table set per basis, blended "
-                           "per lane with the parameters' weights, which only the C reader "
-                           "evaluates)")
-            elif tables_file:
+            # What the traced tables can render: an RGB table file (opaque,
+            # transmissive: a set per lobe and side, or textured: a set per
+            # basis), or a .bsdf (made into such a file on load).
+            if tables_file:
                 why_not = ("it is a spectral table file (its RGB is the C reader's "
                            "conversion of the spectra)" if spectral else None)
-            elif table.n_bases > 1:
-                why_not = ("it is textured (%s): its tables, a set per basis, are blended "
-                           "per lane with the parameters' weights, which only the C reader "
-                           "evaluates" % ", ".join(table.names))
             else:
                 why_not = None
             if why_not is None:
@@ -551,7 +569,16 @@ def _make_class():
                                           ctx.is_enabled(Flags.GlossyTransmission, 1),
                                           want_value, want_pdf)
 
+        def _textured_eval_pdf(self, ctx, si, wo, active, want_value, want_pdf):
+            if not self._tables_enabled(ctx):
+                return [mi.Float(0.0)] * 3, mi.Float(0.0)
+            value, pdf = self.m_tables.eval_pdf(si.wi, wo, self._param_values(si, active),
+                                                active, want_value, want_pdf)
+            return value, pdf
+
         def eval(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                return mi.Color3f(*self._textured_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_lobes:
                 return mi.Color3f(*self._lobes_eval_pdf(ctx, si, wo, active, True, False)[0])
             if self.m_tables is not None:
@@ -569,6 +596,8 @@ def _make_class():
             return dr.select(ok, f * dr.abs(cos_o), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                return self._textured_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_lobes:
                 return self._lobes_eval_pdf(ctx, si, wo, active, False, True)[1]
             if self.m_tables is not None:
@@ -585,6 +614,9 @@ def _make_class():
             return dr.select(ok, p, 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
+            if self.m_textured:
+                value, pdf = self._textured_eval_pdf(ctx, si, wo, active, True, True)
+                return mi.Color3f(*value), pdf
             if self.m_lobes:
                 value, pdf = self._lobes_eval_pdf(ctx, si, wo, active, True, True)
                 return mi.Color3f(*value), pdf
@@ -625,7 +657,11 @@ def _make_class():
             bs = dr.zeros(mi.BSDFSample3f)
             if not self._tables_enabled(ctx):
                 return bs, mi.Color3f(0.0)
-            wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
+            if self.m_textured:
+                wo, pdf, weight, ok = self.m_tables.sample(
+                    si.wi, sample2, self._param_values(si, active), active)
+            else:
+                wo, pdf, weight, ok = self.m_tables.sample(si.wi, sample2, active)
             bs.wo = wo
             bs.pdf = pdf
             bs.eta = 1.0

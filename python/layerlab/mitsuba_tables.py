@@ -573,9 +573,10 @@ def _cache_key(source, tolerance):
 
 
 def tables_from_bsdf(handle, source, tolerance=0.0, cache=True):
-    """The fields of the table file made from the opened, untextured .bsdf
-    handle (its path source) by ll_tables_write_from_bsdf (for a
-    transmissive one an extended file, a set per lobe and side), with grid
+    """The fields of the table file made from the opened .bsdf handle (its
+    path source) by ll_tables_write_from_bsdf (for a transmissive one an
+    extended file, a set per lobe and side; for a textured one a set per
+    basis), with grid
     sizes chosen by the tolerance, and where they came from. With cache,
     the file is kept in the user's cache directory (layerlab.user_cache_dir(),
     subfolder "mitsuba-tables", named by a hash of the source's bytes, the

@@ -34,7 +34,6 @@ the cost grows with 2^P, not with the number of bases.
 """
 
 import ctypes
-import itertools
 import math
 import sys
 
@@ -42,6 +41,7 @@ import numpy as np
 
 from . import _native
 from ._native import lib
+from .mitsuba_basis import BasisCorners
 
 import drjit as dr
 import mitsuba as mi
@@ -251,19 +251,13 @@ class TracedBSDF:
         self.cdf = Float(t["cdf"].astype(np.float32))
         self.a0 = Float(t["a0"].astype(np.float32))
         counts = t["parameter_counts"]
-        self.parameter_counts = counts
         positions, first = [], 0
         for c in counts:
-            positions.append([float(x) for x in t["parameter_positions"][first:first + c]])
+            positions.append(t["parameter_positions"][first:first + c])
             first += c
-        self.parameter_positions = positions
-        self.parameter_arrays = [Float(np.asarray(p, dtype=np.float32)) for p in positions]
-        # Basis index = sum_p j_p stride_p, parameter 0 fastest (bsdf_basis.c).
-        strides, s = [], 1
-        for c in counts:
-            strides.append(s)
-            s *= c
-        self.strides = strides
+        # The per-lane basis weights (layerlab.mitsuba_basis, shared with the
+        # textured tables).
+        self.basis = BasisCorners(counts, positions)
 
     # ------------------------------------------------------------ weights
 
@@ -303,36 +297,9 @@ class TracedBSDF:
     def basis_corners(self, params):
         """The bases of non-zero weight for per-lane parameter values (a list
         of Float, one per textured parameter): [(basis index UInt32, weight
-        Float)], the 2^P corners of the lanes' cells with the tensor product
-        of linear hat weights (ll_bsdf_basis_coefficients; values outside a
-        parameter's range are clamped to it). Untextured: [(0, 1)]."""
-        Float, UInt32 = mi.Float, mi.UInt32
-        if not self.parameter_counts:
-            return [(None, None)]
-        options = []
-        for p, count in enumerate(self.parameter_counts):
-            pos = self.parameter_positions[p]
-            if count == 1:
-                options.append([(UInt32(0), None)])
-                continue
-            x = dr.clip(Float(params[p]), pos[0], pos[-1])
-            arr = self.parameter_arrays[p]
-            first = dr.binary_search(0, count - 1, lambda i: dr.gather(Float, arr, i) <= x)
-            j = UInt32(dr.clip(mi.Int32(first) - 1, 0, count - 2))
-            lo = dr.gather(Float, arr, j)
-            hi = dr.gather(Float, arr, j + 1)
-            t = dr.clip((x - lo) / (hi - lo), 0.0, 1.0)
-            options.append([(j, 1.0 - t), (j + 1, t)])
-        corners = []
-        for combo in itertools.product(*options):
-            index, weight = UInt32(0), None
-            for p, (j, w) in enumerate(combo):
-                index = index + j * self.strides[p]
-                if w is not None:
-                    weight = w if weight is None else weight * w
-            # The C weights are floats (ll_bsdf_basis_coefficients).
-            corners.append((index, Float(1.0) if weight is None else weight))
-        return corners
+        Float)], the 2^P corners of the lanes' cells
+        (mitsuba_basis.BasisCorners). Untextured: [(None, None)]."""
+        return self.basis.corners(params)
 
     # ------------------------------------------------------- row tables
 

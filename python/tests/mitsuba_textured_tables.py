@@ -1,19 +1,27 @@
-"""A textured material rendered from its table file against its .bsdf
-(the Fourier path), both through the layerlab plugin's "batch" mode in
-llvm_ad_rgb: the seed's grid (examples/seed-two-roughnesses.layers, coat
-alpha x gold alpha) on the sphere of mitsuba_scenes.py, a bitmap (stripes
-and a ramp over the sphere's uv) driving the coat's alpha, the gold's fixed.
-Not part of `make test` (minutes); run by hand:
+"""A textured material rendered from its table file ("tables" mode) against
+its .bsdf through the Fourier path ("traced" mode), both traced into
+Mitsuba's kernel (default symbolic mode), llvm_ad_rgb: the seed's grid
+(examples/seed-two-roughnesses.layers, coat alpha x gold alpha) on the
+sphere of mitsuba_scenes.py, a bitmap (stripes and a ramp over the
+sphere's uv) driving the coat's alpha, the gold's fixed. Not part of
+`make test` (minutes); run by hand:
 
-    python3 python/tests/mitsuba_textured_tables.py SEED.bsdf SEED.tab OUT.png [SIZE [SPP]]
+    python3 python/tests/mitsuba_textured_tables.py SEED.bsdf SEED.tab OUT.png [SIZE [SPP [ROUNDS [FOURIER]]]]
 
 SEED.tab: `llconvert SEED.bsdf -o SEED.tab` (or the slow test
-test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). Prints each
-render's wall and CPU time (the process's, all threads: on a shared
-machine the CPU-time ratio is the steadier figure), the relative RMSE
-between the two, and the noise: the relative RMSE between two renders of
-the Fourier path with different seeds. Writes the pair side by side
-(Fourier left, tables right; sRGB, clipped) to OUT.png.
+test_tables_textured_seed with LL_TEXTURED_SEED_KEEP=DIR). FOURIER: the
+.bsdf's mode, "traced" (default) or "batch" (its renders in wavefront
+mode, which it needs, after all the tables' renders in symbolic mode: a
+symbolic render traces every BSDF alive, and a batch-mode one refuses to
+be traced, so its scene is made once the tables' are done; then the table
+file also renders through "batch", the C reader, with the tables' seed:
+the relative RMSE between that and the traced tables is their float32
+rounding). The two alternate, ROUNDS (default 3) renders each after one to compile; prints
+each render's CPU time (the process's, all threads: on a shared machine
+the steadier figure) and wall time, the ratio of the smallest CPU times,
+the relative RMSE between the two, and the noise: the relative RMSE
+between two renders of the Fourier path with different seeds. Writes the
+pair side by side (Fourier left, tables right; sRGB, clipped) to OUT.png.
 """
 
 import os
@@ -25,6 +33,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
+import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 
 mi.set_variant("llvm_ad_rgb")
@@ -45,15 +54,19 @@ def coat_alpha_bitmap(n=64):
     return np.ascontiguousarray((0.5 * stripes + 0.5 * ramp)[..., None], dtype=np.float32)
 
 
-def bsdf(path):
-    return {"type": "layerlab", "filename": path, "mode": "batch",
+def bsdf(path, mode):
+    return {"type": "layerlab", "filename": path, "mode": mode,
             "coat_alpha": {"type": "bitmap", "bitmap": mi.Bitmap(coat_alpha_bitmap()),
                            "raw": True, "filter_type": "bilinear"},
             "gold_alpha": GOLD_ALPHA}
 
 
 def timed(scene, spp, seed):
-    S.render(mi, scene, spp=1, seed=99)
+    # The batch mode needs wavefront mode on this thread; the others render
+    # in Mitsuba's default symbolic mode.
+    symbolic = "mode=batch" not in str(scene.shapes()[0].bsdf())
+    dr.set_flag(dr.JitFlag.SymbolicLoops, symbolic)
+    dr.set_flag(dr.JitFlag.SymbolicCalls, symbolic)
     wall, cpu = time.perf_counter(), time.process_time()
     img = S.render(mi, scene, spp=spp, seed=seed)
     return img, time.perf_counter() - wall, time.process_time() - cpu
@@ -70,22 +83,50 @@ def main():
     bsdf_path, tab_path, out = sys.argv[1:4]
     size = int(sys.argv[4]) if len(sys.argv) > 4 else 256
     spp = int(sys.argv[5]) if len(sys.argv) > 5 else 64
+    rounds = int(sys.argv[6]) if len(sys.argv) > 6 else 3
+    mode = sys.argv[7] if len(sys.argv) > 7 else "traced"
     llmi.register()
-    llmi.wavefront_mode()  # the batch mode renders in wavefront mode
     print("size %dx%d, spp %d, variant %s, Mitsuba %s, load average %s"
           % (size, size, spp, mi.variant(), mi.__version__, os.getloadavg()), flush=True)
-    fourier = S.scene(mi, bsdf(bsdf_path), size, spp)
-    tables = S.scene(mi, bsdf(tab_path), size, spp)
-    img_t, wall_t, cpu_t = timed(tables, spp, 1)
-    print("tables:  wall %.1f s, CPU %.1f s" % (wall_t, cpu_t), flush=True)
-    img_f, wall_f, cpu_f = timed(fourier, spp, 1)
-    print("fourier: wall %.1f s, CPU %.1f s" % (wall_f, cpu_f), flush=True)
-    img_f2 = S.render(mi, fourier, spp=spp, seed=2)
-    print("CPU-time ratio fourier / tables: %.2f (wall %.2f)" % (cpu_f / cpu_t, wall_f / wall_t))
+    tables = S.scene(mi, bsdf(tab_path, "tables"), size, spp)
+    print(tables.shapes()[0].bsdf(), flush=True)
+    fourier = None if mode == "batch" else S.scene(mi, bsdf(bsdf_path, mode), size, spp)
+    cpu_t, cpu_f = [], []
+
+    def run(name, scn, times):
+        img, wall, cpu = timed(scn, spp, 1)
+        if times is None:
+            name += " (compiling)"
+        else:
+            times.append(cpu)
+        print("%s: wall %.1f s, CPU %.1f s" % (name, wall, cpu), flush=True)
+        return img
+
+    # One render each to compile the kernels, then alternating rounds.
+    run("tables", tables, None)
+    if fourier is not None:
+        run("fourier", fourier, None)
+    for r in range(rounds):
+        img_t = run("tables", tables, cpu_t)
+        if fourier is not None:
+            img_f = run("fourier (%s)" % mode, fourier, cpu_f)
+    if fourier is None:
+        del tables
+        fourier = S.scene(mi, bsdf(bsdf_path, mode), size, spp)
+        run("fourier", fourier, None)
+        for r in range(rounds):
+            img_f = run("fourier (%s)" % mode, fourier, cpu_f)
+    img_f2 = timed(fourier, spp, 2)[0]
+    print("smallest CPU time: tables %.2f s, fourier %.2f s; ratio fourier / tables %.2f"
+          % (min(cpu_t), min(cpu_f), min(cpu_f) / min(cpu_t)))
     print("relative RMSE tables vs fourier: %.4f; fourier vs fourier (other seed, the noise): "
           "%.4f" % (S.relative_rmse(img_t, img_f), S.relative_rmse(img_f2, img_f)))
     print("mean (R G B): tables %s, fourier %s" % (img_t[..., :3].mean(axis=(0, 1)),
                                                    img_f[..., :3].mean(axis=(0, 1))))
+    if mode == "batch":
+        img_c = timed(S.scene(mi, bsdf(tab_path, "batch"), size, spp), spp, 1)[0]
+        print("relative RMSE tables vs the C reader on the table file (batch, same seed): %.3g"
+              % S.relative_rmse(img_t, img_c))
     print("load average %s" % (os.getloadavg(),))
     to_png([img_f, img_t], out)
 

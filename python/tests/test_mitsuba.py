@@ -331,7 +331,7 @@ def renders(files):
     # untextured file of that sample's layers, same seed.
     spp = SPP["conductor"]
     for key, bsdf in (("textured", {"type": "layerlab", "filename": files["textured"],
-                                    "alpha": 0.2}),
+                                    "alpha": 0.2, "mode": "traced"}),
                       ("reference", {"type": "layerlab", "filename": files["reference"],
                                      "mode": "traced"})):
         out[key] = S.render(mi, S.scene(mi, bsdf, SIZE, spp), spp, 6)
@@ -400,9 +400,9 @@ def test_tables_made_on_load_render_as_native_within_noise(renders, timings):
 def test_default_modes(files):
     """Which path a file takes by default, and what is refused: an untextured .bsdf (opaque,
     or the glass, which transmits: a set of tables per lobe and side) and a table file
-    render from tables in every RGB variant, the glass with both lobes; a textured file
-    keeps the Fourier path ("traced" in LLVM, "batch" in scalar) and refuses "tables" with
-    the reason; "traced" stays selectable for the glass."""
+    render from tables in every RGB variant, the glass with both lobes, and so does a
+    textured file (a table set per basis, made on load); "traced" stays selectable for the
+    glass and the textured file."""
     _use("scalar_rgb")
     assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
                                               "filename": files["conductor"]}))
@@ -418,11 +418,11 @@ def test_default_modes(files):
                                               "mode": "traced"}))
     assert "mode=tables" in str(mi.load_dict({"type": "layerlab",
                                               "filename": files["table"]}))
-    with pytest.raises(Exception, match="textured"):
-        mi.load_dict({"type": "layerlab", "filename": files["textured"], "alpha": 0.2,
-                      "mode": "tables"})
+    textured = mi.load_dict({"type": "layerlab", "filename": files["textured"], "alpha": 0.2})
+    assert "mode=tables" in str(textured) and "bases" in str(textured), str(textured)
     assert "mode=traced" in str(mi.load_dict({"type": "layerlab",
-                                              "filename": files["textured"], "alpha": 0.2}))
+                                              "filename": files["textured"], "alpha": 0.2,
+                                              "mode": "traced"}))
 
 
 def test_render_of_another_roughness_is_told_apart(renders, timings):
