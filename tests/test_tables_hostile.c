@@ -447,6 +447,33 @@ static size_t data_at(const unsigned char *d, const char *name)
     return (size_t)get_u64(d + off);
 }
 
+/* A copy of bytes whose one-element field name holds the 4 bytes value: a
+ * format error naming the field. */
+static void expect_scalar_refused(const unsigned char *bytes, size_t size, const char *name,
+                                  const unsigned char *value)
+{
+    unsigned char *d = copy_of(bytes, size);
+    char what[64];
+    memcpy(d + data_at(d, name), value, 4);
+    snprintf(what, sizeof what, "\"%s\"", name);
+    expect(d, size, LL_ERROR_FORMAT, what);
+    free(d);
+}
+
+/* A copy of bytes without the optional field name (its name damaged)
+ * opens. */
+static void expect_opens_without(const unsigned char *bytes, size_t size, const char *name)
+{
+    unsigned char *d = copy_of(bytes, size);
+    size_t off, shape, rank;
+    ll_bsdf *b = NULL;
+    locate(d, name, &off, &shape, &rank);
+    d[off - 4] = 'x';
+    assert_int_equal(ll_bsdf_open_memory(d, size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    free(d);
+}
+
 static void test_transmissive_fields(void **state)
 {
     static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
@@ -489,36 +516,17 @@ static void test_transmissive_fields(void **state)
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
     free(d);
     /* A reflected set's Fresnel index of 1 (no interface); without the
-     * field (its name damaged) the file opens, its values then f's own. */
-    d = copy_of(tgood, tgood_size);
-    memcpy(d + data_at(d, "reflect_bottom.fresnel_eta"), one_bytes, 4);
-    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.fresnel_eta\"");
-    free(d);
-    d = copy_of(tgood, tgood_size);
-    locate(d, "reflect_bottom.fresnel_eta", &off, &shape, &rank);
-    d[off - 4] = 'x';
-    assert_int_equal(ll_bsdf_open_memory(d, tgood_size, NULL, &b), LL_OK);
-    ll_bsdf_release(b);
-    free(d);
+     * field the file opens, its values then f's own. */
+    expect_scalar_refused(tgood, tgood_size, "reflect_bottom.fresnel_eta", one_bytes);
+    expect_opens_without(tgood, tgood_size, "reflect_bottom.fresnel_eta");
     /* A refracted set's transmittance index other than its warp_eta (1,
      * where the warp is 1.5's) or not a number; without the field the
      * file opens, its values then f's own. */
     assert_int_equal(ll_bsdf_open_memory(rgood, rgood_size, NULL, &b), LL_OK);
     ll_bsdf_release(b);
-    d = copy_of(rgood, rgood_size);
-    memcpy(d + data_at(d, "transmit_top.transmittance_eta"), one_bytes, 4);
-    expect(d, rgood_size, LL_ERROR_FORMAT, "\"transmit_top.transmittance_eta\"");
-    free(d);
-    d = copy_of(rgood, rgood_size);
-    memcpy(d + data_at(d, "transmit_top.transmittance_eta"), nan_bytes, 4);
-    expect(d, rgood_size, LL_ERROR_FORMAT, "\"transmit_top.transmittance_eta\"");
-    free(d);
-    d = copy_of(rgood, rgood_size);
-    locate(d, "transmit_top.transmittance_eta", &off, &shape, &rank);
-    d[off - 4] = 'x';
-    assert_int_equal(ll_bsdf_open_memory(d, rgood_size, NULL, &b), LL_OK);
-    ll_bsdf_release(b);
-    free(d);
+    expect_scalar_refused(rgood, rgood_size, "transmit_top.transmittance_eta", one_bytes);
+    expect_scalar_refused(rgood, rgood_size, "transmit_top.transmittance_eta", nan_bytes);
+    expect_opens_without(rgood, rgood_size, "transmit_top.transmittance_eta");
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
     expect_extent(tgood, tgood_size, "reflect_bottom.rgb", 2, 2);
     expect_extent(tgood, tgood_size, "transmit_top.albedo", 0, 2);
