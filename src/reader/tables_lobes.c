@@ -22,7 +22,8 @@
  * "transmittance_eta" holds its values over the Fresnel transmittance
  * times the refraction's d omega_m / d omega_o (tables_refract.h), both
  * of which vanish at the edge of total internal reflection seen from the
- * denser side; they are multiplied back here.
+ * denser side; the refraction's evaluation and sampler multiply them back
+ * (tables_refract.c).
  *
  * Sampling picks the reflected or the transmitted lobe of wi's side in
  * proportion to their luminance albedos at wi's elevation (stored per
@@ -80,20 +81,6 @@ static void fresnel(const ll_measured *set, const double wi[3], const double wo[
     value[2] *= k;
 }
 
-/* A refracted set stored over its refraction's transmittance: the value
- * times it. */
-static void transmittance(const ll_measured *set, const double wi[3], const double wo[3],
-                          double value[3])
-{
-    double k;
-    if (!(set->transmittance_eta > 0.0))
-        return;
-    k = ll_tables_transmittance_pair(wi, wo, set->transmittance_eta);
-    value[0] *= k;
-    value[1] *= k;
-    value[2] *= k;
-}
-
 /* The set's value at (wi, wo) in its frame (wi above). */
 static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
                       const double wo[3], double value[3])
@@ -104,7 +91,6 @@ static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
         fresnel(set, wi, wo, value);
     } else if (set->refract_eta > 0.0) {
         ll_measured_refract_eval(set, wi, wo, value);
-        transmittance(set, wi, wo, value);
     } else {
         flip(wo, f);
         ll_measured_eval(set, wi, f, value);
@@ -224,8 +210,6 @@ int ll_measured_lobes_sample(const ll_measured *m, const double wi[3], const dou
             fresnel(r, w, wo, value);
     } else if (t->refract_eta > 0.0) {
         ok = ll_measured_refract_sample(t, w, v, wo, pdf, value);
-        if (ok)
-            transmittance(t, w, wo, value);
     } else {
         ok = ll_measured_sample(t, w, v, wo, pdf, value);
         wo[2] = -wo[2];

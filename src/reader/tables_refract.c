@@ -54,6 +54,15 @@ static void values_at(const ll_measured *t, const ll_warp_slices *sl, const doub
 /* pdf of wo from the densities over the two squares: per unit area of the
  * normal's square (2 pi^2 u_theta sin theta_m per steradian), times the
  * refraction's d omega_m / d omega_o. */
+/* A set stored over its refraction's transmittance ("transmittance_eta",
+ * tables_refract.h): its values times that factor. */
+static void scale(double value[3], double k)
+{
+    value[0] *= k;
+    value[1] *= k;
+    value[2] *= k;
+}
+
 static double refracted_pdf(double p_v, double p_l, double u_theta_m, double theta_m,
                             double jac)
 {
@@ -73,6 +82,8 @@ void ll_measured_refract_eval(const ll_measured *t, const double wi[3], const do
     normal_coords(m, phi_i, um, &theta_m);
     ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
     values_at(t, &sl, s, um, uwi, value);
+    if (t->transmittance_eta > 0.0)
+        scale(value, ll_tables_transmittance_at(wi, wo, m, t->transmittance_eta));
 }
 
 double ll_measured_refract_pdf(const ll_measured *t, const double wi[3], const double wo[3])
@@ -120,5 +131,9 @@ int ll_measured_refract_sample(const ll_measured *t, const double wi[3], const d
         return 0;
     }
     values_at(t, &sl, s, um, uwi, value);
+    /* (At wo's own refraction half vector, as the evaluation takes it,
+     * not the sampled m: the two agree to rounding only.) */
+    if (t->transmittance_eta > 0.0)
+        scale(value, ll_tables_transmittance_pair(wi, wo, t->transmittance_eta));
     return 1;
 }

@@ -103,19 +103,24 @@ static inline double ll_tables_fresnel_pair(const double wi[3], const double wo[
 
 /* The factor a transmitted set stored over its refraction's transmittance
  * ("transmittance_eta") is multiplied by: 1 - F(wi.m) times d omega_m /
- * d omega_o at the refraction half vector m of (wi above, wo below); 0
- * where the pair has none. Both factors vanish like |wo.m| at the edge of
+ * d omega_o at the refraction half vector m of (wi above, wo below). Both factors vanish like |wo.m| at the edge of
  * total internal reflection, where the refracted direction grazes the
  * microfacet, so f |cos| / D over them is smooth across it. */
+static inline double ll_tables_transmittance_at(const double wi[3], const double wo[3],
+                                                const double m[3], double eta)
+{
+    double c = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+    return (1.0 - ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta)) *
+           ll_tables_refract_jacobian(wi, wo, m, eta);
+}
+
+/* The same where m is the pair's own refraction half vector. */
 static inline double ll_tables_transmittance_pair(const double wi[3], const double wo[3],
                                                   double eta)
 {
-    double m[3], c;
-    if (!ll_tables_refract_half(wi, wo, eta, m))
-        return 0.0;
-    c = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
-    return (1.0 - ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta)) *
-           ll_tables_refract_jacobian(wi, wo, m, eta);
+    double m[3];
+    return ll_tables_refract_half(wi, wo, eta, m) ? ll_tables_transmittance_at(wi, wo, m, eta)
+                                                  : 0.0;
 }
 
 #endif /* LL_TABLES_REFRACT_H */
