@@ -23,6 +23,17 @@
  * first are dropped (the original's ERROR_GOAL). */
 #define LL_MICROFACET_RELERR 1e-3
 
+/* The sum of a[i] b[i] in the order of i: the compensations' weighted sums
+ * of albedos (microfacet_compensation*.c). */
+static inline double ll_microfacet_dot(const double *a, const double *b, size_t n)
+{
+    double sum = 0.0;
+    size_t i;
+    for (i = 0; i < n; ++i)
+        sum += a[i] * b[i];
+    return sum;
+}
+
 typedef struct ll_microfacet_model ll_microfacet_model;
 
 /* The caller's ll_microfacet read up to its struct_size (defaults after),

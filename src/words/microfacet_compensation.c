@@ -21,15 +21,6 @@
 #include <math.h>
 #include <string.h>
 
-static double dot(const double *a, const double *b, size_t n)
-{
-    double sum = 0.0;
-    size_t i;
-    for (i = 0; i < n; ++i)
-        sum += a[i] * b[i];
-    return sum;
-}
-
 static void clear(ll_microfacet_compensation *out)
 {
     memset(out, 0, sizeof *out);
@@ -196,8 +187,8 @@ void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
         lost[j] = fmax(0.0, 1.0 - mirror_albedo[j]);
         first[j] = fmin(lost[j], fmax(0.0, visible_fresnel(mf, rule, mu[j]) - albedo[j]));
     }
-    wl = dot(w, lost, h);
-    wf = dot(w, first, h);
+    wl = ll_microfacet_dot(w, lost, h);
+    wf = ll_microfacet_dot(w, first, h);
     if (!(wl > 0.0) || !(wf > 0.0))
         return;
     f2 = fmin(1.0, wf / wl);
@@ -213,7 +204,7 @@ void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
         double rho = lost[j] > 0.0 ? first[j] / lost[j] : 1.0;
         first[j] *= pow(rho, exponent - 1.0) * (1.0 - tilt * (1.0 - rho) * mu[j]);
     }
-    wu = dot(w, first, h);
+    wu = ll_microfacet_dot(w, first, h);
     if (!(wu > 0.0))
         return;
     out->u[LL_BLOCK_RT] = out->v[LL_BLOCK_RT] = first;

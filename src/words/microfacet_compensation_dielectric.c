@@ -132,15 +132,6 @@ static double share(const ll_microfacet_model *mf, int denser, double mu, double
     return denser ? v : v + ramp(mu) * (prop - v);
 }
 
-static double dot(const double *a, const double *b, size_t n)
-{
-    double sum = 0.0;
-    size_t i;
-    for (i = 0; i < n; ++i)
-        sum += a[i] * b[i];
-    return sum;
-}
-
 /* Moves a towards target beyond 75 degrees, a[j] += lambda g(mu_j)
  * (target[j] - a[j]) (target NULL: 0) with g the ramp above (flat: 1),
  * lambda at most 1, so that W.a changes by up to `amount`; returns what is
@@ -202,8 +193,8 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
      * enters the denser medium). Where the rarer side has too much (mostly
      * a coarse layer's own quadrature losses), the normalisation below
      * scales it down, as a term in proportion to R / (R + T) would. */
-    w_bt = dot(w, a_bt, h);
-    w_tb = dot(w, a_tb, h);
+    w_bt = ll_microfacet_dot(w, a_bt, h);
+    w_tb = ll_microfacet_dot(w, a_tb, h);
     if (!top_denser && w_bt > w_tb / eta2) {
         double left = balance(h, mu, w, w_bt - w_tb / eta2, NULL, 0, a_bt);
         left = balance(h, mu, w, left * eta2, r_t, 0, a_tb);
@@ -218,8 +209,8 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
      * a_bt[j]: the larger of the two normalisations keeps both below their
      * side's transmitted share (what the ramps could not settle goes into
      * reflection at every angle). */
-    w_bt = dot(w, a_bt, h);
-    w_tb = dot(w, a_tb, h);
+    w_bt = ll_microfacet_dot(w, a_bt, h);
+    w_tb = ll_microfacet_dot(w, a_tb, h);
     norm = fmax(w_bt, w_tb / eta2);
     if (norm > 0.0) {
         out->u[LL_BLOCK_TTB] = a_bt;
@@ -240,12 +231,12 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
         r_t[j] = fmax(0.0, 1.0 - rt[j] - t_tb); /* reflection deficit, top    */
         r_b[j] = fmax(0.0, 1.0 - rb[j] - t_bt); /* reflection deficit, bottom */
     }
-    wa = dot(w, r_t, h);
+    wa = ll_microfacet_dot(w, r_t, h);
     if (wa > 0.0) {
         out->u[LL_BLOCK_RT] = out->v[LL_BLOCK_RT] = r_t;
         out->scale[LL_BLOCK_RT] = 1.0 / wa;
     }
-    wa = dot(w, r_b, h);
+    wa = ll_microfacet_dot(w, r_b, h);
     if (wa > 0.0) {
         out->u[LL_BLOCK_RB] = out->v[LL_BLOCK_RB] = r_b;
         out->scale[LL_BLOCK_RB] = 1.0 / wa;
