@@ -38,8 +38,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables, _fresnel_at, _fresnel_eta, _refraction_half, \
-    _refraction_jacobian
+from .mitsuba_tables import TracedTables, _flip, _fresnel_at, _fresnel_eta, _masked_call, \
+    _refraction_half, _refraction_jacobian
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -77,10 +77,6 @@ def transmittance_at(wi, wo, m, eta):
     (wi above, wo below, m their refraction half vector), as the C
     reader's ll_tables_transmittance_pair."""
     return (1.0 - _fresnel_at(wi, m, eta)) * _refraction_jacobian(wi, wo, m, eta)
-
-
-def _flip(v):
-    return mi.Vector3f(v.x, v.y, -v.z)
 
 
 def _scalar_false(mask):
@@ -179,13 +175,7 @@ class TracedLobes:
         return dr.select(mi.Frame3f.cos_theta(wi) > 0, inv, self.eta * self.eta)
 
     def _branch(self, mask, fn, args, zeros):
-        """fn(*args) where mask holds, zeros() elsewhere. In the JIT
-        variants a symbolic conditional (dr.if_stmt), so that a packet of
-        lanes none of which needs the set skips its code; in the scalar
-        variants a plain call (the mask is a bool there)."""
-        if not self.jit:
-            return fn(*args) if mask else zeros()
-        return dr.if_stmt(args, mask, fn, lambda *_: zeros())
+        return _masked_call(self.jit, mask, fn, args, zeros)
 
     def _set_eval_pdf(self, t, transmit, w, o, mask, want_value, want_pdf):
         if not transmit:

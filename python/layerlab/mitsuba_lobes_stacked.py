@@ -20,7 +20,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _fresnel_at, \
+from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _flip, _fresnel_at, \
     _fresnel_eta, _refraction_half, _refraction_jacobian
 from .mitsuba_lobes import transmittance_at, transmittance_eta
 from .tensor_file import TensorFileError
@@ -31,10 +31,6 @@ ORDER = (1, 0, 2, 3)
 # The albedos (in SETS order) of a side's reflected and transmitted sets.
 SETS_TOP = (0, 2)
 SETS_BOTTOM = (1, 3)
-
-
-def _flip(v):
-    return mi.Vector3f(v.x, v.y, -v.z)
 
 
 class StackedLobes:

@@ -176,6 +176,21 @@ def _refraction_jacobian(wi, wo, m, eta):
     return dr.select(nonzero, eta * eta * dr.abs(om) / dr.select(nonzero, d * d, 1.0), 0.0)
 
 
+def _flip(v):
+    """v with its z negated: a direction as seen from the other side."""
+    return mi.Vector3f(v.x, v.y, -v.z)
+
+
+def _masked_call(jit, mask, fn, args, zeros):
+    """fn(*args) where mask holds, zeros() elsewhere. In the JIT variants a
+    symbolic conditional (dr.if_stmt), so that a packet of lanes none of
+    which needs the code skips it; in the scalar variants a plain call (the
+    mask is a bool there)."""
+    if not jit:
+        return fn(*args) if mask else zeros()
+    return dr.if_stmt(args, mask, fn, lambda *_: zeros())
+
+
 def _fresnel(c, eta):
     """The unpolarised Fresnel reflectance of a smooth interface for light
     at cosine c (> 0) to its normal on the side of index 1, the far side of

@@ -34,7 +34,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_basis import BasisCorners
-from .mitsuba_tables import TracedTables
+from .mitsuba_tables import TracedTables, _masked_call
 from .tensor_file import TensorFileError
 
 
@@ -106,12 +106,8 @@ class TexturedTables:
         return weights, total
 
     def _branch(self, mask, fn, args, zeros):
-        """fn(*args) where mask holds, zeros() elsewhere: a symbolic
-        conditional in the JIT variants (a packet of lanes none of which
-        needs the basis skips its code), a plain call in the scalar ones."""
-        if not self.jit:
-            return fn(*args) if mask else zeros()
-        return dr.if_stmt(args, mask, fn, lambda *_: zeros())
+        # (a packet of lanes none of which needs the basis skips its code)
+        return _masked_call(self.jit, mask, fn, args, zeros)
 
     @staticmethod
     def _zero_eval():
