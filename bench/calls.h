@@ -28,8 +28,15 @@ typedef void (*bench_light_fn)(bench_rng *rng, const double wo[3], size_t k, dou
 void bench_calls_make(bench_calls *w, size_t calls, uint64_t seed, bench_light_fn light);
 void bench_calls_free(bench_calls *w);
 
+/* The timers below measure wall seconds, or after
+ * bench_calls_use_cpu_time(1) the process's CPU seconds (for a program
+ * that makes its calls on one thread: on a shared machine the steadier
+ * figure). bench_calls_seconds: that clock. */
+void bench_calls_use_cpu_time(int on);
+double bench_calls_seconds(void);
+
 /* Each timer makes w->calls calls of its function on one handle and
- * returns the wall seconds they took; it adds their results to *sum,
+ * returns the seconds they took; it adds their results to *sum,
  * which the program prints, so that the work is observable. */
 double bench_time_eval(const ll_bsdf *b, const bench_calls *w, double *sum);
 double bench_time_pdf(const ll_bsdf *b, const bench_calls *w, double *sum);

@@ -15,8 +15,15 @@
  * hemisphere and half the mirror direction of wo turned
  * by a normal within about 0.2 radians of the pole (inside a glossy lobe,
  * where a renderer's evaluations of a glossy material concentrate), u
- * uniform in [0, 1)^2. Metrics: tables.LABEL.{eval,pdf,sample}_dir and
- * tables.LABEL.bsdf_{eval,pdf,sample}_dir.
+ * uniform in [0, 1)^2. Times are CPU seconds (every call on one thread).
+ * Metrics: tables.LABEL.{eval,pdf,sample}_dir and
+ * tables.LABEL.bsdf_{eval,pdf,sample}_dir ("cold": every call reads new,
+ * scattered nodes of the tables); on the table also
+ * tables.LABEL.hot_{eval,pdf,sample}_dir, the first HOT_CALLS calls made
+ * over and over until as many calls are made (their nodes stay in cache:
+ * the cost of the code itself), and tables.LABEL.batch_{eval,sample}_dir,
+ * ns per element of ll_bsdf_eval_dir_batch and ll_bsdf_sample_dir_batch
+ * over all the calls on one thread (LAYERLAB_BATCH_THREADS=1).
  */
 #define LL_EXPERIMENTAL /* ll_tables_write_from_bsdf */
 #include "calls.h"
@@ -25,8 +32,12 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 #define DEFAULT_CALLS 1000000
+#define HOT_CALLS 64
+#define HOT_REPEAT 256
 
 /* wi of call k for the viewer wo (bench_light_fn): for odd k the
  * reflection of wo about a normal m near the pole, for even k a uniform
@@ -51,13 +62,69 @@ static void light_for(bench_rng *rng, const double wo[3], size_t k, double wi[3]
     wi[2] = 2.0 * d * m[2] - wo[2];
 }
 
+/* The hot figures: w's first HOT_CALLS calls (fewer if w has fewer)
+ * repeated HOT_REPEAT times in one workload, timed over and over until at
+ * least w->calls calls are made, per call (one clock reading per
+ * HOT_CALLS * HOT_REPEAT calls). */
+static void measure_hot(const ll_bsdf *b, const bench_calls *w, const char *prefix,
+                        double *sum)
+{
+    bench_calls hot;
+    double t[3] = { 0.0, 0.0, 0.0 };
+    size_t n = w->calls < HOT_CALLS ? w->calls : HOT_CALLS, made, k;
+    char id[192];
+    hot.calls = n * HOT_REPEAT;
+    hot.wo = bench_alloc(hot.calls, 3 * sizeof(double));
+    hot.wi = bench_alloc(hot.calls, 3 * sizeof(double));
+    hot.u = bench_alloc(hot.calls, 2 * sizeof(double));
+    for (k = 0; k < hot.calls; ++k) {
+        memcpy(hot.wo + 3 * k, w->wo + 3 * (k % n), 3 * sizeof(double));
+        memcpy(hot.wi + 3 * k, w->wi + 3 * (k % n), 3 * sizeof(double));
+        memcpy(hot.u + 2 * k, w->u + 2 * (k % n), 2 * sizeof(double));
+    }
+    for (made = 0; made < w->calls; made += hot.calls) {
+        t[0] += bench_time_eval(b, &hot, sum);
+        t[1] += bench_time_pdf(b, &hot, sum);
+        t[2] += bench_time_sample(b, &hot, sum);
+    }
+    snprintf(id, sizeof id, "%shot_eval_dir", prefix);
+    bench_metric(id, "ns", t[0] * 1e9 / (double)made);
+    snprintf(id, sizeof id, "%shot_pdf_dir", prefix);
+    bench_metric(id, "ns", t[1] * 1e9 / (double)made);
+    snprintf(id, sizeof id, "%shot_sample_dir", prefix);
+    bench_metric(id, "ns", t[2] * 1e9 / (double)made);
+    bench_calls_free(&hot);
+}
+
+/* The batch figures: all of w's calls in one batch call of each kind. */
+static void measure_batch(const ll_bsdf *b, const bench_calls *w, const char *prefix,
+                          double *sum, double *out, double *pdf, double *wi)
+{
+    double start;
+    char id[192];
+    start = bench_calls_seconds();
+    bench_check(ll_bsdf_eval_dir_batch(b, w->calls, w->wo, w->wi, LL_TRANSPORT_RADIANCE, NULL,
+                                       0, out),
+                "ll_bsdf_eval_dir_batch");
+    snprintf(id, sizeof id, "%sbatch_eval_dir", prefix);
+    bench_metric(id, "ns", (bench_calls_seconds() - start) * 1e9 / (double)w->calls);
+    *sum += out[0];
+    start = bench_calls_seconds();
+    bench_check(ll_bsdf_sample_dir_batch(b, w->calls, w->wo, w->u, LL_TRANSPORT_RADIANCE, NULL,
+                                         0, wi, pdf, out),
+                "ll_bsdf_sample_dir_batch");
+    snprintf(id, sizeof id, "%sbatch_sample_dir", prefix);
+    bench_metric(id, "ns", (bench_calls_seconds() - start) * 1e9 / (double)w->calls);
+    *sum += out[0] + pdf[0];
+}
+
 int main(int argc, char **argv)
 {
     ll_bsdf *source = NULL, *table = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     bench_calls w;
     size_t runs, calls = DEFAULT_CALLS, run;
-    double sum = 0.0, start;
+    double sum = 0.0, start, *out, *pdf, *wi;
     char text[64], prefix[2][128];
 
     if (argc != 5 && argc != 6)
@@ -68,6 +135,12 @@ int main(int argc, char **argv)
     if (calls == 0)
         bench_die("tables: CALLS must be positive");
     bench_check(ll_set_thread_count(1), "ll_set_thread_count");
+    /* Every call on this one thread: CPU time, which a shared machine's
+     * other work does not lengthen as it does the wall time. */
+    bench_calls_use_cpu_time(1);
+    /* The batch calls on one thread, as the scalar ones. */
+    if (setenv("LAYERLAB_BATCH_THREADS", "1", 1) != 0)
+        bench_die("tables: setenv failed");
     bench_check(ll_bsdf_open(argv[1], NULL, &source), "ll_bsdf_open (source)");
     start = bench_wall_seconds();
     bench_check(ll_tables_write_from_bsdf(source, argv[2], NULL, NULL),
@@ -79,6 +152,9 @@ int main(int argc, char **argv)
     snprintf(text, sizeof text, "%zu bytes", info.file_size);
     bench_info("table file", text);
     bench_calls_make(&w, calls, 29, light_for);
+    out = bench_alloc(calls, 3 * sizeof(double));
+    wi = bench_alloc(calls, 3 * sizeof(double));
+    pdf = bench_alloc(calls, sizeof(double));
     /* An untimed pass of each over 1% of the calls warms caches and pages. */
     bench_calls_warm(table, &w, 1, &sum);
     bench_calls_warm(source, &w, 0, &sum);
@@ -86,6 +162,8 @@ int main(int argc, char **argv)
     snprintf(prefix[1], sizeof prefix[1], "tables.%s.bsdf_", argv[3]);
     for (run = 0; run < runs; ++run) {
         bench_calls_measure(table, &w, prefix[0], &sum);
+        measure_hot(table, &w, prefix[0], &sum);
+        measure_batch(table, &w, prefix[0], &sum, out, pdf, wi);
         bench_calls_measure(source, &w, prefix[1], &sum);
     }
     snprintf(text, sizeof text, "%g", sum);
@@ -93,5 +171,8 @@ int main(int argc, char **argv)
     ll_bsdf_release(table);
     ll_bsdf_release(source);
     bench_calls_free(&w);
+    free(out);
+    free(wi);
+    free(pdf);
     return 0;
 }

@@ -101,6 +101,7 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     memset(wp, 0, sizeof *wp);
     wp->w = w;
     wp->h = h;
+    wp->area = 1.0;
     wp->n_params = n_params;
     for (p = 0; p < n_params; ++p) {
         wp->param_size[p] = param_size[p];
@@ -138,6 +139,7 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     if (!sampling)
         return LL_OK;
     wp->normalized = 1;
+    wp->area = (double)(w - 1) * (double)(h - 1);
     wp->cond = wp->data + 1;
     wp->marg = ll_alloc_array(n * h, sizeof(float));
     wp->row_total = ll_alloc_array(n * h, sizeof(float));
@@ -351,7 +353,7 @@ static inline double bilinear_pair(const slice_pair *q, size_t step, size_t w, s
  * values per cell area, total 1), the value itself otherwise. */
 static double area_scale(const ll_warp2d *wp)
 {
-    return wp->normalized ? (double)(wp->w - 1) * (double)(wp->h - 1) : 1.0;
+    return wp->area;
 }
 
 void ll_warp_slices_append(const slice_set *s, size_t k, size_t n, slice_set *out)

@@ -56,6 +56,10 @@ typedef struct ll_warp2d {
     float *marg;                              /* [n_slices][h] the same along y of
                                                  the row totals                   */
     int normalized;                           /* each slice divided by its total  */
+    double area;                              /* a sampling warp's density per unit
+                                                 area of the square from a value:
+                                                 (w - 1) (h - 1), taken once; else
+                                                 1                                */
     float *row_total;                         /* [n_slices][h] the last entry of
                                                  each row of cond: the totals a
                                                  look-up reads every time, in a
