@@ -125,8 +125,12 @@ static int kink_side(const series_case *c, double mu_o, double mu_i, double phi,
 static void add_piece(const series_work *w, const series_case *c, double mu_o, double mu_i,
                       double a, double b, double h, size_t len)
 {
-    size_t points = 2 * (size_t)ceil(0.5 * (b - a) / h) + 1, k, l;
-    double hx = 1.0 / (double)(points - 1);
+    size_t points, k, l;
+    double hx;
+    if (!(b > a))
+        return; /* two kinks a rounding apart: no piece between them */
+    points = 2 * (size_t)ceil(0.5 * (b - a) / h) + 1;
+    hx = 1.0 / (double)(points - 1);
     for (k = 0; k < points; ++k) {
         double x = (double)k * hx, phi = a + (b - a) * x * x * (3.0 - 2.0 * x);
         double jac = (b - a) * 6.0 * x * (1.0 - x), c1 = cos(phi), prev = c1, cur = 1.0;
