@@ -86,45 +86,41 @@ double ll_ggx_max_beta(size_t n_orders, double relerr)
     return exp(lo);
 }
 
-void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size_t n_out,
-                   double *out, double *scratch)
+/* The series of E_beta p from p's two-sided coefficients b[j], j < n_b
+ * (b_0 the mean, b_j half the amplitude of cos(j phi)); e: n_out + n_b
+ * doubles. */
+static void convolve(double beta, const double *b, size_t n_b, size_t n_out, double *out,
+                     double *e)
 {
-    /* E_beta p with p = sum_j b_j cos(j phi): the two-sided coefficient of
-     * order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) + e_(l + j)) / 2.
-     * From l = LL_GGX_CHEB - 1 on, every l - j >= 0 and e_k = r^k (c + k s)
-     * / s^3 make that sum r^l ((c + l s) S_0 + S_1) / s^3 with
+    /* E_beta p with p = b_0 + sum_j 2 b_j cos(j phi): the two-sided
+     * coefficient of order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) +
+     * e_(l + j)). From l = n_b - 1 on, every l - j >= 0 and e_k = r^k (c +
+     * k s) / s^3 make that sum r^l ((c + l s) S_0 + S_1) / s^3 with
      *     S_0 = b_0 + sum_(j >= 1) b_j (r^-j + r^j),
      *     S_1 = s sum_(j >= 1) j b_j (r^j - r^-j),
-     * one term per order instead of LL_GGX_CHEB (a sharp lobe has hundreds
-     * of orders). For r below closed_r, r^-j would grow towards overflow;
+     * one term per order instead of n_b (a sharp lobe has hundreds of
+     * orders). For r below closed_r, r^-j would grow towards overflow;
      * such a peak is wide and its series short, summed term by term. */
     const double closed_r = 1e-2;
-    double *b = scratch, *e = scratch + LL_GGX_CHEB;
     double c, s, r, power = 1.0, inv_s3;
-    size_t i, j, l, direct, n_e;
+    size_t j, l, direct, n_e;
     peak_constants(beta, &c, &s, &r);
     inv_s3 = 1.0 / (s * s * s);
-    direct = r < closed_r || n_out < LL_GGX_CHEB ? n_out : LL_GGX_CHEB;
-    n_e = direct + LL_GGX_CHEB;
-    for (j = 0; j < LL_GGX_CHEB; ++j) {
-        double sum = 0.0;
-        for (i = 0; i < LL_GGX_CHEB; ++i)
-            sum += basis->to_cosine[j][i] * g[i];
-        b[j] = j == 0 ? sum : 0.5 * sum;
-    }
+    direct = r < closed_r || n_out < n_b ? n_out : n_b;
+    n_e = direct + n_b;
     for (l = 0; l < n_e; ++l) {
         e[l] = power * (c + (double)l * s) * inv_s3;
         power *= r;
     }
     for (l = 0; l < direct; ++l) {
         double sum = b[0] * e[l];
-        for (j = 1; j < LL_GGX_CHEB; ++j)
+        for (j = 1; j < n_b; ++j)
             sum += b[j] * (e[l > j ? l - j : j - l] + e[l + j]);
         out[l] = l == 0 ? sum : 2.0 * sum;
     }
     if (direct < n_out) {
         double s0 = b[0], s1 = 0.0, up = 1.0, down = 1.0, inv_r = 1.0 / r;
-        for (j = 1; j < LL_GGX_CHEB; ++j) {
+        for (j = 1; j < n_b; ++j) {
             up *= r;
             down *= inv_r;
             s0 += b[j] * (down + up);
@@ -139,4 +135,29 @@ void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size
             power *= r;
         }
     }
+}
+
+void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size_t n_out,
+                   double *out, double *scratch)
+{
+    double *b = scratch;
+    size_t i, j;
+    for (j = 0; j < LL_GGX_CHEB; ++j) {
+        double sum = 0.0;
+        for (i = 0; i < LL_GGX_CHEB; ++i)
+            sum += basis->to_cosine[j][i] * g[i];
+        b[j] = j == 0 ? sum : 0.5 * sum;
+    }
+    convolve(beta, b, LL_GGX_CHEB, n_out, out, scratch + LL_GGX_CHEB);
+}
+
+void ll_ggx_series_quadratic(double beta, const double *q, size_t n_out, double *out,
+                             double *scratch)
+{
+    /* v = 1 - cos phi and v^2 = 3/2 - 2 cos phi + cos(2 phi) / 2. */
+    double b[3];
+    b[0] = q[0] + q[1] + 1.5 * q[2];
+    b[1] = 0.5 * (-q[1] - 2.0 * q[2]);
+    b[2] = 0.25 * q[2];
+    convolve(beta, b, 3, n_out, out, scratch);
 }
