@@ -136,13 +136,23 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
  * which the passes of the next blocks of orders replay instead of taking
  * them again (cache NULL: more pieces than it holds, sampled again). */
 #define GGX_CACHE 1024
+#define GGX_KEPT 48 /* pieces whose Taylor sums are kept (the rest: summed per block) */
 typedef struct ggx_pass {
     double seen;
     const double *q; /* g's quadratic taken out with the peak (ggx_split_series) */
     double *cache;
     size_t used;
     int replay;
+    size_t piece;    /* the pieces so far in this pass */
+    ll_filon_kept kept[GGX_KEPT];
 } ggx_pass;
+
+/* The kept Taylor sums of the pass's next piece (NULL: beyond GGX_KEPT). */
+static ll_filon_kept *next_kept(ggx_pass *pass)
+{
+    size_t piece = pass->piece++;
+    return piece < GGX_KEPT ? &pass->kept[piece] : NULL;
+}
 
 /* Record (or, replaying, read) a piece's stride and samples; 0 when a
  * replayed piece is skipped. */
@@ -170,13 +180,15 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
     double *filon = scratch + FILON_SCR_FILON, largest, *seen = &pass->seen;
     size_t stride = 4, k;
+    ll_filon_kept *kept;
     if (!(b > a))
         return;
+    kept = next_kept(pass);
     if (pass->replay) {
         stride = ggx_record(pass, 0, f);
         if (stride)
-            ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
-                                  out, filon);
+            ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
+                                  out, filon, kept);
         return;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
@@ -200,7 +212,8 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
             f[k] = f[k * stride];
     ggx_record(pass, stride, f);
-    ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon);
+    ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon,
+                          kept);
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -313,13 +326,16 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
                       double seen, size_t first, size_t n_out, double *out, double *scratch,
                       ggx_pass *pass)
 {
-    double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
+    /* (refraction ends at its split, but the rest of a split peak, -E_beta
+     * q beyond it, does not) */
+    double end = !p->reflect && p->split > 0.0 && !pass->q ? p->split : LL_PI;
     double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
     /* (a dielectric's reflection: its branch points may be TIR's) */
     int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     pass->seen = seen;
     pass->used = 0;
+    pass->piece = 0;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a, grade_b;
@@ -375,7 +391,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    size_t k, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     if (first && first < n)
         n = first;
     if (n > n_out)
@@ -383,6 +399,8 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.cache = cache;
     pass.replay = 0;
     pass.q = q;
+    for (k = 0; k < GGX_KEPT; ++k)
+        pass.kept[k].powers = 0;
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
     pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
@@ -438,7 +456,7 @@ size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf, const pair_
  * refraction), a branch point just before phi = 0, or GGX_SPLIT_UNRECORDED
  * (beyond which classify_window records none). The peak's orders are the
  * closed form's, one term each. */
-#define GGX_SPLIT_REACH 64.0
+#define GGX_SPLIT_REACH 16.0
 #define GGX_SPLIT_SPAN 4.0
 #define GGX_SPLIT_UNRECORDED 0.2 /* in v: 2 NEAR_SINGULAR of microfacet_plan.c's
                                   * u = v / 2 on GGX's whole circle            */
