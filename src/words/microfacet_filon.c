@@ -34,6 +34,10 @@
                                * errs by 3.3e-4 of the peak instead of 2.3e-4,
                                * and with 2 just off the circle by 5.1e-4
                                * instead of 1.6e-4)                            */
+#define GGX_KINK_GOAL 1e-4    /* the Fresnel part's grading stops where the
+                               * piece next to the kink, d wide, after one
+                               * whose largest f is f_d, has d f_d below this
+                               * times the pair's peak (add_towards)           */
 #define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
@@ -144,6 +148,8 @@ typedef struct ggx_pass {
     size_t used;
     int replay;
     size_t piece;    /* the pieces so far in this pass */
+    double kink_goal; /* > 0: the grading towards TIR's kink stops early
+                       * (add_towards) against this                     */
     ll_filon_kept kept[GGX_KEPT];
 } ggx_pass;
 
@@ -173,7 +179,9 @@ static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
     return stride;
 }
 
-static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
+/* One piece of ggx_filon's; returns the largest |f| of its samples (0 if
+ * it is skipped), the same replayed as sampled. */
+static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                       double b, size_t first, size_t n_out, double *out, double *scratch,
                       ggx_pass *pass)
 {
@@ -182,14 +190,18 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
     size_t stride = 4, k;
     ll_filon_kept *kept;
     if (!(b > a))
-        return;
+        return 0.0;
     kept = next_kept(pass);
     if (pass->replay) {
+        size_t count;
         stride = ggx_record(pass, 0, f);
-        if (stride)
-            ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
-                                  out, filon, kept);
-        return;
+        if (!stride)
+            return 0.0;
+        count = (GGX_PIECE_SAMPLES - 1) / stride + 1;
+        ll_filon_moments_kept(f, count, a, b, first, n_out, out, filon, kept);
+        for (largest = 0.0, k = 0; k < count; ++k)
+            largest = fmax(largest, fabs(f[k]));
+        return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
     largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
@@ -206,7 +218,7 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
     }
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
         ggx_record(pass, 0, f);
-        return;
+        return 0.0;
     }
     if (stride > 1) /* the samples taken, side by side */
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
@@ -214,6 +226,7 @@ static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int par
     ggx_record(pass, stride, f);
     ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon,
                           kept);
+    return largest;
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -281,13 +294,20 @@ static double branch_distance(double outside)
  * there, and a kink under a wide GGX lobe is summed over ~100 orders).
  * levels_a, levels_b: the pieces towards each end at most (0: not
  * graded), as levels_towards allows for a branch point rho_a, rho_b off
- * the circle. */
+ * the circle. Where the pass has a kink_goal (the Fresnel part of total
+ * internal reflection), the grading stops early: the piece that reaches
+ * the kink, d wide, errs by about d times the square root's size there,
+ * which the piece before it (at [d, 4 d], its largest |f| f_d) bounds,
+ * so once d f_d is below the goal, finer pieces change nothing that
+ * matters (a kink far out in a narrow lobe's tail took all 8 levels). The
+ * choice depends on the samples alone, so a replayed pass makes it
+ * again the same. */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                         double b, int levels_a, double rho_a, int levels_b, double rho_b,
                         size_t first, size_t n_out, double *out, double *scratch,
                         ggx_pass *pass)
 {
-    double d = b - a;
+    double d = b - a, last = HUGE_VAL;
     int level, levels;
     if (!(b > a))
         return;
@@ -307,11 +327,13 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
         return;
     }
     for (level = 0; level < levels; ++level) {
-        double near = level == levels - 1 ? 0.0 : 0.25 * d;
+        double near = level == levels - 1 || d * last < pass->kink_goal ? 0.0 : 0.25 * d;
         if (levels_a)
-            ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
+            last = ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
         else
-            ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
+            last = ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
+        if (near == 0.0)
+            break;
         d = near;
     }
 }
@@ -399,6 +421,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.cache = cache;
     pass.replay = 0;
     pass.q = q;
+    pass.kink_goal = part == GGX_FRESNEL ? GGX_KINK_GOAL * seen : 0.0;
     for (k = 0; k < GGX_KEPT; ++k)
         pass.kept[k].powers = 0;
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
