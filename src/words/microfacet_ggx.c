@@ -54,17 +54,49 @@ static double term_ratio(double beta, double l)
     return 2.0 * exp(l * log(r)) * (c + l * s) / c;
 }
 
+/* Whether the term of order l has fallen below relerr times the first. */
+static int term_below(double c, double s, double log_r, double l, double relerr)
+{
+    return 2.0 * exp(l * log_r) * (c + l * s) < relerr * c;
+}
+
 size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
 {
-    double c, s, r, power = 1.0;
-    size_t l;
+    /* The first l with t(l) = log(2 (c + l s) / (relerr c)) + l log r < 0:
+     * t is concave, so Newton's steps from the root's left (l log r alone
+     * crosses first) land right of it and then close in from the right;
+     * the integer found is checked against the terms themselves (a sharp
+     * lobe's series has thousands of terms, which counting one by one
+     * cost as much as the series). */
+    double c, s, r, log_r, l, x;
+    int k;
     peak_constants(beta, &c, &s, &r);
-    for (l = 1; l < cap; ++l) {
-        power *= r;
-        if (2.0 * power * (c + (double)l * s) < relerr * c)
-            return l;
+    if (cap <= 1)
+        return cap;
+    if (!(r > 0.0) || term_below(c, s, log(r), 1.0, relerr))
+        return 1;
+    log_r = log(r);
+    x = fmax(1.0, log(0.5 * relerr) / log_r);
+    for (k = 0; k < 8; ++k) {
+        double t = log(2.0 * (c + x * s) / (relerr * c)) + x * log_r;
+        double slope = s / (c + x * s) + log_r, step;
+        if (!(slope < 0.0))
+            break;
+        step = t / slope;
+        x -= step;
+        if (fabs(step) < 0.01) /* the integer is settled below */
+            break;
     }
-    return cap;
+    if (!(x < (double)cap))
+        return cap;
+    l = ceil(x);
+    if (l < 1.0)
+        l = 1.0;
+    while (l > 1.0 && term_below(c, s, log_r, l - 1.0, relerr))
+        l -= 1.0;
+    while (l < (double)cap && !term_below(c, s, log_r, l, relerr))
+        l += 1.0;
+    return (size_t)l;
 }
 
 double ll_ggx_max_beta(size_t n_orders, double relerr)
