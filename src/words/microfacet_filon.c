@@ -42,7 +42,7 @@
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
                                * this many more ...                            */
-#define GGX_SETTLED 2.5e-4    /* ... extended by half until the last quarter
+#define GGX_SETTLED 2.5e-4    /* ... doubled until the last quarter
                                * of the block stays below this fraction of the
                                * mean: a quarter of what the layer keeps
                                * (LL_MICROFACET_RELERR)                        */
@@ -403,10 +403,12 @@ static int ggx_settled(const double *out, size_t n, double moment0)
  * orders times the samples, so the first holds the orders of the sharpest
  * thing the integrand holds (first: the peak's, or fewer where the peak
  * is taken out, q not NULL) and a few more, and the next ones (the orders
- * after it, the same pieces and samples, replayed) add half as many again
- * until its last quarter has settled against the pair's moment of order
- * 0: moment0, plus the moments' own order 0 if own0. Returns the orders
- * computed. */
+ * after it, the same pieces and samples, replayed) double it until its
+ * last quarter has settled against the pair's moment of order
+ * 0: moment0, plus the moments' own order 0 if own0 (doubling, not
+ * adding half, as every block's pass over the pieces costs the pieces'
+ * setup again, which the fewer passes save more of than the orders
+ * beyond the settled ones cost). Returns the orders computed. */
 static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
                          const double *q, double start, double seen, size_t first,
                          double moment0, int own0, size_t n_out, double *out, double *scratch)
@@ -427,7 +429,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
     pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
-        size_t step = n / 2 > 8 ? n / 2 : 8, next = n_out - n > step ? n + step : n_out;
+        size_t step = n > 8 ? n : 8, next = n_out - n > step ? n + step : n_out;
         ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch, &pass);
         n = next;
     }
