@@ -7,12 +7,17 @@
  * resolution table), which Beckmann's shorter series leave partly empty.
  * The ratio GGX / Beckmann is the figure (docs/benchmarks.md).
  *
- * usage: ggx_speed [NODES [RUNS]]   (default 100 nodes, 3 runs)
+ * usage: ggx_speed [NODES [RUNS [CASE [DIST]]]]
+ *   (default 100 nodes, 3 runs, every case, both distributions). CASE, a
+ *   row of the table from 1, and DIST, ggx or beckmann, build that alone
+ *   (its seconds in its own column, the other 0): one build to count the
+ *   instructions of, e.g. under valgrind --tool=callgrind.
  */
 #include "bench_util.h"
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Gold's index in the red channel (bench/recipe.c's), mono. */
 #define GOLD_RE 0.14317534881908534
@@ -65,17 +70,26 @@ int main(int argc, char **argv)
 {
     size_t n = argc > 1 ? bench_parse_size(argv[1], "NODES") : 100;
     size_t runs = argc > 2 ? bench_parse_size(argv[2], "RUNS") : 3, i;
-    if (n < 4 || n % 2 || runs < 1)
-        bench_die("usage: %s [NODES (even, >= 4) [RUNS (>= 1)]]", argv[0]);
+    size_t n_cases = sizeof cases / sizeof cases[0];
+    size_t only = argc > 3 ? bench_parse_size(argv[3], "CASE") : 0;
+    int beckmann_too = argc <= 4 || strcmp(argv[4], "beckmann") == 0;
+    int ggx_too = argc <= 4 || strcmp(argv[4], "ggx") == 0;
+    if (n < 4 || n % 2 || runs < 1 || only > n_cases || !(beckmann_too || ggx_too))
+        bench_die("usage: %s [NODES (even, >= 4) [RUNS (>= 1) [CASE (1 .. %zu) "
+                  "[ggx|beckmann]]]]",
+                  argv[0], n_cases);
     bench_check(ll_set_thread_count(1), "ll_set_thread_count");
     printf("GGX against Beckmann at the same (n, m): CPU seconds of ll_layer_set_microfacet,\n"
            "one thread, best of %zu, n = %zu, m = GGX's chosen orders\n\n", runs, n);
     printf("| material | alpha | m | Beckmann s | GGX s | GGX / Beckmann |\n");
     printf("|---|---|---|---|---|---|\n");
-    for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+    for (i = 0; i < n_cases; ++i) {
         const speed_case *c = &cases[i];
-        double beckmann = build_seconds(c, LL_MICROFACET_BECKMANN, n, runs);
-        double ggx = build_seconds(c, LL_MICROFACET_GGX, n, runs);
+        double beckmann, ggx;
+        if (only && i + 1 != only)
+            continue;
+        beckmann = beckmann_too ? build_seconds(c, LL_MICROFACET_BECKMANN, n, runs) : 0.0;
+        ggx = ggx_too ? build_seconds(c, LL_MICROFACET_GGX, n, runs) : 0.0;
         printf("| %s | %g | %zu | %.3f | %.3f | %.2f |\n", c->material, c->alpha, c->orders,
                beckmann, ggx, beckmann > 0.0 ? ggx / beckmann : 0.0);
         fflush(stdout);

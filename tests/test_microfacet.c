@@ -25,6 +25,7 @@
 #include "microfacet_check.h"
 #include "numerics/filon.h"
 #include "words/microfacet.h"
+#include "words/microfacet_ggx.h"
 #include "numerics/series.h"
 #include "search/probe.h"
 #include "words/heuristics.h"
@@ -122,6 +123,61 @@ static void filon_is_exact_for_quadratics(void **state)
             ref = F_b - F_a;
         }
         assert_float_equal(moments[l], ref, 1e-13);
+    }
+}
+
+/* A series extended block by block with the Taylor form's sums kept
+ * (ll_filon_moments_kept) is the one whose blocks each sum them again,
+ * bit for bit: on a narrow piece (every order below 400 by the Taylor
+ * form) and on a wide one (the panels' sums after the first orders). */
+static void filon_kept_sums_match_summed_again(void **state)
+{
+    static const size_t blocks[] = { 0, 7, 20, 61, 150, 300 };
+    static const double ends[][2] = { { 0.7, 0.71 }, { 0.2, 2.9 } };
+    double g[17], whole[300], parts[300], scratch[7 * 300];
+    size_t e, k, j;
+    (void)state;
+    for (e = 0; e < 2; ++e) {
+        double a = ends[e][0], b = ends[e][1];
+        ll_filon_kept kept;
+        for (k = 0; k < 17; ++k) {
+            double x = a + (b - a) * (double)k / 16.0;
+            g[k] = exp(-3.0 * x) * sqrt(1.0 + x);
+        }
+        memset(whole, 0, sizeof whole);
+        memset(parts, 0, sizeof parts);
+        kept.powers = 0;
+        for (j = 0; j + 1 < sizeof blocks / sizeof blocks[0]; ++j) {
+            ll_filon_moments_from(g, 17, a, b, blocks[j], blocks[j + 1] - blocks[j],
+                                  whole + blocks[j], scratch);
+            ll_filon_moments_kept(g, 17, a, b, blocks[j], blocks[j + 1] - blocks[j],
+                                  parts + blocks[j], scratch, &kept);
+        }
+        assert_memory_equal(whole, parts, sizeof whole);
+    }
+}
+
+/* The closed form of E_beta times a quadratic in v = 1 - cos phi (GGX's
+ * peak split) against the 16-point form of ll_ggx_series, which holds a
+ * quadratic in cos phi exactly. */
+static void ggx_quadratic_series_matches_interpolated(void **state)
+{
+    static const double betas[] = { 0.3, 40.0, 5e3 };
+    const double q[3] = { 1.5, -0.7, 0.25 };
+    ll_ggx_basis basis;
+    double g[LL_GGX_CHEB], closed[400], interpolated[400], scratch[400 + 2 * LL_GGX_CHEB];
+    size_t i, k, l;
+    (void)state;
+    ll_ggx_basis_init(&basis);
+    for (i = 0; i < LL_GGX_CHEB; ++i) {
+        double v = 1.0 - basis.cos_phi[i];
+        g[i] = q[0] + v * (q[1] + v * q[2]);
+    }
+    for (k = 0; k < sizeof betas / sizeof betas[0]; ++k) {
+        ll_ggx_series_quadratic(betas[k], q, 400, closed, scratch);
+        ll_ggx_series(&basis, betas[k], g, 400, interpolated, scratch);
+        for (l = 0; l < 400; ++l)
+            assert_true(fabs(closed[l] - interpolated[l]) <= 1e-12 * fabs(interpolated[0]));
     }
 }
 
@@ -514,6 +570,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(bessel_i0e_matches_reference),
         cmocka_unit_test(filon_is_exact_for_quadratics),
+        cmocka_unit_test(filon_kept_sums_match_summed_again),
+        cmocka_unit_test(ggx_quadratic_series_matches_interpolated),
         cmocka_unit_test(series_matches_direct_integration),
         cmocka_unit_test(dielectric_conserves_energy),
         cmocka_unit_test(interface_is_reciprocal),

@@ -573,7 +573,8 @@ void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
  * beta (the expansion about the centre costs about two digits of
  * cancellation at the outer panels). */
 #define NARROW_TAU 2.0
-#define NARROW_POWERS 23 /* = 1 + the terms of term_needed at most NARROW_TAU */
+#define NARROW_POWERS LL_FILON_POWERS /* = 1 + the terms of term_needed at most
+                                       * NARROW_TAU */
 
 static const double term_needed[NARROW_POWERS - 1] = {
     1.0000000000000013e-15, 4.4721359549995863e-08, 1.8171205928321391e-05,
@@ -696,31 +697,15 @@ static void narrow_orders(const double *even, const double *odd, double half, si
     }
 }
 
-/* The orders first .. first + count - 1 that are narrow (at most n) into
- * moments; returns count. scratch: 2 n doubles. */
-static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                             size_t n, double *moments, double *scratch)
+/* The powers' sums of the piece, powers of them, into kept's even and odd
+ * (Horner's coefficients in l^2). */
+static void narrow_sums_of(const double *g, size_t n_samples, double a, double b, size_t powers,
+                           ll_filon_kept *kept)
 {
-    double half = 0.5 * (b - a), centre = 0.5 * (a + b), h = (b - a) / (double)(n_samples - 1);
-    double inv[NARROW_POWERS + 3], m[NARROW_POWERS], even[NARROW_POWERS / 2 + 1];
-    double odd[NARROW_POWERS / 2 + 1], cx, sx, c1, s1, fact = 1.0, avail;
-    double *cos_l = scratch, *sin_l = scratch + n;
-    size_t count, powers, k, p, j, l, panels = (n_samples - 1) / 2, last;
-    avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
-    if (avail <= 0.0)
-        return 0;
-    /* Worth it where the narrow orders (all there are, however many are
-     * asked for) save more of the panels' work (about 4 instructions per
-     * panel and order, with the orders side by side in vector registers,
-     * and 10 more per order for the rule's weights and phases) than the
-     * powers' moments cost (about 10 per panel and power). */
-    powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
-    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
-        return 0;
-    count = avail >= (double)n ? n : (size_t)avail;
-    /* the powers of the last of the last order's four (narrow_orders) */
-    last = (first + count - 1) | 3;
-    powers = narrow_terms((double)last * half, 1);
+    double centre = 0.5 * (a + b), h = (b - a) / (double)(n_samples - 1);
+    double inv[NARROW_POWERS + 3], m[NARROW_POWERS], fact = 1.0;
+    double *even = kept->even, *odd = kept->odd;
+    size_t k, p, j, panels = (n_samples - 1) / 2;
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -748,6 +733,45 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
         else
             even[k / 2] = signed_m * fact;
     }
+    kept->powers = powers;
+}
+
+/* The orders first .. first + count - 1 that are narrow (at most n) into
+ * moments; returns count. scratch: 2 n doubles. The powers' sums come
+ * from kept where it holds enough of them (a block of orders after the
+ * first), else are summed into it: each sum is the same whatever number
+ * of powers is summed with it, so the moments do not depend on which
+ * block summed them. kept NULL: summed here for this call alone. */
+static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
+                             size_t n, double *moments, double *scratch, ll_filon_kept *kept)
+{
+    double half = 0.5 * (b - a), centre = 0.5 * (a + b), cx, sx, c1, s1, avail;
+    double *cos_l = scratch, *sin_l = scratch + n;
+    size_t count, powers, l, panels = (n_samples - 1) / 2, last;
+    ll_filon_kept own;
+    avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
+    if (avail <= 0.0)
+        return 0;
+    /* Worth it where the narrow orders (all there are, however many are
+     * asked for) save more of the panels' work (about 4 instructions per
+     * panel and order, with the orders side by side in vector registers,
+     * and 10 more per order for the rule's weights and phases) than the
+     * powers' moments cost (about 10 per panel and power). */
+    powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
+    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
+        return 0;
+    count = avail >= (double)n ? n : (size_t)avail;
+    /* the powers of the last of the last order's four (narrow_orders) */
+    last = (first + count - 1) | 3;
+    powers = narrow_terms((double)last * half, 1);
+    if (!kept) {
+        kept = &own;
+        narrow_sums_of(g, n_samples, a, b, powers, kept);
+    } else if (kept->powers < powers) {
+        /* all that the piece's narrow orders take, for the blocks after */
+        last = ((first + (size_t)avail - 1) | 3);
+        narrow_sums_of(g, n_samples, a, b, narrow_terms((double)last * half, 1), kept);
+    }
     c1 = cos(centre);
     s1 = sin(centre);
     cx = first ? cos((double)first * centre) : 1.0;
@@ -760,15 +784,23 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
         sx = sx * c1 + cx * s1;
         cx = next;
     }
-    narrow_orders(even, odd, half, first, count, cos_l, sin_l, moments);
+    narrow_orders(kept->even, kept->odd, half, first, count, cos_l, sin_l, moments);
     return count;
 }
 
 void ll_filon_moments_from(const double *g, size_t n_samples, double a, double b, size_t first,
                            size_t n_moments, double *moments, double *scratch)
 {
+    ll_filon_moments_kept(g, n_samples, a, b, first, n_moments, moments, scratch, NULL);
+}
+
+void ll_filon_moments_kept(const double *g, size_t n_samples, double a, double b, size_t first,
+                           size_t n_moments, double *moments, double *scratch,
+                           ll_filon_kept *kept)
+{
     filon_rule r;
-    size_t narrow = narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch);
+    size_t narrow =
+        narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch, kept);
     if (narrow == n_moments)
         return;
     rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);

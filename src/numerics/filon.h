@@ -27,4 +27,19 @@ LL_INTERNAL void ll_filon_moments_from(const double *g, size_t n_samples, double
                                        size_t first, size_t n_moments, double *moments,
                                        double *scratch);
 
+/* The Taylor form's sums of one piece's samples (the panels summed once
+ * per power of u), kept between calls of ll_filon_moments_kept for the
+ * next blocks of orders of the same samples. powers = 0: none yet. */
+#define LL_FILON_POWERS 23
+typedef struct ll_filon_kept {
+    size_t powers;
+    double even[LL_FILON_POWERS / 2 + 1], odd[LL_FILON_POWERS / 2 + 1];
+} ll_filon_kept;
+
+/* ll_filon_moments_from with the sums kept in (or taken from) kept: the
+ * moments are the same bit for bit as without. */
+LL_INTERNAL void ll_filon_moments_kept(const double *g, size_t n_samples, double a, double b,
+                                       size_t first, size_t n_moments, double *moments,
+                                       double *scratch, ll_filon_kept *kept);
+
 #endif /* LL_FILON_H */

@@ -6,7 +6,9 @@
  * integrated by Filon's rule for every order, split at the kink and with
  * panels shrinking geometrically towards it (Fresnel's square-root
  * behaviour there): Filon is exact for the oscillation of cos(l phi)
- * whatever l. GGX's pieces double in width away from its peak.
+ * whatever l. GGX's pieces double in width away from its peak, and a
+ * peak much narrower than g's own scale is taken out in closed form first
+ * (ggx_split_series).
  */
 #include "words/microfacet_pair.h"
 
@@ -32,11 +34,15 @@
                                * errs by 3.3e-4 of the peak instead of 2.3e-4,
                                * and with 2 just off the circle by 5.1e-4
                                * instead of 1.6e-4)                            */
+#define GGX_KINK_GOAL 1e-4    /* the Fresnel part's grading stops where the
+                               * piece next to the kink, d wide, after one
+                               * whose largest f is f_d, has d f_d below this
+                               * times the pair's peak (add_towards)           */
 #define GGX_NEGLIGIBLE 1e-6   /* Filon pieces of GGX below this fraction of the
                                * pair's peak add nothing (ggx_piece)           */
 #define GGX_FIRST_EXTRA 16    /* GGX's first block of orders: its peak's and
                                * this many more ...                            */
-#define GGX_SETTLED 2.5e-4    /* ... extended by half until the last quarter
+#define GGX_SETTLED 2.5e-4    /* ... doubled until the last quarter
                                * of the block stays below this fraction of the
                                * mean: a quarter of what the layer keeps
                                * (LL_MICROFACET_RELERR)                        */
@@ -105,8 +111,8 @@ enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
 /* f (or its part) at the cosines cos_phi[k stride], count of them, into
  * f[k stride]; returns the largest |f| of them. */
 static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int part,
-                          const double *cos_phi, size_t first, size_t stride, size_t count,
-                          double *f)
+                          const double *q, const double *cos_phi, size_t first, size_t stride,
+                          size_t count, double *f)
 {
     double c_sub[GGX_PIECE_SAMPLES], f_sub[GGX_PIECE_SAMPLES], ref_sub[GGX_PIECE_SAMPLES];
     double peak = exp(p->a_plus_b), largest = 0.0;
@@ -117,9 +123,11 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
                                  part == GGX_WHOLE ? NULL : part == GGX_REFERENCE ? f_sub
                                                                                   : ref_sub);
     for (k = 0; k < count; ++k) {
-        double c = 1.0 + p->b * (1.0 - c_sub[k]), value = f_sub[k];
+        double v = 1.0 - c_sub[k], c = 1.0 + p->b * v, value = f_sub[k];
         if (part == GGX_FRESNEL)
             value -= ref_sub[k];
+        if (q)
+            value -= q[0] + v * (q[1] + v * q[2]);
         value *= peak / (c * c);
         f[first + k * stride] = value;
         largest = fmax(largest, fabs(value));
@@ -132,12 +140,25 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
  * which the passes of the next blocks of orders replay instead of taking
  * them again (cache NULL: more pieces than it holds, sampled again). */
 #define GGX_CACHE 1024
+#define GGX_KEPT 48 /* pieces whose Taylor sums are kept (the rest: summed per block) */
 typedef struct ggx_pass {
     double seen;
+    const double *q; /* g's quadratic taken out with the peak (ggx_split_series) */
     double *cache;
     size_t used;
     int replay;
+    size_t piece;    /* the pieces so far in this pass */
+    double kink_goal; /* > 0: the grading towards TIR's kink stops early
+                       * (add_towards) against this                     */
+    ll_filon_kept kept[GGX_KEPT];
 } ggx_pass;
+
+/* The kept Taylor sums of the pass's next piece (NULL: beyond GGX_KEPT). */
+static ll_filon_kept *next_kept(ggx_pass *pass)
+{
+    size_t piece = pass->piece++;
+    return piece < GGX_KEPT ? &pass->kept[piece] : NULL;
+}
 
 /* Record (or, replaying, read) a piece's stride and samples; 0 when a
  * replayed piece is skipped. */
@@ -158,44 +179,54 @@ static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
     return stride;
 }
 
-static void ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
+/* One piece of ggx_filon's; returns the largest |f| of its samples (0 if
+ * it is skipped), the same replayed as sampled. */
+static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                       double b, size_t first, size_t n_out, double *out, double *scratch,
                       ggx_pass *pass)
 {
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
     double *filon = scratch + FILON_SCR_FILON, largest, *seen = &pass->seen;
     size_t stride = 4, k;
+    ll_filon_kept *kept;
     if (!(b > a))
-        return;
+        return 0.0;
+    kept = next_kept(pass);
     if (pass->replay) {
+        size_t count;
         stride = ggx_record(pass, 0, f);
-        if (stride)
-            ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out,
-                                  out, filon);
-        return;
+        if (!stride)
+            return 0.0;
+        count = (GGX_PIECE_SAMPLES - 1) / stride + 1;
+        ll_filon_moments_kept(f, count, a, b, first, n_out, out, filon, kept);
+        for (largest = 0.0, k = 0; k < count; ++k)
+            largest = fmax(largest, fabs(f[k]));
+        return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
-    largest = ggx_samples(mf, p, part, cos_phi, 0, 4, 5, f);
+    largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
     *seen = fmax(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
         stride = 2;
-        largest = fmax(largest, ggx_samples(mf, p, part, cos_phi, 2, 4, 4, f));
+        largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 2, 4, 4, f));
         *seen = fmax(*seen, largest);
         if (largest >= GGX_MEDIUM * *seen) {
             stride = 1;
-            largest = fmax(largest, ggx_samples(mf, p, part, cos_phi, 1, 2, 8, f));
+            largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 1, 2, 8, f));
             *seen = fmax(*seen, largest);
         }
     }
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
         ggx_record(pass, 0, f);
-        return;
+        return 0.0;
     }
     if (stride > 1) /* the samples taken, side by side */
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
             f[k] = f[k * stride];
     ggx_record(pass, stride, f);
-    ll_filon_moments_from(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon);
+    ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon,
+                          kept);
+    return largest;
 }
 
 /* [a, b] on uniform panels, except that next to an end at (or near) a
@@ -263,13 +294,20 @@ static double branch_distance(double outside)
  * there, and a kink under a wide GGX lobe is summed over ~100 orders).
  * levels_a, levels_b: the pieces towards each end at most (0: not
  * graded), as levels_towards allows for a branch point rho_a, rho_b off
- * the circle. */
+ * the circle. Where the pass has a kink_goal (the Fresnel part of total
+ * internal reflection), the grading stops early: the piece that reaches
+ * the kink, d wide, errs by about d times the square root's size there,
+ * which the piece before it (at [d, 4 d], its largest |f| f_d) bounds,
+ * so once d f_d is below the goal, finer pieces change nothing that
+ * matters (a kink far out in a narrow lobe's tail took all 8 levels). The
+ * choice depends on the samples alone, so a replayed pass makes it
+ * again the same. */
 static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int part, double a,
                         double b, int levels_a, double rho_a, int levels_b, double rho_b,
                         size_t first, size_t n_out, double *out, double *scratch,
                         ggx_pass *pass)
 {
-    double d = b - a;
+    double d = b - a, last = HUGE_VAL;
     int level, levels;
     if (!(b > a))
         return;
@@ -289,11 +327,13 @@ static void add_towards(const ll_microfacet_model *mf, const pair_plan *p, int p
         return;
     }
     for (level = 0; level < levels; ++level) {
-        double near = level == levels - 1 ? 0.0 : 0.25 * d;
+        double near = level == levels - 1 || d * last < pass->kink_goal ? 0.0 : 0.25 * d;
         if (levels_a)
-            ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
+            last = ggx_piece(mf, p, part, a + near, a + d, first, n_out, out, scratch, pass);
         else
-            ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
+            last = ggx_piece(mf, p, part, b - d, b - near, first, n_out, out, scratch, pass);
+        if (near == 0.0)
+            break;
         d = near;
     }
 }
@@ -308,13 +348,16 @@ static void ggx_filon(const ll_microfacet_model *mf, const pair_plan *p, int par
                       double seen, size_t first, size_t n_out, double *out, double *scratch,
                       ggx_pass *pass)
 {
-    double end = (!p->reflect && p->split > 0.0) ? p->split : LL_PI;
+    /* (refraction ends at its split, but the rest of a split peak, -E_beta
+     * q beyond it, does not) */
+    double end = !p->reflect && p->split > 0.0 && !pass->q ? p->split : LL_PI;
     double a = start, width = p->b > 0.0 ? fmin(LL_PI, 1.0 / sqrt(p->b)) : LL_PI;
     /* (a dielectric's reflection: its branch points may be TIR's) */
     int kink_levels = p->reflect ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     int branch_levels = p->reflect && !mf->conductor ? GGX_KINK_LEVELS : GGX_END_LEVELS;
     pass->seen = seen;
     pass->used = 0;
+    pass->piece = 0;
     while (a < end) {
         double b = a == 0.0 ? width : 2.0 * a;
         int grade_a, grade_b;
@@ -357,26 +400,36 @@ static int ggx_settled(const double *out, size_t n, double moment0)
  * kink far out in the tail, or the end of refraction, adds terms that
  * fall like a power of the order, and how far they matter depends on the
  * size of the kink, which only the moments tell. Each block costs its
- * orders times the samples, so the first holds the peak's orders and a few
- * more, and the next ones (the orders after it, the same pieces and
- * samples, replayed) add half as many again until its last quarter has
- * settled against moment0 (0: the moments' own order 0). Returns the
- * orders computed. */
+ * orders times the samples, so the first holds the orders of the sharpest
+ * thing the integrand holds (first: the peak's, or fewer where the peak
+ * is taken out, q not NULL) and a few more, and the next ones (the orders
+ * after it, the same pieces and samples, replayed) double it until its
+ * last quarter has settled against the pair's moment of order
+ * 0: moment0, plus the moments' own order 0 if own0 (doubling, not
+ * adding half, as every block's pass over the pieces costs the pieces'
+ * setup again, which the fewer passes save more of than the orders
+ * beyond the settled ones cost). Returns the orders computed. */
 static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
-                         double start, double seen, double moment0, size_t n_out, double *out,
-                         double *scratch)
+                         const double *q, double start, double seen, size_t first,
+                         double moment0, int own0, size_t n_out, double *out, double *scratch)
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    size_t k, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    if (first && first < n)
+        n = first;
     if (n > n_out)
         n = n_out;
     pass.cache = cache;
     pass.replay = 0;
+    pass.q = q;
+    pass.kink_goal = part == GGX_FRESNEL ? GGX_KINK_GOAL * seen : 0.0;
+    for (k = 0; k < GGX_KEPT; ++k)
+        pass.kept[k].powers = 0;
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
     pass.replay = pass.cache != NULL;
-    while (n < n_out && !ggx_settled(out, n, moment0 != 0.0 ? moment0 : out[0])) {
-        size_t step = n / 2 > 8 ? n / 2 : 8, next = n_out - n > step ? n + step : n_out;
+    while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
+        size_t step = n > 8 ? n : 8, next = n_out - n > step ? n + step : n_out;
         ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch, &pass);
         n = next;
     }
@@ -398,11 +451,98 @@ size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf, const pair_
                                       double mean, double seen, size_t n_out, double *out,
                                       double *scratch)
 {
-    size_t n;
+    /* The part starts at the split, v_s = 1 - cos(split) from the peak,
+     * where E_beta varies like a peak of sharpness beta / (1 + beta v_s)
+     * (its logarithmic derivative in v): the first block holds that
+     * peak's orders, not the pair's. */
+    double half = sin(0.5 * p->split), local = p->b / (1.0 + p->b * 2.0 * half * half);
+    size_t n, first = ll_ggx_peak_length(local, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     memset(out, 0, n_out * sizeof(double));
-    n = ggx_orders(mf, p, GGX_FRESNEL, p->split, seen, LL_PI * mean, n_out, out, scratch);
+    n = ggx_orders(mf, p, GGX_FRESNEL, NULL, p->split, seen, first, LL_PI * mean, 0, n_out, out,
+                   scratch);
     moments_to_series(out, n);
     return n;
+}
+
+/* The peak split. Where g is analytic over a distance delta in v = 1 -
+ * cos phi around the peak at phi = 0 and the peak is much narrower (beta
+ * delta >= GGX_SPLIT_REACH), f = peak E_beta g is split into peak E_beta q,
+ * q the quadratic in v through g at v = 0, V/2 and V, V = GGX_SPLIT_SPAN /
+ * beta, whose series the closed form gives (ll_ggx_series_quadratic), and
+ * the rest peak E_beta (g - q), which takes the Filon path. That rest has
+ * no sharp peak: g - q is at most about (V / delta)^3 of g over the peak's
+ * v <~ 1 / beta, and beyond it E_beta (g - q), with E_beta ~ (beta v)^-2
+ * against g - q ~ (v / delta)^3, stays below about (beta delta)^-2 of the
+ * peak and varies on g's own scale delta. So the rest needs the orders of
+ * g's kinks and branch points, not the hundreds of the peak's: its first
+ * block holds GGX_FIRST_EXTRA plus 4 / sqrt(delta) (g's scale in phi is
+ * about sqrt(2 delta)), and the blocks grow from there as for any kink,
+ * settled against the whole pair's mean. delta: the kink (the end of
+ * refraction), a branch point just before phi = 0, or GGX_SPLIT_UNRECORDED
+ * (beyond which classify_window records none). The peak's orders are the
+ * closed form's, one term each. */
+#define GGX_SPLIT_REACH 16.0
+#define GGX_SPLIT_SPAN 4.0
+#define GGX_SPLIT_UNRECORDED 0.2 /* in v: 2 NEAR_SINGULAR of microfacet_plan.c's
+                                  * u = v / 2 on GGX's whole circle            */
+
+/* The quadratic of the peak split, of g into q_g and times the peak
+ * factor into q, and the distance delta; 0 if the pair is not split. */
+static int ggx_peak_quadratic(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                              double *q_g, double *q, double *delta)
+{
+    double d = GGX_SPLIT_UNRECORDED, span, h, cos_phi[3], g[3], d1, d12, d2, peak;
+    if (p->split > 0.0) {
+        double half = sin(0.5 * p->split);
+        d = fmin(d, 2.0 * half * half);
+    }
+    if (p->grade_start)
+        d = fmin(d, -2.0 * p->near_start);
+    if (!(p->b * d >= GGX_SPLIT_REACH))
+        return 0;
+    span = GGX_SPLIT_SPAN / p->b;
+    h = 0.5 * span;
+    cos_phi[0] = 1.0;
+    cos_phi[1] = 1.0 - h;
+    cos_phi[2] = 1.0 - span;
+    ll_microfacet_sample_profile(mf, p, cos_phi, 3, reference ? NULL : g, reference ? g : NULL);
+    peak = exp(p->a_plus_b);
+    d1 = (g[1] - g[0]) / h;
+    d12 = (g[2] - g[1]) / h;
+    d2 = (d12 - d1) / span;
+    q_g[0] = g[0];
+    q_g[1] = d1 - d2 * h;
+    q_g[2] = d2;
+    q[0] = q_g[0] * peak;
+    q[1] = q_g[1] * peak;
+    q[2] = q_g[2] * peak;
+    *delta = d;
+    return 1;
+}
+
+/* GGX's whole series by the Filon path (ll_microfacet_filon_series), its
+ * peak split off where it can be. */
+static void ggx_split_series(const ll_microfacet_model *mf, const pair_plan *p, int reference,
+                             size_t n_out, double *out, double *scratch)
+{
+    double q[3], q_rest[3], delta, mean; /* q_rest: q without the peak factor */
+    size_t first, n_closed, l;
+    int part = reference ? GGX_REFERENCE : GGX_WHOLE;
+    if (!ggx_peak_quadratic(mf, p, reference, q_rest, q, &delta)) {
+        ggx_orders(mf, p, part, NULL, 0.0, 0.0, 0, 0.0, 1, n_out, out, scratch);
+        moments_to_series(out, n_out);
+        return;
+    }
+    ll_ggx_series_quadratic(p->b, q, 1, &mean, scratch);
+    first = GGX_FIRST_EXTRA + (size_t)ceil(4.0 / sqrt(delta));
+    ggx_orders(mf, p, part, q_rest, 0.0, q[0], first, LL_PI * mean, 1, n_out, out, scratch);
+    moments_to_series(out, n_out);
+    n_closed = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + 3;
+    if (n_closed > n_out)
+        n_closed = n_out;
+    ll_ggx_series_quadratic(p->b, q, n_closed, scratch, scratch + n_closed);
+    for (l = 0; l < n_closed; ++l)
+        out[l] += scratch[l];
 }
 
 /* The cosine series c_l = (2 - [l = 0]) / pi integral_0^pi f cos(l phi)
@@ -413,8 +553,8 @@ void ll_microfacet_filon_series(const ll_microfacet_model *mf, const pair_plan *
 {
     memset(out, 0, n_out * sizeof(double));
     if (mf->ggx) {
-        ggx_orders(mf, p, reference ? GGX_REFERENCE : GGX_WHOLE, 0.0, 0.0, 0.0, n_out, out,
-                   scratch);
+        ggx_split_series(mf, p, reference, n_out, out, scratch);
+        return;
     } else if (p->split > 0.0) {
         add_graded(mf, p, reference, 0.0, p->split, FILON_SAMPLES, p->grade_start, 1, n_out,
                    out, scratch);

@@ -54,17 +54,49 @@ static double term_ratio(double beta, double l)
     return 2.0 * exp(l * log(r)) * (c + l * s) / c;
 }
 
+/* Whether the term of order l has fallen below relerr times the first. */
+static int term_below(double c, double s, double log_r, double l, double relerr)
+{
+    return 2.0 * exp(l * log_r) * (c + l * s) < relerr * c;
+}
+
 size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
 {
-    double c, s, r, power = 1.0;
-    size_t l;
+    /* The first l with t(l) = log(2 (c + l s) / (relerr c)) + l log r < 0:
+     * t is concave, so Newton's steps from the root's left (l log r alone
+     * crosses first) land right of it and then close in from the right;
+     * the integer found is checked against the terms themselves (a sharp
+     * lobe's series has thousands of terms, which counting one by one
+     * cost as much as the series). */
+    double c, s, r, log_r, l, x;
+    int k;
     peak_constants(beta, &c, &s, &r);
-    for (l = 1; l < cap; ++l) {
-        power *= r;
-        if (2.0 * power * (c + (double)l * s) < relerr * c)
-            return l;
+    if (cap <= 1)
+        return cap;
+    if (!(r > 0.0) || term_below(c, s, log(r), 1.0, relerr))
+        return 1;
+    log_r = log(r);
+    x = fmax(1.0, log(0.5 * relerr) / log_r);
+    for (k = 0; k < 8; ++k) {
+        double t = log(2.0 * (c + x * s) / (relerr * c)) + x * log_r;
+        double slope = s / (c + x * s) + log_r, step;
+        if (!(slope < 0.0))
+            break;
+        step = t / slope;
+        x -= step;
+        if (fabs(step) < 0.01) /* the integer is settled below */
+            break;
     }
-    return cap;
+    if (!(x < (double)cap))
+        return cap;
+    l = ceil(x);
+    if (l < 1.0)
+        l = 1.0;
+    while (l > 1.0 && term_below(c, s, log_r, l - 1.0, relerr))
+        l -= 1.0;
+    while (l < (double)cap && !term_below(c, s, log_r, l, relerr))
+        l += 1.0;
+    return (size_t)l;
 }
 
 double ll_ggx_max_beta(size_t n_orders, double relerr)
@@ -86,45 +118,41 @@ double ll_ggx_max_beta(size_t n_orders, double relerr)
     return exp(lo);
 }
 
-void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size_t n_out,
-                   double *out, double *scratch)
+/* The series of E_beta p from p's two-sided coefficients b[j], j < n_b
+ * (b_0 the mean, b_j half the amplitude of cos(j phi)); e: n_out + n_b
+ * doubles. */
+static void convolve(double beta, const double *b, size_t n_b, size_t n_out, double *out,
+                     double *e)
 {
-    /* E_beta p with p = sum_j b_j cos(j phi): the two-sided coefficient of
-     * order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) + e_(l + j)) / 2.
-     * From l = LL_GGX_CHEB - 1 on, every l - j >= 0 and e_k = r^k (c + k s)
-     * / s^3 make that sum r^l ((c + l s) S_0 + S_1) / s^3 with
+    /* E_beta p with p = b_0 + sum_j 2 b_j cos(j phi): the two-sided
+     * coefficient of order l is b_0 e_l + sum_(j >= 1) b_j (e_(l - j) +
+     * e_(l + j)). From l = n_b - 1 on, every l - j >= 0 and e_k = r^k (c +
+     * k s) / s^3 make that sum r^l ((c + l s) S_0 + S_1) / s^3 with
      *     S_0 = b_0 + sum_(j >= 1) b_j (r^-j + r^j),
      *     S_1 = s sum_(j >= 1) j b_j (r^j - r^-j),
-     * one term per order instead of LL_GGX_CHEB (a sharp lobe has hundreds
-     * of orders). For r below closed_r, r^-j would grow towards overflow;
+     * one term per order instead of n_b (a sharp lobe has hundreds of
+     * orders). For r below closed_r, r^-j would grow towards overflow;
      * such a peak is wide and its series short, summed term by term. */
     const double closed_r = 1e-2;
-    double *b = scratch, *e = scratch + LL_GGX_CHEB;
     double c, s, r, power = 1.0, inv_s3;
-    size_t i, j, l, direct, n_e;
+    size_t j, l, direct, n_e;
     peak_constants(beta, &c, &s, &r);
     inv_s3 = 1.0 / (s * s * s);
-    direct = r < closed_r || n_out < LL_GGX_CHEB ? n_out : LL_GGX_CHEB;
-    n_e = direct + LL_GGX_CHEB;
-    for (j = 0; j < LL_GGX_CHEB; ++j) {
-        double sum = 0.0;
-        for (i = 0; i < LL_GGX_CHEB; ++i)
-            sum += basis->to_cosine[j][i] * g[i];
-        b[j] = j == 0 ? sum : 0.5 * sum;
-    }
+    direct = r < closed_r || n_out < n_b ? n_out : n_b;
+    n_e = direct + n_b;
     for (l = 0; l < n_e; ++l) {
         e[l] = power * (c + (double)l * s) * inv_s3;
         power *= r;
     }
     for (l = 0; l < direct; ++l) {
         double sum = b[0] * e[l];
-        for (j = 1; j < LL_GGX_CHEB; ++j)
+        for (j = 1; j < n_b; ++j)
             sum += b[j] * (e[l > j ? l - j : j - l] + e[l + j]);
         out[l] = l == 0 ? sum : 2.0 * sum;
     }
     if (direct < n_out) {
         double s0 = b[0], s1 = 0.0, up = 1.0, down = 1.0, inv_r = 1.0 / r;
-        for (j = 1; j < LL_GGX_CHEB; ++j) {
+        for (j = 1; j < n_b; ++j) {
             up *= r;
             down *= inv_r;
             s0 += b[j] * (down + up);
@@ -139,4 +167,29 @@ void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size
             power *= r;
         }
     }
+}
+
+void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g, size_t n_out,
+                   double *out, double *scratch)
+{
+    double *b = scratch;
+    size_t i, j;
+    for (j = 0; j < LL_GGX_CHEB; ++j) {
+        double sum = 0.0;
+        for (i = 0; i < LL_GGX_CHEB; ++i)
+            sum += basis->to_cosine[j][i] * g[i];
+        b[j] = j == 0 ? sum : 0.5 * sum;
+    }
+    convolve(beta, b, LL_GGX_CHEB, n_out, out, scratch + LL_GGX_CHEB);
+}
+
+void ll_ggx_series_quadratic(double beta, const double *q, size_t n_out, double *out,
+                             double *scratch)
+{
+    /* v = 1 - cos phi and v^2 = 3/2 - 2 cos phi + cos(2 phi) / 2. */
+    double b[3];
+    b[0] = q[0] + q[1] + 1.5 * q[2];
+    b[1] = 0.5 * (-q[1] - 2.0 * q[2]);
+    b[2] = 0.25 * q[2];
+    convolve(beta, b, 3, n_out, out, scratch);
 }

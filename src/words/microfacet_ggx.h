@@ -68,4 +68,11 @@ LL_INTERNAL double ll_ggx_max_beta(size_t n_orders, double relerr);
 LL_INTERNAL void ll_ggx_series(const ll_ggx_basis *basis, double beta, const double *g,
                                size_t n_out, double *out, double *scratch);
 
+/* The cosine series of E_beta q, l < n_out, for the quadratic q = q[0] +
+ * q[1] v + q[2] v^2 in v = 1 - cos phi (the part of a peak that the Filon
+ * path takes in closed form, words/microfacet_filon.c); scratch holds
+ * n_out + 3 doubles. */
+LL_INTERNAL void ll_ggx_series_quadratic(double beta, const double *q, size_t n_out,
+                                         double *out, double *scratch);
+
 #endif /* LL_MICROFACET_GGX_H */
