@@ -215,9 +215,6 @@ ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval, void *
      * converged one by the factor 1 - 2^-p. */
     const double goal = MARGIN * tolerance;
     probe_cache cache;
-    /* The (n, m) that failed against (2n, 2m): the shrinking stops above
-     * the largest of its m. */
-    size_t failed_n[MAX_STEPS + 1], failed_m[MAX_STEPS + 1], n_failed = 0, floor_n = 0;
     size_t n, m, step, k;
     double e = HUGE_VAL, en, em;
     ll_status s = LL_OK;
@@ -237,8 +234,6 @@ ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval, void *
         s = compare(&cache, n, m, 2 * n, 2 * m, &e);
         if (s != LL_OK || e <= goal)
             break;
-        failed_n[n_failed] = n;
-        failed_m[n_failed++] = m;
         if (step == MAX_STEPS || 2 * n > limit || 2 * m > limit) {
             s = ll_fail(LL_ERROR_INVALID_ARGUMENT,
                         "%s: the tolerance %g is not met within %zu nodes x %zu orders (the "
@@ -278,17 +273,13 @@ ll_status ll_probe_search(const ll_probe_set *set, ll_probe_eval_fn eval, void *
      * error grows as n falls), and only the smallest that screens within
      * the goal (with SCREEN_SLACK) is compared against its own twice, then
      * the larger ones should it fail: each such reference costs four times
-     * its candidate. Node counts that failed at this m end the
-     * candidates (the error grows as n falls). */
-    for (k = 0; k < n_failed; ++k)
-        if (failed_m[k] == m && failed_n[k] > floor_n)
-            floor_n = failed_n[k];
+     * its candidate. */
     if (s == LL_OK) {
         size_t cand[MAX_SHRINKS], n_cand = 0, prev = n;
         for (k = 0; k < MAX_SHRINKS && s == LL_OK; ++k) {
             size_t n1 = even_nodes(SHRINK * (double)prev, min_nodes);
             double e1;
-            if (n1 == prev || n1 <= floor_n)
+            if (n1 == prev)
                 break;
             s = screen(&cache, n1, m, 2 * n, 2 * m, &e1);
             if (s != LL_OK || e1 > goal / SCREEN_SLACK)
