@@ -10,7 +10,9 @@
  * takes steps that still pass.
  *
  * Every evaluation is kept (a few dozen at most), so the comparisons
- * share them: the growth asks for (n, m), (2n, 2m), (2n, m), (n, 2m).
+ * share them: the growth asks for (n, m), (2n, 2m), (2n, m), (n, 2m),
+ * and screens the counts just above one that failed against its (2n, 2m)
+ * before it steps past them (ladder()).
  */
 #include "search/probe.h"
 
