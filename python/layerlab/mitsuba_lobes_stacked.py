@@ -153,6 +153,13 @@ class StackedLobes:
         stored = refract & (e > 0)
         return dr.select(stored, transmittance_at(w, o, m, dr.select(e > 0, e, 1.5)), 1.0)
 
+    def _refracted(self, fn, mask, zeros):
+        """fn(mask) for the refracted lanes (mask); in the scalar variants
+        called only where the lane refracts, zeros() elsewhere."""
+        if not self.jit:
+            return fn(mask) if mask else zeros()
+        return fn(mask)
+
     # ------------------------------------------------------ the three calls
 
     def eval_pdf(self, wi, wo, active, radiance, reflect_on=True, transmit_on=True,
@@ -177,18 +184,27 @@ class StackedLobes:
         m_t, ok_t = _refraction_half(w, o, dr.select(refracts, e, 1.0))
         m = dr.select(refract, m_t, m_r)
         active = active & dr.select(refract, ok_t, ok_r)
-        value, density = self.table._at_normal(w, m, active, want_value, want_pdf, stack)
+        value, density = self.table._at_normal(w, m, active & ~refract if self.jit else
+                                               active and not refract, want_value, want_pdf,
+                                               stack)
+        # A refracted lane: its two elevations' values at the pair turned
+        # to each (TracedTables.refract_eval_pdf, the pdf with the
+        # refraction's change of variables).
+        value_t, pdf_t = self._refracted(
+            lambda mask: self.table.refract_eval_pdf(w, o, e, mask, want_value, want_pdf, stack),
+            active & refract if self.jit else active and refract,
+            lambda: ([0.0, 0.0, 0.0] if want_value else None, 0.0 if want_pdf else None))
         pdf = None
         if want_value:
             scale = dr.select(transmits, self._transport(wi, radiance) *
                               self._transmittance(w, o, m, bottom, refract),
                               self._fresnel(w, m, bottom, ~transmits if self.jit
                                             else not transmits))
+            value = [dr.select(refract, vt, v) for v, vt in zip(value, value_t)]
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
             value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
         if want_pdf:
-            lobe = dr.select(refract, density * _refraction_jacobian(w, o, m, e),
-                             density / (4.0 * dr.dot(w, m)))
+            lobe = dr.select(refract, pdf_t, density / (4.0 * dr.dot(w, m)))
             share = self._share(weights, bottom)
             pdf = lobe * dr.select(transmits, 1.0 - share, share)
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
@@ -213,7 +229,8 @@ class StackedLobes:
         stack = self._stack(bottom, transmitted, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmitted & refracts
-        m, density, value = self.table._sample_normal(w, v, active, stack)
+        m, density, value = self.table._sample_normal(w, v, active & ~refract if self.jit else
+                                                      active and not refract, stack)
         c = dr.dot(w, m)
         # Reflected about m (reflection; the z-flipped direction then flips).
         wo_r = dr.fma(m, 2.0 * c, -w)
@@ -226,11 +243,23 @@ class StackedLobes:
         pdf_t = density * _refraction_jacobian(w, wo_t, m, dr.select(refracts, e, 1.0))
         ok_t = (c > 0) & (k > 0) & (wo_t.z < 0)
         flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
-        wo = dr.select(refract, wo_t, dr.select(flipped, _flip(wo_r), wo_r))
-        pdf = dr.select(refract, pdf_t, pdf_r)
-        ok = active & dr.select(refract, ok_t, ok_r) & dr.isfinite(pdf) & (pdf > 0)
+        # A refracted lane: one of its two elevations' samplers, the pair
+        # turned back, and the blend's value and pdf there
+        # (TracedTables.refract_sample).
+        wo_s, pdf_s, value_s, ok_s = self._refracted(
+            lambda mask: self.table.refract_sample(w, v, e, mask, stack),
+            active & refract if self.jit else active and refract,
+            lambda: (mi.Vector3f(0.0, 0.0, 1.0), 0.0, [0.0, 0.0, 0.0], False))
+        wo = dr.select(refract, wo_s, dr.select(flipped, _flip(wo_r), wo_r))
+        pdf = dr.select(refract, pdf_s, pdf_r)
+        value = [dr.select(refract, vs, vr) for vs, vr in zip(value_s, value)]
+        ok = active & dr.select(refract, ok_s, ok_r) & dr.isfinite(pdf) & (pdf > 0)
         pdf = pdf * dr.select(transmitted, 1.0 - share, share)
         ok = ok & (pdf > 0)
+        # (A refracted lane's transmittance at wo's own refraction half
+        # vector, as its evaluation takes it.)
+        m_t, _ = _refraction_half(w, wo, dr.select(refracts, e, 1.0))
+        m = dr.select(refract, m_t, m)
         trans = self._transmittance(w, wo, m, bottom, refract)
         wo = dr.select(bottom, _flip(wo), wo)
         scale = dr.select(transmitted, self._transport(wi, radiance) * trans,

@@ -41,17 +41,13 @@ static void normal_coords(const double m[3], double phi_i, double um[2], double 
     um[1] = u - floor(u);
 }
 
-/* The incident direction's slices and square coordinates; theta_i is one
- * of the file's elevations, so that the slices are that elevation's
+/* The slices of the incident direction at (phi_i, theta_i); theta_i is
+ * one of the file's elevations, so that the slices are that elevation's
  * alone. */
-static void incident(const ll_measured *t, const double wi[3], double theta_i, double *phi_i,
-                     double uwi[2], ll_warp_slices *sl)
+static void incident(const ll_measured *t, double theta_i, double phi_i, ll_warp_slices *sl)
 {
     double param[2];
-    *phi_i = atan2(wi[1], wi[0]);
-    uwi[0] = ll_tables_theta_to_u(theta_i);
-    uwi[1] = ll_tables_phi_to_u(*phi_i);
-    param[0] = *phi_i;
+    param[0] = phi_i;
     param[1] = theta_i;
     ll_warp2d_slices(&t->vndf, param, sl);
 }
@@ -79,6 +75,7 @@ typedef struct elevations {
     size_t n;
     double theta[2], w[2], wi[2][3];
     turn r[2];
+    double phi; /* wi's azimuth, the turned wi's too (at the pole as well) */
 } elevations;
 
 static void elevations_of(const ll_measured *t, const double wi[3], elevations *e)
@@ -87,6 +84,7 @@ static void elevations_of(const ll_measured *t, const double wi[3], elevations *
     double theta = ll_tables_elevation(wi), f, rr = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
     double cp = rr > 0.0 ? wi[0] / rr : 1.0, sp = rr > 0.0 ? wi[1] / rr : 0.0;
     size_t lo, k;
+    e->phi = atan2(wi[1], wi[0]);
     ll_warp_locate(v, t->vndf.param_size[1], theta, &lo, &f);
     if (!(f > 0.0)) {
         e->n = 1;
@@ -144,14 +142,14 @@ static double refracted_pdf(double p_v, double p_l, double u_theta_m, double the
  * of the pair (as they are, without the factors the reader multiplies
  * them by) and, if pdf is given, the elevation's sampling density; 0 if
  * the pair is not one of a refraction. */
-static int stored_at(const ll_measured *t, const double wi[3], double theta_i,
+static int stored_at(const ll_measured *t, const double wi[3], double theta_i, double phi_i,
                      const double wo[3], double value[3], double *pdf)
 {
-    double m[3], um[2], uwi[2], s[2], theta_m, phi_i, p_v;
+    double m[3], um[2], s[2], theta_m, p_v;
     ll_warp_slices sl;
     if (!ll_tables_refract_half(wi, wo, t->refract_eta, m))
         return 0;
-    incident(t, wi, theta_i, &phi_i, uwi, &sl);
+    incident(t, theta_i, phi_i, &sl);
     normal_coords(m, phi_i, um, &theta_m);
     ll_warp2d_invert_at(&t->vndf, &sl, um, s, &p_v);
     if (value)
@@ -164,12 +162,12 @@ static int stored_at(const ll_measured *t, const double wi[3], double theta_i,
 
 /* The sampler of one of the file's elevations theta_i (wi's own): wo, 0
  * if the sample refracts nothing. */
-static int sample_at(const ll_measured *t, const double wi[3], double theta_i,
+static int sample_at(const ll_measured *t, const double wi[3], double theta_i, double phi_i,
                      const double u[2], double wo[3])
 {
-    double phi_i, uwi[2], pt[2], s[2], um[2], p_l, p_v, theta_m, m[3];
+    double pt[2], s[2], um[2], p_l, p_v, theta_m, m[3];
     ll_warp_slices sl;
-    incident(t, wi, theta_i, &phi_i, uwi, &sl);
+    incident(t, theta_i, phi_i, &sl);
     /* u[1] drives the warps' x, as for reflection (tables_eval.c). */
     pt[0] = u[1];
     pt[1] = u[0];
@@ -193,7 +191,7 @@ static int sample_at(const ll_measured *t, const double wi[3], double theta_i,
 static void blend(const ll_measured *t, const double wi[3], const elevations *e,
                   const double wo[3], double value[3], double *pdf)
 {
-    double sum[3] = { 0.0, 0.0, 0.0 }, m[3], um[2], theta_m, k_factor, phi_i;
+    double sum[3] = { 0.0, 0.0, 0.0 }, m[3], um[2], theta_m, k_factor;
     int any = 0;
     size_t k;
     if (value)
@@ -205,7 +203,7 @@ static void blend(const ll_measured *t, const double wi[3], const elevations *e,
     for (k = 0; k < e->n; ++k) {
         double o[3], v[3], p = 0.0;
         turn_apply(&e->r[k], 1.0, wo, o);
-        if (!stored_at(t, e->wi[k], e->theta[k], o, value ? v : NULL, pdf ? &p : NULL))
+        if (!stored_at(t, e->wi[k], e->theta[k], e->phi, o, value ? v : NULL, pdf ? &p : NULL))
             continue;
         if (pdf)
             *pdf += e->w[k] * p;
@@ -220,9 +218,8 @@ static void blend(const ll_measured *t, const double wi[3], const elevations *e,
         *pdf = 0.0;
     if (!value || !any)
         return;
-    phi_i = atan2(wi[1], wi[0]);
-    normal_coords(m, phi_i, um, &theta_m);
-    k_factor = jacobian_rule(t, um, ll_tables_elevation(wi), phi_i);
+    normal_coords(m, e->phi, um, &theta_m);
+    k_factor = jacobian_rule(t, um, ll_tables_elevation(wi), e->phi);
     if (t->transmittance_eta > 0.0)
         k_factor *= ll_tables_transmittance_at(wi, wo, m, t->transmittance_eta);
     for (k = 0; k < 3; ++k) {
@@ -270,7 +267,7 @@ int ll_measured_refract_sample(const ll_measured *t, const double wi[3], const d
     v[0] = k ? (u[0] - e.w[0]) / e.w[1] : u[0] / e.w[0];
     v[0] = v[0] < 0.0 ? 0.0 : (v[0] > 1.0 ? 1.0 : v[0]);
     v[1] = u[1];
-    if (sample_at(t, e.wi[k], e.theta[k], v, o)) {
+    if (sample_at(t, e.wi[k], e.theta[k], e.phi, v, o)) {
         turn_apply(&e.r[k], -1.0, o, wo);
         if (wo[2] < 0.0)
             blend(t, wi, &e, wo, value, pdf);
