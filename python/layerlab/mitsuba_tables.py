@@ -426,11 +426,18 @@ class TracedTables:
 
     # ------------------------------------------------------ the three calls
 
-    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None):
+    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None, at=None):
         """The lobe at the half vector m (of either warp): (f cos theta_o
         as a list of 3 Float, or None; the density of m per steradian of
-        normals, from the two squares' densities, or None)."""
+        normals, from the two squares' densities, or None). at: (the warps'
+        parameter, the slice weights, wi's azimuth) given by the caller
+        (StackedLobes: a refracted lane's wi turned to one of its
+        elevations); the values are then the stored ones, without D / (4
+        sigma)."""
         theta_i, phi_i, u_wi = self._incident(wi, stack)
+        if at is not None:
+            theta_i, phi_i = at[0], at[2]
+            stack = (stack[0], stack[1], at[1]) if stack is not None else None
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
         u_phi = _phi_to_u(phi_m - phi_i)
@@ -439,8 +446,9 @@ class TracedTables:
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
-            if self.jacobian:
+            value = self.rgb(sample, phi_i, theta_i, active,
+                             stack[2] if stack else (at[1] if at is not None else None))
+            if self.jacobian and at is None:
                 scale = self._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * scale for v in value]
         if want_pdf:
@@ -555,12 +563,17 @@ class TracedTables:
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
         return value, pdf
 
-    def _sample_normal(self, wi, sample2, active, stack=None):
+    def _sample_normal(self, wi, sample2, active, stack=None, at=None):
         """The normal m drawn from the two warps for the random numbers
         sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
         into the luminance warp), its density per steradian of normals and
-        f cos theta_o there (3 Float)."""
+        f cos theta_o there (3 Float). at: as _at_normal's; the values are
+        then the stored ones and the normal's square coordinates follow
+        (m, density, values, u_m)."""
         theta_i, phi_i, u_wi = self._incident(wi, stack)
+        if at is not None:
+            theta_i, phi_i = at[0], at[2]
+            stack = (stack[0], stack[1], at[1]) if stack is not None else None
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
@@ -571,7 +584,10 @@ class TracedTables:
         sin_theta, cos_theta = dr.sincos(theta_m)
         m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
-        value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
+        value = self.rgb(sample, phi_i, theta_i, active,
+                         stack[2] if stack else (at[1] if at is not None else None))
+        if at is not None:
+            return m, density, value, u_m
         if self.jacobian:
             scale = self._jacobian_scale(u_m, u_wi, active, stack)
             value = [v * scale for v in value]

@@ -106,9 +106,7 @@ static void elevations_of(const ll_measured *t, const double wi[3], elevations *
         e->r[k].ay = cp;
         e->r[k].c = cos(e->theta[k] - theta);
         e->r[k].s = sin(e->theta[k] - theta);
-        e->wi[k][0] = sin(e->theta[k]) * cp;
-        e->wi[k][1] = sin(e->theta[k]) * sp;
-        e->wi[k][2] = cos(e->theta[k]);
+        turn_apply(&e->r[k], 1.0, wi, e->wi[k]);
     }
 }
 
@@ -160,10 +158,12 @@ static int stored_at(const ll_measured *t, const double wi[3], double theta_i, d
     return 1;
 }
 
-/* The sampler of one of the file's elevations theta_i (wi's own): wo, 0
- * if the sample refracts nothing. */
+/* The sampler of one of the file's elevations theta_i (wi's own): wo,
+ * the stored values there and the elevation's density (stored_at's, to
+ * rounding, without its inversion of the warp); 0 if the sample refracts
+ * nothing. */
 static int sample_at(const ll_measured *t, const double wi[3], double theta_i, double phi_i,
-                     const double u[2], double wo[3])
+                     const double u[2], double wo[3], double value[3], double *pdf)
 {
     double pt[2], s[2], um[2], p_l, p_v, theta_m, m[3];
     ll_warp_slices sl;
@@ -172,13 +172,21 @@ static int sample_at(const ll_measured *t, const double wi[3], double theta_i, d
     pt[0] = u[1];
     pt[1] = u[0];
     ll_warp2d_sample_at(&t->luminance, &sl, pt, s, &p_l);
+    ll_warp2d_prefetch_nodes(&t->rgb, &sl, s);
     ll_warp2d_sample_at(&t->vndf, &sl, s, um, &p_v);
-    return ll_tables_refract(wi, um, phi_i, t->refract_eta, &theta_m, m, wo) > 0.0 &&
-           wo[2] < 0.0 && p_l > 0.0 && p_v > 0.0;
+    if (!(ll_tables_refract(wi, um, phi_i, t->refract_eta, &theta_m, m, wo) > 0.0) ||
+        !(wo[2] < 0.0))
+        return 0;
+    *pdf = refracted_pdf(p_v, p_l, um[0], theta_m,
+                         ll_tables_refract_jacobian(wi, wo, m, t->refract_eta));
+    ll_measured_values_at(t, &sl, s, 1.0, value);
+    return *pdf > 0.0;
 }
 
 /* The value (value non-NULL) and the sampler's density (pdf non-NULL) at
- * (wi, wo), wi above and wo below, e wi's elevations. The stored values
+ * (wi, wo), wi above and wo below, m their refraction half vector, e wi's
+ * elevations; elevation skip's weighted part is given in value and pdf
+ * (the sampled elevation's), none if skip is e->n. The stored values
  * are blended over the pair turned to each elevation (an elevation where
  * the turned pair refracts nothing, wo turned past the horizon, adds
  * nothing: dividing by the weights of the others instead made the lobe's
@@ -189,19 +197,21 @@ static int sample_at(const ll_measured *t, const double wi[3], double theta_i, d
  * internal reflection), which are exact so; the stored remainder is
  * smooth. The density is the mixture of the elevations' samplers. */
 static void blend(const ll_measured *t, const double wi[3], const elevations *e,
-                  const double wo[3], double value[3], double *pdf)
+                  const double wo[3], const double m[3], size_t skip, double value[3],
+                  double *pdf)
 {
-    double sum[3] = { 0.0, 0.0, 0.0 }, m[3], um[2], theta_m, k_factor;
-    int any = 0;
+    double sum[3] = { 0.0, 0.0, 0.0 }, um[2], theta_m, k_factor;
+    int any = skip < e->n;
     size_t k;
-    if (value)
-        value[0] = value[1] = value[2] = 0.0;
-    if (pdf)
-        *pdf = 0.0;
-    if (!ll_tables_refract_half(wi, wo, t->refract_eta, m))
-        return;
+    if (value && any) {
+        sum[0] = value[0];
+        sum[1] = value[1];
+        sum[2] = value[2];
+    }
     for (k = 0; k < e->n; ++k) {
         double o[3], v[3], p = 0.0;
+        if (k == skip)
+            continue;
         turn_apply(&e->r[k], 1.0, wo, o);
         if (!stored_at(t, e->wi[k], e->theta[k], e->phi, o, value ? v : NULL, pdf ? &p : NULL))
             continue;
@@ -216,7 +226,10 @@ static void blend(const ll_measured *t, const double wi[3], const elevations *e,
     }
     if (pdf && !(ll_is_finite(*pdf) && *pdf > 0.0))
         *pdf = 0.0;
-    if (!value || !any)
+    if (!value)
+        return;
+    value[0] = value[1] = value[2] = 0.0;
+    if (!any)
         return;
     normal_coords(m, e->phi, um, &theta_m);
     k_factor = jacobian_rule(t, um, ll_tables_elevation(wi), e->phi);
@@ -232,21 +245,22 @@ void ll_measured_refract_eval(const ll_measured *t, const double wi[3], const do
                               double value[3])
 {
     elevations e;
+    double m[3];
     value[0] = value[1] = value[2] = 0.0;
-    if (!(wi[2] > 0.0 && wo[2] < 0.0))
+    if (!ll_tables_refract_half(wi, wo, t->refract_eta, m))
         return;
     elevations_of(t, wi, &e);
-    blend(t, wi, &e, wo, value, NULL);
+    blend(t, wi, &e, wo, m, e.n, value, NULL);
 }
 
 double ll_measured_refract_pdf(const ll_measured *t, const double wi[3], const double wo[3])
 {
     elevations e;
-    double pdf;
-    if (!(wi[2] > 0.0 && wo[2] < 0.0))
+    double m[3], pdf = 0.0;
+    if (!ll_tables_refract_half(wi, wo, t->refract_eta, m))
         return 0.0;
     elevations_of(t, wi, &e);
-    blend(t, wi, &e, wo, NULL, &pdf);
+    blend(t, wi, &e, wo, m, e.n, NULL, &pdf);
     return pdf;
 }
 
@@ -254,7 +268,7 @@ int ll_measured_refract_sample(const ll_measured *t, const double wi[3], const d
                                double wo[3], double *pdf, double value[3])
 {
     elevations e;
-    double v[2], o[3];
+    double v[2], o[3], m[3], p;
     size_t k;
     wo[0] = wo[1] = 0.0;
     wo[2] = 1.0;
@@ -267,10 +281,15 @@ int ll_measured_refract_sample(const ll_measured *t, const double wi[3], const d
     v[0] = k ? (u[0] - e.w[0]) / e.w[1] : u[0] / e.w[0];
     v[0] = v[0] < 0.0 ? 0.0 : (v[0] > 1.0 ? 1.0 : v[0]);
     v[1] = u[1];
-    if (sample_at(t, e.wi[k], e.theta[k], e.phi, v, o)) {
+    if (sample_at(t, e.wi[k], e.theta[k], e.phi, v, o, value, &p)) {
         turn_apply(&e.r[k], -1.0, o, wo);
-        if (wo[2] < 0.0)
-            blend(t, wi, &e, wo, value, pdf);
+        if (ll_tables_refract_half(wi, wo, t->refract_eta, m)) {
+            value[0] *= e.w[k];
+            value[1] *= e.w[k];
+            value[2] *= e.w[k];
+            *pdf = e.w[k] * p;
+            blend(t, wi, &e, wo, m, k, value, pdf);
+        }
     }
     if (!(*pdf > 0.0)) {
         wo[0] = wo[1] = 0.0;
