@@ -494,8 +494,11 @@ class TracedTables:
                       float(np.float32(self.theta_host[min(int(j) + 1, last)]))]
         r = dr.sqrt(dr.square(wi.x) + dr.square(wi.y))
         has = r > 0
-        cp = dr.select(has, wi.x / dr.select(has, r, 1.0), 1.0)
-        sp = dr.select(has, wi.y / dr.select(has, r, 1.0), 0.0)
+        phi_i = dr.atan2(wi.y, wi.x)
+        # (At the pole the turn goes towards the azimuth atan2 gives.)
+        sin_p, cos_p = dr.sincos(phi_i)
+        cp = dr.select(has, wi.x / dr.select(has, r, 1.0), cos_p)
+        sp = dr.select(has, wi.y / dr.select(has, r, 1.0), sin_p)
         out = []
         for k, (weight, slices) in enumerate(((w0, (j, 1.0, 0.0)), (w1, (j, 0.0, 1.0)))):
             node = params[k] - shift
@@ -503,7 +506,7 @@ class TracedTables:
             sin_n, cos_n = dr.sincos(node)
             out.append((weight, mi.Vector3f(sin_n * cp, sin_n * sp, cos_n), cos_d, sin_d,
                         params[k], slices))
-        return out, (-sp, cp), dr.atan2(wi.y, wi.x)
+        return out, (-sp, cp), phi_i
 
     def _stored_at(self, wi, phi_i, param, slices, wo, eta, active, want_value, want_pdf):
         """At one of the file's elevations (wi's own, param the warps'

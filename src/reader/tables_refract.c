@@ -82,9 +82,12 @@ static void elevations_of(const ll_measured *t, const double wi[3], elevations *
 {
     const double *v = t->vndf.param_values[1];
     double theta = ll_tables_elevation(wi), f, rr = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
-    double cp = rr > 0.0 ? wi[0] / rr : 1.0, sp = rr > 0.0 ? wi[1] / rr : 0.0;
+    double phi = atan2(wi[1], wi[0]);
+    /* At the pole the turn goes towards the azimuth atan2 gives, which
+     * the normals' coordinates are read against. */
+    double cp = rr > 0.0 ? wi[0] / rr : cos(phi), sp = rr > 0.0 ? wi[1] / rr : sin(phi);
     size_t lo, k;
-    e->phi = atan2(wi[1], wi[0]);
+    e->phi = phi;
     ll_warp_locate(v, t->vndf.param_size[1], theta, &lo, &f);
     if (!(f > 0.0)) {
         e->n = 1;
