@@ -11,8 +11,11 @@
  * most 0.2%, 1% and 3%) are printed with the figures reached; the
  * assertions hold what the tables reach today: the glass seen from above,
  * the glass's f and the pane's f meet the targets; the glass's
- * transmission from below at 40..60 degrees (whose lobe sweeps to the
- * horizon near and beyond the critical angle) and the pane's reflection at
+ * transmission from below at 60 degrees by this stratified estimate
+ * (0.52%: the lobe takes 3% of the samples there, and the
+ * estimate of the .bsdf and of the table alike moves by up to 7% from one
+ * stratification to another, where quadrature of eval puts the table
+ * within 0.2% at these angles) and the pane's reflection at
  * 85 degrees do not, nor does the coat, and are held to their present
  * figures so that a change that worsens them fails.
  */
@@ -27,16 +30,16 @@ typedef struct bounds {
 } bounds;
 
 /* What the tables reach (64 x 96^2 x 96^2 for both, the largest grid the
- * size cap lets the search take), with a margin: glass R 0.232%, T 0.89%
- * (0.03% from the top; from below 0.2..0.9% at 40..60 degrees), median
- * 0.028%, 95th 0.46%, 99th 2.70% (by lobe: reflection above 1.6%,
+ * size cap lets the search take), with a margin: glass R 0.232%, T 0.52%
+ * (0.02% from the top; from below 0.23% at 50 and 0.52% at 60 degrees),
+ * median 0.033%, 95th 0.45%, 99th 2.31% (by lobe: reflection above 1.6%,
  * transmission from above 1.3%, reflection below 4.0%, transmission from
- * below 4.4%); pane R 1.38% (at 85 degrees), T 0.40%, median 0.092%,
+ * below 1.5%); pane R 1.38% (at 85 degrees), T 0.40%, median 0.092%,
  * 95th 0.81%, 99th 2.91% (reflection 3.5%, transmission 2.1%); coat over
  * a medium R 2.43% (from below at 30 degrees, where the coat's compensation
  * returns its lost light as reflection), T 1.05%, median 0.11%, 95th 2.7%,
  * 99th 14.2% (reflection from below 20%, the rest 3.0..4.5%). */
-#define BOUND_GLASS 0.003, 0.011, 0.001, 0.007, 0.035
+#define BOUND_GLASS 0.003, 0.007, 0.001, 0.007, 0.03
 #define BOUND_PANE 0.016, 0.004, 0.002, 0.01, 0.035
 #define BOUND_COAT 0.03, 0.013, 0.002, 0.03, 0.16
 

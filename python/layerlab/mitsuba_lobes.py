@@ -17,6 +17,8 @@ reflection set of the z-flipped direction. A reflected set with
 vector, a refracted set with `transmittance_eta` over the Fresnel
 transmittance times the refraction's d omega_m / d omega_o at its
 refraction half vector (transmittance_at); both are multiplied back.
+A refracted set is read between two incident elevations at the pair
+turned with wi to each (TracedTables.refract_eval_pdf, refract_sample).
 Sampling picks the reflected
 or the transmitted lobe of wi's side in proportion to their stored
 luminance albedos (`<set>.albedo`, per incident elevation, interpolated

@@ -6,8 +6,11 @@ of variables of reflection, refraction or the z-flipped direction) being
 selects. A packet of lanes on different sides and lobes -- most of them
 at a glass surface, where sampling picks the lobe per lane by a random
 number -- costs one set's look-ups instead of those of every set it
-reaches. For files whose four sets share their grids (what the writer
-makes); the others use mitsuba_lobes.TracedLobes, set by set.
+reaches. A refracted lane's first elevation (it reads two, at the pair
+turned with wi to each: TracedTables.refract_eval_pdf) rides in that
+look-up; its second is one more. For files whose four sets share their
+grids (what the writer makes); the others use mitsuba_lobes.TracedLobes,
+set by set.
 
 The same arithmetic as TracedLobes and the C reader (tables_lobes.c,
 tables_refract.c). The sets are stacked in the order ORDER (of SETS in
@@ -21,7 +24,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _flip, _fresnel_at, \
-    _fresnel_eta, _refraction_half, _refraction_jacobian
+    _fresnel_eta, _phi_to_u, _refraction_half, _refraction_jacobian, _theta_to_u, _turn
 from .mitsuba_lobes import transmittance_at, transmittance_eta
 from .tensor_file import TensorFileError
 
@@ -177,17 +180,46 @@ class StackedLobes:
         m_t, ok_t = _refraction_half(w, o, dr.select(refracts, e, 1.0))
         m = dr.select(refract, m_t, m_r)
         active = active & dr.select(refract, ok_t, ok_r)
-        value, density = self.table._at_normal(w, m, active, want_value, want_pdf, stack)
-        pdf = None
+        # A refracted lane reads its two elevations at the pair turned to
+        # each (TracedTables.refract_eval_pdf): the first in the one warp
+        # look-up every lane makes, the second beside it; its stored values
+        # are blended, then D / (4 sigma) is taken at the pair itself.
+        e_safe = dr.select(refracts, e, 1.0)
+        elevations, axis, phi_w = self.table._elevations(w, stack)
+        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, sl1) = elevations
+        o0 = _turn(axis, c0, s0, o)
+        m0, ok0 = _refraction_half(wi0, o0, e_safe)
+        ok0 = ok0 & (w0 > 0)
+        j, a0, a1 = stack[2]
+        at = (dr.select(refract, p0, _elevation(w) + stack[1]),
+              (j, dr.select(refract, 1.0, a0), dr.select(refract, 0.0, a1)), phi_w)
+        raw, density = self.table._at_normal(
+            dr.select(refract, wi0, w), dr.select(refract, m0, m),
+            active & dr.select(refract, ok0, True), want_value, want_pdf, stack, at)
+        o1 = _turn(axis, c1, s1, o)
+        raw1, density1, ok1 = self.table._stored_at(
+            wi1, phi_w, p1, sl1, o1, e_safe, active & refract & (w1 > 0), want_value, want_pdf)
+        value = pdf = None
         if want_value:
             scale = dr.select(transmits, self._transport(wi, radiance) *
                               self._transmittance(w, o, m, bottom, refract),
                               self._fresnel(w, m, bottom, ~transmits if self.jit
                                             else not transmits))
+            value = [dr.select(refract, dr.select(ok0, v0 * w0, 0.0) +
+                               dr.select(ok1, v1 * w1, 0.0), v0)
+                     for v0, v1 in zip(raw, raw1)]
+            if self.table.jacobian:
+                u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_w)
+                u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+                u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
+                jac = self.table._jacobian_scale(u_m, u_wi, active, stack)
+                value = [v * jac for v in value]
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
             value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
         if want_pdf:
-            lobe = dr.select(refract, density * _refraction_jacobian(w, o, m, e),
+            lobe = dr.select(refract,
+                             dr.select(ok0, density * w0, 0.0) *
+                             _refraction_jacobian(w, o, m, e_safe) + w1 * density1,
                              density / (4.0 * dr.dot(w, m)))
             share = self._share(weights, bottom)
             pdf = lobe * dr.select(transmits, 1.0 - share, share)
@@ -213,24 +245,63 @@ class StackedLobes:
         stack = self._stack(bottom, transmitted, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmitted & refracts
-        m, density, value = self.table._sample_normal(w, v, active, stack)
-        c = dr.dot(w, m)
+        # A refracted lane samples one of its two elevations, picked by v.x
+        # with its weight and rescaled (TracedTables.refract_sample), in the
+        # one pair of warp look-ups every lane makes, at wi turned to it.
+        e_safe = dr.select(refracts, e, 1.0)
+        elevations, axis, phi_w = self.table._elevations(w, stack)
+        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, _) = elevations
+        second = refract & (v.x >= w0)
+        u_el = dr.select(second, (v.x - w0) / dr.select(w1 > 0, w1, 1.0),
+                         v.x / dr.select(w0 > 0, w0, 1.0))
+        v_s = mi.Point2f(dr.select(refract, dr.clip(u_el, 0.0, 1.0), v.x), v.y)
+        j, a0, a1 = stack[2]
+        at = (dr.select(refract, dr.select(second, p1, p0), _elevation(w) + stack[1]),
+              (j, dr.select(refract, dr.select(second, 0.0, 1.0), a0),
+               dr.select(refract, dr.select(second, 1.0, 0.0), a1)), phi_w)
+        w_k = dr.select(refract, dr.select(second, wi1, wi0), w)
+        m, density, raw, u_m = self.table._sample_normal(w_k, v_s, active, stack, at)
+        u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
+        jac_r = self.table._jacobian_scale(u_m, u_wi, active, stack) if self.table.jacobian \
+            else 1.0
+        c = dr.dot(w_k, m)
         # Reflected about m (reflection; the z-flipped direction then flips).
         wo_r = dr.fma(m, 2.0 * c, -w)
         pdf_r = density / (4.0 * c)
         ok_r = wo_r.z > 0
-        # Refracted through m.
-        inv = 1.0 / dr.select(refracts, e, 1.0)
+        # Refracted through m at wi turned to the elevation, turned back.
+        inv = 1.0 / e_safe
         k = 1.0 - inv * inv * (1.0 - c * c)
-        wo_t = (inv * c - dr.safe_sqrt(k)) * m - inv * w
-        pdf_t = density * _refraction_jacobian(w, wo_t, m, dr.select(refracts, e, 1.0))
-        ok_t = (c > 0) & (k > 0) & (wo_t.z < 0)
+        wo_k = (inv * c - dr.safe_sqrt(k)) * m - inv * w_k
+        wo_t = _turn(axis, dr.select(second, c1, c0), -dr.select(second, s1, s0), wo_k)
+        m_t, ok_m = _refraction_half(w, wo_t, e_safe)
+        ok_t = (c > 0) & (k > 0) & (wo_k.z < 0) & (wo_t.z < 0) & ok_m & (density > 0)
+        # The other elevation at the pair turned to it.
+        w_o = dr.select(second, w0, w1)
+        o_o = _turn(axis, dr.select(second, c0, c1), dr.select(second, s0, s1), wo_t)
+        raw_o, density_o, ok_o = self.table._stored_at(
+            dr.select(second, wi0, wi1), phi_w, dr.select(second, p0, p1),
+            (j, dr.select(second, 1.0, 0.0), dr.select(second, 0.0, 1.0)), o_o, e_safe,
+            active & refract & ok_t & (w_o > 0), True, True)
+        w_s = dr.select(second, w1, w0)
+        pdf_t = w_s * density * _refraction_jacobian(w, wo_t, m_t, e_safe) + w_o * density_o
+        if self.table.jacobian:
+            u_phi = _phi_to_u(dr.atan2(m_t.y, m_t.x) - phi_w)
+            u_mt = mi.Point2f(_theta_to_u(_elevation(m_t)), u_phi - dr.floor(u_phi))
+            jac_t = self.table._jacobian_scale(u_mt, u_wi, active, stack)
+        else:
+            jac_t = 1.0
+        value = [dr.select(refract, (w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0)) * jac_t,
+                           v_k * jac_r) for v_k, v_o in zip(raw, raw_o)]
         flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
         wo = dr.select(refract, wo_t, dr.select(flipped, _flip(wo_r), wo_r))
         pdf = dr.select(refract, pdf_t, pdf_r)
         ok = active & dr.select(refract, ok_t, ok_r) & dr.isfinite(pdf) & (pdf > 0)
         pdf = pdf * dr.select(transmitted, 1.0 - share, share)
         ok = ok & (pdf > 0)
+        # (A refracted lane's transmittance at wo's own refraction half
+        # vector, as its evaluation takes it.)
+        m = dr.select(refract, m_t, m)
         trans = self._transmittance(w, wo, m, bottom, refract)
         wo = dr.select(bottom, _flip(wo), wo)
         scale = dr.select(transmitted, self._transport(wi, radiance) * trans,

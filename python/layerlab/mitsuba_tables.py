@@ -181,6 +181,17 @@ def _flip(v):
     return mi.Vector3f(v.x, v.y, -v.z)
 
 
+def _turn(axis, c, s, v):
+    """v rotated about the axis (axis[0], axis[1], 0) by the angle whose
+    cosine and sine are c and s (Rodrigues' formula, as the C reader's
+    turn_apply)."""
+    ax, ay = axis
+    k = (ax * v.x + ay * v.y) * (1.0 - c)
+    return mi.Vector3f(v.x * c + ay * v.z * s + ax * k,
+                       v.y * c - ax * v.z * s + ay * k,
+                       v.z * c + (ax * v.y - ay * v.x) * s)
+
+
 def _masked_call(jit, mask, fn, args, zeros):
     """fn(*args) where mask holds, zeros() elsewhere. In the JIT variants a
     symbolic conditional (dr.if_stmt), so that a packet of lanes none of
@@ -415,11 +426,18 @@ class TracedTables:
 
     # ------------------------------------------------------ the three calls
 
-    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None):
+    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None, at=None):
         """The lobe at the half vector m (of either warp): (f cos theta_o
         as a list of 3 Float, or None; the density of m per steradian of
-        normals, from the two squares' densities, or None)."""
+        normals, from the two squares' densities, or None). at: (the warps'
+        parameter, the slice weights, wi's azimuth) given by the caller
+        (StackedLobes: a refracted lane's wi turned to one of its
+        elevations); the values are then the stored ones, without D / (4
+        sigma)."""
         theta_i, phi_i, u_wi = self._incident(wi, stack)
+        if at is not None:
+            theta_i, phi_i = at[0], at[2]
+            stack = (stack[0], stack[1], at[1]) if stack is not None else None
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
         u_phi = _phi_to_u(phi_m - phi_i)
@@ -428,8 +446,9 @@ class TracedTables:
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
-            if self.jacobian:
+            value = self.rgb(sample, phi_i, theta_i, active,
+                             stack[2] if stack else (at[1] if at is not None else None))
+            if self.jacobian and at is None:
                 scale = self._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * scale for v in value]
         if want_pdf:
@@ -450,29 +469,114 @@ class TracedTables:
             pdf = dr.select(active, density / (4.0 * dr.dot(wi, m)), 0.0)
         return value, pdf
 
-    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True):
+    def _elevations(self, wi, stack=None):
+        """wi's two incident elevations of the file, as the C reader's
+        tables_refract.c takes them: for wi's slice and the next, its
+        weight, wi turned to that elevation in its plane of incidence (the
+        turn's cosine and sine), the warps' parameter there and the slice
+        weights that read that elevation alone; the turns' axis and wi's
+        azimuth (the turned wi's too, at the pole as well). stack:
+        a stacked set's (the lane's set, its shift, its slice and weights
+        over the stacked elevations)."""
+        theta = _elevation(wi)
+        if stack is None:
+            j, w0, w1 = self._weights(self.theta_host, self.theta if self.jit else None, theta)
+            shift = 0.0
+        else:
+            j, w0, w1 = stack[2]
+            shift = stack[1]
+        last = len(self.theta_host) - 1
+        if self.jit:
+            params = [dr.gather(mi.Float, self.theta, j),
+                      dr.gather(mi.Float, self.theta, dr.minimum(j + 1, last))]
+        else:
+            params = [float(np.float32(self.theta_host[int(j)])),
+                      float(np.float32(self.theta_host[min(int(j) + 1, last)]))]
+        r = dr.sqrt(dr.square(wi.x) + dr.square(wi.y))
+        has = r > 0
+        phi_i = dr.atan2(wi.y, wi.x)
+        # (At the pole the turn goes towards the azimuth atan2 gives.)
+        sin_p, cos_p = dr.sincos(phi_i)
+        cp = dr.select(has, wi.x / dr.select(has, r, 1.0), cos_p)
+        sp = dr.select(has, wi.y / dr.select(has, r, 1.0), sin_p)
+        out = []
+        for k, (weight, slices) in enumerate(((w0, (j, 1.0, 0.0)), (w1, (j, 0.0, 1.0)))):
+            node = params[k] - shift
+            sin_d, cos_d = dr.sincos(node - theta)
+            sin_n, cos_n = dr.sincos(node)
+            out.append((weight, mi.Vector3f(sin_n * cp, sin_n * sp, cos_n), cos_d, sin_d,
+                        params[k], slices))
+        return out, (-sp, cp), phi_i
+
+    def _stored_at(self, wi, phi_i, param, slices, wo, eta, active, want_value, want_pdf):
+        """At one of the file's elevations (wi's own, param the warps'
+        parameter there, slices the weights that read it alone): the
+        stored values of the refracted pair (without the factors they are
+        multiplied by), the elevation's density per solid angle of wo, and
+        whether the pair refracts."""
+        m, ok = _refraction_half(wi, wo, eta)
+        active = active & ok
+        u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
+        u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+        params = self._params(phi_i, param)
+        sample, vndf_pdf = self.vndf.invert(u_m, params, active)
+        value = density = None
+        if want_value:
+            value = self.rgb(sample, phi_i, param, active, slices)
+        if want_pdf:
+            lum = self.luminance.eval(sample, params, active)
+            density = vndf_pdf * lum / _normal_area(u_m.x, mi.Frame3f.sin_theta(m)) * \
+                _refraction_jacobian(wi, wo, m, eta)
+            density = dr.select(active & dr.isfinite(density), density, 0.0)
+        return value, density, active
+
+    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True,
+                         stack=None):
         """eval_pdf of a transmitted lobe warped about the refraction half
         vector (docs/formats.md, "Extended table files"; the C reader's
         tables_refract.c): wi above, wo below, eta the far side's index over
-        wi's side; the pdf takes the refraction's d omega_m / d omega_o in
-        the place of the reflection's 1 / (4 wi.m)."""
+        wi's side. Between two incident elevations the pair is turned with
+        wi to each, the stored values read there are blended with the
+        elevations' weights and multiplied by D / (4 sigma) at the pair
+        itself; the pdf is the mixture of the elevations' densities, each
+        with the refraction's d omega_m / d omega_o."""
         m, ok = _refraction_half(wi, wo, eta)
         active = active & ok
-        value, density = self._at_normal(wi, m, active, want_value, want_pdf)
-        pdf = None
+        value = [0.0, 0.0, 0.0] if want_value else None
+        pdf = 0.0 if want_pdf else None
+        elevations, axis, phi_i = self._elevations(wi, stack)
+        for weight, wi_k, c, s, param, slices in elevations:
+            o = _turn(axis, c, s, wo)
+            v, p, ok_k = self._stored_at(wi_k, phi_i, param, slices, o, eta,
+                                         active & (weight > 0), want_value, want_pdf)
+            if want_value:
+                value = [dr.select(ok_k, dr.fma(v[i], weight, value[i]), value[i])
+                         for i in range(3)]
+            if want_pdf:
+                pdf = dr.select(ok_k, dr.fma(p, weight, pdf), pdf)
         if want_value:
+            if self.jacobian:
+                u_wi = mi.Point2f(_theta_to_u(_elevation(wi)), _phi_to_u(phi_i))
+                u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
+                u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+                scale = self._jacobian_scale(u_m, u_wi, active, stack)
+                value = [v * scale for v in value]
             value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
         if want_pdf:
-            pdf = density * _refraction_jacobian(wi, wo, m, eta)
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
         return value, pdf
 
-    def _sample_normal(self, wi, sample2, active, stack=None):
+    def _sample_normal(self, wi, sample2, active, stack=None, at=None):
         """The normal m drawn from the two warps for the random numbers
         sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
         into the luminance warp), its density per steradian of normals and
-        f cos theta_o there (3 Float)."""
+        f cos theta_o there (3 Float). at: as _at_normal's; the values are
+        then the stored ones and the normal's square coordinates follow
+        (m, density, values, u_m)."""
         theta_i, phi_i, u_wi = self._incident(wi, stack)
+        if at is not None:
+            theta_i, phi_i = at[0], at[2]
+            stack = (stack[0], stack[1], at[1]) if stack is not None else None
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
@@ -483,7 +587,10 @@ class TracedTables:
         sin_theta, cos_theta = dr.sincos(theta_m)
         m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
-        value = self.rgb(sample, phi_i, theta_i, active, stack[2] if stack else None)
+        value = self.rgb(sample, phi_i, theta_i, active,
+                         stack[2] if stack else (at[1] if at is not None else None))
+        if at is not None:
+            return m, density, value, u_m
         if self.jacobian:
             scale = self._jacobian_scale(u_m, u_wi, active, stack)
             value = [v * scale for v in value]
@@ -507,22 +614,41 @@ class TracedTables:
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
         return wo, pdf, weight, ok
 
-    def refract_sample(self, wi, sample2, eta, active):
+    def refract_sample(self, wi, sample2, eta, active, stack=None):
         """sample of a transmitted lobe warped about the refraction half
-        vector (as refract_eval_pdf): m from the warps as for reflection,
-        wo = wi refracted through it (none under total internal
-        reflection). (wo, pdf, f cos theta_o as a list of 3 Float, ok)."""
+        vector (as refract_eval_pdf): one of wi's two elevations picked by
+        sample2.x with its weight (sample2.x rescaled and passed on), m
+        from that elevation's warps, wi turned to it refracted through m
+        (none under total internal reflection) and turned back; the pdf
+        and value are refract_eval_pdf's there. (wo, pdf, f cos theta_o as
+        a list of 3 Float, ok)."""
         active = active & (mi.Frame3f.cos_theta(wi) > 0)
-        m, density, value = self._sample_normal(wi, sample2, active)
+        (e0, e1), axis, phi_i = self._elevations(wi, stack)
+        w0 = e0[0]
+        second = sample2.x >= w0
+        u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
+                       sample2.x / dr.select(w0 > 0, w0, 1.0))
+        pick = [dr.select(second, b, a) for a, b in zip(e0[1:5], e1[1:5])]
+        wi_k, c_k, s_k, param = pick
+        params = self._params(phi_i, param)
+        sample, lum_pdf = self.luminance.sample(
+            mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
+        u_m, vndf_pdf = self.vndf.sample(sample, params, active)
+        phi_m = (2.0 * u_m.y - 1.0) * PI + phi_i
+        theta_m = dr.square(u_m.x) * (0.5 * PI)
+        sin_phi, cos_phi = dr.sincos(phi_m)
+        sin_theta, cos_theta = dr.sincos(theta_m)
+        m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
         inv = 1.0 / eta
-        c = dr.dot(wi, m)
+        c = dr.dot(wi_k, m)
         k = 1.0 - inv * inv * (1.0 - c * c)
-        a = inv * c - dr.safe_sqrt(k)
-        wo = a * m - inv * wi
-        pdf = density * _refraction_jacobian(wi, wo, m, eta)
-        ok = active & (c > 0) & (k > 0) & (mi.Frame3f.cos_theta(wo) < 0) & \
-            dr.isfinite(pdf) & (pdf > 0)
-        value = [dr.select(ok, dr.maximum(v, 0.0), 0.0) for v in value]
+        o = (inv * c - dr.safe_sqrt(k)) * m - inv * wi_k
+        wo = _turn(axis, c_k, -s_k, o)
+        ok = active & (c > 0) & (k > 0) & (o.z < 0) & (wo.z < 0) & (lum_pdf > 0) & \
+            (vndf_pdf > 0)
+        value, pdf = self.refract_eval_pdf(wi, wo, eta, ok, True, True, stack)
+        ok = ok & (pdf > 0)
+        value = [dr.select(ok, v, 0.0) for v in value]
         return wo, dr.select(ok, pdf, 0.0), value, ok
 
     def describe(self):
