@@ -113,7 +113,7 @@ static size_t kept_terms(const double *c, size_t len, size_t m)
     if (k == 0 || !(c[0] > 0.0))
         return 0;
     for (l = 1; l < k; ++l)
-        if (fabs(c[l]) >= LL_MICROFACET_RELERR * c[0])
+        if (fabs(c[l]) >= LL_MICROFACET_KEEP * c[0])
             last = l;
     return last + 1;
 }

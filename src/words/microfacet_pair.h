@@ -19,9 +19,9 @@
 #define FILON_EXTRA 100       /* a kinked f may need this many orders beyond
                                * its peak's (as the original allows)           */
 #define GGX_TAIL_GOAL 1e-4    /* GGX's peak series falls geometrically: its
-                               * terms below 1e-4 (a tenth of what the layer
-                               * keeps, LL_MICROFACET_RELERR) would double the
-                               * orders of TAIL_GOAL's 1e-6 for nothing        */
+                               * terms below 1e-4 (a tenth of the original's
+                               * truncation, LL_MICROFACET_RELERR) would double
+                               * the orders of TAIL_GOAL's 1e-6 for nothing    */
 
 /* The precomputed map of one grid point. */
 typedef struct grid_entry {

@@ -164,7 +164,7 @@ ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, doubl
         return LL_OK; /* a vanishing mean: nothing */
     last = 0;
     for (l = 1; l < n_out; ++l)
-        if (fabs(out[l]) >= LL_MICROFACET_RELERR * out[0])
+        if (fabs(out[l]) >= LL_MICROFACET_KEEP * out[0])
             last = l;
     *len = last + 1;
     return LL_OK;
