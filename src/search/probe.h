@@ -25,7 +25,7 @@ typedef struct ll_probe_pair {
 } ll_probe_pair;
 
 /* Azimuths per pair, at most. */
-#define LL_PROBE_MAX_PHI 16
+#define LL_PROBE_MAX_PHI 17
 
 typedef struct ll_probe_set {
     ll_probe_pair *pairs;
