@@ -147,6 +147,21 @@ typedef struct ll_tables_figures {
 LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table,
                                         ll_tables_figures *out);
 
+/* The nodes of one slice's sample grid (ns x ns; rgb its three planes and
+ * lum its luminance) whose directions are below the horizon (below[q] !=
+ * 0) and that touch a node above it: set so that the slice's albedo is
+ * b's there; where it is too bright without them, the channel scaled down
+ * to it (bsdf_write_tables_horizon.c). b a table file: nothing changes.
+ * The slice as a reader sees it: */
+typedef struct ll_tables_horizon {
+    const ll_warp2d *ndf_w, *vndf_w; /* D and the visible normals' warp      */
+    double sigma;                    /* sigma of the slice's elevation       */
+    double param[2];                 /* the VNDF warp's parameters: 0, theta */
+} ll_tables_horizon;
+LL_INTERNAL ll_status ll_tables_horizon_fit(const ll_bsdf *b, const ll_tables_horizon *h,
+                                            size_t ns, const unsigned char *below, float *rgb,
+                                            float *lum);
+
 /* Basis k of the textured b as an untextured handle of its own (its
  * coefficients and per-row tables copied; release it with
  * ll_bsdf_release): bsdf_write_tables_basis.c. */
