@@ -223,6 +223,8 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     double param[2] = { 0.0, th };
     double four_sigma = 4.0 * ll_tables_sigma_at(&w->sigma_w, th);
     float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
+    static const double weights[3] = { 0.212671, 0.715160, 0.072169 };
+    double target;
     ll_tables_horizon h;
     ll_status s;
     for (y = 0; y < ns; ++y)
@@ -265,8 +267,16 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     h.sigma = 0.25 * four_sigma;
     h.param[0] = 0.0;
     h.param[1] = th;
-    if ((s = ll_tables_horizon_fit(w->b, &h, ns, below, rgb, lum)) != LL_OK)
+    if ((s = ll_tables_horizon_target(w->b, th, &target)) != LL_OK)
         return s;
+    if (target > 0.0) {
+        if ((s = ll_tables_horizon_fit(&h, ns, below, 3, weights, target, rgb)) != LL_OK)
+            return s;
+        for (x = 0; x < plane; ++x) {
+            double v[3] = { rgb[x], rgb[plane + x], rgb[2 * plane + x] };
+            lum[x] = (float)ll_tables_luminance(v);
+        }
+    }
     floor_slice(w, t, -1.0);
     return LL_OK;
 }
@@ -413,6 +423,9 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         w.spectra.wavelengths = o.wavelengths;
         w.spectra.theta_i = w.theta_i;
         w.spectra.geom = w.geom;
+        w.spectra.ndf_w = &w.ndf_w;
+        w.spectra.vndf_w = &w.vndf_w;
+        w.spectra.sigma_w = &w.sigma_w;
         s = ll_tables_spectra_run(&w.spectra, o.spectrum, o.spectrum_user, w.lum, &watch, FN);
         if (s != LL_OK)
             goto done;

@@ -10,22 +10,19 @@
  * degrees came out 1.5% low, at 128^2 samples 0.03%.
  *
  * So each node below the horizon that touches one above it stores
- * lambda_c times the mean of its neighbours above it, per channel c, with
- * lambda_c chosen so that the slice's albedo (the integral of the stored
- * values over the part of the sample square whose directions are above
- * the horizon, weighted by the square's area element in f cos d omega)
- * equals the source's (ll_bsdf_albedo) at the slice's elevation. lambda_c
- * = 1 continues the lobe flat across the horizon; it is kept in [0,
- * LAMBDA_MAX]. Where the slice is too bright even with lambda_c = 0 (its
- * interior, not its edge: the blue channel of the rough corner at 60-78
- * degrees, 0.1-0.3%), its values in that channel are scaled down to the
- * source's albedo instead. On the coated-gold grid at 32 x 64^2 x 64^2 the
- * worst albedo error over 0-85 degrees went from 1.51% to 0.17% on the
- * rough corner and from 0.62% to 0.35% on the sharp one (coat and gold
- * alpha 0.05); f's median rose by at most 0.004 points, its 95th and 99th
- * percentiles by at most 0.001.
- * A table source (no order-0 series to take the albedo from) is left as
- * it is.
+ * lambda times the mean of its neighbours above it, with lambda chosen so
+ * that the slice's luminance albedo (the integral of the stored values
+ * over the part of the sample square whose directions are above the
+ * horizon, weighted by the square's area element in f cos d omega) equals
+ * the source's (ll_bsdf_albedo) at the slice's elevation. lambda = 1
+ * continues the lobe flat across the horizon; it is kept in [0,
+ * LAMBDA_MAX]. Where the slice is too bright even with lambda = 0 (its
+ * interior, not its edge), its values are scaled down to the source's
+ * albedo instead. One lambda and one scale for all channels, from their
+ * luminance, as the luminance table and the sampling follow it: so a
+ * spectral file (one plane per wavelength, fitted alike) is at each node
+ * the luminance of the RGB file of the same source. A table source (no
+ * order-0 series to take the albedo from) is left as it is.
  */
 #include "writer/bsdf_write_tables.h"
 
@@ -69,28 +66,25 @@ static double bilinear(const float *plane, size_t ns, size_t x, size_t y, double
     return (1.0 - fy) * ((1.0 - fx) * p[0] + fx * p[1]) + fy * ((1.0 - fx) * p[ns] + fx * p[ns + 1]);
 }
 
-ll_status ll_tables_horizon_fit(const ll_bsdf *b, const ll_tables_horizon *h, size_t ns,
-                                const unsigned char *below, float *rgb, float *lum)
+ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
+                                const unsigned char *below, size_t n_ch, const double *weights,
+                                double target, float *planes)
 {
     size_t plane = ns * ns, x, y, q, c, n_edge = 0;
     double theta = h->param[1], wi[3] = { sin(theta), 0.0, cos(theta) };
-    double a0[3] = { 0.0, 0.0, 0.0 }, a1[3] = { 0.0, 0.0, 0.0 }, src[3], lambda[3], gain[3];
+    double a0 = 0.0, a1 = 0.0, lambda = 0.0, gain = 1.0;
     double cell = 1.0 / ((double)(ns - 1) * (double)(ns - 1));
     float *edge;
-    ll_status s;
     for (q = 0; q < plane; ++q)
         n_edge += below[q];
-    if (n_edge == 0 || b->measured)
+    if (n_edge == 0)
         return LL_OK;
-    if ((s = ll_bsdf_albedo(b, cos(theta), NULL, src, NULL)) != LL_OK)
-        return s;
     /* edge: per channel, the mean of the neighbours above the horizon at
      * each node below it that has one, 0 elsewhere. */
-    if (!ll_size_mul(plane, 3, &q) || !(edge = ll_calloc_array(q, sizeof *edge)))
+    if (!ll_size_mul(plane, n_ch, &q) || !(edge = ll_calloc_array(q, sizeof *edge)))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_tables_write_from_bsdf: out of memory");
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
-            double acc[3] = { 0.0, 0.0, 0.0 };
             int n = 0, dy, dx;
             if (!below[y * ns + x])
                 continue;
@@ -100,21 +94,19 @@ ll_status ll_tables_horizon_fit(const ll_bsdf *b, const ll_tables_horizon *h, si
                     if (yy >= ns || xx >= ns || below[yy * ns + xx])
                         continue;
                     ++n;
-                    for (c = 0; c < 3; ++c)
-                        acc[c] += (double)rgb[c * plane + yy * ns + xx];
+                    for (c = 0; c < n_ch; ++c)
+                        edge[c * plane + y * ns + x] += planes[c * plane + yy * ns + xx];
                 }
-            for (c = 0; n > 0 && c < 3; ++c)
-                edge[c * plane + y * ns + x] = (float)(acc[c] / n);
+            for (c = 0; n > 0 && c < n_ch; ++c)
+                edge[c * plane + y * ns + x] /= (float)n;
         }
-    /* The slice's albedo as stored (a0) and per unit of lambda (a1). */
+    /* The slice's albedo as stored (a0) and per unit of lambda (a1), of
+     * the weighted sum of the channels. */
     for (y = 0; y + 1 < ns; ++y)
         for (x = 0; x + 1 < ns; ++x) {
-            const size_t corner[4] = { y * ns + x, y * ns + x + 1, (y + 1) * ns + x,
-                                       (y + 1) * ns + x + 1 };
-            int crossing = below[corner[0]] || below[corner[1]] || below[corner[2]] ||
-                           below[corner[3]];
-            int i, j;
-            int sub = crossing ? SUB : 1;
+            size_t at = y * ns + x;
+            int crossing = below[at] || below[at + 1] || below[at + ns] || below[at + ns + 1];
+            int i, j, sub = crossing ? SUB : 1;
             for (j = 0; j < sub; ++j)
                 for (i = 0; i < sub; ++i) {
                     double fx = (i + 0.5) / sub, fy = (j + 0.5) / sub;
@@ -123,29 +115,39 @@ ll_status ll_tables_horizon_fit(const ll_bsdf *b, const ll_tables_horizon *h, si
                     double wt = cell / (sub * sub) * weight(h, wi, sq);
                     if (wt == 0.0)
                         continue;
-                    for (c = 0; c < 3; ++c) {
-                        a0[c] += wt * bilinear(rgb + c * plane, ns, x, y, fx, fy);
-                        a1[c] += wt * bilinear(edge + c * plane, ns, x, y, fx, fy);
+                    for (c = 0; c < n_ch; ++c) {
+                        a0 += wt * weights[c] * bilinear(planes + c * plane, ns, x, y, fx, fy);
+                        a1 += wt * weights[c] * bilinear(edge + c * plane, ns, x, y, fx, fy);
                     }
                 }
         }
-    for (c = 0; c < 3; ++c) {
-        /* ll_bsdf_albedo answers R, G, B: the channels of rgb. */
-        double l = a1[c] > EDGE_SHARE * src[c] ? (src[c] - a0[c]) / a1[c] : 0.0;
-        lambda[c] = l > 0.0 ? (l < LAMBDA_MAX ? l : LAMBDA_MAX) : 0.0;
+    if (a1 > EDGE_SHARE * target) {
+        double l = (target - a0) / a1;
+        lambda = l > 0.0 ? (l < LAMBDA_MAX ? l : LAMBDA_MAX) : 0.0;
     }
-    for (c = 0; c < 3; ++c)
-        gain[c] = a0[c] > src[c] ? src[c] / a0[c] : 1.0;
-    for (q = 0; q < plane; ++q) {
-        double v[3];
-        if (below[q] && edge[q] + edge[plane + q] + edge[2 * plane + q] == 0.0f)
-            continue;
-        for (c = 0; c < 3; ++c) {
-            v[c] = below[q] ? lambda[c] * (double)edge[c * plane + q] : gain[c] * rgb[c * plane + q];
-            rgb[c * plane + q] = (float)v[c];
+    if (a0 > target && target > 0.0)
+        gain = target / a0;
+    for (c = 0; c < n_ch; ++c)
+        for (q = 0; q < plane; ++q) {
+            float *v = &planes[c * plane + q];
+            if (below[q])
+                *v = (float)(lambda * (double)edge[c * plane + q]);
+            else
+                *v = (float)(gain * (double)*v);
         }
-        lum[q] = (float)ll_tables_luminance(v);
-    }
     ll_free(edge);
+    return LL_OK;
+}
+
+ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, double *out)
+{
+    double rgb[3];
+    ll_status s;
+    *out = 0.0;
+    if (b->measured)
+        return LL_OK;
+    if ((s = ll_bsdf_albedo(b, cos(theta), NULL, rgb, NULL)) != LL_OK)
+        return s;
+    *out = ll_tables_luminance(rgb);
     return LL_OK;
 }
