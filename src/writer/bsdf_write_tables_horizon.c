@@ -23,11 +23,19 @@
  * spectral file (one plane per wavelength, fitted alike) is at each node
  * the luminance of the RGB file of the same source. A table source (no
  * order-0 series to take the albedo from) is left as it is.
+ *
+ * On the coated-gold grid at 32 x 64^2 x 64^2 the worst albedo error over
+ * 0-85 degrees is 0.45% on the rough corner (1.51% with zeros beyond the
+ * horizon) and 0.40% on the sharp one (coat and gold alpha 0.05; 0.62%),
+ * f's percentiles within 0.004 points of the zeros'. A scale per channel
+ * would follow a blue channel whose lobe parts from the luminance's at
+ * grazing angles (coat 0.15 over gold 0.4 at 64 x 96^2 x 96^2: 0.11%
+ * against 2.4% from the luminance, 6.3% with zeros) but would end that
+ * agreement with the spectral file.
  */
 #include "writer/bsdf_write_tables.h"
 
 #include <math.h>
-#include <string.h>
 
 #define LAMBDA_MAX 4.0
 /* The edge is fitted only where it carries at least this share of the
