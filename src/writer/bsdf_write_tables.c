@@ -213,20 +213,27 @@ static void floor_slice(writer *w, size_t t, double top)
 }
 
 /* Steps 3 and 4 for slice t; a spectral file keeps each node's direction
- * and factor instead (its values come per wavelength). */
-static void value_slice(writer *w, size_t t)
+ * and factor instead (its values come per wavelength). below (ns * ns)
+ * receives which nodes' directions are below the horizon, whose values
+ * ll_tables_horizon_fit then sets. */
+static ll_status value_slice(writer *w, size_t t, unsigned char *below)
 {
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = (double)w->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
-    double param[2] = { 0.0, th }, top = 0.0;
+    double param[2] = { 0.0, th };
     double four_sigma = 4.0 * ll_tables_sigma_at(&w->sigma_w, th);
     float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
+    static const double weights[3] = { 0.212671, 0.715160, 0.072169 };
+    double target;
+    ll_tables_horizon h;
+    ll_status s;
     for (y = 0; y < ns; ++y)
         for (x = 0; x < ns; ++x) {
             double sq[2] = { (double)x / (double)(ns - 1), (double)y / (double)(ns - 1) };
             double um[2], pdf, tm, m[3], wo[3], f[3] = { 0.0, 0.0, 0.0 }, scale, y_lum;
             ll_warp2d_sample(&w->vndf_w, sq, param, um, &pdf);
             (void)ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
+            below[y * ns + x] = !(wo[2] > 0.0);
             if (w->spectral) {
                 double *g = w->geom + (t * plane + y * ns + x) * 4;
                 scale = wo[2] * four_sigma / ll_warp2d_eval(&w->ndf_w, um, NULL);
@@ -252,11 +259,26 @@ static void value_slice(writer *w, size_t t)
             }
             y_lum = ll_tables_luminance(f);
             lum[y * ns + x] = (float)y_lum;
-            if (y_lum > top)
-                top = y_lum;
         }
-    if (!w->spectral)
-        floor_slice(w, t, top);
+    if (w->spectral)
+        return LL_OK;
+    h.ndf_w = &w->ndf_w;
+    h.vndf_w = &w->vndf_w;
+    h.sigma = 0.25 * four_sigma;
+    h.param[0] = 0.0;
+    h.param[1] = th;
+    if ((s = ll_tables_horizon_target(w->b, th, &target)) != LL_OK)
+        return s;
+    if (target > 0.0) {
+        if ((s = ll_tables_horizon_fit(&h, ns, below, 3, weights, target, rgb)) != LL_OK)
+            return s;
+        for (x = 0; x < plane; ++x) {
+            double v[3] = { rgb[x], rgb[plane + x], rgb[2 * plane + x] };
+            lum[x] = (float)ll_tables_luminance(v);
+        }
+    }
+    floor_slice(w, t, -1.0);
+    return LL_OK;
 }
 
 /* JSON text of a string (quotes and escapes), appended to buf. */
@@ -378,10 +400,20 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         if (s != LL_OK)
             goto done;
     }
-    for (t = 0; t < w.n_ti; ++t) {
-        value_slice(&w, t);
-        ll_watch_advance(&watch, 1);
-        if ((s = ll_watch_check(&watch, FN)) != LL_OK)
+    {
+        unsigned char *below = ll_alloc_array(w.ns, w.ns);
+        if (!below) {
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory");
+            goto done;
+        }
+        for (t = 0; t < w.n_ti && s == LL_OK; ++t) {
+            if ((s = value_slice(&w, t, below)) != LL_OK)
+                break;
+            ll_watch_advance(&watch, 1);
+            s = ll_watch_check(&watch, FN);
+        }
+        ll_free(below);
+        if (s != LL_OK)
             goto done;
     }
     if (w.spectral) {
@@ -391,6 +423,9 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         w.spectra.wavelengths = o.wavelengths;
         w.spectra.theta_i = w.theta_i;
         w.spectra.geom = w.geom;
+        w.spectra.ndf_w = &w.ndf_w;
+        w.spectra.vndf_w = &w.vndf_w;
+        w.spectra.sigma_w = &w.sigma_w;
         s = ll_tables_spectra_run(&w.spectra, o.spectrum, o.spectrum_user, w.lum, &watch, FN);
         if (s != LL_OK)
             goto done;

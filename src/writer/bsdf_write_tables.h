@@ -112,6 +112,7 @@ typedef struct ll_tables_spectra {
     const float *theta_i;          /* [n_ti]                             */
     const double *geom;            /* [n_ti * plane * 4]                 */
     FILE *scratch;                 /* tmpfile(), [n_l][n_ti][plane] floats */
+    const ll_warp2d *ndf_w, *vndf_w, *sigma_w; /* the warp, for the horizon fit */
 } ll_tables_spectra;
 
 /* Every wavelength's values (source(user, l, lambda) opened, evaluated,
@@ -146,6 +147,26 @@ typedef struct ll_tables_figures {
 } ll_tables_figures;
 LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table,
                                         ll_tables_figures *out);
+
+/* The nodes of one slice's sample grid (ns x ns, n_ch planes of values)
+ * whose directions are below the horizon (below[q] != 0) and that touch a
+ * node above it: set so that the slice's albedo of the channels weighted
+ * by weights is target; where it is too bright without them, every
+ * channel scaled down to it (bsdf_write_tables_horizon.c). The caller
+ * forms the luminance table afterwards. The slice as a reader sees it: */
+typedef struct ll_tables_horizon {
+    const ll_warp2d *ndf_w, *vndf_w; /* D and the visible normals' warp      */
+    double sigma;                    /* sigma of the slice's elevation       */
+    double param[2];                 /* the VNDF warp's parameters: 0, theta */
+} ll_tables_horizon;
+LL_INTERNAL ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
+                                            const unsigned char *below, size_t n_ch,
+                                            const double *weights, double target,
+                                            float *planes);
+/* The luminance albedo of the untextured b at incident elevation theta
+ * (ll_bsdf_albedo), into *out; 0 if b is a table file, which has none
+ * (its slices are then not fitted). */
+LL_INTERNAL ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, double *out);
 
 /* Basis k of the textured b as an untextured handle of its own (its
  * coefficients and per-row tables copied; release it with

@@ -33,12 +33,36 @@ static ll_status luminance_weights(const ll_tables_spectra *sp, double *y, const
     return LL_OK;
 }
 
+/* Slice t of one wavelength's values (plane floats) with its nodes
+ * beyond the horizon fitted to b's albedo, as the RGB file's
+ * (bsdf_write_tables_horizon.c); below is scratch of plane bytes. */
+static ll_status fit_slice(const ll_tables_spectra *sp, const ll_bsdf *b, size_t t,
+                           float *values, unsigned char *below)
+{
+    static const double one[1] = { 1.0 };
+    ll_tables_horizon h;
+    double th = (double)sp->theta_i[t], target;
+    size_t q, ns = (size_t)(sqrt((double)sp->plane) + 0.5);
+    ll_status s;
+    if ((s = ll_tables_horizon_target(b, th, &target)) != LL_OK || !(target > 0.0))
+        return s;
+    for (q = 0; q < sp->plane; ++q)
+        below[q] = !(sp->geom[(t * sp->plane + q) * 4 + 2] > 0.0);
+    h.ndf_w = sp->ndf_w;
+    h.vndf_w = sp->vndf_w;
+    h.sigma = ll_tables_sigma_at(sp->sigma_w, th);
+    h.param[0] = 0.0;
+    h.param[1] = th;
+    return ll_tables_horizon_fit(&h, ns, below, 1, one, target, values);
+}
+
 /* One wavelength's values at every node of every slice, into block
  * (n_ti * plane floats). */
 static ll_status evaluate(const ll_tables_spectra *sp, const ll_bsdf *b, float *block,
-                          const char *fn, double lambda)
+                          unsigned char *below, const char *fn, double lambda)
 {
     size_t t, q;
+    ll_status s;
     for (t = 0; t < sp->n_ti; ++t) {
         double th = (double)sp->theta_i[t], wi[3] = { sin(th), 0.0, cos(th) };
         for (q = 0; q < sp->plane; ++q) {
@@ -46,7 +70,7 @@ static ll_status evaluate(const ll_tables_spectra *sp, const ll_bsdf *b, float *
             double f[3] = { 0.0, 0.0, 0.0 }, v = 0.0;
             if (g[3] > 0.0) {
                 /* Our renderer convention: wo (viewer) is the format's wi. */
-                ll_status s = ll_bsdf_eval_dir(b, wi, g, LL_TRANSPORT_RADIANCE, NULL, f);
+                s = ll_bsdf_eval_dir(b, wi, g, LL_TRANSPORT_RADIANCE, NULL, f);
                 if (s != LL_OK)
                     return ll_fail(s, "%s: the file of %g nm: %s", fn, lambda,
                                    ll_last_error_message());
@@ -54,6 +78,8 @@ static ll_status evaluate(const ll_tables_spectra *sp, const ll_bsdf *b, float *
             }
             block[t * sp->plane + q] = (float)(v > 0.0 && ll_is_finite(v) ? v : 0.0);
         }
+        if ((s = fit_slice(sp, b, t, block + t * sp->plane, below)) != LL_OK)
+            return s;
     }
     return LL_OK;
 }
@@ -64,12 +90,14 @@ ll_status ll_tables_spectra_run(ll_tables_spectra *sp, ll_tables_spectrum_fn sou
     size_t count, l, i;
     double *y = NULL;
     float *block = NULL;
+    unsigned char *below = NULL;
     ll_status s = LL_OK;
     if (!ll_size_mul(sp->n_ti, sp->plane, &count))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the tables' size overflows", fn);
     y = ll_alloc_array(sp->n_l, sizeof *y);
     block = ll_alloc_array(count, sizeof *block);
-    if (!y || !block) {
+    below = ll_alloc_array(sp->plane, 1);
+    if (!y || !block || !below) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "%s: out of memory (spectra)", fn);
         goto done;
     }
@@ -88,7 +116,7 @@ ll_status ll_tables_spectra_run(ll_tables_spectra *sp, ll_tables_spectrum_fn sou
             s = ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: the spectrum source gave no file for "
                         "%g nm", fn, sp->wavelengths[l]);
         if (s == LL_OK)
-            s = evaluate(sp, b, block, fn, sp->wavelengths[l]);
+            s = evaluate(sp, b, block, below, fn, sp->wavelengths[l]);
         ll_bsdf_release(b);
         if (s != LL_OK)
             goto done;
@@ -107,6 +135,7 @@ ll_status ll_tables_spectra_run(ll_tables_spectra *sp, ll_tables_spectrum_fn sou
 done:
     ll_free(y);
     ll_free(block);
+    ll_free(below);
     return s;
 }
 
