@@ -107,13 +107,13 @@ typedef struct eval_job {
 /* The terms of a series of len terms (computed with more orders) that a
  * series of m orders keeps: ll_microfacet_series' truncation after the
  * last term that matters, within the first m. */
-static size_t kept_terms(const double *c, size_t len, size_t m)
+static size_t kept_terms(const double *c, size_t len, size_t m, double keep)
 {
     size_t k = len < m ? len : m, l, last = 0;
     if (k == 0 || !(c[0] > 0.0))
         return 0;
     for (l = 1; l < k; ++l)
-        if (fabs(c[l]) >= LL_MICROFACET_KEEP * c[0])
+        if (fabs(c[l]) >= keep * c[0])
             last = l;
     return last + 1;
 }
@@ -129,7 +129,7 @@ static ll_status slot_series(const eval_job *job, size_t slot, double mu_o, doub
     if (job->mode == MEMO_REUSE && !memo->widened[slot] &&
         !ll_microfacet_widened(job->mf, mu_o, mu_i)) {
         *c = memo->series[slot];
-        *len = kept_terms(*c, memo->len[slot], job->m);
+        *len = kept_terms(*c, memo->len[slot], job->m, ll_microfacet_keep(job->mf));
         return LL_OK;
     }
     s = ll_microfacet_series(job->mf, mu_o, mu_i, job->m, series, len, NULL, scratch);

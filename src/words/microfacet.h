@@ -22,14 +22,14 @@
 /* Truncation goal of every series: coefficients below this fraction of the
  * first are dropped (the original's ERROR_GOAL). */
 #define LL_MICROFACET_RELERR 1e-3
-/* The terms a series keeps: down to this fraction of the first (the rest
- * of the terms, computed to TAIL_GOAL, are dropped). Not RELERR: a cut
- * there falls after a different order from one pair of cosines to the
- * next, so f jumps between neighbouring cosines by up to about 1e-3 of the
- * pair's mean, a percent of f at a lobe's tail, and no node count
+/* The terms a Beckmann series keeps: down to this fraction of the first
+ * (the rest of the terms, computed to TAIL_GOAL, are dropped). Not RELERR:
+ * a cut there falls after a different order from one pair of cosines to
+ * the next, so f jumps between neighbouring cosines by up to about 1e-3 of
+ * the pair's mean, a percent of f at a lobe's tail, and no node count
  * resolves a jump: the resolution search chased them (gold, Beckmann alpha
  * 0.3, to 1542 nodes; 104 here). A file's own truncation (--error) is
- * applied where it is written. */
+ * applied where it is written. GGX keeps RELERR (ll_microfacet_keep). */
 #define LL_MICROFACET_KEEP 1e-5
 
 /* The sum of a[i] b[i] in the order of i: the compensations' weighted sums
@@ -109,6 +109,12 @@ LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double
  * model with fewer orders is a prefix of the one with more (the terms
  * do not depend on how many are asked for), truncated by the same rule:
  * the resolution search reuses them between the order counts it tries. */
+/* The fraction of its first term down to which a series of mf keeps its
+ * terms: LL_MICROFACET_KEEP for Beckmann; RELERR for GGX, whose series are
+ * computed only to a tenth of it (GGX_TAIL_GOAL), so a lower cut would still
+ * move with the pair, and whose transmission converges only to first order
+ * in the nodes at its jump, which the probes do not see in the albedo. */
+LL_INTERNAL double ll_microfacet_keep(const ll_microfacet_model *mf);
 LL_INTERNAL int ll_microfacet_widened(const ll_microfacet_model *mf, double mu_o, double mu_i);
 /* The Smith shadowing-masking term G1 of a direction with |tan theta| =
  * tan_theta for Beckmann roughness alpha, by the rational approximation of

@@ -164,10 +164,15 @@ ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, doubl
         return LL_OK; /* a vanishing mean: nothing */
     last = 0;
     for (l = 1; l < n_out; ++l)
-        if (fabs(out[l]) >= LL_MICROFACET_KEEP * out[0])
+        if (fabs(out[l]) >= ll_microfacet_keep(mf) * out[0])
             last = l;
     *len = last + 1;
     return LL_OK;
+}
+
+double ll_microfacet_keep(const ll_microfacet_model *mf)
+{
+    return mf->ggx ? LL_MICROFACET_RELERR : LL_MICROFACET_KEEP;
 }
 
 int ll_microfacet_widened(const ll_microfacet_model *mf, double mu_o, double mu_i)
