@@ -7,6 +7,8 @@
  *   the search evaluates no more nodes than twice that count;
  * - a count that passes in a dip of the error, while the count above it
  *   fails, is not kept: the answer is where the error has fallen for good.
+ * And the probes of a GGX dielectric that straddle its transmission jump
+ * (search/probe_jump.c): which are marked, and that the error skips them.
  */
 #include <stdarg.h>
 #include <stddef.h>
