@@ -8,10 +8,14 @@
  * The layer holds f per order on a Catmull-Rom spline over fixed nodes,
  * and where a probe's stencil has nodes on both sides of that line the
  * spline smears the jump over the node interval: the error there falls
- * only like 1/n, and a search that compared such values chased it (eta
- * 1.5, alpha 0.8 to 2432 nodes). Such values are left out (NaN) of the
- * comparison: the tolerance covers what a spline over nodes represents,
- * and not the smear within one node interval of the jump.
+ * only like 1/n, and a search comparing such values would grow n without
+ * end. Such values are left out (NaN) of the comparison: the tolerance
+ * covers what a spline over nodes represents, and not the smear within
+ * one node interval of the jump. (The probes lie mostly clear of the
+ * line: from above it is 0.33 or more in mu from the refracted centre,
+ * beyond the groups' offsets; from below it lies beyond |mu_o| = 1
+ * wherever a refracted direction exists. Of the 514 probe pairs of eta
+ * 1.5, 2 straddle at 100 nodes.)
  */
 #include "search/probe.h"
 
