@@ -11,11 +11,12 @@
  * only like 1/n, and a search comparing such values would grow n without
  * end. Such values are left out (NaN) of the comparison: the tolerance
  * covers what a spline over nodes represents, and not the smear within
- * one node interval of the jump. (The probes lie mostly clear of the
- * line: from above it is 0.33 or more in mu from the refracted centre,
- * beyond the groups' offsets; from below it lies beyond |mu_o| = 1
- * wherever a refracted direction exists. Of the 514 probe pairs of eta
- * 1.5, 2 straddle at 100 nodes.)
+ * one node interval of the jump. (At eta 1.5 the probes lie mostly clear
+ * of the line: from above it is 0.33 or more in mu from the refracted
+ * centre, beyond the groups' offsets; from below it lies beyond
+ * |mu_o| = 1 wherever a refracted direction exists. Of the 514 probe
+ * pairs, 2 straddle at 100 nodes. Nearer 1 the line comes closer: at eta
+ * 1.1 and normal incidence it is 0.09 from the centre.)
  */
 #include "search/probe.h"
 
