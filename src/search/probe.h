@@ -60,8 +60,23 @@ LL_INTERNAL ll_status ll_probe_opaque(double mu_min, ll_probe_set *out);
 LL_INTERNAL void ll_probe_free(ll_probe_set *set);
 
 /* The worst relative difference |v - ref| / ref over the values whose ref
- * is above LL_PROBE_FLOOR of the peak of its group. */
+ * is above LL_PROBE_FLOOR of the peak of its group; a value NaN in either
+ * array (ll_probe_mark_jump) is left out, and out of the peaks. */
 LL_INTERNAL double ll_probe_error(const ll_probe_set *set, const double *v, const double *ref);
+
+/* GGX's transmission jump (search/probe_jump.c): whether the spline
+ * stencils of (mu_o, mu_i) on the positive half (h nodes) of the
+ * Gauss-Lobatto nodes hold node pairs on both sides of the line
+ * |mu_i| = e |mu_o|, e the relative index ahead of the light (eta from
+ * above, mu_i > 0; 1 / eta from below), in the transmission blocks
+ * (reflection: never). */
+LL_INTERNAL int ll_probe_jump_straddles(const double *half, size_t h, double eta, double mu_o,
+                                        double mu_i);
+/* Set to NaN the values (LL_PROBE_VALUES(set)) of the probe pairs whose
+ * stencils at n nodes straddle that line: what the search then leaves out
+ * of its comparisons of a GGX dielectric (ll_probe_error). */
+LL_INTERNAL ll_status ll_probe_mark_jump(const ll_probe_set *set, size_t n, double eta,
+                                         double *values);
 
 /* The interface model that the evaluations of one search share (with
  * the maps of its series): every order, no widening (words/microfacet.h). */

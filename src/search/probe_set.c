@@ -178,6 +178,7 @@ double ll_probe_error(const ll_probe_set *set, const double *v, const double *re
     size_t p, k, nphi = set->n_phi;
     if (!peak)
         return HUGE_VAL; /* (callers treat it as "not converged") */
+    /* (fmax ignores a NaN: the values left out are out of the peaks.) */
     for (p = 0; p < set->n_pairs; ++p)
         for (k = 0; k < nphi; ++k)
             peak[set->pairs[p].group] = fmax(peak[set->pairs[p].group], ref[p * nphi + k]);
@@ -185,6 +186,9 @@ double ll_probe_error(const ll_probe_set *set, const double *v, const double *re
         double floor = LL_PROBE_FLOOR * peak[set->pairs[p].group];
         for (k = 0; k < nphi; ++k) {
             double r = ref[p * nphi + k];
+            /* A value left out in either (ll_probe_mark_jump): NaN. */
+            if (isnan(r) || isnan(v[p * nphi + k]))
+                continue;
             if (r > floor && r > 0.0)
                 worst = fmax(worst, fabs(v[p * nphi + k] - r) / r);
         }

@@ -63,6 +63,9 @@ typedef struct interface_ctx {
     ll_microfacet_model *mf0; /* the compensation's: order 0 only */
     double eta_re, eta_im;
     int compensate;
+    /* A GGX dielectric: the probes whose stencils straddle its
+     * transmission jump are left out (search/probe_jump.c). */
+    int jump;
     const ll_probe_set *set;
     ll_probe_compensation made[MAX_COMPENSATIONS];
     size_t n_made;
@@ -120,10 +123,12 @@ static ll_status interface_eval(void *ctx, size_t n, size_t m, ll_watch *watch, 
     interface_ctx *c = ctx;
     const ll_probe_compensation *compensation = NULL;
     ll_status s = c->compensate ? compensation_for(c, n, watch, &compensation) : LL_OK;
-    return s == LL_OK
-               ? ll_probe_interface_eval_memo(c->mf, compensation, memo_for(c, n), n, m, c->set,
-                                              watch, values)
-               : s;
+    if (s == LL_OK)
+        s = ll_probe_interface_eval_memo(c->mf, compensation, memo_for(c, n), n, m, c->set,
+                                         watch, values);
+    if (s == LL_OK && c->jump)
+        s = ll_probe_mark_jump(c->set, n, c->eta_re, values);
+    return s;
 }
 
 ll_status ll_resolution_search_microfacet(const ll_microfacet *microfacet, double tolerance,
@@ -197,6 +202,7 @@ ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double 
     ctx.eta_re = eta_re;
     ctx.eta_im = eta_im;
     ctx.compensate = compensate;
+    ctx.jump = distribution == LL_DISTRIBUTION_GGX && eta_im == 0.0;
     ctx.set = &set;
     /* n: the fit's guess; m: what the probes' own series need. */
     s = ll_probe_interface_model_distribution(eta_re, eta_im, alpha, distribution, &ctx.mf);
