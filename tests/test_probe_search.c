@@ -58,18 +58,27 @@ static void one_probe(ll_probe_set *set, ll_probe_pair *pair)
  * 0.0059 at 114, the goal being 0.6 of the tolerance 0.01). */
 static double fast(size_t n) { return 1.0667e6 / pow((double)n, 4.0); }
 
-static void growth_does_not_overshoot(void **state)
+/* The search on one probe whose made-up error is c's, from n nodes and 10
+ * orders at the tolerance 0.01: the chosen n, its error in *e. */
+static size_t search_from(made_up *c, size_t n, double *e)
 {
     ll_probe_set set;
     ll_probe_pair pair;
-    made_up c = { fast, 0, 0 };
-    size_t n = 100, m = 10;
-    double e = 0.0;
-    (void)state;
+    size_t m = 10;
     one_probe(&set, &pair);
-    assert_int_equal(ll_probe_search(&set, made_up_eval, &c, NULL, 0.01, 10, 100000, "test", &n,
-                                     &m, &e),
-                     LL_OK);
+    assert_int_equal(
+        ll_probe_search(&set, made_up_eval, c, NULL, 0.01, 10, 100000, "test", &n, &m, e),
+        LL_OK);
+    return n;
+}
+
+static void growth_does_not_overshoot(void **state)
+{
+    made_up c = { fast, 0, 0 };
+    double e = 0.0;
+    size_t n;
+    (void)state;
+    n = search_from(&c, 100, &e);
     /* 100 fails, its step would be 156 (and its twice 312); 114 screens
      * against 200 and passes against 228. */
     assert_int_equal(n, 114);
@@ -83,16 +92,11 @@ static double stepped(size_t n) { return n == 286 || n >= 350 ? 0.0 : 0.0075; }
 
 static void a_dip_is_not_kept(void **state)
 {
-    ll_probe_set set;
-    ll_probe_pair pair;
     made_up c = { stepped, 0, 0 };
-    size_t n = 250, m = 10;
     double e = 0.0;
+    size_t n;
     (void)state;
-    one_probe(&set, &pair);
-    assert_int_equal(ll_probe_search(&set, made_up_eval, &c, NULL, 0.01, 10, 100000, "test", &n,
-                                     &m, &e),
-                     LL_OK);
+    n = search_from(&c, 250, &e);
     /* 250 fails and its step is 336; 286 screens and passes against its
      * own twice, but 336 above it fails against 572. */
     assert_true(n >= 350);

@@ -152,6 +152,16 @@ def _normal_area(u_theta_m, sin_theta_m):
     return dr.maximum(TWO_PI_SQUARED * u_theta_m * sin_theta_m, 1e-6)
 
 
+def _normal_at(u_m, phi_i):
+    """(m, sin theta_m): the microfacet normal at the warp's point u_m (theta
+    as u squared, phi about wi's azimuth phi_i), as the writer places them."""
+    phi_m = (2.0 * u_m.y - 1.0) * PI + phi_i
+    theta_m = dr.square(u_m.x) * (0.5 * PI)
+    sin_phi, cos_phi = dr.sincos(phi_m)
+    sin_theta, cos_theta = dr.sincos(theta_m)
+    return mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta), sin_theta
+
+
 def _refraction_half(wi, wo, eta):
     """The refraction half vector of Walter et al. 2007 (sec. 5.2) of wi
     above and wo below, -(wi + eta wo) normalised and turned above the
@@ -581,11 +591,7 @@ class TracedTables:
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
         u_m, vndf_pdf = self.vndf.sample(sample, params, active)
-        phi_m = (2.0 * u_m.y - 1.0) * PI + phi_i
-        theta_m = dr.square(u_m.x) * (0.5 * PI)
-        sin_phi, cos_phi = dr.sincos(phi_m)
-        sin_theta, cos_theta = dr.sincos(theta_m)
-        m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
+        m, sin_theta = _normal_at(u_m, phi_i)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
         value = self.rgb(sample, phi_i, theta_i, active,
                          stack[2] if stack else (at[1] if at is not None else None))
@@ -634,11 +640,7 @@ class TracedTables:
         sample, lum_pdf = self.luminance.sample(
             mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
         u_m, vndf_pdf = self.vndf.sample(sample, params, active)
-        phi_m = (2.0 * u_m.y - 1.0) * PI + phi_i
-        theta_m = dr.square(u_m.x) * (0.5 * PI)
-        sin_phi, cos_phi = dr.sincos(phi_m)
-        sin_theta, cos_theta = dr.sincos(theta_m)
-        m = mi.Vector3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
+        m, _ = _normal_at(u_m, phi_i)
         inv = 1.0 / eta
         c = dr.dot(wi_k, m)
         k = 1.0 - inv * inv * (1.0 - c * c)
