@@ -93,10 +93,17 @@ typedef struct series_case {
 typedef double (*mf_closed_form_fn)(const series_case *c, double mu_o, double mu_i, double phi);
 
 /* The reference's resolution and the buffers of series_error. */
+struct series_work;
+/* A reference of the pair's coefficients other than composite Simpson over
+ * the uniform samples: fills w->ref[l], l < len (w->f holds the samples). */
+typedef void (*mf_reference_fn)(struct series_work *w, const series_case *c, double mu_o,
+                                double mu_i, size_t len);
+
 typedef struct series_work {
     size_t ref_points; /* odd: composite Simpson on [0, pi] */
     size_t max_orders;
     mf_closed_form_fn closed_form;
+    mf_reference_fn reference; /* NULL: composite Simpson */
     double *f, *ref, *ours, *scratch;
 } series_work;
 
@@ -106,6 +113,7 @@ static inline void series_work_init(series_work *w, size_t ref_points, size_t ma
     w->ref_points = ref_points;
     w->max_orders = max_orders;
     w->closed_form = closed_form;
+    w->reference = NULL;
     w->f = malloc(ref_points * sizeof *w->f);
     w->ref = malloc(max_orders * sizeof *w->ref);
     w->ours = malloc(max_orders * sizeof *w->ours);
@@ -126,7 +134,8 @@ static inline void series_work_free(series_work *w)
 
 /* The worst error of the pair's series (relative to the BSDF's peak over
  * phi), comparing with coefficients computed by composite Simpson from the
- * closed form; returns -1 for pairs that scatter negligibly. */
+ * closed form (or by w->reference); returns -1 for pairs that scatter
+ * negligibly. */
 static inline double series_error(series_work *w, ll_microfacet_model *mf, const series_case *c,
                                   double mu_o, double mu_i)
 {
@@ -151,7 +160,10 @@ static inline double series_error(series_work *w, ll_microfacet_model *mf, const
         assert_true(peak < 1e-6);
         return -1.0;
     }
-    ll_test_cosine_series(w->f, w->ref_points, h, len, w->ref);
+    if (w->reference)
+        w->reference(w, c, mu_o, mu_i, len);
+    else
+        ll_test_cosine_series(w->f, w->ref_points, h, len, w->ref);
     return ll_test_series_error(w->ours, w->ref, len, w->ref_points, h, peak);
 }
 
