@@ -19,8 +19,8 @@
 #include "layer/order.h"
 #include "layerlab/ll_layer.h"
 
-/* Truncation goal of every series: coefficients below this fraction of the
- * first are dropped (the original's ERROR_GOAL). */
+/* The original's truncation goal (ERROR_GOAL): the widening's and GGX's
+ * peak lengths aim at it, and GGX series are cut there (ll_microfacet_keep). */
 #define LL_MICROFACET_RELERR 1e-3
 /* The terms a Beckmann series keeps: down to this fraction of the first
  * (the rest of the terms, computed to TAIL_GOAL, are dropped). Not RELERR:
