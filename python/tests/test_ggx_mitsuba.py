@@ -17,7 +17,18 @@ Per case (material, alpha, side, lobe R or T), at incident |mu| 0.1 .. 1:
 - point values at outgoing directions Mitsuba's sampler picks in that lobe
   and uniform ones, |mu_o| >= 0.1, where Mitsuba's f is above 1% of its
   peak over that incident direction's points: median relative difference
-  <= 0.1%, 99th percentile <= 2%;
+  <= 0.1%, 99th percentile <= 2%. A GGX transmission value whose spline
+  stencils in the file (its nodes in mu_i and mu_o) hold nodes on both
+  sides of GGX's jump (eta |mu_o| = |mu_i|) is counted apart (column
+  `band`, with the 99th percentile of all values, `p99 all`), not in these
+  two: f is discontinuous there in both models (Walter et al. 2007's
+  refraction half vector turns horizontal, where GGX's D is alpha^2 / pi),
+  and a spline through fixed nodes interpolates across a jump whatever the
+  node count, so its error inside the stencils that straddle it stays O(1)
+  as the band narrows like 1 / n: no resolution meets a pointwise bound
+  there, and the tolerance the file is built to leaves the same band out
+  (src/search/probe_jump.c). What the band does to the energy is held by
+  the albedos, which count every direction;
 - directional albedos of each lobe at four incident directions: within 1%.
   Each albedo is a deterministic quadrature of f |cos| over the lobe's
   hemisphere, the same directions for Mitsuba's f and ours: Gauss-Legendre
@@ -210,12 +221,32 @@ def _albedos(lib, h, kind, alpha, dist):
     return out
 
 
-def _case(lib, h, bsdf, side, lobe, rng):
+def _stencil_range(half, mu):
+    """The smallest and largest node of the Catmull-Rom stencil that the
+    reader interpolates |mu| with (numerics/spline.c: the interval holding
+    it and one node either side), half: the file's nodes >= 0."""
+    k = int(np.clip(np.searchsorted(half, mu, side="right") - 1, 0, len(half) - 2))
+    return half[max(k - 1, 0)], half[min(k + 2, len(half) - 1)]
+
+
+def _straddles_jump(half, side, mu_i, mu_o):
+    """Whether the stencils of (|mu_o|, |mu_i|) hold node pairs on both
+    sides of GGX's transmission jump |mu_i| = e |mu_o|, e the relative
+    index ahead of the light (the rule of search/probe_jump.c)."""
+    e = S.DIELECTRIC_ETA if side > 0 else 1.0 / S.DIELECTRIC_ETA
+    o_lo, o_hi = _stencil_range(half, mu_o)
+    i_lo, i_hi = _stencil_range(half, mu_i)
+    return i_hi - e * o_lo > 0.0 and i_lo - e * o_hi < 0.0
+
+
+def _case(lib, h, bsdf, side, lobe, rng, half=None):
     """Relative differences where f is above 1% of its peak, of one side
-    (+1 above, -1 below) and lobe."""
+    (+1 above, -1 below) and lobe: those clear of GGX's transmission jump
+    and those whose stencils straddle it (half: the file's nodes >= 0 for
+    GGX transmission, else None and no value is set apart)."""
     ctx = mi.BSDFContext(mi.TransportMode.Radiance, _lobe_flags(lobe))
     full = mi.BSDFContext(mi.TransportMode.Radiance)
-    rel = []
+    rel, band = [], []
     mus = np.linspace(0.1, 1.0, N_WI)
     for mu in mus:
         wi = _incident(mu, side, rng.uniform(0, 2 * np.pi))
@@ -234,14 +265,19 @@ def _case(lib, h, bsdf, side, lobe, rng):
         ours = np.array([_our_eval(lib, h, wi, w) for w in wos])
         peak = theirs.max(axis=0)
         keep = theirs > 0.01 * peak[None, :]
-        rel.append(np.abs(ours[keep] / theirs[keep] - 1))
-    return np.concatenate(rel)
+        apart = np.zeros(len(wos), dtype=bool)
+        if half is not None:
+            apart = np.array([_straddles_jump(half, side, mu, abs(w[2])) for w in wos])
+        diff = np.abs(np.divide(ours, theirs, out=np.ones_like(ours), where=keep) - 1)
+        rel.append(diff[keep & ~apart[:, None]])
+        band.append(diff[keep & apart[:, None]])
+    return np.concatenate(rel), np.concatenate(band)
 
 
 def _table(files, dist):
     """The rows (case, alpha, n, m, points, median, 99th, albedo error, the
-    albedo quadrature's change) of
-    every case, and the printed table."""
+    albedo quadrature's change, values in GGX's jump band, the 99th
+    percentile with them) of every case, and the printed table."""
     import layerlab as ll
     from layerlab import _native
     lib = _native.lib
@@ -253,23 +289,28 @@ def _table(files, dist):
             h = storage._live()
             albedos = _albedos(lib, h, kind, alpha, dist)
             bsdf = mi.load_dict(_mitsuba_bsdf(kind, alpha, dist))
+            nodes = np.asarray(storage.nodes, dtype=np.float64)
             for side, lobe in _sides(kind):
-                rel = _case(lib, h, bsdf, side, lobe, rng)
+                jump = dist == "ggx" and lobe == "T"
+                rel, band = _case(lib, h, bsdf, side, lobe, rng,
+                                  nodes[nodes >= 0.0] if jump else None)
                 a_err = max((np.max(np.abs(a_ll / a_mi - 1))
                              for _, a_mi, a_ll, _ in albedos[side, lobe]), default=0.0)
                 quad = max((change for _, _, _, change in albedos[side, lobe]), default=0.0)
                 name = "%s %s %s" % (kind, "above" if side > 0 else "below", lobe)
                 rows.append((name, alpha, storage.nodeCount, storage.maxOrder, len(rel),
-                             np.median(rel), np.percentile(rel, 99), a_err, quad))
+                             np.median(rel), np.percentile(rel, 99), a_err, quad, len(band),
+                             np.percentile(np.concatenate((rel, band)), 99)))
             storage.close()
     print("\n%s against Mitsuba 3 %s (scalar_rgb), llbuild's resolution, compensate=0" %
           ("GGX" if dist == "ggx" else "Beckmann", mi.__version__))
-    print("%-22s %5s %10s %6s %8s %7s %7s %7s" % ("case", "alpha", "n x m", "points",
-                                                  "median", "p99", "albedo", "quad"))
-    for name, alpha, n, m, count, med, p99, a_err, quad in rows:
-        print("%-22s %5g %10s %6d %7.3f%% %6.2f%% %6.2f%% %6.3f%%" % (
+    print("%-22s %5s %10s %6s %8s %7s %7s %7s %5s %7s" % (
+        "case", "alpha", "n x m", "points", "median", "p99", "albedo", "quad", "band",
+        "p99 all"))
+    for name, alpha, n, m, count, med, p99, a_err, quad, n_band, p99_all in rows:
+        print("%-22s %5g %10s %6d %7.3f%% %6.2f%% %6.2f%% %6.3f%% %5d %6.2f%%" % (
             name, alpha, "%d x %d" % (n, m), count, 100 * med, 100 * p99, 100 * a_err,
-            100 * quad))
+            100 * quad, n_band, 100 * p99_all))
     return rows
 
 
@@ -285,8 +326,6 @@ KNOWN_MISSES = {
     ("conductor above R", 0.05),
     ("dielectric below R", 0.2),
     ("dielectric below R", 0.4),
-    ("dielectric below T", 0.4),
-    ("dielectric above T", 0.8),
     ("dielectric below R", 0.8),
     ("dielectric below T", 0.8),
 }
