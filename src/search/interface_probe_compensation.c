@@ -12,8 +12,8 @@
  * (O(n^2 / 4) for a conductor, whose term needs reflection from above
  * only). That is still far below the layer's O(n^2 m): an order-0 series
  * is 16 samples of the profile and one dot product (about 150 where a
- * kink takes the Filon path, whose moments had cost as much again as its
- * samples before Simpson's rule took order 0). Each reflection pair is computed once for
+ * kink takes the Filon path, where Simpson's rule on the samples now
+ * stands for Filon's moments of every order). Each reflection pair is computed once for
  * itself and its reciprocal (bit for bit the same series), and each
  * transmission pair once for itself and for the reverse pair from the
  * other side, which is eta^2 (or 1 / eta^2) times it: the layer computes
