@@ -112,6 +112,14 @@ LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);
 LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
                                            size_t max_len, double *out, size_t *len,
                                            double *ref0, double *scratch);
+/* The same, and in *widened (non-zero) whether the lobe was widened
+ * (ll_microfacet_widened) from the plan the series was made by: one plan
+ * of the pair instead of two where the caller needs both. 0 where the
+ * series is empty before planning (max_len 0). */
+LL_INTERNAL ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_o,
+                                                   double mu_i, size_t max_len, double *out,
+                                                   size_t *len, double *ref0, double *scratch,
+                                                   int *widened);
 
 /* Does ll_microfacet_series widen the lobe of this pair at the orders in
  * effect (ll_microfacet_set_orders)? Where it does not, the series of a
