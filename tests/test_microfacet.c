@@ -157,6 +157,66 @@ static void filon_kept_sums_match_summed_again(void **state)
     }
 }
 
+/* The search's albedo model (ll_microfacet_order0_simpson) integrates
+ * order 0 of the Filon path by Simpson's rule on Filon's own samples: the
+ * same number as Filon's moments to rounding, on every node pair of a
+ * Gauss-Lobatto grid (the pairs near total internal reflection and the end
+ * of refraction take that path), the conductor's mirror reference too;
+ * and the grid holds pairs where the two differ in their bits, so Simpson's
+ * rule is what was compared. */
+static void order0_simpson_matches_filon(void **state)
+{
+    static const series_case cases[] = { { 1.5, 0.0, 0.3 },
+                                         { 1.5, 0.0, 0.1 },
+                                         { 0.14355224039215753, 3.9839744793223466, 0.5 } };
+    enum { NODES = 40 };
+    double rule[2 * NODES], mu[NODES];
+    double *scratch = malloc(ll_microfacet_scratch_size(1) * sizeof(double));
+    size_t ci, a, b, k, differ = 0, compared = 0;
+    (void)state;
+    assert_non_null(scratch);
+    assert_int_equal(ll_quad_gauss_lobatto(NODES, rule, rule + NODES, NULL), LL_OK);
+    for (k = 0; k < NODES; ++k)
+        mu[k] = rule[k];
+    for (ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
+        const series_case *c = &cases[ci];
+        ll_microfacet_model *filon, *simpson;
+        assert_int_equal(ll_microfacet_create(c->eta_re, c->eta_im, c->alpha,
+                                              LL_PROBE_TRUE_ORDERS, 1, &filon),
+                         LL_OK);
+        assert_int_equal(ll_microfacet_create(c->eta_re, c->eta_im, c->alpha,
+                                              LL_PROBE_TRUE_ORDERS, 1, &simpson),
+                         LL_OK);
+        ll_microfacet_order0_simpson(simpson);
+        assert_int_equal(ll_microfacet_prepare(filon, mu, NODES), LL_OK);
+        assert_int_equal(ll_microfacet_prepare(simpson, mu, NODES), LL_OK);
+        for (a = 0; a < NODES; ++a)
+            for (b = 0; b < NODES; ++b) {
+                double vf = 0.0, vs = 0.0, rf = 0.0, rs = 0.0;
+                size_t lf, ls;
+                int conductor = c->eta_im > 0.0;
+                assert_int_equal(ll_microfacet_series(filon, mu[a], mu[b], 1, &vf, &lf,
+                                                      conductor ? &rf : NULL, scratch),
+                                 LL_OK);
+                assert_int_equal(ll_microfacet_series(simpson, mu[a], mu[b], 1, &vs, &ls,
+                                                      conductor ? &rs : NULL, scratch),
+                                 LL_OK);
+                assert_int_equal(lf, ls);
+                if (lf == 0)
+                    continue;
+                ++compared;
+                assert_true(fabs(vs - vf) <= 1e-13 * fabs(vf));
+                assert_true(fabs(rs - rf) <= 1e-13 * fabs(rf));
+                differ += vs != vf || rs != rf;
+            }
+        ll_microfacet_destroy(filon);
+        ll_microfacet_destroy(simpson);
+    }
+    free(scratch);
+    assert_true(compared > 1000);
+    assert_true(differ > 0);
+}
+
 /* The closed form of E_beta times a quadratic in v = 1 - cos phi (GGX's
  * peak split) against the 16-point form of ll_ggx_series, which holds a
  * quadratic in cos phi exactly. */
@@ -571,6 +631,7 @@ int main(void)
         cmocka_unit_test(bessel_i0e_matches_reference),
         cmocka_unit_test(filon_is_exact_for_quadratics),
         cmocka_unit_test(filon_kept_sums_match_summed_again),
+        cmocka_unit_test(order0_simpson_matches_filon),
         cmocka_unit_test(ggx_quadratic_series_matches_interpolated),
         cmocka_unit_test(series_matches_direct_integration),
         cmocka_unit_test(dielectric_conserves_energy),

@@ -125,6 +125,7 @@ static ll_status slot_series(const eval_job *job, size_t slot, double mu_o, doub
                              double *series, double *scratch, const double **c, size_t *len)
 {
     ll_probe_series_memo *memo = job->memo;
+    int widened;
     ll_status s;
     if (job->mode == MEMO_REUSE && !memo->widened[slot] &&
         !ll_microfacet_widened(job->mf, mu_o, mu_i)) {
@@ -132,12 +133,13 @@ static ll_status slot_series(const eval_job *job, size_t slot, double mu_o, doub
         *len = kept_terms(*c, memo->len[slot], job->m, ll_microfacet_keep(job->mf));
         return LL_OK;
     }
-    s = ll_microfacet_series(job->mf, mu_o, mu_i, job->m, series, len, NULL, scratch);
+    s = ll_microfacet_series_widened(job->mf, mu_o, mu_i, job->m, series, len, NULL, scratch,
+                                     &widened);
     *c = series;
     if (s != LL_OK || job->mode != MEMO_FILL)
         return s;
     memo->len[slot] = *len;
-    memo->widened[slot] = (unsigned char)ll_microfacet_widened(job->mf, mu_o, mu_i);
+    memo->widened[slot] = (unsigned char)(widened != 0);
     if (*len > 0) {
         memo->series[slot] = ll_alloc_array(*len, sizeof(double));
         if (!memo->series[slot])
@@ -201,9 +203,11 @@ static ll_status eval_pair(size_t p, void *ctx)
     return s;
 }
 
-void ll_probe_series_memo_free(ll_probe_series_memo *memo)
+/* Empty the memo's series (its nodes stay). */
+static void memo_clear(ll_probe_series_memo *memo)
 {
-    size_t k;
+    double *nodes = memo->nodes;
+    size_t k, nodes_n = memo->nodes_n;
     if (memo->series)
         for (k = 0; k < memo->slots; ++k)
             ll_free(memo->series[k]);
@@ -211,6 +215,39 @@ void ll_probe_series_memo_free(ll_probe_series_memo *memo)
     ll_free(memo->len);
     ll_free(memo->widened);
     memset(memo, 0, sizeof *memo);
+    memo->nodes = nodes;
+    memo->nodes_n = nodes_n;
+}
+
+void ll_probe_series_memo_free(ll_probe_series_memo *memo)
+{
+    memo_clear(memo);
+    ll_free(memo->nodes);
+    memset(memo, 0, sizeof *memo);
+}
+
+/* The Gauss-Lobatto nodes of n into nodes (weights: scratch of n): the
+ * memo's (nullable) where it holds them, else made and kept there. */
+static ll_status lobatto_nodes(ll_probe_series_memo *memo, size_t n, double *nodes,
+                               double *weights)
+{
+    ll_status s;
+    if (memo && memo->nodes && memo->nodes_n == n) {
+        memcpy(nodes, memo->nodes, n * sizeof(double));
+        return LL_OK;
+    }
+    s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
+    if (s != LL_OK || !memo)
+        return s;
+    ll_free(memo->nodes);
+    memo->nodes_n = 0;
+    /* (Kept only if there is memory for it: else made again next time.) */
+    memo->nodes = ll_alloc_array(n, sizeof(double));
+    if (memo->nodes) {
+        memcpy(memo->nodes, nodes, n * sizeof(double));
+        memo->nodes_n = n;
+    }
+    return LL_OK;
 }
 
 /* Ready memo for an evaluation at (n, m): MEMO_REUSE when it holds n's
@@ -226,14 +263,14 @@ static ll_status memo_mode(ll_probe_series_memo *memo, size_t n, size_t m,
         *mode = MEMO_REUSE;
         return LL_OK;
     }
-    ll_probe_series_memo_free(memo);
+    memo_clear(memo);
     if (!ll_size_mul(16, set->n_pairs, &slots))
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
     memo->series = ll_calloc_array(slots + 1, sizeof *memo->series);
     memo->len = ll_calloc_array(slots + 1, sizeof *memo->len);
     memo->widened = ll_calloc_array(slots + 1, 1);
     if (!memo->series || !memo->len || !memo->widened) {
-        ll_probe_series_memo_free(memo);
+        memo_clear(memo);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
     }
     memo->slots = slots;
@@ -266,7 +303,7 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
     }
     /* The widening of a layer of m orders (ll_layer_set_microfacet). */
     ll_microfacet_set_orders(mf, m);
-    s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
+    s = lobatto_nodes(memo, n, nodes, weights);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
         pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);
@@ -300,7 +337,7 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
             memo->n = n;
             memo->m = m;
         } else {
-            ll_probe_series_memo_free(memo);
+            memo_clear(memo);
         }
     }
 done:

@@ -2,7 +2,9 @@
  * The energy compensation of an interface layer at the probes
  * (search/probe.h): the albedos of the single-scattering layer of n nodes
  * (order 0 only, every node pair, as ll_layer_set_microfacet computes them:
- * the same series, nodes, weights and order of summation), then the same
+ * the same series, nodes, weights and order of summation, except that
+ * order 0 on the Filon path is Simpson's rule on Filon's samples, the same
+ * integral to rounding: ll_microfacet_order0_simpson), then the same
  * rank-one terms (words/microfacet_compensation*.c).
  *
  * Unlike the lobe, the term cannot be had from the stencils alone: it is
@@ -10,7 +12,8 @@
  * (O(n^2 / 4) for a conductor, whose term needs reflection from above
  * only). That is still far below the layer's O(n^2 m): an order-0 series
  * is 16 samples of the profile and one dot product (about 150 where a
- * kink takes the Filon path). Each reflection pair is computed once for
+ * kink takes the Filon path, where Simpson's rule on the samples now
+ * stands for Filon's moments of every order). Each reflection pair is computed once for
  * itself and its reciprocal (bit for bit the same series), and each
  * transmission pair once for itself and for the reverse pair from the
  * other side, which is eta^2 (or 1 / eta^2) times it: the layer computes
@@ -234,9 +237,14 @@ ll_status ll_probe_compensation_model(double eta_re, double eta_im, double alpha
 ll_status ll_probe_compensation_model_distribution(double eta_re, double eta_im, double alpha,
                                                    int distribution, ll_microfacet_model **out)
 {
-    /* No widening, series of one term (maps of one order). */
-    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution,
-                                             LL_PROBE_TRUE_ORDERS, 1, out);
+    /* No widening, series of one term (maps of one order), order 0 of
+     * the Filon path by Simpson's rule: the albedos' O(n^2) order-0
+     * series were most of a search, and Filon's moments most of those. */
+    ll_status s = ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution,
+                                                    LL_PROBE_TRUE_ORDERS, 1, out);
+    if (s == LL_OK)
+        ll_microfacet_order0_simpson(*out);
+    return s;
 }
 
 ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im, size_t n,

@@ -157,6 +157,10 @@ typedef struct ll_probe_series_memo {
     double **series;        /* [slots] (NULL where len is 0)               */
     size_t *len;            /* [slots] terms after the truncation          */
     unsigned char *widened; /* [slots] the lobe was widened at m           */
+    /* The Gauss-Lobatto nodes of nodes_n (the last evaluated: O(n^2) to
+     * make, and the search evaluates each n at several m). */
+    double *nodes;
+    size_t nodes_n;
 } ll_probe_series_memo;
 LL_INTERNAL void ll_probe_series_memo_free(ll_probe_series_memo *memo);
 

@@ -78,6 +78,15 @@ LL_INTERNAL void ll_microfacet_destroy(ll_microfacet_model *mf);
  * and its maps, between the order counts it tries. Not thread-safe. */
 LL_INTERNAL void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders);
 
+/* From now on, a series of one term (max_len 1) on Beckmann's Filon path
+ * takes Simpson's rule on the same samples instead of Filon's moments: the
+ * same quadratic through the samples integrated exactly, so the same
+ * order 0 to rounding (Filon's rule at order 0 is Simpson's), for a
+ * fraction of the work. For the resolution search's albedos, which need
+ * order 0 alone at every node pair; a layer's model never sets it, so
+ * its bits stay those of Filon's moments. */
+LL_INTERNAL void ll_microfacet_order0_simpson(ll_microfacet_model *mf);
+
 /* Precompute the least-squares fits that the pairs (mu[a], mu[b]),
  * a, b < count, will use (in parallel). Required before ll_microfacet_series
  * for those pairs. */
@@ -103,6 +112,14 @@ LL_INTERNAL size_t ll_microfacet_scratch_size(size_t max_len);
 LL_INTERNAL ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
                                            size_t max_len, double *out, size_t *len,
                                            double *ref0, double *scratch);
+/* The same, and in *widened (non-zero) whether the lobe was widened
+ * (ll_microfacet_widened) from the plan the series was made by: one plan
+ * of the pair instead of two where the caller needs both. 0 where the
+ * series is empty before planning (max_len 0). */
+LL_INTERNAL ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_o,
+                                                   double mu_i, size_t max_len, double *out,
+                                                   size_t *len, double *ref0, double *scratch,
+                                                   int *widened);
 
 /* Does ll_microfacet_series widen the lobe of this pair at the orders in
  * effect (ll_microfacet_set_orders)? Where it does not, the series of a

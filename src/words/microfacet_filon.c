@@ -80,6 +80,16 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
                                  reference ? f : NULL);
     for (k = 0; k < samples; ++k)
         f[k] *= exp(p->a_plus_b + p->b * (cos_phi[k] - 1.0));
+    if (n_out == 1 && mf->simpson_order0) {
+        /* (samples is odd: panels of two intervals, as Filon's) */
+        double odd = 0.0, even = 0.0, h = (b - a) / (double)(samples - 1);
+        for (k = 1; k < samples; k += 2)
+            odd += f[k];
+        for (k = 2; k + 1 < samples; k += 2)
+            even += f[k];
+        out[0] += h / 3.0 * (f[0] + 4.0 * odd + 2.0 * even + f[samples - 1]);
+        return;
+    }
     ll_filon_moments(f, samples, a, b, n_out, out, filon);
 }
 

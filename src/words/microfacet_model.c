@@ -62,6 +62,11 @@ void ll_microfacet_set_orders(ll_microfacet_model *mf, size_t n_orders)
     mf->b_max = fmin(model_max_b(mf, n_orders), mf->map_b_max);
 }
 
+void ll_microfacet_order0_simpson(ll_microfacet_model *mf)
+{
+    mf->simpson_order0 = 1;
+}
+
 static void grid_entry_free(grid_entry *e)
 {
     if (e)

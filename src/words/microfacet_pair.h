@@ -43,6 +43,8 @@ struct ll_microfacet_model {
                           * b_max of creation; ll_microfacet_set_orders
                           * may lower b_max, never this)                   */
     size_t max_len;      /* orders wanted                                  */
+    int simpson_order0;  /* order 0 alone by Simpson's rule on the Filon
+                          * path (ll_microfacet_order0_simpson)            */
     size_t n_grid;
     grid_entry **grid;   /* [n_grid] NULL until prepared                   */
 };

@@ -123,19 +123,30 @@ ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, doubl
                                size_t max_len, double *out, size_t *len, double *ref0,
                                double *scratch)
 {
+    int widened;
+    return ll_microfacet_series_widened(mf, mu_o, mu_i, max_len, out, len, ref0, scratch,
+                                        &widened);
+}
+
+ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_o, double mu_i,
+                                       size_t max_len, double *out, size_t *len, double *ref0,
+                                       double *scratch, int *widened)
+{
     pair_plan p;
     size_t n_out, l, last;
     double energy = 0.0, ref_energy = 0.0;
     ll_status s;
 
     *len = 0;
+    *widened = 0;
     if (ref0)
         *ref0 = 0.0;
     if (max_len > mf->max_len)
         max_len = mf->max_len;
     if (max_len == 0 || !ll_microfacet_plan_pair(mf, mu_o, mu_i, HUGE_VAL, &p))
         return LL_OK;
-    if (p.b > mf->b_max) {
+    *widened = p.b > mf->b_max; /* (as ll_microfacet_widened) */
+    if (*widened) {
         /* A lobe too sharp for the orders is widened. The original keeps the
          * integral of the peak, but g is not constant across the wider
          * lobe, and at grazing angles the energy so grows by up to 10%
