@@ -77,7 +77,9 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  *    is above 1% of its largest value (both elevations <= 80 degrees, half
  *    of the pairs near the mirror direction), and the albedo within 0.06
  *    tolerance at viewer elevations 0..85 degrees (so 5%, 2%, 0.2% and
- *    0.3% by default).
+ *    0.3% by default; R and T apart for a transmissive b, from both
+ *    sides, each by quadrature of eval, a lobe under 1% of R + T not held
+ *    to it).
  * A size of 0 is chosen by the tolerance: the writer measures each table
  * it makes against b and grows the sizes left at 0 (the elevations when
  * the albedo misses, the VNDF and sample grids when f misses) until the

@@ -135,18 +135,37 @@ LL_INTERNAL ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts, const char *figures,
                                            const ll_monitor *monitor);
 
+/* The reflected (r) and transmitted (t, 0 unless transmissive) albedo per
+ * channel of b for the viewer wo, radiance transport: the integrals of f
+ * |cos| over wo's hemisphere and the other, by quadrature of
+ * ll_bsdf_eval_dir (bsdf_write_tables_albedo.c says how and how closely);
+ * peak[0] and peak[1] the elevations from the normal (0..pi/2) of the
+ * reflected and the transmitted lobe's peak, where the quadrature is
+ * finest. Deterministic, and the same for any thread count. LL_OK,
+ * LL_ERROR_OUT_OF_MEMORY, or the status of a failed evaluation. */
+LL_INTERNAL ll_status ll_tables_albedo(const ll_bsdf *b, const double wo[3], const double peak[2],
+                                       int transmissive, double r[3], double t[3]);
+
 /* How far table is from src (the figures of the tolerance, ll_tables.h),
  * per channel, all channels pooled: the worst albedo ratio's distance from
- * 1 over viewer elevations 0..85 degrees, and the median, 95th and 99th
- * percentiles of the relative error of f where f cos is above 1% of its
- * largest value (both elevations <= 80 degrees, half of the pairs near
- * the mirror direction). LL_OK, LL_ERROR_OUT_OF_MEMORY, or the status of
- * a failed evaluation. */
+ * 1 over viewer elevations 0..85 degrees (R and T apart, on both sides for
+ * a transmissive src; a lobe under 1% of R + T not counted), and the
+ * median, 95th and 99th percentiles of the relative error of f where f cos
+ * is above 1% of its largest value (both elevations <= 80 degrees, half of
+ * the pairs near the mirror direction). ref: src's albedos
+ * (ll_tables_reference), measured once for every table of a search. LL_OK,
+ * LL_ERROR_OUT_OF_MEMORY, or the status of a failed evaluation. */
+/* The viewer elevations of the albedo figure: 0, 10, .., 80, 85 degrees. */
+#define LL_TABLES_ANGLES 10
 typedef struct ll_tables_figures {
     double albedo, p50, p95, p99;
 } ll_tables_figures;
-LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_bsdf *table,
-                                        ll_tables_figures *out);
+typedef struct ll_tables_source {
+    double albedo[2][LL_TABLES_ANGLES][6]; /* [bottom][viewer elevation][R, T rgb] */
+} ll_tables_source;
+LL_INTERNAL ll_status ll_tables_reference(const ll_bsdf *src, ll_tables_source *ref);
+LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_tables_source *ref,
+                                        const ll_bsdf *table, ll_tables_figures *out);
 
 /* The nodes of one slice's sample grid (ns x ns, n_ch planes of values)
  * whose directions are below the horizon (below[q] != 0) and that touch a
