@@ -89,7 +89,9 @@ if [ "$FULL" = 1 ]; then
     build tolerance bench/tolerance.c bench/bench_util.c
     build textured bench/textured.c bench/child.c bench/metrics.c bench/bench_util.c
     # The convergence modes share tests/convergence_util.h with
-    # tests/test_convergence.c (cmocka's assertions, internal headers).
+    # tests/test_convergence.c (cmocka's assertions, internal headers); each
+    # case runs in cmocka's runner, and the metals' spectra are found in
+    # $BUILD/share/layerlab/ior from $BIN (bench/convergence.c).
     # shellcheck disable=SC2086
     build convergence bench/convergence.c -DLL_EXPERIMENTAL -Isrc -Itests "$BUILD/lib/liblayerlab.a" -fopenmp \
         $BLAS_CFLAGS $BLAS_LIBS -lcmocka -lpthread

@@ -10,9 +10,12 @@
  * research scans (docs/method.md).
  *
  * Header-only (static inline), like test_util.h, so that both programs
- * build from one source file each. Failures are cmocka assertions: inside
- * a test they fail the test, in the benchmark they end the program.
- * LL_CONVERGENCE_VERBOSE=1 prints every case.
+ * build from one source file each. Failures are cmocka assertions, and
+ * both programs call these helpers inside cmocka's runner: outside it a
+ * failed assertion ends the program with status 255 and its message
+ * unprinted. A library call is checked with assert_ll_ok, which names the
+ * call and the library's message. LL_CONVERGENCE_VERBOSE=1 prints every
+ * case.
  */
 #ifndef LL_CONVERGENCE_UTIL_H
 #define LL_CONVERGENCE_UTIL_H
@@ -26,6 +29,18 @@
 #include "numerics/spline.h"
 
 #define MAX_POINTS 4096
+
+/* A layerlab call returns LL_OK, or the check fails with the call's text,
+ * its status and ll_last_error_message() (an unknown metal's message names
+ * the folders its spectra were looked for in), which an assert_int_equal
+ * against LL_OK would reduce to two numbers. */
+#define assert_ll_ok(call)                                                               \
+    do {                                                                                 \
+        ll_status assert_ll_ok_status = (call);                                          \
+        if (assert_ll_ok_status != LL_OK)                                                \
+            fail_msg("%s: %s: %s", #call, ll_status_string(assert_ll_ok_status),         \
+                     ll_last_error_message());                                           \
+    } while (0)
 
 typedef struct point {
     double mu_o, mu_i, phi;
@@ -76,7 +91,7 @@ static inline double peak_bytes(const ll_material *mat, size_t n, size_t m)
     o.n_nodes = n;
     o.n_orders = m;
     o.n_channels = 1;
-    assert_int_equal(ll_material_estimate(mat, &o, &e, NULL), LL_OK);
+    assert_ll_ok(ll_material_estimate(mat, &o, &e, NULL));
     return e.peak_bytes;
 }
 
@@ -234,14 +249,11 @@ static inline void lean_interface_of_distribution(double eta_re, double eta_im, 
 {
     ll_microfacet_model *mf0 = NULL;
     out->n = n;
-    assert_int_equal(ll_probe_interface_model_distribution(eta_re, eta_im, alpha, distribution,
-                                                           &out->mf),
-                     LL_OK);
-    assert_int_equal(ll_probe_compensation_model_distribution(eta_re, eta_im, alpha,
-                                                              distribution, &mf0),
-                     LL_OK);
-    assert_int_equal(ll_probe_compensation_make(mf0, eta_re, eta_im, n, NULL, &out->compensation),
-                     LL_OK);
+    assert_ll_ok(
+        ll_probe_interface_model_distribution(eta_re, eta_im, alpha, distribution, &out->mf));
+    assert_ll_ok(
+        ll_probe_compensation_model_distribution(eta_re, eta_im, alpha, distribution, &mf0));
+    assert_ll_ok(ll_probe_compensation_make(mf0, eta_re, eta_im, n, NULL, &out->compensation));
     ll_microfacet_destroy(mf0);
 }
 
@@ -271,8 +283,7 @@ static inline void lean_interface_make(const ll_material *mat, int conductor, si
 static inline void lean_interface_eval(lean_interface *li, size_t m, const ll_probe_set *set,
                                        double *v)
 {
-    assert_int_equal(ll_probe_interface_eval(li->mf, &li->compensation, li->n, m, set, NULL, v),
-                     LL_OK);
+    assert_ll_ok(ll_probe_interface_eval(li->mf, &li->compensation, li->n, m, set, NULL, v));
 }
 
 /* The lean layer at m orders on the points of s: the runs of points of one
@@ -356,7 +367,7 @@ static inline ll_layer *build_one(const ll_material *mat, size_t n, size_t m)
     o.n_nodes = n;
     o.n_orders = m;
     o.n_channels = 1;
-    assert_int_equal(ll_material_build_layers(mat, &o, NULL, layers, &channels, NULL), LL_OK);
+    assert_ll_ok(ll_material_build_layers(mat, &o, NULL, layers, &channels, NULL));
     assert_int_equal(channels, 1);
     return layers[0];
 }
@@ -386,8 +397,8 @@ static inline size_t leave_out_jump(const point_set *s, double eta, size_t n, do
     double *x2 = malloc(4 * n * sizeof *x2), *w2 = malloc(4 * n * sizeof *w2);
     size_t k, count = 0;
     assert_true(x && w && x2 && w2);
-    assert_int_equal(ll_quad_gauss_lobatto(n, x, w, NULL), LL_OK);
-    assert_int_equal(ll_quad_gauss_lobatto(2 * n, x2, w2, NULL), LL_OK);
+    assert_ll_ok(ll_quad_gauss_lobatto(n, x, w, NULL));
+    assert_ll_ok(ll_quad_gauss_lobatto(2 * n, x2, w2, NULL));
     for (k = 0; k < s->count; ++k)
         if (ll_probe_jump_straddles(x + n / 2, n / 2, eta, s->p[k].mu_o, s->p[k].mu_i) ||
             ll_probe_jump_straddles(x2 + n, n, eta, s->p[k].mu_o, s->p[k].mu_i)) {
@@ -415,12 +426,12 @@ static inline int check_interface(const char *text, double eta, int conductor, d
     point_set *s = malloc(sizeof *s);
     double *va, *vb, e, twice;
     size_t n, m, where, left_out = 0;
-    int lean;
+    int lean, len = (int)strcspn(text, "\n"); /* the word without its newline */
     assert_non_null(s);
-    assert_int_equal(ll_material_parse(text, "convergence", &mat), LL_OK);
+    assert_ll_ok(ll_material_parse(text, "convergence", &mat));
     o.n_channels = 1;
     o.tolerance = tolerance;
-    assert_int_equal(ll_material_resolution(mat, &o, NULL, &n, &m, NULL), LL_OK);
+    assert_ll_ok(ll_material_resolution(mat, &o, NULL, &n, &m, NULL));
     twice = peak_bytes(mat, 2 * n, 2 * m);
     lean = twice > FULL_GRID_BYTES;
     interface_points(s, eta, conductor);
@@ -434,7 +445,7 @@ static inline int check_interface(const char *text, double eta, int conductor, d
         ll_layer *a = build_one(mat, n, m), *b = build_one(mat, 2 * n, 2 * m);
         double d = lean_against_layer(s, va, a);
         if (verbose() || d > 1e-9)
-            printf("  %-40s lean against the layer: %.2g\n", text, d);
+            printf("  %-40.*s lean against the layer: %.2g\n", len, text, d);
         assert_true(d <= 1e-9);
         free(va);
         va = layer_values(s, a);
@@ -446,12 +457,13 @@ static inline int check_interface(const char *text, double eta, int conductor, d
         left_out = leave_out_jump(s, eta, n, va, vb);
     e = worst_of_values(s, va, vb, &where);
     if (verbose() || e > tolerance)
-        printf("  %-40s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f%s (%zu of %zu "
-               "points at the jump left out)\n",
-               text, n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi,
+        printf("  %-40.*s n %5zu m %5zu: worst %.4f at mu_o %.3f mu_i %.3f phi %.3f%s (%zu of "
+               "%zu points at the jump left out)\n",
+               len, text, n, m, e, s->p[where].mu_o, s->p[where].mu_i, s->p[where].phi,
                lean ? " (lean)" : "", left_out, s->count);
     if (lean && (verbose() || e > tolerance))
-        printf("  %-40s (lean: building twice it would take %.1f GB)\n", text, twice / 1e9);
+        printf("  %-40.*s (lean: building twice it would take %.1f GB)\n", len, text,
+               twice / 1e9);
     fflush(stdout);
     free(va);
     free(vb);
@@ -572,8 +584,7 @@ static inline void lean_hg(double g, size_t n, size_t m, int with_forward, const
         ll_medium_finish finish;
         finish.order = lean_order;
         finish.user = &e;
-        assert_int_equal(ll_layer_set_medium_finished(layer, LL_MEDIUM_HG, 1.0, g, &finish, NULL),
-                         LL_OK);
+        assert_ll_ok(ll_layer_set_medium_finished(layer, LL_MEDIUM_HG, 1.0, g, &finish, NULL));
     }
     for (k = 0; k < s->count; ++k) {
         double c1 = cos(s->p[k].phi), prev = c1, cur = 1.0, sum = 0.0;
@@ -617,7 +628,7 @@ static inline double media_case(double g, const point_set *s)
     size_t n, m, where;
     assert_non_null(va);
     assert_non_null(vb);
-    assert_int_equal(ll_resolution_search_henyey_greenstein(g, 0.0, 0.0, NULL, &n, &m, &err), LL_OK);
+    assert_ll_ok(ll_resolution_search_henyey_greenstein(g, 0.0, 0.0, NULL, &n, &m, &err));
     lean_hg(g, n, m, 0, s, va);
     lean_hg(g, 2 * n, 2 * m, 0, s, vb);
     e = worst_of_values(s, va, vb, &where);
