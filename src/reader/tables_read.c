@@ -250,8 +250,10 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
     char prefix[NAME_CAP];
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
     char ne[NAME_CAP], nf[NAME_CAP], nt[NAME_CAP];
-    const ll_tensor_field *ndf, *sigma, *vndf, *lum, *rgb, *alb = NULL, *warp = NULL;
-    const ll_tensor_field *fresnel = NULL, *trans = NULL;
+    /* NULL until require sets them: at -O3 the compiler cannot see that
+     * every path that reads them went through require's LL_OK. */
+    const ll_tensor_field *ndf = NULL, *sigma = NULL, *vndf = NULL, *lum = NULL, *rgb = NULL;
+    const ll_tensor_field *alb = NULL, *warp = NULL, *fresnel = NULL, *trans = NULL;
     int transmit = strncmp(lobe, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;

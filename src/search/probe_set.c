@@ -1,9 +1,9 @@
 /*
  * The probe directions of the resolution search (search/probe.h) and the
  * error measured on them. The grazing cosines mu_min, 1.5 mu_min and
- * 2 mu_min are where a rough interface's azimuthal lobe is narrowest (issue
- * 14: at mu = 0.1 in the mirror direction, eta 1.5, alpha 0.5 gave 2.5
- * instead of 4.76 at the old fit's 37 orders); the pseudo-random ones keep
+ * 2 mu_min are where a rough interface's azimuthal lobe is narrowest (at
+ * mu = 0.1 in the mirror direction, eta 1.5, alpha 0.5 gave 2.5 instead of
+ * 4.76 at an earlier fit's 37 orders); the pseudo-random ones keep
  * the set from being tuned to a few directions.
  */
 #include "search/probe.h"
