@@ -153,11 +153,61 @@ static double balance(size_t h, const double *mu, const double *w, double amount
     return amount - lambda * room;
 }
 
+/* The order-0 value of a transmission pair (the series' convention: the
+ * layer's column j from above is (-mu_o, -mu_j), from below (mu_o, mu_j));
+ * 0 where the pair does not scatter or the series fails. */
+static double order0(const ll_microfacet_model *mf, double mu_o, double mu_i, double *scratch)
+{
+    double v = 0.0;
+    size_t len = 0;
+    if (ll_microfacet_series(mf, mu_o, mu_i, 1, &v, &len, NULL, scratch) != LL_OK || len == 0)
+        return 0.0;
+    return v;
+}
+
+/* Doubles of scratch that ll_microfacet_series needs for one term
+ * (ll_microfacet_scratch_size(1)). */
+#define ORDER0_SCRATCH (2 * FILON_SAMPLES + 8 + 2 * CHEB)
+
+/* (words/microfacet.h) */
+double ll_microfacet_jump_error(const ll_microfacet_model *mf, size_t h, const double *mu,
+                                const double *w, double eta, size_t j, int below,
+                                double *scratch)
+{
+    double e = below ? 1.0 / eta : eta, jump = mu[j] / e, d, upper, lower, sign, cell;
+    size_t i;
+    if (!mf->ggx || !(jump < 1.0))
+        return 0.0;
+    d = 1e-4 * fmin(jump, 1.0 - jump);
+    if (!(d > 0.0))
+        return 0.0;
+    /* The one-sided limits, extrapolated linearly from two cosines just
+     * past the jump (at the jump itself h_z = 0). From above the series
+     * takes (-mu_o, -mu_j), from below (mu_o, mu_j). */
+    sign = below ? 1.0 : -1.0;
+    upper = 2.0 * order0(mf, sign * (jump + d), sign * mu[j], scratch) -
+            order0(mf, sign * (jump + 2.0 * d), sign * mu[j], scratch);
+    lower = 2.0 * order0(mf, sign * (jump - d), sign * mu[j], scratch) -
+            order0(mf, sign * (jump - 2.0 * d), sign * mu[j], scratch);
+    cell = -LL_PI * (1.0 - jump * jump);
+    for (i = h; i-- > 0 && mu[i] > jump;)
+        cell += w[i];
+    return (upper - lower) * cell;
+}
+
 /* Per incident direction the loss 1 - R - T is split by share(): the
  * transmitted part as the product of the two sides' (rank one, so that
  * T^bt = (T^tb)^T / eta^2 keeps reciprocity), then what is left of the
  * loss into reflection as a symmetric u u^T / (W.u), which makes R + T = 1
- * column by column. */
+ * column by column. The loss is that of the albedos without GGX's jump
+ * error (ll_microfacet_jump_error): with it, the loss carried the jump's
+ * quadrature error, of either sign (GGX alpha 0.8, eta 1.5, from above:
+ * up to 1.3% of the loss between 304 and 608 nodes), which the terms --
+ * the small reflected one most, normalised by its own sum -- passed on to
+ * f; without it, 0.005% there. The node sums then keep R + T =
+ * max(R_1 + T_1, 1 + the jump error): R + T = 1 for the albedo whose jump
+ * is integrated exactly, the nodes' sum off by their own first-order
+ * error there. */
 void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h,
                                          const double *mu, const double *w, double eta,
                                          const double *const albedo[4], double *work,
@@ -166,13 +216,15 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
     const double *rt = albedo[LL_BLOCK_RT], *rb = albedo[LL_BLOCK_RB];
     const double *ttb = albedo[LL_BLOCK_TTB], *tbt = albedo[LL_BLOCK_TBT];
     double *a_tb = work, *a_bt = work + h, *r_t = work + 2 * h, *r_b = work + 3 * h;
-    double eta2 = eta * eta, norm, w_tb, w_bt, wa;
+    double eta2 = eta * eta, norm, w_tb, w_bt, wa, scratch[ORDER0_SCRATCH];
     int top_denser = eta < 1.0;
     size_t j;
 
     memset(out, 0, sizeof *out);
     for (j = 0; j < h; ++j) {
-        double sum_t = rt[j] + ttb[j], sum_b = rb[j] + tbt[j];
+        double t_tb = ttb[j] - ll_microfacet_jump_error(mf, h, mu, w, eta, j, 0, scratch);
+        double t_bt = tbt[j] - ll_microfacet_jump_error(mf, h, mu, w, eta, j, 1, scratch);
+        double sum_t = rt[j] + t_tb, sum_b = rb[j] + t_bt;
         double prop_t = sum_t > 0.0 ? rt[j] / sum_t : 0.0;
         double prop_b = sum_b > 0.0 ? rb[j] / sum_b : 0.0;
         r_t[j] = fmax(0.0, 1.0 - sum_t); /* the losses, top and bottom */
@@ -223,7 +275,8 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
     /* What is left for reflection: the transmission albedos now include
      * the terms above, column j of W C^tb being a_tb[j] (W.a_bt) / norm. */
     for (j = 0; j < h; ++j) {
-        double t_tb = ttb[j], t_bt = tbt[j];
+        double t_tb = ttb[j] - ll_microfacet_jump_error(mf, h, mu, w, eta, j, 0, scratch);
+        double t_bt = tbt[j] - ll_microfacet_jump_error(mf, h, mu, w, eta, j, 1, scratch);
         if (norm > 0.0) {
             t_tb += a_tb[j] * w_bt / norm;
             t_bt += a_bt[j] * w_tb / (norm * eta2);
