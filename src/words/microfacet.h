@@ -165,9 +165,9 @@ LL_INTERNAL void ll_microfacet_compensate_dielectric(const ll_microfacet_model *
                                                      double *work,
                                                      ll_microfacet_compensation *out);
 /* The first-order error of the node quadrature of a GGX transmission
- * albedo at its jump (docs/method.md, "GGX"): where the refraction half
- * vector turns horizontal, mu_j = e |mu_o| with e the relative index
- * ahead of the light (eta from above, 1 / eta from below), GGX's D stays
+ * albedo at its jump (docs/method.md, "Rough interfaces"): where the
+ * refraction half vector turns horizontal, mu_j = e |mu_o| with e the
+ * relative index ahead of the light (eta from above, 1 / eta from below), GGX's D stays
  * finite and f drops from a finite value to 0 along the whole azimuth, so
  * the nodes' sum of f W over the outgoing cosines counts the node cell
  * that the jump J cuts as wholly lit or wholly dark. With f = g+ above J
