@@ -143,7 +143,10 @@ def test_adding_follows_stokes_for_two_plates():
 def test_ggx_interface_by_name():
     # The distribution is chosen by name; GGX's longer tails reflect more
     # light far from the mirror direction than Beckmann's of the same alpha,
-    # and a compensated, non-absorbing GGX dielectric conserves energy.
+    # and a compensated, non-absorbing GGX dielectric conserves energy: to
+    # the node quadrature's error at its transmission jump (docs/method.md,
+    # "Rough interfaces"; at 40 nodes up to 8.3e-3 from 0.7, -0.7, 0.3,
+    # 0.95, -0.3), where single scattering alone loses 7.7% from 0.7.
     beckmann, ggx = make_layer(40, 40), make_layer(40, 40)
     beckmann.setMicrofacet(eta=0.2 + 3j, alpha=0.2)
     ggx.setMicrofacet(eta=0.2 + 3j, alpha=0.2, distribution="ggx")
@@ -152,7 +155,10 @@ def test_ggx_interface_by_name():
     glass = make_layer(40, 40)
     glass.setMicrofacet(eta=1.5, alpha=0.5, distribution="ggx")
     r, t = glass.albedo(0.7)
-    assert r + t == pytest.approx(1.0, abs=1e-9)
+    assert r + t == pytest.approx(1.0, abs=1e-2)
+    single = make_layer(40, 40)
+    single.setMicrofacet(eta=1.5, alpha=0.5, conserveEnergy=False, distribution="ggx")
+    assert sum(single.albedo(0.7)) < 0.95
     with pytest.raises(ll.InvalidArgumentError, match="distribution"):
         glass.setMicrofacet(eta=1.5, alpha=0.5, distribution="phong")
 

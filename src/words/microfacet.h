@@ -181,6 +181,24 @@ LL_INTERNAL void ll_microfacet_compensate_dielectric(const ll_microfacet_model *
                                                      double eta, const double *const albedo[4],
                                                      double *work,
                                                      ll_microfacet_compensation *out);
+/* The first-order error of the node quadrature of a GGX transmission
+ * albedo at its jump (docs/method.md, "Rough interfaces"): where the
+ * refraction half vector turns horizontal, mu_j = e |mu_o| with e the
+ * relative index ahead of the light (eta from above, 1 / eta from below), GGX's D stays
+ * finite and f drops from a finite value to 0 along the whole azimuth, so
+ * the nodes' sum of f W over the outgoing cosines counts the node cell
+ * that the jump J cuts as wholly lit or wholly dark. With f = g+ above J
+ * and g- below, the sum minus the integral is (g+ - g-) (sum of w_i over
+ * mu_i > J - pi (1 - J^2)), up to terms of second order in the node
+ * spacing (the rest of f is continuous there). It changes sign and size
+ * from one node count to the next. This is that error for the albedo of
+ * positive node j (mu ascending, weights w as for
+ * ll_microfacet_compensate_dielectric), from above (below = 0) or below;
+ * 0 for Beckmann, whose D vanishes at the horizontal normal (no jump).
+ * scratch holds ll_microfacet_scratch_size(1) doubles. */
+LL_INTERNAL double ll_microfacet_jump_error(const ll_microfacet_model *mf, size_t h,
+                                            const double *mu, const double *w, double eta,
+                                            size_t j, int below, double *scratch);
 /* A conductor's from the albedos of reflection from above of the same
  * interface with F = 1 (ll_microfacet_series' ref0) and of the interface
  * itself, at the positive node cosines mu; mf is a model of the interface
