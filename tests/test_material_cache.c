@@ -151,7 +151,7 @@ static void damaged_entries_are_not_trusted(void **state)
     resolve(conductor, dir, &n, &m, &searches);
     only_entry(dir, path, sizeof path);
     good = ll_test_read_file(path, &len);
-    for (k = 0; k < 5; ++k) {
+    for (k = 0; k < 6; ++k) {
         char text[8192];
         size_t text_len = len;
         assert_true(len < sizeof text);
@@ -177,6 +177,14 @@ static void damaged_entries_are_not_trusted(void **state)
         case 3: /* empty */
             text_len = 0;
             break;
+        case 4: { /* an entry of another search revision, checksum and all */
+            char *sum, *at = strstr(text, " search ");
+            assert_non_null(at);
+            at[8] = at[8] == '0' ? '1' : '0'; /* (the revision's first digit) */
+            sum = text + len - 17;
+            snprintf(sum, 18, "%016llx\n", fnv1a(text, (size_t)(sum - text)));
+            break;
+        }
         default: { /* another key's whole entry, checksum and all, under this name */
             char *sum;
             memcpy(strstr(text, "conductor"), "dielectri", 9);

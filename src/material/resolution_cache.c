@@ -5,9 +5,9 @@
  *
  * The key is the word as its search sees it (name, choice, the values the
  * search reads, written exactly as hexadecimal floats; a measured table's
- * path, size and modification time), the tolerance, mu_min and the
- * library's version: a new version may search differently, so it searches
- * again. The file's name is a hash of the key; the file holds the key
+ * path, size and modification time), the tolerance, mu_min, the
+ * library's version and the search's revision (LL_SEARCH_REVISION): a new
+ * version or search may choose differently, so it searches again. The file's name is a hash of the key; the file holds the key
  * itself (a hash collision is a miss, not a wrong answer), the answer and
  * a checksum of both, so a truncated or damaged entry is ignored and
  * rewritten, never trusted. Writers make a temporary file in the directory
@@ -19,6 +19,7 @@
 /* mkstemp and st_mtim are POSIX 2008, strtoull C99. */
 #include "material/material.h"
 #include "material/word_table.h"
+#include "search/probe.h"
 
 #include <errno.h>
 #include <math.h>
@@ -52,8 +53,9 @@ static int make_key(const ll_word_params *p, double tolerance, double mu_min, ch
 {
     unsigned reads = p->desc->resolution_reads;
     size_t used, k;
-    int len = snprintf(key, size, "layerlab %s; %s choice %d; tolerance %a; mu_min %a;",
-                       ll_version_string(), p->desc->name, p->choice, tolerance, mu_min);
+    int len = snprintf(key, size, "layerlab %s search %d; %s choice %d; tolerance %a; mu_min %a;",
+                       ll_version_string(), LL_SEARCH_REVISION, p->desc->name, p->choice,
+                       tolerance, mu_min);
     if (len < 0 || (size_t)len >= size)
         return 0;
     used = (size_t)len;

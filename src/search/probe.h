@@ -15,6 +15,14 @@
 #include "words/media.h"
 #include "words/merl.h"
 
+/* The revision of what the search chooses: the probes, the criterion and
+ * the words' numerics it measures (series truncation, energy
+ * compensation). Remembered choices are keyed by it as well as by the
+ * library's version (material/resolution_cache.c), so that a build of the
+ * same version number with another search does not take a choice it would
+ * no longer make: raise it with every change that can change a choice. */
+#define LL_SEARCH_REVISION 2
+
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
  * A group is one incident direction and one block (reflection or
