@@ -11,7 +11,7 @@
 /* Every block carries a header with a mark and its size, so that a block the
  * allocator did not make (the C library's, or a pointer into a block) is
  * seen when it comes back. Counted atomically: the build's worker threads
- * allocate too. */
+ * allocate too. ll_grow_array's growth is checked at the end. */
 #define MARK 0x6c6c616c6c6f63ull /* "llalloc" */
 
 typedef union header {
@@ -212,12 +212,49 @@ static void arguments_are_checked(void **state)
     assert_int_equal(ll_set_allocator(NULL), LL_OK);
 }
 
+/* ll_grow_array: first elements, then doubling; an overflowing or failed
+ * growth leaves the block and its capacity as they were. */
+static void arrays_grow_geometrically(void **state)
+{
+    size_t cap = 0, k, huge = SIZE_MAX / 4 + 1;
+    int *a = NULL, *grown;
+    (void)state;
+    a = ll_grow_array(a, &cap, 4, sizeof *a);
+    assert_non_null(a);
+    assert_int_equal(cap, 4);
+    for (k = 0; k < 4; ++k)
+        a[k] = (int)k;
+    a = ll_grow_array(a, &cap, 4, sizeof *a);
+    assert_non_null(a);
+    assert_int_equal(cap, 8);
+    for (k = 0; k < 4; ++k)
+        assert_int_equal(a[k], (int)k); /* (kept) */
+    /* Twice the capacity overflows size_t: refused, nothing changed. */
+    cap = huge * 2;
+    assert_null(ll_grow_array(a, &cap, 4, 1));
+    assert_int_equal(cap, huge * 2);
+    /* Twice the elements' bytes overflow: likewise. */
+    cap = huge;
+    assert_null(ll_grow_array(a, &cap, 4, sizeof *a));
+    assert_int_equal(cap, huge);
+    /* A failed allocation: likewise, and the block is still whole. */
+    cap = 8;
+    ll_alloc_fail_after(1);
+    grown = ll_grow_array(a, &cap, 4, sizeof *a);
+    ll_alloc_fail_after(0);
+    assert_null(grown);
+    assert_int_equal(cap, 8);
+    assert_int_equal(a[3], 3);
+    ll_free(a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(every_block_goes_through_the_allocator),
         cmocka_unit_test(failing_allocator_is_out_of_memory),
         cmocka_unit_test(arguments_are_checked),
+        cmocka_unit_test(arrays_grow_geometrically),
     };
     return cmocka_run_group_tests_name("allocator", tests, NULL, NULL);
 }

@@ -303,13 +303,10 @@ static ll_status parse_word(parser *p, const ll_word_desc *desc, const token *na
     if (count == p->m->capacity) {
         /* Geometric growth: a text of millions of words parses in linear
          * time. */
-        size_t capacity = count ? 2 * count : 8;
-        grown = capacity > SIZE_MAX / sizeof *grown ? NULL
-                                                    : ll_realloc(p->m->words, capacity * sizeof *grown);
+        grown = ll_grow_array(p->m->words, &p->m->capacity, 8, sizeof *grown);
         if (!grown)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory parsing %s", p->source);
         p->m->words = grown;
-        p->m->capacity = capacity;
     }
     w = &p->m->words[count];
     memset(w, 0, sizeof *w);

@@ -40,12 +40,10 @@ static double next_random(unsigned long long *state)
 static ll_status add_pair(ll_probe_set *set, double mu_o, double mu_i, size_t group)
 {
     if (set->n_pairs == set->cap_pairs) {
-        size_t cap = set->cap_pairs ? 2 * set->cap_pairs : 256;
-        ll_probe_pair *p = ll_realloc_array(set->pairs, cap, sizeof *p);
+        ll_probe_pair *p = ll_grow_array(set->pairs, &set->cap_pairs, 256, sizeof *p);
         if (!p)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
         set->pairs = p;
-        set->cap_pairs = cap;
     }
     set->pairs[set->n_pairs].mu_o = mu_o;
     set->pairs[set->n_pairs].mu_i = mu_i;

@@ -262,6 +262,18 @@ void *ll_realloc_array(void *block, size_t count, size_t size)
     return ll_realloc(block, bytes);
 }
 
+void *ll_grow_array(void *block, size_t *capacity, size_t first, size_t size)
+{
+    size_t count = first;
+    void *grown;
+    if (*capacity && !ll_size_mul(*capacity, 2, &count))
+        return NULL;
+    grown = ll_realloc_array(block, count, size);
+    if (grown)
+        *capacity = count;
+    return grown;
+}
+
 char *ll_strdup(const char *s)
 {
     size_t len = strlen(s);

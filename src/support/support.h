@@ -59,6 +59,12 @@ LL_INTERNAL char *ll_realpath(const char *path);
 LL_INTERNAL void *ll_alloc_array(size_t count, size_t size);
 LL_INTERNAL void *ll_calloc_array(size_t count, size_t size);
 LL_INTERNAL void *ll_realloc_array(void *block, size_t count, size_t size);
+/* An array of *capacity elements of size bytes grown for one more: to
+ * first elements if it has none, else to twice as many (so that n appends
+ * cost O(n)). Returns the grown block and sets *capacity, or NULL on
+ * overflow or failure, when block and *capacity are unchanged and the
+ * block is still the caller's. */
+LL_INTERNAL void *ll_grow_array(void *block, size_t *capacity, size_t first, size_t size);
 
 /* Failure injection, for the statically linked tests only (hidden, in no
  * public header). ll_alloc_fail_after(k): from now on count allocations

@@ -106,12 +106,10 @@ static ll_status add(work *w, double a, double b, double c, double d, int lobe)
 {
     cell *x;
     if (w->n == w->cap) {
-        size_t cap = w->cap ? 2 * w->cap : 128;
-        cell *cells = ll_realloc_array(w->cells, cap, sizeof *cells);
+        cell *cells = ll_grow_array(w->cells, &w->cap, 128, sizeof *cells);
         if (!cells)
             return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_tables_albedo: out of memory");
         w->cells = cells;
-        w->cap = cap;
     }
     x = &w->cells[w->n++];
     memset(x, 0, sizeof *x);
