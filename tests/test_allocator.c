@@ -3,7 +3,8 @@
  * small build, write, open, evaluation and sampling take every block of the
  * library from it -- as many blocks as the library's own count of its
  * allocations -- and give every one back to it; the arguments are checked;
- * NULL restores malloc.
+ * NULL restores malloc. And ll_grow_array, the library's one growth of an
+ * array.
  */
 #include "test_util.h"
 #include "support/support.h"
@@ -11,7 +12,7 @@
 /* Every block carries a header with a mark and its size, so that a block the
  * allocator did not make (the C library's, or a pointer into a block) is
  * seen when it comes back. Counted atomically: the build's worker threads
- * allocate too. ll_grow_array's growth is checked at the end. */
+ * allocate too. */
 #define MARK 0x6c6c616c6c6f63ull /* "llalloc" */
 
 typedef union header {
