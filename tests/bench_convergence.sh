@@ -27,12 +27,15 @@ if [ ! -f "$build/lib/liblayerlab.a" ]; then
     exit 1
 fi
 
-# A sanitizer's build of the library needs the program built the same way.
+# A sanitizer's or coverage build of the library needs the program built
+# the same way.
 san=""
 if nm "$build/lib/liblayerlab.a" 2>/dev/null | grep -q __asan_init; then
     san="-fsanitize=address,undefined"
 elif nm "$build/lib/liblayerlab.a" 2>/dev/null | grep -q __tsan_init; then
     san="-fsanitize=thread"
+elif nm "$build/lib/liblayerlab.a" 2>/dev/null | grep -q __gcov_init; then
+    san="--coverage"
 fi
 blas_libs=$(make -s --no-print-directory -C "$root" print-blas-libs 2>/dev/null ||
     echo "-llapacke -lopenblas")
