@@ -181,10 +181,6 @@ static double order0(const ll_microfacet_model *mf, double mu_o, double mu_i, do
     return v;
 }
 
-/* Doubles of scratch that ll_microfacet_series needs for one term
- * (ll_microfacet_scratch_size(1)). */
-#define ORDER0_SCRATCH (2 * FILON_SAMPLES + 8 + 2 * CHEB)
-
 /* (words/microfacet.h) */
 double ll_microfacet_jump_error(const ll_microfacet_model *mf, size_t h, const double *mu,
                                 const double *w, double eta, size_t j, int below,
@@ -233,7 +229,7 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
     const double *rt = albedo[LL_BLOCK_RT], *rb = albedo[LL_BLOCK_RB];
     const double *ttb = albedo[LL_BLOCK_TTB], *tbt = albedo[LL_BLOCK_TBT];
     double *a_tb = work, *a_bt = work + h, *r_t = work + 2 * h, *r_b = work + 3 * h;
-    double eta2 = eta * eta, norm, w_tb, w_bt, wa, scratch[ORDER0_SCRATCH];
+    double eta2 = eta * eta, norm, w_tb, w_bt, wa, scratch[MICROFACET_SCRATCH(1)];
     int top_denser = eta < 1.0;
     size_t j;
 
@@ -259,9 +255,10 @@ void ll_microfacet_compensate_dielectric(const ll_microfacet_model *mf, size_t h
      * measurements end), then the rarer side's transmission takes from its
      * reflection there, by the ramp and, if that is not enough, by the
      * reach (reach(): all of it from 80 degrees on; from the rarer side at
-     * grazing incidence the lost light mostly enters the denser medium). Where the rarer side has too much (mostly
-     * a coarse layer's own quadrature losses), the normalisation below
-     * scales it down, as a term in proportion to R / (R + T) would. */
+     * grazing incidence the lost light mostly enters the denser medium).
+     * Where the rarer side has too much (mostly a coarse layer's own
+     * quadrature losses), the normalisation below scales it down, as a
+     * term in proportion to R / (R + T) would. */
     w_bt = ll_microfacet_dot(w, a_bt, h);
     w_tb = ll_microfacet_dot(w, a_tb, h);
     if (!top_denser && w_bt > w_tb / eta2) {

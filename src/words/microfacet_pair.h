@@ -14,6 +14,11 @@
 #define TAIL_GOAL 1e-6        /* matrices keep orders until exp(-B v)'s series
                                * falls below this fraction of its first term   */
 #define FILON_SAMPLES 129     /* Filon samples of a main piece (odd)           */
+/* ll_microfacet_scratch_size(max_len) as a constant expression (for a
+ * series of one term on the stack): Chebyshev path 2 CHEB; Filon path
+ * 2 FILON_SAMPLES + 7 max_len; GGX's total internal reflection a series
+ * more. */
+#define MICROFACET_SCRATCH(max_len) (2 * FILON_SAMPLES + 8 * (max_len) + 2 * CHEB)
 #define ANGLE_EPS 1e-7        /* azimuths this close count as equal            */
 #define NEGLIGIBLE 1e-10      /* skip pairs whose peak series starts below     */
 #define FILON_EXTRA 100       /* a kinked f may need this many orders beyond

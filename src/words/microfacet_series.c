@@ -61,9 +61,7 @@
 
 size_t ll_microfacet_scratch_size(size_t max_len)
 {
-    /* Chebyshev path: 2 CHEB; Filon path: 2 FILON_SAMPLES + 7 max_len;
-     * GGX's total internal reflection: a series more. */
-    return 2 * FILON_SAMPLES + 8 * max_len + 2 * CHEB;
+    return MICROFACET_SCRATCH(max_len);
 }
 
 /* The series of a planned pair, n_out <= max_len terms (*n_out), and the
