@@ -11,9 +11,9 @@
  * relative aim where it carries at least 1% of the viewer's R + T (per
  * channel): rough glass's transmission from below beyond 65 degrees
  * (1.5e-4 of the light at 70 degrees) is 10% off at the largest grid, which
- * moves 0.002% of the light. The sampler's weights (each file's own, 256^2
- * strata) were used before; a lobe given a few percent of the strata was
- * 2-3% off for the .bsdf and the table alike.
+ * moves 0.002% of the light. Not each file's own sampler weights: with
+ * 256^2 strata, a lobe that gets a few percent of them comes out 2-3% off,
+ * for the .bsdf and the table alike, more than the aim it would check.
  *
  * f: PAIRS direction pairs from a fixed
  * seed, both elevations <= 80 degrees, the viewer uniform in cos theta and
