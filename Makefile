@@ -146,7 +146,7 @@ TOOL_LIBS = $(shell pkg-config --libs cairo OpenEXR 2>/dev/null) -lm
 # the slow tier (`make check`) holds what takes minutes, needs MPI or
 # Mitsuba, signals running processes, or installs the cross-checks' codes.
 SLOW_TESTS   := test_convergence test_material_fuzz_replay test_ms_walk test_tables_tolerance \
-                test_tables_transmit_tolerance
+                test_tables_transmit_tolerance test_microfacet_walk test_coat_ggx_monte_carlo
 # Measurements that take longer than a CI run allows (`make figures`, not in
 # either tier): they print the figures docs/formats.md quotes and hold what
 # is met.
