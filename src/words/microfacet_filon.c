@@ -406,6 +406,134 @@ static int ggx_settled(const double *out, size_t n, double moment0)
     return 2.0 * largest < GGX_SETTLED * fabs(moment0);
 }
 
+/* The asymptotic tail of total internal reflection's kink. Beyond the
+ * critical azimuth phi_c the refracted cosine is sqrt(cos phi_c - cos phi)
+ * times a constant, so the Fresnel part is a power series in s^1/2, s =
+ * phi - phi_c: d_1 s^1/2 + d_2 s + d_3 s^3/2 + ... (f is 0 before phi_c,
+ * smooth after it and even about pi). Its moments at high orders are then
+ * the end point's alone (integral_0^inf s^nu e^(i l s) ds = Gamma(nu + 1)
+ * e^(i pi (nu + 1) / 2) / l^(nu + 1)):
+ *     A_l = sum_p d_p Gamma(p / 2 + 1) cos(l phi_c + pi (p / 2 + 1) / 2)
+ *           / l^(p / 2 + 1),  p = 1 .. GGX_TAIL_TERMS,
+ * which errs like l^-7/2 from the powers left out (and, at low orders, by
+ * the rest of f's shape). The l^-3/2 of the first term is what kept most
+ * such pairs at the orders' limit, each block of Filon moments costing all
+ * the pieces again. So once a block after the first agrees with A_l order
+ * by order to within 16 GGX_SETTLED of the moment of order 0 over the
+ * block's last order n, the orders after it are A_l's (until they settle
+ * too): the error of A_l summed over those orders, about n / 2.5 times the
+ * block's as it falls like l^-7/2, stays within about 4 GGX_SETTLED of the
+ * mean in the series, where settling leaves out every term below
+ * GGX_SETTLED, however many. (Measured, n = 200, eta 1.5: 16 takes 9% of
+ * the instructions off the build at alpha 0.05 and 11% at 0.1, 32 no more,
+ * and checking the first block's second half as well errs by 1.5e-4 of
+ * the peak against direct integration.) d_p come from the polynomial in
+ * s^1/2 through f / s^1/2 at GGX_TAIL_POINTS points s^1/2 = sigma, 2 sigma,
+ * ..., sigma = GGX_TAIL_FIT times the square root of the span over which
+ * the series holds (to pi, and to where cos phi reaches the peak factor's
+ * pole 1 + 1 / beta), fitted only when a second block is needed; the
+ * block check makes a poor fit cost orders, not accuracy. tail: d_1 ..
+ * d_5, phi_c. */
+#define GGX_TAIL_FIT 0.05
+#define GGX_TAIL_POINTS 6 /* samples of the fit: the polynomial's degree + 1 */
+#define GGX_TAIL_TERMS 5  /* powers s^(p/2) in the tail, p = 1 .. 5          */
+#define GGX_TAIL_MATCH 16.0 /* the block check's bound, in GGX_SETTLED of the
+                             * moment of order 0 over the block's end        */
+
+static int kink_tail_fit(const ll_microfacet_model *mf, const pair_plan *p, double *tail)
+{
+    double phi_c = p->split, x_c = cos(phi_c), span = LL_PI - phi_c, sigma;
+    double x[GGX_TAIL_POINTS], f[GGX_TAIL_POINTS], c[GGX_TAIL_POINTS];
+    size_t j, k;
+    if (p->b > 0.0 && sin(phi_c) > 0.0)
+        span = fmin(span, (1.0 + 1.0 / p->b - x_c) / sin(phi_c));
+    if (!(span > 0.0))
+        return 0;
+    sigma = GGX_TAIL_FIT * sqrt(span);
+    for (j = 0; j < GGX_TAIL_POINTS; ++j) {
+        double root = (double)(j + 1) * sigma;
+        x[j] = cos(phi_c + root * root);
+    }
+    ggx_samples(mf, p, GGX_FRESNEL, NULL, x, 0, 1, GGX_TAIL_POINTS, f);
+    /* f / s^1/2 at the nodes t_j = j + 1 (in units of sigma): Newton's
+     * divided differences, then the monomial coefficients in t */
+    for (j = 0; j < GGX_TAIL_POINTS; ++j)
+        c[j] = f[j] / ((double)(j + 1) * sigma);
+    for (k = 1; k < GGX_TAIL_POINTS; ++k)
+        for (j = GGX_TAIL_POINTS - 1; j >= k; --j)
+            c[j] = (c[j] - c[j - 1]) / (double)k;
+    for (k = GGX_TAIL_POINTS - 1; k-- > 0;)
+        for (j = k; j + 1 < GGX_TAIL_POINTS; ++j)
+            c[j] -= (double)(k + 1) * c[j + 1];
+    for (k = 0; k < GGX_TAIL_TERMS; ++k) {
+        tail[k] = c[k] / pow(sigma, (double)k);
+        if (!isfinite(tail[k]))
+            return 0;
+    }
+    tail[GGX_TAIL_TERMS] = phi_c;
+    return 1;
+}
+
+/* A_l of the tail for l = from .. to - 1 (from >= 1), into a, or, with
+ * check not NULL, only as long as |check[l] - A_l| stays within limit;
+ * returns whether it did. The phase l phi_c goes by rotation (one
+ * rounding per order). */
+static int kink_tail(const double *tail, size_t from, size_t to, double *a, const double *check,
+                     double limit)
+{
+    /* Gamma(p / 2 + 1) */
+    static const double gamma[GGX_TAIL_TERMS] = { 0.88622692545275801, 1.0,
+                                                  1.3293403881791370, 2.0,
+                                                  3.3233509704478426 };
+    double wc[GGX_TAIL_TERMS], ws[GGX_TAIL_TERMS], phi_c = tail[GGX_TAIL_TERMS];
+    double c = cos((double)from * phi_c), s = sin((double)from * phi_c);
+    double rc = cos(phi_c), rs = sin(phi_c);
+    size_t k, l;
+    for (k = 0; k < GGX_TAIL_TERMS; ++k) {
+        double phase = 0.25 * LL_PI * (double)(k + 3);
+        wc[k] = tail[k] * gamma[k] * cos(phase);
+        ws[k] = tail[k] * gamma[k] * sin(phase);
+    }
+    for (l = from; l < to; ++l) {
+        double order = (double)l, step = 1.0 / sqrt(order), power = 1.0 / order, sum = 0.0;
+        double next = c * rc - s * rs;
+        for (k = 0; k < GGX_TAIL_TERMS; ++k) {
+            power *= step;
+            sum += (wc[k] * c - ws[k] * s) * power;
+        }
+        if (check && !(fabs(check[l] - sum) <= limit))
+            return 0;
+        if (a)
+            a[l - from] = sum;
+        s = s * rc + c * rs;
+        c = next;
+    }
+    return 1;
+}
+
+/* Whether the moments of the orders [from, to) agree with the tail's. */
+static int tail_matches(const double *tail, const double *out, size_t from, size_t to,
+                        double moment0)
+{
+    return kink_tail(tail, from > 0 ? from : 1, to, NULL, out,
+                     GGX_TAIL_MATCH * GGX_SETTLED * fabs(moment0) / (double)to);
+}
+
+/* The orders from n on from the tail, doubling until settled against
+ * moment0 (at most n_out); returns the orders. */
+static size_t tail_extend(const double *tail, double *out, size_t n, size_t n_out,
+                          double moment0)
+{
+    while (n < n_out) {
+        size_t step = n > 8 ? n : 8, next = n_out - n > step ? n + step : n_out;
+        kink_tail(tail, n, next, out + n, NULL, 0.0);
+        n = next;
+        if (ggx_settled(out, n, moment0))
+            break;
+    }
+    return n;
+}
+
 /* GGX's Filon moments from start on, n_out orders at most, by blocks: a
  * kink far out in the tail, or the end of refraction, adds terms that
  * fall like a power of the order, and how far they matter depends on the
@@ -418,14 +546,19 @@ static int ggx_settled(const double *out, size_t n, double moment0)
  * 0: moment0, plus the moments' own order 0 if own0 (doubling, not
  * adding half, as every block's pass over the pieces costs the pieces'
  * setup again, which the fewer passes save more of than the orders
- * beyond the settled ones cost). Returns the orders computed. */
+ * beyond the settled ones cost). tail (not NULL: total internal
+ * reflection's Fresnel part, room for kink_tail_fit's fit): the orders
+ * after a block that agrees with the kink's asymptotic tail are the
+ * tail's. Returns the orders computed. */
 static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int part,
-                         const double *q, double start, double seen, size_t first,
-                         double moment0, int own0, size_t n_out, double *out, double *scratch)
+                         const double *q, double *tail, double start, double seen,
+                         size_t first, double moment0, int own0, size_t n_out, double *out,
+                         double *scratch)
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t k, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    size_t k, blocks = 1, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    int fitted = 0; /* the tail: 0 not yet fitted, 1 fitted, -1 no fit */
     if (first && first < n)
         n = first;
     if (n > n_out)
@@ -440,8 +573,15 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
         size_t step = n > 8 ? n : 8, next = n_out - n > step ? n + step : n_out;
+        if (tail && blocks >= 2) {
+            if (!fitted)
+                fitted = kink_tail_fit(mf, p, tail) ? 1 : -1;
+            if (fitted > 0 && tail_matches(tail, out, n / 2, n, moment0))
+                return tail_extend(tail, out, n, n_out, moment0);
+        }
         ggx_filon(mf, p, part, start, seen, n, next - n, out + n, scratch, &pass);
         n = next;
+        ++blocks;
     }
     return n;
 }
@@ -466,10 +606,11 @@ size_t ll_microfacet_ggx_fresnel_part(const ll_microfacet_model *mf, const pair_
      * (its logarithmic derivative in v): the first block holds that
      * peak's orders, not the pair's. */
     double half = sin(0.5 * p->split), local = p->b / (1.0 + p->b * 2.0 * half * half);
+    double tail[GGX_TAIL_TERMS + 1];
     size_t n, first = ll_ggx_peak_length(local, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
     memset(out, 0, n_out * sizeof(double));
-    n = ggx_orders(mf, p, GGX_FRESNEL, NULL, p->split, seen, first, LL_PI * mean, 0, n_out, out,
-                   scratch);
+    n = ggx_orders(mf, p, GGX_FRESNEL, NULL, tail, p->split, seen, first, LL_PI * mean, 0, n_out,
+                   out, scratch);
     moments_to_series(out, n);
     return n;
 }
@@ -539,13 +680,13 @@ static void ggx_split_series(const ll_microfacet_model *mf, const pair_plan *p, 
     size_t first, n_closed, l;
     int part = reference ? GGX_REFERENCE : GGX_WHOLE;
     if (!ggx_peak_quadratic(mf, p, reference, q_rest, q, &delta)) {
-        ggx_orders(mf, p, part, NULL, 0.0, 0.0, 0, 0.0, 1, n_out, out, scratch);
+        ggx_orders(mf, p, part, NULL, NULL, 0.0, 0.0, 0, 0.0, 1, n_out, out, scratch);
         moments_to_series(out, n_out);
         return;
     }
     ll_ggx_series_quadratic(p->b, q, 1, &mean, scratch);
     first = GGX_FIRST_EXTRA + (size_t)ceil(4.0 / sqrt(delta));
-    ggx_orders(mf, p, part, q_rest, 0.0, q[0], first, LL_PI * mean, 1, n_out, out, scratch);
+    ggx_orders(mf, p, part, q_rest, NULL, 0.0, q[0], first, LL_PI * mean, 1, n_out, out, scratch);
     moments_to_series(out, n_out);
     n_closed = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + 3;
     if (n_closed > n_out)
