@@ -90,13 +90,14 @@ def _scalar_false(mask):
 def traced_lobes(fields, name=""):
     """The lobes of a transmissive table file: its four sets stacked into
     one table (mitsuba_lobes_stacked.StackedLobes, one pass per call) when
-    the file has all four with the same grids, else set by set
-    (TracedLobes)."""
+    the file has all four with the same grids and one incident azimuth
+    (what the writer makes), else set by set (TracedLobes)."""
     from .mitsuba_lobes_stacked import ORDER, StackedLobes
     from .mitsuba_tables import stack_sets
     names = layout_names(fields) or []
     prefixes = [SETS[k][0] for k in ORDER]
-    if all(p[:-1] in names for p in prefixes) and "eta" in fields:
+    if all(p[:-1] in names for p in prefixes) and "eta" in fields and \
+            np.asarray(fields.get("phi_i", [])).size == 1:
         stacked = stack_sets(fields, prefixes)
         if stacked is not None:
             return StackedLobes(fields, stacked, SETS, name)
