@@ -315,9 +315,6 @@ class StackedLobes:
         raw_j = self.table.rgb_slice(sample, j, active & (b0 > 0))
         raw_j1 = self.table.rgb_slice(sample, j + 1, active & (b1 > 0))
         raw = [dr.fma(x, b0, y * b1) for x, y in zip(raw_j, raw_j1)]
-        u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
-        jac_r = self.table._jacobian_scale(u_m, u_wi, active, stack) if self.table.jacobian \
-            else 1.0
         c = dr.dot(w_k, m)
         # Reflected about m (reflection; the z-flipped direction then flips).
         wo_r = dr.fma(m, 2.0 * c, -w)
@@ -338,14 +335,15 @@ class StackedLobes:
             active & refract & ok_t & (w_o > 0))
         w_s = dr.select(second, w1, w0)
         pdf_t = w_s * density * _refraction_jacobian(w, wo_t, m_t, e_safe) + w_o * density_o
+        value = [dr.select(refract, w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0), v_k)
+                 for v_k, v_o in zip(raw, raw_o)]
         if self.table.jacobian:
-            u_phi = _phi_to_u(dr.atan2(m_t.y, m_t.x) - phi_w)
-            u_mt = mi.Point2f(_theta_to_u(_elevation(m_t)), u_phi - dr.floor(u_phi))
-            jac_t = self.table._jacobian_scale(u_mt, u_wi, active, stack)
-        else:
-            jac_t = 1.0
-        value = [dr.select(refract, (w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0)) * jac_t,
-                           v_k * jac_r) for v_k, v_o in zip(raw, raw_o)]
+            # D / (4 sigma) at the sampled normal, or at a refracted pair's
+            # own refraction half vector: one look-up for either.
+            u_j = dr.select(refract, _square(m_t, phi_w), u_m)
+            u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
+            jac = self.table._jacobian_scale(u_j, u_wi, active, stack)
+            value = [v * jac for v in value]
         flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
         wo = dr.select(refract, wo_t, dr.select(flipped, _flip(wo_r), wo_r))
         pdf = dr.select(refract, pdf_t, pdf_r)
