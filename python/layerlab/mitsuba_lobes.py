@@ -30,9 +30,11 @@ radiance transport a transmitted value takes the eta^2 of the interface it
 crosses (1 / eta^2 going down from above, eta^2 going up), as the C
 reader's ll_bsdf_eval_dir does.
 
-In the JIT variants each of the four sets is traced once under its lane
-mask (a packet's lanes may be on different sides and lobes): a call costs
-the arithmetic of the sets it could reach, not one.
+Set by set (TracedLobes), in the JIT variants each of the four sets is
+traced once under its lane mask (a packet's lanes may be on different
+sides and lobes): a call costs the arithmetic of the sets it could reach,
+not one. The files the writer makes are read stacked instead
+(traced_lobes, mitsuba_lobes_stacked): one set's look-ups per lane.
 """
 
 import numpy as np

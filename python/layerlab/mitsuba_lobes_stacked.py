@@ -6,11 +6,15 @@ of variables of reflection, refraction or the z-flipped direction) being
 selects. A packet of lanes on different sides and lobes -- most of them
 at a glass surface, where sampling picks the lobe per lane by a random
 number -- costs one set's look-ups instead of those of every set it
-reaches. A refracted lane's first elevation (it reads two, at the pair
-turned with wi to each: TracedTables.refract_eval_pdf) rides in that
-look-up; its second is one more. For files whose four sets share their
-grids (what the writer makes); the others use mitsuba_lobes.TracedLobes,
-set by set.
+reaches. The VNDF and luminance are read through mitsuba_warp.SliceWarp,
+which takes the slice and the point per lane: a reflected lane reads the
+two slices about wi's elevation at one point, a refracted lane (which
+reads two elevations, at the pair turned with wi to each:
+TracedTables.refract_eval_pdf) one slice at each elevation's own point,
+so that either is one look-up of two slices; sampling reads the picked
+elevation's slice alone. For files whose four sets share their grids and
+have one incident azimuth (what the writer makes); the others use
+mitsuba_lobes.TracedLobes, set by set, over Mitsuba's warps.
 
 The same arithmetic as TracedLobes and the C reader (tables_lobes.c,
 tables_refract.c). The sets are stacked in the order ORDER (of SETS in
