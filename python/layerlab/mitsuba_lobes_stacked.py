@@ -34,6 +34,7 @@ from .mitsuba_warp import SliceWarp
 from .mitsuba_lobes import transmittance_at, transmittance_eta
 from .tensor_file import TensorFileError
 
+
 def _square(m, phi_i):
     """The point of the normal m in the VNDF's square, its azimuth about
     wi's phi_i (as TracedTables._at_normal places it)."""
@@ -57,8 +58,8 @@ class StackedLobes:
         """fields: the file's; stacked: stack_sets of the four sets' prefixes
         in the order ORDER; sets: SETS."""
         self.table = TracedTables(stacked, name)
-        # The warps read slice by slice at a point each (eval_pdf); the
-        # table's Mitsuba warps sample.
+        # The VNDF and luminance, read and sampled slice by slice at a
+        # point each (the table keeps D, sigma and the values).
         self.vndf = SliceWarp(np.asarray(stacked["vndf"], dtype=np.float32)[0])
         self.lum = SliceWarp(np.asarray(stacked["luminance"], dtype=np.float32)[0])
         self.eta = float(np.asarray(fields["eta"], dtype=np.float32).ravel()[0])
