@@ -30,9 +30,11 @@ radiance transport a transmitted value takes the eta^2 of the interface it
 crosses (1 / eta^2 going down from above, eta^2 going up), as the C
 reader's ll_bsdf_eval_dir does.
 
-In the JIT variants each of the four sets is traced once under its lane
-mask (a packet's lanes may be on different sides and lobes): a call costs
-the arithmetic of the sets it could reach, not one.
+Set by set (TracedLobes), in the JIT variants each of the four sets is
+traced once under its lane mask (a packet's lanes may be on different
+sides and lobes): a call costs the arithmetic of the sets it could reach,
+not one. The files the writer makes are read stacked instead
+(traced_lobes, mitsuba_lobes_stacked): one set's look-ups per lane.
 """
 
 import numpy as np
@@ -90,13 +92,14 @@ def _scalar_false(mask):
 def traced_lobes(fields, name=""):
     """The lobes of a transmissive table file: its four sets stacked into
     one table (mitsuba_lobes_stacked.StackedLobes, one pass per call) when
-    the file has all four with the same grids, else set by set
-    (TracedLobes)."""
+    the file has all four with the same grids and one incident azimuth
+    (what the writer makes), else set by set (TracedLobes)."""
     from .mitsuba_lobes_stacked import ORDER, StackedLobes
     from .mitsuba_tables import stack_sets
     names = layout_names(fields) or []
     prefixes = [SETS[k][0] for k in ORDER]
-    if all(p[:-1] in names for p in prefixes) and "eta" in fields:
+    if all(p[:-1] in names for p in prefixes) and "eta" in fields and \
+            np.asarray(fields.get("phi_i", [])).size == 1:
         stacked = stack_sets(fields, prefixes)
         if stacked is not None:
             return StackedLobes(fields, stacked, SETS, name)

@@ -6,11 +6,15 @@ of variables of reflection, refraction or the z-flipped direction) being
 selects. A packet of lanes on different sides and lobes -- most of them
 at a glass surface, where sampling picks the lobe per lane by a random
 number -- costs one set's look-ups instead of those of every set it
-reaches. A refracted lane's first elevation (it reads two, at the pair
-turned with wi to each: TracedTables.refract_eval_pdf) rides in that
-look-up; its second is one more. For files whose four sets share their
-grids (what the writer makes); the others use mitsuba_lobes.TracedLobes,
-set by set.
+reaches. The VNDF and luminance are read through mitsuba_warp.SliceWarp,
+which takes the slice and the point per lane: a reflected lane reads the
+two slices about wi's elevation at one point, a refracted lane (which
+reads two elevations, at the pair turned with wi to each:
+TracedTables.refract_eval_pdf) one slice at each elevation's own point,
+so that either is one look-up of two slices; sampling reads the picked
+elevation's slice alone. For files whose four sets share their grids and
+have one incident azimuth (what the writer makes); the others use
+mitsuba_lobes.TracedLobes, set by set, over Mitsuba's warps.
 
 The same arithmetic as TracedLobes and the C reader (tables_lobes.c,
 tables_refract.c). The sets are stacked in the order ORDER (of SETS in
@@ -24,9 +28,19 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _flip, _fresnel_at, \
-    _fresnel_eta, _phi_to_u, _refraction_half, _refraction_jacobian, _theta_to_u, _turn
+    _fresnel_eta, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
+    _theta_to_u, _turn
+from .mitsuba_warp import SliceWarp
 from .mitsuba_lobes import transmittance_at, transmittance_eta
 from .tensor_file import TensorFileError
+
+
+def _square(m, phi_i):
+    """The point of the normal m in the VNDF's square, its azimuth about
+    wi's phi_i (as TracedTables._at_normal places it)."""
+    u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
+    return mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+
 
 # The stacked sets' order, by their index in SETS: reflect_bottom,
 # reflect_top, transmit_top, transmit_bottom.
@@ -44,6 +58,10 @@ class StackedLobes:
         """fields: the file's; stacked: stack_sets of the four sets' prefixes
         in the order ORDER; sets: SETS."""
         self.table = TracedTables(stacked, name)
+        # The VNDF and luminance, read and sampled slice by slice at a
+        # point each (the table keeps D, sigma and the values).
+        self.vndf = SliceWarp(np.asarray(stacked["vndf"], dtype=np.float32)[0])
+        self.lum = SliceWarp(np.asarray(stacked["luminance"], dtype=np.float32)[0])
         self.eta = float(np.asarray(fields["eta"], dtype=np.float32).ravel()[0])
         self.jit = dr.is_jit_v(mi.Float)
         n_ti = len(np.asarray(fields["theta_i"]))
@@ -156,6 +174,23 @@ class StackedLobes:
         stored = refract & (e > 0)
         return dr.select(stored, transmittance_at(w, o, m, dr.select(e > 0, e, 1.5)), 1.0)
 
+    def _slice_at(self, wi, phi_i, k, wo, eta, active):
+        """A refracted pair at one of wi's elevations, read from its one
+        slice k (TracedTables._stored_at without the neighbour's weight
+        0): the stored values, the density per solid angle of wo, and
+        whether the pair refracts."""
+        m, ok = _refraction_half(wi, wo, eta)
+        active = active & ok
+        u = _square(m, phi_i)
+        cell = self.vndf.cell(u)
+        sample, vndf_pdf = self.vndf.invert(self.vndf.read(k, cell, active), cell)
+        value = self.table.rgb_slice(sample, k, active)
+        lum_cell = self.lum.cell(sample)
+        lum = self.lum.density(self.lum.read(k, lum_cell, active, cdf=False), lum_cell)
+        density = vndf_pdf * lum / _normal_area(u.x, mi.Frame3f.sin_theta(m)) * \
+            _refraction_jacobian(wi, wo, m, eta)
+        return value, dr.select(active & dr.isfinite(density), density, 0.0), active
+
     # ------------------------------------------------------ the three calls
 
     def eval_pdf(self, wi, wo, active, radiance, reflect_on=True, transmit_on=True,
@@ -177,50 +212,65 @@ class StackedLobes:
                        _flip(o), o)
         m_r = dr.normalize(w + o2)
         ok_r = (w.z > 0) & (o2.z > 0)
-        m_t, ok_t = _refraction_half(w, o, dr.select(refracts, e, 1.0))
+        e_safe = dr.select(refracts, e, 1.0)
+        m_t, ok_t = _refraction_half(w, o, e_safe)
         m = dr.select(refract, m_t, m_r)
         active = active & dr.select(refract, ok_t, ok_r)
         # A refracted lane reads its two elevations at the pair turned to
-        # each (TracedTables.refract_eval_pdf): the first in the one warp
-        # look-up every lane makes, the second beside it; its stored values
-        # are blended, then D / (4 sigma) is taken at the pair itself.
-        e_safe = dr.select(refracts, e, 1.0)
+        # each (TracedTables.refract_eval_pdf), one slice each; a reflected
+        # lane reads the two slices around wi's elevation at one point.
+        # Either way slice j at one point and slice j + 1 at another: one
+        # look-up of two slices for every lane (mitsuba_warp).
         elevations, axis, phi_w = self.table._elevations(w, stack)
-        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, sl1) = elevations
-        o0 = _turn(axis, c0, s0, o)
-        m0, ok0 = _refraction_half(wi0, o0, e_safe)
-        ok0 = ok0 & (w0 > 0)
+        (w0, wi0, c0, s0, _, _), (w1, wi1, c1, s1, _, _) = elevations
+        m0, ok0 = _refraction_half(wi0, _turn(axis, c0, s0, o), e_safe)
+        m1, ok1 = _refraction_half(wi1, _turn(axis, c1, s1, o), e_safe)
+        ok0, ok1 = ok0 & (w0 > 0), ok1 & (w1 > 0)
         j, a0, a1 = stack[2]
-        at = (dr.select(refract, p0, _elevation(w) + stack[1]),
-              (j, dr.select(refract, 1.0, a0), dr.select(refract, 0.0, a1)), phi_w)
-        raw, density = self.table._at_normal(
-            dr.select(refract, wi0, w), dr.select(refract, m0, m),
-            active & dr.select(refract, ok0, True), want_value, want_pdf, stack, at)
-        o1 = _turn(axis, c1, s1, o)
-        raw1, density1, ok1 = self.table._stored_at(
-            wi1, phi_w, p1, sl1, o1, e_safe, active & refract & (w1 > 0), want_value, want_pdf)
+        m_a, m_b = dr.select(refract, m0, m), dr.select(refract, m1, m)
+        read_a = active & dr.select(refract, ok0, True)
+        read_b = active & dr.select(refract, ok1, a1 > 0)
+        # (A reflected lane's mixture; a refracted lane's slice j alone.)
+        mix_a = (dr.select(refract, 1.0, a0), dr.select(refract, 0.0, a1))
+        u_a, u_b = _square(m_a, phi_w), _square(m_b, phi_w)
+        cell_a, cell_b = self.vndf.cell(u_a), self.vndf.cell(u_b)
+        va = self.vndf.read(j, cell_a, read_a)
+        vb = self.vndf.read(j + 1, cell_b, read_b)
+        sample_a, pdf_a = self.vndf.invert(self.vndf.mix(va, vb, *mix_a), cell_a)
+        sample_b, pdf_b = self.vndf.invert(vb, cell_b)
+        sample_b = dr.select(refract, sample_b, sample_a)
         value = pdf = None
         if want_value:
+            ra = self.table.rgb_slice(sample_a, j, read_a)
+            rb = self.table.rgb_slice(sample_b, j + 1, read_b)
+            value = [dr.select(refract, dr.select(ok0, x * w0, 0.0) + dr.select(ok1, y * w1, 0.0),
+                               dr.fma(x, a0, y * a1)) for x, y in zip(ra, rb)]
             scale = dr.select(transmits, self._transport(wi, radiance) *
                               self._transmittance(w, o, m, bottom, refract),
                               self._fresnel(w, m, bottom, ~transmits if self.jit
                                             else not transmits))
-            value = [dr.select(refract, dr.select(ok0, v0 * w0, 0.0) +
-                               dr.select(ok1, v1 * w1, 0.0), v0)
-                     for v0, v1 in zip(raw, raw1)]
             if self.table.jacobian:
-                u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_w)
-                u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+                u_m = dr.select(refract, _square(m, phi_w), u_a)
                 u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
                 jac = self.table._jacobian_scale(u_m, u_wi, active, stack)
                 value = [v * jac for v in value]
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
             value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
         if want_pdf:
+            lum_cell_a, lum_cell_b = self.lum.cell(sample_a), self.lum.cell(sample_b)
+            la = self.lum.read(j, lum_cell_a, read_a, cdf=False)
+            lb = self.lum.read(j + 1, lum_cell_b, read_b, cdf=False)
+            lum_a = self.lum.density(self.lum.mix(la, lb, *mix_a), lum_cell_a)
+            lum_b = self.lum.density(lb, lum_cell_b)
+            density_a = pdf_a * lum_a / _normal_area(u_a.x, mi.Frame3f.sin_theta(m_a))
+            density_b = pdf_b * lum_b / _normal_area(u_b.x, mi.Frame3f.sin_theta(m_b))
+            # (The refraction's d omega_m / d omega_o is the same at the
+            # pair turned to either elevation: a turn keeps the dots.)
             lobe = dr.select(refract,
-                             dr.select(ok0, density * w0, 0.0) *
-                             _refraction_jacobian(w, o, m, e_safe) + w1 * density1,
-                             density / (4.0 * dr.dot(w, m)))
+                             (dr.select(ok0, density_a * w0, 0.0) +
+                              dr.select(ok1, density_b * w1, 0.0)) *
+                             _refraction_jacobian(w, o, m, e_safe),
+                             density_a / (4.0 * dr.dot(w, m)))
             share = self._share(weights, bottom)
             pdf = lobe * dr.select(transmits, 1.0 - share, share)
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
@@ -250,20 +300,26 @@ class StackedLobes:
         # one pair of warp look-ups every lane makes, at wi turned to it.
         e_safe = dr.select(refracts, e, 1.0)
         elevations, axis, phi_w = self.table._elevations(w, stack)
-        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, _) = elevations
+        (w0, wi0, c0, s0, _, _), (w1, wi1, c1, s1, _, _) = elevations
         second = refract & (v.x >= w0)
         u_el = dr.select(second, (v.x - w0) / dr.select(w1 > 0, w1, 1.0),
                          v.x / dr.select(w0 > 0, w0, 1.0))
         v_s = mi.Point2f(dr.select(refract, dr.clip(u_el, 0.0, 1.0), v.x), v.y)
+        # The slices j, j + 1 mixed as wi's elevation weighs them; a
+        # refracted lane's picked one alone (the other is not read).
         j, a0, a1 = stack[2]
-        at = (dr.select(refract, dr.select(second, p1, p0), _elevation(w) + stack[1]),
-              (j, dr.select(refract, dr.select(second, 0.0, 1.0), a0),
-               dr.select(refract, dr.select(second, 1.0, 0.0), a1)), phi_w)
+        b0 = dr.select(refract, dr.select(second, 0.0, 1.0), a0)
+        b1 = dr.select(refract, dr.select(second, 1.0, 0.0), a1)
         w_k = dr.select(refract, dr.select(second, wi1, wi0), w)
-        m, density, raw, u_m = self.table._sample_normal(w_k, v_s, active, stack, at)
-        u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
-        jac_r = self.table._jacobian_scale(u_m, u_wi, active, stack) if self.table.jacobian \
-            else 1.0
+        # (Mitsuba's `measured` takes the numbers as (y, x) into the
+        # luminance warp, as TracedTables._sample_normal.)
+        sample, lum_pdf = self.lum.sample(j, j + 1, b0, b1, mi.Point2f(v_s.y, v_s.x), active)
+        u_m, vndf_pdf = self.vndf.sample(j, j + 1, b0, b1, sample, active)
+        m, sin_theta = _normal_at(u_m, phi_w)
+        density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
+        raw_j = self.table.rgb_slice(sample, j, active & (b0 > 0))
+        raw_j1 = self.table.rgb_slice(sample, j + 1, active & (b1 > 0))
+        raw = [dr.fma(x, b0, y * b1) for x, y in zip(raw_j, raw_j1)]
         c = dr.dot(w_k, m)
         # Reflected about m (reflection; the z-flipped direction then flips).
         wo_r = dr.fma(m, 2.0 * c, -w)
@@ -279,20 +335,20 @@ class StackedLobes:
         # The other elevation at the pair turned to it.
         w_o = dr.select(second, w0, w1)
         o_o = _turn(axis, dr.select(second, c0, c1), dr.select(second, s0, s1), wo_t)
-        raw_o, density_o, ok_o = self.table._stored_at(
-            dr.select(second, wi0, wi1), phi_w, dr.select(second, p0, p1),
-            (j, dr.select(second, 1.0, 0.0), dr.select(second, 0.0, 1.0)), o_o, e_safe,
-            active & refract & ok_t & (w_o > 0), True, True)
+        raw_o, density_o, ok_o = self._slice_at(
+            dr.select(second, wi0, wi1), phi_w, dr.select(second, j, j + 1), o_o, e_safe,
+            active & refract & ok_t & (w_o > 0))
         w_s = dr.select(second, w1, w0)
         pdf_t = w_s * density * _refraction_jacobian(w, wo_t, m_t, e_safe) + w_o * density_o
+        value = [dr.select(refract, w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0), v_k)
+                 for v_k, v_o in zip(raw, raw_o)]
         if self.table.jacobian:
-            u_phi = _phi_to_u(dr.atan2(m_t.y, m_t.x) - phi_w)
-            u_mt = mi.Point2f(_theta_to_u(_elevation(m_t)), u_phi - dr.floor(u_phi))
-            jac_t = self.table._jacobian_scale(u_mt, u_wi, active, stack)
-        else:
-            jac_t = 1.0
-        value = [dr.select(refract, (w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0)) * jac_t,
-                           v_k * jac_r) for v_k, v_o in zip(raw, raw_o)]
+            # D / (4 sigma) at the sampled normal, or at a refracted pair's
+            # own refraction half vector: one look-up for either.
+            u_j = dr.select(refract, _square(m_t, phi_w), u_m)
+            u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
+            jac = self.table._jacobian_scale(u_j, u_wi, active, stack)
+            value = [v * jac for v in value]
         flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
         wo = dr.select(refract, wo_t, dr.select(flipped, _flip(wo_r), wo_r))
         pdf = dr.select(refract, pdf_t, pdf_r)

@@ -282,7 +282,16 @@ class TracedTables:
         self.use_phi = n_pi > 1
         self.theta_host = theta.astype(np.float64)
         self.phi_host = phi.astype(np.float64)
-        if self.use_phi:
+        ndf = np.ascontiguousarray(fields[prefix + "ndf"], dtype=np.float32)
+        sigma = np.ascontiguousarray(fields[prefix + "sigma"], dtype=np.float32)
+        # Sets stacked (stack_sets): D and sigma per set, the set's index
+        # their parameter (whole numbers: one slice exactly).
+        self.stacked = ndf.ndim == 3
+        if self.stacked:
+            # (Their reader, mitsuba_lobes_stacked, reads the VNDF and
+            # luminance slice by slice through its own warps.)
+            self.vndf = self.luminance = None
+        elif self.use_phi:
             params = [phi.tolist(), theta.tolist()]
             self.vndf = mi.MarginalContinuous2D2(np.ascontiguousarray(vndf), params)
             self.luminance = mi.MarginalContinuous2D2(np.ascontiguousarray(lum), params)
@@ -290,11 +299,6 @@ class TracedTables:
             params = [theta.tolist()]
             self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
             self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
-        ndf = np.ascontiguousarray(fields[prefix + "ndf"], dtype=np.float32)
-        sigma = np.ascontiguousarray(fields[prefix + "sigma"], dtype=np.float32)
-        # Sets stacked (stack_sets): D and sigma per set, the set's index
-        # their parameter (whole numbers: one slice exactly).
-        self.stacked = ndf.ndim == 3
         if self.stacked:
             # Bilinear look-ups of the lane's set's grid (_grid_eval):
             # what Mitsuba's warps evaluated as stored compute, without
@@ -415,15 +419,36 @@ class TracedTables:
         return [dr.lerp(dr.lerp(v00[c], v10[c], fx), dr.lerp(v01[c], v11[c], fx), fy)
                 for c in range(3)]
 
-    def _incident(self, wi, stack=None):
-        """wi's elevation as the slices' parameter (of stacked sets: stack
-        = (the lane's set, its shift, its slice and weights over the
-        elevations), stack_sets), its azimuth and square coordinates."""
+    def rgb_slice(self, sample, j, active):
+        """The stored values (R, G, B) of the one slice j (of an isotropic
+        file: an incident elevation) at the point sample of the sample
+        square, bilinear in its cell: what rgb gives with the weights 1
+        and 0 on that slice, without reading the next."""
+        if not self.jit and not active:
+            return [0.0, 0.0, 0.0]   # (its slice may lie past the last)
+        nx, ny = self.size
+        px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
+        py = dr.clip(sample.y, 0.0, 1.0) * float(ny - 1)
+        if self.jit:
+            UInt32, Int32 = mi.UInt32, mi.Int32
+            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
+            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
+        else:
+            ox = min(int(px), nx - 2)
+            oy = min(int(py), ny - 2)
+        fx, fy = px - ox, py - oy
+        base = j * (nx * ny) + oy * nx + ox
+        v00, v10 = self._gather(base, active), self._gather(base + 1, active)
+        v01, v11 = self._gather(base + nx, active), self._gather(base + nx + 1, active)
+        return [dr.lerp(dr.lerp(v00[c], v10[c], fx), dr.lerp(v01[c], v11[c], fx), fy)
+                for c in range(3)]
+
+    def _incident(self, wi):
+        """wi's elevation (the slices' parameter), its azimuth and square
+        coordinates."""
         theta_i = _elevation(wi)
         phi_i = dr.atan2(wi.y, wi.x)
         u_wi = mi.Point2f(_theta_to_u(theta_i), _phi_to_u(phi_i))
-        if stack is not None:
-            theta_i = theta_i + stack[1]
         return theta_i, phi_i, u_wi
 
     def _jacobian_scale(self, u_m, u_wi, active, stack=None):
@@ -436,18 +461,11 @@ class TracedTables:
 
     # ------------------------------------------------------ the three calls
 
-    def _at_normal(self, wi, m, active, want_value, want_pdf, stack=None, at=None):
+    def _at_normal(self, wi, m, active, want_value, want_pdf):
         """The lobe at the half vector m (of either warp): (f cos theta_o
         as a list of 3 Float, or None; the density of m per steradian of
-        normals, from the two squares' densities, or None). at: (the warps'
-        parameter, the slice weights, wi's azimuth) given by the caller
-        (StackedLobes: a refracted lane's wi turned to one of its
-        elevations); the values are then the stored ones, without D / (4
-        sigma)."""
-        theta_i, phi_i, u_wi = self._incident(wi, stack)
-        if at is not None:
-            theta_i, phi_i = at[0], at[2]
-            stack = (stack[0], stack[1], at[1]) if stack is not None else None
+        normals, from the two squares' densities, or None)."""
+        theta_i, phi_i, u_wi = self._incident(wi)
         theta_m = _elevation(m)
         phi_m = dr.atan2(m.y, m.x)
         u_phi = _phi_to_u(phi_m - phi_i)
@@ -456,10 +474,9 @@ class TracedTables:
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active,
-                             stack[2] if stack else (at[1] if at is not None else None))
-            if self.jacobian and at is None:
-                scale = self._jacobian_scale(u_m, u_wi, active, stack)
+            value = self.rgb(sample, phi_i, theta_i, active)
+            if self.jacobian:
+                scale = self._jacobian_scale(u_m, u_wi, active)
                 value = [v * scale for v in value]
         if want_pdf:
             lum = self.luminance.eval(sample, params, active)
@@ -576,29 +593,21 @@ class TracedTables:
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
         return value, pdf
 
-    def _sample_normal(self, wi, sample2, active, stack=None, at=None):
+    def _sample_normal(self, wi, sample2, active):
         """The normal m drawn from the two warps for the random numbers
         sample2 (Mitsuba's `measured` takes them as (sample2.y, sample2.x)
         into the luminance warp), its density per steradian of normals and
-        f cos theta_o there (3 Float). at: as _at_normal's; the values are
-        then the stored ones and the normal's square coordinates follow
-        (m, density, values, u_m)."""
-        theta_i, phi_i, u_wi = self._incident(wi, stack)
-        if at is not None:
-            theta_i, phi_i = at[0], at[2]
-            stack = (stack[0], stack[1], at[1]) if stack is not None else None
+        f cos theta_o there (3 Float)."""
+        theta_i, phi_i, u_wi = self._incident(wi)
         params = self._params(phi_i, theta_i)
         sample, lum_pdf = self.luminance.sample(mi.Point2f(sample2.y, sample2.x), params,
                                                 active)
         u_m, vndf_pdf = self.vndf.sample(sample, params, active)
         m, sin_theta = _normal_at(u_m, phi_i)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
-        value = self.rgb(sample, phi_i, theta_i, active,
-                         stack[2] if stack else (at[1] if at is not None else None))
-        if at is not None:
-            return m, density, value, u_m
+        value = self.rgb(sample, phi_i, theta_i, active)
         if self.jacobian:
-            scale = self._jacobian_scale(u_m, u_wi, active, stack)
+            scale = self._jacobian_scale(u_m, u_wi, active)
             value = [v * scale for v in value]
         return m, density, value
 

@@ -1,0 +1,213 @@
+"""The inversion and evaluation of the `measured` format's 2D warp
+(docs/formats.md, "The 2D warp": a density bilinear over a grid of the
+unit square, sampled by its marginal along y and the conditional along x)
+one slice at a time, for the stacked lobe sets of a transmissive table
+(mitsuba_lobes_stacked).
+
+Mitsuba's warps (mi.MarginalContinuous2D1) find the slices of a parameter
+themselves and read both neighbours at one point. A refracted lane reads
+its two incident elevations each at its own point, one slice each
+(TracedTables.refract_eval_pdf), which through Mitsuba's warps costs two
+look-ups of two slices. Here the caller names the slice and the point:
+every lane reads two slices, each at its own cell -- a reflected lane both
+at the same point (and mixes them, as an interpolation over the
+parameter does), a refracted lane each at its own -- so that a packet of
+mixed lanes pays for one look-up.
+
+The arithmetic is the warp's definition (the C reader's
+src/reader/tables_warp.c computes the same): each slice normalised to
+integrate to 1 over the square; at a point in cell (c, r) with fractions
+(tx, ty) the density is bilinear in the cell's nodes, the marginal
+integral u_y = (rows' integral up to row r) + the integral of the row
+totals, linear in y, over [r, y]; u_x the conditional integral up to x of
+the density along x at y (the rows r and r + 1 mixed by ty) over that
+row's total. The per-slice tables are built here from the stored values
+in double precision, as the writer's and Mitsuba's are.
+"""
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+
+class SliceWarp:
+    """A stack of warp slices ([slices, h, w] stored values) read by slice
+    index and point."""
+
+    def __init__(self, data):
+        d = np.asarray(data, dtype=np.float64)
+        n, h, w = d.shape
+        self.w, self.h = int(w), int(h)
+        # Running trapezoid integrals along x (from 0 at the first node)
+        # and of the row totals along y, both over the unit square.
+        cond = np.zeros_like(d)
+        cond[:, :, 1:] = np.cumsum((0.5 / (w - 1)) * (d[:, :, :-1] + d[:, :, 1:]), axis=2)
+        rows = cond[:, :, -1]
+        marg = np.zeros((n, h))
+        marg[:, 1:] = np.cumsum((0.5 / (h - 1)) * (rows[:, :-1] + rows[:, 1:]), axis=1)
+        total = marg[:, -1]
+        # (A slice without mass -- never in a file the C reader opened --
+        # is left at 0 rather than divided by 0.)
+        norm = np.where(total > 0, 1.0 / np.where(total > 0, total, 1.0), 0.0)[:, None, None]
+        # A node's value and its running integral side by side: one read of
+        # two floats at each of the cell's nodes; a row's total and the
+        # integral before it the same.
+        self.node_host = np.stack([d * norm, cond * norm], axis=-1).astype(np.float32)
+        self.row_host = np.stack([rows * norm[:, :, 0], marg * norm[:, :, 0]],
+                                 axis=-1).astype(np.float32)
+        self.jit = dr.is_jit_v(mi.Float)
+        if self.jit:
+            self.node = mi.Float(self.node_host.ravel())
+            self.row = mi.Float(self.row_host.ravel())
+        else:
+            self.node_host = self.node_host.reshape(-1, 2)
+            self.row_host = self.row_host.reshape(-1, 2)
+
+    def cell(self, pos):
+        """(the cell's first node within a slice, its row, tx, ty) of the
+        point pos (clamped into the square)."""
+        w, h = self.w, self.h
+        px = dr.clip(pos.x, 0.0, 1.0) * float(w - 1)
+        py = dr.clip(pos.y, 0.0, 1.0) * float(h - 1)
+        if self.jit:
+            cx = dr.minimum(mi.UInt32(mi.Int32(px)), w - 2)
+            cy = dr.minimum(mi.UInt32(mi.Int32(py)), h - 2)
+        else:
+            cx, cy = min(int(px), w - 2), min(int(py), h - 2)
+        return cy * w + cx, cy, px - cx, py - cy
+
+    def read(self, k, cell, active, cdf=True):
+        """The values of slice k at the cell: the four nodes (x, then y
+        varying), and with cdf the running integrals at the cell's left
+        nodes (rows r, r + 1), the totals of rows r, r + 1 and the
+        integral before row r."""
+        node, row = cell[0], cell[1]
+        base = k * (self.w * self.h) + node
+        rbase = k * self.h + row
+        if self.jit:
+            def at(i):
+                return dr.gather(mi.Array2f, self.node, i, active)
+
+            def at_row(i):
+                return dr.gather(mi.Array2f, self.row, i, active)
+        elif not active:
+            # (A lane that reads nothing: its slice may lie past the last.)
+            return [0.0] * (9 if cdf else 4)
+        else:
+            def at(i):
+                v = self.node_host[int(i)]
+                return float(v[0]), float(v[1])
+
+            def at_row(i):
+                v = self.row_host[int(i)]
+                return float(v[0]), float(v[1])
+        n00, n10 = at(base), at(base + 1)
+        n01, n11 = at(base + self.w), at(base + self.w + 1)
+        values = [n00[0], n10[0], n01[0], n11[0]]
+        if not cdf:
+            return values
+        r0, r1 = at_row(rbase), at_row(rbase + 1)
+        return values + [n00[1], n01[1], r0[0], r1[0], r0[1]]
+
+    @staticmethod
+    def mix(a, b, wa, wb):
+        """Two slices' values mixed with weights wa, wb (an interpolation
+        over the parameter)."""
+        return [dr.fma(x, wa, y * wb) for x, y in zip(a, b)]
+
+    @staticmethod
+    def density(values, cell):
+        """The density at the point (bilinear in the cell's nodes)."""
+        v00, v10, v01, v11 = values[:4]
+        tx, ty = cell[2], cell[3]
+        return dr.lerp(dr.lerp(v00, v10, tx), dr.lerp(v01, v11, tx), ty)
+
+    def invert(self, values, cell):
+        """(the square's point u that the warp maps to the cell's point,
+        the density there) from read(..., cdf=True) values."""
+        v00, v10, v01, v11, c0, c1, t0, t1, before = values
+        tx, ty = cell[2], cell[3]
+        uy = before + ty * dr.fma(0.5 * ty, t1 - t0, t0) * (1.0 / (self.h - 1))
+        g0, g1 = dr.lerp(v00, v01, ty), dr.lerp(v10, v11, ty)
+        ux = dr.lerp(c0, c1, ty) + tx * dr.fma(0.5 * tx, g1 - g0, g0) * (1.0 / (self.w - 1))
+        total = dr.lerp(t0, t1, ty)
+        ux = ux / dr.select(total > 0, total, 1.0)
+        return mi.Point2f(ux, uy), dr.lerp(g0, g1, tx)
+
+    # ------------------------------------------------------------ sampling
+
+    def _search(self, lo, hi, below):
+        """The last index i in [lo - 1, hi - 1] with below(i) (below(lo -
+        1) holds, below is monotone): a halving in the JIT variants."""
+        if self.jit:
+            return dr.binary_search(lo, hi, below) - 1
+        i = lo
+        while i < hi and below(i):
+            i += 1
+        return i - 1
+
+    def sample(self, k0, k1, a0, a1, u, active):
+        """(the point the warp maps u in [0, 1]^2 to, the density there) of
+        slices k0 and k1 mixed with weights a0, a1 (a slice of weight 0 is
+        not read): the row from the marginal, then the column from the
+        conditional at that y, each inside its interval the root of the
+        quadratic that the linear density integrates to."""
+        w, h = self.w, self.h
+        on0, on1 = active & (a0 > 0), active & (a1 > 0)
+        if self.jit:
+            k0, k1 = mi.UInt32(k0), mi.UInt32(k1)
+
+            def pair(arr, i0, i1):
+                return self.mix(dr.gather(mi.Array2f, arr, i0, on0),
+                                dr.gather(mi.Array2f, arr, i1, on1), a0, a1)
+
+            def second(arr, i0, i1):
+                # (A search reads the running integrals alone.)
+                return dr.fma(dr.gather(mi.Float, arr, 2 * i0 + 1, on0), a0,
+                              dr.gather(mi.Float, arr, 2 * i1 + 1, on1) * a1)
+            node_arr, row_arr = self.node, self.row
+        else:
+            def pair(host, i0, i1):
+                v0 = host[int(i0)] if on0 else (0.0, 0.0)
+                v1 = host[int(i1)] if on1 else (0.0, 0.0)
+                return self.mix([float(v0[0]), float(v0[1])], [float(v1[0]), float(v1[1])],
+                                a0, a1)
+
+            def second(host, i0, i1):
+                return pair(host, i0, i1)[1]
+            node_arr, row_arr = self.node_host, self.row_host
+        ux, uy = dr.clip(u.x, 0.0, 1.0), dr.clip(u.y, 0.0, 1.0)
+        rb0, rb1 = k0 * h, k1 * h
+        r = self._search(1, h - 1, lambda i: second(row_arr, rb0 + i, rb1 + i) <= uy)
+        t0, before = pair(row_arr, rb0 + r, rb1 + r)
+        t1 = pair(row_arr, rb0 + r + 1, rb1 + r + 1)[0]
+        ty = _root(t0, t1, (uy - before) * float(h - 1))
+        target = ux * dr.lerp(t0, t1, ty)
+        nb0, nb1 = k0 * (w * h) + r * w, k1 * (w * h) + r * w
+
+        def column(i):
+            return pair(node_arr, nb0 + i, nb1 + i), pair(node_arr, nb0 + w + i, nb1 + w + i)
+
+        def left_of(i):
+            return dr.lerp(second(node_arr, nb0 + i, nb1 + i),
+                           second(node_arr, nb0 + w + i, nb1 + w + i), ty) <= target
+
+        c = self._search(1, w - 1, left_of)
+        (d00, c00), (d01, c01) = column(c)
+        d10, d11 = column(c + 1)[0][0], column(c + 1)[1][0]
+        g0, g1 = dr.lerp(d00, d01, ty), dr.lerp(d10, d11, ty)
+        tx = _root(g0, g1, (target - dr.lerp(c00, c01, ty)) * float(w - 1))
+        if self.jit:
+            c, r = mi.Float(c), mi.Float(r)
+        return (mi.Point2f((c + tx) * (1.0 / (w - 1)), (r + ty) * (1.0 / (h - 1))),
+                dr.lerp(g0, g1, tx))
+
+
+def _root(f0, f1, mass):
+    """t in [0, 1] with t (f0 + t (f1 - f0) / 2) = mass: the integral of the
+    density linear from f0 to f1 over [0, t] (the root that stays stable
+    as f1 - f0 goes to 0)."""
+    disc = dr.maximum(dr.fma(2.0 * (f1 - f0), mass, f0 * f0), 0.0)
+    den = f0 + dr.sqrt(disc)
+    return dr.clip(2.0 * mass / dr.select(den > 0, den, 1.0), 0.0, 1.0)
