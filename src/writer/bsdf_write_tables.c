@@ -223,8 +223,7 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     double param[2] = { 0.0, th };
     double four_sigma = 4.0 * ll_tables_sigma_at(&w->sigma_w, th);
     float *lum = w->lum + t * plane, *rgb = w->rgb ? w->rgb + t * 3 * plane : NULL;
-    static const double weights[3] = { 0.212671, 0.715160, 0.072169 };
-    double target;
+    double target[3];
     ll_tables_horizon h;
     ll_status s;
     for (y = 0; y < ns; ++y)
@@ -267,10 +266,11 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     h.sigma = 0.25 * four_sigma;
     h.param[0] = 0.0;
     h.param[1] = th;
-    if ((s = ll_tables_horizon_target(w->b, th, &target)) != LL_OK)
+    h.fresnel_eta = 0.0;
+    if ((s = ll_tables_horizon_target(w->b, th, 0, target)) != LL_OK)
         return s;
-    if (target > 0.0) {
-        if ((s = ll_tables_horizon_fit(&h, ns, below, 3, weights, target, rgb)) != LL_OK)
+    if (target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0) {
+        if ((s = ll_tables_horizon_fit(&h, ns, below, 3, target, rgb)) != LL_OK)
             return s;
         for (x = 0; x < plane; ++x) {
             double v[3] = { rgb[x], rgb[plane + x], rgb[2 * plane + x] };
