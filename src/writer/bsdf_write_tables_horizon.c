@@ -16,16 +16,15 @@
  * above the horizon, weighted by the square's area element in f cos
  * d omega) equals the source's (ll_bsdf_albedo, per channel) at the
  * slice's elevation. lambda = 1 continues the lobe flat across the
- * horizon; it is kept in [0, LAMBDA_MAX]. The rest is a scale of the
- * channel's values: down where the slice is too bright even with lambda =
- * 0 (its interior, not its edge), up (at most GAIN_MAX) where the edge
- * cannot carry what is missing. The latter is the reflection of rough
- * glass (eta 1.5, alpha 0.3) towards grazing: there the edge carries
- * almost nothing (per unit of lambda 0.1% of the slice's albedo at 86.7
- * degrees), while the slice's interior as the sample grid's bilinear
- * cells hold it falls short of the source (at 86.7 degrees 4.2% at a 64^2
- * sample grid, 1.3% at 96^2), and it reached the albedo at 85 degrees
- * between two slices (1.1% low at 32 x 64^2 x 48^2; 0.01% scaled).
+ * horizon; it is kept in [0, LAMBDA_MAX]. Where the slice is too bright
+ * in a channel even with lambda = 0 (its interior, not its edge), that
+ * channel's values are scaled down to the source's albedo instead. A
+ * slice too dark where the edge carries almost nothing is left so: rough
+ * glass's reflection beyond 85 degrees (4% short at 86.7 degrees on a 64^2
+ * sample grid, 1.3% on 96^2, with the edge carrying 0.1% of the albedo
+ * per unit of lambda) is the sample grid's cells inside the lobe, and a
+ * scale of the whole slice up to it moved f everywhere else (a coat over
+ * a scattering medium: median error of f 0.17% to 0.21%).
  *
  * Each channel follows its own source: a coloured lobe whose blue part
  * leaves the luminance's towards grazing (a coat over gold) keeps every
@@ -36,8 +35,11 @@
  * way per wavelength (its plane is that wavelength's file), so it follows
  * its source per wavelength as the RGB file does per channel; the
  * luminance of the RGB file and a spectral file's plane of the same
- * source agree node for node only for a grey source. A table source (no
- * order-0 series to take the albedo from) is left as it is.
+ * source agree node for node only for a grey source. The reflected sets
+ * of a transmissive file are fitted alike, to their side's reflected
+ * albedo, a set stored over F weighed with it (bsdf_write_tables_lobes.c).
+ * A table source (no order-0 series to take the albedo from) is left as
+ * it is.
  */
 #include "writer/bsdf_write_tables.h"
 #include "reader/tables_refract.h"
@@ -45,10 +47,6 @@
 #include <math.h>
 
 #define LAMBDA_MAX 4.0
-/* The largest scale up: rough glass's slices beyond 85 degrees need up to
- * 1.11 at a 48^2 sample grid; more than this is a grid too coarse for the
- * lobe, which the tolerance's search should see. */
-#define GAIN_MAX 1.25
 /* The edge is fitted only where it carries at least this share of the
  * albedo per unit of lambda (viewers beyond about 70 degrees on the
  * coated-gold grid): below, the cells that cross the horizon hold almost
@@ -160,10 +158,6 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
         }
         if (a0[c] > target)
             gain[c] = target / a0[c];
-        else if (a0[c] > 0.0 && a0[c] + lambda[c] * a1[c] < target) {
-            double g = (target - lambda[c] * a1[c]) / a0[c];
-            gain[c] = g < GAIN_MAX ? g : GAIN_MAX;
-        }
     }
     for (c = 0; c < n_ch; ++c)
         for (q = 0; q < plane; ++q) {
