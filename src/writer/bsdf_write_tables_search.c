@@ -20,8 +20,8 @@
  * sharp D is followed, and it costs little beside the four tables of the
  * sample grid. From the smallest grid (16 x 64^2 x 32^2) this reaches
  * 24 x 64^2 x 48^2 (1.3 MB) on rough gold (alpha 0.2), 48 x 64^2 x 64^2
- * (3.9 MB) on examples/coated-gold.layers and the size cap's 64 x 96^2 x
- * 96^2 (47 MB, met) on rough glass (eta 1.5, alpha 0.3, compensate=0).
+ * (3.9 MB) on examples/coated-gold.layers and 64 x 80^2 x 80^2 (32.8 MB)
+ * on rough glass (eta 1.5, alpha 0.3, compensate=0).
  */
 #include "layerlab/ll_tables.h"
 #include "writer/bsdf_write_tables.h"
