@@ -30,8 +30,10 @@
  * leaves the luminance's towards grazing (a coat over gold) keeps every
  * channel's albedo there, which one factor for all channels from the
  * luminance did not (tests/test_tables_horizon.c holds both cases). The
- * luminance table is formed from the fitted values afterwards, so the
- * sampling follows what is stored. A spectral file is fitted the same
+ * luminance table (what sampling follows) is fitted alike as one plane to
+ * the source's luminance albedo (bsdf_write_tables.c says why): sampling
+ * follows the stored values, but for the horizon's cells of a coloured
+ * lobe not node for node. A spectral file is fitted the same
  * way per wavelength (its plane is that wavelength's file), so it follows
  * its source per wavelength as the RGB file does per channel; the
  * luminance of the RGB file and a spectral file's plane of the same
