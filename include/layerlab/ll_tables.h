@@ -79,7 +79,9 @@ typedef ll_status (*ll_tables_spectrum_fn)(void *user, size_t index, double wave
  *    tolerance at viewer elevations 0..85 degrees (so 5%, 2%, 0.2% and
  *    0.3% by default; R and T apart for a transmissive b, from both
  *    sides, each by quadrature of eval, a lobe under 1% of R + T not held
- *    to it).
+ *    to it); a transmissive b's f over its four lobes is held closer, its
+ *    99th percentile to 0.6 and its 95th to 0.2 tolerance (3% and 1% by
+ *    default).
  * A size of 0 is chosen by the tolerance: the writer measures each table
  * it makes against b and grows the sizes left at 0 (the elevations when
  * the albedo misses, the VNDF and sample grids when f misses) until the

@@ -167,25 +167,30 @@ LL_INTERNAL ll_status ll_tables_reference(const ll_bsdf *src, ll_tables_source *
 LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_tables_source *ref,
                                         const ll_bsdf *table, ll_tables_figures *out);
 
-/* The nodes of one slice's sample grid (ns x ns, n_ch planes of values)
- * whose directions are below the horizon (below[q] != 0) and that touch a
- * node above it: set so that the slice's albedo of the channels weighted
- * by weights is target; where it is too bright without them, every
- * channel scaled down to it (bsdf_write_tables_horizon.c). The caller
+/* The nodes of one slice's sample grid (ns x ns, n_ch planes of values,
+ * 1..LL_TABLES_HORIZON_CHANNELS) whose directions are below the horizon
+ * (below[q] != 0) and that touch a node above it: set per channel so that
+ * the slice's albedo of that channel is its targets[c]; where a channel is
+ * too bright without them, that channel scaled down to it; a channel whose
+ * target is 0 keeps its values (bsdf_write_tables_horizon.c). The caller
  * forms the luminance table afterwards. The slice as a reader sees it: */
+#define LL_TABLES_HORIZON_CHANNELS 3
 typedef struct ll_tables_horizon {
     const ll_warp2d *ndf_w, *vndf_w; /* D and the visible normals' warp      */
     double sigma;                    /* sigma of the slice's elevation       */
     double param[2];                 /* the VNDF warp's parameters: 0, theta */
+    double fresnel_eta;              /* > 0: values stored over F (a set's
+                                        "fresnel_eta"), 0: none             */
 } ll_tables_horizon;
 LL_INTERNAL ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                                             const unsigned char *below, size_t n_ch,
-                                            const double *weights, double target,
-                                            float *planes);
-/* The luminance albedo of the untextured b at incident elevation theta
- * (ll_bsdf_albedo), into *out; 0 if b is a table file, which has none
- * (its slices are then not fitted). */
-LL_INTERNAL ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, double *out);
+                                            const double *targets, float *planes);
+/* The reflected albedo per channel of the untextured b at incident
+ * elevation theta, seen from below if bottom (ll_bsdf_albedo), into out;
+ * 0 if b is a table file, which has none (its slices are then not
+ * fitted). */
+LL_INTERNAL ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom,
+                                               double out[3]);
 
 /* Basis k of the textured b as an untextured handle of its own (its
  * coefficients and per-row tables copied; release it with

@@ -9,31 +9,42 @@
  * grid (coat and gold alpha 0.4) at 32 x 64^2 x 64^2 the albedo at 85
  * degrees came out 1.5% low, at 128^2 samples 0.03%.
  *
- * So each node below the horizon that touches one above it stores
- * lambda times the mean of its neighbours above it, with lambda chosen so
- * that the slice's luminance albedo (the integral of the stored values
- * over the part of the sample square whose directions are above the
- * horizon, weighted by the square's area element in f cos d omega) equals
- * the source's (ll_bsdf_albedo) at the slice's elevation. lambda = 1
- * continues the lobe flat across the horizon; it is kept in [0,
- * LAMBDA_MAX]. Where the slice is too bright even with lambda = 0 (its
- * interior, not its edge), its values are scaled down to the source's
- * albedo instead. One lambda and one scale for all channels, from their
- * luminance, as the luminance table and the sampling follow it: so a
- * spectral file (one plane per wavelength, fitted alike) is at each node
- * the luminance of the RGB file of the same source. A table source (no
- * order-0 series to take the albedo from) is left as it is.
+ * So, per channel, each node below the horizon that touches one above it
+ * stores lambda times the mean of its neighbours above it, with lambda
+ * chosen so that the slice's albedo in that channel (the integral of the
+ * stored values over the part of the sample square whose directions are
+ * above the horizon, weighted by the square's area element in f cos
+ * d omega) equals the source's (ll_bsdf_albedo, per channel) at the
+ * slice's elevation. lambda = 1 continues the lobe flat across the
+ * horizon; it is kept in [0, LAMBDA_MAX]. Where the slice is too bright
+ * in a channel even with lambda = 0 (its interior, not its edge), that
+ * channel's values are scaled down to the source's albedo instead. A
+ * slice too dark where the edge carries almost nothing is left so: rough
+ * glass's reflection beyond 85 degrees (4% short at 86.7 degrees on a 64^2
+ * sample grid, 1.3% on 96^2, with the edge carrying 0.1% of the albedo
+ * per unit of lambda) is the sample grid's cells inside the lobe, and a
+ * scale of the whole slice up to it moved f everywhere else (a coat over
+ * a scattering medium: median error of f 0.17% to 0.21%).
  *
- * On the coated-gold grid at 32 x 64^2 x 64^2 the worst albedo error over
- * 0-85 degrees is 0.45% on the rough corner (1.51% with zeros beyond the
- * horizon) and 0.40% on the sharp one (coat and gold alpha 0.05; 0.62%),
- * f's percentiles within 0.004 points of the zeros'. A scale per channel
- * would follow a blue channel whose lobe parts from the luminance's at
- * grazing angles (coat 0.15 over gold 0.4 at 64 x 96^2 x 96^2: 0.11%
- * against 2.4% from the luminance, 6.3% with zeros) but would end that
- * agreement with the spectral file.
+ * Each channel follows its own source: a coloured lobe whose blue part
+ * leaves the luminance's towards grazing (a coat over gold) keeps every
+ * channel's albedo there, which one factor for all channels from the
+ * luminance did not (tests/test_tables_horizon.c holds both cases). The
+ * luminance table (what sampling follows) is fitted alike as one plane to
+ * the source's luminance albedo (bsdf_write_tables.c says why): sampling
+ * follows the stored values, but for the horizon's cells of a coloured
+ * lobe not node for node. A spectral file is fitted the same
+ * way per wavelength (its plane is that wavelength's file), so it follows
+ * its source per wavelength as the RGB file does per channel; the
+ * luminance of the RGB file and a spectral file's plane of the same
+ * source agree node for node only for a grey source. The reflected sets
+ * of a transmissive file are fitted alike, to their side's reflected
+ * albedo, a set stored over F weighed with it (bsdf_write_tables_lobes.c).
+ * A table source (no order-0 series to take the albedo from) is left as
+ * it is.
  */
 #include "writer/bsdf_write_tables.h"
+#include "reader/tables_refract.h"
 
 #include <math.h>
 
@@ -55,16 +66,18 @@
  * u_theta sin(theta_m) / (sigma pdf), D, sigma and the density pdf of the
  * visible normals as a reader interpolates them (ideally the same for all
  * points, the jacobian's purpose; it is not quite, by the bilinear VNDF
- * table). */
+ * table), times F of the pair for a set stored over it. */
 static double weight(const ll_tables_horizon *h, const double wi[3], const double sq[2])
 {
-    double um[2], pdf, tm, m[3], wo[3], d;
+    double um[2], pdf, tm, m[3], wo[3], d, fresnel;
     ll_warp2d_sample(h->vndf_w, sq, h->param, um, &pdf);
     d = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
     if (!(wo[2] > 0.0) || !(pdf > 0.0))
         return 0.0;
+    /* A set stored over F: the reader multiplies F back. */
+    fresnel = h->fresnel_eta > 0.0 ? ll_tables_fresnel_pair(wi, wo, h->fresnel_eta) : 1.0;
     return ll_warp2d_eval(h->ndf_w, um, NULL) * d * 2.0 * LL_PI * LL_PI * um[0] * sin(tm) /
-           (h->sigma * pdf);
+           (h->sigma * pdf) * fresnel;
 }
 
 /* The bilinear value of plane (ns x ns) in cell (x, y) at (fx, fy). */
@@ -75,18 +88,26 @@ static double bilinear(const float *plane, size_t ns, size_t x, size_t y, double
 }
 
 ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
-                                const unsigned char *below, size_t n_ch, const double *weights,
-                                double target, float *planes)
+                                const unsigned char *below, size_t n_ch, const double *targets,
+                                float *planes)
 {
     size_t plane = ns * ns, x, y, q, c, n_edge = 0;
     double theta = h->param[1], wi[3] = { sin(theta), 0.0, cos(theta) };
-    double a0 = 0.0, a1 = 0.0, lambda = 0.0, gain = 1.0;
+    double a0[LL_TABLES_HORIZON_CHANNELS], a1[LL_TABLES_HORIZON_CHANNELS];
+    double lambda[LL_TABLES_HORIZON_CHANNELS], gain[LL_TABLES_HORIZON_CHANNELS];
     double cell = 1.0 / ((double)(ns - 1) * (double)(ns - 1));
     float *edge;
+    if (n_ch == 0 || n_ch > LL_TABLES_HORIZON_CHANNELS)
+        return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_tables_horizon_fit: %zu channels (1..%d)",
+                       n_ch, LL_TABLES_HORIZON_CHANNELS);
     for (q = 0; q < plane; ++q)
         n_edge += below[q];
     if (n_edge == 0)
         return LL_OK;
+    for (c = 0; c < n_ch; ++c) {
+        a0[c] = a1[c] = lambda[c] = 0.0;
+        gain[c] = 1.0;
+    }
     /* edge: per channel, the mean of the neighbours above the horizon at
      * each node below it that has one, 0 elsewhere. */
     if (!ll_size_mul(plane, n_ch, &q) || !(edge = ll_calloc_array(q, sizeof *edge)))
@@ -108,8 +129,8 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
             for (c = 0; n > 0 && c < n_ch; ++c)
                 edge[c * plane + y * ns + x] /= (float)n;
         }
-    /* The slice's albedo as stored (a0) and per unit of lambda (a1), of
-     * the weighted sum of the channels. */
+    /* Per channel, the slice's albedo as stored (a0) and per unit of
+     * lambda (a1). */
     for (y = 0; y + 1 < ns; ++y)
         for (x = 0; x + 1 < ns; ++x) {
             size_t at = y * ns + x;
@@ -124,38 +145,43 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                     if (wt == 0.0)
                         continue;
                     for (c = 0; c < n_ch; ++c) {
-                        a0 += wt * weights[c] * bilinear(planes + c * plane, ns, x, y, fx, fy);
-                        a1 += wt * weights[c] * bilinear(edge + c * plane, ns, x, y, fx, fy);
+                        a0[c] += wt * bilinear(planes + c * plane, ns, x, y, fx, fy);
+                        a1[c] += wt * bilinear(edge + c * plane, ns, x, y, fx, fy);
                     }
                 }
         }
-    if (a1 > EDGE_SHARE * target) {
-        double l = (target - a0) / a1;
-        lambda = l > 0.0 ? (l < LAMBDA_MAX ? l : LAMBDA_MAX) : 0.0;
+    for (c = 0; c < n_ch; ++c) {
+        double target = targets[c];
+        if (!(target > 0.0))
+            continue;
+        if (a1[c] > EDGE_SHARE * target) {
+            double l = (target - a0[c]) / a1[c];
+            lambda[c] = l > 0.0 ? (l < LAMBDA_MAX ? l : LAMBDA_MAX) : 0.0;
+        }
+        if (a0[c] > target)
+            gain[c] = target / a0[c];
     }
-    if (a0 > target && target > 0.0)
-        gain = target / a0;
     for (c = 0; c < n_ch; ++c)
         for (q = 0; q < plane; ++q) {
             float *v = &planes[c * plane + q];
             if (below[q])
-                *v = (float)(lambda * (double)edge[c * plane + q]);
+                *v = (float)(lambda[c] * (double)edge[c * plane + q]);
             else
-                *v = (float)(gain * (double)*v);
+                *v = (float)(gain[c] * (double)*v);
         }
     ll_free(edge);
     return LL_OK;
 }
 
-ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, double *out)
+ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom, double out[3])
 {
-    double rgb[3];
-    ll_status s;
-    *out = 0.0;
+    double mu = cos(theta);
+    out[0] = out[1] = out[2] = 0.0;
     if (b->measured)
         return LL_OK;
-    if ((s = ll_bsdf_albedo(b, cos(theta), NULL, rgb, NULL)) != LL_OK)
-        return s;
-    *out = ll_tables_luminance(rgb);
-    return LL_OK;
+    /* mu_i = 0 counts as from above: the grazing slice from below just
+     * under it. */
+    if (bottom)
+        mu = -(mu > 1e-4 ? mu : 1e-4);
+    return ll_bsdf_albedo(b, mu, NULL, out, NULL);
 }

@@ -20,8 +20,9 @@
  * sharp D is followed, and it costs little beside the four tables of the
  * sample grid. From the smallest grid (16 x 64^2 x 32^2) this reaches
  * 24 x 64^2 x 48^2 (1.3 MB) on rough gold (alpha 0.2), 48 x 64^2 x 64^2
- * (3.9 MB) on examples/coated-gold.layers and the size cap's 64 x 96^2 x
- * 96^2 (47 MB, met) on rough glass (eta 1.5, alpha 0.3, compensate=0).
+ * (3.9 MB) on examples/coated-gold.layers and 64 x 96^2 x 96^2 (47.2 MB)
+ * on rough glass (eta 1.5, alpha 0.3, compensate=0), whose f is held
+ * closer (TRANSMIT_P99_SHARE).
  */
 #include "layerlab/ll_tables.h"
 #include "writer/bsdf_write_tables.h"
@@ -44,6 +45,17 @@
  * more (coated gold's: 0.293% by the search's former estimate of the same
  * kind, 0.306% by the tests'), so the search aims at 0.9 of each bound. */
 #define MARGIN 0.9
+/* A transmissive source's f is held closer: its 99th and 95th percentiles
+ * to 0.6 and 0.2 of the tolerance (3% and 1% by default), as its four
+ * lobes' tables are one file a renderer reads through one warp per lobe.
+ * Its figures spread more between pair sets than an opaque one's: rough
+ * glass (eta 1.5, alpha 0.3) at 64 x 80^2 x 80^2 has a 99th percentile of
+ * 2.35% by the search's pairs and 3.03% by the tests' (a quarter per lobe
+ * and side there too, other directions), so the search aims at 0.75 of
+ * these bounds. */
+#define TRANSMIT_P99_SHARE 0.6
+#define TRANSMIT_P95_SHARE 0.2
+#define TRANSMIT_MARGIN 0.75
 
 static const size_t theta_ladder[] = { 16, 24, 32, 48, 64, 96, 128, 192 };
 static const size_t sample_ladder[] = { 32, 48, 64, 80, 96, 128, 160, 192, 256 };
@@ -88,6 +100,11 @@ static int albedo_met(const search *s, const ll_tables_figures *f)
 static int f_met(const search *s, const ll_tables_figures *f)
 {
     double t = MARGIN * s->tolerance;
+    if (s->sets > 1.0) {
+        double tt = TRANSMIT_MARGIN * s->tolerance;
+        return f->p99 <= TRANSMIT_P99_SHARE * tt && f->p95 <= TRANSMIT_P95_SHARE * tt &&
+               f->p50 <= P50_SHARE * t;
+    }
     return f->p99 <= t && f->p95 <= P95_SHARE * t && f->p50 <= P50_SHARE * t;
 }
 

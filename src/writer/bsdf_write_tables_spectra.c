@@ -39,13 +39,17 @@ static ll_status luminance_weights(const ll_tables_spectra *sp, double *y, const
 static ll_status fit_slice(const ll_tables_spectra *sp, const ll_bsdf *b, size_t t,
                            float *values, unsigned char *below)
 {
-    static const double one[1] = { 1.0 };
     ll_tables_horizon h;
-    double th = (double)sp->theta_i[t], target;
+    double th = (double)sp->theta_i[t], rgb[3], target;
     size_t q, ns = (size_t)(sqrt((double)sp->plane) + 0.5);
     ll_status s;
-    if ((s = ll_tables_horizon_target(b, th, &target)) != LL_OK || !(target > 0.0))
+    /* The values are the luminance of the wavelength's file (its one
+     * channel), and so is the target. */
+    if ((s = ll_tables_horizon_target(b, th, 0, rgb)) != LL_OK)
         return s;
+    target = ll_tables_luminance(rgb);
+    if (!(target > 0.0))
+        return LL_OK;
     for (q = 0; q < sp->plane; ++q)
         below[q] = !(sp->geom[(t * sp->plane + q) * 4 + 2] > 0.0);
     h.ndf_w = sp->ndf_w;
@@ -53,7 +57,8 @@ static ll_status fit_slice(const ll_tables_spectra *sp, const ll_bsdf *b, size_t
     h.sigma = ll_tables_sigma_at(sp->sigma_w, th);
     h.param[0] = 0.0;
     h.param[1] = th;
-    return ll_tables_horizon_fit(&h, ns, below, 1, one, target, values);
+    h.fresnel_eta = 0.0;
+    return ll_tables_horizon_fit(&h, ns, below, 1, &target, values);
 }
 
 /* One wavelength's values at every node of every slice, into block
