@@ -2,7 +2,7 @@
 BSDF it stands for: eval, pdf, sample and eval_pdf on a wavefront of 2^20 random lanes
 (directions uniform on the sphere for glass, on the upper hemisphere for gold; the smallest of
 three timings after one that compiles the kernel), llvm_ad_rgb. Not part of `make test`; run by
-hand (docs/benchmarks.md, "Transmissive table files"):
+hand (docs/benchmarks.md, "Rendering in Mitsuba 3", its transmissive table files):
 
     python3 python/tests/mitsuba_bsdf_calls.py GOLD_TAB GLASS_TAB [GLASS_TAB ...]
 
