@@ -373,6 +373,22 @@ class TracedTables:
         row = self.values_host[int(index)]
         return [float(row[0]), float(row[1]), float(row[2])]
 
+    def _cell(self, sample):
+        """The cell of the sample grid that holds the point sample of the
+        square (its lower corner's column and row) and the point's place
+        in it (fx, fy in [0, 1])."""
+        nx, ny = self.size
+        px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
+        py = dr.clip(sample.y, 0.0, 1.0) * float(ny - 1)
+        if self.jit:
+            UInt32, Int32 = mi.UInt32, mi.Int32
+            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
+            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
+        else:
+            ox = min(int(px), nx - 2)
+            oy = min(int(py), ny - 2)
+        return ox, oy, px - ox, py - oy
+
     def rgb(self, sample, phi_i, theta_i, active, theta_weights=None):
         """The stored values (R, G, B) at the point sample of the sample
         square for the incident direction (phi_i, theta_i): Mitsuba's
@@ -388,17 +404,7 @@ class TracedTables:
                                          theta_i)
         if self.use_phi:
             jp, wp0, wp1 = self._weights(self.phi_host, self.phi if self.jit else None, phi_i)
-        px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
-        py = dr.clip(sample.y, 0.0, 1.0) * float(ny - 1)
-        if self.jit:
-            UInt32, Int32 = mi.UInt32, mi.Int32
-            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
-            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
-        else:
-            ox = min(int(px), nx - 2)
-            oy = min(int(py), ny - 2)
-        fx = px - ox
-        fy = py - oy
+        ox, oy, fx, fy = self._cell(sample)
         node = oy * nx + ox
         size = nx * ny
 
@@ -427,16 +433,7 @@ class TracedTables:
         if not self.jit and not active:
             return [0.0, 0.0, 0.0]   # (its slice may lie past the last)
         nx, ny = self.size
-        px = dr.clip(sample.x, 0.0, 1.0) * float(nx - 1)
-        py = dr.clip(sample.y, 0.0, 1.0) * float(ny - 1)
-        if self.jit:
-            UInt32, Int32 = mi.UInt32, mi.Int32
-            ox = dr.minimum(UInt32(Int32(px)), nx - 2)
-            oy = dr.minimum(UInt32(Int32(py)), ny - 2)
-        else:
-            ox = min(int(px), nx - 2)
-            oy = min(int(py), ny - 2)
-        fx, fy = px - ox, py - oy
+        ox, oy, fx, fy = self._cell(sample)
         base = j * (nx * ny) + oy * nx + ox
         v00, v10 = self._gather(base, active), self._gather(base + 1, active)
         v01, v11 = self._gather(base + nx, active), self._gather(base + nx + 1, active)
