@@ -65,8 +65,7 @@ static const size_t sample_ladder[] = { 32, 48, 64, 80, 96, 128, 160, 192, 256 }
 /* No grid beyond the larger of the source file's size and SIZE_CAP_FLOOR
  * bytes: where the warp cannot follow a material (a coat over a bright
  * red diffuse base: the plastic example stops at 64 x 96^2 x 96^2, 11.8
- * MB, with its albedo 2.6% off at 85 degrees in the channels the coat
- * carries there), growing further buys little at a cost no renderer
+ * MB, with its albedo 1.7% off), growing further buys little at a cost no renderer
  * wants, and the file says the figures were not met. */
 #define SIZE_CAP_FLOOR 16e6
 
