@@ -270,20 +270,19 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     if ((s = ll_tables_horizon_target(w->b, th, 0, target)) != LL_OK)
         return s;
     if (target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0) {
-        /* The values per channel; the luminance (what sampling follows)
-         * by one fit of its own, to the source's luminance albedo. The
-         * luminance of the per-channel values would make the cells that
-         * cross the horizon steeper where the channels' factors part (a
-         * coat over gold: blue's near LAMBDA_MAX), and a float32 reader's
+        /* The values per channel, and the luminance (what sampling
+         * follows) as a plane of its own in the same fit, to the source's
+         * luminance albedo. The luminance of the per-channel values would
+         * make the cells that cross the horizon steeper where the
+         * channels' factors part (a coat over gold: blue's near
+         * LAMBDA_MAX), and a float32 reader's
          * pdf there moved from the C reader's by 1.4e-4 (the Mitsuba
          * plugin, a viewer at 87 degrees) against 5e-5 with this fit;
          * sampling needs f cos only roughly, and pdf stays exactly the
          * density of what is sampled. */
-        double target_lum = ll_tables_luminance(target);
-        if ((s = ll_tables_horizon_fit(&h, ns, below, 3, target, rgb)) != LL_OK)
-            return s;
-        if (target_lum > 0.0 &&
-            (s = ll_tables_horizon_fit(&h, ns, below, 1, &target_lum, lum)) != LL_OK)
+        double targets[4] = { target[0], target[1], target[2], ll_tables_luminance(target) };
+        float *planes[4] = { rgb, rgb + plane, rgb + 2 * plane, lum };
+        if ((s = ll_tables_horizon_fit(&h, ns, below, 4, targets, planes)) != LL_OK)
             return s;
     }
     floor_slice(w, t, -1.0);

@@ -168,13 +168,14 @@ LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_tables_sour
                                         const ll_bsdf *table, ll_tables_figures *out);
 
 /* The nodes of one slice's sample grid (ns x ns, n_ch planes of values,
- * 1..LL_TABLES_HORIZON_CHANNELS) whose directions are below the horizon
+ * 1..LL_TABLES_HORIZON_CHANNELS, each its own array) whose directions are below the horizon
  * (below[q] != 0) and that touch a node above it: set per channel so that
  * the slice's albedo of that channel is its targets[c]; where a channel is
  * too bright without them, that channel scaled down to it; a channel whose
- * target is 0 keeps its values (bsdf_write_tables_horizon.c). The caller
- * forms the luminance table afterwards. The slice as a reader sees it: */
-#define LL_TABLES_HORIZON_CHANNELS 3
+ * target is 0 keeps its values (bsdf_write_tables_horizon.c). The planes
+ * share the slice's weights, computed once: RGB and the luminance fitted
+ * in one call. The slice as a reader sees it: */
+#define LL_TABLES_HORIZON_CHANNELS 4
 typedef struct ll_tables_horizon {
     const ll_warp2d *ndf_w, *vndf_w; /* D and the visible normals' warp      */
     double sigma;                    /* sigma of the slice's elevation       */
@@ -184,7 +185,7 @@ typedef struct ll_tables_horizon {
 } ll_tables_horizon;
 LL_INTERNAL ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                                             const unsigned char *below, size_t n_ch,
-                                            const double *targets, float *planes);
+                                            const double *targets, float *const *planes);
 /* The reflected albedo per channel of the untextured b at incident
  * elevation theta, seen from below if bottom (ll_bsdf_albedo), into out;
  * 0 if b is a table file, which has none (its slices are then not

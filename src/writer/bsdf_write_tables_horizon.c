@@ -89,7 +89,7 @@ static double bilinear(const float *plane, size_t ns, size_t x, size_t y, double
 
 ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                                 const unsigned char *below, size_t n_ch, const double *targets,
-                                float *planes)
+                                float *const *planes)
 {
     size_t plane = ns * ns, x, y, q, c, n_edge = 0;
     double theta = h->param[1], wi[3] = { sin(theta), 0.0, cos(theta) };
@@ -124,7 +124,7 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                         continue;
                     ++n;
                     for (c = 0; c < n_ch; ++c)
-                        edge[c * plane + y * ns + x] += planes[c * plane + yy * ns + xx];
+                        edge[c * plane + y * ns + x] += planes[c][yy * ns + xx];
                 }
             for (c = 0; n > 0 && c < n_ch; ++c)
                 edge[c * plane + y * ns + x] /= (float)n;
@@ -145,7 +145,7 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                     if (wt == 0.0)
                         continue;
                     for (c = 0; c < n_ch; ++c) {
-                        a0[c] += wt * bilinear(planes + c * plane, ns, x, y, fx, fy);
+                        a0[c] += wt * bilinear(planes[c], ns, x, y, fx, fy);
                         a1[c] += wt * bilinear(edge + c * plane, ns, x, y, fx, fy);
                     }
                 }
@@ -163,7 +163,7 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
     }
     for (c = 0; c < n_ch; ++c)
         for (q = 0; q < plane; ++q) {
-            float *v = &planes[c * plane + q];
+            float *v = &planes[c][q];
             if (below[q])
                 *v = (float)(lambda[c] * (double)edge[c * plane + q]);
             else

@@ -250,9 +250,13 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
 {
     size_t ns = w->ns, plane = ns * ns, q;
     float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
+    float *planes[3];
     double target[3];
     ll_tables_horizon h;
     ll_status s;
+    planes[0] = rgb;
+    planes[1] = rgb + plane;
+    planes[2] = rgb + 2 * plane;
     if ((s = ll_tables_horizon_target(w->b, th, l->bottom, target)) != LL_OK)
         return s;
     if (!(target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0))
@@ -263,7 +267,7 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = l->fresnel_eta;
-    if ((s = ll_tables_horizon_fit(&h, ns, w->next, 3, target, rgb)) != LL_OK)
+    if ((s = ll_tables_horizon_fit(&h, ns, w->next, 3, target, planes)) != LL_OK)
         return s;
     for (q = 0; q < plane; ++q) {
         double v[3] = { rgb[q], rgb[plane + q], rgb[2 * plane + q] };
