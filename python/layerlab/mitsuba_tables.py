@@ -18,7 +18,8 @@ fields): the VNDF and luminance warps normalised, the NDF and sigma tables
 evaluated as stored. Where the file has one incident azimuth the warps take
 the elevation as their only parameter (Mitsuba's take the azimuth too and
 give it the weights 1 and 0 over one slice, the same values with twice the
-memory reads). The values (`rgb`) are interpolated here, all three channels
+memory reads). A stacked table (stack_sets) is read by its own warps
+instead (mitsuba_warp.SliceWarp, D and sigma per set as _StackedGrid). The values (`rgb`) are interpolated here, all three channels
 of a node in one 4-float read (the layout below), with the same arithmetic
 as Mitsuba's interpolation per channel: per corner of the sample's cell
 fma(v0, w0, v1 w1) over the two incident elevations, then bilinear in the
@@ -79,11 +80,12 @@ STACK_SHIFTS = (-3.25, -1.625, 0.0, 1.625)
 def stack_sets(fields, prefixes):
     """The fields of the sets named by prefixes (at most four, each with
     the same grids) as the fields of one table of their slices one after
-    the other: the warps' parameter of the k-th is theta_i +
-    STACK_SHIFTS[k], so that one Mitsuba warp serves every set and a lane
-    reads its own set's slices (two neighbouring slices of one set, never
-    of two); D and sigma become one warp per kind with k as parameter.
-    None if the sets' grids differ."""
+    the other, the k-th set's elevations stored as theta_i +
+    STACK_SHIFTS[k]: a lane reads its own set's slices by index
+    (mitsuba_warp.SliceWarp for the VNDF and luminance, the values by
+    gather; two neighbouring slices of one set, never of two); D and sigma
+    become one grid per kind, [set, y, x]. None if the sets' grids
+    differ."""
     theta = np.asarray(fields["theta_i"], dtype=np.float32)
     if len(prefixes) > len(STACK_SHIFTS):
         return None
