@@ -267,24 +267,15 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = 0.0;
+    h.over_f = 0u;
     if ((s = ll_tables_horizon_target(w->b, th, 0, target)) != LL_OK)
         return s;
-    if (target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0) {
-        /* The values per channel, and the luminance (what sampling
-         * follows) as a plane of its own in the same fit, to the source's
-         * luminance albedo. The luminance of the per-channel values would
-         * make the cells that cross the horizon steeper where the
-         * channels' factors part (a coat over gold: blue's near
-         * LAMBDA_MAX), and a float32 reader's
-         * pdf there moved from the C reader's by 1.4e-4 (the Mitsuba
-         * plugin, a viewer at 87 degrees) against 5e-5 with this fit;
-         * sampling needs f cos only roughly, and pdf stays exactly the
-         * density of what is sampled. */
-        double targets[4] = { target[0], target[1], target[2], ll_tables_luminance(target) };
-        float *planes[4] = { rgb, rgb + plane, rgb + 2 * plane, lum };
-        if ((s = ll_tables_horizon_fit(&h, ns, below, 4, targets, planes)) != LL_OK)
-            return s;
-    }
+    /* The values per channel, and the luminance (what sampling follows)
+     * as a plane of its own in the same fit, to the source's luminance
+     * albedo (ll_tables_horizon_fit_rgb says why). */
+    if ((target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0) &&
+        (s = ll_tables_horizon_fit_rgb(&h, ns, below, target, rgb, lum)) != LL_OK)
+        return s;
     floor_slice(w, t, -1.0);
     return LL_OK;
 }

@@ -180,12 +180,33 @@ typedef struct ll_tables_horizon {
     const ll_warp2d *ndf_w, *vndf_w; /* D and the visible normals' warp      */
     double sigma;                    /* sigma of the slice's elevation       */
     double param[2];                 /* the VNDF warp's parameters: 0, theta */
-    double fresnel_eta;              /* > 0: values stored over F (a set's
-                                        "fresnel_eta"), 0: none             */
+    double fresnel_eta;              /* > 0: the index of F for the planes
+                                        over_f names (a set's "fresnel_eta"),
+                                        0: no plane stored over F           */
+    unsigned over_f;                 /* bit c set: plane c is stored over F
+                                        (a reflected set's RGB, not its
+                                        luminance), read if fresnel_eta > 0 */
 } ll_tables_horizon;
 LL_INTERNAL ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                                             const unsigned char *below, size_t n_ch,
                                             const double *targets, float *const *planes);
+/* The fit above of a slice of an RGB table, the one both the opaque and
+ * the transmissive writer make: R, G and B (rgb, three planes) to
+ * target per channel, and the luminance (lum, what sampling follows) as a
+ * plane of its own to the luminance of target (bsdf_write_tables_horizon.c
+ * says why); with h->fresnel_eta > 0 the RGB planes are stored over F and
+ * the luminance is not (h->over_f is not read). */
+LL_INTERNAL ll_status ll_tables_horizon_fit_rgb(const ll_tables_horizon *h, size_t ns,
+                                                const unsigned char *below,
+                                                const double target[3], float *rgb,
+                                                float *lum);
+/* The slice's albedo of one stored plane (ns x ns) as the fit integrates
+ * it: stored value times the square's area element in f cos d omega,
+ * times F if over_f and h->fresnel_eta > 0; below as for the fit (which
+ * cells cross the horizon). What a test holds a written slice to. */
+LL_INTERNAL double ll_tables_horizon_albedo(const ll_tables_horizon *h, size_t ns,
+                                            const unsigned char *below, const float *plane,
+                                            int over_f);
 /* The reflected albedo per channel of the untextured b at incident
  * elevation theta, seen from below if bottom (ll_bsdf_albedo), into out;
  * 0 if b is a table file, which has none (its slices are then not

@@ -31,15 +31,17 @@
  * channel's albedo there, which one factor for all channels from the
  * luminance did not (tests/test_tables_horizon.c holds both cases). The
  * luminance table (what sampling follows) is fitted alike as one plane to
- * the source's luminance albedo (bsdf_write_tables.c says why): sampling
+ * the source's luminance albedo (ll_tables_horizon_fit_rgb says why): sampling
  * follows the stored values, but for the horizon's cells of a coloured
  * lobe not node for node. A spectral file is fitted the same
  * way per wavelength (its plane is that wavelength's file), so it follows
  * its source per wavelength as the RGB file does per channel; the
  * luminance of the RGB file and a spectral file's plane of the same
  * source agree node for node only for a grey source. The reflected sets
- * of a transmissive file are fitted alike, to their side's reflected
- * albedo, a set stored over F weighed with it (bsdf_write_tables_lobes.c).
+ * of a transmissive file are fitted alike (ll_tables_horizon_fit_rgb
+ * serves both writers), to their side's reflected albedo: the RGB of a
+ * set stored over F weighed with it, its luminance, f cos itself, not
+ * (bsdf_write_tables_lobes.c).
  * A table source (no order-0 series to take the albedo from) is left as
  * it is.
  */
@@ -66,18 +68,22 @@
  * u_theta sin(theta_m) / (sigma pdf), D, sigma and the density pdf of the
  * visible normals as a reader interpolates them (ideally the same for all
  * points, the jacobian's purpose; it is not quite, by the bilinear VNDF
- * table), times F of the pair for a set stored over it. */
-static double weight(const ll_tables_horizon *h, const double wi[3], const double sq[2])
+ * table). *fresnel receives F of the pair (1 without fresnel_eta), the
+ * further factor of a plane stored over it. */
+static double weight(const ll_tables_horizon *h, const double wi[3], const double sq[2],
+                     double *fresnel)
 {
-    double um[2], pdf, tm, m[3], wo[3], d, fresnel;
+    double um[2], pdf, tm, m[3], wo[3], d;
+    *fresnel = 1.0;
     ll_warp2d_sample(h->vndf_w, sq, h->param, um, &pdf);
     d = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
     if (!(wo[2] > 0.0) || !(pdf > 0.0))
         return 0.0;
-    /* A set stored over F: the reader multiplies F back. */
-    fresnel = h->fresnel_eta > 0.0 ? ll_tables_fresnel_pair(wi, wo, h->fresnel_eta) : 1.0;
+    /* A plane stored over F: the reader multiplies F back. */
+    if (h->fresnel_eta > 0.0)
+        *fresnel = ll_tables_fresnel_pair(wi, wo, h->fresnel_eta);
     return ll_warp2d_eval(h->ndf_w, um, NULL) * d * 2.0 * LL_PI * LL_PI * um[0] * sin(tm) /
-           (h->sigma * pdf) * fresnel;
+           (h->sigma * pdf);
 }
 
 /* The bilinear value of plane (ns x ns) in cell (x, y) at (fx, fy). */
@@ -87,15 +93,49 @@ static double bilinear(const float *plane, size_t ns, size_t x, size_t y, double
     return (1.0 - fy) * ((1.0 - fx) * p[0] + fx * p[1]) + fy * ((1.0 - fx) * p[ns] + fx * p[ns + 1]);
 }
 
+/* Per plane c, the slice's albedo of the values as stored (a0[c]) and,
+ * if edge is given (n_ch planes after one another), of the edge's values
+ * (a1[c]). A plane is weighed with F where over_f names it: a reflected
+ * set's RGB is stored over F, its luminance (what sampling follows, f
+ * cos itself) is not, and a fit of the luminance weighed with F would
+ * miss its target by F's mean over the slice. */
+static void sums(const ll_tables_horizon *h, size_t ns, const unsigned char *below, size_t n_ch,
+                 const float *const *planes, const float *edge, double *a0, double *a1)
+{
+    size_t plane = ns * ns, x, y, c;
+    double theta = h->param[1], wi[3] = { sin(theta), 0.0, cos(theta) };
+    double cell = 1.0 / ((double)(ns - 1) * (double)(ns - 1));
+    for (y = 0; y + 1 < ns; ++y)
+        for (x = 0; x + 1 < ns; ++x) {
+            size_t at = y * ns + x;
+            int crossing = below[at] || below[at + 1] || below[at + ns] || below[at + ns + 1];
+            int i, j, sub = crossing ? SUB : 1;
+            for (j = 0; j < sub; ++j)
+                for (i = 0; i < sub; ++i) {
+                    double fx = (i + 0.5) / sub, fy = (j + 0.5) / sub, fresnel;
+                    double sq[2] = { ((double)x + fx) / (double)(ns - 1),
+                                     ((double)y + fy) / (double)(ns - 1) };
+                    double base = weight(h, wi, sq, &fresnel);
+                    if (base == 0.0)
+                        continue;
+                    for (c = 0; c < n_ch; ++c) {
+                        double wt = cell / (sub * sub) *
+                                    ((h->over_f >> c) & 1u ? base * fresnel : base);
+                        a0[c] += wt * bilinear(planes[c], ns, x, y, fx, fy);
+                        if (edge)
+                            a1[c] += wt * bilinear(edge + c * plane, ns, x, y, fx, fy);
+                    }
+                }
+        }
+}
+
 ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
                                 const unsigned char *below, size_t n_ch, const double *targets,
                                 float *const *planes)
 {
     size_t plane = ns * ns, x, y, q, c, n_edge = 0;
-    double theta = h->param[1], wi[3] = { sin(theta), 0.0, cos(theta) };
     double a0[LL_TABLES_HORIZON_CHANNELS], a1[LL_TABLES_HORIZON_CHANNELS];
     double lambda[LL_TABLES_HORIZON_CHANNELS], gain[LL_TABLES_HORIZON_CHANNELS];
-    double cell = 1.0 / ((double)(ns - 1) * (double)(ns - 1));
     float *edge;
     if (n_ch == 0 || n_ch > LL_TABLES_HORIZON_CHANNELS)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, "ll_tables_horizon_fit: %zu channels (1..%d)",
@@ -131,25 +171,7 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
         }
     /* Per channel, the slice's albedo as stored (a0) and per unit of
      * lambda (a1). */
-    for (y = 0; y + 1 < ns; ++y)
-        for (x = 0; x + 1 < ns; ++x) {
-            size_t at = y * ns + x;
-            int crossing = below[at] || below[at + 1] || below[at + ns] || below[at + ns + 1];
-            int i, j, sub = crossing ? SUB : 1;
-            for (j = 0; j < sub; ++j)
-                for (i = 0; i < sub; ++i) {
-                    double fx = (i + 0.5) / sub, fy = (j + 0.5) / sub;
-                    double sq[2] = { ((double)x + fx) / (double)(ns - 1),
-                                     ((double)y + fy) / (double)(ns - 1) };
-                    double wt = cell / (sub * sub) * weight(h, wi, sq);
-                    if (wt == 0.0)
-                        continue;
-                    for (c = 0; c < n_ch; ++c) {
-                        a0[c] += wt * bilinear(planes[c], ns, x, y, fx, fy);
-                        a1[c] += wt * bilinear(edge + c * plane, ns, x, y, fx, fy);
-                    }
-                }
-        }
+    sums(h, ns, below, n_ch, (const float *const *)planes, edge, a0, a1);
     for (c = 0; c < n_ch; ++c) {
         double target = targets[c];
         if (!(target > 0.0))
@@ -171,6 +193,46 @@ ll_status ll_tables_horizon_fit(const ll_tables_horizon *h, size_t ns,
         }
     ll_free(edge);
     return LL_OK;
+}
+
+ll_status ll_tables_horizon_fit_rgb(const ll_tables_horizon *h, size_t ns,
+                                    const unsigned char *below, const double target[3],
+                                    float *rgb, float *lum)
+{
+    /* The luminance as a plane of its own, to the source's luminance
+     * albedo: the luminance of the per-channel fitted values would make
+     * the cells that cross the horizon steeper where the channels'
+     * factors part (a coat over gold: blue's near LAMBDA_MAX), and a
+     * float32 reader's pdf there left the C reader's by 1.4e-4 (the
+     * Mitsuba plugin, a viewer at 87 degrees) against 5e-5 with this fit.
+     * Sampling needs f cos only roughly, and pdf stays exactly the
+     * density of what is sampled. A reflected set stores its RGB over F
+     * (bsdf_write_tables_lobes.c) but its luminance as f cos itself, so
+     * only the RGB planes are weighed with F. */
+    ll_tables_horizon fit = *h;
+    double targets[4];
+    float *planes[4];
+    size_t plane = ns * ns;
+    targets[0] = target[0];
+    targets[1] = target[1];
+    targets[2] = target[2];
+    targets[3] = ll_tables_luminance(target);
+    planes[0] = rgb;
+    planes[1] = rgb + plane;
+    planes[2] = rgb + 2 * plane;
+    planes[3] = lum;
+    fit.over_f = 7u; /* R, G and B */
+    return ll_tables_horizon_fit(&fit, ns, below, 4, targets, planes);
+}
+
+double ll_tables_horizon_albedo(const ll_tables_horizon *h, size_t ns, const unsigned char *below,
+                                const float *plane, int over_f)
+{
+    ll_tables_horizon one = *h;
+    double a0 = 0.0;
+    one.over_f = over_f ? 1u : 0u;
+    sums(&one, ns, below, 1, &plane, NULL, &a0, NULL);
+    return a0;
 }
 
 ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom, double out[3])

@@ -64,7 +64,6 @@ typedef struct writer {
     double *theta_d;
     unsigned char *valid, *next;            /* [ns * ns]: extend_slice's,
                                                next also fit_slice's below    */
-    double *fresnel;                        /* [ns * ns]: F of a node's pair  */
     lobe l[LOBES];
 } writer;
 
@@ -92,8 +91,7 @@ static ll_status allocate(writer *w)
     w->theta_d = ll_alloc_array(w->n_ti, sizeof(double));
     w->valid = ll_alloc_array(w->ns, w->ns);
     w->next = ll_alloc_array(w->ns, w->ns);
-    w->fresnel = ll_alloc_array(w->ns * w->ns, sizeof(double));
-    if (!w->theta_i || !w->theta_d || !w->valid || !w->next || !w->fresnel)
+    if (!w->theta_i || !w->theta_d || !w->valid || !w->next)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, FN ": out of memory (tables)");
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w->l[k];
@@ -116,7 +114,6 @@ static void release(writer *w)
     ll_free(w->theta_d);
     ll_free(w->valid);
     ll_free(w->next);
-    ll_free(w->fresnel);
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w->l[k];
         ll_free(l->ndf);
@@ -244,19 +241,21 @@ static void extend_slice(const writer *w, float *rgb)
  * fitted per channel to the side's reflected albedo at the slice's
  * elevation as the opaque writer's are: without them the cells that cross
  * the horizon pull a grazing viewer's lobe down (rough glass seen from
- * above at 85 degrees, 32 x 64^2: 0.79% low). Then the luminance of the
- * values as fitted, F multiplied back where they are stored over it. */
+ * above at 85 degrees, 32 x 64^2: 0.79% low). The luminance is fitted as
+ * a plane of its own to the side's luminance albedo, by the opaque
+ * writer's code (ll_tables_horizon_fit_rgb says why). The RGB of a set
+ * stored over F is weighed with F there; its luminance, f cos itself, is
+ * not: formed from the fitted values times F, as it was, its albedo as
+ * stored was up to 3.6% short of the source's luminance albedo (a coat
+ * over a coloured medium seen from below, tests/test_tables_horizon.c),
+ * as the luminance interpolated between nodes is not the interpolated
+ * values times F. */
 static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
 {
-    size_t ns = w->ns, plane = ns * ns, q;
-    float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
-    float *planes[3];
+    size_t plane = w->ns * w->ns;
     double target[3];
     ll_tables_horizon h;
     ll_status s;
-    planes[0] = rgb;
-    planes[1] = rgb + plane;
-    planes[2] = rgb + 2 * plane;
     if ((s = ll_tables_horizon_target(w->b, th, l->bottom, target)) != LL_OK)
         return s;
     if (!(target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0))
@@ -267,13 +266,9 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = l->fresnel_eta;
-    if ((s = ll_tables_horizon_fit(&h, ns, w->next, 3, target, planes)) != LL_OK)
-        return s;
-    for (q = 0; q < plane; ++q) {
-        double v[3] = { rgb[q], rgb[plane + q], rgb[2 * plane + q] };
-        lum[q] = (float)(ll_tables_luminance(v) * w->fresnel[q]);
-    }
-    return LL_OK;
+    h.over_f = 0u; /* set by the fit of RGB and luminance */
+    return ll_tables_horizon_fit_rgb(&h, w->ns, w->next, target, l->rgb + t * 3 * plane,
+                                     l->lum + t * plane);
 }
 
 /* The values and luminance of slice t at the sample grid's nodes. */
@@ -294,23 +289,13 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
             reached = wi[2] > 0.0 && direction(l, wi, um, wo, &sampling);
             w->next[y * ns + x] = !reached;
-            w->fresnel[y * ns + x] = 1.0;
-            if (!reached && !l->transmit && l->fresnel_eta > 0.0) {
-                /* F of the pair beyond the horizon, for the luminance of
-                 * a value fit_slice puts there. */
-                double tm, m[3];
-                (void)ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
-                w->fresnel[y * ns + x] = ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
-            }
             if (reached) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
                 scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
                 if (!ll_is_finite(scale))
                     scale = 0.0;
-                if (l->fresnel_eta > 0.0) {
-                    w->fresnel[y * ns + x] = ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
-                    over = 1.0 / w->fresnel[y * ns + x];
-                }
+                if (l->fresnel_eta > 0.0)
+                    over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
                 if (l->transmittance_eta > 0.0) {
                     double tr = ll_tables_transmittance_pair(wi, wo, l->transmittance_eta);
                     over = tr > 0.0 ? 1.0 / tr : 0.0;

@@ -58,6 +58,7 @@ static ll_status fit_slice(const ll_tables_spectra *sp, const ll_bsdf *b, size_t
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = 0.0;
+    h.over_f = 0u;
     return ll_tables_horizon_fit(&h, ns, below, 1, &target, &values);
 }
 
