@@ -97,8 +97,7 @@ static double bilinear(const float *plane, size_t ns, size_t x, size_t y, double
  * if edge is given (n_ch planes after one another), of the edge's values
  * (a1[c]). A plane is weighed with F where over_f names it: a reflected
  * set's RGB is stored over F, its luminance (what sampling follows, f
- * cos itself) is not, and a fit of the luminance weighed with F would
- * miss its target by F's mean over the slice. */
+ * cos itself) is not: weighed with F, its F would count twice. */
 static void sums(const ll_tables_horizon *h, size_t ns, const unsigned char *below, size_t n_ch,
                  const float *const *planes, const float *edge, double *a0, double *a1)
 {
