@@ -2,13 +2,12 @@
  * The plan of one pair of zenith cosines of a rough interface: the
  * exponent A + B cos phi of its peak, whether and how far the lobe is
  * widened, its window of azimuths and the branch points of g there (which
- * decide between the Chebyshev maps and the Filon path), and g itself at
- * given azimuths (the Fresnel factor, shadowing and the Jacobian;
+ * decide between the Chebyshev maps and the Filon path), and the factors
+ * of g that do not depend on the azimuth (g itself: microfacet_profile.c;
  * microfacet_series.c describes the method).
  */
 #include "words/microfacet_pair.h"
 
-#include "words/fresnel.h"
 #include "numerics/series.h"
 
 #include <math.h>
@@ -192,50 +191,4 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
     if (!p->reflect)
         p->scale *= p->eta * p->eta;
     return 1;
-}
-
-/* g at the azimuths with the given cosines into g, and g with F = 1 into
- * no_fresnel (either may be NULL). With t = wi . wo and unnormalised H:
- *   reflection:   |H|^2 = 2 (1 + t),  wi.H = 1 + t,
- *                 g = F D G / (4 |mu_i mu_o|) = scale F (1 + t)^2
- *   refraction:   |H|^2 = 1 + eta^2 + 2 eta t,  wi.H = 1 + eta t,
- *                 wo.H = t + eta, and the Jacobian's
- *                 (wi.H)(wo.H) / (wi.H + eta wo.H)^2 = (wi.H)(wo.H)/|H|^4,
- *                 g = scale (1 - F) |(1 + eta t)(t + eta)|
- *                 where both directions see the front of the facet. */
-void ll_microfacet_sample_profile(const ll_microfacet_model *mf, const pair_plan *p,
-                                  const double *cos_phi, size_t count, double *g,
-                                  double *no_fresnel)
-{
-    size_t k;
-    double eta = p->eta, s = p->sign_h;
-    for (k = 0; k < count; ++k) {
-        double t = -p->sin_prod * cos_phi[k] - p->mu_prod, value, f, unused;
-        if (p->reflect) {
-            double one_t = fmax(0.0, 1.0 + t);
-            double cos_h = s * sqrt(fmin(1.0, 0.5 * one_t)); /* wi . m */
-            f = mf->conductor ? ll_fresnel_conductor_kernel(fabs(cos_h), mf->eta_re, mf->eta_im)
-                              : ll_fresnel_dielectric_kernel(cos_h, mf->eta_re, &unused);
-            value = p->scale * one_t * one_t;
-            if (g)
-                g[k] = f * value;
-        } else {
-            double wi_h = 1.0 + eta * t, wo_h = t + eta;
-            double len2 = fmax(1e-300, 1.0 + eta * eta + 2.0 * eta * t);
-            /* Both sides: v.m cos(theta_v) > 0 (wi.z = -mu_i, wo.z = mu_o). */
-            if (s * wi_h * -p->mu_i > 0.0 && s * wo_h * p->mu_o > 0.0) {
-                double cos_h = fmax(-1.0, fmin(1.0, s * wi_h / sqrt(len2)));
-                f = ll_fresnel_dielectric_kernel(cos_h, mf->eta_re, &unused);
-                value = p->scale * fabs(wi_h * wo_h);
-                if (g)
-                    g[k] = (1.0 - f) * value;
-            } else {
-                value = 0.0;
-                if (g)
-                    g[k] = 0.0;
-            }
-        }
-        if (no_fresnel)
-            no_fresnel[k] = value;
-    }
 }
