@@ -17,6 +17,8 @@
 #define GRID_B0 (1.0 / 16.0)  /* below this B, B_k = 0 (k = 0)                 */
 #define NEAR_SINGULAR 0.1     /* a branch point of g within this fraction of
                                * the window from it spoils the Chebyshev form  */
+#define NEGLIGIBLE_LOG -23.1  /* below ln(NEGLIGIBLE) = -23.03 by more than
+                               * exp's rounding                                */
 
 double ll_microfacet_smith_g1(double tan_theta, double alpha)
 {
@@ -163,9 +165,20 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
         return 0;
     if (mf->ggx)
         return ll_microfacet_plan_ggx(mf, p, b_limit, mu_i, si, so, h_z);
-    /* The series' first term i0e(B) e^(A + B), with i0e <= 1. */
+    /* The series' first term i0e(B) e^(A + B), with i0e <= 1. Most of a
+     * layer's pairs lie far outside the lobe, where A + B alone rules
+     * them out: below NEGLIGIBLE_LOG, e^(A + B) < NEGLIGIBLE whatever
+     * exp's rounding, so the test below would fail too. And where
+     * e^(A + B) / (2 sqrt(1 + 2 pi B)) reaches NEGLIGIBLE, so does
+     * e^(A + B) i0e(B), as i0e(B) >= 1 / sqrt(1 + 2 pi B) for every B >= 0
+     * (equal at B = 0; i0e ~ (2 pi B)^-1/2 (1 + 1 / (8 B)) for large B),
+     * so i0e's series is summed only for the pairs in between. */
+    if (!(p->a_plus_b >= NEGLIGIBLE_LOG))
+        return 0;
     e0 = exp(p->a_plus_b);
-    if (!(e0 >= NEGLIGIBLE) || !(e0 * ll_bessel_i0e(p->b) >= NEGLIGIBLE))
+    if (!(e0 >= NEGLIGIBLE) ||
+        (!(e0 * (0.5 / sqrt(1.0 + 2.0 * LL_PI * p->b)) >= NEGLIGIBLE) &&
+         !(e0 * ll_bessel_i0e(p->b) >= NEGLIGIBLE)))
         return 0;
     p->widened = p->b > b_limit;
     if (p->widened) {
@@ -174,7 +187,9 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
          * of the whole lobe, g included). */
         p->a_plus_b += log(ll_bessel_i0e(p->b) / ll_bessel_i0e(b_limit));
         p->b = b_limit;
+        e0 = exp(p->a_plus_b);
     }
+    p->peak = e0;
     p->grid = ll_microfacet_grid_index(p->b);
     if (!ll_microfacet_classify_window(mf, p))
         return 0;

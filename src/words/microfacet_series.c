@@ -94,7 +94,7 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     /* g times the part of exp(-B v) that the grid point leaves out. */
     ll_microfacet_sample_profile(mf, p, e->cos_phi, CHEB, g, g_ref);
     rest = (p->b - e->b) * e->delta;
-    peak = exp(p->a_plus_b);
+    peak = p->peak;
     for (i = 0; i < CHEB; ++i) {
         double factor = peak * exp(-rest * e->u[i]);
         g[i] *= factor;
