@@ -77,9 +77,13 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     if (mf->ggx && p->reflect && p->split > 0.0)
         return ll_microfacet_ggx_tir_series(mf, p, max_len, out, n_out, ref0, scratch);
     if (p->filon) {
-        len = (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
-                       : ll_expcos_length(p->b, TAIL_GOAL)) +
-              FILON_EXTRA;
+        /* (At most FILON_EXTRA orders, as for the order 0 of a probe or a
+         * widened lobe, need not ask the peak's length: len exceeds it.) */
+        len = max_len <= FILON_EXTRA
+                  ? max_len
+                  : (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
+                             : ll_expcos_length(p->b, TAIL_GOAL)) +
+                        FILON_EXTRA;
         *n_out = len < max_len ? len : max_len;
         if (ref0) /* order 0 of the reference, by the same rule */
             ll_microfacet_filon_series(mf, p, 1, 1, ref0, scratch);
