@@ -33,12 +33,28 @@ double ll_microfacet_grid_b(size_t k)
     return k == 0 ? 0.0 : GRID_B0 * exp2((double)(k - 1) / GRID_PER_OCTAVE);
 }
 
-/* The grid point at or below b. */
+/* The grid point at or below b. Every pair asks (twice: the maps it
+ * needs, then its series), and log2 and exp2 were 7% of the resolution
+ * search's compensation albedos; so where b lies well inside a grid
+ * interval (1e-9 of it from either end, where the floor of
+ * 4 (log2(b) + 4), off from b's own by about 1e-12 at most, cannot
+ * differ), the interval is read from b's exponent and mantissa
+ * instead, giving the same index. */
 size_t ll_microfacet_grid_index(double b)
 {
+    /* 2^(j / 4), j = 0 .. 4 (only 1e-9 of accuracy matters) */
+    static const double quarter[5] = { 1.0, 1.189207115002721, 1.4142135623730951,
+                                       1.6817928305074290, 2.0 };
     size_t k;
+    int e, j;
+    double r;
     if (b < GRID_B0)
         return 0;
+    r = 2.0 * frexp(b, &e); /* b = r 2^(e - 1), 1 <= r < 2 (not NaN or inf) */
+    j = r >= quarter[2] ? (r >= quarter[3] ? 3 : 2) : (r >= quarter[1] ? 1 : 0);
+    if (r > quarter[j] * (1.0 + 1e-9) && r < quarter[j + 1] * (1.0 - 1e-9))
+        /* (log2(GRID_B0) = -4, and b >= GRID_B0: e - 1 >= -4) */
+        return (size_t)(GRID_PER_OCTAVE * (e - 1 + 4)) + (size_t)j + 1;
     k = (size_t)floor(GRID_PER_OCTAVE * (log2(b) - log2(GRID_B0))) + 1;
     while (k > 1 && ll_microfacet_grid_b(k) > b) /* guard the rounding of log2 */
         --k;
