@@ -161,8 +161,12 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
     p->eta = (-mu_i > 0.0 || mf->conductor) ? mf->eta_re : 1.0 / mf->eta_re;
     p->mu_i = mu_i;
     p->mu_o = mu_o;
-    si = sqrt(fmax(0.0, (1.0 - mu_i) * (1.0 + mu_i)));
-    so = sqrt(fmax(0.0, (1.0 - mu_o) * (1.0 + mu_o)));
+    /* (max(0, x) without fmax's library call: x is never -0 nor NaN here,
+     * so the comparison gives fmax's double) */
+    si = (1.0 - mu_i) * (1.0 + mu_i);
+    so = (1.0 - mu_o) * (1.0 + mu_o);
+    si = sqrt(si > 0.0 ? si : 0.0);
+    so = sqrt(so > 0.0 ? so : 0.0);
     p->sin_prod = si * so;
     p->mu_prod = mu_i * mu_o;
 
