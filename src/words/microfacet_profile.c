@@ -99,23 +99,50 @@ static inline __m128d dielectric_fresnel2(__m128d cos_i, __m128d eta, __m128d in
     return SELECT2(_mm_cmple_pd(cos_t2, zero), one, f);
 }
 
-/* The samples of reflect_profile from a dielectric (eta != 1) two at a
- * time; returns the samples done (count rounded down to even). */
-static size_t reflect_dielectric_sse2(const pair_plan *p, double eta, double inv_eta,
-                                      const double *cos_phi, size_t count, double *g,
-                                      double *no_fresnel)
+/* ll_fresnel_conductor_kernel two at a time, the same operations; a2 and
+ * b4 its per-pair eta_re^2 - eta_im^2 and 4 eta_im^2 eta_re^2 (fmax(0,
+ * x) is 0 for the x < 0 that rounding may give, and x is never -0). */
+static inline __m128d conductor_fresnel2(__m128d cos_i, __m128d a2, __m128d b4)
+{
+    __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);
+    __m128d c2 = _mm_mul_pd(cos_i, cos_i), s2 = _mm_sub_pd(one, c2), s4 = _mm_mul_pd(s2, s2);
+    __m128d t1 = _mm_sub_pd(a2, s2);
+    __m128d a2pb2 = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(t1, t1), b4));
+    __m128d a = _mm_sqrt_pd(POSITIVE2(_mm_mul_pd(half, _mm_add_pd(a2pb2, t1))));
+    __m128d term1 = _mm_add_pd(a2pb2, c2);
+    __m128d term2 = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), a), cos_i);
+    __m128d rs2 = _mm_div_pd(_mm_sub_pd(term1, term2), _mm_add_pd(term1, term2));
+    __m128d term3 = _mm_add_pd(_mm_mul_pd(a2pb2, c2), s4), term4 = _mm_mul_pd(term2, s2);
+    __m128d rp2 =
+        _mm_div_pd(_mm_mul_pd(rs2, _mm_sub_pd(term3, term4)), _mm_add_pd(term3, term4));
+    return _mm_mul_pd(half, _mm_add_pd(rp2, rs2));
+}
+
+/* The per-pair constants of the reflection loops: a dielectric's eta and
+ * 1 / eta (eta != 1), or a conductor's a2 and b4 (conductor_fresnel2). */
+typedef struct reflect_constants {
+    int conductor;
+    double c0, c1;
+} reflect_constants;
+
+/* The samples of reflect_profile with the Fresnel factor two at a time;
+ * returns the samples done (count rounded down to even). */
+static size_t reflect_sse2(const pair_plan *p, const reflect_constants *rc,
+                           const double *cos_phi, size_t count, double *g, double *no_fresnel)
 {
     __m128d neg_sin = _mm_set1_pd(-p->sin_prod), mu_prod = _mm_set1_pd(p->mu_prod);
     __m128d s = _mm_set1_pd(p->sign_h), scale = _mm_set1_pd(p->scale);
     __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);
-    __m128d e = _mm_set1_pd(eta), inv_e = _mm_set1_pd(inv_eta);
+    __m128d c0 = _mm_set1_pd(rc->c0), c1 = _mm_set1_pd(rc->c1);
     size_t k;
     for (k = 0; k + 2 <= count; k += 2) {
         __m128d t = _mm_sub_pd(_mm_mul_pd(neg_sin, _mm_loadu_pd(cos_phi + k)), mu_prod);
         __m128d one_t = POSITIVE2(_mm_add_pd(one, t));
         __m128d cos_h = _mm_mul_pd(s, _mm_sqrt_pd(BELOW2(_mm_mul_pd(half, one_t), one)));
         __m128d value = _mm_mul_pd(_mm_mul_pd(scale, one_t), one_t);
-        _mm_storeu_pd(g + k, _mm_mul_pd(dielectric_fresnel2(cos_h, e, inv_e), value));
+        __m128d f = rc->conductor ? conductor_fresnel2(ABS2(cos_h), c0, c1)
+                                  : dielectric_fresnel2(cos_h, c0, c1);
+        _mm_storeu_pd(g + k, _mm_mul_pd(f, value));
         if (no_fresnel)
             _mm_storeu_pd(no_fresnel + k, value);
     }
@@ -190,14 +217,32 @@ dielectric_fresnel4(__m256d cos_i, __m256d eta, __m256d inv_eta)
     return SELECT4(_mm256_cmp_pd(cos_t2, zero, _CMP_LE_OQ), one, f);
 }
 
+__attribute__((target("avx"))) static inline __m256d
+conductor_fresnel4(__m256d cos_i, __m256d a2, __m256d b4)
+{
+    __m256d one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
+    __m256d c2 = _mm256_mul_pd(cos_i, cos_i), s2 = _mm256_sub_pd(one, c2);
+    __m256d s4 = _mm256_mul_pd(s2, s2), t1 = _mm256_sub_pd(a2, s2);
+    __m256d a2pb2 = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(t1, t1), b4));
+    __m256d a = _mm256_sqrt_pd(POSITIVE4(_mm256_mul_pd(half, _mm256_add_pd(a2pb2, t1))));
+    __m256d term1 = _mm256_add_pd(a2pb2, c2);
+    __m256d term2 = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), a), cos_i);
+    __m256d rs2 = _mm256_div_pd(_mm256_sub_pd(term1, term2), _mm256_add_pd(term1, term2));
+    __m256d term3 = _mm256_add_pd(_mm256_mul_pd(a2pb2, c2), s4);
+    __m256d term4 = _mm256_mul_pd(term2, s2);
+    __m256d rp2 = _mm256_div_pd(_mm256_mul_pd(rs2, _mm256_sub_pd(term3, term4)),
+                                _mm256_add_pd(term3, term4));
+    return _mm256_mul_pd(half, _mm256_add_pd(rp2, rs2));
+}
+
 __attribute__((target("avx"))) static size_t
-reflect_dielectric_avx(const pair_plan *p, double eta, double inv_eta, const double *cos_phi,
-                       size_t count, double *g, double *no_fresnel)
+reflect_avx(const pair_plan *p, const reflect_constants *rc, const double *cos_phi, size_t count,
+            double *g, double *no_fresnel)
 {
     __m256d neg_sin = _mm256_set1_pd(-p->sin_prod), mu_prod = _mm256_set1_pd(p->mu_prod);
     __m256d s = _mm256_set1_pd(p->sign_h), scale = _mm256_set1_pd(p->scale);
     __m256d one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
-    __m256d e = _mm256_set1_pd(eta), inv_e = _mm256_set1_pd(inv_eta);
+    __m256d c0 = _mm256_set1_pd(rc->c0), c1 = _mm256_set1_pd(rc->c1);
     size_t k;
     for (k = 0; k + 4 <= count; k += 4) {
         __m256d t =
@@ -206,7 +251,9 @@ reflect_dielectric_avx(const pair_plan *p, double eta, double inv_eta, const dou
         __m256d cos_h =
             _mm256_mul_pd(s, _mm256_sqrt_pd(BELOW4(_mm256_mul_pd(half, one_t), one)));
         __m256d value = _mm256_mul_pd(_mm256_mul_pd(scale, one_t), one_t);
-        _mm256_storeu_pd(g + k, _mm256_mul_pd(dielectric_fresnel4(cos_h, e, inv_e), value));
+        __m256d f = rc->conductor ? conductor_fresnel4(ABS4(cos_h), c0, c1)
+                                  : dielectric_fresnel4(cos_h, c0, c1);
+        _mm256_storeu_pd(g + k, _mm256_mul_pd(f, value));
         if (no_fresnel)
             _mm256_storeu_pd(no_fresnel + k, value);
     }
@@ -266,14 +313,21 @@ static void reflect_profile(const ll_microfacet_model *mf, const pair_plan *p,
         return;
     }
     k = 0;
-#if PROFILE_HAVE_AVX
-    if (!mf->conductor && eta != 1.0 && have_avx())
-        k = reflect_dielectric_avx(p, eta, inv_eta, cos_phi, count, g, no_fresnel);
-#endif
 #if defined(__SSE2__)
-    if (!mf->conductor && eta != 1.0)
-        k += reflect_dielectric_sse2(p, eta, inv_eta, cos_phi + k, count - k, g + k,
-                                     no_fresnel ? no_fresnel + k : NULL);
+    if (mf->conductor || eta != 1.0) {
+        reflect_constants rc;
+        rc.conductor = mf->conductor;
+        /* (as the kernels form them: eta_re^2 - eta_im^2 - s2 and
+         * 4 eta_im^2 eta_re^2 left to right) */
+        rc.c0 = mf->conductor ? eta * eta - eta_im * eta_im : eta;
+        rc.c1 = mf->conductor ? 4.0 * eta_im * eta_im * eta * eta : inv_eta;
+#if PROFILE_HAVE_AVX
+        if (have_avx())
+            k = reflect_avx(p, &rc, cos_phi, count, g, no_fresnel);
+#endif
+        k += reflect_sse2(p, &rc, cos_phi + k, count - k, g + k,
+                          no_fresnel ? no_fresnel + k : NULL);
+    }
 #endif
     for (; k < count; ++k) {
         double t = neg_sin * cos_phi[k] - mu_prod, one_t = clamp_below(0.0, 1.0 + t);
