@@ -114,11 +114,14 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
             g_ref[i] *= factor;
     }
     *n_out = e->len < max_len ? e->len : max_len;
-    memset(out, 0, *n_out * sizeof(double));
-    for (i = 0; i < CHEB; ++i) {
-        const double *column = e->matrix + i * e->len;
-        for (l = 0; l < *n_out; ++l)
-            out[l] += g[i] * column[l];
+    /* Each order summed over the points in a register, in the points'
+     * order (through out, which may alias nothing the compiler can rule
+     * out, every term was a store and a load). */
+    for (l = 0; l < *n_out; ++l) {
+        double sum = 0.0;
+        for (i = 0; i < CHEB; ++i)
+            sum += g[i] * e->matrix[i * e->len + l];
+        out[l] = sum;
     }
     if (g_ref) {
         double sum = 0.0;
