@@ -158,8 +158,9 @@ static ll_status add_missing(ll_microfacet_model *mf, const albedo_job *job, siz
 /* Prepare the maps of the tables' pairs that the first pass left NaN
  * (after the first node counts of a search, few: the maps are the
  * model's, kept from one count to the next), in batches; *any: whether
- * there were such pairs (then retry the tables). Planning only these, instead of every pair
- * before the tables, leaves each pair one plan, not two. */
+ * there were such pairs (then the tables are retried). Planning only
+ * these, instead of every pair before the tables, leaves each pair one
+ * plan, not two. */
 static ll_status collect_missing(ll_microfacet_model *mf, const albedo_job *job, int *any)
 {
     size_t n = job->n, h = n / 2, col, i, j, count = 0;
@@ -173,6 +174,8 @@ static ll_status collect_missing(ll_microfacet_model *mf, const albedo_job *job,
         j = col < h ? col : col - h;
         if (job->conductor && col < h)
             continue; /* (no table: opaque from below) */
+        if (ll_watch_poll(job->watch))
+            s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
         for (i = 0; i <= j && s == LL_OK; ++i)
             if (isnan(tri[j * (j + 1) / 2 + i])) {
                 *any = 1;

@@ -33,13 +33,12 @@ double ll_microfacet_grid_b(size_t k)
     return k == 0 ? 0.0 : GRID_B0 * exp2((double)(k - 1) / GRID_PER_OCTAVE);
 }
 
-/* The grid point at or below b. Every pair asks (twice: the maps it
- * needs, then its series), and log2 and exp2 were 7% of the resolution
- * search's compensation albedos; so where b lies well inside a grid
- * interval (1e-9 of it from either end, where the floor of
- * 4 (log2(b) + 4), off from b's own by about 1e-12 at most, cannot
- * differ), the interval is read from b's exponent and mantissa
- * instead, giving the same index. */
+/* The grid point at or below b. Every planned pair asks, and log2 and
+ * exp2 are library calls; so where b lies well inside a grid interval
+ * (1e-9 of it from either end, where the floor of 4 (log2(b) + 4), off
+ * from b's own by about 1e-12 at most, cannot differ), the interval is
+ * read from b's exponent and mantissa instead, giving the same index
+ * (tests/test_microfacet_profile.c compares the two). */
 size_t ll_microfacet_grid_index(double b)
 {
     /* 2^(j / 4), j = 0 .. 4 (only 1e-9 of accuracy matters) */
