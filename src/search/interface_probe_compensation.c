@@ -50,6 +50,10 @@ typedef struct albedo_job {
      * needed. */
     double *trans;
     double eta2;
+    /* The tables' first pass computes the pairs whose maps the model
+     * has and marks the rest NaN; the second (retry, after preparing
+     * them) computes the NaN slots alone. */
+    int retry;
     ll_watch *watch;
 } albedo_job;
 
@@ -65,13 +69,42 @@ static int reflects(const albedo_job *job, size_t row, size_t col)
     return job->conductor ? col >= h : (row < h) != (col < h);
 }
 
+/* A table's order-0 value of row, column col into *v (and the mirror's
+ * into *ref if not NULL). First pass: computed if the model has the
+ * pair's map, else NaN (made later: collect_missing); retry: computed
+ * where NaN (a NaN series, were there one, the same again), the rest
+ * kept. */
+static ll_status table_value(const albedo_job *job, size_t row, size_t col, double *v,
+                             double *ref, double *scratch)
+{
+    double value, mirror = 0.0;
+    size_t len;
+    int missing = 0;
+    ll_status s;
+    if (job->retry && !isnan(*v))
+        return LL_OK;
+    /* Depth grows opposite to the normal: the series takes -mu. */
+    if (job->retry)
+        s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &value, &len,
+                                 ref ? &mirror : NULL, scratch);
+    else
+        s = ll_microfacet_series_if_prepared(job->mf, -job->x[row], -job->x[col], 1, &value,
+                                             &len, ref ? &mirror : NULL, scratch, &missing);
+    if (s != LL_OK)
+        return s;
+    *v = missing ? NAN : len == 0 ? 0.0 : value;
+    if (ref)
+        *ref = mirror;
+    return LL_OK;
+}
+
 /* The reflection triangles' part of column col: rows i <= j. */
 static ll_status triangle_column(size_t col, void *ctx)
 {
     const albedo_job *job = ctx;
-    size_t n = job->n, h = n / 2, i, len;
+    size_t n = job->n, h = n / 2, i;
     size_t j = col < h ? col : col - h, at = j * (j + 1) / 2;
-    double *scratch, *tri = job->tri[col < h ? 0 : 1], v, ref = 0.0;
+    double *scratch, *tri = job->tri[col < h ? 0 : 1];
     ll_status s = LL_OK;
     if (job->conductor && col < h)
         return LL_OK;
@@ -82,11 +115,8 @@ static ll_status triangle_column(size_t col, void *ctx)
         s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
     for (i = 0; i <= j && s == LL_OK; ++i) {
         size_t row = col < h ? i + h : i;
-        s = ll_microfacet_series(job->mf, -job->x[row], -job->x[col], 1, &v, &len,
-                                 job->conductor ? &ref : NULL, scratch);
-        tri[at + i] = len == 0 ? 0.0 : v;
-        if (job->conductor)
-            job->tri_ref[at + i] = ref;
+        s = table_value(job, row, col, tri + at + i, job->conductor ? job->tri_ref + at + i : NULL,
+                        scratch);
     }
     ll_free(scratch);
     return s;
@@ -96,52 +126,66 @@ static ll_status triangle_column(size_t col, void *ctx)
 static ll_status transmission_column(size_t col, void *ctx)
 {
     const albedo_job *job = ctx;
-    size_t h = job->n / 2, i, len;
-    double *scratch, *out = job->trans + col * h, v;
+    size_t h = job->n / 2, i;
+    double *scratch, *out = job->trans + col * h;
     ll_status s = LL_OK;
     scratch = ll_alloc_array(ll_microfacet_scratch_size(1), sizeof(double));
     if (!scratch)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
     if (ll_watch_poll(job->watch))
         s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
-    for (i = 0; i < h && s == LL_OK; ++i) {
-        s = ll_microfacet_series(job->mf, -job->x[i], -job->x[col], 1, &v, &len, NULL, scratch);
-        out[i] = len == 0 ? 0.0 : v;
-    }
+    for (i = 0; i < h && s == LL_OK; ++i)
+        s = table_value(job, i, col, out + i, NULL, scratch);
     ll_free(scratch);
     return s;
 }
 
-/* Pairs per ll_microfacet_prepare_pairs call of prepare_tables. */
+/* Pairs per ll_microfacet_prepare_pairs call of collect_missing. */
 #define PREPARE_BATCH 16384
 
-/* Prepare the maps of the pairs that the tables hold (a quarter of all
- * n^2 for a conductor, half for a dielectric), in batches. */
-static ll_status prepare_tables(ll_microfacet_model *mf, const albedo_job *job)
+/* Append the pair (row, col) to the batch, preparing it when full. */
+static ll_status add_missing(ll_microfacet_model *mf, const albedo_job *job, size_t row,
+                             size_t col, double *mu, size_t *count)
 {
-    size_t n = job->n, h = n / 2, col, i, count = 0;
+    mu[*count] = -job->x[row];
+    mu[PREPARE_BATCH + *count] = -job->x[col];
+    if (++*count < PREPARE_BATCH)
+        return LL_OK;
+    *count = 0;
+    return ll_microfacet_prepare_pairs(mf, mu, mu + PREPARE_BATCH, PREPARE_BATCH);
+}
+
+/* Prepare the maps of the tables' pairs that the first pass left NaN
+ * (after the first node counts of a search, few: the maps are the
+ * model's, kept from one count to the next), in batches; *any: whether
+ * there were such pairs (then the tables are retried). Planning only
+ * these, instead of every pair before the tables, leaves each pair one
+ * plan, not two. */
+static ll_status collect_missing(ll_microfacet_model *mf, const albedo_job *job, int *any)
+{
+    size_t n = job->n, h = n / 2, col, i, j, count = 0;
     double *mu = ll_alloc_array(PREPARE_BATCH, 2 * sizeof(double));
     ll_status s = LL_OK;
+    *any = 0;
     if (!mu)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
     for (col = 0; col < n && s == LL_OK; ++col) {
-        size_t j = col < h ? col : col - h;
-        /* (transmission: rows < h of columns < h; triangles: rows i <= j
-         * of the other half) */
-        size_t rows = job->trans && col < h ? h + j + 1 : j + 1;
+        const double *tri = job->tri[col < h ? 0 : 1];
+        j = col < h ? col : col - h;
         if (job->conductor && col < h)
-            continue;
+            continue; /* (no table: opaque from below) */
         if (ll_watch_poll(job->watch))
             s = ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
-        for (i = 0; i < rows && s == LL_OK; ++i) {
-            size_t row = i < (rows - j - 1) ? i : (i - (rows - j - 1)) + (col < h ? h : 0);
-            mu[count] = -job->x[row];
-            mu[PREPARE_BATCH + count] = -job->x[col];
-            if (++count == PREPARE_BATCH) {
-                s = ll_microfacet_prepare_pairs(mf, mu, mu + PREPARE_BATCH, count);
-                count = 0;
+        for (i = 0; i <= j && s == LL_OK; ++i)
+            if (isnan(tri[j * (j + 1) / 2 + i])) {
+                *any = 1;
+                s = add_missing(mf, job, col < h ? i + h : i, col, mu, &count);
             }
-        }
+        for (i = 0; job->trans && col < h && i < h && s == LL_OK; ++i)
+            if (isnan(job->trans[col * h + i])) {
+                *any = 1;
+                s = add_missing(mf, job, i, col, mu, &count);
+            }
     }
     if (s == LL_OK && count > 0)
         s = ll_microfacet_prepare_pairs(mf, mu, mu + PREPARE_BATCH, count);
@@ -251,6 +295,7 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
                                      ll_watch *watch, ll_probe_compensation *out)
 {
     size_t h = n / 2, k, q;
+    int tables, pass;
     double *rule = ll_alloc_array(n, 2 * sizeof(double));
     double *x = ll_alloc_array(n, 3 * sizeof(double));
     albedo_job job;
@@ -303,16 +348,22 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
             job.tri[0] = job.tri[1] = job.tri_ref = NULL;
         }
     }
-    /* The maps of the pairs to compute: the tables' alone where they are
-     * all there (the pairs of the other halves have the same B), else
-     * every pair's. */
-    if (s == LL_OK)
-        s = job.tri[0] && (job.conductor || job.trans) ? prepare_tables(mf, &job)
-                                                       : ll_microfacet_prepare(mf, x + 2 * n, n);
-    if (s == LL_OK && job.trans)
-        s = ll_parallel_for_watched(h, transmission_column, &job, watch);
-    if (s == LL_OK && job.tri[0])
-        s = ll_parallel_for_watched(n, triangle_column, &job, watch);
+    job.retry = 0;
+    /* Without the tables (too many nodes, or no memory for them), every
+     * pair's maps first. With them, the pairs whose maps the model has,
+     * then the maps of the rest (the pairs of the other halves have the
+     * same B) and those pairs. */
+    tables = job.tri[0] && (job.conductor || job.trans);
+    if (s == LL_OK && !tables)
+        s = ll_microfacet_prepare(mf, x + 2 * n, n);
+    for (pass = 0; pass < 2 && s == LL_OK && (pass == 0 || job.retry); ++pass) {
+        if (job.trans)
+            s = ll_parallel_for_watched(h, transmission_column, &job, watch);
+        if (s == LL_OK && job.tri[0])
+            s = ll_parallel_for_watched(n, triangle_column, &job, watch);
+        if (s == LL_OK && tables && pass == 0)
+            s = collect_missing(mf, &job, &job.retry);
+    }
     if (s == LL_OK)
         s = ll_parallel_for_watched(n, albedo_column, &job, watch);
     ll_free(job.tri[0]);

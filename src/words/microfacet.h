@@ -121,6 +121,16 @@ LL_INTERNAL ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf
                                                    size_t *len, double *ref0, double *scratch,
                                                    int *widened);
 
+/* ll_microfacet_series for a model that may not be prepared for the
+ * pair: where the pair needs a map that is not there, *missing is set
+ * (else cleared), LL_OK returned and nothing computed; prepare the pair
+ * (ll_microfacet_prepare_pairs) and ask again. One plan of the pair where
+ * preparing every pair first would plan each twice. */
+LL_INTERNAL ll_status ll_microfacet_series_if_prepared(const ll_microfacet_model *mf, double mu_o,
+                                                       double mu_i, size_t max_len, double *out,
+                                                       size_t *len, double *ref0,
+                                                       double *scratch, int *missing);
+
 /* Does ll_microfacet_series widen the lobe of this pair at the orders in
  * effect (ll_microfacet_set_orders)? Where it does not, the series of a
  * model with fewer orders is a prefix of the one with more (the terms

@@ -32,6 +32,16 @@ static void clear(ll_microfacet_compensation *out)
 #define VISIBLE_RADII 32
 #define VISIBLE_AZIMUTHS 24
 
+/* The quadrature of visible_fresnel with what does not depend on mu
+ * computed once per surface, not per node (each node's average took 32
+ * exponentials and 768 cosines of the same arguments): per slope radius
+ * alpha s, the radial weight and 1 / sqrt(1 + alpha^2 s^2), per azimuth
+ * its cosine and weight. */
+typedef struct visible_rule {
+    double alpha_s[VISIBLE_RADII], radial[VISIBLE_RADII], norm[VISIBLE_RADII];
+    double cos_phi[VISIBLE_AZIMUTHS], weight[VISIBLE_AZIMUTHS];
+} visible_rule;
+
 /* The Fresnel reflectance averaged over the normals that the direction of
  * cosine mu sees (weights max(0, wi.m) D(m)): what the first bounce of
  * light arriving along mu reflects before any shadowing. In slopes (the
@@ -39,28 +49,45 @@ static void clear(ll_microfacet_compensation *out)
  * the weight is (mu - x sin theta)_+ P(s) s ds dphi with P Beckmann's
  * exp(-s^2) or GGX's (1 + s^2)^-2, and the facet's cosine is
  * (mu - x sin theta) / sqrt(1 + alpha^2 s^2). The normalisation is the
- * same sum without F: F = 1 gives 1 exactly. rule holds 2 (VISIBLE_RADII +
- * VISIBLE_AZIMUTHS) doubles of Gauss-Legendre nodes and weights on [-1, 1]. */
-static double visible_fresnel(const ll_microfacet_model *mf, const double *rule, double mu)
+ * same sum without F: F = 1 gives 1 exactly. The radii s = q / (1 - q)
+ * on Gauss-Legendre q, the azimuths of the slope on [0, pi] (the
+ * integrand is even in them); rule holds 2 (VISIBLE_RADII +
+ * VISIBLE_AZIMUTHS) doubles of Gauss-Legendre nodes and weights on
+ * [-1, 1]. */
+static void visible_prepare(const ll_microfacet_model *mf, const double *rule, visible_rule *v)
 {
     const double *xq = rule, *wq = rule + VISIBLE_RADII;
     const double *xp = rule + 2 * VISIBLE_RADII, *wp = xp + VISIBLE_AZIMUTHS;
-    double sin_t = sqrt(fmax(0.0, 1.0 - mu * mu)), num = 0.0, den = 0.0;
     size_t a, b;
     for (a = 0; a < VISIBLE_RADII; ++a) {
         double q = 0.5 * (xq[a] + 1.0), s = q / (1.0 - q), ds = 0.5 * wq[a] / ((1.0 - q) * (1.0 - q));
         double p = mf->ggx ? 1.0 / ((1.0 + s * s) * (1.0 + s * s)) : exp(-s * s);
-        double radial = p * s * ds, norm = 1.0 / sqrt(1.0 + mf->alpha * mf->alpha * s * s);
+        v->alpha_s[a] = mf->alpha * s;
+        v->radial[a] = p * s * ds;
+        v->norm[a] = 1.0 / sqrt(1.0 + mf->alpha * mf->alpha * s * s);
+    }
+    for (b = 0; b < VISIBLE_AZIMUTHS; ++b) {
+        v->cos_phi[b] = cos(0.5 * LL_PI * (xp[b] + 1.0));
+        v->weight[b] = wp[b];
+    }
+}
+
+static double visible_fresnel(const ll_microfacet_model *mf, const visible_rule *v, double mu)
+{
+    double sin_t = sqrt(fmax(0.0, 1.0 - mu * mu)), num = 0.0, den = 0.0;
+    size_t a, b;
+    for (a = 0; a < VISIBLE_RADII; ++a) {
+        double radial = v->radial[a], norm = v->norm[a], alpha_s = v->alpha_s[a];
         if (!(radial > 0.0))
             continue;
         for (b = 0; b < VISIBLE_AZIMUTHS; ++b) {
-            double phi = 0.5 * LL_PI * (xp[b] + 1.0);
-            double vis = mu - mf->alpha * s * cos(phi) * sin_t, weight;
+            double vis = mu - alpha_s * v->cos_phi[b] * sin_t, weight, c;
             if (vis <= 0.0)
                 continue;
-            weight = radial * wp[b] * vis;
+            weight = radial * v->weight[b] * vis;
             den += weight;
-            num += weight * ll_fresnel_conductor_kernel(fmin(1.0, vis * norm), mf->eta_re,
+            c = vis * norm; /* (> 0: min(1, c) without fmin's library call) */
+            num += weight * ll_fresnel_conductor_kernel(c < 1.0 ? c : 1.0, mf->eta_re,
                                                         mf->eta_im);
         }
     }
@@ -176,6 +203,7 @@ void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
                                         ll_microfacet_compensation *out)
 {
     double *lost = work, *first = work + h, rule[2 * (VISIBLE_RADII + VISIBLE_AZIMUTHS)];
+    visible_rule visible;
     double f2, factor, wl, wf, wu, ramp, exponent, tilt, c2 = chain(mf, 0), c3 = chain(mf, 1);
     size_t j;
     clear(out);
@@ -183,9 +211,10 @@ void ll_microfacet_compensate_conductor(const ll_microfacet_model *mf, size_t h,
     (void)ll_quad_gauss_legendre(VISIBLE_RADII, rule, rule + VISIBLE_RADII, NULL);
     (void)ll_quad_gauss_legendre(VISIBLE_AZIMUTHS, rule + 2 * VISIBLE_RADII,
                                  rule + 2 * VISIBLE_RADII + VISIBLE_AZIMUTHS, NULL);
+    visible_prepare(mf, rule, &visible);
     for (j = 0; j < h; ++j) {
         lost[j] = fmax(0.0, 1.0 - mirror_albedo[j]);
-        first[j] = fmin(lost[j], fmax(0.0, visible_fresnel(mf, rule, mu[j]) - albedo[j]));
+        first[j] = fmin(lost[j], fmax(0.0, visible_fresnel(mf, &visible, mu[j]) - albedo[j]));
     }
     wl = ll_microfacet_dot(w, lost, h);
     wf = ll_microfacet_dot(w, first, h);

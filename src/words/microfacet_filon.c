@@ -73,13 +73,28 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
     double *filon = scratch + FILON_SCR_FILON;
     size_t k;
+    double peak[FILON_SAMPLES], step, ch, sh, c, s;
     if (!(b > a))
         return;
-    azimuth_cosines(a, b, samples, cos_phi);
+    /* The cosines as azimuth_cosines makes them, and with each its peak
+     * factor: the rotation is a chain of dependent roundings, which the
+     * exponentials' independent work now overlaps. */
+    step = (b - a) / (double)(samples - 1);
+    ch = cos(step);
+    sh = sin(step);
+    c = cos(a);
+    s = sin(a);
+    for (k = 0; k < samples; ++k) {
+        double next_c = c * ch - s * sh;
+        cos_phi[k] = c;
+        peak[k] = exp(p->a_plus_b + p->b * (c - 1.0));
+        s = s * ch + c * sh;
+        c = next_c;
+    }
     ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
                                  reference ? f : NULL);
     for (k = 0; k < samples; ++k)
-        f[k] *= exp(p->a_plus_b + p->b * (cos_phi[k] - 1.0));
+        f[k] *= peak[k];
     if (n_out == 1 && mf->simpson_order0) {
         /* (samples is odd: panels of two intervals, as Filon's) */
         double odd = 0.0, even = 0.0, h = (b - a) / (double)(samples - 1);

@@ -60,6 +60,7 @@ typedef struct pair_plan {
     double eta;        /* relative index in the half vector wi + eta wo     */
     double a_plus_b;   /* log of the peak of exp(A + B cos phi) (GGX: of
                         * (1 - A - B cos phi)^-2)                           */
+    double peak;       /* Beckmann: exp(a_plus_b), as planned               */
     double b;          /* Beckmann: B; GGX: beta (words/microfacet_ggx.h)    */
     int widened;       /* B was reduced to what the orders hold             */
     size_t grid;       /* B_k <= B                                           */

@@ -2,13 +2,12 @@
  * The plan of one pair of zenith cosines of a rough interface: the
  * exponent A + B cos phi of its peak, whether and how far the lobe is
  * widened, its window of azimuths and the branch points of g there (which
- * decide between the Chebyshev maps and the Filon path), and g itself at
- * given azimuths (the Fresnel factor, shadowing and the Jacobian;
+ * decide between the Chebyshev maps and the Filon path), and the factors
+ * of g that do not depend on the azimuth (g itself: microfacet_profile.c;
  * microfacet_series.c describes the method).
  */
 #include "words/microfacet_pair.h"
 
-#include "words/fresnel.h"
 #include "numerics/series.h"
 
 #include <math.h>
@@ -18,6 +17,8 @@
 #define GRID_B0 (1.0 / 16.0)  /* below this B, B_k = 0 (k = 0)                 */
 #define NEAR_SINGULAR 0.1     /* a branch point of g within this fraction of
                                * the window from it spoils the Chebyshev form  */
+#define NEGLIGIBLE_LOG -23.1  /* below ln(NEGLIGIBLE) = -23.03 by more than
+                               * exp's rounding                                */
 
 double ll_microfacet_smith_g1(double tan_theta, double alpha)
 {
@@ -32,12 +33,27 @@ double ll_microfacet_grid_b(size_t k)
     return k == 0 ? 0.0 : GRID_B0 * exp2((double)(k - 1) / GRID_PER_OCTAVE);
 }
 
-/* The grid point at or below b. */
+/* The grid point at or below b. Every planned pair asks, and log2 and
+ * exp2 are library calls; so where b lies well inside a grid interval
+ * (1e-9 of it from either end, where the floor of 4 (log2(b) + 4), off
+ * from b's own by about 1e-12 at most, cannot differ), the interval is
+ * read from b's exponent and mantissa instead, giving the same index
+ * (tests/test_microfacet_profile.c compares the two). */
 size_t ll_microfacet_grid_index(double b)
 {
+    /* 2^(j / 4), j = 0 .. 4 (only 1e-9 of accuracy matters) */
+    static const double quarter[5] = { 1.0, 1.189207115002721, 1.4142135623730951,
+                                       1.6817928305074290, 2.0 };
     size_t k;
+    int e, j;
+    double r;
     if (b < GRID_B0)
         return 0;
+    r = 2.0 * frexp(b, &e); /* b = r 2^(e - 1), 1 <= r < 2 (not NaN or inf) */
+    j = r >= quarter[2] ? (r >= quarter[3] ? 3 : 2) : (r >= quarter[1] ? 1 : 0);
+    if (r > quarter[j] * (1.0 + 1e-9) && r < quarter[j + 1] * (1.0 - 1e-9))
+        /* (log2(GRID_B0) = -4, and b >= GRID_B0: e - 1 >= -4) */
+        return (size_t)(GRID_PER_OCTAVE * (e - 1 + 4)) + (size_t)j + 1;
     k = (size_t)floor(GRID_PER_OCTAVE * (log2(b) - log2(GRID_B0))) + 1;
     while (k > 1 && ll_microfacet_grid_b(k) > b) /* guard the rounding of log2 */
         --k;
@@ -144,8 +160,12 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
     p->eta = (-mu_i > 0.0 || mf->conductor) ? mf->eta_re : 1.0 / mf->eta_re;
     p->mu_i = mu_i;
     p->mu_o = mu_o;
-    si = sqrt(fmax(0.0, (1.0 - mu_i) * (1.0 + mu_i)));
-    so = sqrt(fmax(0.0, (1.0 - mu_o) * (1.0 + mu_o)));
+    /* (max(0, x) without fmax's library call: x is never -0 nor NaN here,
+     * so the comparison gives fmax's double) */
+    si = (1.0 - mu_i) * (1.0 + mu_i);
+    so = (1.0 - mu_o) * (1.0 + mu_o);
+    si = sqrt(si > 0.0 ? si : 0.0);
+    so = sqrt(so > 0.0 ? so : 0.0);
     p->sin_prod = si * so;
     p->mu_prod = mu_i * mu_o;
 
@@ -164,9 +184,20 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
         return 0;
     if (mf->ggx)
         return ll_microfacet_plan_ggx(mf, p, b_limit, mu_i, si, so, h_z);
-    /* The series' first term i0e(B) e^(A + B), with i0e <= 1. */
+    /* The series' first term i0e(B) e^(A + B), with i0e <= 1. Most of a
+     * layer's pairs lie far outside the lobe, where A + B alone rules
+     * them out: below NEGLIGIBLE_LOG, e^(A + B) < NEGLIGIBLE whatever
+     * exp's rounding, so the test below would fail too. And where
+     * e^(A + B) / (2 sqrt(1 + 2 pi B)) reaches NEGLIGIBLE, so does
+     * e^(A + B) i0e(B), as i0e(B) >= 1 / sqrt(1 + 2 pi B) for every B >= 0
+     * (equal at B = 0; i0e ~ (2 pi B)^-1/2 (1 + 1 / (8 B)) for large B),
+     * so i0e's series is summed only for the pairs in between. */
+    if (!(p->a_plus_b >= NEGLIGIBLE_LOG))
+        return 0;
     e0 = exp(p->a_plus_b);
-    if (!(e0 >= NEGLIGIBLE) || !(e0 * ll_bessel_i0e(p->b) >= NEGLIGIBLE))
+    if (!(e0 >= NEGLIGIBLE) ||
+        (!(e0 * (0.5 / sqrt(1.0 + 2.0 * LL_PI * p->b)) >= NEGLIGIBLE) &&
+         !(e0 * ll_bessel_i0e(p->b) >= NEGLIGIBLE)))
         return 0;
     p->widened = p->b > b_limit;
     if (p->widened) {
@@ -175,7 +206,9 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
          * of the whole lobe, g included). */
         p->a_plus_b += log(ll_bessel_i0e(p->b) / ll_bessel_i0e(b_limit));
         p->b = b_limit;
+        e0 = exp(p->a_plus_b);
     }
+    p->peak = e0;
     p->grid = ll_microfacet_grid_index(p->b);
     if (!ll_microfacet_classify_window(mf, p))
         return 0;
@@ -192,50 +225,4 @@ int ll_microfacet_plan_pair(const ll_microfacet_model *mf, double mu_o, double m
     if (!p->reflect)
         p->scale *= p->eta * p->eta;
     return 1;
-}
-
-/* g at the azimuths with the given cosines into g, and g with F = 1 into
- * no_fresnel (either may be NULL). With t = wi . wo and unnormalised H:
- *   reflection:   |H|^2 = 2 (1 + t),  wi.H = 1 + t,
- *                 g = F D G / (4 |mu_i mu_o|) = scale F (1 + t)^2
- *   refraction:   |H|^2 = 1 + eta^2 + 2 eta t,  wi.H = 1 + eta t,
- *                 wo.H = t + eta, and the Jacobian's
- *                 (wi.H)(wo.H) / (wi.H + eta wo.H)^2 = (wi.H)(wo.H)/|H|^4,
- *                 g = scale (1 - F) |(1 + eta t)(t + eta)|
- *                 where both directions see the front of the facet. */
-void ll_microfacet_sample_profile(const ll_microfacet_model *mf, const pair_plan *p,
-                                  const double *cos_phi, size_t count, double *g,
-                                  double *no_fresnel)
-{
-    size_t k;
-    double eta = p->eta, s = p->sign_h;
-    for (k = 0; k < count; ++k) {
-        double t = -p->sin_prod * cos_phi[k] - p->mu_prod, value, f, unused;
-        if (p->reflect) {
-            double one_t = fmax(0.0, 1.0 + t);
-            double cos_h = s * sqrt(fmin(1.0, 0.5 * one_t)); /* wi . m */
-            f = mf->conductor ? ll_fresnel_conductor_kernel(fabs(cos_h), mf->eta_re, mf->eta_im)
-                              : ll_fresnel_dielectric_kernel(cos_h, mf->eta_re, &unused);
-            value = p->scale * one_t * one_t;
-            if (g)
-                g[k] = f * value;
-        } else {
-            double wi_h = 1.0 + eta * t, wo_h = t + eta;
-            double len2 = fmax(1e-300, 1.0 + eta * eta + 2.0 * eta * t);
-            /* Both sides: v.m cos(theta_v) > 0 (wi.z = -mu_i, wo.z = mu_o). */
-            if (s * wi_h * -p->mu_i > 0.0 && s * wo_h * p->mu_o > 0.0) {
-                double cos_h = fmax(-1.0, fmin(1.0, s * wi_h / sqrt(len2)));
-                f = ll_fresnel_dielectric_kernel(cos_h, mf->eta_re, &unused);
-                value = p->scale * fabs(wi_h * wo_h);
-                if (g)
-                    g[k] = (1.0 - f) * value;
-            } else {
-                value = 0.0;
-                if (g)
-                    g[k] = 0.0;
-            }
-        }
-        if (no_fresnel)
-            no_fresnel[k] = value;
-    }
 }

@@ -65,9 +65,12 @@ size_t ll_microfacet_scratch_size(size_t max_len)
 }
 
 /* The series of a planned pair, n_out <= max_len terms (*n_out), and the
- * order 0 of its reference (F = 1) if ref0 is not NULL. */
+ * order 0 of its reference (F = 1) if ref0 is not NULL. Where its map is
+ * missing: with missing not NULL, *missing = 1 and nothing computed, else
+ * a failure. */
 static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, size_t max_len,
-                             double *out, size_t *n_out, double *ref0, double *scratch)
+                             double *out, size_t *n_out, double *ref0, double *scratch,
+                             int *missing)
 {
     const grid_entry *e;
     double *g = scratch, *g_ref = ref0 ? scratch + CHEB : NULL, rest, peak;
@@ -77,9 +80,13 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     if (mf->ggx && p->reflect && p->split > 0.0)
         return ll_microfacet_ggx_tir_series(mf, p, max_len, out, n_out, ref0, scratch);
     if (p->filon) {
-        len = (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
-                       : ll_expcos_length(p->b, TAIL_GOAL)) +
-              FILON_EXTRA;
+        /* (At most FILON_EXTRA orders, as for the order 0 of a probe or a
+         * widened lobe, need not ask the peak's length: len exceeds it.) */
+        len = max_len <= FILON_EXTRA
+                  ? max_len
+                  : (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
+                             : ll_expcos_length(p->b, TAIL_GOAL)) +
+                        FILON_EXTRA;
         *n_out = len < max_len ? len : max_len;
         if (ref0) /* order 0 of the reference, by the same rule */
             ll_microfacet_filon_series(mf, p, 1, 1, ref0, scratch);
@@ -87,6 +94,11 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
         return LL_OK;
     }
     e = p->grid < mf->n_grid ? mf->grid[p->grid] : NULL;
+    if (!e && missing) {
+        *n_out = 0;
+        *missing = 1;
+        return LL_OK;
+    }
     if (!e)
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "microfacet series: the pair (%g, %g) was not prepared", p->mu_o,
@@ -94,7 +106,7 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     /* g times the part of exp(-B v) that the grid point leaves out. */
     ll_microfacet_sample_profile(mf, p, e->cos_phi, CHEB, g, g_ref);
     rest = (p->b - e->b) * e->delta;
-    peak = exp(p->a_plus_b);
+    peak = p->peak;
     for (i = 0; i < CHEB; ++i) {
         double factor = peak * exp(-rest * e->u[i]);
         g[i] *= factor;
@@ -102,11 +114,14 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
             g_ref[i] *= factor;
     }
     *n_out = e->len < max_len ? e->len : max_len;
-    memset(out, 0, *n_out * sizeof(double));
-    for (i = 0; i < CHEB; ++i) {
-        const double *column = e->matrix + i * e->len;
-        for (l = 0; l < *n_out; ++l)
-            out[l] += g[i] * column[l];
+    /* Each order summed over the points in a register, in the points'
+     * order (through out, which may alias nothing the compiler can rule
+     * out, every term was a store and a load). */
+    for (l = 0; l < *n_out; ++l) {
+        double sum = 0.0;
+        for (i = 0; i < CHEB; ++i)
+            sum += g[i] * e->matrix[i * e->len + l];
+        out[l] = sum;
     }
     if (g_ref) {
         double sum = 0.0;
@@ -117,18 +132,11 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
     return LL_OK;
 }
 
-ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
-                               size_t max_len, double *out, size_t *len, double *ref0,
-                               double *scratch)
-{
-    int widened;
-    return ll_microfacet_series_widened(mf, mu_o, mu_i, max_len, out, len, ref0, scratch,
-                                        &widened);
-}
-
-ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_o, double mu_i,
-                                       size_t max_len, double *out, size_t *len, double *ref0,
-                                       double *scratch, int *widened)
+/* ll_microfacet_series_widened, and with missing not NULL,
+ * ll_microfacet_series_if_prepared's report of a missing map. */
+static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i, size_t max_len,
+                        double *out, size_t *len, double *ref0, double *scratch, int *widened,
+                        int *missing)
 {
     pair_plan p;
     size_t n_out, l, last;
@@ -151,14 +159,15 @@ ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_
          * (R + T = 1.06 for eta = 1.5, alpha = 0.3 at 61 orders). So the
          * order 0 of the true lobe is computed first, and the widened
          * series scaled to it. */
-        s = pair_series(mf, &p, 1, &energy, &n_out, ref0 ? &ref_energy : NULL, scratch);
-        if (s != LL_OK)
+        s = pair_series(mf, &p, 1, &energy, &n_out, ref0 ? &ref_energy : NULL, scratch,
+                        missing);
+        if (s != LL_OK || (missing && *missing))
             return s;
         if (!ll_microfacet_plan_pair(mf, mu_o, mu_i, mf->b_max, &p))
             return LL_OK;
     }
-    s = pair_series(mf, &p, max_len, out, &n_out, ref0, scratch);
-    if (s != LL_OK)
+    s = pair_series(mf, &p, max_len, out, &n_out, ref0, scratch, missing);
+    if (s != LL_OK || (missing && *missing))
         return s;
     if (p.widened) {
         double scale = out[0] > 0.0 ? energy / out[0] : 0.0;
@@ -177,6 +186,31 @@ ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_
             last = l;
     *len = last + 1;
     return LL_OK;
+}
+
+ll_status ll_microfacet_series(const ll_microfacet_model *mf, double mu_o, double mu_i,
+                               size_t max_len, double *out, size_t *len, double *ref0,
+                               double *scratch)
+{
+    int widened;
+    return series(mf, mu_o, mu_i, max_len, out, len, ref0, scratch, &widened, NULL);
+}
+
+ll_status ll_microfacet_series_widened(const ll_microfacet_model *mf, double mu_o, double mu_i,
+                                       size_t max_len, double *out, size_t *len, double *ref0,
+                                       double *scratch, int *widened)
+{
+    return series(mf, mu_o, mu_i, max_len, out, len, ref0, scratch, widened, NULL);
+}
+
+ll_status ll_microfacet_series_if_prepared(const ll_microfacet_model *mf, double mu_o,
+                                           double mu_i, size_t max_len, double *out,
+                                           size_t *len, double *ref0, double *scratch,
+                                           int *missing)
+{
+    int widened;
+    *missing = 0;
+    return series(mf, mu_o, mu_i, max_len, out, len, ref0, scratch, &widened, missing);
 }
 
 double ll_microfacet_keep(const ll_microfacet_model *mf)
