@@ -4,8 +4,10 @@
  * entry; an entry that is damaged, or holds another key, is not trusted
  * but searched again and rewritten; no cache_dir, no file; builds sharing
  * the directory at once leave whole entries; the user's directory comes
- * from LAYERLAB_CACHE_DIR, XDG_CACHE_HOME or HOME. Every directory is a
- * scratch one (the user's own cache is never touched).
+ * from LAYERLAB_CACHE_DIR, XDG_CACHE_HOME or HOME; a channel whose search
+ * starts at the channel before's answer is remembered under that start,
+ * so a build chooses the same whatever the cache holds. Every directory is
+ * a scratch one (the user's own cache is never touched).
  */
 #include <stdarg.h>
 #include <stddef.h>
@@ -137,6 +139,36 @@ static void second_call_is_answered_from_the_cache(void **state)
     assert_int_equal(n3, n1);
     assert_int_equal(m3, m1);
     assert_int_equal(ll_test_count_entries(dir), 2);
+}
+
+/* A metal's second channel starts its search at the first channel's
+ * answer: the same channel after another first channel is another key. B
+ * shares its second and third channels with A (the third is the second's
+ * search), not its first; after A has filled the cache, B searches its
+ * first channel and its second again, and chooses what it chose cold. */
+static void a_channels_start_is_part_of_its_key(void **state)
+{
+    static const char a[] = "conductor eta=0.2+3i alpha=0.5,0.3,0.3\n";
+    static const char b[] = "conductor eta=0.2+3i alpha=0.2,0.3,0.3\n";
+    char dir[600];
+    size_t na, ma, nb, mb, n, m;
+    int searches;
+    (void)state;
+    fresh_dir("start", dir, sizeof dir);
+    resolve(b, NULL, &nb, &mb, &searches);
+    assert_int_equal(searches, 2);
+    resolve(a, dir, &na, &ma, &searches);
+    assert_int_equal(searches, 2);
+    assert_int_equal(ll_test_count_entries(dir), 2);
+    resolve(b, dir, &n, &m, &searches);
+    assert_int_equal(searches, 2);
+    assert_int_equal(ll_test_count_entries(dir), 4);
+    assert_int_equal(n, nb);
+    assert_int_equal(m, mb);
+    resolve(a, dir, &n, &m, &searches);
+    assert_int_equal(searches, 0);
+    assert_int_equal(n, na);
+    assert_int_equal(m, ma);
 }
 
 /* Damage of every kind: the entry is searched again and rewritten whole. */
@@ -322,6 +354,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(second_call_is_answered_from_the_cache),
         cmocka_unit_test(damaged_entries_are_not_trusted),
+        cmocka_unit_test(a_channels_start_is_part_of_its_key),
         cmocka_unit_test(concurrent_builds_leave_whole_entries),
         cmocka_unit_test(older_struct_has_no_cache),
         cmocka_unit_test(the_user_cache_directory),

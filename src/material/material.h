@@ -160,17 +160,19 @@ LL_INTERNAL void ll_resolution_memo_free(ll_resolution_memo *memo);
 
 /* ---- resolution_cache.c: the searches' choices kept between processes
  * in dir (ll_build_options.cache_dir; NULL or "" for none), keyed by the
- * word as its search sees it, the tolerance, mu_min and the library's
- * version. get: 1 and the answer when a whole, undamaged entry is there,
- * else 0. put: writes the entry atomically (a temporary file renamed over
- * it), creating dir; a failure to write is silent (a later build searches
- * again). Neither touches the thread's error message. */
+ * word as its search sees it (and start: where its search started, the
+ * nodes and orders; NULL or zeros for its own first guess), the tolerance,
+ * mu_min and the library's version. get: 1 and the answer when a whole,
+ * undamaged entry is there, else 0. put: writes the entry atomically (a
+ * temporary file renamed over it), creating dir; a failure to write is
+ * silent (a later build searches again). Neither touches the thread's
+ * error message. */
 LL_INTERNAL int ll_resolution_cache_get(const char *dir, const ll_word_params *p,
-                                        double tolerance, double mu_min, size_t *n, size_t *m,
-                                        double *error);
+                                        const size_t *start, double tolerance, double mu_min,
+                                        size_t *n, size_t *m, double *error);
 LL_INTERNAL void ll_resolution_cache_put(const char *dir, const ll_word_params *p,
-                                         double tolerance, double mu_min, size_t n, size_t m,
-                                         double error);
+                                         const size_t *start, double tolerance, double mu_min,
+                                         size_t n, size_t m, double error);
 /* The smallest node count whose quadrature is meaningful
  * (docs/material-language.md, "Settings"), and the largest node or order
  * count a build accepts. */

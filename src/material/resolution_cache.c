@@ -4,8 +4,9 @@
  * cache_dir; ll_material_cache_dir gives the user's cache directory).
  *
  * The key is the word as its search sees it (name, choice, the values the
- * search reads, written exactly as hexadecimal floats; a measured table's
- * path, size and modification time), the tolerance, mu_min, the
+ * search reads, written exactly as hexadecimal floats; where its search
+ * started, if not at its own first guess; a measured table's path, size
+ * and modification time), the tolerance, mu_min, the
  * library's version and the search's revision (LL_SEARCH_REVISION): a new
  * version or search may choose differently, so it searches again. The file's name is a hash of the key; the file holds the key
  * itself (a hash collision is a miss, not a wrong answer), the answer and
@@ -48,8 +49,8 @@ static unsigned long long fnv1a(const char *text, size_t len)
 }
 
 /* The key, or 0 when it does not fit (then the word is not cached). */
-static int make_key(const ll_word_params *p, double tolerance, double mu_min, char *key,
-                    size_t size)
+static int make_key(const ll_word_params *p, const size_t *start, double tolerance,
+                    double mu_min, char *key, size_t size)
 {
     unsigned reads = p->desc->resolution_reads;
     size_t used, k;
@@ -63,6 +64,15 @@ static int make_key(const ll_word_params *p, double tolerance, double mu_min, ch
         if (reads != 0 && !(reads >> k & 1u))
             continue;
         len = snprintf(key + used, size - used, " v%zu %a", k, p->v[k]);
+        if (len < 0 || (size_t)len >= size - used)
+            return 0;
+        used += (size_t)len;
+    }
+    if (start && (start[0] || start[1])) {
+        /* Where the search started (another channel's answer): the answer
+         * may depend on it, and a build must choose the same whatever
+         * other materials left in the cache. */
+        len = snprintf(key + used, size - used, " start %zu %zu", start[0], start[1]);
         if (len < 0 || (size_t)len >= size - used)
             return 0;
         used += (size_t)len;
@@ -111,8 +121,9 @@ static int format_entry(const char *key, size_t n, size_t m, double error, char 
     return len + sum;
 }
 
-int ll_resolution_cache_get(const char *dir, const ll_word_params *p, double tolerance,
-                            double mu_min, size_t *n, size_t *m, double *error)
+int ll_resolution_cache_get(const char *dir, const ll_word_params *p, const size_t *start,
+                            double tolerance, double mu_min, size_t *n, size_t *m,
+                            double *error)
 {
     char key[KEY_MAX], path[KEY_MAX + 64], text[ENTRY_MAX + 1], expect[ENTRY_MAX];
     unsigned long long vn, vm;
@@ -121,7 +132,7 @@ int ll_resolution_cache_get(const char *dir, const ll_word_params *p, double tol
     size_t got;
     int len;
     FILE *f;
-    if (!dir || !*dir || !make_key(p, tolerance, mu_min, key, sizeof key) ||
+    if (!dir || !*dir || !make_key(p, start, tolerance, mu_min, key, sizeof key) ||
         !entry_path(dir, key, path, sizeof path))
         return 0;
     f = fopen(path, "rb");
@@ -183,12 +194,12 @@ static int make_dirs(const char *dir)
     return stat(dir, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-void ll_resolution_cache_put(const char *dir, const ll_word_params *p, double tolerance,
-                             double mu_min, size_t n, size_t m, double error)
+void ll_resolution_cache_put(const char *dir, const ll_word_params *p, const size_t *start,
+                             double tolerance, double mu_min, size_t n, size_t m, double error)
 {
     char key[KEY_MAX], path[KEY_MAX + 64], temp[KEY_MAX + 80], text[ENTRY_MAX];
     int len, fd, ok;
-    if (!dir || !*dir || !make_key(p, tolerance, mu_min, key, sizeof key) ||
+    if (!dir || !*dir || !make_key(p, start, tolerance, mu_min, key, sizeof key) ||
         !entry_path(dir, key, path, sizeof path) || !make_dirs(dir))
         return;
     len = format_entry(key, n, m, error, text, sizeof text);

@@ -180,9 +180,9 @@ static ll_status conductor_resolution(const ll_word_params *p, double tolerance,
                                       ll_watch *watch, size_t *n, size_t *m, double *error)
 {
     /* The layer conductor_build makes: with or without the compensation. */
-    return ll_search_microfacet_distribution(p->v[ALPHA], p->v[ETA], p->v[K], p->choice,
-                                             p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, tolerance,
-                                             mu_min, watch, n, m, error);
+    return ll_search_microfacet_from(p->v[ALPHA], p->v[ETA], p->v[K], p->choice,
+                                     p->v[LL_CONDUCTOR_COMPENSATE] != 0.0, tolerance, mu_min,
+                                     watch, n, m, error);
 }
 
 static void conductor_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
@@ -225,5 +225,5 @@ const ll_word_desc ll_word_conductor = {
       LL_PARAM_ALPHA(ALPHA), LL_PARAM_COMPENSATE(LL_CONDUCTOR_COMPENSATE),
       LL_PARAM_DISTRIBUTION },
     conductor_finish, conductor_needs_colour, NULL, conductor_params, conductor_resolution,
-    conductor_cost, conductor_build, conductor_metadata, NULL, 0
+    conductor_cost, conductor_build, conductor_metadata, NULL, 0, 1
 };

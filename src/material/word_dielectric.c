@@ -44,8 +44,8 @@ static ll_status dielectric_resolution(const ll_word_params *p, double tolerance
                                        double *error)
 {
     /* The layer dielectric_build makes: with or without the compensation. */
-    return ll_search_microfacet_distribution(p->v[1], p->v[0], 0.0, p->choice, p->v[2] != 0.0,
-                                             tolerance, mu_min, watch, n, m, error);
+    return ll_search_microfacet_from(p->v[1], p->v[0], 0.0, p->choice, p->v[2] != 0.0,
+                                     tolerance, mu_min, watch, n, m, error);
 }
 
 static void dielectric_cost(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out)
@@ -81,5 +81,5 @@ const ll_word_desc ll_word_dielectric = {
       LL_PARAM_ALPHA(LL_DIELECTRIC_ALPHA), LL_PARAM_COMPENSATE(LL_DIELECTRIC_COMPENSATE),
       LL_PARAM_DISTRIBUTION },
     NULL, NULL, dielectric_index_ratio, dielectric_params, dielectric_resolution,
-    dielectric_cost, dielectric_build, dielectric_metadata, NULL, 0
+    dielectric_cost, dielectric_build, dielectric_metadata, NULL, 0, 1
 };

@@ -59,5 +59,5 @@ const ll_word_desc ll_word_diffuse = {
     { { "albedo", 1, LL_DIFFUSE_ALBEDO, 0.0, 1.0, 1, 1,
         "an albedo is a fraction of light, in [0, 1]", NULL, NULL } },
     NULL, NULL, NULL, diffuse_params, diffuse_resolution, diffuse_cost, diffuse_build,
-    diffuse_metadata, NULL, 0
+    diffuse_metadata, NULL, 0, 0
 };

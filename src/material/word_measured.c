@@ -178,5 +178,5 @@ const ll_word_desc ll_word_measured = {
     "measured", "measured file=gold-metallic-paint.binary", "measured", 1, 0,
     { { "file", 0, -1, 0, 0, 0, 0, NULL, measured_parse_file, NULL } },
     measured_finish, measured_needs_colour, NULL, measured_params, measured_resolution,
-    measured_cost, measured_build, measured_metadata, measured_destroy, 1u << 3
+    measured_cost, measured_build, measured_metadata, measured_destroy, 1u << 3, 0
 };

@@ -216,5 +216,5 @@ const ll_word_desc ll_word_medium = {
       { "kappa", 0, KAPPA, 0.0, 1e4, 1, 1,
         "the von Mises-Fisher concentration kappa must be in [0, 10000]", NULL, NULL } },
     medium_finish, NULL, NULL, medium_params, medium_resolution, medium_cost, medium_build,
-    medium_metadata, NULL, 1u << LL_MEDIUM_SHAPE
+    medium_metadata, NULL, 1u << LL_MEDIUM_SHAPE, 0
 };

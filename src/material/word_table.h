@@ -148,7 +148,9 @@ struct ll_word_desc {
      * HUGE_VAL when it is beyond the search's reach and not verified); may
      * fail with a message naming the largest supported parameter. watch
      * (nullable): a search polls it (LL_ERROR_CANCELLED) and advances its
-     * stage by up to LL_PROBE_SEARCH_UNITS (search/probe.h). */
+     * stage by up to LL_PROBE_SEARCH_UNITS (search/probe.h). A word with
+     * resolution_starts reads *n_nodes, *n_orders on entry: where to start
+     * its search (0, 0: its own first guess). */
     ll_status (*resolution)(const ll_word_params *p, double tolerance, double mu_min,
                             ll_watch *watch, size_t *n_nodes, size_t *n_orders, double *error);
     void (*cost)(const ll_word_params *p, size_t n, size_t m, ll_word_cost *out);
@@ -162,6 +164,11 @@ struct ll_word_desc {
     /* Bit k set: the resolution hook reads v[k] (words whose read values
      * are equal share one resolution search); 0: it may read them all. */
     unsigned resolution_reads;
+    /* 1: the resolution hook starts where it is told (above): a channel's
+     * search begins at the answer for the channel before it, which is
+     * nearer than the word's own first guess (gold's three channels at
+     * alpha 0.1 each chose 112 x 277, from a first guess of 76 x 227). */
+    int resolution_starts;
 };
 
 /* The words, in the order messages list them. */

@@ -21,7 +21,7 @@
  * library's version (material/resolution_cache.c), so that a build of the
  * same version number with another search does not take a choice it would
  * no longer make: raise it with every change that can change a choice. */
-#define LL_SEARCH_REVISION 2
+#define LL_SEARCH_REVISION 3
 
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
@@ -243,6 +243,13 @@ LL_INTERNAL ll_status ll_search_microfacet_distribution(double alpha, double eta
                                                         double mu_min, ll_watch *watch,
                                                         size_t *n_nodes, size_t *n_orders,
                                                         double *error);
+/* The same, from a start: *n_nodes, *n_orders on entry (0, 0: the fit's
+ * guess, as above). */
+LL_INTERNAL ll_status ll_search_microfacet_from(double alpha, double eta_re, double eta_im,
+                                                int distribution, int compensate,
+                                                double tolerance, double mu_min,
+                                                ll_watch *watch, size_t *n_nodes,
+                                                size_t *n_orders, double *error);
 LL_INTERNAL ll_status ll_search_henyey_greenstein(double g, double tolerance, double mu_min,
                                                   ll_watch *watch, size_t *n_nodes,
                                                   size_t *n_orders, double *error);

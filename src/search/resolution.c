@@ -164,16 +164,35 @@ ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double 
                                             double mu_min, ll_watch *watch, size_t *n_nodes,
                                             size_t *n_orders, double *error)
 {
+    size_t n = 0, m = 0;
+    ll_status s = ll_search_microfacet_from(alpha, eta_re, eta_im, distribution, compensate,
+                                            tolerance, mu_min, watch, n_nodes ? &n : NULL,
+                                            n_orders ? &m : NULL, error);
+    if (s == LL_OK) {
+        *n_nodes = n;
+        *n_orders = m;
+    }
+    return s;
+}
+
+ll_status ll_search_microfacet_from(double alpha, double eta_re, double eta_im, int distribution,
+                                    int compensate, double tolerance, double mu_min,
+                                    ll_watch *watch, size_t *n_nodes, size_t *n_orders,
+                                    double *error)
+{
     static const char fn[] = "ll_resolution_search_microfacet";
     ll_probe_set set;
     interface_ctx ctx;
-    size_t n, m;
+    size_t n, m, start_n, start_m;
     double e = 0.0;
     ll_status s = n_nodes && n_orders
                       ? read_goal(fn, &tolerance, &mu_min)
                       : ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: n_nodes or n_orders is NULL", fn);
-    if (s == LL_OK)
-        s = ll_fit_microfacet(alpha, eta_re, eta_im, &n, &m);
+    if (s != LL_OK)
+        return s;
+    start_n = *n_nodes;
+    start_m = *n_orders;
+    s = ll_fit_microfacet(alpha, eta_re, eta_im, &n, &m);
     if (s != LL_OK)
         return s;
     if (eta_im == 0.0 && eta_re == 1.0) {
@@ -204,16 +223,22 @@ ll_status ll_search_microfacet_distribution(double alpha, double eta_re, double 
     ctx.compensate = compensate;
     ctx.jump = distribution == LL_DISTRIBUTION_GGX && eta_im == 0.0;
     ctx.set = &set;
-    /* n: the fit's guess; m: what the probes' own series need. */
+    /* n: the fit's guess; m: what the probes' own series need; or the
+     * start, where one is given. */
     s = ll_probe_interface_model_distribution(eta_re, eta_im, alpha, distribution, &ctx.mf);
     if (s == LL_OK && compensate)
         s = ll_probe_compensation_model_distribution(eta_re, eta_im, alpha, distribution,
                                                      &ctx.mf0);
     if (s == LL_OK)
         s = ll_probe_interface_orders(ctx.mf, tolerance, &set, &m);
-    if (s == LL_OK)
+    if (s == LL_OK) {
+        if (start_n)
+            n = start_n;
+        if (start_m)
+            m = start_m;
         s = ll_probe_search(&set, interface_eval, &ctx, watch, tolerance, SEARCH_MIN_NODES,
                             SEARCH_LIMIT, fn, &n, &m, &e);
+    }
     while (ctx.n_made > 0)
         ll_probe_compensation_free(&ctx.made[--ctx.n_made]);
     while (ctx.n_memos > 0)
