@@ -5,9 +5,12 @@
  * the standard's formula), every code back to itself, and rounding to
  * nearest with ties to even at the midpoint between every two neighbours
  * (and just beside it), the range's end and the subnormals included.
+ * And the tensor writer's float16 fields: read back as written (rounded),
+ * a value beyond the range refused naming the field, the file untouched.
  */
 #include "test_util.h"
 #include "reader/tensor.h"
+#include "writer/bsdf_write_tensor.h"
 
 /* IEEE 754 binary16 by its definition. */
 static double decode(unsigned h)
@@ -81,12 +84,50 @@ static void test_range(void **state)
     assert_true(fabs((double)ll_half_round(0.1f) / 0.1f - 1.0) <= 0x1p-11);
 }
 
+static void test_written_fields(void **state)
+{
+    float v[2][3] = { { 0.1f, 1.0f, 65504.0f }, { 0.0f, 3.0f, 0x1p-24f } };
+    ll_tensor_out_field f = { "basis0.vndf", LL_TENSOR_F16, 2, { 2, 3 }, v, NULL, NULL };
+    char path[600];
+    unsigned char *bytes;
+    size_t size = 0, i;
+    ll_tensor_file tf;
+    (void)state;
+    snprintf(path, sizeof path, "%s/half.tab", ll_test_dir());
+    assert_int_equal(ll_tensor_write(path, "test", &f, 1), LL_OK);
+    bytes = ll_test_read_file(path, &size);
+    assert_non_null(bytes);
+    assert_int_equal(ll_tensor_parse(bytes, size, path, &tf), LL_OK);
+    assert_int_equal(tf.fields[0].dtype, LL_TENSOR_F16);
+    assert_int_equal(tf.fields[0].bytes, 12);
+    for (i = 0; i < 6; ++i)
+        assert_true(ll_tensor_value(&tf.fields[0], i) == ll_half_round(v[i / 3][i % 3]));
+    ll_tensor_file_free(&tf);
+    free(bytes);
+    /* 65520 rounds to infinity; a NaN: refused, naming field and element. */
+    v[1][1] = 65520.0f;
+    assert_int_equal(ll_tensor_write(path, "test", &f, 1), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "\"basis0.vndf\": element 4 = 65520"));
+    v[1][1] = NAN;
+    assert_int_equal(ll_tensor_write(path, "test", &f, 1), LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "\"basis0.vndf\": element 4"));
+    /* The file as the first write left it. */
+    bytes = ll_test_read_file(path, &size);
+    assert_non_null(bytes);
+    assert_int_equal(ll_tensor_parse(bytes, size, path, &tf), LL_OK);
+    assert_true(ll_tensor_value(&tf.fields[0], 4) == 3.0f);
+    ll_tensor_file_free(&tf);
+    free(bytes);
+    unlink(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_code),
         cmocka_unit_test(test_ties_to_even),
         cmocka_unit_test(test_range),
+        cmocka_unit_test(test_written_fields),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
 }

@@ -227,9 +227,9 @@ static void floor_slice(writer *w, size_t t, double top)
 
 /* The n values v rounded to float16 in place (w->half), or an error naming
  * the table if one lies beyond float16's range: the values are f cos
- * 4 sigma / D and densities over the unit square, of order 1 (at most 120
- * for a coat over gold), so one that is not would be a fault of the
- * source rather than a value to clamp. */
+ * 4 sigma / D and densities over the unit square, of order 1
+ * (docs/formats.md, "Textured files"), so one near 65504 would be a fault
+ * of the source rather than a value to clamp. */
 static ll_status round_half(const writer *w, float *v, size_t n, const char *table)
 {
     size_t i;
@@ -429,7 +429,9 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         if ((s = ll_watch_check(&watch, FN)) != LL_OK)
             goto done;
     }
-    /* Rounded before the warp is built from them (the file's header). */
+    /* A float16 VNDF is rounded before the warp that places the values is
+     * built from it (the file's header says why); allocate() checked the
+     * product. */
     if ((s = round_half(&w, w.vndf, w.n_ti * w.nv * w.nv, "vndf")) != LL_OK)
         goto done;
     {
@@ -484,7 +486,7 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         for (t = 0; t < w.n_ti; ++t)
             floor_slice(&w, t, -1.0);
         /* The spectra are rounded as they are written (the textured
-         * writer's float16 fields). */
+         * writer's float16 fields); allocate() checked the product. */
         if ((s = round_half(&w, w.lum, w.n_ti * w.ns * w.ns, "luminance")) != LL_OK)
             goto done;
         for (t = 0; t < w.spectra.n_l; ++t)
