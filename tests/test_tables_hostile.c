@@ -7,7 +7,10 @@
  * transmissive (extended) table: its layout, eta and the fields of its
  * sets, which errors name with their prefix. A textured table file too:
  * its parameter block, its layout, each basis' fields named in full
- * (reader/tables_textured.c).
+ * (reader/tables_textured.c), and its float16 grids: a NaN, an infinity or
+ * a negative value there is refused as in a float32 field, and float16 is
+ * refused outside a textured file's grids (the format's fields, which
+ * Mitsuba's and pbrt-v4's `measured` read, are float32).
  */
 #include "test_bsdf_util.h"
 #include "support/support.h"
@@ -620,6 +623,76 @@ static void test_textured_fields(void **state)
     free(d);
 }
 
+/* Element i of the float16 field name set to the binary16 bits h. */
+static void set_f16(unsigned char *d, const char *name, size_t i, unsigned h)
+{
+    size_t off, shape, rank, at;
+    locate(d, name, &off, &shape, &rank);
+    at = (size_t)get_u64(d + off) + 2 * i;
+    d[at] = (unsigned char)(h & 0xffu);
+    d[at + 1] = (unsigned char)(h >> 8);
+}
+
+/* The dtype code of field name set to code (its data then lies inside
+ * the file still, for a code of fewer bytes). */
+static void set_dtype(unsigned char *d, const char *name, unsigned char code)
+{
+    size_t off, shape, rank;
+    locate(d, name, &off, &shape, &rank);
+    d[off - 1] = code;
+}
+
+static void test_textured_float16(void **state)
+{
+    /* binary16: a quiet NaN, +infinity, -1, -0 (which is >= 0: read). */
+    static const unsigned bad[3] = { 0x7e00u, 0x7c00u, 0xbc00u };
+    static const char *const grids[3] = { "basis1.vndf", "basis1.luminance", "basis6.rgb" };
+    unsigned char *d;
+    size_t off, shape, rank;
+    ll_bsdf *b = NULL;
+    char what[64];
+    int g, k;
+    (void)state;
+    for (g = 0; g < 3; ++g) {
+        locate(tex, grids[g], &off, &shape, &rank);
+        assert_int_equal(tex[off - 1], 9); /* float16 */
+        for (k = 0; k < 3; ++k) {
+            d = copy_of(tex, tex_size);
+            set_f16(d, grids[g], 1, bad[k]);
+            snprintf(what, sizeof what, "\"%s\": element 1 = ", grids[g]);
+            expect(d, tex_size, LL_ERROR_FORMAT, what);
+            free(d);
+        }
+    }
+    d = copy_of(tex, tex_size);
+    set_f16(d, "basis1.luminance", 1, 0x8000u);
+    assert_int_equal(ll_bsdf_open_memory(d, tex_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    free(d);
+    /* A textured file's small fields are float32 as an opaque file's. */
+    d = copy_of(tex, tex_size);
+    set_dtype(d, "basis2.theta_i", 9);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis2.theta_i\" is float16");
+    free(d);
+    d = copy_of(tex, tex_size);
+    set_dtype(d, "basis2.sigma", 9);
+    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis2.sigma\" is float16");
+    free(d);
+    /* An untextured file's grids: float32, as `measured` reads them. */
+    d = copy_of(good, good_size);
+    set_dtype(d, "vndf", 9);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\" is float16");
+    free(d);
+    d = copy_of(good, good_size);
+    set_dtype(d, "rgb", 9);
+    expect(d, good_size, LL_ERROR_FORMAT, "\"rgb\" is float16");
+    free(d);
+    d = copy_of(tgood, tgood_size);
+    set_dtype(d, "reflect_top.luminance", 9);
+    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_top.luminance\" is float16");
+    free(d);
+}
+
 static void test_textured_truncated_and_damaged(void **state)
 {
     static const double wo[3] = { 0.3, 0.1, 0.9 };
@@ -659,6 +732,7 @@ int main(void)
         cmocka_unit_test(test_transmissive_damage),
         cmocka_unit_test(test_textured_opens),
         cmocka_unit_test(test_textured_fields),
+        cmocka_unit_test(test_textured_float16),
         cmocka_unit_test(test_textured_truncated_and_damaged),
         cmocka_unit_test(test_textured_out_of_memory),
     };

@@ -149,7 +149,10 @@ typedef struct ll_tables_options {
  * holds it ("layerlab_parameter_counts", "layerlab_parameter_positions",
  * float32), b's metadata as "layerlab_metadata", and for each basis k a
  * complete set of the format's fields named "basis<k>." + name, written as
- * the tables of that basis alone (its own grid chosen by the tolerance).
+ * the tables of that basis alone (its own grid chosen by the tolerance,
+ * measured on the tables as stored), its grids "vndf", "luminance" and
+ * "rgb" (or "spectra") as float16 (IEEE binary16), the other fields
+ * float32.
  * ll_bsdf_open reads it as a textured handle: the parameters, names and
  * ll_bsdf_basis_coefficients as on b; evaluation blends the bases' tables
  * with the caller's basis weights, sampling picks a basis with probability

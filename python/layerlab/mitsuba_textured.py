@@ -201,9 +201,20 @@ class TexturedTables:
                 lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), (mi.Float(0.0),) * 3,
                          mi.Bool(False)))
             wo = dr.select(mask, o, wo)
-            pdf = dr.select(mask, p, pdf)
-            value = [dr.select(mask, val[c], value[c]) for c in range(3)]
             ok = dr.select(mask, f, ok)
+        # The picked basis' value and pdf at wo as eval_pdf() computes them
+        # (through the inverse warps), not its sampler's float32 products
+        # along the forward warps: a sample's pdf and weight are then
+        # eval_pdf()'s at its direction, as the C reader's are, where the
+        # sampler's parted from them by up to 1.2e-4 on bases of float16
+        # grids (coat 0.05 over gold 0.3).
+        for k, t in enumerate(self.sets):
+            mask = ok & (pick == k)
+            if not self.jit and not mask:
+                continue
+            v, p = self._eval_basis(t, wi, wo, mask, True, True)
+            value = [dr.select(mask, v[c], value[c]) for c in range(3)]
+            pdf = dr.select(mask, p, pdf)
         # The blend at wo: the picked basis' own value and pdf, the others'
         # evaluated there.
         pdf = a_pick * pdf

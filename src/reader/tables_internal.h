@@ -87,7 +87,8 @@ LL_INTERNAL void ll_measured_free(ll_measured *m);
 /* One material of a parsed file: its fields named prefix +
  * the format's names ("" the plain file, "basis3." a textured file's
  * basis 3), every one checked as ll_measured_open checks them (errors
- * name the field in full). */
+ * name the field in full). A basis' grids (vndf, luminance, rgb or
+ * spectra) may be float16, the plain file's are float32. */
 LL_INTERNAL ll_status ll_measured_read_set(const ll_tensor_file *t, const char *prefix,
                                            const char *file, ll_measured **out);
 /* b->metadata from the field "layerlab_metadata" (else "description"). */

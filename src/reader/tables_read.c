@@ -13,6 +13,12 @@
  * and seen by the CIE 1931 observer, white-normalised on the file's own
  * wavelengths), so that evaluation and every consumer of the RGB calls
  * work on it unchanged.
+ *
+ * A textured file's sets (tables_textured.c) may store their three grids
+ * (vndf, luminance, rgb or spectra) as float16, read as floats; every
+ * other field, and every field of an untextured file, is float32 as the
+ * format says (Mitsuba 3's `measured` refuses a file whose fields are
+ * not).
  */
 #include "reader/tables_internal.h"
 #include "reader/tensor.h"
@@ -33,7 +39,7 @@
 
 static double get_field(const void *ctx, size_t index)
 {
-    return (double)ll_tensor_f32(ctx, index);
+    return (double)ll_tensor_value(ctx, index);
 }
 
 static double get_double(const void *ctx, size_t index)
@@ -41,15 +47,21 @@ static double get_double(const void *ctx, size_t index)
     return ((const double *)ctx)[index];
 }
 
-/* Field name: present, float32, of the given rank. */
-static ll_status require(const ll_tensor_file *t, const char *name, size_t rank,
-                         const char *file, const ll_tensor_field **out)
+/* Field name: present, float32 (or float16 if half), of the given rank. */
+static ll_status require_as(const ll_tensor_file *t, const char *name, size_t rank, int half,
+                            const char *file, const ll_tensor_field **out)
 {
     const ll_tensor_field *f = ll_tensor_find(t, name);
     size_t i;
     if (!f)
         return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\" is missing", file, name);
-    if (f->dtype != LL_TENSOR_F32 || f->rank != rank)
+    if (f->dtype == LL_TENSOR_F16 && !half)
+        return ll_fail(LL_ERROR_FORMAT,
+                       "ll_bsdf_open: %s: field \"%s\" is float16, which only the grids of a "
+                       "textured file's bases (vndf, luminance, rgb, spectra) may be; the "
+                       "format's fields are float32",
+                       file, name);
+    if ((f->dtype != LL_TENSOR_F32 && f->dtype != LL_TENSOR_F16) || f->rank != rank)
         return ll_fail(LL_ERROR_FORMAT,
                        "ll_bsdf_open: %s: field \"%s\" must be float32 of rank %zu "
                        "(dtype code %d, rank %zu)",
@@ -59,7 +71,7 @@ static ll_status require(const ll_tensor_file *t, const char *name, size_t rank,
             return ll_fail(LL_ERROR_FORMAT, "ll_bsdf_open: %s: field \"%s\" has extent 0",
                            file, name);
     for (i = 0; i < f->count; ++i) {
-        float v = ll_tensor_f32(f, i);
+        float v = ll_tensor_value(f, i);
         if (!(v >= 0.0f) || !((double)v <= LL_MEASURED_MAX_VALUE))
             return ll_fail(LL_ERROR_FORMAT,
                            "ll_bsdf_open: %s: field \"%s\": element %zu = %g is not a finite "
@@ -68,6 +80,12 @@ static ll_status require(const ll_tensor_file *t, const char *name, size_t rank,
     }
     *out = f;
     return LL_OK;
+}
+
+static ll_status require(const ll_tensor_file *t, const char *name, size_t rank,
+                         const char *file, const ll_tensor_field **out)
+{
+    return require_as(t, name, rank, 0, file, out);
 }
 
 /* A parameter list: strictly ascending. */
@@ -177,7 +195,7 @@ static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *la
         for (l = 0; l < n_l; ++l) {
             size_t from = (t * n_l + l) * plane;
             for (q = 0; q < plane; ++q) {
-                double v = (double)ll_tensor_f32(spectra, from + q);
+                double v = (double)ll_tensor_value(spectra, from + q);
                 for (c = 0; c < 3; ++c)
                     rgb[(t * 3 + (size_t)c) * plane + q] += w[l][c] * v;
             }
@@ -195,6 +213,7 @@ static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *la
 typedef struct shared {
     const char *file;
     int spectral, jacobian, extended;
+    int half;                /* the grids may be float16 (a textured set) */
     size_t n_ti, n_pi;
     const ll_tensor_field *lam;
     double *theta_v, *phi_v, *lambda_v;
@@ -269,9 +288,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         return name_error(sh->file, prefix, "luminance");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
-        (s = require(t, nv, 4, file, &vndf)) != LL_OK ||
-        (s = require(t, nl, 4, file, &lum)) != LL_OK ||
-        (s = require(t, nr, 5, file, &rgb)) != LL_OK ||
+        (s = require_as(t, nv, 4, sh->half, file, &vndf)) != LL_OK ||
+        (s = require_as(t, nl, 4, sh->half, file, &lum)) != LL_OK ||
+        (s = require_as(t, nr, 5, sh->half, file, &rgb)) != LL_OK ||
         (sh->extended && (s = require(t, na, 1, file, &alb)) != LL_OK) ||
         (sh->extended && transmit && (s = require(t, ne, 1, file, &warp)) != LL_OK) ||
         (sh->extended && !transmit && ll_tensor_find(t, nf) &&
@@ -447,6 +466,8 @@ ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const 
     ll_status s;
     memset(&sh, 0, sizeof sh);
     sh.file = file;
+    /* A set under a prefix is a textured file's basis (tables_textured.c). */
+    sh.half = base[0] != '\0';
     /* As Mitsuba: "wavelengths" makes the file spectral (pbrt reads only
      * such files). */
     sh.spectral = find_named(t, base, "wavelengths") != NULL;

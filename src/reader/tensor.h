@@ -66,4 +66,16 @@ LL_INTERNAL const ll_tensor_field *ll_tensor_find(const ll_tensor_file *t, const
 /* Element i of a float32 field, decoded from little-endian bytes. */
 LL_INTERNAL float ll_tensor_f32(const ll_tensor_field *f, size_t i);
 
+/* Element i of a float32 or float16 field, as a float (tensor_half.c). */
+LL_INTERNAL float ll_tensor_value(const ll_tensor_field *f, size_t i);
+
+/* IEEE 754 binary16 (tensor_half.c): to float (exact), from float
+ * (round to nearest, ties to even; from 65520 on an infinity, NaN a
+ * NaN), and v rounded to the nearest binary16 as a float. */
+LL_INTERNAL float ll_half_to_float(uint16_t h);
+LL_INTERNAL uint16_t ll_half_from_float(float v);
+LL_INTERNAL float ll_half_round(float v);
+/* The largest finite binary16. */
+#define LL_HALF_MAX 65504.0f
+
 #endif /* LL_TENSOR_H */

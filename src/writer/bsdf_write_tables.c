@@ -18,6 +18,13 @@
  * A spectral file shares steps 1-3 (the warp of the RGB source) and takes
  * its values per wavelength (bsdf_write_tables_spectra.c) at the same
  * directions, which step 3 keeps for it.
+ *
+ * The tables of a textured file's basis are stored as float16 (half):
+ * then the VNDF is rounded to float16 before step 3 builds its warp, since
+ * a reader builds the warp from the rounded values and the nodes must sit
+ * where its warp puts them, and the values and luminance are rounded as
+ * they are computed, so that what the tolerance search measures is what
+ * the file holds.
  */
 #include "layerlab/ll_tables.h"
 #include "writer/bsdf_write_tables.h"
@@ -38,6 +45,9 @@
 /* Light transmitted beyond this fraction of the largest reflected a_0
  * makes a file transmissive (a conductor's transmitted blocks are 0). */
 #define TRANSMISSION_TOLERANCE 1e-6
+/* The smallest positive float16 (a subnormal): a float16 table's
+ * luminance floor stays above it, so that rounding keeps it positive. */
+#define HALF_TINY 0x1p-24
 
 typedef struct writer {
     const ll_bsdf *b;
@@ -45,6 +55,7 @@ typedef struct writer {
     float *theta_i, phi_i[1], *ndf, *sigma, *vndf, *lum, *rgb;
     ll_warp2d ndf_w, sigma_w, vndf_w;
     int spectral;
+    int half;                /* the grids rounded to float16              */
     double *geom;            /* spectral: [n_ti][ns * ns][wo, scale]      */
     float *wavelengths;      /* spectral: [n_l] as stored                 */
     ll_tables_spectra spectra;
@@ -207,9 +218,33 @@ static void floor_slice(writer *w, size_t t, double top)
             if ((double)lum[x] > top)
                 top = (double)lum[x];
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
+    if (w->half && floor_v < HALF_TINY)
+        floor_v = HALF_TINY;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
             lum[x] = (float)floor_v;
+}
+
+/* The n values v rounded to float16 in place (w->half), or an error naming
+ * the table if one lies beyond float16's range: the values are f cos
+ * 4 sigma / D and densities over the unit square, of order 1
+ * (docs/formats.md, "Textured files"), so one near 65504 would be a fault
+ * of the source rather than a value to clamp. */
+static ll_status round_half(const writer *w, float *v, size_t n, const char *table)
+{
+    size_t i;
+    if (!w->half)
+        return LL_OK;
+    for (i = 0; i < n; ++i) {
+        float r = ll_half_round(v[i]);
+        if (!(r <= LL_HALF_MAX))
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           FN ": table \"%s\": element %zu = %g is beyond float16's range "
+                           "(65504), in which a textured file's tables are stored",
+                           table, i, (double)v[i]);
+        v[i] = r;
+    }
+    return LL_OK;
 }
 
 /* Steps 3 and 4 for slice t; a spectral file keeps each node's direction
@@ -277,7 +312,9 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
         (s = ll_tables_horizon_fit_rgb(&h, ns, below, target, rgb, lum)) != LL_OK)
         return s;
     floor_slice(w, t, -1.0);
-    return LL_OK;
+    if ((s = round_half(w, rgb, 3 * plane, "rgb")) != LL_OK)
+        return s;
+    return round_half(w, lum, plane, "luminance");
 }
 
 /* JSON text of a string (quotes and escapes), appended to buf. */
@@ -333,7 +370,7 @@ static char *metadata_text(const writer *w, double alpha, const char *figures, s
 }
 
 ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tables_options *opts,
-                               const char *figures, const ll_monitor *monitor)
+                               const char *figures, int half, const ll_monitor *monitor)
 {
     ll_tables_options o;
     writer w;
@@ -347,13 +384,17 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": bsdf or path is NULL");
     if ((s = check_options(opts, &o)) != LL_OK || (s = check_source(b)) != LL_OK)
         return s;
-    /* A transmissive file: every lobe, both sides, in an extended file. */
+    /* A transmissive file: every lobe, both sides, in an extended file
+     * (float32: a textured file's bases are opaque). */
     if (ll_tables_transmits(b))
-        return ll_tables_write_lobes(b, path, &o, figures, monitor);
+        return half ? ll_fail(LL_ERROR_UNSUPPORTED,
+                              FN ": float16 tables of a transmissive file are not written")
+                    : ll_tables_write_lobes(b, path, &o, figures, monitor);
     if ((s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
         return s;
     w.b = b;
     w.spectral = o.format == LL_TABLES_SPECTRAL;
+    w.half = half;
     w.spectra.n_l = w.spectral ? o.n_wavelengths : 0;
     w.n_ti = o.n_theta_i;
     w.nv = o.vndf_size;
@@ -379,6 +420,11 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         if ((s = ll_watch_check(&watch, FN)) != LL_OK)
             goto done;
     }
+    /* A float16 VNDF is rounded before the warp that places the values is
+     * built from it (the file's header says why); allocate() checked the
+     * product. */
+    if ((s = round_half(&w, w.vndf, w.n_ti * w.nv * w.nv, "vndf")) != LL_OK)
+        goto done;
     {
         double phi[1] = { 0.0 }, *theta = ll_alloc_array(w.n_ti, sizeof(double));
         const double *params[2];
@@ -430,6 +476,10 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
             goto done;
         for (t = 0; t < w.n_ti; ++t)
             floor_slice(&w, t, -1.0);
+        /* The spectra are rounded as they are written (the textured
+         * writer's float16 fields); allocate() checked the product. */
+        if ((s = round_half(&w, w.lum, w.n_ti * w.ns * w.ns, "luminance")) != LL_OK)
+            goto done;
         for (t = 0; t < w.spectra.n_l; ++t)
             w.wavelengths[t] = (float)o.wavelengths[t];
     }

@@ -130,9 +130,20 @@ LL_INTERNAL void ll_tables_spectra_close(ll_tables_spectra *sp);
 /* ll_tables_write_from_bsdf at the grid opts gives (a size of 0 takes
  * 32, 128 or 64; the tolerance is not read): one table, no measurement.
  * figures (nullable): JSON members ending in ", " that the metadata field
- * holds after the grid. */
+ * holds after the grid. half: the opaque b's tables for a textured file,
+ * whose VNDF, luminance and values are stored as float16: each rounded to
+ * float16 where it is made (the VNDF before the warp built from it), in a
+ * float32 file that converts to float16 exactly. */
 LL_INTERNAL ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts, const char *figures,
+                                           int half, const ll_monitor *monitor);
+
+/* ll_tables_write_from_bsdf of the untextured, opaque b (one basis of a
+ * textured file) with its grids rounded to float16 as
+ * ll_tables_write_grid's half says, the tolerance measured on the
+ * rounded tables (bsdf_write_tables_search.c). */
+LL_INTERNAL ll_status ll_tables_write_half(const ll_bsdf *b, const char *path,
+                                           const ll_tables_options *opts,
                                            const ll_monitor *monitor);
 
 /* The reflected (r) and transmitted (t, 0 unless transmissive) albedo per

@@ -76,6 +76,7 @@ typedef struct search {
     int albedo_grows_sample;  /* whose turn an albedo miss is                */
     double tolerance;
     double sets;              /* table sets: 4 for a transmissive source     */
+    int half;                 /* float16 grids (a textured file's basis)    */
 } search;
 
 static void grid_at(const search *s, ll_tables_options *g)
@@ -172,14 +173,14 @@ static ll_monitor monitor_of(ll_tables_share *st, double lo, double hi)
  * spectral file: its spectra share that warp, and measuring them would
  * build every wavelength again for each grid tried. */
 static ll_status try_grid(const ll_bsdf *b, const ll_tables_source *ref, const char *at,
-                          const ll_tables_options *g, const ll_monitor *monitor,
+                          const ll_tables_options *g, int half, const ll_monitor *monitor,
                           ll_tables_figures *f)
 {
     ll_bsdf *t = NULL;
     ll_tables_options rgb = *g;
     ll_status s;
     rgb.format = LL_TABLES_RGB;
-    s = ll_tables_write_grid(b, at, &rgb, NULL, monitor);
+    s = ll_tables_write_grid(b, at, &rgb, NULL, half, monitor);
     if (s != LL_OK)
         return s;
     if ((s = ll_bsdf_open(at, NULL, &t)) != LL_OK)
@@ -210,7 +211,7 @@ static ll_status run(const ll_bsdf *b, const char *path, search *s, const char *
     for (;;) {
         grid_at(s, &g);
         m = monitor_of(progress, 0.9 - left, 0.9 - 0.5 * left);
-        if ((st = try_grid(b, ref, scratch, &g, &m, &f)) != LL_OK) {
+        if ((st = try_grid(b, ref, scratch, &g, s->half, &m, &f)) != LL_OK) {
             ll_free(ref);
             return st;
         }
@@ -226,11 +227,12 @@ static ll_status run(const ll_bsdf *b, const char *path, search *s, const char *
              "\"f_median\": %.3g, \"f_p95\": %.3g, \"f_p99\": %.3g}, ",
              s->tolerance, met ? "true" : "false", f.albedo, f.p50, f.p95, f.p99);
     m = monitor_of(progress, 0.9, 1.0);
-    return ll_tables_write_grid(b, path, &g, figures, &m);
+    return ll_tables_write_grid(b, path, &g, figures, s->half, &m);
 }
 
-ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
-                                    const ll_tables_options *opts, const ll_monitor *monitor)
+/* ll_tables_write_from_bsdf, its grids rounded to float16 if half. */
+static ll_status write_tables(const ll_bsdf *b, const char *path, const ll_tables_options *opts,
+                              int half, const ll_monitor *monitor)
 {
     ll_tables_options defaults = LL_TABLES_OPTIONS_INIT;
     ll_monitor none = LL_MONITOR_INIT;
@@ -252,15 +254,17 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
                        FN ": the file is a textured table file; convert the textured .bsdf it "
                        "was made from");
     if (b->n_parameters > 0)
-        return ll_tables_write_textured(b, path, &s.o, monitor);
+        return half ? ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": a basis is untextured")
+                    : ll_tables_write_textured(b, path, &s.o, monitor);
     if (s.o.format == LL_TABLES_SPECTRAL && ll_tables_transmits(b))
         return ll_fail(LL_ERROR_UNSUPPORTED,
                        FN ": spectral tables of a transmissive file are not written by this "
                        "version (LL_TABLES_RGB writes them)");
     if (s.o.n_theta_i && s.o.vndf_size && s.o.sample_size)
-        return ll_tables_write_grid(b, path, &s.o, NULL, monitor);
+        return ll_tables_write_grid(b, path, &s.o, NULL, half, monitor);
     s.tolerance = s.o.tolerance != 0.0 ? s.o.tolerance : DEFAULT_TOLERANCE;
     s.sets = ll_tables_transmits(b) ? 4.0 : 1.0;
+    s.half = half;
     /* The floor per set: a transmissive file holds four. */
     s.cap = (double)b->file_size > s.sets * SIZE_CAP_FLOOR ? (double)b->file_size
                                                           : s.sets * SIZE_CAP_FLOOR;
@@ -286,4 +290,16 @@ ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
     unlink(scratch);
     ll_free(scratch);
     return st;
+}
+
+ll_status ll_tables_write_from_bsdf(const ll_bsdf *b, const char *path,
+                                    const ll_tables_options *opts, const ll_monitor *monitor)
+{
+    return write_tables(b, path, opts, 0, monitor);
+}
+
+ll_status ll_tables_write_half(const ll_bsdf *b, const char *path, const ll_tables_options *opts,
+                               const ll_monitor *monitor)
+{
+    return write_tables(b, path, opts, 1, monitor);
 }

@@ -43,10 +43,34 @@ static size_t field_bytes(const ll_tensor_out_field *f, int *ok)
     return bytes;
 }
 
+/* Elements v[0..n) of field f, elements first..first+n of it, as its
+ * dtype: float32 as they are, float16 rounded (a value it cannot hold is
+ * refused rather than stored as an infinity: the readers refuse those). */
+static ll_status put_floats(ll_bsdf_out *o, const ll_tensor_out_field *f, const float *v,
+                            size_t n, size_t first)
+{
+    size_t i;
+    if (f->dtype == LL_TENSOR_F32) {
+        for (i = 0; i < n; ++i)
+            ll_bsdf_out_f32(o, v[i]);
+        return LL_OK;
+    }
+    for (i = 0; i < n; ++i) {
+        uint16_t h = ll_half_from_float(v[i]);
+        if ((h & 0x7c00u) == 0x7c00u)
+            return ll_fail(LL_ERROR_INVALID_ARGUMENT,
+                           "writing field \"%s\": element %zu = %g is not a finite value "
+                           "within float16's range (+-65504)",
+                           f->name, first + i, (double)v[i]);
+        put_u16(o, h);
+    }
+    return LL_OK;
+}
+
 /* A filled field (data NULL): block by block, one block's buffer held. */
 static ll_status fill_blocks(ll_bsdf_out *o, const ll_tensor_out_field *f)
 {
-    size_t block, blocks = 1, per = 1, r, i;
+    size_t block, blocks = 1, per = 1, r;
     float *buf;
     ll_status s = LL_OK;
     for (r = 0; r < f->rank; ++r) {
@@ -60,8 +84,8 @@ static ll_status fill_blocks(ll_bsdf_out *o, const ll_tensor_out_field *f)
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "writing field \"%s\": out of memory", f->name);
     for (block = 0; block < blocks && s == LL_OK; ++block) {
         s = f->fill(f->fill_ctx, block, buf);
-        for (i = 0; s == LL_OK && i < per; ++i)
-            ll_bsdf_out_f32(o, buf[i]);
+        if (s == LL_OK)
+            s = put_floats(o, f, buf, per, block * per);
     }
     ll_free(buf);
     return s;
@@ -77,10 +101,10 @@ static ll_status write_fields(const char *path, const char *fn, const ll_tensor_
     ll_status s;
     for (k = 0; k < n_fields; ++k) {
         size_t len = strlen(fields[k].name);
-        if ((fields[k].dtype != LL_TENSOR_F32 && fields[k].dtype != LL_TENSOR_U8) ||
-            len == 0 || len > LL_TENSOR_MAX_NAME || fields[k].rank > LL_TENSOR_MAX_RANK ||
-            (!fields[k].data && (!fields[k].fill || fields[k].dtype != LL_TENSOR_F32 ||
-                                 fields[k].rank < 2)))
+        int floats = fields[k].dtype == LL_TENSOR_F32 || fields[k].dtype == LL_TENSOR_F16;
+        if ((!floats && fields[k].dtype != LL_TENSOR_U8) || len == 0 ||
+            len > LL_TENSOR_MAX_NAME || fields[k].rank > LL_TENSOR_MAX_RANK ||
+            (!fields[k].data && (!fields[k].fill || !floats || fields[k].rank < 2)))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT, "%s: field \"%s\" cannot be written", fn,
                            fields[k].name);
         at += 2 + len + 2 + 1 + 8 + 8 * fields[k].rank;
@@ -121,20 +145,14 @@ static ll_status write_fields(const char *path, const char *fn, const ll_tensor_
     }
     for (k = 0; k < n_fields; ++k) {
         const ll_tensor_out_field *f = &fields[k];
-        size_t bytes = field_bytes(f, &ok), i;
+        size_t bytes = field_bytes(f, &ok);
         pad_to(o, &at, offset[k]);
-        if (!f->data) {
-            s = fill_blocks(o, f);
-            if (s != LL_OK) {
-                ll_bsdf_out_abort(o);
-                return s;
-            }
-        } else if (f->dtype == LL_TENSOR_U8) {
+        if (f->dtype == LL_TENSOR_U8)
             ll_bsdf_out_bytes(o, f->data, bytes);
-        } else {
-            const float *v = f->data;
-            for (i = 0; i < bytes / 4; ++i)
-                ll_bsdf_out_f32(o, v[i]);
+        else if ((s = f->data ? put_floats(o, f, f->data, bytes / ll_tensor_dtype_size(f->dtype), 0)
+                              : fill_blocks(o, f)) != LL_OK) {
+            ll_bsdf_out_abort(o);
+            return s;
         }
         at += bytes;
     }
