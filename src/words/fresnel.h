@@ -10,19 +10,18 @@
 #include <math.h>
 
 /* Unpolarised reflectance of a smooth dielectric boundary, relative index
- * eta (transmitted side / incident side) for cos_i > 0; cos_i <= 0 is light
- * from the other side, where the relative index is 1/eta. *cos_t gets the
- * refracted cosine with the sign opposite to cos_i (0 under total internal
- * reflection). The s and p amplitudes of Born and Wolf section 1.5.2. */
-static inline double ll_fresnel_dielectric_kernel(double cos_i, double eta, double *cos_t)
+ * eta != 1 (transmitted side / incident side) and inv_eta = 1 / eta, for
+ * cos_i > 0; cos_i <= 0 is light from the other side, where the relative
+ * index is 1/eta. *cos_t gets the refracted cosine with the sign opposite
+ * to cos_i (0 under total internal reflection). The s and p amplitudes of
+ * Born and Wolf section 1.5.2. (An inner loop computes inv_eta once per
+ * pair: the doubles are those of ll_fresnel_dielectric_kernel.) */
+static inline double ll_fresnel_dielectric_inv(double cos_i, double eta, double inv_eta,
+                                               double *cos_t)
 {
     double scale, cos_t2, ci, ct, rs, rp;
-    if (eta == 1.0) {
-        *cos_t = -cos_i;
-        return 0.0;
-    }
     /* Snell: sin_t = sin_i / eta_rel, with eta_rel = eta from this side. */
-    scale = cos_i > 0.0 ? 1.0 / eta : eta;
+    scale = cos_i > 0.0 ? inv_eta : eta;
     cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * (scale * scale);
     if (cos_t2 <= 0.0) {
         *cos_t = 0.0;
@@ -36,6 +35,16 @@ static inline double ll_fresnel_dielectric_kernel(double cos_i, double eta, doub
     rp = (eta * ci - ct) / (eta * ci + ct);
     *cos_t = cos_i > 0.0 ? -ct : ct;
     return 0.5 * (rs * rs + rp * rp);
+}
+
+/* The same for any eta (eta = 1: no boundary, nothing reflected). */
+static inline double ll_fresnel_dielectric_kernel(double cos_i, double eta, double *cos_t)
+{
+    if (eta == 1.0) {
+        *cos_t = -cos_i;
+        return 0.0;
+    }
+    return ll_fresnel_dielectric_inv(cos_i, eta, 1.0 / eta, cos_t);
 }
 
 /* Unpolarised reflectance for a complex relative index eta_re + i eta_im

@@ -57,19 +57,12 @@ static inline double clamp_above(double hi, double x)
     return x < hi ? x : hi;
 }
 
-/* Fresnel's reflectance of a dielectric (ll_fresnel_dielectric_kernel,
- * the same operations) with 1 / eta computed once per pair and eta != 1. */
+/* Fresnel's reflectance of a dielectric, eta != 1, with 1 / eta computed
+ * once per pair (fresnel.h). */
 static inline double dielectric_fresnel(double cos_i, double eta, double inv_eta)
 {
-    double scale = cos_i > 0.0 ? inv_eta : eta;
-    double cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * (scale * scale), ci, ct, rs, rp;
-    if (cos_t2 <= 0.0)
-        return 1.0;
-    ci = fabs(cos_i);
-    ct = sqrt(cos_t2);
-    rs = (ci - eta * ct) / (ci + eta * ct);
-    rp = (eta * ci - ct) / (eta * ci + ct);
-    return 0.5 * (rs * rs + rp * rp);
+    double unused;
+    return ll_fresnel_dielectric_inv(cos_i, eta, inv_eta, &unused);
 }
 
 #if defined(__SSE2__)
