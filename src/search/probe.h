@@ -157,7 +157,9 @@ LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, in
  * other order counts (ll_probe_interface_eval_memo): the search asks for
  * each n at several m, and where a lobe is not widened the series of fewer
  * orders is a prefix of the one with more (ll_microfacet_widened). Slots:
- * 16 per probe pair, by stencil position. Zeroed: empty. */
+ * the distinct node pairs of the stencils (each computed once, however
+ * many probes' stencils hold it), by (block, node o, node i). Zeroed:
+ * empty. */
 typedef struct ll_probe_series_memo {
     size_t n;               /* the node count; 0: empty                    */
     size_t m;               /* the orders the series were computed with    */
