@@ -94,9 +94,10 @@ typedef struct pair_stencil {
 enum { MEMO_NONE, MEMO_FILL, MEMO_REUSE };
 
 /* The node pairs of an evaluation's stencils, each once: probes 0.01
- * apart in mu share most of their stencils' nodes, so the 16 slots of
- * every probe pair name far fewer distinct series (a half to nine tenths
- * of them, by the node count). Ordered by (block, node o, node i). */
+ * apart in mu share stencil nodes wherever the nodes are not much farther
+ * apart, so the 16 slots of every probe pair name fewer distinct series,
+ * the more so the fewer the nodes (docs/benchmarks.md). Ordered by
+ * (block, node o, node i). */
 typedef struct node_pairs {
     size_t count;
     double *mu_o, *mu_i;  /* [count] node cosines as the series takes them */

@@ -133,10 +133,11 @@ LL_INTERNAL void ll_probe_compensation_free(ll_probe_compensation *c);
 /* What ll_layer_set_microfacet of the model's interface on the
  * Gauss-Lobatto nodes of n and m orders followed by ll_layer_eval gives at
  * the probes, from the series at the spline stencils of the probes alone
- * (no layer is built: 16 series per pair), plus the energy compensation's
- * term there when compensation (made for the same n) is not NULL.
- * values holds LL_PROBE_VALUES(set). watch (nullable) is polled per
- * pair. */
+ * (no layer is built: 16 series per pair, each node pair that several
+ * stencils hold computed once), plus the energy compensation's term there
+ * when compensation (made for the same n) is not NULL. values holds
+ * LL_PROBE_VALUES(set). watch (nullable) is polled per node pair and per
+ * probe pair. */
 LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet_model *mf,
                                               const ll_probe_compensation *compensation,
                                               size_t n, size_t m, const ll_probe_set *set,
