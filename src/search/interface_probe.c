@@ -26,6 +26,7 @@
 #include "layerlab/ll_quad.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define TRUE_ORDERS LL_PROBE_TRUE_ORDERS
@@ -92,6 +93,20 @@ typedef struct pair_stencil {
 /* What an evaluation does with the memo's series. */
 enum { MEMO_NONE, MEMO_FILL, MEMO_REUSE };
 
+/* The node pairs of an evaluation's stencils, each once: probes 0.01
+ * apart in mu share stencil nodes wherever the nodes are not much farther
+ * apart, so the 16 slots of every probe pair name fewer distinct series,
+ * the more so the fewer the nodes (docs/benchmarks.md). Ordered by
+ * (block, node o, node i). */
+typedef struct node_pairs {
+    size_t count;
+    double *mu_o, *mu_i;  /* [count] node cosines as the series takes them */
+    size_t *of_slot;      /* [16 n_pairs] the pair of stencil slot 16 p + 4 a + b */
+    const double **c;     /* [count] the series the evaluation reads */
+    size_t *len;          /* [count] their terms */
+    double **fresh;       /* [count] series computed and not kept by the memo */
+} node_pairs;
+
 typedef struct eval_job {
     const ll_microfacet_model *mf;
     const ll_probe_set *set;
@@ -100,6 +115,7 @@ typedef struct eval_job {
     ll_probe_series_memo *memo;                /* nullable */
     int mode;                                  /* MEMO_* */
     size_t m;
+    node_pairs *pairs;
     double *values;
     ll_watch *watch;
 } eval_job;
@@ -118,53 +134,74 @@ static size_t kept_terms(const double *c, size_t len, size_t m, double keep)
     return last + 1;
 }
 
-/* The series of stencil slot `slot` (node cosines mu_o, mu_i as the
- * series takes them): from the memo where it holds them unwidened for
- * orders at least m, else computed (and kept when filling). */
-static ll_status slot_series(const eval_job *job, size_t slot, double mu_o, double mu_i,
-                             double *series, double *scratch, const double **c, size_t *len)
+/* The series of distinct node pair d (on a worker thread: the model is
+ * only read): from the memo where it holds it unwidened for orders at
+ * least m, else computed (and kept there when filling). */
+static ll_status pair_series(size_t d, void *ctx)
 {
+    const eval_job *job = ctx;
     ll_probe_series_memo *memo = job->memo;
-    int widened;
+    node_pairs *np = job->pairs;
+    double mu_o = np->mu_o[d], mu_i = np->mu_i[d], *series, *scratch, *kept = NULL;
+    size_t len = 0;
+    int widened = 0;
     ll_status s;
-    if (job->mode == MEMO_REUSE && !memo->widened[slot] &&
+    if (ll_watch_poll(job->watch))
+        return ll_fail(LL_ERROR_CANCELLED, "resolution search: cancelled");
+    if (job->mode == MEMO_REUSE && !memo->widened[d] &&
         !ll_microfacet_widened(job->mf, mu_o, mu_i)) {
-        *c = memo->series[slot];
-        *len = kept_terms(*c, memo->len[slot], job->m, ll_microfacet_keep(job->mf));
+        np->c[d] = memo->series[d];
+        np->len[d] = kept_terms(memo->series[d], memo->len[d], job->m,
+                                ll_microfacet_keep(job->mf));
         return LL_OK;
     }
-    s = ll_microfacet_series_widened(job->mf, mu_o, mu_i, job->m, series, len, NULL, scratch,
-                                     &widened);
-    *c = series;
-    if (s != LL_OK || job->mode != MEMO_FILL)
+    series = ll_alloc_array(job->m, sizeof(double));
+    scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
+    if (!series || !scratch)
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu orders",
+                    job->m);
+    else
+        s = ll_microfacet_series_widened(job->mf, mu_o, mu_i, job->m, series, &len, NULL,
+                                         scratch, &widened);
+    if (s == LL_OK && len > 0) {
+        kept = ll_alloc_array(len, sizeof(double));
+        if (!kept)
+            s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+        else
+            memcpy(kept, series, len * sizeof(double));
+    }
+    ll_free(series);
+    ll_free(scratch);
+    if (s != LL_OK)
         return s;
-    memo->len[slot] = *len;
-    memo->widened[slot] = (unsigned char)(widened != 0);
-    if (*len > 0) {
-        memo->series[slot] = ll_alloc_array(*len, sizeof(double));
-        if (!memo->series[slot])
-            return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-        memcpy(memo->series[slot], series, *len * sizeof(double));
+    np->c[d] = kept;
+    np->len[d] = len;
+    if (job->mode == MEMO_FILL) {
+        memo->series[d] = kept;
+        memo->len[d] = len;
+        memo->widened[d] = (unsigned char)(widened != 0);
+    } else {
+        np->fresh[d] = kept;
     }
     return LL_OK;
 }
 
-/* The values of probe pair p (on a worker thread: the model is only read). */
+/* The values of probe pair p from its stencil's series (on a worker
+ * thread). */
 static ll_status eval_pair(size_t p, void *ctx)
 {
     const eval_job *job = ctx;
     const pair_stencil *st = job->stencils + p;
-    /* series, the compensation's series, and the stencil's weighted sum
-     * of both */
-    double *series = ll_alloc_array(job->m, 3 * sizeof(double));
-    double *term = series ? series + job->m : NULL, *sum = series ? series + 2 * job->m : NULL;
-    double *scratch = ll_alloc_array(ll_microfacet_scratch_size(job->m), sizeof(double));
+    const node_pairs *np = job->pairs;
+    /* the compensation's series, and the stencil's weighted sum of both */
+    double *term = ll_alloc_array(job->m, 2 * sizeof(double));
+    double *sum = term ? term + job->m : NULL;
     double *acc = job->values + p * job->set->n_phi;
     const ll_probe_pair *pair = job->set->pairs + p;
     int block = LL_BLOCK_OF(pair->mu_o, pair->mu_i);
     size_t a, b, k, l, len, sum_len = 0;
     ll_status s = LL_OK;
-    if (!series || !scratch)
+    if (!term)
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu orders",
                     job->m);
     else if (ll_watch_poll(job->watch))
@@ -173,33 +210,131 @@ static ll_status eval_pair(size_t p, void *ctx)
         memset(sum, 0, job->m * sizeof(double));
     memset(acc, 0, job->set->n_phi * sizeof(double));
     for (a = 0; a < st->co && s == LL_OK; ++a)
-        for (b = 0; b < st->ci && s == LL_OK; ++b) {
-            const double *c = NULL;
-            /* Depth grows opposite to the normal: the series takes -mu. */
-            s = slot_series(job, 16 * p + 4 * a + b, -st->no[a], -st->ni[b], series, scratch, &c,
-                            &len);
+        for (b = 0; b < st->ci; ++b) {
+            size_t d = np->of_slot[16 * p + 4 * a + b];
+            const double *c = np->c[d];
             /* (The stencil's series summed first and then evaluated at
              * the azimuths: 16 times fewer terms than evaluating each.) */
-            for (l = 0; s == LL_OK && l < len; ++l)
+            len = np->len[d];
+            for (l = 0; l < len; ++l)
                 sum[l] += st->wo[a] * st->wi[b] * c[l];
-            if (s == LL_OK && len > sum_len)
+            if (len > sum_len)
                 sum_len = len;
-            if (s == LL_OK) {
-                /* The compensation's series (same azimuth convention). */
-                len = ll_probe_compensation_series(job->compensation, block, st->io[a],
-                                                   st->ii[b], job->m, term);
-                for (l = 0; l < len; ++l)
-                    sum[l] += st->wo[a] * st->wi[b] * term[l];
-                if (len > sum_len)
-                    sum_len = len;
-            }
+            /* The compensation's series (same azimuth convention). */
+            len = ll_probe_compensation_series(job->compensation, block, st->io[a], st->ii[b],
+                                               job->m, term);
+            for (l = 0; l < len; ++l)
+                sum[l] += st->wo[a] * st->wi[b] * term[l];
+            if (len > sum_len)
+                sum_len = len;
         }
     if (s == LL_OK)
         ll_probe_add_series(sum, sum_len, job->set->phi, job->set->n_phi, 1.0, acc);
     for (k = 0; k < job->set->n_phi; ++k)
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
-    ll_free(series);
-    ll_free(scratch);
+    ll_free(term);
+    return s;
+}
+
+/* A stencil slot's node pair, for sorting: its block (the signs of the
+ * probe pair's cosines, which its nodes take), node indices, slot. */
+typedef struct slot_key {
+    size_t block, io, ii, slot;
+} slot_key;
+
+static int slot_key_order(const void *x, const void *y)
+{
+    const slot_key *a = x, *b = y;
+    if (a->block != b->block)
+        return a->block < b->block ? -1 : 1;
+    if (a->io != b->io)
+        return a->io < b->io ? -1 : 1;
+    if (a->ii != b->ii)
+        return a->ii < b->ii ? -1 : 1;
+    return a->slot < b->slot ? -1 : a->slot > b->slot;
+}
+
+static int same_node_pair(const slot_key *a, const slot_key *b)
+{
+    return a->block == b->block && a->io == b->io && a->ii == b->ii;
+}
+
+static void node_pairs_free(node_pairs *np)
+{
+    size_t d;
+    if (np->fresh)
+        for (d = 0; d < np->count; ++d)
+            ll_free(np->fresh[d]);
+    ll_free(np->mu_o);
+    ll_free(np->mu_i);
+    ll_free(np->of_slot);
+    ll_free(np->c);
+    ll_free(np->len);
+    ll_free(np->fresh);
+    memset(np, 0, sizeof *np);
+}
+
+/* The distinct node pairs of the stencils (their count in np->count) and
+ * which one each slot reads. A sort, not a table of the n^2 / 4 node
+ * pairs of each block: the stencils hold a few thousand. */
+static ll_status node_pairs_make(const ll_probe_set *set, const pair_stencil *stencils,
+                                 node_pairs *np)
+{
+    slot_key *keys = NULL;
+    size_t slots, p, a, b, k, count = 0;
+    ll_status s = LL_OK;
+    memset(np, 0, sizeof *np);
+    if (!ll_size_mul(16, set->n_pairs, &slots))
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    keys = ll_alloc_array(slots + 1, sizeof *keys);
+    np->of_slot = ll_alloc_array(slots + 1, sizeof *np->of_slot);
+    if (!keys || !np->of_slot) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+        goto done;
+    }
+    for (p = 0; p < set->n_pairs; ++p) {
+        const pair_stencil *st = stencils + p;
+        size_t block = 2 * (size_t)(set->pairs[p].mu_o < 0.0) + (size_t)(set->pairs[p].mu_i < 0.0);
+        for (a = 0; a < st->co; ++a)
+            for (b = 0; b < st->ci; ++b) {
+                keys[count].block = block;
+                keys[count].io = st->io[a];
+                keys[count].ii = st->ii[b];
+                keys[count].slot = 16 * p + 4 * a + b;
+                ++count;
+            }
+    }
+    /* (The slot breaks ties: one order whatever qsort does with equals.) */
+    qsort(keys, count, sizeof *keys, slot_key_order);
+    for (k = 0; k < count; ++k)
+        if (k == 0 || !same_node_pair(&keys[k], &keys[k - 1]))
+            ++np->count;
+    np->mu_o = ll_alloc_array(np->count + 1, sizeof(double));
+    np->mu_i = ll_alloc_array(np->count + 1, sizeof(double));
+    np->c = ll_calloc_array(np->count + 1, sizeof *np->c);
+    np->len = ll_calloc_array(np->count + 1, sizeof *np->len);
+    np->fresh = ll_calloc_array(np->count + 1, sizeof *np->fresh);
+    if (!np->mu_o || !np->mu_i || !np->c || !np->len || !np->fresh) {
+        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+        goto done;
+    }
+    np->count = 0;
+    for (k = 0; k < count; ++k) {
+        size_t slot = keys[k].slot, pp = slot / 16;
+        const pair_stencil *st = stencils + pp;
+        if (k > 0 && same_node_pair(&keys[k], &keys[k - 1])) {
+            np->of_slot[slot] = np->count - 1;
+            continue;
+        }
+        /* Depth grows opposite to the normal: the series takes -mu. */
+        np->mu_o[np->count] = -st->no[(slot / 4) % 4];
+        np->mu_i[np->count] = -st->ni[slot % 4];
+        np->of_slot[slot] = np->count++;
+    }
+done:
+    ll_free(keys);
+    if (s != LL_OK)
+        node_pairs_free(np);
     return s;
 }
 
@@ -250,30 +385,28 @@ static ll_status lobatto_nodes(ll_probe_series_memo *memo, size_t n, double *nod
     return LL_OK;
 }
 
-/* Ready memo for an evaluation at (n, m): MEMO_REUSE when it holds n's
- * series for at least m orders, else emptied and sized for filling. */
-static ll_status memo_mode(ll_probe_series_memo *memo, size_t n, size_t m,
-                           const ll_probe_set *set, int *mode)
+/* Ready memo for an evaluation at (n, m) of count distinct node pairs:
+ * MEMO_REUSE when it holds n's series for at least m orders, else emptied
+ * and sized for filling. */
+static ll_status memo_mode(ll_probe_series_memo *memo, size_t n, size_t m, size_t count,
+                           int *mode)
 {
-    size_t slots;
     *mode = MEMO_NONE;
     if (!memo)
         return LL_OK;
-    if (memo->n == n && m <= memo->m) {
+    if (memo->n == n && m <= memo->m && memo->slots == count) {
         *mode = MEMO_REUSE;
         return LL_OK;
     }
     memo_clear(memo);
-    if (!ll_size_mul(16, set->n_pairs, &slots))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-    memo->series = ll_calloc_array(slots + 1, sizeof *memo->series);
-    memo->len = ll_calloc_array(slots + 1, sizeof *memo->len);
-    memo->widened = ll_calloc_array(slots + 1, 1);
+    memo->series = ll_calloc_array(count + 1, sizeof *memo->series);
+    memo->len = ll_calloc_array(count + 1, sizeof *memo->len);
+    memo->widened = ll_calloc_array(count + 1, 1);
     if (!memo->series || !memo->len || !memo->widened) {
         memo_clear(memo);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
     }
-    memo->slots = slots;
+    memo->slots = count;
     *mode = MEMO_FILL;
     return LL_OK;
 }
@@ -292,12 +425,12 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
 {
     double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
     pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
-    double *mu_o = ll_alloc_array(16 * set->n_pairs + 1, sizeof(double));
-    double *mu_i = ll_alloc_array(16 * set->n_pairs + 1, sizeof(double));
-    size_t h = n / 2, p, a, b, count = 0;
+    size_t h = n / 2, p;
+    node_pairs np;
     eval_job job;
     ll_status s;
-    if (!nodes || !weights || !stencils || !mu_o || !mu_i) {
+    memset(&np, 0, sizeof np);
+    if (!nodes || !weights || !stencils) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
         goto done;
     }
@@ -308,27 +441,27 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
         pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);
         st->ci = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_i, st->ni, st->wi, st->ii);
-        for (a = 0; a < st->co; ++a)
-            for (b = 0; b < st->ci; ++b) {
-                mu_o[count] = -st->no[a];
-                mu_i[count] = -st->ni[b];
-                ++count;
-            }
     }
-    /* The maps first (they change the model), then the pairs in parallel. */
     if (s == LL_OK)
-        s = ll_microfacet_prepare_pairs(mf, mu_o, mu_i, count);
+        s = node_pairs_make(set, stencils, &np);
+    /* The maps first (they change the model), then the series of the node
+     * pairs and the probes' sums of them, each in parallel. */
+    if (s == LL_OK)
+        s = ll_microfacet_prepare_pairs(mf, np.mu_o, np.mu_i, np.count);
     job.mf = mf;
     job.set = set;
     job.stencils = stencils;
     job.compensation = compensation;
     job.m = m;
+    job.pairs = &np;
     job.values = values;
     job.watch = watch;
     job.memo = memo;
     job.mode = MEMO_NONE;
     if (s == LL_OK)
-        s = memo_mode(memo, n, m, set, &job.mode);
+        s = memo_mode(memo, n, m, np.count, &job.mode);
+    if (s == LL_OK)
+        s = ll_parallel_for_watched(np.count, pair_series, &job, watch);
     if (s == LL_OK)
         s = ll_parallel_for_watched(set->n_pairs, eval_pair, &job, watch);
     if (job.mode == MEMO_FILL) {
@@ -341,11 +474,10 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
         }
     }
 done:
+    node_pairs_free(&np);
     ll_free(nodes);
     ll_free(weights);
     ll_free(stencils);
-    ll_free(mu_o);
-    ll_free(mu_i);
     return s;
 }
 

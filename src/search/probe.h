@@ -133,10 +133,11 @@ LL_INTERNAL void ll_probe_compensation_free(ll_probe_compensation *c);
 /* What ll_layer_set_microfacet of the model's interface on the
  * Gauss-Lobatto nodes of n and m orders followed by ll_layer_eval gives at
  * the probes, from the series at the spline stencils of the probes alone
- * (no layer is built: 16 series per pair), plus the energy compensation's
- * term there when compensation (made for the same n) is not NULL.
- * values holds LL_PROBE_VALUES(set). watch (nullable) is polled per
- * pair. */
+ * (no layer is built: 16 series per pair, each node pair that several
+ * stencils hold computed once), plus the energy compensation's term there
+ * when compensation (made for the same n) is not NULL. values holds
+ * LL_PROBE_VALUES(set). watch (nullable) is polled per node pair and per
+ * probe pair. */
 LL_INTERNAL ll_status ll_probe_interface_eval(ll_microfacet_model *mf,
                                               const ll_probe_compensation *compensation,
                                               size_t n, size_t m, const ll_probe_set *set,
@@ -157,7 +158,9 @@ LL_INTERNAL ll_status ll_probe_medium_eval(ll_medium_kind kind, double shape, in
  * other order counts (ll_probe_interface_eval_memo): the search asks for
  * each n at several m, and where a lobe is not widened the series of fewer
  * orders is a prefix of the one with more (ll_microfacet_widened). Slots:
- * 16 per probe pair, by stencil position. Zeroed: empty. */
+ * the distinct node pairs of the stencils (each computed once, however
+ * many probes' stencils hold it), by (block, node o, node i). Zeroed:
+ * empty. */
 typedef struct ll_probe_series_memo {
     size_t n;               /* the node count; 0: empty                    */
     size_t m;               /* the orders the series were computed with    */
