@@ -16,7 +16,7 @@ non-zero weight, the corners of its cell. With them:
   sample2.x, visiting the bases in the order of their index as the C
   reader does, sample2.x rescaled into the picked basis' share and passed
   on with sample2.y; wo sampled from that basis; the value and pdf of the
-  blend there (the picked basis' own value, the others evaluated at wo).
+  blend there (every basis of non-zero weight evaluated at wo).
 
 In the JIT variants each basis is traced once, under a symbolic
 conditional whose mask is the lanes that weigh it (dr.if_stmt): a packet
@@ -183,47 +183,35 @@ class TexturedTables:
         # [0, 1): the largest float below 1 at most.
         u0 = dr.clip(u0, 0.0, float(np.nextafter(np.float32(1.0), np.float32(0.0))))
         u = mi.Point2f(u0, sample2.y)
-        # The picked basis' sample.
+        # The picked basis' sample: its direction alone.
         wo = mi.Vector3f(0.0, 0.0, 1.0)
-        pdf, value, ok = Float(0.0), [Float(0.0)] * 3, active & False
+        ok = active & False
         for k, t in enumerate(self.sets):
             mask = active & (pick == k)
             if not self.jit and not mask:
                 continue
 
             def run(wi, u, mask, t=t):
-                o, p, val, f = t.reflect_sample(wi, u, mask)
-                return (mi.Vector3f(o), mi.Float(p), tuple(mi.Float(x) for x in val),
-                        mi.Bool(f))
+                o, _, _, f = t.reflect_sample(wi, u, mask)
+                return mi.Vector3f(o), mi.Bool(f)
 
-            o, p, val, f = self._branch(
-                mask, run, (wi, u, mask),
-                lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Float(0.0), (mi.Float(0.0),) * 3,
-                         mi.Bool(False)))
+            o, f = self._branch(mask, run, (wi, u, mask),
+                                lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Bool(False)))
             wo = dr.select(mask, o, wo)
             ok = dr.select(mask, f, ok)
-        # The picked basis' value and pdf at wo as eval_pdf() computes them
-        # (through the inverse warps), not its sampler's float32 products
-        # along the forward warps: a sample's pdf and weight are then
-        # eval_pdf()'s at its direction, as the C reader's are, where the
-        # sampler's parted from them by up to 1.2e-4 on bases of float16
-        # grids (coat 0.05 over gold 0.3).
-        for k, t in enumerate(self.sets):
-            mask = ok & (pick == k)
-            if not self.jit and not mask:
-                continue
-            v, p = self._eval_basis(t, wi, wo, mask, True, True)
-            value = [dr.select(mask, v[c], value[c]) for c in range(3)]
-            pdf = dr.select(mask, p, pdf)
-        # The blend at wo: the picked basis' own value and pdf, the others'
-        # evaluated there.
-        pdf = a_pick * pdf
-        value = [pick_weight * v for v in value]
+        # The blend at wo: every basis of non-zero weight evaluated there,
+        # the picked one too, as eval_pdf() evaluates it (through the
+        # inverse warps), not from its sampler's float32 products along
+        # the forward warps: a sample's pdf and weight are then eval_pdf()'s
+        # at its direction, as the C reader's are, where the sampler's
+        # parted from them by up to 1.2e-4 on bases of float16 grids (coat
+        # 0.05 over gold 0.3).
+        pdf, value = Float(0.0), [Float(0.0)] * 3
         for k, t in enumerate(self.sets):
             w = 0.0
             for index, wc in corners:
                 w = dr.select(index == k, wc, w)
-            mask = ok & (w != 0) & (pick != k)
+            mask = ok & (w != 0)
             if not self.jit and not mask:
                 continue
             v, p = self._eval_basis(t, wi, wo, mask, True, True)
