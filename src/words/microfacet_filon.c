@@ -48,8 +48,12 @@
                                * (LL_MICROFACET_RELERR)                        */
 
 /* cos(a + k h) for k < count, h = (b - a) / (count - 1), by rotation
- * (the error grows by about one rounding per step). */
-static void azimuth_cosines(double a, double b, size_t count, double *out)
+ * (the error grows by about one rounding per step); with p not NULL, each
+ * cosine's Beckmann peak factor exp(A + B (cos - 1)) into peak, in the
+ * same loop: the rotation is a chain of dependent roundings, which the
+ * exponentials' independent work overlaps. */
+static void azimuth_cosines(double a, double b, size_t count, double *out, const pair_plan *p,
+                            double *peak)
 {
     double h = (b - a) / (double)(count - 1), ch = cos(h), sh = sin(h);
     double c = cos(a), s = sin(a);
@@ -57,6 +61,8 @@ static void azimuth_cosines(double a, double b, size_t count, double *out)
     for (k = 0; k < count; ++k) {
         double next_c = c * ch - s * sh;
         out[k] = c;
+        if (p)
+            peak[k] = exp(p->a_plus_b + p->b * (c - 1.0));
         s = s * ch + c * sh;
         c = next_c;
     }
@@ -73,24 +79,10 @@ static void add_piece(const ll_microfacet_model *mf, const pair_plan *p, int ref
     double *f = scratch + FILON_SCR_F, *cos_phi = scratch + FILON_SCR_COS;
     double *filon = scratch + FILON_SCR_FILON;
     size_t k;
-    double peak[FILON_SAMPLES], step, ch, sh, c, s;
+    double peak[FILON_SAMPLES];
     if (!(b > a))
         return;
-    /* The cosines as azimuth_cosines makes them, and with each its peak
-     * factor: the rotation is a chain of dependent roundings, which the
-     * exponentials' independent work now overlaps. */
-    step = (b - a) / (double)(samples - 1);
-    ch = cos(step);
-    sh = sin(step);
-    c = cos(a);
-    s = sin(a);
-    for (k = 0; k < samples; ++k) {
-        double next_c = c * ch - s * sh;
-        cos_phi[k] = c;
-        peak[k] = exp(p->a_plus_b + p->b * (c - 1.0));
-        s = s * ch + c * sh;
-        c = next_c;
-    }
+    azimuth_cosines(a, b, samples, cos_phi, p, peak);
     ll_microfacet_sample_profile(mf, p, cos_phi, samples, reference ? NULL : f,
                                  reference ? f : NULL);
     for (k = 0; k < samples; ++k)
@@ -228,7 +220,7 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
             largest = fmax(largest, fabs(f[k]));
         return largest;
     }
-    azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi);
+    azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi, NULL, NULL);
     largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
     *seen = fmax(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
