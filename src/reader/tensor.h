@@ -66,7 +66,7 @@ LL_INTERNAL const ll_tensor_field *ll_tensor_find(const ll_tensor_file *t, const
 /* Element i of a float32 field, decoded from little-endian bytes. */
 LL_INTERNAL float ll_tensor_f32(const ll_tensor_field *f, size_t i);
 
-/* Element i of a float32 or float16 field, as a float (tensor_half.c). */
+/* Element i of a float32 or float16 field, as a float. */
 LL_INTERNAL float ll_tensor_value(const ll_tensor_field *f, size_t i);
 
 /* IEEE 754 binary16 (tensor_half.c): to float (exact), from float

@@ -71,10 +71,3 @@ float ll_half_round(float v)
 {
     return ll_half_to_float(ll_half_from_float(v));
 }
-
-float ll_tensor_value(const ll_tensor_field *f, size_t i)
-{
-    if (f->dtype == LL_TENSOR_F16)
-        return ll_half_to_float((uint16_t)(f->data[2 * i] | (f->data[2 * i + 1] << 8)));
-    return ll_tensor_f32(f, i);
-}

@@ -47,6 +47,13 @@ float ll_tensor_f32(const ll_tensor_field *f, size_t i)
     return v;
 }
 
+float ll_tensor_value(const ll_tensor_field *f, size_t i)
+{
+    if (f->dtype == LL_TENSOR_F16)
+        return ll_half_to_float(get_u16(f->data + 2 * i));
+    return ll_tensor_f32(f, i);
+}
+
 void ll_tensor_file_free(ll_tensor_file *t)
 {
     if (!t)
