@@ -199,25 +199,14 @@ class TexturedTables:
                                 lambda: (mi.Vector3f(0.0, 0.0, 1.0), mi.Bool(False)))
             wo = dr.select(mask, o, wo)
             ok = dr.select(mask, f, ok)
-        # The blend at wo: every basis of non-zero weight evaluated there,
-        # the picked one too, as eval_pdf() evaluates it (through the
-        # inverse warps), not from its sampler's float32 products along
-        # the forward warps: a sample's pdf and weight are then eval_pdf()'s
-        # at its direction, as the C reader's are, where the sampler's
-        # parted from them by up to 1.2e-4 on bases of float16 grids (coat
-        # 0.05 over gold 0.3).
-        pdf, value = Float(0.0), [Float(0.0)] * 3
-        for k, t in enumerate(self.sets):
-            w = 0.0
-            for index, wc in corners:
-                w = dr.select(index == k, wc, w)
-            mask = ok & (w != 0)
-            if not self.jit and not mask:
-                continue
-            v, p = self._eval_basis(t, wi, wo, mask, True, True)
-            value = [dr.select(mask, dr.fma(w, v[c], value[c]), value[c]) for c in range(3)]
-            pdf = dr.select(mask, dr.fma(dr.abs(w), p, pdf), pdf)
-        pdf = pdf / dr.select(total > 0, total, 1.0)
+        # The blend at wo, as eval_pdf() gives it: every basis of non-zero
+        # weight evaluated there, the picked one too, through the inverse
+        # warps rather than from its sampler's float32 products along the
+        # forward warps, so that a sample's pdf and weight are eval_pdf()'s
+        # at its direction, as the C reader's are (the sampler's parted
+        # from them by up to 1.2e-4 on bases of float16 grids: coat 0.05
+        # over gold 0.3).
+        value, pdf = self.eval_pdf(wi, wo, params, ok)
         ok = ok & (pdf > 0)
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
         return wo, dr.select(ok, pdf, 0.0), weight, ok
