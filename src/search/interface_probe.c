@@ -20,6 +20,7 @@
  * without).
  */
 #include "search/probe.h"
+#include "search/probe_pairs.h"
 #include "words/microfacet.h"
 #include "numerics/spline.h"
 
@@ -29,8 +30,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TRUE_ORDERS LL_PROBE_TRUE_ORDERS
-#define TRUE_MAX_LEN ((size_t)100000)
 
 size_t ll_probe_stencil(const double *half, size_t h, double mu, double node[4], double w[4],
                         size_t index[4])
@@ -79,43 +78,22 @@ ll_status ll_probe_interface_model(double eta_re, double eta_im, double alpha,
 ll_status ll_probe_interface_model_distribution(double eta_re, double eta_im, double alpha,
                                                 int distribution, ll_microfacet_model **out)
 {
-    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution, TRUE_ORDERS,
-                                             TRUE_MAX_LEN, out);
+    return ll_microfacet_create_distribution(eta_re, eta_im, alpha, distribution,
+                                             LL_PROBE_TRUE_ORDERS, LL_PROBE_TRUE_MAX_LEN, out);
 }
-
-/* One probe pair's 4 x 4 stencil (signed node cosines and weights). */
-typedef struct pair_stencil {
-    double no[4], wo[4], ni[4], wi[4];
-    size_t io[4], ii[4]; /* node indices into the positive half */
-    size_t co, ci;
-} pair_stencil;
 
 /* What an evaluation does with the memo's series. */
 enum { MEMO_NONE, MEMO_FILL, MEMO_REUSE };
 
-/* The node pairs of an evaluation's stencils, each once: probes 0.01
- * apart in mu share stencil nodes wherever the nodes are not much farther
- * apart, so the 16 slots of every probe pair name fewer distinct series,
- * the more so the fewer the nodes (docs/benchmarks.md). Ordered by
- * (block, node o, node i). */
-typedef struct node_pairs {
-    size_t count;
-    double *mu_o, *mu_i;  /* [count] node cosines as the series takes them */
-    size_t *of_slot;      /* [16 n_pairs] the pair of stencil slot 16 p + 4 a + b */
-    const double **c;     /* [count] the series the evaluation reads */
-    size_t *len;          /* [count] their terms */
-    double **fresh;       /* [count] series computed and not kept by the memo */
-} node_pairs;
-
 typedef struct eval_job {
     const ll_microfacet_model *mf;
     const ll_probe_set *set;
-    const pair_stencil *stencils;
+    const ll_probe_pair_stencil *stencils;
     const ll_probe_compensation *compensation; /* nullable */
     ll_probe_series_memo *memo;                /* nullable */
     int mode;                                  /* MEMO_* */
     size_t m;
-    node_pairs *pairs;
+    ll_probe_node_pairs *pairs;
     double *values;
     ll_watch *watch;
 } eval_job;
@@ -141,7 +119,7 @@ static ll_status pair_series(size_t d, void *ctx)
 {
     const eval_job *job = ctx;
     ll_probe_series_memo *memo = job->memo;
-    node_pairs *np = job->pairs;
+    ll_probe_node_pairs *np = job->pairs;
     double mu_o = np->mu_o[d], mu_i = np->mu_i[d], *series, *scratch, *kept = NULL;
     size_t len = 0;
     int widened = 0;
@@ -191,8 +169,8 @@ static ll_status pair_series(size_t d, void *ctx)
 static ll_status eval_pair(size_t p, void *ctx)
 {
     const eval_job *job = ctx;
-    const pair_stencil *st = job->stencils + p;
-    const node_pairs *np = job->pairs;
+    const ll_probe_pair_stencil *st = job->stencils + p;
+    const ll_probe_node_pairs *np = job->pairs;
     /* the compensation's series, and the stencil's weighted sum of both */
     double *term = ll_alloc_array(job->m, 2 * sizeof(double));
     double *sum = term ? term + job->m : NULL;
@@ -233,108 +211,6 @@ static ll_status eval_pair(size_t p, void *ctx)
     for (k = 0; k < job->set->n_phi; ++k)
         acc[k] = acc[k] > 0.0 ? acc[k] : 0.0; /* as ll_layer_eval */
     ll_free(term);
-    return s;
-}
-
-/* A stencil slot's node pair, for sorting: its block (the signs of the
- * probe pair's cosines, which its nodes take), node indices, slot. */
-typedef struct slot_key {
-    size_t block, io, ii, slot;
-} slot_key;
-
-static int slot_key_order(const void *x, const void *y)
-{
-    const slot_key *a = x, *b = y;
-    if (a->block != b->block)
-        return a->block < b->block ? -1 : 1;
-    if (a->io != b->io)
-        return a->io < b->io ? -1 : 1;
-    if (a->ii != b->ii)
-        return a->ii < b->ii ? -1 : 1;
-    return a->slot < b->slot ? -1 : a->slot > b->slot;
-}
-
-static int same_node_pair(const slot_key *a, const slot_key *b)
-{
-    return a->block == b->block && a->io == b->io && a->ii == b->ii;
-}
-
-static void node_pairs_free(node_pairs *np)
-{
-    size_t d;
-    if (np->fresh)
-        for (d = 0; d < np->count; ++d)
-            ll_free(np->fresh[d]);
-    ll_free(np->mu_o);
-    ll_free(np->mu_i);
-    ll_free(np->of_slot);
-    ll_free(np->c);
-    ll_free(np->len);
-    ll_free(np->fresh);
-    memset(np, 0, sizeof *np);
-}
-
-/* The distinct node pairs of the stencils (their count in np->count) and
- * which one each slot reads. A sort, not a table of the n^2 / 4 node
- * pairs of each block: the stencils hold a few thousand. */
-static ll_status node_pairs_make(const ll_probe_set *set, const pair_stencil *stencils,
-                                 node_pairs *np)
-{
-    slot_key *keys = NULL;
-    size_t slots, p, a, b, k, count = 0;
-    ll_status s = LL_OK;
-    memset(np, 0, sizeof *np);
-    if (!ll_size_mul(16, set->n_pairs, &slots))
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-    keys = ll_alloc_array(slots + 1, sizeof *keys);
-    np->of_slot = ll_alloc_array(slots + 1, sizeof *np->of_slot);
-    if (!keys || !np->of_slot) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-        goto done;
-    }
-    for (p = 0; p < set->n_pairs; ++p) {
-        const pair_stencil *st = stencils + p;
-        size_t block = 2 * (size_t)(set->pairs[p].mu_o < 0.0) + (size_t)(set->pairs[p].mu_i < 0.0);
-        for (a = 0; a < st->co; ++a)
-            for (b = 0; b < st->ci; ++b) {
-                keys[count].block = block;
-                keys[count].io = st->io[a];
-                keys[count].ii = st->ii[b];
-                keys[count].slot = 16 * p + 4 * a + b;
-                ++count;
-            }
-    }
-    /* (The slot breaks ties: one order whatever qsort does with equals.) */
-    qsort(keys, count, sizeof *keys, slot_key_order);
-    for (k = 0; k < count; ++k)
-        if (k == 0 || !same_node_pair(&keys[k], &keys[k - 1]))
-            ++np->count;
-    np->mu_o = ll_alloc_array(np->count + 1, sizeof(double));
-    np->mu_i = ll_alloc_array(np->count + 1, sizeof(double));
-    np->c = ll_calloc_array(np->count + 1, sizeof *np->c);
-    np->len = ll_calloc_array(np->count + 1, sizeof *np->len);
-    np->fresh = ll_calloc_array(np->count + 1, sizeof *np->fresh);
-    if (!np->mu_o || !np->mu_i || !np->c || !np->len || !np->fresh) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-        goto done;
-    }
-    np->count = 0;
-    for (k = 0; k < count; ++k) {
-        size_t slot = keys[k].slot, pp = slot / 16;
-        const pair_stencil *st = stencils + pp;
-        if (k > 0 && same_node_pair(&keys[k], &keys[k - 1])) {
-            np->of_slot[slot] = np->count - 1;
-            continue;
-        }
-        /* Depth grows opposite to the normal: the series takes -mu. */
-        np->mu_o[np->count] = -st->no[(slot / 4) % 4];
-        np->mu_i[np->count] = -st->ni[slot % 4];
-        np->of_slot[slot] = np->count++;
-    }
-done:
-    ll_free(keys);
-    if (s != LL_OK)
-        node_pairs_free(np);
     return s;
 }
 
@@ -424,9 +300,9 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
                                        const ll_probe_set *set, ll_watch *watch, double *values)
 {
     double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
-    pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
+    ll_probe_pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
     size_t h = n / 2, p;
-    node_pairs np;
+    ll_probe_node_pairs np;
     eval_job job;
     ll_status s;
     memset(&np, 0, sizeof np);
@@ -438,12 +314,12 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
     ll_microfacet_set_orders(mf, m);
     s = lobatto_nodes(memo, n, nodes, weights);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
-        pair_stencil *st = stencils + p;
+        ll_probe_pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);
         st->ci = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_i, st->ni, st->wi, st->ii);
     }
     if (s == LL_OK)
-        s = node_pairs_make(set, stencils, &np);
+        s = ll_probe_node_pairs_make(set, stencils, &np);
     /* The maps first (they change the model), then the series of the node
      * pairs and the probes' sums of them, each in parallel. */
     if (s == LL_OK)
@@ -474,95 +350,9 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
         }
     }
 done:
-    node_pairs_free(&np);
+    ll_probe_node_pairs_free(&np);
     ll_free(nodes);
     ll_free(weights);
     ll_free(stencils);
-    return s;
-}
-
-/* The true series of a pair into c (*len terms). */
-static ll_status true_series(ll_microfacet_model *mf, const ll_probe_pair *pair, double *c,
-                             size_t *len, double *scratch)
-{
-    double mu[2];
-    ll_status s;
-    mu[0] = -pair->mu_o;
-    mu[1] = -pair->mu_i;
-    s = ll_microfacet_prepare_pairs(mf, mu, mu + 1, 1);
-    return s == LL_OK ? ll_microfacet_series(mf, mu[0], mu[1], TRUE_MAX_LEN, c, len, NULL,
-                                             scratch)
-                      : s;
-}
-
-/* The shortest truncation of c within tolerance of the whole series where
- * it is above floor. */
-static size_t needed_length(const double *c, size_t len, const double *phi, size_t n_phi,
-                            const double *full, double floor, double tolerance)
-{
-    double c1[LL_PROBE_MAX_PHI], prev[LL_PROBE_MAX_PHI], cur[LL_PROBE_MAX_PHI],
-        sum[LL_PROBE_MAX_PHI];
-    size_t k, l, needed = 1;
-    for (k = 0; k < n_phi; ++k) {
-        c1[k] = cos(phi[k]);
-        prev[k] = c1[k];
-        cur[k] = 1.0;
-        sum[k] = 0.0;
-    }
-    for (l = 0; l < len; ++l)
-        for (k = 0; k < n_phi; ++k) {
-            double next = 2.0 * c1[k] * cur[k] - prev[k];
-            sum[k] += c[l] * cur[k];
-            prev[k] = cur[k];
-            cur[k] = next;
-            /* l + 1 terms are not enough here: at least l + 2 are needed. */
-            if (full[k] > floor && full[k] > 0.0 &&
-                fabs(sum[k] - full[k]) > tolerance * full[k])
-                needed = l + 2;
-        }
-    return needed < len ? needed : len;
-}
-
-ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
-                                    const ll_probe_set *set, size_t *n_orders)
-{
-    double *c = ll_alloc_array(TRUE_MAX_LEN, sizeof(double));
-    double *scratch = ll_alloc_array(ll_microfacet_scratch_size(TRUE_MAX_LEN), sizeof(double));
-    double *full = ll_calloc_array(LL_PROBE_VALUES(set) + 1, sizeof(double));
-    double *peak = ll_calloc_array(set->n_groups + 1, sizeof(double));
-    size_t p, k, len, m = 1, nphi = set->n_phi;
-    ll_status s;
-    if (!c || !scratch || !full || !peak) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
-        goto done;
-    }
-    ll_microfacet_set_orders(mf, TRUE_ORDERS);
-    s = LL_OK;
-    /* The whole series' values, for the peaks of the groups. */
-    for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
-        s = true_series(mf, &set->pairs[p], c, &len, scratch);
-        if (s != LL_OK)
-            break;
-        ll_probe_add_series(c, len, set->phi, nphi, 1.0, full + p * nphi);
-        for (k = 0; k < nphi; ++k)
-            peak[set->pairs[p].group] = fmax(peak[set->pairs[p].group], full[p * nphi + k]);
-    }
-    for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
-        size_t need;
-        s = true_series(mf, &set->pairs[p], c, &len, scratch);
-        if (s != LL_OK || len == 0)
-            continue;
-        need = needed_length(c, len, set->phi, nphi, full + p * nphi,
-                             LL_PROBE_FLOOR * peak[set->pairs[p].group], 0.5 * tolerance);
-        if (need > m)
-            m = need;
-    }
-    if (s == LL_OK)
-        *n_orders = m;
-done:
-    ll_free(c);
-    ll_free(scratch);
-    ll_free(full);
-    ll_free(peak);
     return s;
 }

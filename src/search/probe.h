@@ -98,6 +98,8 @@ LL_INTERNAL ll_status ll_probe_interface_model_distribution(double eta_re, doubl
 /* No widening: the orders a "true" series may have (more than any layer
  * holds: LL_MATERIAL_MAX_RESOLUTION is 100000). */
 #define LL_PROBE_TRUE_ORDERS ((size_t)1 << 20)
+/* The terms a true series may have (the model's max_len). */
+#define LL_PROBE_TRUE_MAX_LEN ((size_t)100000)
 
 /* The energy compensation of an interface layer at the probes: the terms
  * that ll_layer_set_microfacet (compensate = 1) on the Gauss-Lobatto
@@ -184,10 +186,11 @@ LL_INTERNAL ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
                                                    size_t m, const ll_probe_set *set,
                                                    ll_watch *watch, double *values);
 
-/* The Fourier orders the lobes themselves need: at every probe pair, the
- * true series (no widening) truncated after L terms is within tolerance / 2
- * of the whole series at every azimuth where it is above LL_PROBE_FLOOR of
- * its group's peak; the largest such L over the pairs. */
+/* The Fourier orders the lobes themselves need
+ * (search/interface_probe_orders.c): at every probe pair, the true series
+ * (no widening) truncated after L terms is within tolerance / 2 of the
+ * whole series at every azimuth where it is above LL_PROBE_FLOOR of its
+ * group's peak; the largest such L over the pairs. */
 LL_INTERNAL ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
                                                 const ll_probe_set *set, size_t *n_orders);
 
