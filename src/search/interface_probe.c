@@ -214,11 +214,11 @@ static ll_status eval_pair(size_t p, void *ctx)
     return s;
 }
 
-/* Empty the memo's series (its nodes stay). */
+/* Empty the memo's series (its rule stays). */
 static void memo_clear(ll_probe_series_memo *memo)
 {
-    double *nodes = memo->nodes;
-    size_t k, nodes_n = memo->nodes_n;
+    double *rule = memo->rule;
+    size_t k, rule_n = memo->rule_n;
     if (memo->series)
         for (k = 0; k < memo->slots; ++k)
             ll_free(memo->series[k]);
@@ -226,39 +226,38 @@ static void memo_clear(ll_probe_series_memo *memo)
     ll_free(memo->len);
     ll_free(memo->widened);
     memset(memo, 0, sizeof *memo);
-    memo->nodes = nodes;
-    memo->nodes_n = nodes_n;
+    memo->rule = rule;
+    memo->rule_n = rule_n;
 }
 
 void ll_probe_series_memo_free(ll_probe_series_memo *memo)
 {
     memo_clear(memo);
-    ll_free(memo->nodes);
+    ll_free(memo->rule);
     memset(memo, 0, sizeof *memo);
 }
 
-/* The Gauss-Lobatto nodes of n into nodes (weights: scratch of n): the
- * memo's (nullable) where it holds them, else made and kept there. */
-static ll_status lobatto_nodes(ll_probe_series_memo *memo, size_t n, double *nodes,
-                               double *weights)
+ll_status ll_probe_series_memo_rule(ll_probe_series_memo *memo, size_t n, const double **nodes,
+                                    const double **weights)
 {
-    ll_status s;
-    if (memo && memo->nodes && memo->nodes_n == n) {
-        memcpy(nodes, memo->nodes, n * sizeof(double));
-        return LL_OK;
+    ll_status s = LL_OK;
+    if (!memo->rule || memo->rule_n != n) {
+        ll_free(memo->rule);
+        memo->rule_n = 0;
+        memo->rule = ll_alloc_array(n, 2 * sizeof(double));
+        s = memo->rule ? ll_quad_gauss_lobatto(n, memo->rule, memo->rule + n, NULL)
+                       : ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                                 "resolution probes: out of memory for %zu nodes", n);
+        if (s != LL_OK) {
+            ll_free(memo->rule);
+            memo->rule = NULL;
+            return s;
+        }
+        memo->rule_n = n;
     }
-    s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
-    if (s != LL_OK || !memo)
-        return s;
-    ll_free(memo->nodes);
-    memo->nodes_n = 0;
-    /* (Kept only if there is memory for it: else made again next time.) */
-    memo->nodes = ll_alloc_array(n, sizeof(double));
-    if (memo->nodes) {
-        memcpy(memo->nodes, nodes, n * sizeof(double));
-        memo->nodes_n = n;
-    }
-    return LL_OK;
+    *nodes = memo->rule;
+    *weights = memo->rule + n;
+    return s;
 }
 
 /* Ready memo for an evaluation at (n, m) of count distinct node pairs:
@@ -299,20 +298,23 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
                                        ll_probe_series_memo *memo, size_t n, size_t m,
                                        const ll_probe_set *set, ll_watch *watch, double *values)
 {
-    double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
+    ll_probe_series_memo own;
+    const double *nodes, *weights;
     ll_probe_pair_stencil *stencils = ll_alloc_array(set->n_pairs + 1, sizeof *stencils);
     size_t h = n / 2, p;
     ll_probe_node_pairs np;
     eval_job job;
     ll_status s;
     memset(&np, 0, sizeof np);
-    if (!nodes || !weights || !stencils) {
+    memset(&own, 0, sizeof own);
+    if (!stencils) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
         goto done;
     }
     /* The widening of a layer of m orders (ll_layer_set_microfacet). */
     ll_microfacet_set_orders(mf, m);
-    s = lobatto_nodes(memo, n, nodes, weights);
+    /* (Without a memo, the rule of this evaluation alone.) */
+    s = ll_probe_series_memo_rule(memo ? memo : &own, n, &nodes, &weights);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
         ll_probe_pair_stencil *st = stencils + p;
         st->co = ll_probe_stencil(nodes + h, h, set->pairs[p].mu_o, st->no, st->wo, st->io);
@@ -351,8 +353,7 @@ ll_status ll_probe_interface_eval_memo(ll_microfacet_model *mf,
     }
 done:
     ll_probe_node_pairs_free(&np);
-    ll_free(nodes);
-    ll_free(weights);
+    ll_probe_series_memo_free(&own);
     ll_free(stencils);
     return s;
 }

@@ -294,30 +294,42 @@ ll_status ll_probe_compensation_model_distribution(double eta_re, double eta_im,
 ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im, size_t n,
                                      ll_watch *watch, ll_probe_compensation *out)
 {
+    double *rule = ll_alloc_array(n, 2 * sizeof(double));
+    ll_status s = rule ? ll_quad_gauss_lobatto(n, rule, rule + n, NULL)
+                       : ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                                 "resolution probes: out of memory for %zu nodes", n);
+    if (s == LL_OK)
+        s = ll_probe_compensation_make_rule(mf, eta_re, eta_im, n, rule, rule + n, watch, out);
+    else
+        memset(out, 0, sizeof *out);
+    ll_free(rule);
+    return s;
+}
+
+ll_status ll_probe_compensation_make_rule(ll_microfacet_model *mf, double eta_re, double eta_im,
+                                          size_t n, const double *nodes, const double *weights,
+                                          ll_watch *watch, ll_probe_compensation *out)
+{
     size_t h = n / 2, k, q;
     int tables, pass;
-    double *rule = ll_alloc_array(n, 2 * sizeof(double));
     double *x = ll_alloc_array(n, 3 * sizeof(double));
     albedo_job job;
     ll_status s = LL_OK;
     memset(out, 0, sizeof *out);
     out->h = h;
     out->memory = ll_alloc_array(h + 1, 9 * sizeof(double));
-    if (!rule || !x || !out->memory) {
+    if (!x || !out->memory) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
         goto done;
     }
-    s = ll_quad_gauss_lobatto(n, rule, rule + n, NULL);
-    if (s != LL_OK)
-        goto done;
     /* (mf: ll_probe_compensation_model's. Order 0 of a widened lobe is
      * that of the true one, ll_microfacet_series: the terms hold for
      * every m.) */
     /* The layer's order (ll_layer_create): the negative half reversed. */
     for (k = 0; k < n; ++k)
-        x[k] = rule[k < h ? h - 1 - k : k];
+        x[k] = nodes[k < h ? h - 1 - k : k];
     for (k = 0; k < h; ++k)
-        x[n + k] = 2.0 * LL_PI * rule[n + h + k] * rule[h + k];
+        x[n + k] = 2.0 * LL_PI * weights[h + k] * nodes[h + k];
     for (k = 0; k < n; ++k)
         x[2 * n + k] = -x[k];
     /* (Unwatched: ll_microfacet_prepare_watched would start a stage of its
@@ -383,7 +395,6 @@ ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, dou
                                             (const double *const *)job.albedo, out->memory,
                                             &out->terms);
 done:
-    ll_free(rule);
     ll_free(x);
     if (s != LL_OK)
         ll_probe_compensation_free(out);

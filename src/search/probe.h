@@ -85,6 +85,9 @@ LL_INTERNAL int ll_probe_jump_straddles(const double *half, size_t h, double eta
  * of its comparisons of a GGX dielectric (ll_probe_error). */
 LL_INTERNAL ll_status ll_probe_mark_jump(const ll_probe_set *set, size_t n, double eta,
                                          double *values);
+/* The same on the Gauss-Lobatto nodes of n the caller has (all n). */
+LL_INTERNAL void ll_probe_mark_jump_nodes(const ll_probe_set *set, size_t n,
+                                          const double *nodes, double eta, double *values);
 
 /* The interface model that the evaluations of one search share (with
  * the maps of its series): every order, no widening (words/microfacet.h). */
@@ -124,6 +127,14 @@ typedef struct ll_probe_compensation {
 LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im,
                                                  size_t n, ll_watch *watch,
                                                  ll_probe_compensation *out);
+/* The same on the Gauss-Lobatto rule of n the caller has (nodes and
+ * weights, all n): the search's evaluations at one n share it
+ * (ll_probe_series_memo_rule). */
+LL_INTERNAL ll_status ll_probe_compensation_make_rule(ll_microfacet_model *mf, double eta_re,
+                                                      double eta_im, size_t n,
+                                                      const double *nodes,
+                                                      const double *weights, ll_watch *watch,
+                                                      ll_probe_compensation *out);
 /* The term's Fourier series (ll_microfacet_compensation_series: m terms
  * at most in out[m], returns how many) of block (LL_BLOCK_*) at output
  * node i, input node j (indices into the positive half); 0 for c ==
@@ -170,12 +181,17 @@ typedef struct ll_probe_series_memo {
     double **series;        /* [slots] (NULL where len is 0)               */
     size_t *len;            /* [slots] terms after the truncation          */
     unsigned char *widened; /* [slots] the lobe was widened at m           */
-    /* The Gauss-Lobatto nodes of nodes_n (the last evaluated: O(n^2) to
-     * make, and the search evaluates each n at several m). */
-    double *nodes;
-    size_t nodes_n;
+    /* The Gauss-Lobatto rule of rule_n (nodes, then weights; O(n^2) to
+     * make, and the search evaluates each n at several m, its
+     * compensation and jump marks on the same nodes). */
+    double *rule;
+    size_t rule_n;
 } ll_probe_series_memo;
 LL_INTERNAL void ll_probe_series_memo_free(ll_probe_series_memo *memo);
+/* The Gauss-Lobatto rule of n (*nodes, *weights: n each), made once and
+ * kept by the memo (the one it held for another n replaced). */
+LL_INTERNAL ll_status ll_probe_series_memo_rule(ll_probe_series_memo *memo, size_t n,
+                                                const double **nodes, const double **weights);
 
 /* ll_probe_interface_eval, reusing the series that memo (nullable) holds
  * for n when m is at most its orders, and refilling it otherwise: the

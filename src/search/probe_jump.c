@@ -59,20 +59,22 @@ int ll_probe_jump_straddles(const double *half, size_t h, double eta, double mu_
 
 ll_status ll_probe_mark_jump(const ll_probe_set *set, size_t n, double eta, double *values)
 {
-    double *nodes = ll_alloc_array(n, sizeof(double)), *weights = ll_alloc_array(n, sizeof(double));
-    size_t h = n / 2, p, k;
-    ll_status s;
-    if (!nodes || !weights) {
-        s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory for %zu nodes", n);
-    } else {
-        s = ll_quad_gauss_lobatto(n, nodes, weights, NULL);
-        for (p = 0; p < set->n_pairs && s == LL_OK; ++p)
-            if (ll_probe_jump_straddles(nodes + h, h, eta, set->pairs[p].mu_o,
-                                        set->pairs[p].mu_i))
-                for (k = 0; k < set->n_phi; ++k)
-                    values[p * set->n_phi + k] = NAN;
-    }
-    ll_free(nodes);
-    ll_free(weights);
+    double *rule = ll_alloc_array(n, 2 * sizeof(double));
+    ll_status s = rule ? ll_quad_gauss_lobatto(n, rule, rule + n, NULL)
+                       : ll_fail(LL_ERROR_OUT_OF_MEMORY,
+                                 "resolution probes: out of memory for %zu nodes", n);
+    if (s == LL_OK)
+        ll_probe_mark_jump_nodes(set, n, rule, eta, values);
+    ll_free(rule);
     return s;
+}
+
+void ll_probe_mark_jump_nodes(const ll_probe_set *set, size_t n, const double *nodes, double eta,
+                              double *values)
+{
+    size_t h = n / 2, p, k;
+    for (p = 0; p < set->n_pairs; ++p)
+        if (ll_probe_jump_straddles(nodes + h, h, eta, set->pairs[p].mu_o, set->pairs[p].mu_i))
+            for (k = 0; k < set->n_phi; ++k)
+                values[p * set->n_phi + k] = NAN;
 }

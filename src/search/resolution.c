@@ -94,7 +94,8 @@ static ll_probe_series_memo *memo_for(interface_ctx *c, size_t n)
     return &c->memo[MAX_MEMOS - 1];
 }
 
-static ll_status compensation_for(interface_ctx *c, size_t n, ll_watch *watch,
+static ll_status compensation_for(interface_ctx *c, size_t n, const double *nodes,
+                                  const double *weights, ll_watch *watch,
                                   const ll_probe_compensation **out)
 {
     size_t k;
@@ -111,7 +112,8 @@ static ll_status compensation_for(interface_ctx *c, size_t n, ll_watch *watch,
             c->made[k - 1] = c->made[k];
         --c->n_made;
     }
-    s = ll_probe_compensation_make(c->mf0, c->eta_re, c->eta_im, n, watch, &c->made[c->n_made]);
+    s = ll_probe_compensation_make_rule(c->mf0, c->eta_re, c->eta_im, n, nodes, weights, watch,
+                                        &c->made[c->n_made]);
     if (s != LL_OK)
         return s;
     *out = &c->made[c->n_made++];
@@ -122,12 +124,17 @@ static ll_status interface_eval(void *ctx, size_t n, size_t m, ll_watch *watch, 
 {
     interface_ctx *c = ctx;
     const ll_probe_compensation *compensation = NULL;
-    ll_status s = c->compensate ? compensation_for(c, n, watch, &compensation) : LL_OK;
+    ll_probe_series_memo *memo = memo_for(c, n);
+    const double *nodes, *weights;
+    /* (One Gauss-Lobatto rule of n for the compensation, the probes'
+     * stencils and the jump's marks.) */
+    ll_status s = ll_probe_series_memo_rule(memo, n, &nodes, &weights);
+    if (s == LL_OK && c->compensate)
+        s = compensation_for(c, n, nodes, weights, watch, &compensation);
     if (s == LL_OK)
-        s = ll_probe_interface_eval_memo(c->mf, compensation, memo_for(c, n), n, m, c->set,
-                                         watch, values);
+        s = ll_probe_interface_eval_memo(c->mf, compensation, memo, n, m, c->set, watch, values);
     if (s == LL_OK && c->jump)
-        s = ll_probe_mark_jump(c->set, n, c->eta_re, values);
+        ll_probe_mark_jump_nodes(c->set, n, nodes, c->eta_re, values);
     return s;
 }
 
