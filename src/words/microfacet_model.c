@@ -82,6 +82,7 @@ void ll_microfacet_destroy(ll_microfacet_model *mf)
     for (k = 0; k < mf->n_grid; ++k)
         grid_entry_free(mf->grid[k]);
     ll_free(mf->grid);
+    ll_free(mf->window_rule);
     ll_free(mf);
 }
 
@@ -186,8 +187,7 @@ typedef struct prepare_job {
     ll_microfacet_model *mf;
     ll_watch *watch;        /* nullable; one unit per entry     */
     size_t *grid;           /* the grid points to compute       */
-    double x[GAUSS_NODES];  /* Gauss-Legendre rule on [-1, 1]   */
-    double w[GAUSS_NODES];
+    const double *x, *w;    /* Gauss-Legendre rule on [-1, 1]   */
 } prepare_job;
 
 static ll_status prepare_one(size_t index, void *ctx)
@@ -244,6 +244,24 @@ static void mark_pair(const ll_microfacet_model *mf, double mu_o, double mu_i, u
         need[p.grid] = 1;
 }
 
+/* The maps' Gauss-Legendre rule in mf->window_rule, made once. */
+static ll_status window_rule(ll_microfacet_model *mf)
+{
+    ll_status s;
+    if (mf->window_rule)
+        return LL_OK;
+    mf->window_rule = ll_alloc_array(GAUSS_NODES, 2 * sizeof(double));
+    if (!mf->window_rule)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "microfacet: out of memory for the maps");
+    s = ll_quad_gauss_legendre(GAUSS_NODES, mf->window_rule, mf->window_rule + GAUSS_NODES,
+                               NULL);
+    if (s != LL_OK) {
+        ll_free(mf->window_rule);
+        mf->window_rule = NULL;
+    }
+    return s;
+}
+
 /* Compute the marked maps that are missing (in parallel). */
 static ll_status make_marked(ll_microfacet_model *mf, const unsigned char *need, size_t n_grid,
                              ll_watch *watch)
@@ -259,7 +277,9 @@ static ll_status make_marked(ll_microfacet_model *mf, const unsigned char *need,
             job.grid[n_items++] = k;
     job.mf = mf;
     job.watch = watch;
-    s = n_items ? ll_quad_gauss_legendre(GAUSS_NODES, job.x, job.w, NULL) : LL_OK;
+    s = n_items ? window_rule(mf) : LL_OK;
+    job.x = mf->window_rule;
+    job.w = mf->window_rule + GAUSS_NODES;
     if (s == LL_OK)
         s = ll_watch_stage(watch, "interface", 0.05, 0.05, n_items)
                 ? ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled")

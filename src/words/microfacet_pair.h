@@ -52,6 +52,9 @@ struct ll_microfacet_model {
                           * path (ll_microfacet_order0_simpson)            */
     size_t n_grid;
     grid_entry **grid;   /* [n_grid] NULL until prepared                   */
+    double *window_rule; /* the maps' Gauss-Legendre rule (nodes, then
+                          * weights), made with the first map: a search
+                          * prepares maps in dozens of batches           */
 };
 
 /* Everything one pair needs, from its two cosines. */
