@@ -13,18 +13,23 @@
 
 #include <math.h>
 
-/* The true series of a pair into c (*len terms). */
-static ll_status true_series(ll_microfacet_model *mf, const ll_probe_pair *pair, double *c,
-                             size_t *len, double *scratch)
+/* Prepare the maps of every probe pair's true series, in one batch (one
+ * pass over the model's grid, not one per pair). */
+static ll_status prepare_all(ll_microfacet_model *mf, const ll_probe_set *set)
 {
-    double mu[2];
+    double *mu = ll_alloc_array(set->n_pairs + 1, 2 * sizeof(double));
+    size_t p;
     ll_status s;
-    mu[0] = -pair->mu_o;
-    mu[1] = -pair->mu_i;
-    s = ll_microfacet_prepare_pairs(mf, mu, mu + 1, 1);
-    return s == LL_OK ? ll_microfacet_series(mf, mu[0], mu[1], LL_PROBE_TRUE_MAX_LEN, c, len,
-                                             NULL, scratch)
-                      : s;
+    if (!mu)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "resolution probes: out of memory");
+    /* Depth grows opposite to the normal: the series takes -mu. */
+    for (p = 0; p < set->n_pairs; ++p) {
+        mu[p] = -set->pairs[p].mu_o;
+        mu[set->n_pairs + p] = -set->pairs[p].mu_i;
+    }
+    s = ll_microfacet_prepare_pairs(mf, mu, mu + set->n_pairs, set->n_pairs);
+    ll_free(mu);
+    return s;
 }
 
 /* Per azimuth k, the terms the truncation of c needs to stay within
@@ -75,9 +80,10 @@ ll_status ll_probe_interface_orders(ll_microfacet_model *mf, double tolerance,
         goto done;
     }
     ll_microfacet_set_orders(mf, LL_PROBE_TRUE_ORDERS);
-    s = LL_OK;
+    s = prepare_all(mf, set);
     for (p = 0; p < set->n_pairs && s == LL_OK; ++p) {
-        s = true_series(mf, &set->pairs[p], c, &len, scratch);
+        s = ll_microfacet_series(mf, -set->pairs[p].mu_o, -set->pairs[p].mu_i,
+                                 LL_PROBE_TRUE_MAX_LEN, c, &len, NULL, scratch);
         if (s != LL_OK || len == 0)
             continue; /* (a pair without a lobe needs nothing: need stays 0) */
         /* The whole series' values, for the peaks of the groups. */
