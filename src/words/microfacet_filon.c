@@ -68,6 +68,15 @@ static void azimuth_cosines(double a, double b, size_t count, double *out, const
     }
 }
 
+/* The larger of a and b, as fmax(a, b) where a is not NaN (b NaN gives
+ * a): the running maxima below start from 0 or a sample, and fmax is a
+ * library call that the compiler may not inline (it must order signed
+ * zeros and NaNs as C99 says), once per sample. */
+static double larger(double a, double b)
+{
+    return b > a ? b : a;
+}
+
 /* Scratch of the Filon path: samples, their cosines, Filon's own. */
 enum { FILON_SCR_F = 0, FILON_SCR_COS = FILON_SAMPLES, FILON_SCR_FILON = 2 * FILON_SAMPLES };
 
@@ -147,7 +156,7 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
             value -= q[0] + v * (q[1] + v * q[2]);
         value *= peak / (c * c);
         f[first + k * stride] = value;
-        largest = fmax(largest, fabs(value));
+        largest = larger(largest, fabs(value));
     }
     return largest;
 }
@@ -217,20 +226,20 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
         count = (GGX_PIECE_SAMPLES - 1) / stride + 1;
         ll_filon_moments_kept(f, count, a, b, first, n_out, out, filon, kept);
         for (largest = 0.0, k = 0; k < count; ++k)
-            largest = fmax(largest, fabs(f[k]));
+            largest = larger(largest, fabs(f[k]));
         return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi, NULL, NULL);
     largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
-    *seen = fmax(*seen, largest);
+    *seen = larger(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
         stride = 2;
-        largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 2, 4, 4, f));
-        *seen = fmax(*seen, largest);
+        largest = larger(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 2, 4, 4, f));
+        *seen = larger(*seen, largest);
         if (largest >= GGX_MEDIUM * *seen) {
             stride = 1;
-            largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 1, 2, 8, f));
-            *seen = fmax(*seen, largest);
+            largest = larger(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 1, 2, 8, f));
+            *seen = larger(*seen, largest);
         }
     }
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
@@ -409,7 +418,7 @@ static int ggx_settled(const double *out, size_t n, double moment0)
     if (width > n)
         width = n;
     for (l = n - width; l < n; ++l)
-        largest = fmax(largest, fabs(out[l]));
+        largest = larger(largest, fabs(out[l]));
     return 2.0 * largest < GGX_SETTLED * fabs(moment0);
 }
 
@@ -564,7 +573,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t k, blocks = 1, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    size_t k, blocks = 1, n = ll_ggx_length_at(&p->peak_len, n_out) + GGX_FIRST_EXTRA;
     int fitted = 0; /* the tail: 0 not yet fitted, 1 fitted, -1 no fit */
     if (first && first < n)
         n = first;
@@ -695,7 +704,7 @@ static void ggx_split_series(const ll_microfacet_model *mf, const pair_plan *p, 
     first = GGX_FIRST_EXTRA + (size_t)ceil(4.0 / sqrt(delta));
     ggx_orders(mf, p, part, q_rest, NULL, 0.0, q[0], first, LL_PI * mean, 1, n_out, out, scratch);
     moments_to_series(out, n_out);
-    n_closed = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + 3;
+    n_closed = ll_ggx_length_at(&p->peak_len, n_out) + 3;
     if (n_closed > n_out)
         n_closed = n_out;
     ll_ggx_series_quadratic(p->b, q, n_closed, scratch, scratch + n_closed);
