@@ -140,7 +140,7 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
 {
     pair_plan p;
     size_t n_out, l, last;
-    double energy = 0.0, ref_energy = 0.0;
+    double energy = 0.0, ref_energy = 0.0, keep;
     ll_status s;
 
     *len = 0;
@@ -181,13 +181,14 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
             *ref0 = ref_energy;
     }
 
-    /* Truncate after the last term that matters. */
+    /* Truncate after the last term that matters: found from the end, as
+     * a series' last terms are the small ones (GGX's are computed to a
+     * tenth of what is kept). */
     if (!(out[0] > 0.0))
         return LL_OK; /* a vanishing mean: nothing */
-    last = 0;
-    for (l = 1; l < n_out; ++l)
-        if (fabs(out[l]) >= ll_microfacet_keep(mf) * out[0])
-            last = l;
+    keep = ll_microfacet_keep(mf) * out[0];
+    for (last = n_out > 0 ? n_out - 1 : 0; last > 0 && !(fabs(out[last]) >= keep); --last)
+        ;
     *len = last + 1;
     return LL_OK;
 }
