@@ -177,15 +177,33 @@ static void convolve(double beta, const double *b, size_t n_b, size_t n_out, dou
         e[l] = power * (c + (double)l * s) * inv_s3;
         power *= r;
     }
-    for (l = 0; l < direct; ++l) {
-        /* (j < l and j >= l apart: the same terms in the same order,
-         * without a choice of index per term) */
-        double sum = b[0] * e[l];
-        for (j = 1; j < n_b && j < l; ++j)
-            sum += b[j] * (e[l - j] + e[l + j]);
-        for (; j < n_b; ++j)
-            sum += b[j] * (e[j - l] + e[l + j]);
-        out[l] = l == 0 ? sum : 2.0 * sum;
+    if (direct <= LL_GGX_CHEB && n_b <= LL_GGX_CHEB) {
+        /* The first orders side by side, each summed over j in order as
+         * below: e_|l - j| from a mirrored copy, e_|k| at k + n_b - 1, so
+         * that every l reads consecutive entries. */
+        double mirror[3 * LL_GGX_CHEB], sum[LL_GGX_CHEB];
+        for (l = 0; l + 1 < n_b; ++l)
+            mirror[l] = e[n_b - 1 - l];
+        for (l = 0; l < n_e; ++l)
+            mirror[n_b - 1 + l] = e[l];
+        for (l = 0; l < direct; ++l)
+            sum[l] = b[0] * e[l];
+        for (j = 1; j < n_b; ++j)
+            for (l = 0; l < direct; ++l)
+                sum[l] += b[j] * (mirror[n_b - 1 + l - j] + e[l + j]);
+        for (l = 0; l < direct; ++l)
+            out[l] = l == 0 ? sum[l] : 2.0 * sum[l];
+    } else {
+        for (l = 0; l < direct; ++l) {
+            /* (j < l and j >= l apart: the same terms in the same order,
+             * without a choice of index per term) */
+            double total = b[0] * e[l];
+            for (j = 1; j < n_b && j < l; ++j)
+                total += b[j] * (e[l - j] + e[l + j]);
+            for (; j < n_b; ++j)
+                total += b[j] * (e[j - l] + e[l + j]);
+            out[l] = l == 0 ? total : 2.0 * total;
+        }
     }
     if (direct < n_out) {
         double s0 = b[0], s1 = 0.0, up = 1.0, down = 1.0, inv_r = 1.0 / r;
