@@ -135,13 +135,14 @@ enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
 #error "ggx_piece takes every fourth, every second, then all of 17 samples"
 #endif
 /* f (or its part) at the cosines cos_phi[k stride], count of them, into
- * f[k stride]; returns the largest |f| of them. */
+ * f[k stride]; returns the largest |f| of them. peak: exp(p->a_plus_b),
+ * which the pair's pieces share. */
 static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int part,
-                          const double *q, const double *cos_phi, size_t first, size_t stride,
-                          size_t count, double *f)
+                          const double *q, double peak, const double *cos_phi, size_t first,
+                          size_t stride, size_t count, double *f)
 {
     double c_sub[GGX_PIECE_SAMPLES], f_sub[GGX_PIECE_SAMPLES], ref_sub[GGX_PIECE_SAMPLES];
-    double peak = exp(p->a_plus_b), largest = 0.0;
+    double largest = 0.0;
     size_t k;
     for (k = 0; k < count; ++k)
         c_sub[k] = cos_phi[first + k * stride];
@@ -170,6 +171,7 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
 typedef struct ggx_pass {
     double seen;
     const double *q; /* g's quadratic taken out with the peak (ggx_split_series) */
+    double peak;     /* exp(a_plus_b), once for all the pass' samples              */
     double *cache;
     size_t used;
     int replay;
@@ -230,15 +232,15 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
         return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi, NULL, NULL);
-    largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
+    largest = ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 0, 4, 5, f);
     *seen = larger(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
         stride = 2;
-        largest = larger(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 2, 4, 4, f));
+        largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 2, 4, 4, f));
         *seen = larger(*seen, largest);
         if (largest >= GGX_MEDIUM * *seen) {
             stride = 1;
-            largest = larger(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 1, 2, 8, f));
+            largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 1, 2, 8, f));
             *seen = larger(*seen, largest);
         }
     }
@@ -470,7 +472,7 @@ static int kink_tail_fit(const ll_microfacet_model *mf, const pair_plan *p, doub
         double root = (double)(j + 1) * sigma;
         x[j] = cos(phi_c + root * root);
     }
-    ggx_samples(mf, p, GGX_FRESNEL, NULL, x, 0, 1, GGX_TAIL_POINTS, f);
+    ggx_samples(mf, p, GGX_FRESNEL, NULL, exp(p->a_plus_b), x, 0, 1, GGX_TAIL_POINTS, f);
     /* f / s^1/2 at the nodes t_j = j + 1 (in units of sigma): Newton's
      * divided differences, then the monomial coefficients in t */
     for (j = 0; j < GGX_TAIL_POINTS; ++j)
@@ -582,6 +584,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.cache = cache;
     pass.replay = 0;
     pass.q = q;
+    pass.peak = exp(p->a_plus_b);
     pass.kink_goal = part == GGX_FRESNEL ? GGX_KINK_GOAL * seen : 0.0;
     for (k = 0; k < GGX_KEPT; ++k)
         pass.kept[k].powers = 0;
