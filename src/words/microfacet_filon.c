@@ -163,10 +163,11 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
 }
 
 /* One pass over a pair's pieces: the largest f seen so far, and the
- * samples each piece took (its stride, 0 if skipped, then the samples),
- * which the passes of the next blocks of orders replay instead of taking
- * them again (cache NULL: more pieces than it holds, sampled again). */
-#define GGX_CACHE 1024
+ * samples each piece took (its stride, 0 if skipped, their largest |f|,
+ * then the samples), which the passes of the next blocks of orders replay
+ * instead of taking them again (cache NULL: more pieces than it holds,
+ * sampled again). */
+#define GGX_CACHE 1152
 #define GGX_KEPT 48 /* pieces whose Taylor sums are kept (the rest: summed per block) */
 typedef struct ggx_pass {
     double seen;
@@ -176,6 +177,7 @@ typedef struct ggx_pass {
     size_t used;
     int replay;
     size_t piece;    /* the pieces so far in this pass */
+    size_t kept_ready; /* kept[0 .. kept_ready - 1] are initialised        */
     double kink_goal; /* > 0: the grading towards TIR's kink stops early
                        * (add_towards) against this                     */
     ll_filon_kept kept[GGX_KEPT];
@@ -185,26 +187,40 @@ typedef struct ggx_pass {
 static ll_filon_kept *next_kept(ggx_pass *pass)
 {
     size_t piece = pass->piece++;
-    return piece < GGX_KEPT ? &pass->kept[piece] : NULL;
+    if (piece >= GGX_KEPT)
+        return NULL;
+    if (piece >= pass->kept_ready) { /* (a pair uses a few of them) */
+        pass->kept[piece].powers = 0;
+        pass->kept_ready = piece + 1;
+    }
+    return &pass->kept[piece];
 }
 
-/* Record (or, replaying, read) a piece's stride and samples; 0 when a
- * replayed piece is skipped. */
-static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
+/* Record a piece's stride (0: skipped), the largest |f| of its samples
+ * and the samples. */
+static void ggx_record(ggx_pass *pass, size_t stride, double largest, const double *f)
 {
     size_t count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
-    if (pass->replay) {
-        stride = (size_t)pass->cache[pass->used];
-        count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
-        memcpy(f, pass->cache + pass->used + 1, count * sizeof *f);
-    } else if (pass->cache && pass->used + 1 + count <= GGX_CACHE) {
+    if (pass->cache && pass->used + 2 + count <= GGX_CACHE) {
         pass->cache[pass->used] = (double)stride;
-        memcpy(pass->cache + pass->used + 1, f, count * sizeof *f);
+        pass->cache[pass->used + 1] = largest;
+        memcpy(pass->cache + pass->used + 2, f, count * sizeof *f);
     } else {
         pass->cache = NULL;
     }
-    pass->used += 1 + count;
-    return stride;
+    pass->used += 2 + count;
+}
+
+/* Replaying, the next piece's samples where they are kept (NULL: the
+ * piece is skipped), their count and largest |f|. */
+static const double *ggx_replay(ggx_pass *pass, size_t *count, double *largest)
+{
+    size_t stride = (size_t)pass->cache[pass->used];
+    const double *f = pass->cache + pass->used + 2;
+    *count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+    *largest = pass->cache[pass->used + 1];
+    pass->used += 2 + *count;
+    return stride ? f : NULL;
 }
 
 /* One piece of ggx_filon's; returns the largest |f| of its samples (0 if
@@ -222,13 +238,10 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
     kept = next_kept(pass);
     if (pass->replay) {
         size_t count;
-        stride = ggx_record(pass, 0, f);
-        if (!stride)
+        const double *kept_f = ggx_replay(pass, &count, &largest);
+        if (!kept_f)
             return 0.0;
-        count = (GGX_PIECE_SAMPLES - 1) / stride + 1;
-        ll_filon_moments_kept(f, count, a, b, first, n_out, out, filon, kept);
-        for (largest = 0.0, k = 0; k < count; ++k)
-            largest = larger(largest, fabs(f[k]));
+        ll_filon_moments_kept(kept_f, count, a, b, first, n_out, out, filon, kept);
         return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi, NULL, NULL);
@@ -245,13 +258,13 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
         }
     }
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
-        ggx_record(pass, 0, f);
+        ggx_record(pass, 0, 0.0, f);
         return 0.0;
     }
     if (stride > 1) /* the samples taken, side by side */
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
             f[k] = f[k * stride];
-    ggx_record(pass, stride, f);
+    ggx_record(pass, stride, largest, f);
     ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon,
                           kept);
     return largest;
@@ -575,7 +588,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t k, blocks = 1, n = ll_ggx_length_at(&p->peak_len, n_out) + GGX_FIRST_EXTRA;
+    size_t blocks = 1, n = ll_ggx_length_at(&p->peak_len, n_out) + GGX_FIRST_EXTRA;
     int fitted = 0; /* the tail: 0 not yet fitted, 1 fitted, -1 no fit */
     if (first && first < n)
         n = first;
@@ -586,8 +599,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.q = q;
     pass.peak = exp(p->a_plus_b);
     pass.kink_goal = part == GGX_FRESNEL ? GGX_KINK_GOAL * seen : 0.0;
-    for (k = 0; k < GGX_KEPT; ++k)
-        pass.kept[k].powers = 0;
+    pass.kept_ready = 0;
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
     pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
