@@ -241,6 +241,42 @@ static void ggx_quadratic_series_matches_interpolated(void **state)
     }
 }
 
+/* A pair's peak length, prepared once for caps up to a largest one,
+ * answers every cap as ll_ggx_peak_length does (the pair's orders, its
+ * Filon blocks and its closed-form part ask it at different caps, and the
+ * series must not depend on whether it was asked once or each time), and
+ * a cap beyond the prepared one still gets ll_ggx_peak_length's answer.
+ * That length is the first order whose term 2 r^l (c + l s) / c falls
+ * below relerr, counted here term by term (up to a rounding at the
+ * boundary). */
+static void ggx_peak_length_prepared_matches_direct(void **state)
+{
+    static const double betas[] = { 0.0, 1e-6, 0.01, 0.3, 1.0, 40.0, 5e3, 1e5, 3e7 };
+    static const double relerrs[] = { 1e-4, 1e-3 };
+    static const size_t max_caps[] = { 1, 2, 17, 200, 5000 };
+    size_t b, e, m, cap;
+    (void)state;
+    for (b = 0; b < sizeof betas / sizeof betas[0]; ++b)
+        for (e = 0; e < sizeof relerrs / sizeof relerrs[0]; ++e) {
+            double beta = betas[b], relerr = relerrs[e], c = 1.0 + beta;
+            double s = sqrt(1.0 + 2.0 * beta), r = beta / (c + s);
+            size_t counted = 1;
+            while (counted < 5000 &&
+                   2.0 * pow(r, (double)counted) * (c + (double)counted * s) >= relerr * c)
+                ++counted;
+            for (m = 0; m < sizeof max_caps / sizeof max_caps[0]; ++m) {
+                ll_ggx_length len;
+                ll_ggx_length_prepare(beta, relerr, max_caps[m], &len);
+                for (cap = 0; cap <= max_caps[m] + 5; cap += cap < 40 ? 1 : 97) {
+                    size_t direct = ll_ggx_peak_length(beta, relerr, cap);
+                    size_t want = cap < 1 ? cap : counted < cap ? counted : cap;
+                    assert_int_equal(ll_ggx_length_at(&len, cap), direct);
+                    assert_true(direct + 1 >= want && direct <= want + 1);
+                }
+            }
+        }
+}
+
 /* ------------------------------- the series against direct integration */
 
 /* B of the pair (the sharpness of the Beckmann peak in phi), from the
@@ -633,6 +669,7 @@ int main(void)
         cmocka_unit_test(filon_kept_sums_match_summed_again),
         cmocka_unit_test(order0_simpson_matches_filon),
         cmocka_unit_test(ggx_quadratic_series_matches_interpolated),
+        cmocka_unit_test(ggx_peak_length_prepared_matches_direct),
         cmocka_unit_test(series_matches_direct_integration),
         cmocka_unit_test(dielectric_conserves_energy),
         cmocka_unit_test(interface_is_reciprocal),

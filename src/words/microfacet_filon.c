@@ -68,6 +68,15 @@ static void azimuth_cosines(double a, double b, size_t count, double *out, const
     }
 }
 
+/* The larger of a and b, as fmax(a, b) where a is not NaN (b NaN gives
+ * a): the running maxima below start from 0 or a sample, and fmax is a
+ * library call that the compiler may not inline (it must order signed
+ * zeros and NaNs as C99 says), once per sample. */
+static double larger(double a, double b)
+{
+    return b > a ? b : a;
+}
+
 /* Scratch of the Filon path: samples, their cosines, Filon's own. */
 enum { FILON_SCR_F = 0, FILON_SCR_COS = FILON_SAMPLES, FILON_SCR_FILON = 2 * FILON_SAMPLES };
 
@@ -126,13 +135,14 @@ enum { GGX_WHOLE, GGX_REFERENCE, GGX_FRESNEL };
 #error "ggx_piece takes every fourth, every second, then all of 17 samples"
 #endif
 /* f (or its part) at the cosines cos_phi[k stride], count of them, into
- * f[k stride]; returns the largest |f| of them. */
+ * f[k stride]; returns the largest |f| of them. peak: exp(p->a_plus_b),
+ * which the pair's pieces share. */
 static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int part,
-                          const double *q, const double *cos_phi, size_t first, size_t stride,
-                          size_t count, double *f)
+                          const double *q, double peak, const double *cos_phi, size_t first,
+                          size_t stride, size_t count, double *f)
 {
     double c_sub[GGX_PIECE_SAMPLES], f_sub[GGX_PIECE_SAMPLES], ref_sub[GGX_PIECE_SAMPLES];
-    double peak = exp(p->a_plus_b), largest = 0.0;
+    double largest = 0.0;
     size_t k;
     for (k = 0; k < count; ++k)
         c_sub[k] = cos_phi[first + k * stride];
@@ -147,24 +157,27 @@ static double ggx_samples(const ll_microfacet_model *mf, const pair_plan *p, int
             value -= q[0] + v * (q[1] + v * q[2]);
         value *= peak / (c * c);
         f[first + k * stride] = value;
-        largest = fmax(largest, fabs(value));
+        largest = larger(largest, fabs(value));
     }
     return largest;
 }
 
 /* One pass over a pair's pieces: the largest f seen so far, and the
- * samples each piece took (its stride, 0 if skipped, then the samples),
- * which the passes of the next blocks of orders replay instead of taking
- * them again (cache NULL: more pieces than it holds, sampled again). */
-#define GGX_CACHE 1024
+ * samples each piece took (its stride, 0 if skipped, their largest |f|,
+ * then the samples), which the passes of the next blocks of orders replay
+ * instead of taking them again (cache NULL: more pieces than it holds,
+ * sampled again). */
+#define GGX_CACHE 1152
 #define GGX_KEPT 48 /* pieces whose Taylor sums are kept (the rest: summed per block) */
 typedef struct ggx_pass {
     double seen;
     const double *q; /* g's quadratic taken out with the peak (ggx_split_series) */
+    double peak;     /* exp(a_plus_b), once for all the pass' samples              */
     double *cache;
     size_t used;
     int replay;
     size_t piece;    /* the pieces so far in this pass */
+    size_t kept_ready; /* kept[0 .. kept_ready - 1] are initialised        */
     double kink_goal; /* > 0: the grading towards TIR's kink stops early
                        * (add_towards) against this                     */
     ll_filon_kept kept[GGX_KEPT];
@@ -174,26 +187,40 @@ typedef struct ggx_pass {
 static ll_filon_kept *next_kept(ggx_pass *pass)
 {
     size_t piece = pass->piece++;
-    return piece < GGX_KEPT ? &pass->kept[piece] : NULL;
+    if (piece >= GGX_KEPT)
+        return NULL;
+    if (piece >= pass->kept_ready) { /* (a pair uses a few of them) */
+        pass->kept[piece].powers = 0;
+        pass->kept_ready = piece + 1;
+    }
+    return &pass->kept[piece];
 }
 
-/* Record (or, replaying, read) a piece's stride and samples; 0 when a
- * replayed piece is skipped. */
-static size_t ggx_record(ggx_pass *pass, size_t stride, double *f)
+/* Record a piece's stride (0: skipped), the largest |f| of its samples
+ * and the samples. */
+static void ggx_record(ggx_pass *pass, size_t stride, double largest, const double *f)
 {
     size_t count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
-    if (pass->replay) {
-        stride = (size_t)pass->cache[pass->used];
-        count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
-        memcpy(f, pass->cache + pass->used + 1, count * sizeof *f);
-    } else if (pass->cache && pass->used + 1 + count <= GGX_CACHE) {
+    if (pass->cache && pass->used + 2 + count <= GGX_CACHE) {
         pass->cache[pass->used] = (double)stride;
-        memcpy(pass->cache + pass->used + 1, f, count * sizeof *f);
+        pass->cache[pass->used + 1] = largest;
+        memcpy(pass->cache + pass->used + 2, f, count * sizeof *f);
     } else {
         pass->cache = NULL;
     }
-    pass->used += 1 + count;
-    return stride;
+    pass->used += 2 + count;
+}
+
+/* Replaying, the next piece's samples where they are kept (NULL: the
+ * piece is skipped), their count and largest |f|. */
+static const double *ggx_replay(ggx_pass *pass, size_t *count, double *largest)
+{
+    size_t stride = (size_t)pass->cache[pass->used];
+    const double *f = pass->cache + pass->used + 2;
+    *count = stride ? (GGX_PIECE_SAMPLES - 1) / stride + 1 : 0;
+    *largest = pass->cache[pass->used + 1];
+    pass->used += 2 + *count;
+    return stride ? f : NULL;
 }
 
 /* One piece of ggx_filon's; returns the largest |f| of its samples (0 if
@@ -211,36 +238,33 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
     kept = next_kept(pass);
     if (pass->replay) {
         size_t count;
-        stride = ggx_record(pass, 0, f);
-        if (!stride)
+        const double *kept_f = ggx_replay(pass, &count, &largest);
+        if (!kept_f)
             return 0.0;
-        count = (GGX_PIECE_SAMPLES - 1) / stride + 1;
-        ll_filon_moments_kept(f, count, a, b, first, n_out, out, filon, kept);
-        for (largest = 0.0, k = 0; k < count; ++k)
-            largest = fmax(largest, fabs(f[k]));
+        ll_filon_moments_kept(kept_f, count, a, b, first, n_out, out, filon, kept);
         return largest;
     }
     azimuth_cosines(a, b, GGX_PIECE_SAMPLES, cos_phi, NULL, NULL);
-    largest = ggx_samples(mf, p, part, pass->q, cos_phi, 0, 4, 5, f);
-    *seen = fmax(*seen, largest);
+    largest = ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 0, 4, 5, f);
+    *seen = larger(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
         stride = 2;
-        largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 2, 4, 4, f));
-        *seen = fmax(*seen, largest);
+        largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 2, 4, 4, f));
+        *seen = larger(*seen, largest);
         if (largest >= GGX_MEDIUM * *seen) {
             stride = 1;
-            largest = fmax(largest, ggx_samples(mf, p, part, pass->q, cos_phi, 1, 2, 8, f));
-            *seen = fmax(*seen, largest);
+            largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 1, 2, 8, f));
+            *seen = larger(*seen, largest);
         }
     }
     if (largest < GGX_NEGLIGIBLE * *seen || !(largest > 0.0)) {
-        ggx_record(pass, 0, f);
+        ggx_record(pass, 0, 0.0, f);
         return 0.0;
     }
     if (stride > 1) /* the samples taken, side by side */
         for (k = 1; k * stride < GGX_PIECE_SAMPLES; ++k)
             f[k] = f[k * stride];
-    ggx_record(pass, stride, f);
+    ggx_record(pass, stride, largest, f);
     ll_filon_moments_kept(f, (GGX_PIECE_SAMPLES - 1) / stride + 1, a, b, first, n_out, out, filon,
                           kept);
     return largest;
@@ -409,7 +433,7 @@ static int ggx_settled(const double *out, size_t n, double moment0)
     if (width > n)
         width = n;
     for (l = n - width; l < n; ++l)
-        largest = fmax(largest, fabs(out[l]));
+        largest = larger(largest, fabs(out[l]));
     return 2.0 * largest < GGX_SETTLED * fabs(moment0);
 }
 
@@ -461,7 +485,7 @@ static int kink_tail_fit(const ll_microfacet_model *mf, const pair_plan *p, doub
         double root = (double)(j + 1) * sigma;
         x[j] = cos(phi_c + root * root);
     }
-    ggx_samples(mf, p, GGX_FRESNEL, NULL, x, 0, 1, GGX_TAIL_POINTS, f);
+    ggx_samples(mf, p, GGX_FRESNEL, NULL, exp(p->a_plus_b), x, 0, 1, GGX_TAIL_POINTS, f);
     /* f / s^1/2 at the nodes t_j = j + 1 (in units of sigma): Newton's
      * divided differences, then the monomial coefficients in t */
     for (j = 0; j < GGX_TAIL_POINTS; ++j)
@@ -564,7 +588,7 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
 {
     double cache[GGX_CACHE];
     ggx_pass pass;
-    size_t k, blocks = 1, n = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + GGX_FIRST_EXTRA;
+    size_t blocks = 1, n = ll_ggx_length_at(&p->peak_len, n_out) + GGX_FIRST_EXTRA;
     int fitted = 0; /* the tail: 0 not yet fitted, 1 fitted, -1 no fit */
     if (first && first < n)
         n = first;
@@ -573,9 +597,9 @@ static size_t ggx_orders(const ll_microfacet_model *mf, const pair_plan *p, int 
     pass.cache = cache;
     pass.replay = 0;
     pass.q = q;
+    pass.peak = exp(p->a_plus_b);
     pass.kink_goal = part == GGX_FRESNEL ? GGX_KINK_GOAL * seen : 0.0;
-    for (k = 0; k < GGX_KEPT; ++k)
-        pass.kept[k].powers = 0;
+    pass.kept_ready = 0;
     ggx_filon(mf, p, part, start, seen, 0, n, out, scratch, &pass);
     pass.replay = pass.cache != NULL;
     while (n < n_out && !ggx_settled(out, n, moment0 + (own0 ? out[0] : 0.0))) {
@@ -695,7 +719,7 @@ static void ggx_split_series(const ll_microfacet_model *mf, const pair_plan *p, 
     first = GGX_FIRST_EXTRA + (size_t)ceil(4.0 / sqrt(delta));
     ggx_orders(mf, p, part, q_rest, NULL, 0.0, q[0], first, LL_PI * mean, 1, n_out, out, scratch);
     moments_to_series(out, n_out);
-    n_closed = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, n_out) + 3;
+    n_closed = ll_ggx_length_at(&p->peak_len, n_out) + 3;
     if (n_closed > n_out)
         n_closed = n_out;
     ll_ggx_series_quadratic(p->b, q, n_closed, scratch, scratch + n_closed);

@@ -60,22 +60,34 @@ static int term_below(double c, double s, double log_r, double l, double relerr)
     return 2.0 * exp(l * log_r) * (c + l * s) < relerr * c;
 }
 
-size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
+void ll_ggx_length_prepare(double beta, double relerr, size_t max_cap, ll_ggx_length *len)
 {
     /* The first l with t(l) = log(2 (c + l s) / (relerr c)) + l log r < 0:
      * t is concave, so Newton's steps from the root's left (l log r alone
      * crosses first) land right of it and then close in from the right;
      * the integer found is checked against the terms themselves (a sharp
      * lobe's series has thousands of terms, which counting one by one
-     * cost as much as the series). */
+     * cost as much as the series). A cap at or below Newton's root is its
+     * own answer; below it, the answer is the smaller of the cap and the
+     * length walked to under max_cap, as the walk down from ceil(x) does
+     * not depend on the cap and the walk up stops at the cap or the first
+     * term below relerr, whichever comes first. */
     double c, s, r, log_r, l, x;
     int k;
+    len->beta = beta;
+    len->relerr = relerr;
+    len->max_cap = max_cap;
+    len->one = 0;
+    len->x = HUGE_VAL;
+    len->walked = max_cap;
+    if (max_cap <= 1)
+        return;
     peak_constants(beta, &c, &s, &r);
-    if (cap <= 1)
-        return cap;
-    if (!(r > 0.0) || term_below(c, s, log(r), 1.0, relerr))
-        return 1;
-    log_r = log(r);
+    log_r = r > 0.0 ? log(r) : 0.0;
+    if (!(r > 0.0) || term_below(c, s, log_r, 1.0, relerr)) {
+        len->one = 1;
+        return;
+    }
     x = fmax(1.0, log(0.5 * relerr) / log_r);
     for (k = 0; k < 8; ++k) {
         double t = log(2.0 * (c + x * s) / (relerr * c)) + x * log_r;
@@ -87,16 +99,37 @@ size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
         if (fabs(step) < 0.01) /* the integer is settled below */
             break;
     }
-    if (!(x < (double)cap))
-        return cap;
+    len->x = x;
+    if (!(x < (double)max_cap))
+        return;
     l = ceil(x);
     if (l < 1.0)
         l = 1.0;
     while (l > 1.0 && term_below(c, s, log_r, l - 1.0, relerr))
         l -= 1.0;
-    while (l < (double)cap && !term_below(c, s, log_r, l, relerr))
+    while (l < (double)max_cap && !term_below(c, s, log_r, l, relerr))
         l += 1.0;
-    return (size_t)l;
+    len->walked = (size_t)l;
+}
+
+size_t ll_ggx_length_at(const ll_ggx_length *len, size_t cap)
+{
+    if (cap > len->max_cap) /* (not prepared that far) */
+        return ll_ggx_peak_length(len->beta, len->relerr, cap);
+    if (cap <= 1)
+        return cap;
+    if (len->one)
+        return 1;
+    if (!(len->x < (double)cap))
+        return cap;
+    return len->walked < cap ? len->walked : cap;
+}
+
+size_t ll_ggx_peak_length(double beta, double relerr, size_t cap)
+{
+    ll_ggx_length len;
+    ll_ggx_length_prepare(beta, relerr, cap, &len);
+    return ll_ggx_length_at(&len, cap);
 }
 
 double ll_ggx_max_beta(size_t n_orders, double relerr)
@@ -144,11 +177,33 @@ static void convolve(double beta, const double *b, size_t n_b, size_t n_out, dou
         e[l] = power * (c + (double)l * s) * inv_s3;
         power *= r;
     }
-    for (l = 0; l < direct; ++l) {
-        double sum = b[0] * e[l];
+    if (direct <= LL_GGX_CHEB && n_b <= LL_GGX_CHEB) {
+        /* The first orders side by side, each summed over j in order as
+         * below: e_|l - j| from a mirrored copy, e_|k| at k + n_b - 1, so
+         * that every l reads consecutive entries. */
+        double mirror[3 * LL_GGX_CHEB], sum[LL_GGX_CHEB];
+        for (l = 0; l + 1 < n_b; ++l)
+            mirror[l] = e[n_b - 1 - l];
+        for (l = 0; l < n_e; ++l)
+            mirror[n_b - 1 + l] = e[l];
+        for (l = 0; l < direct; ++l)
+            sum[l] = b[0] * e[l];
         for (j = 1; j < n_b; ++j)
-            sum += b[j] * (e[l > j ? l - j : j - l] + e[l + j]);
-        out[l] = l == 0 ? sum : 2.0 * sum;
+            for (l = 0; l < direct; ++l)
+                sum[l] += b[j] * (mirror[n_b - 1 + l - j] + e[l + j]);
+        for (l = 0; l < direct; ++l)
+            out[l] = l == 0 ? sum[l] : 2.0 * sum[l];
+    } else {
+        for (l = 0; l < direct; ++l) {
+            /* (j < l and j >= l apart: the same terms in the same order,
+             * without a choice of index per term) */
+            double total = b[0] * e[l];
+            for (j = 1; j < n_b && j < l; ++j)
+                total += b[j] * (e[l - j] + e[l + j]);
+            for (; j < n_b; ++j)
+                total += b[j] * (e[j - l] + e[l + j]);
+            out[l] = l == 0 ? total : 2.0 * total;
+        }
     }
     if (direct < n_out) {
         double s0 = b[0], s1 = 0.0, up = 1.0, down = 1.0, inv_r = 1.0 / r;

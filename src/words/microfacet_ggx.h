@@ -57,6 +57,24 @@ LL_INTERNAL double ll_ggx_peak_mean(double beta);
  * relerr times the first, at most cap (>= 1). */
 LL_INTERNAL size_t ll_ggx_peak_length(double beta, double relerr, size_t cap);
 
+/* ll_ggx_peak_length prepared once for every cap up to a largest one: a
+ * pair asks its peak's length at several caps (its orders, its Filon
+ * blocks, its closed-form part), and each answer would cost the same
+ * logarithms and exponentials again. ll_ggx_length_at gives exactly what
+ * ll_ggx_peak_length(beta, relerr, cap) does. */
+typedef struct ll_ggx_length {
+    double beta, relerr;
+    size_t max_cap; /* the caps answered from the fields below          */
+    int one;        /* the first term is already below relerr: length 1 */
+    double x;       /* Newton's root (the caps at or below it answer    */
+                    /* themselves)                                      */
+    size_t walked;  /* the length for max_cap, where x < max_cap        */
+} ll_ggx_length;
+
+LL_INTERNAL void ll_ggx_length_prepare(double beta, double relerr, size_t max_cap,
+                                       ll_ggx_length *len);
+LL_INTERNAL size_t ll_ggx_length_at(const ll_ggx_length *len, size_t cap);
+
 /* The largest beta whose series n_orders terms hold at relative error
  * relerr (the term of order n_orders below relerr times the first):
  * sharper lobes are widened. */

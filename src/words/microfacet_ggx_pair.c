@@ -52,7 +52,7 @@ ll_status ll_microfacet_ggx_pair_series(const ll_microfacet_model *mf, const pai
 {
     double *g = scratch, *g_ref = scratch + LL_GGX_CHEB, *rest = scratch + 2 * LL_GGX_CHEB;
     double peak = exp(p->a_plus_b);
-    size_t i, len = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len) + LL_GGX_CHEB;
+    size_t i, len = ll_ggx_length_at(&p->peak_len, max_len) + LL_GGX_CHEB;
     ll_microfacet_sample_profile(mf, p, mf->ggx_basis.cos_phi, LL_GGX_CHEB, g, ref0 ? g_ref : NULL);
     for (i = 0; i < LL_GGX_CHEB; ++i) {
         g[i] *= peak;
@@ -79,14 +79,16 @@ ll_status ll_microfacet_ggx_tir_series(const ll_microfacet_model *mf, const pair
 {
     double *g_ref = scratch, *rest = scratch + LL_GGX_CHEB, *part, peak = exp(p->a_plus_b);
     double seen = 0.0;
-    size_t i, l, len = ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len), n_part;
+    size_t i, l, len = ll_ggx_length_at(&p->peak_len, max_len), n_part;
     size_t n_filon = len + FILON_EXTRA < max_len ? len + FILON_EXTRA : max_len;
     len = len + LL_GGX_CHEB < max_len ? len + LL_GGX_CHEB : max_len;
     ll_microfacet_sample_profile(mf, p, mf->ggx_basis.cos_phi, LL_GGX_CHEB, NULL, g_ref);
     for (i = 0; i < LL_GGX_CHEB; ++i) {
-        double c = 1.0 + p->b * (1.0 - mf->ggx_basis.cos_phi[i]);
+        double c = 1.0 + p->b * (1.0 - mf->ggx_basis.cos_phi[i]), value;
         g_ref[i] *= peak;
-        seen = fmax(seen, g_ref[i] / (c * c));
+        value = g_ref[i] / (c * c);
+        if (value > seen) /* (fmax's choice: a NaN value leaves seen) */
+            seen = value;
     }
     ll_ggx_series(&mf->ggx_basis, p->b, g_ref, len, out, rest);
     if (ref0)

@@ -79,6 +79,9 @@ typedef struct pair_plan {
     double sign_h;     /* sign of the half vector's z                       */
     double mu_i, mu_o;
     double scale;      /* G1(wi) G1(wo) / (pi alpha^2 h_z^4 |mu_i mu_o|)    */
+    ll_ggx_length peak_len; /* GGX: ll_ggx_peak_length(b, GGX_TAIL_GOAL, cap)
+                             * for the caps up to the pair's orders, prepared
+                             * by ll_microfacet_series before its series    */
 } pair_plan;
 
 /* B_k, the grid point k of the maps (B_0 = 0), and the grid point at or

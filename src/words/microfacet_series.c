@@ -84,7 +84,7 @@ static ll_status pair_series(const ll_microfacet_model *mf, const pair_plan *p, 
          * widened lobe, need not ask the peak's length: len exceeds it.) */
         len = max_len <= FILON_EXTRA
                   ? max_len
-                  : (mf->ggx ? ll_ggx_peak_length(p->b, GGX_TAIL_GOAL, max_len)
+                  : (mf->ggx ? ll_ggx_length_at(&p->peak_len, max_len)
                              : ll_expcos_length(p->b, TAIL_GOAL)) +
                         FILON_EXTRA;
         *n_out = len < max_len ? len : max_len;
@@ -140,7 +140,7 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
 {
     pair_plan p;
     size_t n_out, l, last;
-    double energy = 0.0, ref_energy = 0.0;
+    double energy = 0.0, ref_energy = 0.0, keep;
     ll_status s;
 
     *len = 0;
@@ -159,6 +159,8 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
          * (R + T = 1.06 for eta = 1.5, alpha = 0.3 at 61 orders). So the
          * order 0 of the true lobe is computed first, and the widened
          * series scaled to it. */
+        if (mf->ggx)
+            ll_ggx_length_prepare(p.b, GGX_TAIL_GOAL, 1, &p.peak_len);
         s = pair_series(mf, &p, 1, &energy, &n_out, ref0 ? &ref_energy : NULL, scratch,
                         missing);
         if (s != LL_OK || (missing && *missing))
@@ -166,6 +168,8 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
         if (!ll_microfacet_plan_pair(mf, mu_o, mu_i, mf->b_max, &p))
             return LL_OK;
     }
+    if (mf->ggx)
+        ll_ggx_length_prepare(p.b, GGX_TAIL_GOAL, max_len, &p.peak_len);
     s = pair_series(mf, &p, max_len, out, &n_out, ref0, scratch, missing);
     if (s != LL_OK || (missing && *missing))
         return s;
@@ -177,13 +181,14 @@ static ll_status series(const ll_microfacet_model *mf, double mu_o, double mu_i,
             *ref0 = ref_energy;
     }
 
-    /* Truncate after the last term that matters. */
+    /* Truncate after the last term that matters: found from the end, as
+     * a series' last terms are the small ones (GGX's are computed to a
+     * tenth of what is kept). */
     if (!(out[0] > 0.0))
         return LL_OK; /* a vanishing mean: nothing */
-    last = 0;
-    for (l = 1; l < n_out; ++l)
-        if (fabs(out[l]) >= ll_microfacet_keep(mf) * out[0])
-            last = l;
+    keep = ll_microfacet_keep(mf) * out[0];
+    for (last = n_out > 0 ? n_out - 1 : 0; last > 0 && !(fabs(out[last]) >= keep); --last)
+        ;
     *len = last + 1;
     return LL_OK;
 }
