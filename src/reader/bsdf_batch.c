@@ -3,8 +3,10 @@
  * evaluates, or samples, a whole array of directions, as a wavefront
  * renderer (Mitsuba 3's LLVM variants) hands them over. Each element is
  * exactly the scalar _dir call on that element -- the batch calls call
- * them -- so a batch result is bit-identical to the scalar one and does not
- * depend on how the array is split between threads.
+ * them, or on a plain table file run their steps interleaved across
+ * elements (tables_batch.c) -- so a batch result is bit-identical to the
+ * scalar one and does not depend on how the array is split between
+ * threads.
  *
  * Threads: POSIX threads of libc (the reader library links no OpenMP). The
  * array is cut into contiguous ranges of at least LL_BATCH_MIN_PER_THREAD
