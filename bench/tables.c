@@ -21,9 +21,10 @@
  * scattered nodes of the tables); on the table also
  * tables.LABEL.hot_{eval,pdf,sample}_dir, the first HOT_CALLS calls made
  * over and over until as many calls are made (their nodes stay in cache:
- * the cost of the code itself), and tables.LABEL.batch_{eval,sample}_dir,
- * ns per element of ll_bsdf_eval_dir_batch and ll_bsdf_sample_dir_batch
- * over all the calls on one thread (LAYERLAB_BATCH_THREADS=1).
+ * the cost of the code itself), and tables.LABEL.batch_{eval,pdf,sample}_dir,
+ * ns per element of ll_bsdf_eval_dir_batch, ll_bsdf_pdf_dir_batch and
+ * ll_bsdf_sample_dir_batch over all the calls on one thread
+ * (LAYERLAB_BATCH_THREADS=1).
  */
 #define LL_EXPERIMENTAL /* ll_tables_write_from_bsdf */
 #include "calls.h"
@@ -109,6 +110,12 @@ static void measure_batch(const ll_bsdf *b, const bench_calls *w, const char *pr
     snprintf(id, sizeof id, "%sbatch_eval_dir", prefix);
     bench_metric(id, "ns", (bench_calls_seconds() - start) * 1e9 / (double)w->calls);
     *sum += out[0];
+    start = bench_calls_seconds();
+    bench_check(ll_bsdf_pdf_dir_batch(b, w->calls, w->wo, w->wi, NULL, 0, pdf),
+                "ll_bsdf_pdf_dir_batch");
+    snprintf(id, sizeof id, "%sbatch_pdf_dir", prefix);
+    bench_metric(id, "ns", (bench_calls_seconds() - start) * 1e9 / (double)w->calls);
+    *sum += pdf[0];
     start = bench_calls_seconds();
     bench_check(ll_bsdf_sample_dir_batch(b, w->calls, w->wo, w->u, LL_TRANSPORT_RADIANCE, NULL,
                                          0, wi, pdf, out),

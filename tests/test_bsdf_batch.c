@@ -3,8 +3,11 @@
  * for bit, what the scalar _dir calls give: for random directions over the
  * whole sphere (reflection and transmission, some invalid elements), for
  * the golden untextured file and a textured file with per-element or shared
- * weights, with one thread and with several (LAYERLAB_BATCH_THREADS), and
- * the status of the first invalid element.
+ * weights, and a table file (whose batches run as a pipeline over the
+ * elements, tables_batch.c), with one thread and with several
+ * (LAYERLAB_BATCH_THREADS), and the status of the first invalid element;
+ * on the table also every count from 0 to past twice the pipeline's depth
+ * and invalid or zero elements at every place in it.
  */
 #include "test_bsdf_util.h"
 
@@ -248,12 +251,159 @@ static void invalid_elements(void **state)
     ll_bsdf_release(b);
 }
 
+/* A table file of the golden file at a small grid (the pipeline reads
+ * the same tables whatever their size). */
+static ll_bsdf *open_table(void)
+{
+    ll_bsdf *src = open_golden(), *b = NULL;
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    char path[600];
+    o.n_theta_i = 8;
+    o.vndf_size = 32;
+    o.sample_size = 16;
+    snprintf(path, sizeof path, "%s/table.bsdf", ll_test_dir());
+    if (ll_tables_write_from_bsdf(src, path, &o, NULL) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    ll_bsdf_release(src);
+    if (ll_bsdf_open(path, NULL, &b) != LL_OK)
+        fail_msg("%s", ll_last_error_message());
+    return b;
+}
+
+static void table_equals_scalar(void **state)
+{
+    ll_bsdf *b = open_table();
+    batch_data *d = make_data(29);
+    float one = 0.75f;
+    size_t k;
+    (void)state;
+    /* Some elements of weight 0 (an eval without a look-up). */
+    for (k = 0; k < N_ELEMENTS; k += 7)
+        d->weights[k] = 0.0f;
+    set_threads("1");
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_IMPORTANCE);
+    check_against_scalar(b, d, &one, 0, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, d->weights, 1, LL_TRANSPORT_IMPORTANCE);
+    set_threads("3");
+    check_against_scalar(b, d, NULL, 0, LL_TRANSPORT_RADIANCE);
+    check_against_scalar(b, d, d->weights, 1, LL_TRANSPORT_RADIANCE);
+    unsetenv("LAYERLAB_BATCH_THREADS");
+    free(d);
+    ll_bsdf_release(b);
+}
+
+/* The lowest failing status of the scalar calls on elements [0, n) (what
+ * the batch must return), LL_OK if none. */
+static ll_status first_status(const ll_status *s, size_t n)
+{
+    size_t k;
+    for (k = 0; k < n; ++k)
+        if (s[k] != LL_OK)
+            return s[k];
+    return LL_OK;
+}
+
+/* Batches of the first n elements, for every n up to past twice any
+ * pipeline depth and a long one, on data with elements that fail (NaN,
+ * zero, u or weight out of range) or give zero (below the horizon) at
+ * neighbouring places, so that they meet every stage of the pipeline,
+ * the filling and the draining: each element's outputs bit for bit those
+ * of its scalar call, the status that of the lowest failing one. */
+static void table_pipeline_edges(void **state)
+{
+    enum { N = 1000 };
+    ll_bsdf *b = open_table();
+    batch_data *d = make_data(31);
+    static double rgb[3 * N], pdf[N], srgb[3 * N], spdf[N], swi[3 * N];
+    static double brgb[3 * N], bpdf[N], bwi[3 * N], bsrgb[3 * N], bspdf[N];
+    static ll_status se[N], sp[N], ss[N];
+    const size_t counts[] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 15, 16, 17, 18, 23,
+                              31, 32, 33, 34, 40, 47, 63, 64, 65, 66, N };
+    size_t k, c, n;
+    (void)state;
+    /* Valid directions above the surface for the first 80 elements (the
+     * ones that reach the tables), then the stand-ins at chosen places. */
+    for (k = 0; k < 80; ++k) {
+        d->wo[3 * k + 2] = fabs(d->wo[3 * k + 2]) + 0.05;
+        d->wi[3 * k + 2] = fabs(d->wi[3 * k + 2]) + 0.05;
+    }
+    for (k = 0; k < N; ++k)
+        d->weights[k] = 1.0f;
+    d->wi[3 * 2 + 2] = -0.5;                                    /* below: zeros, LL_OK */
+    d->wo[3 * 5 + 2] = -0.5;
+    d->wi[3 * 9 + 0] = NAN;                                     /* invalid wi */
+    d->wo[3 * 10 + 0] = d->wo[3 * 10 + 1] = d->wo[3 * 10 + 2] = 0.0; /* zero wo */
+    d->u[2 * 11] = 1.5;                                         /* u out of range */
+    d->weights[12] = NAN;                                       /* weight not finite */
+    d->weights[13] = 0.0f;
+    d->wi[3 * 16 + 2] = -0.3;
+    d->wo[3 * 17 + 1] = INFINITY;
+    d->wi[3 * 33 + 2] = NAN;
+    d->wo[3 * 34 + 2] = -1.0;
+    d->wi[3 * 64 + 0] = d->wi[3 * 64 + 1] = d->wi[3 * 64 + 2] = 0.0;
+    d->u[2 * 65 + 1] = -0.1;
+    for (k = 0; k < N; ++k) {
+        se[k] = ll_bsdf_eval_dir(b, d->wo + 3 * k, d->wi + 3 * k, LL_TRANSPORT_RADIANCE,
+                                 d->weights + k, srgb + 3 * k);
+        sp[k] = ll_bsdf_pdf_dir(b, d->wo + 3 * k, d->wi + 3 * k, d->weights + k, spdf + k);
+        ss[k] = ll_bsdf_sample_dir(b, d->wo + 3 * k, d->u + 2 * k, LL_TRANSPORT_RADIANCE,
+                                   d->weights + k, swi + 3 * k, pdf + k, rgb + 3 * k);
+    }
+    /* The chosen places do what they stand for. */
+    assert_int_equal(se[2], LL_OK);
+    assert_true(srgb[6] == 0.0 && spdf[2] == 0.0);
+    assert_int_equal(se[9], LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(ss[11], LL_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(se[12], LL_ERROR_INVALID_ARGUMENT);
+    set_threads("1");
+    for (c = 0; c < sizeof counts / sizeof counts[0]; ++c) {
+        n = counts[c];
+        memset(brgb, 0xff, sizeof brgb);
+        memset(bpdf, 0xff, sizeof bpdf);
+        memset(bwi, 0xff, sizeof bwi);
+        memset(bsrgb, 0xff, sizeof bsrgb);
+        memset(bspdf, 0xff, sizeof bspdf);
+        assert_int_equal(ll_bsdf_eval_dir_batch(b, n, d->wo, d->wi, LL_TRANSPORT_RADIANCE,
+                                                d->weights, 1, brgb),
+                         first_status(se, n));
+        assert_int_equal(ll_bsdf_pdf_dir_batch(b, n, d->wo, d->wi, d->weights, 1, bpdf),
+                         first_status(sp, n));
+        assert_int_equal(ll_bsdf_sample_dir_batch(b, n, d->wo, d->u, LL_TRANSPORT_RADIANCE,
+                                                  d->weights, 1, bwi, bspdf, bsrgb),
+                         first_status(ss, n));
+        for (k = 0; k < n; ++k) {
+            assert_same_bits(brgb + 3 * k, srgb + 3 * k, 3, "eval", k);
+            assert_same_bits(bpdf + k, spdf + k, 1, "pdf", k);
+            assert_same_bits(bwi + 3 * k, swi + 3 * k, 3, "sampled wi", k);
+            assert_same_bits(bspdf + k, pdf + k, 1, "sampled pdf", k);
+            assert_same_bits(bsrgb + 3 * k, rgb + 3 * k, 3, "sampled f", k);
+        }
+        /* Nothing written past the batch. */
+        if (n < N)
+            assert_true(isnan(brgb[3 * n]) && isnan(bpdf[n]) && isnan(bspdf[n]));
+    }
+    /* An invalid mode fails every element, as their scalar calls do. */
+    assert_int_equal(ll_bsdf_eval_dir_batch(b, 20, d->wo, d->wi, (ll_transport)7, NULL, 0, brgb),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "transport mode"));
+    assert_int_equal(ll_bsdf_sample_dir_batch(b, 20, d->wo, d->u, (ll_transport)7, NULL, 0, bwi,
+                                              bspdf, bsrgb),
+                     LL_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ll_last_error_message(), "transport mode"));
+    unsetenv("LAYERLAB_BATCH_THREADS");
+    free(d);
+    ll_bsdf_release(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(untextured_equals_scalar),
         cmocka_unit_test(textured_equals_scalar),
         cmocka_unit_test(invalid_elements),
+        cmocka_unit_test(table_equals_scalar),
+        cmocka_unit_test(table_pipeline_edges),
     };
     return cmocka_run_group_tests_name("bsdf_batch", tests, ll_test_dir_setup,
                                        ll_test_dir_teardown);

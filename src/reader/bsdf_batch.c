@@ -3,8 +3,10 @@
  * evaluates, or samples, a whole array of directions, as a wavefront
  * renderer (Mitsuba 3's LLVM variants) hands them over. Each element is
  * exactly the scalar _dir call on that element -- the batch calls call
- * them -- so a batch result is bit-identical to the scalar one and does not
- * depend on how the array is split between threads.
+ * them, or on a plain table file run their steps interleaved across
+ * elements (tables_batch.c) -- so a batch result is bit-identical to the
+ * scalar one and does not depend on how the array is split between
+ * threads.
  *
  * Threads: POSIX threads of libc (the reader library links no OpenMP). The
  * array is cut into contiguous ranges of at least LL_BATCH_MIN_PER_THREAD
@@ -20,7 +22,7 @@
  * calling thread (ll_last_error_message is per thread) by repeating that
  * one scalar call.
  */
-#include "reader/bsdf_internal.h"
+#include "reader/bsdf_batch.h"
 
 #include <pthread.h>
 #include <stdlib.h>
@@ -29,40 +31,22 @@
 #define LL_BATCH_MIN_PER_THREAD 1024
 #define LL_BATCH_MAX_THREADS 64
 
-typedef enum { BATCH_EVAL, BATCH_PDF, BATCH_SAMPLE } batch_kind;
-
-/* One batch call's arguments, shared read-only by the workers. */
-typedef struct batch_job {
-    batch_kind kind;
-    const ll_bsdf *b;
-    const double *wo, *wi, *u;
-    ll_transport mode;
-    const float *basis_coeffs;
-    size_t coeff_stride;
-    double *wi_out, *pdf_out, *rgb_out;
-} batch_job;
-
 /* One thread's range [begin, end) and the lowest index in it whose scalar
  * call failed (end if none). */
 typedef struct batch_range {
-    const batch_job *job;
+    const ll_batch_job *job;
     size_t begin, end, first_failed;
     ll_status failed_status;
 } batch_range;
 
-static const float *element_basis(const batch_job *job, size_t k)
+ll_status ll_batch_element(const ll_batch_job *job, size_t k)
 {
-    return job->basis_coeffs ? job->basis_coeffs + k * job->coeff_stride : NULL;
-}
-
-static ll_status run_element(const batch_job *job, size_t k)
-{
-    const float *basis = element_basis(job, k);
+    const float *basis = ll_batch_basis(job, k);
     switch (job->kind) {
-    case BATCH_EVAL:
+    case LL_BATCH_EVAL:
         return ll_bsdf_eval_dir(job->b, job->wo + 3 * k, job->wi + 3 * k, job->mode, basis,
                                 job->rgb_out + 3 * k);
-    case BATCH_PDF:
+    case LL_BATCH_PDF:
         return ll_bsdf_pdf_dir(job->b, job->wo + 3 * k, job->wi + 3 * k, basis, job->pdf_out + k);
     default:
         return ll_bsdf_sample_dir(job->b, job->wo + 3 * k, job->u + 2 * k, job->mode, basis,
@@ -76,8 +60,12 @@ static void *run_range(void *arg)
     size_t k;
     r->first_failed = r->end;
     r->failed_status = LL_OK;
+    if (ll_measured_batch_fits(r->job)) {
+        r->first_failed = ll_measured_batch_range(r->job, r->begin, r->end, &r->failed_status);
+        return NULL;
+    }
     for (k = r->begin; k < r->end; ++k) {
-        ll_status s = run_element(r->job, k);
+        ll_status s = ll_batch_element(r->job, k);
         if (s != LL_OK && r->first_failed == r->end) {
             r->first_failed = k;
             r->failed_status = s;
@@ -104,7 +92,7 @@ static size_t thread_limit(void)
 
 /* Run every element; returns the lowest failing element's status with its
  * message (made again here when the failure happened on a worker). */
-static ll_status run_batch(const batch_job *job, size_t count)
+static ll_status run_batch(const ll_batch_job *job, size_t count)
 {
     batch_range ranges[LL_BATCH_MAX_THREADS];
     pthread_t threads[LL_BATCH_MAX_THREADS];
@@ -135,7 +123,7 @@ static ll_status run_batch(const batch_job *job, size_t count)
         }
     }
     if (first < count)
-        status = run_element(job, first); /* the message, on this thread */
+        status = ll_batch_element(job, first); /* the message, on this thread */
     return status;
 }
 
@@ -161,7 +149,7 @@ static ll_status check_batch(const ll_bsdf *b, size_t count, int arrays_present,
 }
 
 /* The three entry points: their arguments checked, then run_batch. */
-static ll_status start_batch(const batch_job *job, size_t count, int arrays_present,
+static ll_status start_batch(const ll_batch_job *job, size_t count, int arrays_present,
                              const char *fn)
 {
     ll_status s = check_batch(job->b, count, arrays_present, job->basis_coeffs,
@@ -174,7 +162,7 @@ ll_status ll_bsdf_eval_dir_batch(const ll_bsdf *b, size_t count, const double *w
                                  const float *basis_coeffs, size_t coeff_stride,
                                  double *rgb_out)
 {
-    batch_job job = { .kind = BATCH_EVAL, .b = b, .wo = wo, .wi = wi, .mode = mode,
+    ll_batch_job job = { .kind = LL_BATCH_EVAL, .b = b, .wo = wo, .wi = wi, .mode = mode,
                       .basis_coeffs = basis_coeffs, .coeff_stride = coeff_stride,
                       .rgb_out = rgb_out };
     return start_batch(&job, count, wo && wi && rgb_out, "ll_bsdf_eval_dir_batch");
@@ -184,7 +172,7 @@ ll_status ll_bsdf_pdf_dir_batch(const ll_bsdf *b, size_t count, const double *wo
                                 const double *wi, const float *basis_coeffs,
                                 size_t coeff_stride, double *pdf_out)
 {
-    batch_job job = { .kind = BATCH_PDF, .b = b, .wo = wo, .wi = wi,
+    ll_batch_job job = { .kind = LL_BATCH_PDF, .b = b, .wo = wo, .wi = wi,
                       .mode = LL_TRANSPORT_RADIANCE, .basis_coeffs = basis_coeffs,
                       .coeff_stride = coeff_stride, .pdf_out = pdf_out };
     return start_batch(&job, count, wo && wi && pdf_out, "ll_bsdf_pdf_dir_batch");
@@ -195,7 +183,7 @@ ll_status ll_bsdf_sample_dir_batch(const ll_bsdf *b, size_t count, const double 
                                    const float *basis_coeffs, size_t coeff_stride,
                                    double *wi_out, double *pdf_out, double *rgb_out)
 {
-    batch_job job = { .kind = BATCH_SAMPLE, .b = b, .wo = wo, .u = u, .mode = mode,
+    ll_batch_job job = { .kind = LL_BATCH_SAMPLE, .b = b, .wo = wo, .u = u, .mode = mode,
                       .basis_coeffs = basis_coeffs, .coeff_stride = coeff_stride,
                       .wi_out = wi_out, .pdf_out = pdf_out, .rgb_out = rgb_out };
     return start_batch(&job, count, wo && u && wi_out && pdf_out && rgb_out,

@@ -12,25 +12,13 @@
 
 #include <math.h>
 
-/* The fixed direction wi as every look-up of a call needs it: its
- * elevation, the slices of its parameters, and its azimuth phi_i in the
- * forms that are used. The half vector's azimuth is only ever read
- * relative to phi_i (the files are isotropic), and that difference is one
- * atan2 of the half vector in wi's own azimuthal frame; phi_i itself is
- * taken only where a table depends on it (a file with two incident
- * azimuths, or a sigma that varies along the azimuth), and wi's unit
- * azimuth vector only where the sampler turns a normal by it. */
+/* The fixed direction wi as every look-up needs it: ll_measured_incident
+ * (tables_internal.h). */
 /* Below this |x| + |y| of wi, products with wi's azimuth vector could
  * underflow: such a wi takes the plain form with phi_i itself. */
 #define LL_TABLES_MIN_AZIMUTH 1e-100
 
-typedef struct incident {
-    double theta, u_theta, u_phi;
-    double ax, ay;            /* wi's azimuth vector (unit if asked for)   */
-    int has_azimuth;          /* wi is not (next to) the normal            */
-    double phi;               /* phi_i where it is read, else 0            */
-    ll_warp_slices sl;
-} incident;
+typedef ll_measured_incident incident;
 
 static void incident_of(const ll_measured *t, const double wi[3], int unit, incident *in)
 {
@@ -113,64 +101,112 @@ static int half_vector(const double wi[3], const double wo[3], double m[3])
     return 1;
 }
 
+/* The look-ups split at their loads from memory (tables_internal.h);
+ * the scalar calls below run the steps in a row. */
+int ll_measured_look_begin(const ll_measured *t, const double wi[3], const double wo[3],
+                           ll_measured_look *lk)
+{
+    if (!half_vector(wi, wo, lk->m))
+        return 0;
+    lk->wi[0] = wi[0];
+    lk->wi[1] = wi[1];
+    lk->wi[2] = wi[2];
+    incident_of(t, wi, 0, &lk->in);
+    normal_coords(lk->m, &lk->in, lk->um, &lk->theta_m);
+    return 1;
+}
+
+void ll_measured_look_prefetch_vndf(const ll_measured *t, const ll_measured_look *lk)
+{
+    ll_warp2d_prefetch_nodes(&t->vndf, &lk->in.sl, lk->um);
+}
+
+void ll_measured_look_invert(const ll_measured *t, ll_measured_look *lk)
+{
+    ll_warp2d_invert_at(&t->vndf, &lk->in.sl, lk->um, lk->s, &lk->p_v);
+}
+
+void ll_measured_look_prefetch_values(const ll_measured *t, const ll_measured_look *lk,
+                                      int pdf)
+{
+    ll_warp2d_prefetch_nodes(pdf ? &t->luminance : &t->rgb, &lk->in.sl, lk->s);
+}
+
+void ll_measured_look_value(const ll_measured *t, const ll_measured_look *lk, double value[3])
+{
+    ll_measured_values_at(t, &lk->in.sl, lk->s, jacobian(t, lk->um, &lk->in), value);
+}
+
+double ll_measured_look_pdf(const ll_measured *t, const ll_measured_look *lk)
+{
+    const double *wi = lk->wi, *m = lk->m;
+    double p_l = ll_warp2d_eval_at(&t->luminance, &lk->in.sl, lk->s);
+    return reflected_pdf(lk->p_v, p_l, lk->um[0], lk->theta_m,
+                         wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
+}
+
 void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[3],
                       double value[3])
 {
-    double m[3], um[2], s[2], theta_m, p_v;
-    incident in;
+    ll_measured_look lk;
     if (t->extended) {
         ll_measured_lobes_eval(t, wi, wo, value);
         return;
     }
     value[0] = value[1] = value[2] = 0.0;
-    if (!half_vector(wi, wo, m))
+    if (!ll_measured_look_begin(t, wi, wo, &lk))
         return;
-    incident_of(t, wi, 0, &in);
-    normal_coords(m, &in, um, &theta_m);
-    ll_warp2d_invert_at(&t->vndf, &in.sl, um, s, &p_v);
-    ll_measured_values_at(t, &in.sl, s, jacobian(t, um, &in), value);
+    ll_measured_look_invert(t, &lk);
+    ll_measured_look_value(t, &lk, value);
 }
 
 double ll_measured_pdf(const ll_measured *t, const double wi[3], const double wo[3])
 {
-    double m[3], um[2], s[2], theta_m, p_v, p_l;
-    incident in;
+    ll_measured_look lk;
     if (t->extended)
         return ll_measured_lobes_pdf(t, wi, wo);
-    if (!half_vector(wi, wo, m))
+    if (!ll_measured_look_begin(t, wi, wo, &lk))
         return 0.0;
-    incident_of(t, wi, 0, &in);
-    normal_coords(m, &in, um, &theta_m);
-    ll_warp2d_invert_at(&t->vndf, &in.sl, um, s, &p_v);
-    p_l = ll_warp2d_eval_at(&t->luminance, &in.sl, s);
-    return reflected_pdf(p_v, p_l, um[0], theta_m,
-                         wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
+    ll_measured_look_invert(t, &lk);
+    return ll_measured_look_pdf(t, &lk);
 }
 
-int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[2],
-                       double wo[3], double *pdf, double value[3])
+int ll_measured_draw_begin(const ll_measured *t, const double wi[3], const double u[2],
+                           ll_measured_look *lk)
 {
-    double pt[2], s[2], um[2], p_l, p_v, theta_m, m[3], d;
-    incident in;
-    if (t->extended)
-        return ll_measured_lobes_sample(t, wi, u, wo, pdf, value);
-    wo[0] = wo[1] = 0.0;
-    wo[2] = 1.0;
-    *pdf = 0.0;
-    value[0] = value[1] = value[2] = 0.0;
+    double pt[2];
     if (!(wi[2] > 0.0))
         return 0;
-    incident_of(t, wi, 1, &in);
+    lk->wi[0] = wi[0];
+    lk->wi[1] = wi[1];
+    lk->wi[2] = wi[2];
+    incident_of(t, wi, 1, &lk->in);
     /* The second number drives the warps' x (the elevation-like axis), as
      * Mitsuba's swap of the two does. */
     pt[0] = u[1];
     pt[1] = u[0];
-    ll_warp2d_sample_at(&t->luminance, &in.sl, pt, s, &p_l);
-    /* The values are read at s after the vndf's sampling, which does not
-     * depend on them: their fetch from memory runs meanwhile. */
-    ll_warp2d_prefetch_nodes(&t->rgb, &in.sl, s);
-    ll_warp2d_sample_at(&t->vndf, &in.sl, s, um, &p_v);
-    d = ll_tables_mirror_dir(wi, um, in.ax, in.ay, &theta_m, m, wo);
+    ll_warp2d_draw_begin(&t->luminance, &lk->in.sl, pt, &lk->dr);
+    ll_warp2d_prefetch_draw(&t->luminance, &lk->in.sl, &lk->dr);
+    return 1;
+}
+
+void ll_measured_draw_middle(const ll_measured *t, ll_measured_look *lk)
+{
+    ll_warp2d_draw_end(&t->luminance, &lk->in.sl, &lk->dr, lk->s, &lk->p_l);
+    ll_warp2d_prefetch_nodes(&t->rgb, &lk->in.sl, lk->s);
+    ll_warp2d_draw_begin(&t->vndf, &lk->in.sl, lk->s, &lk->dr);
+    ll_warp2d_prefetch_draw(&t->vndf, &lk->in.sl, &lk->dr);
+}
+
+/* A sample's last steps once both warps have sampled (s with density
+ * p_l, um with p_v): the reflected direction, its pdf and the values. wo,
+ * pdf and value hold the answer for no direction when called. */
+static int draw_tail(const ll_measured *t, const double wi[3], const incident *in,
+                     const double s[2], double p_l, const double um[2], double p_v,
+                     double wo[3], double *pdf, double value[3])
+{
+    double theta_m, m[3];
+    double d = ll_tables_mirror_dir(wi, um, in->ax, in->ay, &theta_m, m, wo);
     if (!(wo[2] > 0.0) || !(d > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;
@@ -182,8 +218,47 @@ int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[
         wo[2] = 1.0;
         return 0;
     }
-    ll_measured_values_at(t, &in.sl, s, jacobian(t, um, &in), value);
+    ll_measured_values_at(t, &in->sl, s, jacobian(t, um, in), value);
     return 1;
+}
+
+static void no_direction(double wo[3], double *pdf, double value[3])
+{
+    wo[0] = wo[1] = 0.0;
+    wo[2] = 1.0;
+    *pdf = 0.0;
+    value[0] = value[1] = value[2] = 0.0;
+}
+
+int ll_measured_draw_end(const ll_measured *t, ll_measured_look *lk, double wo[3], double *pdf,
+                         double value[3])
+{
+    no_direction(wo, pdf, value);
+    ll_warp2d_draw_end(&t->vndf, &lk->in.sl, &lk->dr, lk->um, &lk->p_v);
+    return draw_tail(t, lk->wi, &lk->in, lk->s, lk->p_l, lk->um, lk->p_v, wo, pdf, value);
+}
+
+/* The steps of draw_begin, _middle and _end in a row, each warp's
+ * sampling in one call (ll_warp2d_sample_at: the same steps). */
+int ll_measured_sample(const ll_measured *t, const double wi[3], const double u[2],
+                       double wo[3], double *pdf, double value[3])
+{
+    double pt[2], s[2], um[2], p_l, p_v;
+    incident in;
+    if (t->extended)
+        return ll_measured_lobes_sample(t, wi, u, wo, pdf, value);
+    no_direction(wo, pdf, value);
+    if (!(wi[2] > 0.0))
+        return 0;
+    incident_of(t, wi, 1, &in);
+    pt[0] = u[1]; /* as in ll_measured_draw_begin */
+    pt[1] = u[0];
+    ll_warp2d_sample_at(&t->luminance, &in.sl, pt, s, &p_l);
+    /* The values are read at s after the vndf's sampling, which does not
+     * depend on them: their fetch from memory runs meanwhile. */
+    ll_warp2d_prefetch_nodes(&t->rgb, &in.sl, s);
+    ll_warp2d_sample_at(&t->vndf, &in.sl, s, um, &p_v);
+    return draw_tail(t, wi, &in, s, p_l, um, p_v, wo, pdf, value);
 }
 
 /* ------------------------------------------------ the layer convention */

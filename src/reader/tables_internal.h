@@ -127,6 +127,64 @@ LL_INTERNAL int ll_measured_blend_sample(const ll_bsdf *b, const double wi[3], c
                                          const float *basis, double wo[3], double *pdf,
                                          double value[3]);
 
+/* The fixed direction wi as every look-up of a call needs it: its
+ * elevation, the slices of its parameters, and its azimuth phi_i in the
+ * forms that are used. The half vector's azimuth is only ever read
+ * relative to phi_i (the files are isotropic), and that difference is one
+ * atan2 of the half vector in wi's own azimuthal frame; phi_i itself is
+ * taken only where a table depends on it (a file with two incident
+ * azimuths, or a sigma that varies along the azimuth), and wi's unit
+ * azimuth vector only where the sampler turns a normal by it. */
+typedef struct ll_measured_incident {
+    double theta, u_theta, u_phi;
+    double ax, ay;            /* wi's azimuth vector (unit if asked for)   */
+    int has_azimuth;          /* wi is not (next to) the normal            */
+    double phi;               /* phi_i where it is read, else 0            */
+    ll_warp_slices sl;
+} ll_measured_incident;
+
+/* One look-up of a plain (not extended) set, split where it waits on
+ * memory, so that the batch calls (tables_batch.c) can run the steps of
+ * several look-ups interleaved while each one's tables are fetched; the
+ * scalar calls below run the same steps in a row, so both give the same
+ * bits. What a look-up carries from one step to the next: */
+typedef struct ll_measured_look {
+    ll_measured_incident in;
+    double wi[3];             /* the fixed direction                       */
+    double m[3], um[2];       /* the normal and its square's coordinates   */
+    double theta_m;
+    ll_warp_draw dr;          /* draw: the current warp's sampling        */
+    double s[2];              /* the sample square's point                 */
+    double p_v, p_l;          /* the vndf's and the luminance's densities  */
+} ll_measured_look;
+
+/* eval and pdf at (wi, wo): _begin takes the half vector and its
+ * coordinates (0: wi and wo are not both above the surface; the value and
+ * pdf are 0); _invert reads the vndf warp there (its nodes: asked for by
+ * _prefetch_vndf); _value and _pdf read the values or the luminance at the
+ * point found (asked for by _prefetch_values, pdf nonzero for the
+ * luminance). */
+LL_INTERNAL int ll_measured_look_begin(const ll_measured *t, const double wi[3],
+                                       const double wo[3], ll_measured_look *lk);
+LL_INTERNAL void ll_measured_look_prefetch_vndf(const ll_measured *t, const ll_measured_look *lk);
+LL_INTERNAL void ll_measured_look_invert(const ll_measured *t, ll_measured_look *lk);
+LL_INTERNAL void ll_measured_look_prefetch_values(const ll_measured *t,
+                                                  const ll_measured_look *lk, int pdf);
+LL_INTERNAL void ll_measured_look_value(const ll_measured *t, const ll_measured_look *lk,
+                                        double value[3]);
+LL_INTERNAL double ll_measured_look_pdf(const ll_measured *t, const ll_measured_look *lk);
+/* sample from u given wi: _begin (0: wi is not above the surface; no
+ * direction) starts the luminance warp's sampling (ll_warp2d_draw_begin)
+ * and asks for the stretch of its rows that it reads; _middle reads it,
+ * then starts the vndf warp's sampling and asks for its stretch and for
+ * the values at the luminance's point; _end reads those and gives what
+ * ll_measured_sample gives. */
+LL_INTERNAL int ll_measured_draw_begin(const ll_measured *t, const double wi[3],
+                                       const double u[2], ll_measured_look *lk);
+LL_INTERNAL void ll_measured_draw_middle(const ll_measured *t, ll_measured_look *lk);
+LL_INTERNAL int ll_measured_draw_end(const ll_measured *t, ll_measured_look *lk, double wo[3],
+                                     double *pdf, double value[3]);
+
 /* f cos(theta_o) of the channels R, G, B at (wi, wo); 0 below the surface. */
 LL_INTERNAL void ll_measured_eval(const ll_measured *m, const double wi[3], const double wo[3],
                                   double value[3]);

@@ -613,14 +613,28 @@ static inline void prefetch(const float *p, size_t n)
  * stays in [0, n - 2]. */
 #define COUNT_SEARCH(n, stride, first, value, target, out)                                \
     do {                                                                                  \
-        size_t last_ = (n) - 2, rounds_ = last_ / (stride), base_ = 0, count_ = 0, end_;  \
-        size_t j, i;                                                                      \
+        size_t base_;                                                                     \
+        COUNT_SEARCH_FIRST(n, stride, first, target, base_);                              \
+        COUNT_SEARCH_REST(n, stride, base_, value, target, out);                          \
+    } while (0)
+/* Its two rounds apart (a caller can ask for the stretch the first
+ * round leaves before the second reads it): the first gives the last
+ * multiple of stride whose value is <= target (0 if none) in base_out,
+ * the second the answer from there. */
+#define COUNT_SEARCH_FIRST(n, stride, first, target, base_out)                            \
+    do {                                                                                  \
+        size_t rounds_ = ((n) - 2) / (stride), j;                                         \
+        (base_out) = 0;                                                                   \
         for (j = 1; j <= rounds_; ++j)                                                    \
-            base_ += (first) <= (target) ? (stride) : 0;                                  \
-        end_ = base_ + (stride) <= last_ ? base_ + (stride) : last_ + 1;                  \
-        for (i = base_ + 1; i < end_; ++i)                                                \
+            (base_out) += (first) <= (target) ? (stride) : 0;                             \
+    } while (0)
+#define COUNT_SEARCH_REST(n, stride, base, value, target, out)                            \
+    do {                                                                                  \
+        size_t last_ = (n) - 2, count_ = 0, end_, i;                                      \
+        end_ = (base) + (stride) <= last_ ? (base) + (stride) : last_ + 1;                \
+        for (i = (base) + 1; i < end_; ++i)                                               \
             count_ += (value) <= (target);                                                \
-        (out) = base_ + count_;                                                           \
+        (out) = (base) + count_;                                                          \
     } while (0)
 
 /* Rows r and r + 1 of a pair at ty from values a (row r) and b (row r +
@@ -632,28 +646,34 @@ static inline double rows_mix(const slice_pair *q, double ty, float a0, float a1
            ty * (q->w0 * (double)b0 + q->w1 * (double)b1);
 }
 
-/* sample_at for a pair of slices: the general form's arithmetic, in the
- * same order, so both give the same numbers; the searches by
- * COUNT_SEARCH, the conditional one's first round from the guide. */
-static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[2],
-                        double pos[2], double *pdf)
+/* sample_at for a pair of slices, in three steps split where they wait
+ * on memory: sample_pair_row finds the row interval r from the marginal
+ * (small, read in place); sample_pair_guide the row's fraction and the
+ * column search's first round from the guide (small too); sample_pair_rest
+ * the column and the point from rows r and r + 1 of the table of
+ * megabytes. The general form's arithmetic, in the same order, so both
+ * give the same numbers; the searches by COUNT_SEARCH. */
+static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, const double u[2])
 {
-    size_t w = wp->w, h = wp->h, st = w * h, r, c, at, gs = wp->guide_stride;
-    size_t gc = wp->guide_count, hs = wp->marg_stride;
-    double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
-    slice_pair marg, tot, cond, data;
+    size_t h = wp->h, hs = wp->marg_stride, r;
+    double target = u[1];
+    slice_pair marg;
+    pair_of(s, wp->marg, h, 1, &marg);
+    COUNT_SEARCH(h, hs, pmix(&marg, j * hs), pmix(&marg, i), target, r);
+    return r;
+}
+
+static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, const double u[2],
+                                     ll_warp_draw *dr)
+{
+    size_t h = wp->h, st = wp->w * h, r = dr->r, gs = wp->guide_stride;
+    size_t gc = wp->guide_count;
+    double target = u[1], r0, r1, ty, row_total, m0, m1;
+    slice_pair marg, tot, cond;
     const float *g0, *g1;
     pair_of(s, wp->marg, h, 1, &marg);
     pair_of(s, wp->row_total, h, 1, &tot);
     pair_of(s, wp->cond, 2 * st, 2, &cond);
-    pair_of(s, wp->data, 2 * st, 2, &data);
-    target = u[1];
-    COUNT_SEARCH(h, hs, pmix(&marg, j * hs), pmix(&marg, i), target, r);
-    at = r * w;
-    /* Rows r and r + 1 of both slices, while the guide is read: their
-     * fetch from memory then overlaps the guide's instead of following it. */
-    prefetch(cond.p0 + 2 * at, 4 * w);
-    prefetch(cond.p1 + 2 * at, 4 * w);
     r0 = pmix(&tot, r);
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
@@ -668,8 +688,21 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
         g0 += (s->index[0] * h + r) * gc - 1;
         g1 += (s->index[s->count == 2] * h + r) * gc - 1;
     }
-    COUNT_SEARCH(w, gs, rows_mix(&cond, ty, g0[j], g1[j], g0[j + gc], g1[j + gc]),
-                 pair_at2(&cond, at, w, ty, i), target, c);
+    COUNT_SEARCH_FIRST(wp->w, gs, rows_mix(&cond, ty, g0[j], g1[j], g0[j + gc], g1[j + gc]),
+                       target, dr->base);
+    dr->ty = ty;
+    dr->target = target;
+}
+
+static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
+                                    const ll_warp_draw *dr, double pos[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h, c, r = dr->r, at = r * w, gs = wp->guide_stride;
+    double target = dr->target, ty = dr->ty, tx, v0, v1, cdf_c, cdf_c1;
+    slice_pair cond, data;
+    pair_of(s, wp->cond, 2 * st, 2, &cond);
+    pair_of(s, wp->data, 2 * st, 2, &data);
+    COUNT_SEARCH_REST(w, gs, dr->base, pair_at2(&cond, at, w, ty, i), target, c);
     cdf_c = pair_at2(&cond, at, w, ty, c);
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
@@ -680,12 +713,19 @@ static void sample_pair(const ll_warp2d *wp, const slice_set *s, const double u[
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
-                         double pos[2], double *pdf)
+/* Rows r and r + 1 of both slices (values and running integrals side by
+ * side). */
+static inline void prefetch_pair_rows(const ll_warp2d *wp, const slice_set *s, size_t r)
 {
-    size_t w = wp->w, h = wp->h, st = w * h, r, c;
-    double u[2], target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
-    slice_rows marg, cond, data;
+    size_t w = wp->w, plane = 2 * w * wp->h, j;
+    for (j = 0; j < s->count; ++j)
+        prefetch(wp->data + s->index[j] * plane + 2 * r * w, 4 * w);
+}
+
+/* u_in kept off the edges of the square, as the renderers' samplers keep
+ * it. */
+static inline void off_edges(const double u_in[2], double u[2])
+{
     int k;
     for (k = 0; k < 2; ++k) {
         u[k] = u_in[k];
@@ -694,10 +734,85 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
         if (u[k] > 1.0 - LL_WARP_EPSILON)
             u[k] = 1.0 - LL_WARP_EPSILON;
     }
-    if (s->count <= 2) {
-        sample_pair(wp, s, u, pos, pdf);
+}
+
+static void sample_general(const ll_warp2d *wp, const slice_set *s, const double u[2],
+                           double pos[2], double *pdf);
+
+void ll_warp2d_draw_begin(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
+                          ll_warp_draw *dr)
+{
+    off_edges(u_in, dr->u);
+    if (s->count > 2)
+        return;
+    dr->r = sample_pair_row(wp, s, dr->u);
+    sample_pair_guide(wp, s, dr->u, dr);
+}
+
+void ll_warp2d_prefetch_draw(const ll_warp2d *wp, const slice_set *s, const ll_warp_draw *dr)
+{
+#if defined(__GNUC__)
+    size_t w = wp->w, plane = 2 * w * wp->h, j, last = w - 2, end;
+    if (s->count > 2)
+        return;
+    /* Nodes base .. end of rows r and r + 1 (the second round's and the
+     * two nodes after its answer), each with its running integral. */
+    end = dr->base + wp->guide_stride <= last ? dr->base + wp->guide_stride : last + 1;
+    for (j = 0; j < s->count; ++j) {
+        const float *p = wp->data + s->index[j] * plane + 2 * (dr->r * w + dr->base);
+        size_t n = 2 * (end - dr->base + 1), k;
+        /* Its first and last floats, and every line between (none for a
+         * stretch of up to 16 floats: two lines at most). */
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + n - 1);
+        __builtin_prefetch(p + 2 * w);
+        __builtin_prefetch(p + 2 * w + n - 1);
+        for (k = 16; k + 1 < n; k += 16) {
+            __builtin_prefetch(p + k);
+            __builtin_prefetch(p + 2 * w + k);
+        }
+    }
+#else
+    (void)wp;
+    (void)s;
+    (void)dr;
+#endif
+}
+
+void ll_warp2d_draw_end(const ll_warp2d *wp, const slice_set *s, const ll_warp_draw *dr,
+                        double pos[2], double *pdf)
+{
+    if (s->count > 2)
+        sample_general(wp, s, dr->u, pos, pdf);
+    else
+        sample_pair_rest(wp, s, dr, pos, pdf);
+}
+
+void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
+                         double pos[2], double *pdf)
+{
+    ll_warp_draw dr;
+    off_edges(u_in, dr.u);
+    if (s->count > 2) {
+        sample_general(wp, s, dr.u, pos, pdf);
         return;
     }
+    dr.r = sample_pair_row(wp, s, dr.u);
+    /* Rows r and r + 1 of both slices, while the guide is read: their
+     * fetch from memory then overlaps the guide's instead of following it. */
+    prefetch_pair_rows(wp, s, dr.r);
+    sample_pair_guide(wp, s, dr.u, &dr);
+    sample_pair_rest(wp, s, &dr, pos, pdf);
+}
+
+/* Three or more slices (an anisotropic file), u already kept off the
+ * edges. */
+static void sample_general(const ll_warp2d *wp, const slice_set *s, const double u[2],
+                           double pos[2], double *pdf)
+{
+    size_t w = wp->w, h = wp->h, st = w * h, r, c;
+    double target, r0, r1, ty, tx, row_total, v0, v1, cdf_c, cdf_c1, m0, m1;
+    slice_rows marg, cond, data;
     rows_of(s, wp->marg, h, 1, &marg);
     rows_of(s, wp->cond, 2 * st, 2, &cond);
     data_rows_of(wp, s, &data);

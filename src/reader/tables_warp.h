@@ -137,13 +137,36 @@ LL_INTERNAL void ll_warp2d_eval_nodes(const ll_warp2d *wp, const ll_warp_slices 
 LL_INTERNAL double ll_warp2d_eval_single(const ll_warp2d *wp, const double pos[2]);
 /* Ask the memory for the nodes that ll_warp2d_eval_nodes will read at
  * pos for the slices s (without the inner parameter), so that their fetch
- * overlaps other work; a hint that changes no result. */
+ * overlaps other work; a hint that changes no result. On a sampling warp
+ * the same cell's nodes carry their running integrals: what
+ * ll_warp2d_eval_at and ll_warp2d_invert_at read there (beside the
+ * marginal and row totals, small tables that stay in cache). */
 LL_INTERNAL void ll_warp2d_prefetch_nodes(const ll_warp2d *wp, const ll_warp_slices *s,
                                           const double pos[2]);
 /* The one slice of a warp without parameters. */
 LL_INTERNAL void ll_warp_slices_single(ll_warp_slices *s);
 LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double u[2], double pos[2], double *pdf);
+/* sample_at in steps split at its loads from memory, for callers that
+ * overlap those of several samples (the batch calls' pipeline):
+ * ll_warp2d_draw_begin keeps u_in off the edges and, for one or two
+ * slices, finds the row interval from the marginal and the stretch of
+ * the column search from the guide (small tables, in cache);
+ * ll_warp2d_prefetch_draw asks for that stretch of the rows (a hint that
+ * changes no result); ll_warp2d_draw_end reads it and gives what
+ * sample_at gives. */
+typedef struct ll_warp_draw {
+    double u[2];              /* off the edges                          */
+    size_t r;                 /* the row interval                       */
+    size_t base;              /* the column search's first-round answer */
+    double ty, target;        /* the row's fraction, the column target  */
+} ll_warp_draw;
+LL_INTERNAL void ll_warp2d_draw_begin(const ll_warp2d *wp, const ll_warp_slices *s,
+                                      const double u_in[2], ll_warp_draw *dr);
+LL_INTERNAL void ll_warp2d_prefetch_draw(const ll_warp2d *wp, const ll_warp_slices *s,
+                                         const ll_warp_draw *dr);
+LL_INTERNAL void ll_warp2d_draw_end(const ll_warp2d *wp, const ll_warp_slices *s,
+                                    const ll_warp_draw *dr, double pos[2], double *pdf);
 LL_INTERNAL void ll_warp2d_invert_at(const ll_warp2d *wp, const ll_warp_slices *s,
                                      const double pos[2], double u[2], double *pdf);
 
