@@ -9,23 +9,11 @@
  * evaluate there, and scale f by 1 / |mu_o| (the stored series is
  * f * |mu_o|) and, for radiance transport through the interface, eta^2.
  */
+#include "reader/bsdf_dir.h"
 #include "reader/bsdf_internal.h"
 #include "reader/tables_internal.h"
 
 #include <math.h>
-
-/* A direction's length, or 0 if it is not a usable (finite, non-zero) one.
- * Unit vectors (what renderers pass) skip the square root: dividing by a
- * length within 1e-12 of 1 would change nothing that matters. */
-static double length_of(const double w[3])
-{
-    double len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-    if (fabs(len2 - 1.0) <= 1e-12)
-        return 1.0;
-    if (!(len2 > 0.0) || !ll_is_finite(len2))
-        return 0.0;
-    return sqrt(len2);
-}
 
 static double clamp_unit(double x) { return x > 1.0 ? 1.0 : (x < -1.0 ? -1.0 : x); }
 
@@ -34,7 +22,7 @@ static double clamp_unit(double x) { return x > 1.0 ? 1.0 : (x < -1.0 ? -1.0 : x
 static int to_file_axes(const double wo[3], const double wi[3], double *mu_i, double *mu_o,
                         double *cos_phi)
 {
-    double lo = length_of(wo), li = length_of(wi);
+    double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi);
     double xy_o = wo[0] * wo[0] + wo[1] * wo[1], xy_i = wi[0] * wi[0] + wi[1] * wi[1];
     if (!(lo > 0.0) || !(li > 0.0))
         return 0;
@@ -48,19 +36,6 @@ static int to_file_axes(const double wo[3], const double wi[3], double *mu_i, do
     return 1;
 }
 
-/* pbrt-v3's FourierBSDF::f: in radiance mode, a transmitted value (mu_i and
- * mu_o of the same sign in the file's axes) is scaled by the square of the
- * relative index it crosses, 1 / eta going up through it (wi below the
- * surface) and eta going down (Veach's thesis, sec. 5.2). */
-static double transport_scale(const ll_bsdf *b, double mu_i, double mu_o, ll_transport mode)
-{
-    double e;
-    if (mode != LL_TRANSPORT_RADIANCE || !(mu_i * mu_o > 0.0))
-        return 1.0;
-    e = mu_o > 0.0 ? 1.0 / b->eta : b->eta;
-    return e * e;
-}
-
 /* A table file (tables_internal.h) is evaluated on the directions
  * themselves, as the renderers' readers do: through (mu_i, mu_o, cos phi)
  * the azimuth's sine would come back as sqrt(1 - cos^2), which loses half
@@ -68,7 +43,7 @@ static double transport_scale(const ll_bsdf *b, double mu_i, double mu_o, ll_tra
  * format's wi. 0 if either direction is not usable. */
 static int unit_pair(const double wo[3], const double wi[3], double v[3], double l[3])
 {
-    double lo = length_of(wo), li = length_of(wi);
+    double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi);
     int k;
     if (!(lo > 0.0) || !(li > 0.0))
         return 0;
@@ -77,17 +52,6 @@ static int unit_pair(const double wo[3], const double wi[3], double v[3], double
         l[k] = wi[k] / li;
     }
     return 1;
-}
-
-static void measured_rgb(const double value[3], double cos_light, double weight, double rgb[3])
-{
-    double scale = weight * ll_bsdf_cosine_scale(cos_light);
-    int c;
-    for (c = 0; c < 3; ++c) {
-        rgb[c] = value[c] * scale;
-        if (!(rgb[c] > 0.0) || !ll_is_finite(rgb[c]))
-            rgb[c] = 0.0;
-    }
 }
 
 static ll_status check_mode(ll_transport mode, const char *fn)
@@ -111,7 +75,7 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
         (s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_eval_dir", &basis)) != LL_OK)
         return s;
     if (b->measured) {
-        /* unit_pair refuses what to_file_axes refuses (length_of of each). */
+        /* unit_pair refuses what to_file_axes refuses (ll_bsdf_dir_length of each). */
         double v[3], l[3], value[3];
         if (!unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
@@ -119,13 +83,13 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
         /* The bases blended with their weights; a transmitted value is
          * stored as the .bsdf stores it: radiance takes the same eta^2. */
         ll_measured_blend_eval(b, v, l, basis, value);
-        measured_rgb(value, l[2], transport_scale(b, v[2], -l[2], mode), rgb);
+        ll_bsdf_measured_rgb(value, l[2], ll_bsdf_transport_scale(b, v[2], -l[2], mode), rgb);
         return LL_OK;
     }
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
-    ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, transport_scale(b, mu_i, mu_o, mode), rgb);
+    ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, ll_bsdf_transport_scale(b, mu_i, mu_o, mode), rgb);
     return LL_OK;
 }
 
@@ -172,7 +136,7 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
     if ((s = check_mode(mode, "ll_bsdf_sample_dir")) != LL_OK ||
         (s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_sample_dir", &basis)) != LL_OK)
         return s;
-    lo = length_of(wo);
+    lo = ll_bsdf_dir_length(wo);
     if (!(lo > 0.0) || !(u[0] >= 0.0 && u[0] <= 1.0) || !(u[1] >= 0.0 && u[1] <= 1.0))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_sample_dir: wo must be finite and non-zero and u = (%g, %g) "
@@ -184,7 +148,7 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
         for (k = 0; k < 3; ++k)
             v[k] = wo[k] / lo;
         if (ll_measured_blend_sample(b, v, u, basis, wi, pdf, value))
-            measured_rgb(value, wi[2], transport_scale(b, v[2], -wi[2], mode), rgb);
+            ll_bsdf_measured_rgb(value, wi[2], ll_bsdf_transport_scale(b, v[2], -wi[2], mode), rgb);
         return LL_OK;
     }
     mu_i = clamp_unit(wo[2] / lo);
@@ -212,7 +176,7 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
     wi[0] /= len;
     wi[1] /= len;
     wi[2] /= len;
-    ll_bsdf_to_rgb(b, sums, transport_scale(b, mu_i, mu_o, mode) * ll_bsdf_cosine_scale(mu_o),
+    ll_bsdf_to_rgb(b, sums, ll_bsdf_transport_scale(b, mu_i, mu_o, mode) * ll_bsdf_cosine_scale(mu_o),
                    rgb);
     return LL_OK;
 }

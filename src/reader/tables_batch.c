@@ -23,6 +23,7 @@
  * finish comes, which also gives its status.
  */
 #include "reader/bsdf_batch.h"
+#include "reader/bsdf_dir.h"
 #include "reader/tables_internal.h"
 
 #include <math.h>
@@ -62,37 +63,6 @@ int ll_measured_batch_fits(const ll_batch_job *job)
            job->mode == LL_TRANSPORT_IMPORTANCE;
 }
 
-/* bsdf_dir.c's mapping for a table file, the same arithmetic. */
-static double length_of(const double w[3])
-{
-    double len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-    if (fabs(len2 - 1.0) <= 1e-12)
-        return 1.0;
-    if (!(len2 > 0.0) || !ll_is_finite(len2))
-        return 0.0;
-    return sqrt(len2);
-}
-
-static double transport_scale(const ll_bsdf *b, double mu_i, double mu_o, ll_transport mode)
-{
-    double e;
-    if (mode != LL_TRANSPORT_RADIANCE || !(mu_i * mu_o > 0.0))
-        return 1.0;
-    e = mu_o > 0.0 ? 1.0 / b->eta : b->eta;
-    return e * e;
-}
-
-static void measured_rgb(const double value[3], double cos_light, double weight, double rgb[3])
-{
-    double scale = weight * ll_bsdf_cosine_scale(cos_light);
-    int c;
-    for (c = 0; c < 3; ++c) {
-        rgb[c] = value[c] * scale;
-        if (!(rgb[c] > 0.0) || !ll_is_finite(rgb[c]))
-            rgb[c] = 0.0;
-    }
-}
-
 static const char *kind_name(ll_batch_kind kind)
 {
     return kind == LL_BATCH_EVAL ? "ll_bsdf_eval_dir"
@@ -113,7 +83,7 @@ static void start(const ll_batch_job *job, size_t k, pipe_slot *p)
     p->weight = (double)basis[0];
     if (job->kind == LL_BATCH_SAMPLE) {
         const double *wo = job->wo + 3 * k, *u = job->u + 2 * k;
-        double lo = length_of(wo);
+        double lo = ll_bsdf_dir_length(wo);
         if (!(lo > 0.0) || !(u[0] >= 0.0 && u[0] <= 1.0) || !(u[1] >= 0.0 && u[1] <= 1.0))
             return;
         for (c = 0; c < 3; ++c)
@@ -122,7 +92,7 @@ static void start(const ll_batch_job *job, size_t k, pipe_slot *p)
         p->state = ll_measured_draw_begin(t, p->v, u, &p->lk) ? SLOT_LIVE : SLOT_ZERO;
     } else {
         const double *wo = job->wo + 3 * k, *wi = job->wi + 3 * k;
-        double lo = length_of(wo), li = length_of(wi), l[3];
+        double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi), l[3];
         if (!(lo > 0.0) || !(li > 0.0))
             return;
         for (c = 0; c < 3; ++c) {
@@ -178,7 +148,7 @@ static ll_status finish(const ll_batch_job *job, size_t k, pipe_slot *p)
         ll_measured_look_value(t, &p->lk, value);
         for (c = 0; c < 3; ++c)
             value[c] = 0.0 + p->weight * value[c];
-        measured_rgb(value, p->light_z, transport_scale(b, p->v[2], -p->light_z, job->mode), rgb);
+        ll_bsdf_measured_rgb(value, p->light_z, ll_bsdf_transport_scale(b, p->v[2], -p->light_z, job->mode), rgb);
     } else {
         double *wi = job->wi_out + 3 * k, *pdf = job->pdf_out + k, *rgb = job->rgb_out + 3 * k;
         rgb[0] = rgb[1] = rgb[2] = 0.0;
@@ -193,7 +163,7 @@ static ll_status finish(const ll_batch_job *job, size_t k, pipe_slot *p)
         /* ll_measured_blend_sample's weight of one basis. */
         for (c = 0; c < 3; ++c)
             value[c] *= p->weight;
-        measured_rgb(value, wi[2], transport_scale(b, p->v[2], -wi[2], job->mode), rgb);
+        ll_bsdf_measured_rgb(value, wi[2], ll_bsdf_transport_scale(b, p->v[2], -wi[2], job->mode), rgb);
     }
     return LL_OK;
 }
