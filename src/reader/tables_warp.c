@@ -70,16 +70,20 @@ static int build_slice(ll_warp2d *wp, size_t k)
     return 1;
 }
 
-/* Whether every row of every slice repeats the first row of its slice
- * (compared as stored, all inner values of a node at once). */
+/* Whether every row of every slice repeats the first row of its slice,
+ * compared as stored: the inner values of each node (a sampling warp's
+ * node also holds its running integral, step 2, which is not written yet
+ * and not a value). */
 static int rows_equal(const ll_warp2d *wp)
 {
-    size_t row = wp->w * wp->step, plane = row * wp->h, k, y;
+    size_t st = wp->step, row = wp->w * st, plane = row * wp->h, k, y, x;
     for (k = 0; k < wp->n_slices / wp->inner; ++k)
         for (y = 1; y < wp->h; ++y)
-            if (memcmp(wp->data + k * plane, wp->data + k * plane + y * row,
-                       row * sizeof(float)) != 0)
-                return 0;
+            for (x = 0; x < wp->w; ++x)
+                if (memcmp(wp->data + k * plane + x * st,
+                           wp->data + k * plane + y * row + x * st,
+                           wp->inner * sizeof(float)) != 0)
+                    return 0;
     return 1;
 }
 
