@@ -60,6 +60,11 @@ class SliceWarp:
         if self.jit:
             self.node = mi.Float(self.node_host.ravel())
             self.row = mi.Float(self.row_host.ravel())
+            # Where the searches' answers lie (_guides): per slice for the
+            # marginal, per slice and pair of rows for the conditional.
+            self.guide_row, self.guide_node = _guides(self.node_host, self.row_host)
+            self.guide_row = mi.UInt32(self.guide_row.ravel())
+            self.guide_node = mi.UInt32(self.guide_node.ravel())
         else:
             self.node_host = self.node_host.reshape(-1, 2)
             self.row_host = self.row_host.reshape(-1, 2)
@@ -139,13 +144,34 @@ class SliceWarp:
 
     def _search(self, lo, hi, below):
         """The last index i in [lo - 1, hi - 1] with below(i) (below(lo -
-        1) holds, below is monotone): a halving in the JIT variants."""
-        if self.jit:
-            return dr.binary_search(lo, hi, below) - 1
+        1) holds, below is monotone): a scan (the scalar variants)."""
         i = lo
         while i < hi and below(i):
             i += 1
         return i - 1
+
+    @staticmethod
+    def _interval(guide, base, u, on0, on1, i0, i1, n):
+        """The nodes [first, last] where a search of the integral for u
+        answers (_guides): the smallest first and the largest last of the
+        entries base + i0, base + i1 that are read (on0, on1)."""
+        j = dr.minimum(mi.UInt32(mi.Int32(u * float(GUIDE))), GUIDE - 1)
+        g0 = dr.gather(mi.UInt32, guide, (base + i0) * GUIDE + j, on0)
+        g1 = dr.gather(mi.UInt32, guide, (base + i1) * GUIDE + j, on1)
+        first = dr.minimum(dr.select(on0, g0 & 0xFFFF, n - 2), dr.select(on1, g1 & 0xFFFF, n - 2))
+        last = dr.maximum(g0 >> 16, g1 >> 16)
+        return first, dr.maximum(first, last)
+
+    @staticmethod
+    def _halve(first, last, below):
+        """The last index i in [first, last] with below(i) (below(first)
+        holds, below is monotone): a halving, as many steps as the lane's
+        interval needs."""
+        def step(lo, hi):
+            mid = (lo + hi + 1) >> 1
+            b = below(mid)
+            return dr.select(b, mid, lo), dr.select(b, hi, mid - 1)
+        return dr.while_loop((first, last), lambda lo, hi: lo < hi, step)[0]
 
     def sample(self, k0, k1, a0, a1, u, active):
         """(the point the warp maps u in [0, 1]^2 to, the density there) of
@@ -179,11 +205,18 @@ class SliceWarp:
             node_arr, row_arr = self.node_host, self.row_host
         ux, uy = dr.clip(u.x, 0.0, 1.0), dr.clip(u.y, 0.0, 1.0)
         rb0, rb1 = k0 * h, k1 * h
-        r = self._search(1, h - 1, lambda i: second(row_arr, rb0 + i, rb1 + i) <= uy)
+        def above_row(i):
+            return second(row_arr, rb0 + i, rb1 + i) <= uy
+        if self.jit:
+            r = self._halve(*self._interval(self.guide_row, 0, uy, on0, on1, k0, k1, h),
+                            above_row)
+        else:
+            r = self._search(1, h - 1, above_row)
         t0, before = pair(row_arr, rb0 + r, rb1 + r)
         t1 = pair(row_arr, rb0 + r + 1, rb1 + r + 1)[0]
         ty = _root(t0, t1, (uy - before) * float(h - 1))
-        target = ux * dr.lerp(t0, t1, ty)
+        total = dr.lerp(t0, t1, ty)
+        target = ux * total
         nb0, nb1 = k0 * (w * h) + r * w, k1 * (w * h) + r * w
 
         def column(i):
@@ -193,7 +226,16 @@ class SliceWarp:
             return dr.lerp(second(node_arr, nb0 + i, nb1 + i),
                            second(node_arr, nb0 + w + i, nb1 + w + i), ty) <= target
 
-        c = self._search(1, w - 1, left_of)
+        if self.jit:
+            first, last = self._interval(self.guide_node, r, ux, on0, on1, k0 * (h - 1),
+                                         k1 * (h - 1), w)
+            # The guide leaves out the rows without mass; a mixture of
+            # (almost) nothing but those -- its rows with mass weighted 0,
+            # as at the edge of the support -- is searched over all nodes.
+            empty = total < GUIDE_TINY
+            c = self._halve(dr.select(empty, 0, first), dr.select(empty, w - 2, last), left_of)
+        else:
+            c = self._search(1, w - 1, left_of)
         (d00, c00), (d01, c01) = column(c)
         d10, d11 = column(c + 1)[0][0], column(c + 1)[1][0]
         g0, g1 = dr.lerp(d00, d01, ty), dr.lerp(d10, d11, ty)
@@ -202,6 +244,78 @@ class SliceWarp:
             c, r = mi.Float(c), mi.Float(r)
         return (mi.Point2f((c + tx) * (1.0 / (w - 1)), (r + ty) * (1.0 / (h - 1))),
                 dr.lerp(g0, g1, tx))
+
+
+# A guide's entries per unit of the normalised integral (_guides).
+GUIDE = 64
+# How far a guide's interval reaches past its ends, in the normalised
+# integral: well above the float32 rounding of the mixtures that the
+# searches compare (a few units in 2^-24 of their total), well below a
+# guide step, so that rounding never puts an answer outside its interval.
+GUIDE_MARGIN = 1e-5
+# A mixed row total below which the conditional's search ignores its guide:
+# above it, the float32 products of the mixture (flushed to 0 below 2^-126)
+# are still rounded within a tiny part of GUIDE_MARGIN of the total.
+GUIDE_TINY = 1e-30
+
+
+def _last_at_most(cdf, q):
+    """For each row of cdf ([m, n], non-decreasing, within [0, 1]) and each
+    threshold of q ([t]): the last node i in [0, n - 2] with cdf[i] <= q,
+    node 0 counting always (the answer of SliceWarp._search); [m, t]."""
+    m, n = cdf.shape
+    # The rows one after the other, 4 apart, are one sorted array: one
+    # searchsorted for all of them.
+    offset = 4.0 * np.arange(m, dtype=np.float64)[:, None]
+    inner = (np.clip(cdf[:, 1:n - 1], -1.0, 2.0) + offset).ravel()
+    query = np.clip(np.asarray(q, dtype=np.float64), -1.0, 2.0)[None, :] + offset
+    found = np.searchsorted(inner, query.ravel(), side="right").reshape(m, -1)
+    return found - (n - 2) * np.arange(m)[:, None]
+
+
+def _intervals(cdf):
+    """Per row of cdf (normalised, [m, n]) and guide entry j: the first and
+    last possible answer of a search for u in [j / GUIDE, (j + 1) /
+    GUIDE] (widened by GUIDE_MARGIN); [m, GUIDE] each."""
+    j = np.arange(GUIDE, dtype=np.float64)
+    return (_last_at_most(cdf, j / GUIDE - GUIDE_MARGIN),
+            _last_at_most(cdf, (j + 1) / GUIDE + GUIDE_MARGIN))
+
+
+def _pack(lo, hi):
+    return (lo.astype(np.uint32) | (hi.astype(np.uint32) << 16)).astype(np.uint32)
+
+
+def _guides(node, row):
+    """The guide tables of SliceWarp's searches, from its node and row
+    tables: for u in [j / GUIDE, (j + 1) / GUIDE] the interval of nodes
+    where the answer lies, packed as first | last << 16 (a guide table:
+    Devroye, Non-Uniform Random Variate Generation, 1986, II.2.4).
+
+    The searches compare mixtures: of two slices (weights a0, a1), and
+    in the conditional of rows r, r + 1 (weights 1 - ty, ty). A mixture's
+    integral normalised is a convex combination of its parts' normalised
+    integrals (each part weighted by its share of the total), so the last
+    node where it is <= u lies between the smallest and the largest of
+    the parts' last nodes: the caller takes the smallest first and the
+    largest last over the slices it reads; the conditional's entries here
+    are already those over the pair of rows r, r + 1. A row without mass
+    adds nothing to a mixture and has the empty interval (first n - 2,
+    last 0); a mixture of such rows alone is 0 everywhere (its answer the
+    last node n - 2), and the caller searches it over all nodes."""
+    slices, h, w = node.shape[:3]
+    marg = row[:, :, 1].astype(np.float64)
+    lo, hi = _intervals(marg)
+    guide_row = _pack(lo, hi)
+    totals = row[:, :, 0].astype(np.float64).reshape(-1)
+    has = totals > 0
+    cond = node[:, :, :, 1].astype(np.float64).reshape(-1, w)
+    cond = cond / np.where(has, totals, 1.0)[:, None]
+    lo, hi = _intervals(cond)
+    lo = np.where(has[:, None], lo, w - 2).reshape(slices, h, GUIDE)
+    hi = np.where(has[:, None], hi, 0).reshape(slices, h, GUIDE)
+    guide_node = _pack(np.minimum(lo[:, :-1], lo[:, 1:]), np.maximum(hi[:, :-1], hi[:, 1:]))
+    return guide_row, guide_node
 
 
 def _root(f0, f1, mass):
