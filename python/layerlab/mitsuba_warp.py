@@ -62,9 +62,10 @@ class SliceWarp:
             self.row = mi.Float(self.row_host.ravel())
             # Where the searches' answers lie (_guides): per slice for the
             # marginal, per slice and pair of rows for the conditional.
-            self.guide_row, self.guide_node = _guides(self.node_host, self.row_host)
-            self.guide_row = mi.UInt32(self.guide_row.ravel())
-            self.guide_node = mi.UInt32(self.guide_node.ravel())
+            self.bits_row, self.bits_node = _bits(h), _bits(w)
+            guide_row, guide_node = _guides(self.node_host, self.row_host)
+            self.guide_row = mi.UInt32(_pack(*guide_row, self.bits_row))
+            self.guide_node = mi.UInt32(_pack(*guide_node, self.bits_node))
         else:
             self.node_host = self.node_host.reshape(-1, 2)
             self.row_host = self.row_host.reshape(-1, 2)
@@ -151,27 +152,47 @@ class SliceWarp:
         return i - 1
 
     @staticmethod
-    def _interval(guide, base, u, on0, on1, i0, i1, n):
+    def _interval(guide, size, bits, base, u, on0, on1, i0, i1, n):
         """The nodes [first, last] where a search of the integral for u
-        answers (_guides): the smallest first and the largest last of the
-        entries base + i0, base + i1 that are read (on0, on1)."""
-        j = dr.minimum(mi.UInt32(mi.Int32(u * float(GUIDE))), GUIDE - 1)
-        g0 = dr.gather(mi.UInt32, guide, (base + i0) * GUIDE + j, on0)
-        g1 = dr.gather(mi.UInt32, guide, (base + i1) * GUIDE + j, on1)
-        first = dr.minimum(dr.select(on0, g0 & 0xFFFF, n - 2), dr.select(on1, g1 & 0xFFFF, n - 2))
-        last = dr.maximum(g0 >> 16, g1 >> 16)
+        answers (_guides; size entries a row, packed by _pack with bits):
+        the smallest first and the largest last of the rows base + i0,
+        base + i1 that are read (on0, on1)."""
+        j = dr.minimum(mi.UInt32(mi.Int32(u * float(size))), size - 1)
+        mask = (1 << bits) - 1
+
+        def entry(i, on):
+            e = (base + i) * size + j
+            if bits == 8:
+                # (Two entries a word.)
+                return dr.gather(mi.UInt32, guide, e >> 1, on) >> ((e & 1) << 4)
+            return dr.gather(mi.UInt32, guide, e, on)
+        g0, g1 = entry(i0, on0), entry(i1, on1)
+        first = dr.minimum(dr.select(on0, g0 & mask, n - 2), dr.select(on1, g1 & mask, n - 2))
+        last = dr.maximum((g0 >> bits) & mask, (g1 >> bits) & mask)
         return first, dr.maximum(first, last)
 
     @staticmethod
     def _halve(first, last, below):
         """The last index i in [first, last] with below(i) (below(first)
-        holds, below is monotone): a halving, as many steps as the lane's
-        interval needs."""
+        holds, below is monotone): the first SCAN nodes after first tested
+        at once, then a halving of what is left, as many steps as the
+        lane's interval needs.
+
+        (A search is a chain of reads, each waiting for the one before;
+        the guide leaves most intervals a few nodes wide, whose reads,
+        side by side in memory, are made together.)"""
+        found = first
+        for d in range(1, SCAN + 1):
+            node = first + d
+            found = found + dr.select((node <= last) & below(dr.minimum(node, last)), 1, 0)
+        done = (found < first + SCAN) | (last <= first + SCAN)
+
         def step(lo, hi):
             mid = (lo + hi + 1) >> 1
             b = below(mid)
             return dr.select(b, mid, lo), dr.select(b, hi, mid - 1)
-        return dr.while_loop((first, last), lambda lo, hi: lo < hi, step)[0]
+        return dr.while_loop((found, dr.select(done, found, last)), lambda lo, hi: lo < hi,
+                             step)[0]
 
     def sample(self, k0, k1, a0, a1, u, active):
         """(the point the warp maps u in [0, 1]^2 to, the density there) of
@@ -208,7 +229,8 @@ class SliceWarp:
         def above_row(i):
             return second(row_arr, rb0 + i, rb1 + i) <= uy
         if self.jit:
-            r = self._halve(*self._interval(self.guide_row, 0, uy, on0, on1, k0, k1, h),
+            r = self._halve(*self._interval(self.guide_row, GUIDE_ROW, self.bits_row, 0, uy,
+                                            on0, on1, k0, k1, h),
                             above_row)
         else:
             r = self._search(1, h - 1, above_row)
@@ -227,8 +249,8 @@ class SliceWarp:
                            second(node_arr, nb0 + w + i, nb1 + w + i), ty) <= target
 
         if self.jit:
-            first, last = self._interval(self.guide_node, r, ux, on0, on1, k0 * (h - 1),
-                                         k1 * (h - 1), w)
+            first, last = self._interval(self.guide_node, GUIDE_NODE, self.bits_node, r, ux,
+                                         on0, on1, k0 * (h - 1), k1 * (h - 1), w)
             # The guide leaves out the rows without mass; a mixture of
             # (almost) nothing but those -- its rows with mass weighted 0,
             # as at the edge of the support -- is searched over all nodes.
@@ -246,13 +268,17 @@ class SliceWarp:
                 dr.lerp(g0, g1, tx))
 
 
-# A guide's entries per unit of the normalised integral (_guides).
-GUIDE = 64
+# A guide's entries per unit of the normalised integral (_guides): of the
+# marginal's (a slice's, few) and of the conditional's (a pair of rows').
+GUIDE_ROW = 256
+GUIDE_NODE = 128
 # How far a guide's interval reaches past its ends, in the normalised
 # integral: well above the float32 rounding of the mixtures that the
 # searches compare (a few units in 2^-24 of their total), well below a
 # guide step, so that rounding never puts an answer outside its interval.
 GUIDE_MARGIN = 1e-5
+# The nodes of an interval that a search tests at once (SliceWarp._halve).
+SCAN = 1
 # A mixed row total below which the conditional's search ignores its guide:
 # above it, the float32 products of the mixture (flushed to 0 below 2^-126)
 # are still rounded within a tiny part of GUIDE_MARGIN of the total.
@@ -273,23 +299,35 @@ def _last_at_most(cdf, q):
     return found - (n - 2) * np.arange(m)[:, None]
 
 
-def _intervals(cdf):
-    """Per row of cdf (normalised, [m, n]) and guide entry j: the first and
-    last possible answer of a search for u in [j / GUIDE, (j + 1) /
-    GUIDE] (widened by GUIDE_MARGIN); [m, GUIDE] each."""
-    j = np.arange(GUIDE, dtype=np.float64)
-    return (_last_at_most(cdf, j / GUIDE - GUIDE_MARGIN),
-            _last_at_most(cdf, (j + 1) / GUIDE + GUIDE_MARGIN))
+def _intervals(cdf, size):
+    """Per row of cdf (normalised, [m, n]) and guide entry j < size: the
+    first and last possible answer of a search for u in [j / size, (j +
+    1) / size] (widened by GUIDE_MARGIN); [m, size] each."""
+    j = np.arange(size, dtype=np.float64)
+    return (_last_at_most(cdf, j / size - GUIDE_MARGIN),
+            _last_at_most(cdf, (j + 1) / size + GUIDE_MARGIN))
 
 
-def _pack(lo, hi):
-    return (lo.astype(np.uint32) | (hi.astype(np.uint32) << 16)).astype(np.uint32)
+def _bits(n):
+    """The bits of a node index of a warp of n nodes a side in a guide's
+    entry: 8 (two entries a 32-bit word) while they fit."""
+    return 8 if n - 2 < 256 else 16
+
+
+def _pack(first, last, bits):
+    """The entries first | last << bits, flat, in 32-bit words (two a word
+    with 8 bits, the first in the low half)."""
+    e = (first.astype(np.uint32) | (last.astype(np.uint32) << bits)).ravel()
+    if bits == 8:
+        e = e.reshape(-1, 2)   # (every row has an even number of entries)
+        e = e[:, 0] | (e[:, 1] << 16)
+    return np.ascontiguousarray(e, dtype=np.uint32)
 
 
 def _guides(node, row):
     """The guide tables of SliceWarp's searches, from its node and row
-    tables: for u in [j / GUIDE, (j + 1) / GUIDE] the interval of nodes
-    where the answer lies, packed as first | last << 16 (a guide table:
+    tables: for u in [j / size, (j + 1) / size] the interval of nodes
+    where the answer lies, (first, last) each (a guide table:
     Devroye, Non-Uniform Random Variate Generation, 1986, II.2.4).
 
     The searches compare mixtures: of two slices (weights a0, a1), and
@@ -305,16 +343,15 @@ def _guides(node, row):
     last node n - 2), and the caller searches it over all nodes."""
     slices, h, w = node.shape[:3]
     marg = row[:, :, 1].astype(np.float64)
-    lo, hi = _intervals(marg)
-    guide_row = _pack(lo, hi)
+    guide_row = _intervals(marg, GUIDE_ROW)
     totals = row[:, :, 0].astype(np.float64).reshape(-1)
     has = totals > 0
     cond = node[:, :, :, 1].astype(np.float64).reshape(-1, w)
     cond = cond / np.where(has, totals, 1.0)[:, None]
-    lo, hi = _intervals(cond)
-    lo = np.where(has[:, None], lo, w - 2).reshape(slices, h, GUIDE)
-    hi = np.where(has[:, None], hi, 0).reshape(slices, h, GUIDE)
-    guide_node = _pack(np.minimum(lo[:, :-1], lo[:, 1:]), np.maximum(hi[:, :-1], hi[:, 1:]))
+    lo, hi = _intervals(cond, GUIDE_NODE)
+    lo = np.where(has[:, None], lo, w - 2).reshape(slices, h, GUIDE_NODE)
+    hi = np.where(has[:, None], hi, 0).reshape(slices, h, GUIDE_NODE)
+    guide_node = (np.minimum(lo[:, :-1], lo[:, 1:]), np.maximum(hi[:, :-1], hi[:, 1:]))
     return guide_row, guide_node
 
 
