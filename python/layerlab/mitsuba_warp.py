@@ -23,6 +23,13 @@ totals, linear in y, over [r, y]; u_x the conditional integral up to x of
 the density along x at y (the rows r and r + 1 mixed by ty) over that
 row's total. The per-slice tables are built here from the stored values
 in double precision, as the writer's and Mitsuba's are.
+
+Sampling searches the marginal for the row and the conditional for the
+column. A halving over all nodes is a chain of reads, each waiting on the
+one before (7 for 96 nodes, in each of two warps a sample); here each
+search starts from a guide table (_guides) that leaves a lane a few
+nodes, mostly one or two, and finds in them the node the full search
+finds.
 """
 
 import numpy as np
