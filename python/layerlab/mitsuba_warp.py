@@ -23,6 +23,13 @@ totals, linear in y, over [r, y]; u_x the conditional integral up to x of
 the density along x at y (the rows r and r + 1 mixed by ty) over that
 row's total. The per-slice tables are built here from the stored values
 in double precision, as the writer's and Mitsuba's are.
+
+Sampling searches the marginal for the row and the conditional for the
+column. A halving over all nodes is a chain of reads, each waiting on the
+one before (7 for 96 nodes, in each of two warps a sample); here each
+search starts from a guide table (_guides) that leaves a lane a few
+nodes, mostly one or two, and finds in them the node the full search
+finds.
 """
 
 import numpy as np
@@ -60,6 +67,12 @@ class SliceWarp:
         if self.jit:
             self.node = mi.Float(self.node_host.ravel())
             self.row = mi.Float(self.row_host.ravel())
+            # Where the searches' answers lie (_guides): per slice for the
+            # marginal, per slice and pair of rows for the conditional.
+            self.bits_row, self.bits_node = _bits(h), _bits(w)
+            guide_row, guide_node = _guides(self.node_host, self.row_host)
+            self.guide_row = mi.UInt32(_pack(*guide_row, self.bits_row))
+            self.guide_node = mi.UInt32(_pack(*guide_node, self.bits_node))
         else:
             self.node_host = self.node_host.reshape(-1, 2)
             self.row_host = self.row_host.reshape(-1, 2)
@@ -139,13 +152,54 @@ class SliceWarp:
 
     def _search(self, lo, hi, below):
         """The last index i in [lo - 1, hi - 1] with below(i) (below(lo -
-        1) holds, below is monotone): a halving in the JIT variants."""
-        if self.jit:
-            return dr.binary_search(lo, hi, below) - 1
+        1) holds, below is monotone): a scan (the scalar variants)."""
         i = lo
         while i < hi and below(i):
             i += 1
         return i - 1
+
+    @staticmethod
+    def _interval(guide, size, bits, base, u, on0, on1, i0, i1, n):
+        """The nodes [first, last] where a search of the integral for u
+        answers (_guides; size entries a row, packed by _pack with bits):
+        the smallest first and the largest last of the rows base + i0,
+        base + i1 that are read (on0, on1)."""
+        j = dr.minimum(mi.UInt32(mi.Int32(u * float(size))), size - 1)
+        mask = (1 << bits) - 1
+
+        def entry(i, on):
+            e = (base + i) * size + j
+            if bits == 8:
+                # (Two entries a word.)
+                return dr.gather(mi.UInt32, guide, e >> 1, on) >> ((e & 1) << 4)
+            return dr.gather(mi.UInt32, guide, e, on)
+        g0, g1 = entry(i0, on0), entry(i1, on1)
+        first = dr.minimum(dr.select(on0, g0 & mask, n - 2), dr.select(on1, g1 & mask, n - 2))
+        last = dr.maximum((g0 >> bits) & mask, (g1 >> bits) & mask)
+        return first, dr.maximum(first, last)
+
+    @staticmethod
+    def _halve(first, last, below):
+        """The last index i in [first, last] with below(i) (below(first)
+        holds, below is monotone): the first SCAN nodes after first tested
+        at once, then a halving of what is left, as many steps as the
+        lane's interval needs.
+
+        (A search is a chain of reads, each waiting for the one before;
+        the guide leaves most intervals a few nodes wide, whose reads,
+        side by side in memory, are made together.)"""
+        found = first
+        for d in range(1, SCAN + 1):
+            node = first + d
+            found = found + dr.select((node <= last) & below(dr.minimum(node, last)), 1, 0)
+        done = (found < first + SCAN) | (last <= first + SCAN)
+
+        def step(lo, hi):
+            mid = (lo + hi + 1) >> 1
+            b = below(mid)
+            return dr.select(b, mid, lo), dr.select(b, hi, mid - 1)
+        return dr.while_loop((found, dr.select(done, found, last)), lambda lo, hi: lo < hi,
+                             step)[0]
 
     def sample(self, k0, k1, a0, a1, u, active):
         """(the point the warp maps u in [0, 1]^2 to, the density there) of
@@ -179,11 +233,19 @@ class SliceWarp:
             node_arr, row_arr = self.node_host, self.row_host
         ux, uy = dr.clip(u.x, 0.0, 1.0), dr.clip(u.y, 0.0, 1.0)
         rb0, rb1 = k0 * h, k1 * h
-        r = self._search(1, h - 1, lambda i: second(row_arr, rb0 + i, rb1 + i) <= uy)
+        def above_row(i):
+            return second(row_arr, rb0 + i, rb1 + i) <= uy
+        if self.jit:
+            r = self._halve(*self._interval(self.guide_row, GUIDE_ROW, self.bits_row, 0, uy,
+                                            on0, on1, k0, k1, h),
+                            above_row)
+        else:
+            r = self._search(1, h - 1, above_row)
         t0, before = pair(row_arr, rb0 + r, rb1 + r)
         t1 = pair(row_arr, rb0 + r + 1, rb1 + r + 1)[0]
         ty = _root(t0, t1, (uy - before) * float(h - 1))
-        target = ux * dr.lerp(t0, t1, ty)
+        total = dr.lerp(t0, t1, ty)
+        target = ux * total
         nb0, nb1 = k0 * (w * h) + r * w, k1 * (w * h) + r * w
 
         def column(i):
@@ -193,7 +255,16 @@ class SliceWarp:
             return dr.lerp(second(node_arr, nb0 + i, nb1 + i),
                            second(node_arr, nb0 + w + i, nb1 + w + i), ty) <= target
 
-        c = self._search(1, w - 1, left_of)
+        if self.jit:
+            first, last = self._interval(self.guide_node, GUIDE_NODE, self.bits_node, r, ux,
+                                         on0, on1, k0 * (h - 1), k1 * (h - 1), w)
+            # The guide leaves out the rows without mass; a mixture of
+            # (almost) nothing but those -- its rows with mass weighted 0,
+            # as at the edge of the support -- is searched over all nodes.
+            empty = total < GUIDE_TINY
+            c = self._halve(dr.select(empty, 0, first), dr.select(empty, w - 2, last), left_of)
+        else:
+            c = self._search(1, w - 1, left_of)
         (d00, c00), (d01, c01) = column(c)
         d10, d11 = column(c + 1)[0][0], column(c + 1)[1][0]
         g0, g1 = dr.lerp(d00, d01, ty), dr.lerp(d10, d11, ty)
@@ -202,6 +273,93 @@ class SliceWarp:
             c, r = mi.Float(c), mi.Float(r)
         return (mi.Point2f((c + tx) * (1.0 / (w - 1)), (r + ty) * (1.0 / (h - 1))),
                 dr.lerp(g0, g1, tx))
+
+
+# A guide's entries per unit of the normalised integral (_guides): of the
+# marginal's (a slice's, few) and of the conditional's (a pair of rows').
+GUIDE_ROW = 256
+GUIDE_NODE = 128
+# How far a guide's interval reaches past its ends, in the normalised
+# integral: well above the float32 rounding of the mixtures that the
+# searches compare (a few units in 2^-24 of their total), well below a
+# guide step, so that rounding never puts an answer outside its interval.
+GUIDE_MARGIN = 1e-5
+# The nodes of an interval that a search tests at once (SliceWarp._halve).
+SCAN = 1
+# A mixed row total below which the conditional's search ignores its guide:
+# above it, the float32 products of the mixture (flushed to 0 below 2^-126)
+# are still rounded within a tiny part of GUIDE_MARGIN of the total.
+GUIDE_TINY = 1e-30
+
+
+def _last_at_most(cdf, q):
+    """For each row of cdf ([m, n], non-decreasing, within [0, 1]) and each
+    threshold of q ([t]): the last node i in [0, n - 2] with cdf[i] <= q,
+    node 0 counting always (the answer of SliceWarp._search); [m, t]."""
+    m, n = cdf.shape
+    # The rows one after the other, 4 apart, are one sorted array: one
+    # searchsorted for all of them.
+    offset = 4.0 * np.arange(m, dtype=np.float64)[:, None]
+    inner = (np.clip(cdf[:, 1:n - 1], -1.0, 2.0) + offset).ravel()
+    query = np.clip(np.asarray(q, dtype=np.float64), -1.0, 2.0)[None, :] + offset
+    found = np.searchsorted(inner, query.ravel(), side="right").reshape(m, -1)
+    return found - (n - 2) * np.arange(m)[:, None]
+
+
+def _intervals(cdf, size):
+    """Per row of cdf (normalised, [m, n]) and guide entry j < size: the
+    first and last possible answer of a search for u in [j / size, (j +
+    1) / size] (widened by GUIDE_MARGIN); [m, size] each."""
+    j = np.arange(size, dtype=np.float64)
+    return (_last_at_most(cdf, j / size - GUIDE_MARGIN),
+            _last_at_most(cdf, (j + 1) / size + GUIDE_MARGIN))
+
+
+def _bits(n):
+    """The bits of a node index of a warp of n nodes a side in a guide's
+    entry: 8 (two entries a 32-bit word) while they fit."""
+    return 8 if n - 2 < 256 else 16
+
+
+def _pack(first, last, bits):
+    """The entries first | last << bits, flat, in 32-bit words (two a word
+    with 8 bits, the first in the low half)."""
+    e = (first.astype(np.uint32) | (last.astype(np.uint32) << bits)).ravel()
+    if bits == 8:
+        e = e.reshape(-1, 2)   # (every row has an even number of entries)
+        e = e[:, 0] | (e[:, 1] << 16)
+    return np.ascontiguousarray(e, dtype=np.uint32)
+
+
+def _guides(node, row):
+    """The guide tables of SliceWarp's searches, from its node and row
+    tables: for u in [j / size, (j + 1) / size] the interval of nodes
+    where the answer lies, (first, last) each (a guide table:
+    Devroye, Non-Uniform Random Variate Generation, 1986, II.2.4).
+
+    The searches compare mixtures: of two slices (weights a0, a1), and
+    in the conditional of rows r, r + 1 (weights 1 - ty, ty). A mixture's
+    integral normalised is a convex combination of its parts' normalised
+    integrals (each part weighted by its share of the total), so the last
+    node where it is <= u lies between the smallest and the largest of
+    the parts' last nodes: the caller takes the smallest first and the
+    largest last over the slices it reads; the conditional's entries here
+    are already those over the pair of rows r, r + 1. A row without mass
+    adds nothing to a mixture and has the empty interval (first n - 2,
+    last 0); a mixture of such rows alone is 0 everywhere (its answer the
+    last node n - 2), and the caller searches it over all nodes."""
+    slices, h, w = node.shape[:3]
+    marg = row[:, :, 1].astype(np.float64)
+    guide_row = _intervals(marg, GUIDE_ROW)
+    totals = row[:, :, 0].astype(np.float64).reshape(-1)
+    has = totals > 0
+    cond = node[:, :, :, 1].astype(np.float64).reshape(-1, w)
+    cond = cond / np.where(has, totals, 1.0)[:, None]
+    lo, hi = _intervals(cond, GUIDE_NODE)
+    lo = np.where(has[:, None], lo, w - 2).reshape(slices, h, GUIDE_NODE)
+    hi = np.where(has[:, None], hi, 0).reshape(slices, h, GUIDE_NODE)
+    guide_node = (np.minimum(lo[:, :-1], lo[:, 1:]), np.maximum(hi[:, :-1], hi[:, 1:]))
+    return guide_row, guide_node
 
 
 def _root(f0, f1, mass):

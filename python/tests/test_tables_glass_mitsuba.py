@@ -447,6 +447,56 @@ def test_stacked_warps_are_mitsubas(tables):
                                        atol=1e-6 * scale)
 
 
+def test_guided_searches_find_what_a_full_search_finds(tables, monkeypatch):
+    """SliceWarp.sample's searches, each in the interval of nodes its guide tables give,
+    against the same searches over all nodes (the guide replaced by [0, n - 2]): the same
+    points and densities, bit for bit, for the VNDF and luminance of the stacked glass and
+    for a made-up warp of 300 nodes a row (16-bit guide entries) with rows and runs of
+    nodes without mass, at mixtures of two slices (weights 0 and 1 among them) and at
+    random numbers that fall on the guides' steps and on the stored marginals' own values
+    (ties of the comparison)."""
+    from layerlab.tensor_file import read_tensor_file
+    mi.set_variant("llvm_ad_rgb")
+    from layerlab import mitsuba_warp
+    from layerlab.mitsuba_lobes import SETS
+    from layerlab.mitsuba_lobes_stacked import ORDER
+    from layerlab.mitsuba_tables import stack_sets
+    stacked = stack_sets(read_tensor_file(tables["glass"]), [SETS[k][0] for k in ORDER])
+    rng = np.random.default_rng(37)
+    n = 40000
+    made_up = rng.uniform(size=(5, 7, 300)) ** 8
+    made_up[:, 2:4] = 0.0
+    made_up[1, :, 100:250] = 0.0
+    made_up[3, 5:, :] = 0.0
+    for key, data in (("vndf", stacked["vndf"][0]), ("luminance", stacked["luminance"][0]),
+                      ("made-up", made_up)):
+        warp = mitsuba_warp.SliceWarp(np.ascontiguousarray(data))
+        slices = warp.node_host.shape[0]
+        k = rng.integers(0, slices - 1, n)
+        a = rng.uniform(size=n)
+        a[: n // 4] = 0.0
+        a[n // 4: n // 2] = 1.0
+        u = rng.uniform(size=(2, n))
+        # On the guides' steps, and on the marginals' node values of either slice.
+        u[0, ::3] = rng.integers(0, mitsuba_warp.GUIDE_NODE + 1, n)[::3] / mitsuba_warp.GUIDE_NODE
+        u[1, ::3] = rng.integers(0, mitsuba_warp.GUIDE_ROW + 1, n)[::3] / mitsuba_warp.GUIDE_ROW
+        node = rng.integers(0, warp.h, n)
+        ties = warp.row_host[:, :, 1][k + rng.integers(0, 2, n), node]
+        u[1, 1::3] = ties[1::3]
+        args = (mi.UInt32(k.astype(np.uint32)), mi.UInt32((k + 1).astype(np.uint32)),
+                mi.Float((1.0 - a).astype(np.float32)), mi.Float(a.astype(np.float32)),
+                mi.Point2f(mi.Float(u[0].astype(np.float32)), mi.Float(u[1].astype(np.float32))),
+                mi.Bool(True))
+        guided = [np.array(x) for x in warp.sample(*args)]
+        with monkeypatch.context() as m:
+            m.setattr(mitsuba_warp.SliceWarp, "_interval",
+                      staticmethod(lambda *args: (mi.UInt32(0), mi.UInt32(args[-1] - 2))))
+            full = [np.array(x) for x in warp.sample(*args)]
+        assert np.all(np.isfinite(guided[0]))
+        for ours, theirs in zip(guided, full):
+            assert np.array_equal(ours, theirs), key
+
+
 def test_scalar_and_llvm_agree_over_the_sphere(tables):
     """eval_pdf and sample of the glass tables in scalar_rgb against llvm_ad_rgb on pairs
     drawn over the whole sphere (the horizon included, which the C reader comparisons leave
