@@ -89,7 +89,8 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
     if (!to_file_axes(wo, wi, &mu_i, &mu_o, &cos_phi))
         return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                        "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
-    ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, ll_bsdf_transport_scale(b, mu_i, mu_o, mode), rgb);
+    ll_bsdf_eval_cos(b, mu_i, mu_o, cos_phi, basis, ll_bsdf_transport_scale(b, mu_i, mu_o, mode),
+                     rgb);
     return LL_OK;
 }
 
@@ -176,7 +177,8 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
     wi[0] /= len;
     wi[1] /= len;
     wi[2] /= len;
-    ll_bsdf_to_rgb(b, sums, ll_bsdf_transport_scale(b, mu_i, mu_o, mode) * ll_bsdf_cosine_scale(mu_o),
+    ll_bsdf_to_rgb(b, sums,
+                   ll_bsdf_transport_scale(b, mu_i, mu_o, mode) * ll_bsdf_cosine_scale(mu_o),
                    rgb);
     return LL_OK;
 }

@@ -7,8 +7,9 @@
  * "Table files"): eval the vndf warp's nodes at the half vector, then the
  * values at the point its inversion gives; pdf the same with the
  * luminance; sample the stretch of the luminance warp's rows that its
- * column search reads, then the vndf warp's and the values. Each element runs the steps of tables_internal.h's
- * split look-ups: while element k finishes, element k + d / 2 does its
+ * column search reads, then the vndf warp's and the values. Each element
+ * runs the steps of tables_internal.h's split look-ups: while element k
+ * finishes, element k + d / 2 does its
  * first level's work (its nodes asked for d / 2 elements ago) and asks
  * for its second level, and element k + d starts and asks for its first
  * level. The elements in flight keep their state in a ring of fixed size
@@ -148,7 +149,8 @@ static ll_status finish(const ll_batch_job *job, size_t k, pipe_slot *p)
         ll_measured_look_value(t, &p->lk, value);
         for (c = 0; c < 3; ++c)
             value[c] = 0.0 + p->weight * value[c];
-        ll_bsdf_measured_rgb(value, p->light_z, ll_bsdf_transport_scale(b, p->v[2], -p->light_z, job->mode), rgb);
+        ll_bsdf_measured_rgb(value, p->light_z,
+                             ll_bsdf_transport_scale(b, p->v[2], -p->light_z, job->mode), rgb);
     } else {
         double *wi = job->wi_out + 3 * k, *pdf = job->pdf_out + k, *rgb = job->rgb_out + 3 * k;
         rgb[0] = rgb[1] = rgb[2] = 0.0;
@@ -163,7 +165,8 @@ static ll_status finish(const ll_batch_job *job, size_t k, pipe_slot *p)
         /* ll_measured_blend_sample's weight of one basis. */
         for (c = 0; c < 3; ++c)
             value[c] *= p->weight;
-        ll_bsdf_measured_rgb(value, wi[2], ll_bsdf_transport_scale(b, p->v[2], -wi[2], job->mode), rgb);
+        ll_bsdf_measured_rgb(value, wi[2], ll_bsdf_transport_scale(b, p->v[2], -wi[2], job->mode),
+                             rgb);
     }
     return LL_OK;
 }

@@ -37,9 +37,10 @@ static int build_slice(ll_warp2d *wp, size_t k)
     float *v = wp->data + k * w * h * 2, *c = wp->cond + k * w * h * 2, *m = wp->marg + k * h;
     double total = 0.0, scale, sum, prev_row = 0.0;
     /* Node i of the slice holds its value v[2 i] and its running integral
-     * c[2 i] side by side (ll_warp2d.step). The total first (sums in double), then every table divided by it and
-     * the running integrals taken over the divided values, so that they
-     * are exactly those of the stored density. */
+     * c[2 i] side by side (ll_warp2d.step). The total first (sums in
+     * double), then every table divided by it and the running integrals
+     * taken over the divided values, so that they are exactly those of
+     * the stored density. */
     for (y = 0; y < h; ++y) {
         double row = 0.0;
         for (x = 0; x + 1 < w; ++x)

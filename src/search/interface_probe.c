@@ -286,7 +286,8 @@ static ll_status memo_mode(ll_probe_series_memo *memo, size_t n, size_t m, size_
     return LL_OK;
 }
 
-ll_status ll_probe_interface_eval(ll_microfacet_model *mf, const ll_probe_compensation *compensation,
+ll_status ll_probe_interface_eval(ll_microfacet_model *mf,
+                                  const ll_probe_compensation *compensation,
                                   size_t n, size_t m, const ll_probe_set *set, ll_watch *watch,
                                   double *values)
 {

@@ -291,8 +291,8 @@ ll_status ll_probe_compensation_model_distribution(double eta_re, double eta_im,
     return s;
 }
 
-ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im, size_t n,
-                                     ll_watch *watch, ll_probe_compensation *out)
+ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im,
+                                     size_t n, ll_watch *watch, ll_probe_compensation *out)
 {
     double *rule = ll_alloc_array(n, 2 * sizeof(double));
     ll_status s = rule ? ll_quad_gauss_lobatto(n, rule, rule + n, NULL)

@@ -124,8 +124,8 @@ typedef struct ll_probe_compensation {
     double *memory;
     ll_microfacet_compensation terms;
 } ll_probe_compensation;
-LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re, double eta_im,
-                                                 size_t n, ll_watch *watch,
+LL_INTERNAL ll_status ll_probe_compensation_make(ll_microfacet_model *mf, double eta_re,
+                                                 double eta_im, size_t n, ll_watch *watch,
                                                  ll_probe_compensation *out);
 /* The same on the Gauss-Lobatto rule of n the caller has (nodes and
  * weights, all n): the search's evaluations at one n share it

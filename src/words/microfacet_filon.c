@@ -249,11 +249,13 @@ static double ggx_piece(const ll_microfacet_model *mf, const pair_plan *p, int p
     *seen = larger(*seen, largest);
     if (largest >= GGX_COARSE * *seen) {
         stride = 2;
-        largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 2, 4, 4, f));
+        largest = larger(largest,
+                         ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 2, 4, 4, f));
         *seen = larger(*seen, largest);
         if (largest >= GGX_MEDIUM * *seen) {
             stride = 1;
-            largest = larger(largest, ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 1, 2, 8, f));
+            largest = larger(largest,
+                             ggx_samples(mf, p, part, pass->q, pass->peak, cos_phi, 1, 2, 8, f));
             *seen = larger(*seen, largest);
         }
     }
