@@ -19,8 +19,8 @@
  * stratification to another, where quadrature of eval puts the table
  * within 0.2% at these angles) and the pane's reflection at
  * 85 degrees do not, nor do the compensated glass's transmission from below
- * at 60..70 degrees and its f, nor does the coat, and are held to their present
- * figures so that a change that worsens them fails.
+ * at 70 degrees (0.34%) and its f, nor does the coat, and are held to their
+ * present figures so that a change that worsens them fails.
  */
 #include "test_util.h"
 #include "tables_lobe_figures.h"
@@ -38,9 +38,10 @@ typedef struct bounds {
  * median 0.036%, 95th 0.47%, 99th 2.72% (by lobe: reflection above 1.6%,
  * transmission from above 1.4%, reflection below 4.9%, transmission from
  * below 1.6%); frosted glass R 0.20% (was 2.39% from below at 85 degrees
- * before its reflection from below took the D from above), T 3.27% (from
- * below at 70 degrees, where T is 0.9% of the light, and 0.91% at 60),
- * median 0.077%, 95th 1.24%, 99th 4.09% (reflection above 2.4%,
+ * before its reflection from below took the D from above), T 0.34% (from
+ * below at 70 degrees, where T is 0.9% of the light; 3.27% before the
+ * flipped warp's D took its heavier floor there),
+ * median 0.077%, 95th 1.24%, 99th 4.13% (reflection above 2.4%,
  * transmission from above 3.8%, reflection below 5.9%, transmission from
  * below 3.9%); pane R 1.38% (at 85 degrees), T 0.40%, median 0.092%,
  * 95th 0.81%, 99th 2.91% (reflection 3.5%, transmission 2.1%); coat over
@@ -48,7 +49,7 @@ typedef struct bounds {
  * returns its lost light as reflection), T 1.05%, median 0.11%, 95th 2.7%,
  * 99th 14.2% (reflection from below 20%, the rest 3.0..4.5%). */
 #define BOUND_GLASS 0.003, 0.007, 0.001, 0.007, 0.03
-#define BOUND_FROSTED 0.004, 0.04, 0.002, 0.015, 0.05
+#define BOUND_FROSTED 0.004, 0.005, 0.002, 0.015, 0.05
 #define BOUND_PANE 0.016, 0.004, 0.002, 0.01, 0.035
 #define BOUND_COAT 0.03, 0.013, 0.002, 0.03, 0.16
 
