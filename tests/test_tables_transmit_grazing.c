@@ -40,15 +40,16 @@ static const double viewers_deg[N_VIEWERS] = { 70.0, 75.0, 80.0, 85.0 };
  * margin; the writer before reached 0.08%, 0.6%, 2.1% and 2.9%. */
 static const double bound[N_VIEWERS] = { 0.003, 0.003, 0.003, 0.007 };
 
-/* The reflected albedo (green) of b for a viewer below at theta. */
-static double r_below(const ll_bsdf *b, double theta)
+/* The reflected (or, with transmitted, the transmitted) albedo, green,
+ * of b for a viewer below at theta. */
+static double albedo_below(const ll_bsdf *b, double theta, int transmitted)
 {
     double wo[3] = { sin(theta), 0.0, -cos(theta) }, peak[2], r[3], t[3];
     double st = sin(theta) * 1.5;
     peak[0] = theta;
     peak[1] = st < 1.0 ? asin(st) : LL_PI / 2.0;
     assert_int_equal(ll_tables_albedo(b, wo, peak, 1, r, t), LL_OK);
-    return r[1];
+    return transmitted ? t[1] : r[1];
 }
 
 static void test_reflection_below_grazing(void **state)
@@ -67,7 +68,8 @@ static void test_reflection_below_grazing(void **state)
     ll_test_build_tables("dielectric eta=1.5 alpha=0.3\n", "frosted", &o, bsdf_path, tab_path,
                          &src, &tab);
     for (k = 0; k < N_VIEWERS; ++k) {
-        double th = viewers_deg[k] * LL_PI / 180.0, rs = r_below(src, th), rt = r_below(tab, th);
+        double th = viewers_deg[k] * LL_PI / 180.0, rs = albedo_below(src, th, 0),
+               rt = albedo_below(tab, th, 0);
         printf("frosted: R from below at %.0f degrees: table %.6f, .bsdf %.6f (%.3f%%)\n",
                viewers_deg[k], rt, rs, 100.0 * (rt / rs - 1.0));
         assert_true(rs > 0.9);
@@ -85,17 +87,6 @@ static void test_reflection_below_grazing(void **state)
     assert_true(alpha[1] == alpha[0]);
     ll_bsdf_release(tab);
     ll_bsdf_release(src);
-}
-
-/* The transmitted albedo (green) of b for a viewer below at theta. */
-static double t_below(const ll_bsdf *b, double theta)
-{
-    double wo[3] = { sin(theta), 0.0, -cos(theta) }, peak[2], r[3], t[3];
-    double st = sin(theta) * 1.5;
-    peak[0] = theta;
-    peak[1] = st < 1.0 ? asin(st) : LL_PI / 2.0;
-    assert_int_equal(ll_tables_albedo(b, wo, peak, 1, r, t), LL_OK);
-    return t[1];
 }
 
 #define N_BEYOND 5
@@ -118,7 +109,8 @@ static void test_transmission_below_beyond_critical(void **state)
     ll_test_build_tables("dielectric eta=1.5 alpha=0.3\n", "frosted_t", &o, bsdf_path, tab_path,
                          &src, &tab);
     for (k = 0; k < N_BEYOND; ++k) {
-        double th = beyond_deg[k] * LL_PI / 180.0, ts = t_below(src, th), tt = t_below(tab, th);
+        double th = beyond_deg[k] * LL_PI / 180.0, ts = albedo_below(src, th, 1),
+               tt = albedo_below(tab, th, 1);
         printf("frosted: T from below at %.1f degrees: table %.6f, .bsdf %.6f (%.3f%%)\n",
                beyond_deg[k], tt, ts, 100.0 * (tt / ts - 1.0));
         assert_true(ts > 0.005);
