@@ -66,117 +66,54 @@ static inline double dielectric_fresnel(double cos_i, double eta, double inv_eta
 }
 
 #if defined(__SSE2__)
-/* (x > 0 ? x : 0, x < hi ? x : hi, mask ? a : b, |x|) two at a time */
-#define POSITIVE2(x) _mm_and_pd(_mm_cmpgt_pd(x, _mm_setzero_pd()), x)
-#define SELECT2(mask, a, b) _mm_or_pd(_mm_and_pd(mask, a), _mm_andnot_pd(mask, b))
-#define BELOW2(x, hi) SELECT2(_mm_cmplt_pd(x, hi), x, hi)
-#define ABS2(x) _mm_andnot_pd(_mm_set1_pd(-0.0), x)
-
-/* dielectric_fresnel two at a time: the same operations on each (IEEE's
- * +, -, *, / and sqrt round the same in a vector register; ISO C's mode
- * contracts nothing into fused multiply-adds), with the branch as a
- * selection: a totally reflected sample (cos_t2 <= 0) takes F = 1 instead
- * of the amplitudes, which are computed from sqrt(max(cos_t2, 0)) and
- * dropped. */
-static inline __m128d dielectric_fresnel2(__m128d cos_i, __m128d eta, __m128d inv_eta)
-{
-    __m128d one = _mm_set1_pd(1.0), zero = _mm_setzero_pd();
-    __m128d sc = SELECT2(_mm_cmpgt_pd(cos_i, zero), inv_eta, eta);
-    __m128d cos_t2 =
-        _mm_sub_pd(one, _mm_mul_pd(_mm_sub_pd(one, _mm_mul_pd(cos_i, cos_i)), _mm_mul_pd(sc, sc)));
-    __m128d ci = ABS2(cos_i), ct = _mm_sqrt_pd(POSITIVE2(cos_t2));
-    __m128d e_ct = _mm_mul_pd(eta, ct), e_ci = _mm_mul_pd(eta, ci);
-    __m128d rs = _mm_div_pd(_mm_sub_pd(ci, e_ct), _mm_add_pd(ci, e_ct));
-    __m128d rp = _mm_div_pd(_mm_sub_pd(e_ci, ct), _mm_add_pd(e_ci, ct));
-    __m128d f = _mm_mul_pd(_mm_set1_pd(0.5), _mm_add_pd(_mm_mul_pd(rs, rs), _mm_mul_pd(rp, rp)));
-    return SELECT2(_mm_cmple_pd(cos_t2, zero), one, f);
-}
-
-/* ll_fresnel_conductor_kernel two at a time, the same operations; a2 and
- * b4 its per-pair eta_re^2 - eta_im^2 and 4 eta_im^2 eta_re^2 (fmax(0,
- * x) is 0 for the x < 0 that rounding may give, and x is never -0). */
-static inline __m128d conductor_fresnel2(__m128d cos_i, __m128d a2, __m128d b4)
-{
-    __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);
-    __m128d c2 = _mm_mul_pd(cos_i, cos_i), s2 = _mm_sub_pd(one, c2), s4 = _mm_mul_pd(s2, s2);
-    __m128d t1 = _mm_sub_pd(a2, s2);
-    __m128d a2pb2 = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(t1, t1), b4));
-    __m128d a = _mm_sqrt_pd(POSITIVE2(_mm_mul_pd(half, _mm_add_pd(a2pb2, t1))));
-    __m128d term1 = _mm_add_pd(a2pb2, c2);
-    __m128d term2 = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), a), cos_i);
-    __m128d rs2 = _mm_div_pd(_mm_sub_pd(term1, term2), _mm_add_pd(term1, term2));
-    __m128d term3 = _mm_add_pd(_mm_mul_pd(a2pb2, c2), s4), term4 = _mm_mul_pd(term2, s2);
-    __m128d rp2 =
-        _mm_div_pd(_mm_mul_pd(rs2, _mm_sub_pd(term3, term4)), _mm_add_pd(term3, term4));
-    return _mm_mul_pd(half, _mm_add_pd(rp2, rs2));
-}
-
 /* The per-pair constants of the reflection loops: a dielectric's eta and
- * 1 / eta (eta != 1), or a conductor's a2 and b4 (conductor_fresnel2). */
+ * 1 / eta (eta != 1), or a conductor's a2 and b4 (conductor_fresnel). */
 typedef struct reflect_constants {
     int conductor;
     double c0, c1;
 } reflect_constants;
 
-/* The samples of reflect_profile with the Fresnel factor two at a time;
- * returns the samples done (count rounded down to even). */
-static size_t reflect_sse2(const pair_plan *p, const reflect_constants *rc,
-                           const double *cos_phi, size_t count, double *g, double *no_fresnel)
-{
-    __m128d neg_sin = _mm_set1_pd(-p->sin_prod), mu_prod = _mm_set1_pd(p->mu_prod);
-    __m128d s = _mm_set1_pd(p->sign_h), scale = _mm_set1_pd(p->scale);
-    __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);
-    __m128d c0 = _mm_set1_pd(rc->c0), c1 = _mm_set1_pd(rc->c1);
-    size_t k;
-    for (k = 0; k + 2 <= count; k += 2) {
-        __m128d t = _mm_sub_pd(_mm_mul_pd(neg_sin, _mm_loadu_pd(cos_phi + k)), mu_prod);
-        __m128d one_t = POSITIVE2(_mm_add_pd(one, t));
-        __m128d cos_h = _mm_mul_pd(s, _mm_sqrt_pd(BELOW2(_mm_mul_pd(half, one_t), one)));
-        __m128d value = _mm_mul_pd(_mm_mul_pd(scale, one_t), one_t);
-        __m128d f = rc->conductor ? conductor_fresnel2(ABS2(cos_h), c0, c1)
-                                  : dielectric_fresnel2(cos_h, c0, c1);
-        _mm_storeu_pd(g + k, _mm_mul_pd(f, value));
-        if (no_fresnel)
-            _mm_storeu_pd(no_fresnel + k, value);
-    }
-    return k;
-}
-
-/* The samples of refract_profile with the Fresnel factor (eta_re != 1),
- * two at a time: every sample computed, then those that do not see the
- * front of the facet from both sides set to 0. Returns the samples done. */
-static size_t refract_sse2(const pair_plan *p, double eta_re, double inv_eta_re,
-                           const double *cos_phi, size_t count, double *g, double *no_fresnel)
-{
-    __m128d neg_sin = _mm_set1_pd(-p->sin_prod), mu_prod = _mm_set1_pd(p->mu_prod);
-    __m128d s = _mm_set1_pd(p->sign_h), scale = _mm_set1_pd(p->scale);
-    __m128d eta = _mm_set1_pd(p->eta), one_eta2 = _mm_set1_pd(1.0 + p->eta * p->eta);
-    __m128d two_eta = _mm_set1_pd(2.0 * p->eta), neg_mu_i = _mm_set1_pd(-p->mu_i);
-    __m128d mu_o = _mm_set1_pd(p->mu_o), one = _mm_set1_pd(1.0), zero = _mm_setzero_pd();
-    __m128d minus_one = _mm_set1_pd(-1.0), tiny = _mm_set1_pd(1e-300);
-    __m128d e = _mm_set1_pd(eta_re), inv_e = _mm_set1_pd(inv_eta_re);
-    size_t k;
-    for (k = 0; k + 2 <= count; k += 2) {
-        __m128d t = _mm_sub_pd(_mm_mul_pd(neg_sin, _mm_loadu_pd(cos_phi + k)), mu_prod);
-        __m128d wi_h = _mm_add_pd(one, _mm_mul_pd(eta, t)), wo_h = _mm_add_pd(t, eta);
-        __m128d s_wi = _mm_mul_pd(s, wi_h);
-        __m128d front = _mm_and_pd(_mm_cmpgt_pd(_mm_mul_pd(s_wi, neg_mu_i), zero),
-                                   _mm_cmpgt_pd(_mm_mul_pd(_mm_mul_pd(s, wo_h), mu_o), zero));
-        __m128d value = _mm_and_pd(front, _mm_mul_pd(scale, ABS2(_mm_mul_pd(wi_h, wo_h))));
-        __m128d len2 = _mm_add_pd(one_eta2, _mm_mul_pd(two_eta, t));
-        __m128d cos_h, x;
-        len2 = SELECT2(_mm_cmpgt_pd(len2, tiny), len2, tiny);
-        x = BELOW2(_mm_div_pd(s_wi, _mm_sqrt_pd(len2)), one);
-        cos_h = SELECT2(_mm_cmpgt_pd(x, minus_one), x, minus_one);
-        /* (masked again: a sample that is dropped gives 0, never 0 times a NaN) */
-        _mm_storeu_pd(g + k, _mm_and_pd(front, _mm_mul_pd(_mm_sub_pd(one, dielectric_fresnel2(
-                                                                    cos_h, e, inv_e)),
-                                                        value)));
-        if (no_fresnel)
-            _mm_storeu_pd(no_fresnel + k, value);
-    }
-    return k;
-}
+/* The loops two at a time (microfacet_profile_loops.h): reflect_sse2,
+ * refract_sse2. */
+#define PV __m128d
+#define PW 2
+#define PFN(name) name##_sse2
+#define PATTR
+#define P_SET1(x) _mm_set1_pd(x)
+#define P_ZERO() _mm_setzero_pd()
+#define P_ADD(a, b) _mm_add_pd(a, b)
+#define P_SUB(a, b) _mm_sub_pd(a, b)
+#define P_MUL(a, b) _mm_mul_pd(a, b)
+#define P_DIV(a, b) _mm_div_pd(a, b)
+#define P_SQRT(a) _mm_sqrt_pd(a)
+#define P_AND(a, b) _mm_and_pd(a, b)
+#define P_ANDNOT(a, b) _mm_andnot_pd(a, b)
+#define P_OR(a, b) _mm_or_pd(a, b)
+#define P_GT(a, b) _mm_cmpgt_pd(a, b)
+#define P_LT(a, b) _mm_cmplt_pd(a, b)
+#define P_LE(a, b) _mm_cmple_pd(a, b)
+#define P_LOADU(p) _mm_loadu_pd(p)
+#define P_STOREU(p, a) _mm_storeu_pd(p, a)
+#include "words/microfacet_profile_loops.h"
+#undef PV
+#undef PW
+#undef PFN
+#undef PATTR
+#undef P_SET1
+#undef P_ZERO
+#undef P_ADD
+#undef P_SUB
+#undef P_MUL
+#undef P_DIV
+#undef P_SQRT
+#undef P_AND
+#undef P_ANDNOT
+#undef P_OR
+#undef P_GT
+#undef P_LT
+#undef P_LE
+#undef P_LOADU
+#undef P_STOREU
 #endif
 
 #if PROFILE_HAVE_AVX
@@ -187,108 +124,47 @@ static int have_avx(void)
     return __builtin_cpu_supports("avx");
 }
 
-/* The SSE2 loops' operations four at a time (AVX without FMA: the same
- * roundings). */
-#define POSITIVE4(x) _mm256_and_pd(_mm256_cmp_pd(x, _mm256_setzero_pd(), _CMP_GT_OQ), x)
-#define SELECT4(mask, a, b) _mm256_or_pd(_mm256_and_pd(mask, a), _mm256_andnot_pd(mask, b))
-#define BELOW4(x, hi) SELECT4(_mm256_cmp_pd(x, hi, _CMP_LT_OQ), x, hi)
-#define ABS4(x) _mm256_andnot_pd(_mm256_set1_pd(-0.0), x)
-
-__attribute__((target("avx"))) static inline __m256d
-dielectric_fresnel4(__m256d cos_i, __m256d eta, __m256d inv_eta)
-{
-    __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd();
-    __m256d sc = SELECT4(_mm256_cmp_pd(cos_i, zero, _CMP_GT_OQ), inv_eta, eta);
-    __m256d cos_t2 = _mm256_sub_pd(
-        one, _mm256_mul_pd(_mm256_sub_pd(one, _mm256_mul_pd(cos_i, cos_i)), _mm256_mul_pd(sc, sc)));
-    __m256d ci = ABS4(cos_i), ct = _mm256_sqrt_pd(POSITIVE4(cos_t2));
-    __m256d e_ct = _mm256_mul_pd(eta, ct), e_ci = _mm256_mul_pd(eta, ci);
-    __m256d rs = _mm256_div_pd(_mm256_sub_pd(ci, e_ct), _mm256_add_pd(ci, e_ct));
-    __m256d rp = _mm256_div_pd(_mm256_sub_pd(e_ci, ct), _mm256_add_pd(e_ci, ct));
-    __m256d f = _mm256_mul_pd(_mm256_set1_pd(0.5),
-                              _mm256_add_pd(_mm256_mul_pd(rs, rs), _mm256_mul_pd(rp, rp)));
-    return SELECT4(_mm256_cmp_pd(cos_t2, zero, _CMP_LE_OQ), one, f);
-}
-
-__attribute__((target("avx"))) static inline __m256d
-conductor_fresnel4(__m256d cos_i, __m256d a2, __m256d b4)
-{
-    __m256d one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
-    __m256d c2 = _mm256_mul_pd(cos_i, cos_i), s2 = _mm256_sub_pd(one, c2);
-    __m256d s4 = _mm256_mul_pd(s2, s2), t1 = _mm256_sub_pd(a2, s2);
-    __m256d a2pb2 = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(t1, t1), b4));
-    __m256d a = _mm256_sqrt_pd(POSITIVE4(_mm256_mul_pd(half, _mm256_add_pd(a2pb2, t1))));
-    __m256d term1 = _mm256_add_pd(a2pb2, c2);
-    __m256d term2 = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), a), cos_i);
-    __m256d rs2 = _mm256_div_pd(_mm256_sub_pd(term1, term2), _mm256_add_pd(term1, term2));
-    __m256d term3 = _mm256_add_pd(_mm256_mul_pd(a2pb2, c2), s4);
-    __m256d term4 = _mm256_mul_pd(term2, s2);
-    __m256d rp2 = _mm256_div_pd(_mm256_mul_pd(rs2, _mm256_sub_pd(term3, term4)),
-                                _mm256_add_pd(term3, term4));
-    return _mm256_mul_pd(half, _mm256_add_pd(rp2, rs2));
-}
-
-__attribute__((target("avx"))) static size_t
-reflect_avx(const pair_plan *p, const reflect_constants *rc, const double *cos_phi, size_t count,
-            double *g, double *no_fresnel)
-{
-    __m256d neg_sin = _mm256_set1_pd(-p->sin_prod), mu_prod = _mm256_set1_pd(p->mu_prod);
-    __m256d s = _mm256_set1_pd(p->sign_h), scale = _mm256_set1_pd(p->scale);
-    __m256d one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
-    __m256d c0 = _mm256_set1_pd(rc->c0), c1 = _mm256_set1_pd(rc->c1);
-    size_t k;
-    for (k = 0; k + 4 <= count; k += 4) {
-        __m256d t =
-            _mm256_sub_pd(_mm256_mul_pd(neg_sin, _mm256_loadu_pd(cos_phi + k)), mu_prod);
-        __m256d one_t = POSITIVE4(_mm256_add_pd(one, t));
-        __m256d cos_h =
-            _mm256_mul_pd(s, _mm256_sqrt_pd(BELOW4(_mm256_mul_pd(half, one_t), one)));
-        __m256d value = _mm256_mul_pd(_mm256_mul_pd(scale, one_t), one_t);
-        __m256d f = rc->conductor ? conductor_fresnel4(ABS4(cos_h), c0, c1)
-                                  : dielectric_fresnel4(cos_h, c0, c1);
-        _mm256_storeu_pd(g + k, _mm256_mul_pd(f, value));
-        if (no_fresnel)
-            _mm256_storeu_pd(no_fresnel + k, value);
-    }
-    return k;
-}
-
-__attribute__((target("avx"))) static size_t
-refract_avx(const pair_plan *p, double eta_re, double inv_eta_re, const double *cos_phi,
-            size_t count, double *g, double *no_fresnel)
-{
-    __m256d neg_sin = _mm256_set1_pd(-p->sin_prod), mu_prod = _mm256_set1_pd(p->mu_prod);
-    __m256d s = _mm256_set1_pd(p->sign_h), scale = _mm256_set1_pd(p->scale);
-    __m256d eta = _mm256_set1_pd(p->eta), one_eta2 = _mm256_set1_pd(1.0 + p->eta * p->eta);
-    __m256d two_eta = _mm256_set1_pd(2.0 * p->eta), neg_mu_i = _mm256_set1_pd(-p->mu_i);
-    __m256d mu_o = _mm256_set1_pd(p->mu_o), one = _mm256_set1_pd(1.0);
-    __m256d zero = _mm256_setzero_pd(), minus_one = _mm256_set1_pd(-1.0);
-    __m256d tiny = _mm256_set1_pd(1e-300);
-    __m256d e = _mm256_set1_pd(eta_re), inv_e = _mm256_set1_pd(inv_eta_re);
-    size_t k;
-    for (k = 0; k + 4 <= count; k += 4) {
-        __m256d t =
-            _mm256_sub_pd(_mm256_mul_pd(neg_sin, _mm256_loadu_pd(cos_phi + k)), mu_prod);
-        __m256d wi_h = _mm256_add_pd(one, _mm256_mul_pd(eta, t)), wo_h = _mm256_add_pd(t, eta);
-        __m256d s_wi = _mm256_mul_pd(s, wi_h);
-        __m256d front = _mm256_and_pd(
-            _mm256_cmp_pd(_mm256_mul_pd(s_wi, neg_mu_i), zero, _CMP_GT_OQ),
-            _mm256_cmp_pd(_mm256_mul_pd(_mm256_mul_pd(s, wo_h), mu_o), zero, _CMP_GT_OQ));
-        __m256d value =
-            _mm256_and_pd(front, _mm256_mul_pd(scale, ABS4(_mm256_mul_pd(wi_h, wo_h))));
-        __m256d len2 = _mm256_add_pd(one_eta2, _mm256_mul_pd(two_eta, t));
-        __m256d cos_h, x, f;
-        len2 = SELECT4(_mm256_cmp_pd(len2, tiny, _CMP_GT_OQ), len2, tiny);
-        x = BELOW4(_mm256_div_pd(s_wi, _mm256_sqrt_pd(len2)), one);
-        cos_h = SELECT4(_mm256_cmp_pd(x, minus_one, _CMP_GT_OQ), x, minus_one);
-        f = dielectric_fresnel4(cos_h, e, inv_e);
-        _mm256_storeu_pd(
-            g + k, _mm256_and_pd(front, _mm256_mul_pd(_mm256_sub_pd(one, f), value)));
-        if (no_fresnel)
-            _mm256_storeu_pd(no_fresnel + k, value);
-    }
-    return k;
-}
+/* The same loops four at a time (AVX without FMA: the same roundings):
+ * reflect_avx, refract_avx, chosen at run time. */
+#define PV __m256d
+#define PW 4
+#define PFN(name) name##_avx
+#define PATTR __attribute__((target("avx")))
+#define P_SET1(x) _mm256_set1_pd(x)
+#define P_ZERO() _mm256_setzero_pd()
+#define P_ADD(a, b) _mm256_add_pd(a, b)
+#define P_SUB(a, b) _mm256_sub_pd(a, b)
+#define P_MUL(a, b) _mm256_mul_pd(a, b)
+#define P_DIV(a, b) _mm256_div_pd(a, b)
+#define P_SQRT(a) _mm256_sqrt_pd(a)
+#define P_AND(a, b) _mm256_and_pd(a, b)
+#define P_ANDNOT(a, b) _mm256_andnot_pd(a, b)
+#define P_OR(a, b) _mm256_or_pd(a, b)
+#define P_GT(a, b) _mm256_cmp_pd(a, b, _CMP_GT_OQ)
+#define P_LT(a, b) _mm256_cmp_pd(a, b, _CMP_LT_OQ)
+#define P_LE(a, b) _mm256_cmp_pd(a, b, _CMP_LE_OQ)
+#define P_LOADU(p) _mm256_loadu_pd(p)
+#define P_STOREU(p, a) _mm256_storeu_pd(p, a)
+#include "words/microfacet_profile_loops.h"
+#undef PV
+#undef PW
+#undef PFN
+#undef PATTR
+#undef P_SET1
+#undef P_ZERO
+#undef P_ADD
+#undef P_SUB
+#undef P_MUL
+#undef P_DIV
+#undef P_SQRT
+#undef P_AND
+#undef P_ANDNOT
+#undef P_OR
+#undef P_GT
+#undef P_LT
+#undef P_LE
+#undef P_LOADU
+#undef P_STOREU
 #endif
 
 /* Reflection: g = scale F (1 + t)^2 (F = 1 in no_fresnel), t = wi . wo. */
