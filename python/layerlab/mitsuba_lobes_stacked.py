@@ -18,8 +18,7 @@ mitsuba_lobes.TracedLobes, set by set, over Mitsuba's warps.
 
 The same arithmetic as TracedLobes and the C reader (tables_lobes.c,
 tables_refract.c). The sets are stacked in the order ORDER (of SETS in
-mitsuba_lobes), so that the sets seen from above, which a scene mostly
-hits, get the parameters nearest 0 (stack_sets).
+mitsuba_lobes).
 """
 
 import numpy as np
@@ -27,7 +26,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import STACK_SHIFTS, TracedTables, _elevation, _flip, _fresnel_at, \
+from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, \
     _fresnel_eta, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
     _theta_to_u, _turn
 from .mitsuba_warp import SliceWarp
@@ -130,8 +129,8 @@ class StackedLobes:
         return dr.select(none, 1.0, r / dr.select(none, 1.0, r + tr))
 
     def _stack(self, bottom, transmit, weights):
-        """The lane's set as stacked: (its index in ORDER, its shift, its
-        slice and weights over the stacked elevations)."""
+        """The lane's set as stacked: (its index in ORDER, its slice and
+        weights over the stacked elevations)."""
         def pick(values):
             v = [values[ORDER.index(k)] for k in range(4)]   # by SETS index
             return dr.select(bottom, dr.select(transmit, v[3], v[1]),
@@ -139,7 +138,7 @@ class StackedLobes:
         k = pick([float(k) for k in range(4)])
         j, w0, w1 = weights
         j = (mi.UInt32(k) if self.jit else int(k)) * self.n_ti + j
-        return k, pick(STACK_SHIFTS), (j, w0, w1)
+        return k, (j, w0, w1)
 
     def _transport(self, wi, radiance):
         if not radiance:
@@ -226,7 +225,7 @@ class StackedLobes:
         m0, ok0 = _refraction_half(wi0, _turn(axis, c0, s0, o), e_safe)
         m1, ok1 = _refraction_half(wi1, _turn(axis, c1, s1, o), e_safe)
         ok0, ok1 = ok0 & (w0 > 0), ok1 & (w1 > 0)
-        j, a0, a1 = stack[2]
+        j, a0, a1 = stack[1]
         m_a, m_b = dr.select(refract, m0, m), dr.select(refract, m1, m)
         read_a = active & dr.select(refract, ok0, True)
         read_b = active & dr.select(refract, ok1, a1 > 0)
@@ -307,7 +306,7 @@ class StackedLobes:
         v_s = mi.Point2f(dr.select(refract, dr.clip(u_el, 0.0, 1.0), v.x), v.y)
         # The slices j, j + 1 mixed as wi's elevation weighs them; a
         # refracted lane's picked one alone (the other is not read).
-        j, a0, a1 = stack[2]
+        j, a0, a1 = stack[1]
         b0 = dr.select(refract, dr.select(second, 0.0, 1.0), a0)
         b1 = dr.select(refract, dr.select(second, 1.0, 0.0), a1)
         w_k = dr.select(refract, dr.select(second, wi1, wi0), w)

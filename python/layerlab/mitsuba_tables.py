@@ -69,25 +69,17 @@ def _phi_to_u(phi):
     return (phi + PI) * INV_TWO_PI
 
 
-# stack_sets: the slices' parameter of the k-th stacked set is its
-# incident elevation plus STACK_SHIFTS[k]: ranges of width pi / 2 apart
-# from each other (the shifts 13/8 apart, exact in float32), as close to 0
-# as four such ranges can be, since a parameter's float32 rounding (its
-# magnitude's) is what moves the interpolation between two slices.
-STACK_SHIFTS = (-3.25, -1.625, 0.0, 1.625)
-
-
 def stack_sets(fields, prefixes):
     """The fields of the sets named by prefixes (at most four, each with
     the same grids) as the fields of one table of their slices one after
-    the other, the k-th set's elevations stored as theta_i +
-    STACK_SHIFTS[k]: a lane reads its own set's slices by index
+    the other, each set's slices with its incident elevations: a lane
+    reads its own set's slices by index
     (mitsuba_warp.SliceWarp for the VNDF and luminance, the values by
     gather; two neighbouring slices of one set, never of two); D and sigma
     become one grid per kind, [set, y, x]. None if the sets' grids
     differ."""
     theta = np.asarray(fields["theta_i"], dtype=np.float32)
-    if len(prefixes) > len(STACK_SHIFTS):
+    if len(prefixes) > 4:
         return None
     shapes = set()
     for p in prefixes:
@@ -95,8 +87,7 @@ def stack_sets(fields, prefixes):
                          ("ndf", "sigma", "vndf", "luminance", "rgb")))
     if len(shapes) != 1:
         return None
-    out = {"theta_i": np.concatenate([theta.astype(np.float64) + STACK_SHIFTS[k]
-                                      for k in range(len(prefixes))]).astype(np.float32),
+    out = {"theta_i": np.concatenate([theta] * len(prefixes)),
            "phi_i": fields["phi_i"], "jacobian": fields["jacobian"]}
     for key in ("vndf", "luminance", "rgb"):
         out[key] = np.concatenate([np.asarray(fields[p + key], dtype=np.float32)
@@ -502,15 +493,13 @@ class TracedTables:
         turn's cosine and sine), the warps' parameter there and the slice
         weights that read that elevation alone; the turns' axis and wi's
         azimuth (the turned wi's too, at the pole as well). stack:
-        a stacked set's (the lane's set, its shift, its slice and weights
-        over the stacked elevations)."""
+        a stacked set's (the lane's set, its slice and weights over the
+        stacked elevations)."""
         theta = _elevation(wi)
         if stack is None:
             j, w0, w1 = self._weights(self.theta_host, self.theta if self.jit else None, theta)
-            shift = 0.0
         else:
-            j, w0, w1 = stack[2]
-            shift = stack[1]
+            j, w0, w1 = stack[1]
         last = len(self.theta_host) - 1
         if self.jit:
             params = [dr.gather(mi.Float, self.theta, j),
@@ -527,9 +516,8 @@ class TracedTables:
         sp = dr.select(has, wi.y / dr.select(has, r, 1.0), sin_p)
         out = []
         for k, (weight, slices) in enumerate(((w0, (j, 1.0, 0.0)), (w1, (j, 0.0, 1.0)))):
-            node = params[k] - shift
-            sin_d, cos_d = dr.sincos(node - theta)
-            sin_n, cos_n = dr.sincos(node)
+            sin_d, cos_d = dr.sincos(params[k] - theta)
+            sin_n, cos_n = dr.sincos(params[k])
             out.append((weight, mi.Vector3f(sin_n * cp, sin_n * sp, cos_n), cos_d, sin_d,
                         params[k], slices))
         return out, (-sp, cp), phi_i
@@ -556,8 +544,7 @@ class TracedTables:
             density = dr.select(active & dr.isfinite(density), density, 0.0)
         return value, density, active
 
-    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True,
-                         stack=None):
+    def refract_eval_pdf(self, wi, wo, eta, active, want_value=True, want_pdf=True):
         """eval_pdf of a transmitted lobe warped about the refraction half
         vector (docs/formats.md, "Extended table files"; the C reader's
         tables_refract.c): wi above, wo below, eta the far side's index over
@@ -570,7 +557,7 @@ class TracedTables:
         active = active & ok
         value = [0.0, 0.0, 0.0] if want_value else None
         pdf = 0.0 if want_pdf else None
-        elevations, axis, phi_i = self._elevations(wi, stack)
+        elevations, axis, phi_i = self._elevations(wi)
         for weight, wi_k, c, s, param, slices in elevations:
             o = _turn(axis, c, s, wo)
             v, p, ok_k = self._stored_at(wi_k, phi_i, param, slices, o, eta,
@@ -585,7 +572,7 @@ class TracedTables:
                 u_wi = mi.Point2f(_theta_to_u(_elevation(wi)), _phi_to_u(phi_i))
                 u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
                 u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
-                scale = self._jacobian_scale(u_m, u_wi, active, stack)
+                scale = self._jacobian_scale(u_m, u_wi, active)
                 value = [v * scale for v in value]
             value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
         if want_pdf:
@@ -628,7 +615,7 @@ class TracedTables:
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
         return wo, pdf, weight, ok
 
-    def refract_sample(self, wi, sample2, eta, active, stack=None):
+    def refract_sample(self, wi, sample2, eta, active):
         """sample of a transmitted lobe warped about the refraction half
         vector (as refract_eval_pdf): one of wi's two elevations picked by
         sample2.x with its weight (sample2.x rescaled and passed on), m
@@ -637,7 +624,7 @@ class TracedTables:
         and value are refract_eval_pdf's there. (wo, pdf, f cos theta_o as
         a list of 3 Float, ok)."""
         active = active & (mi.Frame3f.cos_theta(wi) > 0)
-        (e0, e1), axis, phi_i = self._elevations(wi, stack)
+        (e0, e1), axis, phi_i = self._elevations(wi)
         w0 = e0[0]
         second = sample2.x >= w0
         u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
@@ -656,7 +643,7 @@ class TracedTables:
         wo = _turn(axis, c_k, -s_k, o)
         ok = active & (c > 0) & (k > 0) & (o.z < 0) & (wo.z < 0) & (lum_pdf > 0) & \
             (vndf_pdf > 0)
-        value, pdf = self.refract_eval_pdf(wi, wo, eta, ok, True, True, stack)
+        value, pdf = self.refract_eval_pdf(wi, wo, eta, ok, True, True)
         ok = ok & (pdf > 0)
         value = [dr.select(ok, v, 0.0) for v in value]
         return wo, dr.select(ok, pdf, 0.0), value, ok

@@ -412,7 +412,9 @@ def test_stacked_warps_are_mitsubas(tables):
     from layerlab.mitsuba_tables import stack_sets
     from layerlab.mitsuba_warp import SliceWarp
     stacked = stack_sets(read_tensor_file(tables["glass"]), [SETS[k][0] for k in ORDER])
-    theta = stacked["theta_i"]
+    # Mitsuba's warp takes a rising parameter list: the slices' indices
+    # (the stacked sets repeat their elevations; SliceWarp reads by index).
+    theta = np.arange(stacked["vndf"].shape[1], dtype=np.float32)
     rng = np.random.default_rng(29)
     n = 20000
     for key in ("vndf", "luminance"):
