@@ -669,28 +669,27 @@ static void test_textured_float16(void **state)
     assert_int_equal(ll_bsdf_open_memory(d, tex_size, NULL, &b), LL_OK);
     ll_bsdf_release(b);
     free(d);
-    /* A textured file's small fields are float32 as an opaque file's. */
-    d = copy_of(tex, tex_size);
-    set_dtype(d, "basis2.theta_i", 9);
-    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis2.theta_i\" is float16");
-    free(d);
-    d = copy_of(tex, tex_size);
-    set_dtype(d, "basis2.sigma", 9);
-    expect(d, tex_size, LL_ERROR_FORMAT, "\"basis2.sigma\" is float16");
-    free(d);
-    /* An untextured file's grids: float32, as `measured` reads them. */
-    d = copy_of(good, good_size);
-    set_dtype(d, "vndf", 9);
-    expect(d, good_size, LL_ERROR_FORMAT, "\"vndf\" is float16");
-    free(d);
-    d = copy_of(good, good_size);
-    set_dtype(d, "rgb", 9);
-    expect(d, good_size, LL_ERROR_FORMAT, "\"rgb\" is float16");
-    free(d);
-    d = copy_of(tgood, tgood_size);
-    set_dtype(d, "reflect_top.luminance", 9);
-    expect(d, tgood_size, LL_ERROR_FORMAT, "\"reflect_top.luminance\" is float16");
-    free(d);
+    /* Float16 anywhere else is refused: a textured file's small fields
+     * are float32 as an opaque file's, and an untextured file's grids
+     * float32, as `measured` reads them. */
+    {
+        const struct {
+            const unsigned char *file;
+            size_t size;
+            const char *field;
+        } float32_only[5] = { { tex, tex_size, "basis2.theta_i" },
+                              { tex, tex_size, "basis2.sigma" },
+                              { good, good_size, "vndf" },
+                              { good, good_size, "rgb" },
+                              { tgood, tgood_size, "reflect_top.luminance" } };
+        for (k = 0; k < 5; ++k) {
+            d = copy_of(float32_only[k].file, float32_only[k].size);
+            set_dtype(d, float32_only[k].field, 9);
+            snprintf(what, sizeof what, "\"%s\" is float16", float32_only[k].field);
+            expect(d, float32_only[k].size, LL_ERROR_FORMAT, what);
+            free(d);
+        }
+    }
 }
 
 static void test_textured_truncated_and_damaged(void **state)
