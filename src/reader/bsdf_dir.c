@@ -36,24 +36,6 @@ static int to_file_axes(const double wo[3], const double wi[3], double *mu_i, do
     return 1;
 }
 
-/* A table file (tables_internal.h) is evaluated on the directions
- * themselves, as the renderers' readers do: through (mu_i, mu_o, cos phi)
- * the azimuth's sine would come back as sqrt(1 - cos^2), which loses half
- * the digits next to the plane of incidence. Our wo (the viewer) is the
- * format's wi. 0 if either direction is not usable. */
-static int unit_pair(const double wo[3], const double wi[3], double v[3], double l[3])
-{
-    double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi);
-    int k;
-    if (!(lo > 0.0) || !(li > 0.0))
-        return 0;
-    for (k = 0; k < 3; ++k) {
-        v[k] = wo[k] / lo;
-        l[k] = wi[k] / li;
-    }
-    return 1;
-}
-
 static ll_status check_mode(ll_transport mode, const char *fn)
 {
     if (mode != LL_TRANSPORT_RADIANCE && mode != LL_TRANSPORT_IMPORTANCE)
@@ -75,9 +57,9 @@ ll_status ll_bsdf_eval_dir(const ll_bsdf *b, const double wo[3], const double wi
         (s = ll_bsdf_check_basis(b, basis_coeffs, "ll_bsdf_eval_dir", &basis)) != LL_OK)
         return s;
     if (b->measured) {
-        /* unit_pair refuses what to_file_axes refuses (ll_bsdf_dir_length of each). */
+        /* ll_bsdf_unit_pair refuses what to_file_axes refuses. */
         double v[3], l[3], value[3];
-        if (!unit_pair(wo, wi, v, l))
+        if (!ll_bsdf_unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_eval_dir: wo and wi must be finite and non-zero");
         /* The bases blended with their weights; a transmitted value is
@@ -107,7 +89,7 @@ ll_status ll_bsdf_pdf_dir(const ll_bsdf *b, const double wo[3], const double wi[
         return s;
     if (b->measured) {
         double v[3], l[3];
-        if (!unit_pair(wo, wi, v, l))
+        if (!ll_bsdf_unit_pair(wo, wi, v, l))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            "ll_bsdf_pdf_dir: wo and wi must be finite and non-zero");
         *pdf = ll_measured_blend_pdf(b, v, l, basis);

@@ -23,6 +23,26 @@ static inline double ll_bsdf_dir_length(const double w[3])
     return sqrt(len2);
 }
 
+/* A table file (tables_internal.h) is evaluated on the directions
+ * themselves, as the renderers' readers do: through (mu_i, mu_o, cos phi)
+ * the azimuth's sine would come back as sqrt(1 - cos^2), which loses half
+ * the digits next to the plane of incidence. wo and wi as units into v
+ * and l (our wo, the viewer, is the format's wi); 0 if either direction
+ * is not usable. */
+static inline int ll_bsdf_unit_pair(const double wo[3], const double wi[3], double v[3],
+                                    double l[3])
+{
+    double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi);
+    int k;
+    if (!(lo > 0.0) || !(li > 0.0))
+        return 0;
+    for (k = 0; k < 3; ++k) {
+        v[k] = wo[k] / lo;
+        l[k] = wi[k] / li;
+    }
+    return 1;
+}
+
 /* pbrt-v3's FourierBSDF::f: in radiance mode, a transmitted value (mu_i and
  * mu_o of the same sign in the file's axes) is scaled by the square of the
  * relative index it crosses, 1 / eta going up through it (wi below the

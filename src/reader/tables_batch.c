@@ -92,14 +92,9 @@ static void start(const ll_batch_job *job, size_t k, pipe_slot *p)
         /* ll_measured_draw_begin asks for the luminance warp's rows. */
         p->state = ll_measured_draw_begin(t, p->v, u, &p->lk) ? SLOT_LIVE : SLOT_ZERO;
     } else {
-        const double *wo = job->wo + 3 * k, *wi = job->wi + 3 * k;
-        double lo = ll_bsdf_dir_length(wo), li = ll_bsdf_dir_length(wi), l[3];
-        if (!(lo > 0.0) || !(li > 0.0))
+        double l[3];
+        if (!ll_bsdf_unit_pair(job->wo + 3 * k, job->wi + 3 * k, p->v, l))
             return;
-        for (c = 0; c < 3; ++c) {
-            p->v[c] = wo[c] / lo;
-            l[c] = wi[c] / li;
-        }
         p->light_z = l[2];
         /* An eval of weight 0 is 0 without a look-up (the blend skips
          * it); a pdf does not depend on the weight. */
