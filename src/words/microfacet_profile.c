@@ -95,25 +95,6 @@ typedef struct reflect_constants {
 #define P_LOADU(p) _mm_loadu_pd(p)
 #define P_STOREU(p, a) _mm_storeu_pd(p, a)
 #include "words/microfacet_profile_loops.h"
-#undef PV
-#undef PW
-#undef PFN
-#undef PATTR
-#undef P_SET1
-#undef P_ZERO
-#undef P_ADD
-#undef P_SUB
-#undef P_MUL
-#undef P_DIV
-#undef P_SQRT
-#undef P_AND
-#undef P_ANDNOT
-#undef P_OR
-#undef P_GT
-#undef P_LT
-#undef P_LE
-#undef P_LOADU
-#undef P_STOREU
 #endif
 
 #if PROFILE_HAVE_AVX
@@ -146,25 +127,6 @@ static int have_avx(void)
 #define P_LOADU(p) _mm256_loadu_pd(p)
 #define P_STOREU(p, a) _mm256_storeu_pd(p, a)
 #include "words/microfacet_profile_loops.h"
-#undef PV
-#undef PW
-#undef PFN
-#undef PATTR
-#undef P_SET1
-#undef P_ZERO
-#undef P_ADD
-#undef P_SUB
-#undef P_MUL
-#undef P_DIV
-#undef P_SQRT
-#undef P_AND
-#undef P_ANDNOT
-#undef P_OR
-#undef P_GT
-#undef P_LT
-#undef P_LE
-#undef P_LOADU
-#undef P_STOREU
 #endif
 
 /* Reflection: g = scale F (1 + t)^2 (F = 1 in no_fresnel), t = wi . wo. */

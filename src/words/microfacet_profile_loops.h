@@ -11,7 +11,7 @@
  *   P_AND, P_ANDNOT, P_OR  (bits),
  *   P_GT, P_LT, P_LE       (comparisons to masks, false for a NaN),
  *   P_LOADU, P_STOREU,
- * and undefines them after. Each loop keeps the scalar formula's
+ * which it undefines at its end. Each loop keeps the scalar formula's
  * operations in its order, so that every width gives every sample the
  * same double (tests/test_microfacet_profile.c).
  */
@@ -124,3 +124,22 @@ PATTR static size_t PFN(refract)(const pair_plan *p, double eta_re, double inv_e
 #undef P_SELECT
 #undef P_BELOW
 #undef P_ABS
+#undef PV
+#undef PW
+#undef PFN
+#undef PATTR
+#undef P_SET1
+#undef P_ZERO
+#undef P_ADD
+#undef P_SUB
+#undef P_MUL
+#undef P_DIV
+#undef P_SQRT
+#undef P_AND
+#undef P_ANDNOT
+#undef P_OR
+#undef P_GT
+#undef P_LT
+#undef P_LE
+#undef P_LOADU
+#undef P_STOREU
