@@ -8,6 +8,8 @@
 #include "test_util.h"
 #include "reader/tables_warp.h"
 
+#include <string.h>
+
 #define W 7
 #define H 5
 #define P0 2
@@ -275,7 +277,7 @@ static void test_guides_find_the_whole_search(void **state)
     static double data[P1 * GH * GW];
     ll_warp2d guided, whole;
     uint64_t rng = 99;
-    size_t k, n_marg, n_cond;
+    size_t n_marg, n_cond;
     (void)state;
     make_guided(&guided, data, &rng);
     init_guided(&whole, data);
@@ -289,16 +291,41 @@ static void test_guides_find_the_whole_search(void **state)
     check_same_samples(&guided, &whole, 40000, &rng);
     n_marg = guided.n_slices * (guided.marg_buckets + 1);
     n_cond = guided.n_slices * GH * (guided.cond_buckets + 1);
-    for (k = 0; k < n_marg; ++k)
-        guided.marg_guide[k] = 0;
-    for (k = 0; k < n_cond; ++k)
-        guided.cond_guide[k] = 0;
+    assert_false(guided.guide_wide);
+    memset(guided.marg_guide, 0, n_marg);
+    memset(guided.cond_guide, 0, n_cond);
     check_same_samples(&guided, &whole, 5000, &rng);
-    for (k = 0; k < n_marg; ++k)
-        guided.marg_guide[k] = GH - 2;
-    for (k = 0; k < n_cond; ++k)
-        guided.cond_guide[k] = GW - 2;
+    memset(guided.marg_guide, GH - 2, n_marg);
+    memset(guided.cond_guide, GW - 2, n_cond);
     check_same_samples(&guided, &whole, 5000, &rng);
+    ll_warp2d_free(&guided);
+    ll_warp2d_free(&whole);
+}
+
+/* A warp too wide for byte entries (300 nodes along x) takes 16-bit ones,
+ * which find the whole search's answers as well. */
+#define WIDE 300
+static void test_wide_guides(void **state)
+{
+    static double data[P1 * 4 * WIDE];
+    static const double p0[1] = { 0.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
+    const double *params[2] = { p0, p1 };
+    size_t sizes[2] = { 1, P1 };
+    ll_warp2d guided, whole;
+    uint64_t rng = 31;
+    (void)state;
+    fill_lumpy(data, P1 * 4 * WIDE, &rng);
+    assert_int_equal(ll_warp2d_init(&guided, WIDE, 4, 2, sizes, params, get_table, data, 1),
+                     LL_OK);
+    assert_int_equal(ll_warp2d_init(&whole, WIDE, 4, 2, sizes, params, get_table, data, 1),
+                     LL_OK);
+    assert_true(guided.guide_wide);
+    assert_non_null(guided.cond_guide);
+    ll_free(whole.marg_guide);
+    ll_free(whole.cond_guide);
+    whole.marg_guide = NULL;
+    whole.cond_guide = NULL;
+    check_same_samples(&guided, &whole, 20000, &rng);
     ll_warp2d_free(&guided);
     ll_warp2d_free(&whole);
 }
@@ -333,6 +360,7 @@ int main(void)
         cmocka_unit_test(test_histogram),
         cmocka_unit_test(test_interpolation),
         cmocka_unit_test(test_guides_find_the_whole_search),
+        cmocka_unit_test(test_wide_guides),
         cmocka_unit_test(test_no_guides_where_integrals_decrease),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -5,6 +5,7 @@
  */
 #include "reader/tables_warp.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -124,25 +125,29 @@ static int ascending(const float *v, size_t n, size_t st)
 }
 
 /* Entries 0 .. g of a guide for the running integrals v[0], v[st], ...
- * of n nodes (not decreasing): entry j the last i in [0, n - 2] whose
- * value is at most (j / g) total. */
-static void guide_of(const float *v, size_t n, size_t st, size_t g, double total, uint16_t *out)
+ * of n nodes (not decreasing), from entry `first` of wp's guide out:
+ * entry j the last i in [0, n - 2] whose value is at most (j / g) total. */
+static void guide_of(const ll_warp2d *wp, const float *v, size_t n, size_t st, size_t g,
+                     double total, void *out, size_t first)
 {
     size_t i = 0, j;
     for (j = 0; j <= g; ++j) {
         double target = (double)j / (double)g * total;
         while (i + 2 < n && (double)v[(i + 1) * st] <= target)
             ++i;
-        out[j] = (uint16_t)i;
+        if (wp->guide_wide)
+            ((uint16_t *)out)[first + j] = (uint16_t)i;
+        else
+            ((unsigned char *)out)[first + j] = (unsigned char)i;
     }
 }
 
 /* The guides of a sampling warp (ll_warp2d.marg_guide): 1, or 0 if out of
  * memory. None (1) where a running integral decreases or a node index
- * does not fit an entry. */
+ * does not fit 16 bits. */
 static int build_guides(ll_warp2d *wp)
 {
-    size_t w = wp->w, h = wp->h, n = wp->n_slices, gm, gc, k, y, rows, count;
+    size_t w = wp->w, h = wp->h, n = wp->n_slices, gm, gc, k, y, rows, count, bytes;
     if (w - 2 > UINT16_MAX || h - 2 > UINT16_MAX)
         return 1;
     for (k = 0; k < n; ++k) {
@@ -152,22 +157,22 @@ static int build_guides(ll_warp2d *wp)
             if (!ascending(wp->cond + (k * h + y) * w * 2, w, 2))
                 return 1;
     }
+    wp->guide_wide = w - 2 > UCHAR_MAX || h - 2 > UCHAR_MAX;
+    bytes = wp->guide_wide ? sizeof(uint16_t) : 1;
     gm = guide_buckets(h);
     gc = guide_buckets(w);
     rows = n * h; /* the tables' own size, checked at init */
-    if (!ll_size_mul(n, gm + 1, &count) ||
-        !(wp->marg_guide = ll_alloc_array(count, sizeof(uint16_t))))
+    if (!ll_size_mul(n, gm + 1, &count) || !(wp->marg_guide = ll_alloc_array(count, bytes)))
         return 0;
-    if (!ll_size_mul(rows, gc + 1, &count) ||
-        !(wp->cond_guide = ll_alloc_array(count, sizeof(uint16_t))))
+    if (!ll_size_mul(rows, gc + 1, &count) || !(wp->cond_guide = ll_alloc_array(count, bytes)))
         return 0;
     wp->marg_buckets = gm;
     wp->cond_buckets = gc;
     for (k = 0; k < n; ++k)
-        guide_of(wp->marg + k * h, h, 1, gm, 1.0, wp->marg_guide + k * (gm + 1));
+        guide_of(wp, wp->marg + k * h, h, 1, gm, 1.0, wp->marg_guide, k * (gm + 1));
     for (k = 0; k < rows; ++k)
-        guide_of(wp->cond + k * w * 2, w, 2, gc, (double)wp->row_total[k],
-                 wp->cond_guide + k * (gc + 1));
+        guide_of(wp, wp->cond + k * w * 2, w, 2, gc, (double)wp->row_total[k], wp->cond_guide,
+                 k * (gc + 1));
     return 1;
 }
 
@@ -757,11 +762,13 @@ static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, co
     pair_of(s, wp->marg, h, 1, &marg);
     if (wp->marg_guide) {
         /* Both slices' answers for the bucket of u[1]. */
+        const void *gd = wp->marg_guide;
         size_t g = wp->marg_buckets, j = bucket_of(target, g);
-        const uint16_t *a = wp->marg_guide + s->index[0] * (g + 1) + j;
-        const uint16_t *b = wp->marg_guide + s->index[s->count == 2] * (g + 1) + j;
+        size_t a = s->index[0] * (g + 1) + j, b = s->index[s->count == 2] * (g + 1) + j;
         int ok;
-        GUIDED_SEARCH(h, min2(a[0], b[0]), max2(a[1], b[1]), pmix(&marg, i), target, r, ok);
+        GUIDED_SEARCH(h, min2(ll_warp_guide_entry(wp, gd, a), ll_warp_guide_entry(wp, gd, b)),
+                      max2(ll_warp_guide_entry(wp, gd, a + 1), ll_warp_guide_entry(wp, gd, b + 1)),
+                      pmix(&marg, i), target, r, ok);
         if (ok)
             return r;
     }
@@ -791,11 +798,15 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     if (dr->guided) {
         /* The answers of rows r and r + 1 of both slices for the bucket
          * of u[0] (the blend's target is u[0] times its blended total). */
+        const void *gd = wp->cond_guide;
         size_t g = wp->cond_buckets, row = g + 1, j = bucket_of(u[0], g);
-        const uint16_t *a = wp->cond_guide + (s->index[0] * h + r) * row + j;
-        const uint16_t *b = wp->cond_guide + (s->index[s->count == 2] * h + r) * row + j;
-        dr->base = min2(min2(a[0], a[row]), min2(b[0], b[row]));
-        dr->top = max2(max2(a[1], a[row + 1]), max2(b[1], b[row + 1]));
+        size_t a = (s->index[0] * h + r) * row + j, b = (s->index[s->count == 2] * h + r) * row + j;
+        dr->base = min2(min2(ll_warp_guide_entry(wp, gd, a), ll_warp_guide_entry(wp, gd, a + row)),
+                        min2(ll_warp_guide_entry(wp, gd, b), ll_warp_guide_entry(wp, gd, b + row)));
+        dr->top = max2(max2(ll_warp_guide_entry(wp, gd, a + 1),
+                            ll_warp_guide_entry(wp, gd, a + row + 1)),
+                       max2(ll_warp_guide_entry(wp, gd, b + 1),
+                            ll_warp_guide_entry(wp, gd, b + row + 1)));
         return;
     }
     COUNT_SEARCH_FIRST(w, gs, pair_at2(&cond, at, w, ty, j * gs), target, dr->base);

@@ -83,16 +83,27 @@ typedef struct ll_warp2d {
      * target, then counts only the nodes between, which finds what the
      * whole search finds (a few nodes instead of two rounds of about
      * sqrt(w)). Where the check fails (rounding at a tie) the whole search
-     * runs. NULL (every search whole) if a running integral decreases
-     * anywhere, where only the whole search defines the answer, or if the
-     * nodes do not fit the entries. marg_stride, guide_stride: the first
-     * round's strides of the whole searches along y and x (about sqrt of
-     * the node count: both rounds read about as many values). */
+     * runs. Entries are bytes where every node index fits one (w and h
+     * up to 257), which keeps a row's guide within a cache line or two
+     * and both warps' guides within a core's second-level cache for the
+     * usual grids; else 16 bits (guide_wide). NULL (every search whole)
+     * if a running integral decreases anywhere, where only the whole
+     * search defines the answer, or if the nodes do not fit 16 bits.
+     * marg_stride, guide_stride: the first round's strides of the whole
+     * searches along y and x (about sqrt of the node count: both rounds
+     * read about as many values). */
     size_t guide_stride, marg_stride;
     size_t marg_buckets, cond_buckets;        /* powers of two                    */
-    uint16_t *marg_guide;                     /* [n_slices][marg_buckets + 1]     */
-    uint16_t *cond_guide;                     /* [n_slices][h][cond_buckets + 1]  */
+    int guide_wide;                           /* entries uint16_t, else bytes     */
+    void *marg_guide;                         /* [n_slices][marg_buckets + 1]     */
+    void *cond_guide;                         /* [n_slices][h][cond_buckets + 1]  */
 } ll_warp2d;
+
+/* Entry k of a guide of wp (ll_warp2d.marg_guide, cond_guide). */
+static inline size_t ll_warp_guide_entry(const ll_warp2d *wp, const void *guide, size_t k)
+{
+    return wp->guide_wide ? ((const uint16_t *)guide)[k] : ((const unsigned char *)guide)[k];
+}
 
 /* The slices around one parameter point and their weights (only those of
  * non-zero weight), computed once and shared by the look-ups of warps with
