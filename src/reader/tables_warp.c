@@ -7,6 +7,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 /* Keeps the sampler off the exact edges of the square, where the inverse
@@ -386,6 +387,15 @@ static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
     return 1;
 }
 
+/* A node index to double and a non-negative double below the node count
+ * to its index, through the signed type: the indices lie far below 2^53,
+ * where both conversions are exact, and x86-64 converts a signed integer
+ * in one instruction but an unsigned one with a branch and several (these
+ * run a few times in every look-up). */
+static inline double index_to_double(size_t i) { return (double)(ptrdiff_t)i; }
+
+static inline size_t double_to_index(double f) { return (size_t)(ptrdiff_t)f; }
+
 /* Cell and fraction of coordinate x in [0, 1] over n nodes. */
 static inline size_t cell(double x, size_t n, double *t)
 {
@@ -395,11 +405,11 @@ static inline size_t cell(double x, size_t n, double *t)
         x = 0.0;
     if (x > 1.0)
         x = 1.0;
-    f = x * (double)(n - 1);
-    i = (size_t)f;
+    f = x * index_to_double(n - 1);
+    i = double_to_index(f);
     if (i > n - 2)
         i = n - 2;
-    *t = f - (double)i;
+    *t = f - index_to_double(i);
     return i;
 }
 
@@ -737,7 +747,7 @@ static inline void prefetch(const float *p, size_t n)
 /* The bucket of u in [0, 1) among g (a power of two: u g is exact). */
 static inline size_t bucket_of(double u, size_t g)
 {
-    size_t j = (size_t)(u * (double)g);
+    size_t j = double_to_index(u * index_to_double(g));
     return j < g ? j : g - 1;
 }
 
@@ -834,8 +844,8 @@ static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
     tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = ((double)c + tx) / (double)(w - 1);
-    pos[1] = ((double)r + ty) / (double)(h - 1);
+    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
+    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -959,8 +969,8 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
     tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = ((double)c + tx) / (double)(w - 1);
-    pos[1] = ((double)r + ty) / (double)(h - 1);
+    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
+    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
