@@ -8,6 +8,8 @@
 #include "test_util.h"
 #include "reader/tables_warp.h"
 
+#include <string.h>
+
 #define W 7
 #define H 5
 #define P0 2
@@ -205,6 +207,149 @@ static void test_interpolation(void **state)
     ll_warp2d_free(&wp);
 }
 
+/* A warp of GW x GH nodes over three incident slices whose values have
+ * stretches of zeros (flat running integrals, where a search's target can
+ * tie) and a row of zeros in every slice. */
+#define GW 37
+#define GH 19
+static void init_guided(ll_warp2d *wp, const double *data)
+{
+    static const double p0[1] = { 0.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
+    const double *params[2] = { p0, p1 };
+    size_t sizes[2] = { 1, P1 };
+    assert_int_equal(ll_warp2d_init(wp, GW, GH, 2, sizes, params, get_table, data, 1), LL_OK);
+}
+
+static void make_guided(ll_warp2d *wp, double *data, uint64_t *rng)
+{
+    size_t k;
+    for (k = 0; k < P1 * GH * GW; ++k) {
+        size_t x = k % GW, y = k / GW % GH;
+        data[k] = y == 3 || (x > 5 && x < 12) || (x + y) % 7 == 0
+                      ? 0.0
+                      : 0.05 + ll_test_uniform(rng) * (k % 3 == 0 ? 4.0 : 1.0);
+    }
+    init_guided(wp, data);
+}
+
+/* guided and whole (the same warp without guides) sample the same points
+ * and densities, to the bit, by sample_at and by the batch calls' steps,
+ * at n u anywhere, on the guides' bucket edges and at the square's edges,
+ * between slices and on them. */
+static void check_same_samples(const ll_warp2d *guided, const ll_warp2d *whole, size_t n,
+                               uint64_t *rng)
+{
+    ll_warp_slices s;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        double u[2], param[2], a[2], b[2], c[2], pa, pb, pc;
+        ll_warp_draw dr;
+        int e;
+        for (e = 0; e < 2; ++e) {
+            size_t g = e == 0 ? guided->cond_buckets : guided->marg_buckets;
+            double v = ll_test_uniform(rng);
+            /* A third on a bucket's edge (a few at 0 and 1). */
+            u[e] = k % 3 == 0 ? floor(v * (double)(g + 1)) / (double)g : v;
+        }
+        param[0] = 0.0;
+        param[1] = k % 5 == 0 ? guided->param_values[1][k % P1]
+                              : -1.2 + 3.5 * ll_test_uniform(rng);
+        ll_warp2d_slices(guided, param, &s);
+        ll_warp2d_sample_at(guided, &s, u, a, &pa);
+        ll_warp2d_sample_at(whole, &s, u, b, &pb);
+        ll_warp2d_draw_begin(guided, &s, u, &dr);
+        ll_warp2d_prefetch_draw(guided, &s, &dr);
+        ll_warp2d_draw_end(guided, &s, &dr, c, &pc);
+        assert_memory_equal(a, b, sizeof a);
+        assert_memory_equal(&pa, &pb, sizeof pa);
+        assert_memory_equal(a, c, sizeof a);
+        assert_memory_equal(&pa, &pc, sizeof pa);
+    }
+}
+
+/* The guided searches (ll_warp2d.marg_guide, cond_guide) find what the
+ * whole searches find, to the bit; and a guide whose stretch does not
+ * bracket the target (as rounding can leave one at a tie) only sends the
+ * search to the whole one: guides set to the first node everywhere, then
+ * to the last, give the same samples again. */
+static void test_guides_find_the_whole_search(void **state)
+{
+    static double data[P1 * GH * GW];
+    ll_warp2d guided, whole;
+    uint64_t rng = 99;
+    size_t n_marg, n_cond;
+    (void)state;
+    make_guided(&guided, data, &rng);
+    init_guided(&whole, data);
+    assert_non_null(guided.marg_guide);
+    assert_non_null(guided.cond_guide);
+    assert_true(guided.cond_buckets >= 8 && guided.marg_buckets >= 8);
+    ll_free(whole.marg_guide);
+    ll_free(whole.cond_guide);
+    whole.marg_guide = NULL;
+    whole.cond_guide = NULL;
+    check_same_samples(&guided, &whole, 40000, &rng);
+    n_marg = guided.n_slices * (guided.marg_buckets + 1);
+    n_cond = guided.n_slices * GH * (guided.cond_buckets + 1);
+    assert_false(guided.guide_wide);
+    memset(guided.marg_guide, 0, n_marg);
+    memset(guided.cond_guide, 0, n_cond);
+    check_same_samples(&guided, &whole, 5000, &rng);
+    memset(guided.marg_guide, GH - 2, n_marg);
+    memset(guided.cond_guide, GW - 2, n_cond);
+    check_same_samples(&guided, &whole, 5000, &rng);
+    ll_warp2d_free(&guided);
+    ll_warp2d_free(&whole);
+}
+
+/* A warp too wide for byte entries (300 nodes along x) takes 16-bit ones,
+ * which find the whole search's answers as well. */
+#define WIDE 300
+static void test_wide_guides(void **state)
+{
+    static double data[P1 * 4 * WIDE];
+    static const double p0[1] = { 0.0 }, p1[P1] = { -1.0, 0.5, 2.0 };
+    const double *params[2] = { p0, p1 };
+    size_t sizes[2] = { 1, P1 };
+    ll_warp2d guided, whole;
+    uint64_t rng = 31;
+    (void)state;
+    fill_lumpy(data, P1 * 4 * WIDE, &rng);
+    assert_int_equal(ll_warp2d_init(&guided, WIDE, 4, 2, sizes, params, get_table, data, 1),
+                     LL_OK);
+    assert_int_equal(ll_warp2d_init(&whole, WIDE, 4, 2, sizes, params, get_table, data, 1),
+                     LL_OK);
+    assert_true(guided.guide_wide);
+    assert_non_null(guided.cond_guide);
+    ll_free(whole.marg_guide);
+    ll_free(whole.cond_guide);
+    whole.marg_guide = NULL;
+    whole.cond_guide = NULL;
+    check_same_samples(&guided, &whole, 20000, &rng);
+    ll_warp2d_free(&guided);
+    ll_warp2d_free(&whole);
+}
+
+/* A running integral that decreases (a negative value, which the reader
+ * refuses but the warp takes) leaves the warp without guides: only the
+ * whole search defines its answer. */
+static void test_no_guides_where_integrals_decrease(void **state)
+{
+    static double data[P1 * GH * GW];
+    ll_warp2d wp;
+    uint64_t rng = 5;
+    (void)state;
+    make_guided(&wp, data, &rng);
+    assert_non_null(wp.cond_guide);
+    ll_warp2d_free(&wp);
+    /* Row 1 of slice 0: its running integral falls after node 20. */
+    data[GW + 20] = -10.0;
+    init_guided(&wp, data);
+    assert_null(wp.marg_guide);
+    assert_null(wp.cond_guide);
+    ll_warp2d_free(&wp);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -214,6 +359,9 @@ int main(void)
         cmocka_unit_test(test_density_integrates_to_one),
         cmocka_unit_test(test_histogram),
         cmocka_unit_test(test_interpolation),
+        cmocka_unit_test(test_guides_find_the_whole_search),
+        cmocka_unit_test(test_wide_guides),
+        cmocka_unit_test(test_no_guides_where_integrals_decrease),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -129,7 +129,7 @@ ll_status ll_bsdf_sample_dir(const ll_bsdf *b, const double wo[3], const double 
         double v[3], value[3];
         int k;
         for (k = 0; k < 3; ++k)
-            v[k] = wo[k] / lo;
+            v[k] = lo == 1.0 ? wo[k] : wo[k] / lo; /* as ll_bsdf_unit_pair */
         if (ll_measured_blend_sample(b, v, u, basis, wi, pdf, value))
             ll_bsdf_measured_rgb(value, wi[2], ll_bsdf_transport_scale(b, v[2], -wi[2], mode), rgb);
         return LL_OK;

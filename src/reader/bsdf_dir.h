@@ -18,7 +18,7 @@ static inline double ll_bsdf_dir_length(const double w[3])
     double len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
     if (fabs(len2 - 1.0) <= 1e-12)
         return 1.0;
-    if (!(len2 > 0.0) || !ll_is_finite(len2))
+    if (!(len2 > 0.0) || !isfinite(len2))
         return 0.0;
     return sqrt(len2);
 }
@@ -36,9 +36,10 @@ static inline int ll_bsdf_unit_pair(const double wo[3], const double wi[3], doub
     int k;
     if (!(lo > 0.0) || !(li > 0.0))
         return 0;
+    /* x / 1 is x: the division only for a direction that is not unit. */
     for (k = 0; k < 3; ++k) {
-        v[k] = wo[k] / lo;
-        l[k] = wi[k] / li;
+        v[k] = lo == 1.0 ? wo[k] : wo[k] / lo;
+        l[k] = li == 1.0 ? wi[k] : wi[k] / li;
     }
     return 1;
 }
@@ -58,7 +59,9 @@ static inline double ll_bsdf_transport_scale(const ll_bsdf *b, double mu_i, doub
 }
 
 /* A table file's value times weight and the cosine factor of the light's
- * direction, as rgb (what is not a positive finite number: 0). */
+ * direction, as rgb (what is not a positive finite number: 0). C99's
+ * isfinite in place, where support's ll_is_finite is a call: this runs on
+ * every evaluation and sample. */
 static inline void ll_bsdf_measured_rgb(const double value[3], double cos_light, double weight,
                                         double rgb[3])
 {
@@ -66,7 +69,7 @@ static inline void ll_bsdf_measured_rgb(const double value[3], double cos_light,
     int c;
     for (c = 0; c < 3; ++c) {
         rgb[c] = value[c] * scale;
-        if (!(rgb[c] > 0.0) || !ll_is_finite(rgb[c]))
+        if (!(rgb[c] > 0.0) || !isfinite(rgb[c]))
             rgb[c] = 0.0;
     }
 }

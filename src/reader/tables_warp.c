@@ -5,7 +5,9 @@
  */
 #include "reader/tables_warp.h"
 
+#include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 /* Keeps the sampler off the exact edges of the square, where the inverse
@@ -24,7 +26,8 @@ void ll_warp2d_free(ll_warp2d *wp)
     ll_free(wp->data); /* cond points into it */
     ll_free(wp->marg);
     ll_free(wp->row_total);
-    ll_free(wp->guide);
+    ll_free(wp->marg_guide);
+    ll_free(wp->cond_guide);
     memset(wp, 0, sizeof *wp);
 }
 
@@ -98,6 +101,82 @@ static size_t search_stride(size_t n)
     return s;
 }
 
+/* The buckets of a guide over n nodes: the least power of two >= (n -
+ * 1) / 2, so that a bucket of one part holds about two intervals. A power
+ * of two makes u times it exact, so that the bucket of u is the one whose
+ * targets bracket u. */
+static size_t guide_buckets(size_t n)
+{
+    size_t g = 1;
+    while (2 * g < n - 1)
+        g *= 2;
+    return g;
+}
+
+/* Whether the running integrals at v[0], v[st], ... v[(n - 1) st] do not
+ * decrease (so that the count of a search is its last node at or below
+ * the target, which the guides find). */
+static int ascending(const float *v, size_t n, size_t st)
+{
+    size_t i;
+    for (i = 1; i < n; ++i)
+        if (!(v[(i - 1) * st] <= v[i * st]))
+            return 0;
+    return 1;
+}
+
+/* Entries 0 .. g of a guide for the running integrals v[0], v[st], ...
+ * of n nodes (not decreasing), from entry `first` of wp's guide out:
+ * entry j the last i in [0, n - 2] whose value is at most (j / g) total. */
+static void guide_of(const ll_warp2d *wp, const float *v, size_t n, size_t st, size_t g,
+                     double total, void *out, size_t first)
+{
+    size_t i = 0, j;
+    for (j = 0; j <= g; ++j) {
+        double target = (double)j / (double)g * total;
+        while (i + 2 < n && (double)v[(i + 1) * st] <= target)
+            ++i;
+        if (wp->guide_wide)
+            ((uint16_t *)out)[first + j] = (uint16_t)i;
+        else
+            ((unsigned char *)out)[first + j] = (unsigned char)i;
+    }
+}
+
+/* The guides of a sampling warp (ll_warp2d.marg_guide): 1, or 0 if out of
+ * memory. None (1) where a running integral decreases or a node index
+ * does not fit 16 bits. */
+static int build_guides(ll_warp2d *wp)
+{
+    size_t w = wp->w, h = wp->h, n = wp->n_slices, gm, gc, k, y, rows, count, bytes;
+    if (w - 2 > UINT16_MAX || h - 2 > UINT16_MAX)
+        return 1;
+    for (k = 0; k < n; ++k) {
+        if (!ascending(wp->marg + k * h, h, 1))
+            return 1;
+        for (y = 0; y < h; ++y)
+            if (!ascending(wp->cond + (k * h + y) * w * 2, w, 2))
+                return 1;
+    }
+    wp->guide_wide = w - 2 > UCHAR_MAX || h - 2 > UCHAR_MAX;
+    bytes = wp->guide_wide ? sizeof(uint16_t) : 1;
+    gm = guide_buckets(h);
+    gc = guide_buckets(w);
+    rows = n * h; /* the tables' own size, checked at init */
+    if (!ll_size_mul(n, gm + 1, &count) || !(wp->marg_guide = ll_alloc_array(count, bytes)))
+        return 0;
+    if (!ll_size_mul(rows, gc + 1, &count) || !(wp->cond_guide = ll_alloc_array(count, bytes)))
+        return 0;
+    wp->marg_buckets = gm;
+    wp->cond_buckets = gc;
+    for (k = 0; k < n; ++k)
+        guide_of(wp, wp->marg + k * h, h, 1, gm, 1.0, wp->marg_guide, k * (gm + 1));
+    for (k = 0; k < rows; ++k)
+        guide_of(wp, wp->cond + k * w * 2, w, 2, gc, (double)wp->row_total[k], wp->cond_guide,
+                 k * (gc + 1));
+    return 1;
+}
+
 ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
                          const size_t *param_size, const double *const *params, ll_warp_get get,
                          const void *ctx, int sampling)
@@ -157,17 +236,8 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
         wp->row_total[k] = wp->cond[(k * w + w - 1) * 2];
     wp->marg_stride = search_stride(h);
     wp->guide_stride = search_stride(w);
-    wp->guide_count = (w - 2) / wp->guide_stride;
-    if (wp->guide_count > 0) {
-        size_t j;
-        if (!ll_size_mul(n * h, wp->guide_count, &total) ||
-            !(wp->guide = ll_alloc_array(total, sizeof(float))))
-            goto oom;
-        for (k = 0; k < n * h; ++k)
-            for (j = 0; j < wp->guide_count; ++j)
-                wp->guide[k * wp->guide_count + j] =
-                    wp->cond[(k * w + (j + 1) * wp->guide_stride) * 2];
-    }
+    if (!build_guides(wp))
+        goto oom;
     return LL_OK;
 oom:
     return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory (%zu x %zu table)", w, h);
@@ -317,6 +387,15 @@ static int data_pair_of(const ll_warp2d *wp, const slice_set *s, slice_pair *q)
     return 1;
 }
 
+/* A node index to double and a non-negative double below the node count
+ * to its index, through the signed type: the indices lie far below 2^53,
+ * where both conversions are exact, and x86-64 converts a signed integer
+ * in one instruction but an unsigned one with a branch and several (these
+ * run a few times in every look-up). */
+static inline double index_to_double(size_t i) { return (double)(ptrdiff_t)i; }
+
+static inline size_t double_to_index(double f) { return (size_t)(ptrdiff_t)f; }
+
 /* Cell and fraction of coordinate x in [0, 1] over n nodes. */
 static inline size_t cell(double x, size_t n, double *t)
 {
@@ -326,11 +405,11 @@ static inline size_t cell(double x, size_t n, double *t)
         x = 0.0;
     if (x > 1.0)
         x = 1.0;
-    f = x * (double)(n - 1);
-    i = (size_t)f;
+    f = x * index_to_double(n - 1);
+    i = double_to_index(f);
     if (i > n - 2)
         i = n - 2;
-    *t = f - (double)i;
+    *t = f - index_to_double(i);
     return i;
 }
 
@@ -642,28 +721,67 @@ static inline void prefetch(const float *p, size_t n)
         (out) = (base) + count_;                                                          \
     } while (0)
 
-/* Rows r and r + 1 of a pair at ty from values a (row r) and b (row r +
- * 1) of both slices: pair_at2's arithmetic, in its order. */
-static inline double rows_mix(const slice_pair *q, double ty, float a0, float a1, float b0,
-                              float b1)
+/* COUNT_SEARCH's answer from the stretch lo .. hi of a guide (lo <= hi
+ * <= n - 2): where value(lo) <= target (or lo is 0, which is not counted)
+ * and value(hi + 1) > target (or hi is n - 2), the last i in lo .. hi
+ * with value(i) <= target, found by halving, which for values that do
+ * not decrease is the whole search's count; ok_out 1 then. ok_out 0 (out
+ * unset) where the ends do not bracket the target: the whole search
+ * decides. */
+#define GUIDED_SEARCH(n, lo, hi, value, target, out, ok_out)                              \
+    do {                                                                                  \
+        size_t lo_ = (lo), hi_ = (hi), count_ = 0, i;                                     \
+        (ok_out) = 0;                                                                     \
+        i = lo_;                                                                          \
+        if (lo_ == 0 || (value) <= (target)) {                                            \
+            i = hi_ + 1;                                                                  \
+            if (hi_ >= (n) - 2 || !((value) <= (target))) {                               \
+                for (i = lo_ + 1; i <= hi_; ++i)                                          \
+                    count_ += (value) <= (target);                                        \
+                (out) = lo_ + count_;                                                     \
+                (ok_out) = 1;                                                             \
+            }                                                                             \
+        }                                                                                 \
+    } while (0)
+
+/* The bucket of u in [0, 1) among g (a power of two: u g is exact). */
+static inline size_t bucket_of(double u, size_t g)
 {
-    return (1.0 - ty) * (q->w0 * (double)a0 + q->w1 * (double)a1) +
-           ty * (q->w0 * (double)b0 + q->w1 * (double)b1);
+    size_t j = double_to_index(u * index_to_double(g));
+    return j < g ? j : g - 1;
 }
+
+static inline size_t min2(size_t a, size_t b) { return a < b ? a : b; }
+
+static inline size_t max2(size_t a, size_t b) { return a > b ? a : b; }
 
 /* sample_at for a pair of slices, in three steps split where they wait
  * on memory: sample_pair_row finds the row interval r from the marginal
- * (small, read in place); sample_pair_guide the row's fraction and the
- * column search's first round from the guide (small too); sample_pair_rest
- * the column and the point from rows r and r + 1 of the table of
- * megabytes. The general form's arithmetic, in the same order, so both
- * give the same numbers; the searches by COUNT_SEARCH. */
+ * and its guide (small, read in place); sample_pair_guide the row's
+ * fraction and the stretch of the column search from the rows' guides
+ * (small too; without guides, the whole search's first round);
+ * sample_pair_rest the column and the point from rows r and r + 1 of the
+ * table of megabytes. The general form's arithmetic, in the same order,
+ * so both give the same numbers; the searches find what COUNT_SEARCH
+ * finds. */
 static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, const double u[2])
 {
     size_t h = wp->h, hs = wp->marg_stride, r;
     double target = u[1];
     slice_pair marg;
     pair_of(s, wp->marg, h, 1, &marg);
+    if (wp->marg_guide) {
+        /* Both slices' answers for the bucket of u[1]. */
+        const void *gd = wp->marg_guide;
+        size_t g = wp->marg_buckets, j = bucket_of(target, g);
+        size_t a = s->index[0] * (g + 1) + j, b = s->index[s->count == 2] * (g + 1) + j;
+        int ok;
+        GUIDED_SEARCH(h, min2(ll_warp_guide_entry(wp, gd, a), ll_warp_guide_entry(wp, gd, b)),
+                      max2(ll_warp_guide_entry(wp, gd, a + 1), ll_warp_guide_entry(wp, gd, b + 1)),
+                      pmix(&marg, i), target, r, ok);
+        if (ok)
+            return r;
+    }
     COUNT_SEARCH(h, hs, pmix(&marg, j * hs), pmix(&marg, i), target, r);
     return r;
 }
@@ -671,11 +789,9 @@ static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, co
 static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, const double u[2],
                                      ll_warp_draw *dr)
 {
-    size_t h = wp->h, st = wp->w * h, r = dr->r, gs = wp->guide_stride;
-    size_t gc = wp->guide_count;
+    size_t w = wp->w, h = wp->h, st = w * h, r = dr->r, at = r * w, gs = wp->guide_stride;
     double target = u[1], r0, r1, ty, row_total, m0, m1;
     slice_pair marg, tot, cond;
-    const float *g0, *g1;
     pair_of(s, wp->marg, h, 1, &marg);
     pair_of(s, wp->row_total, h, 1, &tot);
     pair_of(s, wp->cond, 2 * st, 2, &cond);
@@ -686,35 +802,50 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
-    /* Guide rows r and r + 1 of both slices (column j stride at j - 1;
-     * a warp too narrow for a guide reads none). */
-    g0 = g1 = wp->guide;
-    if (gc > 0) {
-        g0 += (s->index[0] * h + r) * gc - 1;
-        g1 += (s->index[s->count == 2] * h + r) * gc - 1;
-    }
-    COUNT_SEARCH_FIRST(wp->w, gs, rows_mix(&cond, ty, g0[j], g1[j], g0[j + gc], g1[j + gc]),
-                       target, dr->base);
     dr->ty = ty;
     dr->target = target;
+    dr->guided = wp->cond_guide != NULL;
+    if (dr->guided) {
+        /* The answers of rows r and r + 1 of both slices for the bucket
+         * of u[0] (the blend's target is u[0] times its blended total). */
+        const void *gd = wp->cond_guide;
+        size_t g = wp->cond_buckets, row = g + 1, j = bucket_of(u[0], g);
+        size_t a = (s->index[0] * h + r) * row + j, b = (s->index[s->count == 2] * h + r) * row + j;
+        dr->base = min2(min2(ll_warp_guide_entry(wp, gd, a), ll_warp_guide_entry(wp, gd, a + row)),
+                        min2(ll_warp_guide_entry(wp, gd, b), ll_warp_guide_entry(wp, gd, b + row)));
+        dr->top = max2(max2(ll_warp_guide_entry(wp, gd, a + 1),
+                            ll_warp_guide_entry(wp, gd, a + row + 1)),
+                       max2(ll_warp_guide_entry(wp, gd, b + 1),
+                            ll_warp_guide_entry(wp, gd, b + row + 1)));
+        return;
+    }
+    COUNT_SEARCH_FIRST(w, gs, pair_at2(&cond, at, w, ty, j * gs), target, dr->base);
+    dr->top = min2(dr->base + gs - 1, w - 2);
 }
 
 static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
                                     const ll_warp_draw *dr, double pos[2], double *pdf)
 {
-    size_t w = wp->w, h = wp->h, st = w * h, c, r = dr->r, at = r * w, gs = wp->guide_stride;
+    size_t w = wp->w, h = wp->h, st = w * h, c = 0, r = dr->r, at = r * w, gs = wp->guide_stride;
     double target = dr->target, ty = dr->ty, tx, v0, v1, cdf_c, cdf_c1;
+    int ok = 0;
     slice_pair cond, data;
     pair_of(s, wp->cond, 2 * st, 2, &cond);
     pair_of(s, wp->data, 2 * st, 2, &data);
-    COUNT_SEARCH_REST(w, gs, dr->base, pair_at2(&cond, at, w, ty, i), target, c);
+    if (dr->guided)
+        GUIDED_SEARCH(w, dr->base, dr->top, pair_at2(&cond, at, w, ty, i), target, c, ok);
+    if (!dr->guided)
+        COUNT_SEARCH_REST(w, gs, dr->base, pair_at2(&cond, at, w, ty, i), target, c);
+    else if (!ok)
+        COUNT_SEARCH(w, gs, pair_at2(&cond, at, w, ty, j * gs), pair_at2(&cond, at, w, ty, i),
+                     target, c);
     cdf_c = pair_at2(&cond, at, w, ty, c);
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
     tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = ((double)c + tx) / (double)(w - 1);
-    pos[1] = ((double)r + ty) / (double)(h - 1);
+    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
+    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -757,12 +888,12 @@ void ll_warp2d_draw_begin(const ll_warp2d *wp, const slice_set *s, const double 
 void ll_warp2d_prefetch_draw(const ll_warp2d *wp, const slice_set *s, const ll_warp_draw *dr)
 {
 #if defined(__GNUC__)
-    size_t w = wp->w, plane = 2 * w * wp->h, j, last = w - 2, end;
+    size_t w = wp->w, plane = 2 * w * wp->h, j, end = dr->top + 1;
     if (s->count > 2)
         return;
-    /* Nodes base .. end of rows r and r + 1 (the second round's and the
-     * two nodes after its answer), each with its running integral. */
-    end = dr->base + wp->guide_stride <= last ? dr->base + wp->guide_stride : last + 1;
+    /* Nodes base .. top + 1 of rows r and r + 1 (the stretch and the node
+     * after it that settles the search; the two after its answer are
+     * among them), each with its running integral. */
     for (j = 0; j < s->count; ++j) {
         const float *p = wp->data + s->index[j] * plane + 2 * (dr->r * w + dr->base);
         size_t n = 2 * (end - dr->base + 1), k;
@@ -838,8 +969,8 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
     tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = ((double)c + tx) / (double)(w - 1);
-    pos[1] = ((double)r + ty) / (double)(h - 1);
+    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
+    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 

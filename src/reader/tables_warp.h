@@ -22,6 +22,7 @@
 #include "support/support.h"
 
 #include <math.h>
+#include <stdint.h>
 
 #define LL_WARP_MAX_PARAMS 3
 
@@ -69,20 +70,40 @@ typedef struct ll_warp2d {
                                                  the same values: y does not
                                                  matter (an isotropic file's ndf
                                                  and sigma)                       */
-    /* A sampling warp's guide to its conditional searches: the running
-     * integral of every row at the columns guide_stride, 2 guide_stride,
-     * ... <= w - 2 (guide_count of them), [n_slices][h][guide_count]. A
-     * search reads the columns first from here (rows r and r + 1 side by
-     * side: a line or two per slice), then only the stretch of
-     * guide_stride nodes it falls in from the table of megabytes: two
-     * rounds of independent reads instead of a halving step's chain of
-     * dependent ones. The values are cond's own, so the search finds what
-     * a halving finds. NULL if the warp only interpolates. marg_stride:
-     * the first round's stride of the search along y (the marginal, small
-     * enough to be read in place). */
-    size_t guide_stride, guide_count, marg_stride;
-    float *guide;
+    /* Where a sampling warp's searches end: guide tables (Chen and Asau
+     * 1974; Devroye, Non-Uniform Random Variate Generation, 1986), as the
+     * Mitsuba plugin's warp has them (python/layerlab/mitsuba_warp.py). marg_guide[k][j], j = 0 .. marg_buckets: the marginal
+     * search's answer in slice k alone for the target j / marg_buckets;
+     * cond_guide[k][y][j], j = 0 .. cond_buckets: the conditional search's
+     * answer in row y of slice k alone for the target (j / cond_buckets)
+     * times the row's total. A search for u in bucket j of a blend of
+     * rows and slices (non-negative weights) ends between the least of
+     * their answers at j and the greatest at j + 1, up to rounding: the
+     * search checks that the blend's values at both ends bracket its
+     * target, then counts only the nodes between, which finds what the
+     * whole search finds (a few nodes instead of two rounds of about
+     * sqrt(w)). Where the check fails (rounding at a tie) the whole search
+     * runs. Entries are bytes where every node index fits one (w and h
+     * up to 257), which keeps a row's guide within a cache line or two
+     * and both warps' guides within a core's second-level cache for the
+     * usual grids; else 16 bits (guide_wide). NULL (every search whole)
+     * if a running integral decreases anywhere, where only the whole
+     * search defines the answer, or if the nodes do not fit 16 bits.
+     * marg_stride, guide_stride: the first round's strides of the whole
+     * searches along y and x (about sqrt of the node count: both rounds
+     * read about as many values). */
+    size_t guide_stride, marg_stride;
+    size_t marg_buckets, cond_buckets;        /* powers of two                    */
+    int guide_wide;                           /* entries uint16_t, else bytes     */
+    void *marg_guide;                         /* [n_slices][marg_buckets + 1]     */
+    void *cond_guide;                         /* [n_slices][h][cond_buckets + 1]  */
 } ll_warp2d;
+
+/* Entry k of a guide of wp (ll_warp2d.marg_guide, cond_guide). */
+static inline size_t ll_warp_guide_entry(const ll_warp2d *wp, const void *guide, size_t k)
+{
+    return wp->guide_wide ? ((const uint16_t *)guide)[k] : ((const unsigned char *)guide)[k];
+}
 
 /* The slices around one parameter point and their weights (only those of
  * non-zero weight), computed once and shared by the look-ups of warps with
@@ -151,14 +172,18 @@ LL_INTERNAL void ll_warp2d_sample_at(const ll_warp2d *wp, const ll_warp_slices *
  * overlap those of several samples (the batch calls' pipeline):
  * ll_warp2d_draw_begin keeps u_in off the edges and, for one or two
  * slices, finds the row interval from the marginal and the stretch of
- * the column search from the guide (small tables, in cache);
+ * the column search from the guides (small tables, in cache);
  * ll_warp2d_prefetch_draw asks for that stretch of the rows (a hint that
  * changes no result); ll_warp2d_draw_end reads it and gives what
  * sample_at gives. */
 typedef struct ll_warp_draw {
     double u[2];              /* off the edges                          */
     size_t r;                 /* the row interval                       */
-    size_t base;              /* the column search's first-round answer */
+    size_t base, top;         /* the column search's stretch: its answer
+                                 lies in base .. top, which the nodes
+                                 base .. top + 1 settle                 */
+    int guided;               /* the stretch is the guide's (else the
+                                 whole search's first round)            */
     double ty, target;        /* the row's fraction, the column target  */
 } ll_warp_draw;
 LL_INTERNAL void ll_warp2d_draw_begin(const ll_warp2d *wp, const ll_warp_slices *s,
