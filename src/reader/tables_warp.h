@@ -72,8 +72,8 @@ typedef struct ll_warp2d {
                                                  and sigma)                       */
     /* Where a sampling warp's searches end: guide tables (Chen and Asau
      * 1974; Devroye, Non-Uniform Random Variate Generation, 1986), as the
-     * Mitsuba plugin's warp has them (python/layerlab/mitsuba_warp.py). marg_guide[k][j], j = 0 .. marg_buckets: the marginal
-     * search's answer in slice k alone for the target j / marg_buckets;
+     * Mitsuba plugin's warp has them (python/layerlab/mitsuba_warp.py).
+     * marg_guide[k][j], j = 0 .. marg_buckets: the marginal search's answer in slice k alone for the target j / marg_buckets;
      * cond_guide[k][y][j], j = 0 .. cond_buckets: the conditional search's
      * answer in row y of slice k alone for the target (j / cond_buckets)
      * times the row's total. A search for u in bucket j of a blend of
