@@ -2,6 +2,7 @@
  * Filon quadrature of cosine moments (see filon.h).
  */
 #include "numerics/filon.h"
+#include "numerics/filon_powers.h"
 
 #include <math.h>
 #include <string.h>
@@ -564,15 +565,19 @@ void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
  * cost its panels). Each order takes the powers k < K whose bound
  * (l (b - a) / 2)^k / k! on their share (relative to the integral of |q|)
  * reaches NARROW_GOAL: term_needed[k - 1] = (NARROW_GOAL k!)^(1/k) is
- * where term k starts to count, so K <= 23 at NARROW_TAU. Which orders
+ * where term k starts to count, so K <= 27 at NARROW_TAU. Which orders
  * take this form, and with how many powers, depends on the order and the
  * interval alone, not on how many orders are asked for: a series computed
- * to fewer orders is a prefix of one to more, bit for bit. The moment of
- * the panel [x1 - h, x1 + h] with q = A + B u + C u^2 in u is A P_(k+1) +
- * B P_(k+2) + C P_(k+3), P_j = (beta^j - alpha^j) / j over its ends alpha,
- * beta (the expansion about the centre costs about two digits of
- * cancellation at the outer panels). */
-#define NARROW_TAU 2.0
+ * to fewer orders is a prefix of one to more, bit for bit. Where the
+ * piece's sample count has them, M_k come from fixed weights of the
+ * samples (filon_powers.h); elsewhere the moment of the panel [x1 - h, x1
+ * + h] with q = A + B u + C u^2 in u is A P_(k+1) + B P_(k+2) + C
+ * P_(k+3), P_j = (beta^j - alpha^j) / j over its ends alpha, beta (the
+ * expansion about the centre costs about two digits of cancellation at the
+ * outer panels). The terms of the series reach tau^3 / 3! = 4.5 times the
+ * integral of |q| at NARROW_TAU: the sum's rounding stays near 1e-15 of
+ * it, as the rule's (a rounding per panel of the phase). */
+#define NARROW_TAU 3.0
 #define NARROW_POWERS LL_FILON_POWERS /* = 1 + the terms of term_needed at most
                                        * NARROW_TAU */
 
@@ -584,12 +589,27 @@ static const double term_needed[NARROW_POWERS - 1] = {
     0.39770405980972057,    0.51289582984850846,    0.64234247497797614,
     0.78530565461182733,    0.94100572489375511,    1.1086557743950802,
     1.287483945295584,      1.4767474542135719,     1.6757408354434047,
-    1.8838002279380828,
+    1.8838002279380828,     2.1003050009539264,     2.3246776287698836,
+    2.5563824486584048,     2.7949237399284534,
 };
 
-/* The powers an order with l (b - a) / 2 = tau takes, from at least k. */
+/* The powers an order with l (b - a) / 2 = tau takes, from at least k:
+ * the first k with tau below term_needed[k - 1] (or NARROW_POWERS), by
+ * bisection from k = 1 (term_needed increases), else step by step (the
+ * next four orders' from the last four's). */
 static size_t narrow_terms(double tau, size_t k)
 {
+    if (k == 1) {
+        size_t hi = NARROW_POWERS;
+        while (k < hi) {
+            size_t mid = k + (hi - k) / 2;
+            if (tau >= term_needed[mid - 1])
+                k = mid + 1;
+            else
+                hi = mid;
+        }
+        return k;
+    }
     while (k < NARROW_POWERS && tau >= term_needed[k - 1])
         ++k;
     return k;
@@ -697,8 +717,66 @@ static void narrow_orders(const double *even, const double *odd, double half, si
     }
 }
 
-/* The powers' sums of the piece, powers of them, into kept's even and odd
- * (Horner's coefficients in l^2). */
+/* cos and sin of l x for the orders l = first .. first + n - 1 into c
+ * and s: those of the first order directly, of the next three by
+ * rotations by x, and from there four chains of every fourth order by
+ * rotations by 4 x (one rounding per four orders, where one chain of
+ * rotations by x took four), two chains to an SSE2 register where there
+ * is one (lane by lane the scalar loop's operations). */
+static void order_phases(double x, size_t first, size_t n, double *restrict c,
+                         double *restrict s)
+{
+    double c1 = cos(x), s1 = sin(x), c2, s2, rc, rs, cx[4], sx[4];
+    size_t l = 0, j;
+    cx[0] = first ? cos((double)first * x) : 1.0;
+    sx[0] = first ? sin((double)first * x) : 0.0;
+    for (j = 1; j < 4; ++j) {
+        cx[j] = cx[j - 1] * c1 - sx[j - 1] * s1;
+        sx[j] = sx[j - 1] * c1 + cx[j - 1] * s1;
+    }
+    c2 = (c1 - s1) * (c1 + s1);
+    s2 = 2.0 * s1 * c1;
+    rc = (c2 - s2) * (c2 + s2);
+    rs = 2.0 * s2 * c2;
+#if defined(__SSE2__)
+    {
+        __m128d c0v = _mm_loadu_pd(cx), c1v = _mm_loadu_pd(cx + 2);
+        __m128d s0v = _mm_loadu_pd(sx), s1v = _mm_loadu_pd(sx + 2);
+        __m128d rcv = _mm_set1_pd(rc), rsv = _mm_set1_pd(rs);
+        for (; l + 4 <= n; l += 4) {
+            __m128d next0 = _mm_sub_pd(_mm_mul_pd(c0v, rcv), _mm_mul_pd(s0v, rsv));
+            __m128d next1 = _mm_sub_pd(_mm_mul_pd(c1v, rcv), _mm_mul_pd(s1v, rsv));
+            _mm_storeu_pd(c + l, c0v);
+            _mm_storeu_pd(c + l + 2, c1v);
+            _mm_storeu_pd(s + l, s0v);
+            _mm_storeu_pd(s + l + 2, s1v);
+            s0v = _mm_add_pd(_mm_mul_pd(s0v, rcv), _mm_mul_pd(c0v, rsv));
+            s1v = _mm_add_pd(_mm_mul_pd(s1v, rcv), _mm_mul_pd(c1v, rsv));
+            c0v = next0;
+            c1v = next1;
+        }
+        _mm_storeu_pd(cx, c0v);
+        _mm_storeu_pd(cx + 2, c1v);
+        _mm_storeu_pd(sx, s0v);
+        _mm_storeu_pd(sx + 2, s1v);
+    }
+#endif
+    for (; l < n; l += 4)
+        for (j = 0; j < 4; ++j) {
+            double next = cx[j] * rc - sx[j] * rs;
+            if (l + j < n) {
+                c[l + j] = cx[j];
+                s[l + j] = sx[j];
+            }
+            sx[j] = sx[j] * rc + cx[j] * rs;
+            cx[j] = next;
+        }
+}
+
+/* The powers' sums of the piece, powers of them (or all, where the
+ * piece's sample count has a table of their weights: filon_powers.h, a
+ * fixed sum of its samples per power instead of each panel's powers),
+ * into kept's even and odd (Horner's coefficients in l^2). */
 static void narrow_sums_of(const double *g, size_t n_samples, double a, double b, size_t powers,
                            ll_filon_kept *kept)
 {
@@ -706,6 +784,10 @@ static void narrow_sums_of(const double *g, size_t n_samples, double a, double b
     double inv[NARROW_POWERS + 3], m[NARROW_POWERS], fact = 1.0;
     double *even = kept->even, *odd = kept->odd;
     size_t k, p, j, panels = (n_samples - 1) / 2;
+    if (ll_filon_power_sums(g, n_samples, 0.5 * (b - a), even, odd)) {
+        kept->powers = NARROW_POWERS;
+        return;
+    }
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -745,9 +827,10 @@ static void narrow_sums_of(const double *g, size_t n_samples, double a, double b
 static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
                              size_t n, double *moments, double *scratch, ll_filon_kept *kept)
 {
-    double half = 0.5 * (b - a), centre = 0.5 * (a + b), cx, sx, c1, s1, avail;
+    double half = 0.5 * (b - a), centre = 0.5 * (a + b), avail, sums_cost;
     double *cos_l = scratch, *sin_l = scratch + n;
-    size_t count, powers, l, panels = (n_samples - 1) / 2, last;
+    size_t count, powers, panels = (n_samples - 1) / 2, last;
+    int tabled = ll_filon_power_tabled(n_samples);
     ll_filon_kept own;
     avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
     if (avail <= 0.0)
@@ -756,14 +839,21 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
      * asked for) save more of the panels' work (about 4 instructions per
      * panel and order, with the orders side by side in vector registers,
      * and 10 more per order for the rule's weights and phases) than the
-     * powers' moments cost (about 10 per panel and power). */
-    powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
-    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
+     * powers' moments cost (about 10 per panel and power, or 2 per sample
+     * and power from a table). */
+    if (tabled) {
+        sums_cost = 2.0 * (double)(n_samples * NARROW_POWERS);
+    } else {
+        powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
+        sums_cost = (double)(panels * powers) * 10.0;
+    }
+    if (!(avail * ((double)panels * 4.0 + 10.0) > sums_cost))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    /* the powers of the last of the last order's four (narrow_orders) */
+    /* the powers of the last of the last order's four (narrow_orders); a
+     * table gives them all at once */
     last = (first + count - 1) | 3;
-    powers = narrow_terms((double)last * half, 1);
+    powers = tabled ? NARROW_POWERS : narrow_terms((double)last * half, 1);
     if (!kept) {
         kept = &own;
         narrow_sums_of(g, n_samples, a, b, powers, kept);
@@ -772,18 +862,7 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
         last = ((first + (size_t)avail - 1) | 3);
         narrow_sums_of(g, n_samples, a, b, narrow_terms((double)last * half, 1), kept);
     }
-    c1 = cos(centre);
-    s1 = sin(centre);
-    cx = first ? cos((double)first * centre) : 1.0;
-    sx = first ? sin((double)first * centre) : 0.0;
-    for (l = 0; l < count; ++l) {
-        double next;
-        cos_l[l] = cx;
-        sin_l[l] = sx;
-        next = cx * c1 - sx * s1;
-        sx = sx * c1 + cx * s1;
-        cx = next;
-    }
+    order_phases(centre, first, count, cos_l, sin_l);
     narrow_orders(kept->even, kept->odd, half, first, count, cos_l, sin_l, moments);
     return count;
 }
