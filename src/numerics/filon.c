@@ -356,30 +356,49 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     }
 }
 
-/* One order's step over a panel: accumulate, then advance the phase by 2h
- * (angle addition; the error grows by about one rounding per panel). */
-#define FILON_STEP(sum, c, s, l)                                                   \
+/* The panels' sum of one order is
+ *   w_end_c S_ends + w_mid S_mid + w_end_s S_diff,
+ * S_ends = sum_p cos(l x_p) (f_2p + f_2p+2), S_mid = sum_p cos(l x_p)
+ * f_2p+1, S_diff = sum_p sin(l x_p) (f_2p - f_2p+2): three products and
+ * sums per panel and order, the weights applied once at the end (where
+ * each panel took five products), and the phase advanced by 2h (angle
+ * addition; the error grows by about one rounding per panel). */
+#define FILON_STEP(se, sm, sd, c, s, l)                                            \
     do {                                                                           \
         double c_ = (c), s_ = (s);                                                 \
-        (sum) += c_ * (wc[l] * ends + wm[l] * f1) + s_ * ws[l] * diff;             \
+        (se) += c_ * ends;                                                         \
+        (sm) += c_ * f1;                                                           \
+        (sd) += s_ * diff;                                                         \
         (c) = c_ * rc[l] - s_ * rs[l];                                             \
         (s) = s_ * rc[l] + c_ * rs[l];                                             \
     } while (0)
 
+/* One order's sums into its moment. */
+#define FILON_END(acc, se, sm, sd, l) ((acc) += wc[l] * (se) + wm[l] * (sm) + ws[l] * (sd))
+
 #if defined(__SSE2__)
 /* FILON_STEP for the two orders of each of the vectors c and s (lanes l, l
- * + 1 of the weights w*): the same operations in the same order per lane,
- * so the same roundings as one order at a time. */
-#define FILON_STEP2(sum, c, s, w)                                                  \
+ * + 1 of the rotations rc, rs): the same operations in the same order per
+ * lane, so the same roundings as one order at a time. */
+#define FILON_STEP2(se, sm, sd, c, s, rc, rs)                                      \
     do {                                                                           \
         __m128d c_ = (c), s_ = (s);                                                \
-        (sum) = _mm_add_pd(                                                        \
-            (sum), _mm_add_pd(_mm_mul_pd(c_, _mm_add_pd(_mm_mul_pd(w##_end_c, ends), \
-                                                          _mm_mul_pd(w##_mid, mid))), \
-                              _mm_mul_pd(_mm_mul_pd(s_, w##_end_s), diff)));       \
-        (c) = _mm_sub_pd(_mm_mul_pd(c_, w##_rot_c), _mm_mul_pd(s_, w##_rot_s));    \
-        (s) = _mm_add_pd(_mm_mul_pd(s_, w##_rot_c), _mm_mul_pd(c_, w##_rot_s));    \
+        (se) = _mm_add_pd((se), _mm_mul_pd(c_, ends));                             \
+        (sm) = _mm_add_pd((sm), _mm_mul_pd(c_, mid));                              \
+        (sd) = _mm_add_pd((sd), _mm_mul_pd(s_, diff));                             \
+        (c) = _mm_sub_pd(_mm_mul_pd(c_, rc), _mm_mul_pd(s_, rs));                  \
+        (s) = _mm_add_pd(_mm_mul_pd(s_, rc), _mm_mul_pd(c_, rs));                  \
     } while (0)
+
+/* FILON_END for the orders l, l + 1. */
+static void filon_end2(double *acc, __m128d se, __m128d sm, __m128d sd, const double *wc,
+                       const double *wm, const double *ws)
+{
+    _mm_storeu_pd(acc, _mm_add_pd(_mm_loadu_pd(acc),
+                                  _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(wc), se),
+                                                        _mm_mul_pd(_mm_loadu_pd(wm), sm)),
+                                             _mm_mul_pd(_mm_loadu_pd(ws), sd))));
+}
 
 /* accumulate's orders in pairs, two pairs at a time while four remain
  * (the baseline of x86-64 has two doubles per register); returns the
@@ -394,34 +413,31 @@ static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double 
     for (l = 0; l + 4 <= n; l += 4) {
         __m128d c0 = _mm_loadu_pd(cx + l), c1 = _mm_loadu_pd(cx + l + 2);
         __m128d s0 = _mm_loadu_pd(sx + l), s1 = _mm_loadu_pd(sx + l + 2);
-        __m128d a0 = _mm_loadu_pd(acc + l), a1 = _mm_loadu_pd(acc + l + 2);
-        __m128d x0_end_c = _mm_loadu_pd(wc + l), x0_end_s = _mm_loadu_pd(ws + l);
-        __m128d x0_mid = _mm_loadu_pd(wm + l), x0_rot_c = _mm_loadu_pd(rc + l);
-        __m128d x0_rot_s = _mm_loadu_pd(rs + l), x1_end_c = _mm_loadu_pd(wc + l + 2);
-        __m128d x1_end_s = _mm_loadu_pd(ws + l + 2), x1_mid = _mm_loadu_pd(wm + l + 2);
-        __m128d x1_rot_c = _mm_loadu_pd(rc + l + 2), x1_rot_s = _mm_loadu_pd(rs + l + 2);
+        __m128d rc0 = _mm_loadu_pd(rc + l), rc1 = _mm_loadu_pd(rc + l + 2);
+        __m128d rs0 = _mm_loadu_pd(rs + l), rs1 = _mm_loadu_pd(rs + l + 2);
+        __m128d se0 = _mm_setzero_pd(), sm0 = _mm_setzero_pd(), sd0 = _mm_setzero_pd();
+        __m128d se1 = _mm_setzero_pd(), sm1 = _mm_setzero_pd(), sd1 = _mm_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
             __m128d mid = _mm_set1_pd(g[2 * p + 1]);
-            FILON_STEP2(a0, c0, s0, x0);
-            FILON_STEP2(a1, c1, s1, x1);
+            FILON_STEP2(se0, sm0, sd0, c0, s0, rc0, rs0);
+            FILON_STEP2(se1, sm1, sd1, c1, s1, rc1, rs1);
         }
-        _mm_storeu_pd(acc + l, a0);
-        _mm_storeu_pd(acc + l + 2, a1);
+        filon_end2(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
+        filon_end2(acc + l + 2, se1, sm1, sd1, wc + l + 2, wm + l + 2, ws + l + 2);
     }
     for (; l + 2 <= n; l += 2) {
         __m128d c0 = _mm_loadu_pd(cx + l), s0 = _mm_loadu_pd(sx + l);
-        __m128d a0 = _mm_loadu_pd(acc + l), x0_end_c = _mm_loadu_pd(wc + l);
-        __m128d x0_end_s = _mm_loadu_pd(ws + l), x0_mid = _mm_loadu_pd(wm + l);
-        __m128d x0_rot_c = _mm_loadu_pd(rc + l), x0_rot_s = _mm_loadu_pd(rs + l);
+        __m128d rc0 = _mm_loadu_pd(rc + l), rs0 = _mm_loadu_pd(rs + l);
+        __m128d se0 = _mm_setzero_pd(), sm0 = _mm_setzero_pd(), sd0 = _mm_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
             __m128d mid = _mm_set1_pd(g[2 * p + 1]);
-            FILON_STEP2(a0, c0, s0, x0);
+            FILON_STEP2(se0, sm0, sd0, c0, s0, rc0, rs0);
         }
-        _mm_storeu_pd(acc + l, a0);
+        filon_end2(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
     }
     return l;
 }
@@ -433,17 +449,27 @@ static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double 
 /* FILON_STEP2 for four orders per AVX register, chosen at run time
  * (docs/style.md, item 12): additions and multiplications alone, no fused
  * ones, so each order's roundings are those of the other paths. */
-#define FILON_STEP4(sum, c, s, w)                                                  \
+#define FILON_STEP4(se, sm, sd, c, s, rc, rs)                                      \
     do {                                                                           \
         __m256d c_ = (c), s_ = (s);                                                \
-        (sum) = _mm256_add_pd(                                                     \
-            (sum),                                                                 \
-            _mm256_add_pd(_mm256_mul_pd(c_, _mm256_add_pd(_mm256_mul_pd(w##_end_c, ends), \
-                                                          _mm256_mul_pd(w##_mid, mid))), \
-                          _mm256_mul_pd(_mm256_mul_pd(s_, w##_end_s), diff)));     \
-        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, w##_rot_c), _mm256_mul_pd(s_, w##_rot_s)); \
-        (s) = _mm256_add_pd(_mm256_mul_pd(s_, w##_rot_c), _mm256_mul_pd(c_, w##_rot_s)); \
+        (se) = _mm256_add_pd((se), _mm256_mul_pd(c_, ends));                       \
+        (sm) = _mm256_add_pd((sm), _mm256_mul_pd(c_, mid));                        \
+        (sd) = _mm256_add_pd((sd), _mm256_mul_pd(s_, diff));                       \
+        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, rc), _mm256_mul_pd(s_, rs));         \
+        (s) = _mm256_add_pd(_mm256_mul_pd(s_, rc), _mm256_mul_pd(c_, rs));         \
     } while (0)
+
+/* filon_end2 for the orders l .. l + 3. */
+__attribute__((target("avx"))) static void filon_end4(double *acc, __m256d se, __m256d sm,
+                                                      __m256d sd, const double *wc,
+                                                      const double *wm, const double *ws)
+{
+    _mm256_storeu_pd(
+        acc, _mm256_add_pd(_mm256_loadu_pd(acc),
+                           _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(wc), se),
+                                                       _mm256_mul_pd(_mm256_loadu_pd(wm), sm)),
+                                         _mm256_mul_pd(_mm256_loadu_pd(ws), sd))));
+}
 
 /* accumulate's orders four at a time, eight while eight remain; returns
  * the orders done. */
@@ -458,34 +484,31 @@ accumulate_quads(size_t panels, size_t n, const double *g, double *restrict acc,
     for (l = 0; l + 8 <= n; l += 8) {
         __m256d c0 = _mm256_loadu_pd(cx + l), c1 = _mm256_loadu_pd(cx + l + 4);
         __m256d s0 = _mm256_loadu_pd(sx + l), s1 = _mm256_loadu_pd(sx + l + 4);
-        __m256d a0 = _mm256_loadu_pd(acc + l), a1 = _mm256_loadu_pd(acc + l + 4);
-        __m256d x0_end_c = _mm256_loadu_pd(wc + l), x0_end_s = _mm256_loadu_pd(ws + l);
-        __m256d x0_mid = _mm256_loadu_pd(wm + l), x0_rot_c = _mm256_loadu_pd(rc + l);
-        __m256d x0_rot_s = _mm256_loadu_pd(rs + l), x1_end_c = _mm256_loadu_pd(wc + l + 4);
-        __m256d x1_end_s = _mm256_loadu_pd(ws + l + 4), x1_mid = _mm256_loadu_pd(wm + l + 4);
-        __m256d x1_rot_c = _mm256_loadu_pd(rc + l + 4), x1_rot_s = _mm256_loadu_pd(rs + l + 4);
+        __m256d rc0 = _mm256_loadu_pd(rc + l), rc1 = _mm256_loadu_pd(rc + l + 4);
+        __m256d rs0 = _mm256_loadu_pd(rs + l), rs1 = _mm256_loadu_pd(rs + l + 4);
+        __m256d se0 = _mm256_setzero_pd(), sm0 = _mm256_setzero_pd(), sd0 = _mm256_setzero_pd();
+        __m256d se1 = _mm256_setzero_pd(), sm1 = _mm256_setzero_pd(), sd1 = _mm256_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
             __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
-            FILON_STEP4(a0, c0, s0, x0);
-            FILON_STEP4(a1, c1, s1, x1);
+            FILON_STEP4(se0, sm0, sd0, c0, s0, rc0, rs0);
+            FILON_STEP4(se1, sm1, sd1, c1, s1, rc1, rs1);
         }
-        _mm256_storeu_pd(acc + l, a0);
-        _mm256_storeu_pd(acc + l + 4, a1);
+        filon_end4(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
+        filon_end4(acc + l + 4, se1, sm1, sd1, wc + l + 4, wm + l + 4, ws + l + 4);
     }
     for (; l + 4 <= n; l += 4) {
         __m256d c0 = _mm256_loadu_pd(cx + l), s0 = _mm256_loadu_pd(sx + l);
-        __m256d a0 = _mm256_loadu_pd(acc + l), x0_end_c = _mm256_loadu_pd(wc + l);
-        __m256d x0_end_s = _mm256_loadu_pd(ws + l), x0_mid = _mm256_loadu_pd(wm + l);
-        __m256d x0_rot_c = _mm256_loadu_pd(rc + l), x0_rot_s = _mm256_loadu_pd(rs + l);
+        __m256d rc0 = _mm256_loadu_pd(rc + l), rs0 = _mm256_loadu_pd(rs + l);
+        __m256d se0 = _mm256_setzero_pd(), sm0 = _mm256_setzero_pd(), sd0 = _mm256_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
             __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
-            FILON_STEP4(a0, c0, s0, x0);
+            FILON_STEP4(se0, sm0, sd0, c0, s0, rc0, rs0);
         }
-        _mm256_storeu_pd(acc + l, a0);
+        filon_end4(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
     }
     return l;
 }
@@ -513,35 +536,31 @@ static void accumulate(size_t panels, size_t n, const double *g, double *restric
     l += accumulate_pairs(panels, n - l, g, acc + l, cx + l, sx + l, wc + l, ws + l, wm + l,
                           rc + l, rs + l);
 #endif
-    for (; l + 4 <= n; l += 4) {
-        double c0 = cx[l], c1 = cx[l + 1], c2 = cx[l + 2], c3 = cx[l + 3];
-        double s0 = sx[l], s1 = sx[l + 1], s2 = sx[l + 2], s3 = sx[l + 3];
-        double a0 = acc[l], a1 = acc[l + 1], a2 = acc[l + 2], a3 = acc[l + 3];
+    for (; l + 2 <= n; l += 2) {
+        double c0 = cx[l], c1 = cx[l + 1], s0 = sx[l], s1 = sx[l + 1];
+        double se0 = 0.0, sm0 = 0.0, sd0 = 0.0, se1 = 0.0, sm1 = 0.0, sd1 = 0.0;
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f1 = g[2 * p + 1], f2 = g[2 * p + 2];
             double ends = f0 + f2, diff = f0 - f2;
-            FILON_STEP(a0, c0, s0, l);
-            FILON_STEP(a1, c1, s1, l + 1);
-            FILON_STEP(a2, c2, s2, l + 2);
-            FILON_STEP(a3, c3, s3, l + 3);
+            FILON_STEP(se0, sm0, sd0, c0, s0, l);
+            FILON_STEP(se1, sm1, sd1, c1, s1, l + 1);
         }
-        acc[l] = a0;
-        acc[l + 1] = a1;
-        acc[l + 2] = a2;
-        acc[l + 3] = a3;
+        FILON_END(acc[l], se0, sm0, sd0, l);
+        FILON_END(acc[l + 1], se1, sm1, sd1, l + 1);
     }
     for (; l < n; ++l) {
-        double c = cx[l], s = sx[l], sum = acc[l];
+        double c = cx[l], s = sx[l], se = 0.0, sm = 0.0, sd = 0.0;
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f1 = g[2 * p + 1], f2 = g[2 * p + 2];
             double ends = f0 + f2, diff = f0 - f2;
-            FILON_STEP(sum, c, s, l);
+            FILON_STEP(se, sm, sd, c, s, l);
         }
-        acc[l] = sum;
+        FILON_END(acc[l], se, sm, sd, l);
     }
 }
 
 #undef FILON_STEP
+#undef FILON_END
 
 /* The panel integral of the quadratic q through (f0, f1, f2) at
  * x1 - h, x1, x1 + h, with q = f1 + d1 u + d2 u^2, is
