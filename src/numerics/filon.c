@@ -634,162 +634,174 @@ static size_t narrow_terms(double tau, size_t k)
     return k;
 }
 
-/* The narrow sums of one order (lambda = l^2) with terms powers: the even
- * and odd parts, Horner's in l^2. */
-static void narrow_sums(const double *even, const double *odd, size_t terms, double lambda,
-                        double *ce, double *so)
+/* The narrow terms go four orders at a time, 4q .. 4q + 3, all with the
+ * powers of the last (so an order takes the same powers whether the rest
+ * of its four is asked for or not), lane j the order 4q + j: its phase
+ * cos, sin(l x_c) from four chains of rotations by 4 x_c, and its term
+ *   cos(l x_c) E(l^2) - sin(l x_c) l O(l^2),
+ * E and O the even and odd sums by Horner's rule in l^2. Lanes outside
+ * the orders asked for are computed and dropped. The AVX, SSE2 and
+ * scalar loops do the same operations lane by lane. */
+typedef struct narrow_run {
+    const double *even, *odd;
+    double half, rc, rs;     /* (b - a) / 2; the rotation by 4 x_c           */
+    double c[4], s[4];       /* the phases of the lanes of the first four     */
+    size_t start, first, end; /* the first four's order; the orders asked for */
+} narrow_run;
+
+/* Add lane j's term of the four at order four to its moment where that
+ * order is asked for. */
+static void narrow_keep(const narrow_run *r, size_t four, const double *term, double *moments)
 {
-    double e = 0.0, o = 0.0;
     size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = e * lambda + even[j];
-    for (j = terms / 2; j-- > 0;)
-        o = o * lambda + odd[j];
-    *ce = e;
-    *so = o;
+    for (j = 0; j < 4; ++j)
+        if (four + j >= r->first && four + j < r->end)
+            moments[four + j - r->first] += term[j];
 }
 
-/* One order's narrow term with terms powers into *moment. */
-static void narrow_one(const double *even, const double *odd, size_t terms, double order,
-                       double cx, double sx, double *moment)
+#if !defined(__SSE2__)
+static void narrow_scalar(const narrow_run *r, double *moments)
 {
-    double ce, so;
-    narrow_sums(even, odd, terms, order * order, &ce, &so);
-    *moment += cx * ce - sx * order * so;
-}
-
-#if defined(__SSE2__)
-/* narrow_one for the orders order, order + 1 (lane by lane the same). */
-static void narrow_two(const double *even, const double *odd, size_t terms, double order,
-                       const double *cx, const double *sx, double *moments)
-{
-    __m128d o = _mm_set_pd(order + 1.0, order), lambda = _mm_mul_pd(o, o);
-    __m128d e = _mm_setzero_pd(), od = _mm_setzero_pd();
-    size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
-    for (j = terms / 2; j-- > 0;)
-        od = _mm_add_pd(_mm_mul_pd(od, lambda), _mm_set1_pd(odd[j]));
-    _mm_storeu_pd(moments,
-                  _mm_add_pd(_mm_loadu_pd(moments),
-                             _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx), e),
-                                        _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx), o), od))));
-}
-#endif
-
-#if FILON_HAVE_AVX
-/* narrow_one for the orders order .. order + 3, one AVX register. */
-__attribute__((target("avx"))) static void narrow_four(const double *even, const double *odd,
-                                                       size_t terms, double order,
-                                                       const double *cx, const double *sx,
-                                                       double *moments)
-{
-    __m256d o = _mm256_set_pd(order + 3.0, order + 2.0, order + 1.0, order);
-    __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), od = _mm256_setzero_pd();
-    size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_set1_pd(even[j]));
-    for (j = terms / 2; j-- > 0;)
-        od = _mm256_add_pd(_mm256_mul_pd(od, lambda), _mm256_set1_pd(odd[j]));
-    _mm256_storeu_pd(
-        moments,
-        _mm256_add_pd(_mm256_loadu_pd(moments),
-                      _mm256_sub_pd(_mm256_mul_pd(_mm256_loadu_pd(cx), e),
-                                    _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(sx), o), od))));
-}
-#endif
-
-/* The narrow terms of the orders first .. first + count - 1 with the
- * phases cx, sx of each, into moments. Orders go in fours (4q .. 4q + 3),
- * all with the powers of the last, so an order takes the same powers
- * whether the rest of its four is in the same block of orders or not:
- * whole fours share Horner's steps in one AVX register or two SSE2 ones
- * (lane by lane the operations of narrow_one, as at the ends). */
-static void narrow_orders(const double *even, const double *odd, double half, size_t first,
-                          size_t count, const double *cx, const double *sx, double *moments)
-{
-    size_t l = 0, terms = 1;
-    while (l < count) {
-        size_t order = first + l, four = order & ~(size_t)3, k, rest;
-        terms = narrow_terms((double)(four + 3) * half, terms);
-        if (order == four && l + 4 <= count) {
-#if FILON_HAVE_AVX
-            if (have_avx()) {
-                narrow_four(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
-                l += 4;
-                continue;
-            }
-#endif
-#if defined(__SSE2__)
-            narrow_two(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
-            narrow_two(even, odd, terms, (double)order + 2.0, cx + l + 2, sx + l + 2,
-                       moments + l + 2);
-            l += 4;
-            continue;
-#endif
+    double c[4], s[4], term[4];
+    size_t terms = 1, j, k, four;
+    memcpy(c, r->c, sizeof c);
+    memcpy(s, r->s, sizeof s);
+    for (four = r->start; four < r->end; four += 4) {
+        terms = narrow_terms((double)(four + 3) * r->half, terms);
+        for (j = 0; j < 4; ++j) {
+            double order = (double)(four + j), lambda = order * order, e = 0.0, o = 0.0, next;
+            for (k = (terms - 1) / 2 + 1; k-- > 0;)
+                e = e * lambda + r->even[k];
+            for (k = terms / 2; k-- > 0;)
+                o = o * lambda + r->odd[k];
+            term[j] = c[j] * e - s[j] * order * o;
+            next = c[j] * r->rc - s[j] * r->rs;
+            s[j] = s[j] * r->rc + c[j] * r->rs;
+            c[j] = next;
         }
-        rest = four + 4 - order;
-        if (rest > count - l)
-            rest = count - l;
-        for (k = 0; k < rest; ++k, ++l)
-            narrow_one(even, odd, terms, (double)(first + l), cx[l], sx[l], moments + l);
+        narrow_keep(r, four, term, moments);
     }
 }
+#endif
 
-/* cos and sin of l x for the orders l = first .. first + n - 1 into c
- * and s: those of the first order directly, of the next three by
- * rotations by x, and from there four chains of every fourth order by
- * rotations by 4 x (one rounding per four orders, where one chain of
- * rotations by x took four), two chains to an SSE2 register where there
- * is one (lane by lane the scalar loop's operations). */
-static void order_phases(double x, size_t first, size_t n, double *restrict c,
-                         double *restrict s)
+#if defined(__SSE2__)
+static void narrow_sse2(const narrow_run *r, double *moments)
 {
-    double c1 = cos(x), s1 = sin(x), c2, s2, rc, rs, cx[4], sx[4];
-    size_t l = 0, j;
-    cx[0] = first ? cos((double)first * x) : 1.0;
-    sx[0] = first ? sin((double)first * x) : 0.0;
+    __m128d c0 = _mm_loadu_pd(r->c), c1 = _mm_loadu_pd(r->c + 2);
+    __m128d s0 = _mm_loadu_pd(r->s), s1 = _mm_loadu_pd(r->s + 2);
+    __m128d rc = _mm_set1_pd(r->rc), rs = _mm_set1_pd(r->rs), four_v = _mm_set1_pd(4.0);
+    __m128d o0 = _mm_set_pd((double)r->start + 1.0, (double)r->start);
+    __m128d o1 = _mm_set_pd((double)r->start + 3.0, (double)r->start + 2.0);
+    size_t four, terms = 1, k;
+    for (four = r->start; four < r->end; four += 4) {
+        __m128d l0 = _mm_mul_pd(o0, o0), l1 = _mm_mul_pd(o1, o1), e0 = _mm_setzero_pd();
+        __m128d e1 = _mm_setzero_pd(), d0 = _mm_setzero_pd(), d1 = _mm_setzero_pd(), t0, t1;
+        terms = narrow_terms((double)(four + 3) * r->half, terms);
+        for (k = (terms - 1) / 2 + 1; k-- > 0;) {
+            __m128d w = _mm_set1_pd(r->even[k]);
+            e0 = _mm_add_pd(_mm_mul_pd(e0, l0), w);
+            e1 = _mm_add_pd(_mm_mul_pd(e1, l1), w);
+        }
+        for (k = terms / 2; k-- > 0;) {
+            __m128d w = _mm_set1_pd(r->odd[k]);
+            d0 = _mm_add_pd(_mm_mul_pd(d0, l0), w);
+            d1 = _mm_add_pd(_mm_mul_pd(d1, l1), w);
+        }
+        t0 = _mm_sub_pd(_mm_mul_pd(c0, e0), _mm_mul_pd(_mm_mul_pd(s0, o0), d0));
+        t1 = _mm_sub_pd(_mm_mul_pd(c1, e1), _mm_mul_pd(_mm_mul_pd(s1, o1), d1));
+        if (four >= r->first && four + 4 <= r->end) {
+            double *m = moments + (four - r->first);
+            _mm_storeu_pd(m, _mm_add_pd(_mm_loadu_pd(m), t0));
+            _mm_storeu_pd(m + 2, _mm_add_pd(_mm_loadu_pd(m + 2), t1));
+        } else {
+            double term[4];
+            _mm_storeu_pd(term, t0);
+            _mm_storeu_pd(term + 2, t1);
+            narrow_keep(r, four, term, moments);
+        }
+        {
+            __m128d n0 = _mm_sub_pd(_mm_mul_pd(c0, rc), _mm_mul_pd(s0, rs));
+            __m128d n1 = _mm_sub_pd(_mm_mul_pd(c1, rc), _mm_mul_pd(s1, rs));
+            s0 = _mm_add_pd(_mm_mul_pd(s0, rc), _mm_mul_pd(c0, rs));
+            s1 = _mm_add_pd(_mm_mul_pd(s1, rc), _mm_mul_pd(c1, rs));
+            c0 = n0;
+            c1 = n1;
+        }
+        o0 = _mm_add_pd(o0, four_v);
+        o1 = _mm_add_pd(o1, four_v);
+    }
+}
+#endif
+
+#if FILON_HAVE_AVX
+__attribute__((target("avx"))) static void narrow_avx(const narrow_run *r, double *moments)
+{
+    __m256d c = _mm256_loadu_pd(r->c), s = _mm256_loadu_pd(r->s);
+    __m256d rc = _mm256_set1_pd(r->rc), rs = _mm256_set1_pd(r->rs);
+    __m256d four_v = _mm256_set1_pd(4.0), start = _mm256_set1_pd((double)r->start);
+    __m256d o = _mm256_add_pd(start, _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
+    size_t four, terms = 1, k;
+    for (four = r->start; four < r->end; four += 4) {
+        __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), d = _mm256_setzero_pd();
+        __m256d t, next;
+        terms = narrow_terms((double)(four + 3) * r->half, terms);
+        for (k = (terms - 1) / 2 + 1; k-- > 0;)
+            e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_broadcast_sd(r->even + k));
+        for (k = terms / 2; k-- > 0;)
+            d = _mm256_add_pd(_mm256_mul_pd(d, lambda), _mm256_broadcast_sd(r->odd + k));
+        t = _mm256_sub_pd(_mm256_mul_pd(c, e), _mm256_mul_pd(_mm256_mul_pd(s, o), d));
+        if (four >= r->first && four + 4 <= r->end) {
+            double *m = moments + (four - r->first);
+            _mm256_storeu_pd(m, _mm256_add_pd(_mm256_loadu_pd(m), t));
+        } else {
+            double term[4];
+            _mm256_storeu_pd(term, t);
+            narrow_keep(r, four, term, moments);
+        }
+        next = _mm256_sub_pd(_mm256_mul_pd(c, rc), _mm256_mul_pd(s, rs));
+        s = _mm256_add_pd(_mm256_mul_pd(s, rc), _mm256_mul_pd(c, rs));
+        c = next;
+        o = _mm256_add_pd(o, four_v);
+    }
+}
+#endif
+
+/* The narrow terms of the orders first .. first + count - 1 of a piece
+ * centred on x_c into moments. The phases start at the four holding first:
+ * the first lane's directly, the next three by rotations by x_c. */
+static void narrow_orders(const double *even, const double *odd, double half, double x_c,
+                          size_t first, size_t count, double *moments)
+{
+    narrow_run r;
+    double c1 = cos(x_c), s1 = sin(x_c), c2, s2;
+    size_t j;
+    r.even = even;
+    r.odd = odd;
+    r.half = half;
+    r.first = first;
+    r.end = first + count;
+    r.start = first & ~(size_t)3;
+    r.c[0] = r.start ? cos((double)r.start * x_c) : 1.0;
+    r.s[0] = r.start ? sin((double)r.start * x_c) : 0.0;
     for (j = 1; j < 4; ++j) {
-        cx[j] = cx[j - 1] * c1 - sx[j - 1] * s1;
-        sx[j] = sx[j - 1] * c1 + cx[j - 1] * s1;
+        r.c[j] = r.c[j - 1] * c1 - r.s[j - 1] * s1;
+        r.s[j] = r.s[j - 1] * c1 + r.c[j - 1] * s1;
     }
     c2 = (c1 - s1) * (c1 + s1);
     s2 = 2.0 * s1 * c1;
-    rc = (c2 - s2) * (c2 + s2);
-    rs = 2.0 * s2 * c2;
-#if defined(__SSE2__)
-    {
-        __m128d c0v = _mm_loadu_pd(cx), c1v = _mm_loadu_pd(cx + 2);
-        __m128d s0v = _mm_loadu_pd(sx), s1v = _mm_loadu_pd(sx + 2);
-        __m128d rcv = _mm_set1_pd(rc), rsv = _mm_set1_pd(rs);
-        for (; l + 4 <= n; l += 4) {
-            __m128d next0 = _mm_sub_pd(_mm_mul_pd(c0v, rcv), _mm_mul_pd(s0v, rsv));
-            __m128d next1 = _mm_sub_pd(_mm_mul_pd(c1v, rcv), _mm_mul_pd(s1v, rsv));
-            _mm_storeu_pd(c + l, c0v);
-            _mm_storeu_pd(c + l + 2, c1v);
-            _mm_storeu_pd(s + l, s0v);
-            _mm_storeu_pd(s + l + 2, s1v);
-            s0v = _mm_add_pd(_mm_mul_pd(s0v, rcv), _mm_mul_pd(c0v, rsv));
-            s1v = _mm_add_pd(_mm_mul_pd(s1v, rcv), _mm_mul_pd(c1v, rsv));
-            c0v = next0;
-            c1v = next1;
-        }
-        _mm_storeu_pd(cx, c0v);
-        _mm_storeu_pd(cx + 2, c1v);
-        _mm_storeu_pd(sx, s0v);
-        _mm_storeu_pd(sx + 2, s1v);
+    r.rc = (c2 - s2) * (c2 + s2);
+    r.rs = 2.0 * s2 * c2;
+#if FILON_HAVE_AVX
+    if (have_avx()) {
+        narrow_avx(&r, moments);
+        return;
     }
 #endif
-    for (; l < n; l += 4)
-        for (j = 0; j < 4; ++j) {
-            double next = cx[j] * rc - sx[j] * rs;
-            if (l + j < n) {
-                c[l + j] = cx[j];
-                s[l + j] = sx[j];
-            }
-            sx[j] = sx[j] * rc + cx[j] * rs;
-            cx[j] = next;
-        }
+#if defined(__SSE2__)
+    narrow_sse2(&r, moments);
+#else
+    narrow_scalar(&r, moments);
+#endif
 }
 
 /* The powers' sums of the piece, powers of them (or all, where the
@@ -838,16 +850,15 @@ static void narrow_sums_of(const double *g, size_t n_samples, double a, double b
 }
 
 /* The orders first .. first + count - 1 that are narrow (at most n) into
- * moments; returns count. scratch: 2 n doubles. The powers' sums come
+ * moments; returns count. The powers' sums come
  * from kept where it holds enough of them (a block of orders after the
  * first), else are summed into it: each sum is the same whatever number
  * of powers is summed with it, so the moments do not depend on which
  * block summed them. kept NULL: summed here for this call alone. */
 static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                             size_t n, double *moments, double *scratch, ll_filon_kept *kept)
+                             size_t n, double *moments, ll_filon_kept *kept)
 {
     double half = 0.5 * (b - a), centre = 0.5 * (a + b), avail, sums_cost;
-    double *cos_l = scratch, *sin_l = scratch + n;
     size_t count, powers, panels = (n_samples - 1) / 2, last;
     int tabled = ll_filon_power_tabled(n_samples);
     ll_filon_kept own;
@@ -881,8 +892,7 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
         last = ((first + (size_t)avail - 1) | 3);
         narrow_sums_of(g, n_samples, a, b, narrow_terms((double)last * half, 1), kept);
     }
-    order_phases(centre, first, count, cos_l, sin_l);
-    narrow_orders(kept->even, kept->odd, half, first, count, cos_l, sin_l, moments);
+    narrow_orders(kept->even, kept->odd, half, centre, first, count, moments);
     return count;
 }
 
@@ -898,7 +908,7 @@ void ll_filon_moments_kept(const double *g, size_t n_samples, double a, double b
 {
     filon_rule r;
     size_t narrow =
-        narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch, kept);
+        narrow_moments(g, n_samples, a, b, first, n_moments, moments, kept);
     if (narrow == n_moments)
         return;
     rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);
