@@ -615,7 +615,7 @@ static const double term_needed[NARROW_POWERS - 1] = {
 /* The powers an order with l (b - a) / 2 = tau takes, from at least k:
  * the first k with tau below term_needed[k - 1] (or NARROW_POWERS), by
  * bisection from k = 1 (term_needed increases), else step by step (the
- * next four orders' from the last four's). */
+ * next eight orders' from the last eight's). */
 static size_t narrow_terms(double tau, size_t k)
 {
     if (k == 1) {
@@ -634,42 +634,45 @@ static size_t narrow_terms(double tau, size_t k)
     return k;
 }
 
-/* The narrow terms go four orders at a time, 4q .. 4q + 3, all with the
+/* The narrow terms go eight orders at a time, 8q .. 8q + 7, all with the
  * powers of the last (so an order takes the same powers whether the rest
- * of its four is asked for or not), lane j the order 4q + j: its phase
- * cos, sin(l x_c) from four chains of rotations by 4 x_c, and its term
+ * of its eight is asked for or not; Horner's steps then share their
+ * coefficients and loop), lane j the order 8q + j: its phase cos, sin(l
+ * x_c) from eight chains of rotations by 8 x_c, and its term
  *   cos(l x_c) E(l^2) - sin(l x_c) l O(l^2),
  * E and O the even and odd sums by Horner's rule in l^2. Lanes outside
  * the orders asked for are computed and dropped. The AVX, SSE2 and
  * scalar loops do the same operations lane by lane. */
+#define NARROW_LANES 8
+
 typedef struct narrow_run {
     const double *even, *odd;
-    double half, rc, rs;     /* (b - a) / 2; the rotation by 4 x_c           */
-    double c[4], s[4];       /* the phases of the lanes of the first four     */
-    size_t start, first, end; /* the first four's order; the orders asked for */
+    double half, rc, rs;     /* (b - a) / 2; the rotation by 8 x_c           */
+    double c[NARROW_LANES], s[NARROW_LANES]; /* the first eight's phases    */
+    size_t start, first, end; /* the first eight's order; the orders asked for */
 } narrow_run;
 
-/* Add lane j's term of the four at order four to its moment where that
+/* Add lane j's term of the eight at order start to its moment where that
  * order is asked for. */
-static void narrow_keep(const narrow_run *r, size_t four, const double *term, double *moments)
+static void narrow_keep(const narrow_run *r, size_t start, const double *term, double *moments)
 {
     size_t j;
-    for (j = 0; j < 4; ++j)
-        if (four + j >= r->first && four + j < r->end)
-            moments[four + j - r->first] += term[j];
+    for (j = 0; j < NARROW_LANES; ++j)
+        if (start + j >= r->first && start + j < r->end)
+            moments[start + j - r->first] += term[j];
 }
 
 #if !defined(__SSE2__)
 static void narrow_scalar(const narrow_run *r, double *moments)
 {
-    double c[4], s[4], term[4];
-    size_t terms = 1, j, k, four;
+    double c[NARROW_LANES], s[NARROW_LANES], term[NARROW_LANES];
+    size_t terms = 1, j, k, eight;
     memcpy(c, r->c, sizeof c);
     memcpy(s, r->s, sizeof s);
-    for (four = r->start; four < r->end; four += 4) {
-        terms = narrow_terms((double)(four + 3) * r->half, terms);
-        for (j = 0; j < 4; ++j) {
-            double order = (double)(four + j), lambda = order * order, e = 0.0, o = 0.0, next;
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (j = 0; j < NARROW_LANES; ++j) {
+            double order = (double)(eight + j), lambda = order * order, e = 0.0, o = 0.0, next;
             for (k = (terms - 1) / 2 + 1; k-- > 0;)
                 e = e * lambda + r->even[k];
             for (k = terms / 2; k-- > 0;)
@@ -679,7 +682,7 @@ static void narrow_scalar(const narrow_run *r, double *moments)
             s[j] = s[j] * r->rc + c[j] * r->rs;
             c[j] = next;
         }
-        narrow_keep(r, four, term, moments);
+        narrow_keep(r, eight, term, moments);
     }
 }
 #endif
@@ -687,48 +690,49 @@ static void narrow_scalar(const narrow_run *r, double *moments)
 #if defined(__SSE2__)
 static void narrow_sse2(const narrow_run *r, double *moments)
 {
-    __m128d c0 = _mm_loadu_pd(r->c), c1 = _mm_loadu_pd(r->c + 2);
-    __m128d s0 = _mm_loadu_pd(r->s), s1 = _mm_loadu_pd(r->s + 2);
-    __m128d rc = _mm_set1_pd(r->rc), rs = _mm_set1_pd(r->rs), four_v = _mm_set1_pd(4.0);
-    __m128d o0 = _mm_set_pd((double)r->start + 1.0, (double)r->start);
-    __m128d o1 = _mm_set_pd((double)r->start + 3.0, (double)r->start + 2.0);
-    size_t four, terms = 1, k;
-    for (four = r->start; four < r->end; four += 4) {
-        __m128d l0 = _mm_mul_pd(o0, o0), l1 = _mm_mul_pd(o1, o1), e0 = _mm_setzero_pd();
-        __m128d e1 = _mm_setzero_pd(), d0 = _mm_setzero_pd(), d1 = _mm_setzero_pd(), t0, t1;
-        terms = narrow_terms((double)(four + 3) * r->half, terms);
+    __m128d c[4], s[4], o[4];
+    __m128d rc = _mm_set1_pd(r->rc), rs = _mm_set1_pd(r->rs), step = _mm_set1_pd(8.0);
+    size_t eight, terms = 1, k, i;
+    for (i = 0; i < 4; ++i) {
+        c[i] = _mm_loadu_pd(r->c + 2 * i);
+        s[i] = _mm_loadu_pd(r->s + 2 * i);
+        o[i] = _mm_set_pd((double)(r->start + 2 * i + 1), (double)(r->start + 2 * i));
+    }
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        __m128d lambda[4], e[4], d[4], t[4];
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (i = 0; i < 4; ++i) {
+            lambda[i] = _mm_mul_pd(o[i], o[i]);
+            e[i] = _mm_setzero_pd();
+            d[i] = _mm_setzero_pd();
+        }
         for (k = (terms - 1) / 2 + 1; k-- > 0;) {
             __m128d w = _mm_set1_pd(r->even[k]);
-            e0 = _mm_add_pd(_mm_mul_pd(e0, l0), w);
-            e1 = _mm_add_pd(_mm_mul_pd(e1, l1), w);
+            for (i = 0; i < 4; ++i)
+                e[i] = _mm_add_pd(_mm_mul_pd(e[i], lambda[i]), w);
         }
         for (k = terms / 2; k-- > 0;) {
             __m128d w = _mm_set1_pd(r->odd[k]);
-            d0 = _mm_add_pd(_mm_mul_pd(d0, l0), w);
-            d1 = _mm_add_pd(_mm_mul_pd(d1, l1), w);
+            for (i = 0; i < 4; ++i)
+                d[i] = _mm_add_pd(_mm_mul_pd(d[i], lambda[i]), w);
         }
-        t0 = _mm_sub_pd(_mm_mul_pd(c0, e0), _mm_mul_pd(_mm_mul_pd(s0, o0), d0));
-        t1 = _mm_sub_pd(_mm_mul_pd(c1, e1), _mm_mul_pd(_mm_mul_pd(s1, o1), d1));
-        if (four >= r->first && four + 4 <= r->end) {
-            double *m = moments + (four - r->first);
-            _mm_storeu_pd(m, _mm_add_pd(_mm_loadu_pd(m), t0));
-            _mm_storeu_pd(m + 2, _mm_add_pd(_mm_loadu_pd(m + 2), t1));
+        for (i = 0; i < 4; ++i) {
+            __m128d next = _mm_sub_pd(_mm_mul_pd(c[i], rc), _mm_mul_pd(s[i], rs));
+            t[i] = _mm_sub_pd(_mm_mul_pd(c[i], e[i]), _mm_mul_pd(_mm_mul_pd(s[i], o[i]), d[i]));
+            s[i] = _mm_add_pd(_mm_mul_pd(s[i], rc), _mm_mul_pd(c[i], rs));
+            c[i] = next;
+            o[i] = _mm_add_pd(o[i], step);
+        }
+        if (eight >= r->first && eight + NARROW_LANES <= r->end) {
+            double *m = moments + (eight - r->first);
+            for (i = 0; i < 4; ++i)
+                _mm_storeu_pd(m + 2 * i, _mm_add_pd(_mm_loadu_pd(m + 2 * i), t[i]));
         } else {
-            double term[4];
-            _mm_storeu_pd(term, t0);
-            _mm_storeu_pd(term + 2, t1);
-            narrow_keep(r, four, term, moments);
+            double term[NARROW_LANES];
+            for (i = 0; i < 4; ++i)
+                _mm_storeu_pd(term + 2 * i, t[i]);
+            narrow_keep(r, eight, term, moments);
         }
-        {
-            __m128d n0 = _mm_sub_pd(_mm_mul_pd(c0, rc), _mm_mul_pd(s0, rs));
-            __m128d n1 = _mm_sub_pd(_mm_mul_pd(c1, rc), _mm_mul_pd(s1, rs));
-            s0 = _mm_add_pd(_mm_mul_pd(s0, rc), _mm_mul_pd(c0, rs));
-            s1 = _mm_add_pd(_mm_mul_pd(s1, rc), _mm_mul_pd(c1, rs));
-            c0 = n0;
-            c1 = n1;
-        }
-        o0 = _mm_add_pd(o0, four_v);
-        o1 = _mm_add_pd(o1, four_v);
     }
 }
 #endif
@@ -736,39 +740,55 @@ static void narrow_sse2(const narrow_run *r, double *moments)
 #if FILON_HAVE_AVX
 __attribute__((target("avx"))) static void narrow_avx(const narrow_run *r, double *moments)
 {
-    __m256d c = _mm256_loadu_pd(r->c), s = _mm256_loadu_pd(r->s);
+    __m256d c0 = _mm256_loadu_pd(r->c), c1 = _mm256_loadu_pd(r->c + 4);
+    __m256d s0 = _mm256_loadu_pd(r->s), s1 = _mm256_loadu_pd(r->s + 4);
     __m256d rc = _mm256_set1_pd(r->rc), rs = _mm256_set1_pd(r->rs);
-    __m256d four_v = _mm256_set1_pd(4.0), start = _mm256_set1_pd((double)r->start);
-    __m256d o = _mm256_add_pd(start, _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
-    size_t four, terms = 1, k;
-    for (four = r->start; four < r->end; four += 4) {
-        __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), d = _mm256_setzero_pd();
-        __m256d t, next;
-        terms = narrow_terms((double)(four + 3) * r->half, terms);
-        for (k = (terms - 1) / 2 + 1; k-- > 0;)
-            e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_broadcast_sd(r->even + k));
-        for (k = terms / 2; k-- > 0;)
-            d = _mm256_add_pd(_mm256_mul_pd(d, lambda), _mm256_broadcast_sd(r->odd + k));
-        t = _mm256_sub_pd(_mm256_mul_pd(c, e), _mm256_mul_pd(_mm256_mul_pd(s, o), d));
-        if (four >= r->first && four + 4 <= r->end) {
-            double *m = moments + (four - r->first);
-            _mm256_storeu_pd(m, _mm256_add_pd(_mm256_loadu_pd(m), t));
-        } else {
-            double term[4];
-            _mm256_storeu_pd(term, t);
-            narrow_keep(r, four, term, moments);
+    __m256d step = _mm256_set1_pd(8.0), start = _mm256_set1_pd((double)r->start);
+    __m256d o0 = _mm256_add_pd(start, _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
+    __m256d o1 = _mm256_add_pd(start, _mm256_set_pd(7.0, 6.0, 5.0, 4.0));
+    size_t eight, terms = 1, k;
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        __m256d l0 = _mm256_mul_pd(o0, o0), l1 = _mm256_mul_pd(o1, o1);
+        __m256d e0 = _mm256_setzero_pd(), e1 = _mm256_setzero_pd();
+        __m256d d0 = _mm256_setzero_pd(), d1 = _mm256_setzero_pd(), t0, t1, n0, n1;
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (k = (terms - 1) / 2 + 1; k-- > 0;) {
+            __m256d w = _mm256_broadcast_sd(r->even + k);
+            e0 = _mm256_add_pd(_mm256_mul_pd(e0, l0), w);
+            e1 = _mm256_add_pd(_mm256_mul_pd(e1, l1), w);
         }
-        next = _mm256_sub_pd(_mm256_mul_pd(c, rc), _mm256_mul_pd(s, rs));
-        s = _mm256_add_pd(_mm256_mul_pd(s, rc), _mm256_mul_pd(c, rs));
-        c = next;
-        o = _mm256_add_pd(o, four_v);
+        for (k = terms / 2; k-- > 0;) {
+            __m256d w = _mm256_broadcast_sd(r->odd + k);
+            d0 = _mm256_add_pd(_mm256_mul_pd(d0, l0), w);
+            d1 = _mm256_add_pd(_mm256_mul_pd(d1, l1), w);
+        }
+        t0 = _mm256_sub_pd(_mm256_mul_pd(c0, e0), _mm256_mul_pd(_mm256_mul_pd(s0, o0), d0));
+        t1 = _mm256_sub_pd(_mm256_mul_pd(c1, e1), _mm256_mul_pd(_mm256_mul_pd(s1, o1), d1));
+        if (eight >= r->first && eight + NARROW_LANES <= r->end) {
+            double *m = moments + (eight - r->first);
+            _mm256_storeu_pd(m, _mm256_add_pd(_mm256_loadu_pd(m), t0));
+            _mm256_storeu_pd(m + 4, _mm256_add_pd(_mm256_loadu_pd(m + 4), t1));
+        } else {
+            double term[NARROW_LANES];
+            _mm256_storeu_pd(term, t0);
+            _mm256_storeu_pd(term + 4, t1);
+            narrow_keep(r, eight, term, moments);
+        }
+        n0 = _mm256_sub_pd(_mm256_mul_pd(c0, rc), _mm256_mul_pd(s0, rs));
+        n1 = _mm256_sub_pd(_mm256_mul_pd(c1, rc), _mm256_mul_pd(s1, rs));
+        s0 = _mm256_add_pd(_mm256_mul_pd(s0, rc), _mm256_mul_pd(c0, rs));
+        s1 = _mm256_add_pd(_mm256_mul_pd(s1, rc), _mm256_mul_pd(c1, rs));
+        c0 = n0;
+        c1 = n1;
+        o0 = _mm256_add_pd(o0, step);
+        o1 = _mm256_add_pd(o1, step);
     }
 }
 #endif
 
 /* The narrow terms of the orders first .. first + count - 1 of a piece
- * centred on x_c into moments. The phases start at the four holding first:
- * the first lane's directly, the next three by rotations by x_c. */
+ * centred on x_c into moments. The phases start at the eight holding
+ * first: the first lane's directly, the next seven by rotations by x_c. */
 static void narrow_orders(const double *even, const double *odd, double half, double x_c,
                           size_t first, size_t count, double *moments)
 {
@@ -780,17 +800,22 @@ static void narrow_orders(const double *even, const double *odd, double half, do
     r.half = half;
     r.first = first;
     r.end = first + count;
-    r.start = first & ~(size_t)3;
+    r.start = first & ~(size_t)(NARROW_LANES - 1);
     r.c[0] = r.start ? cos((double)r.start * x_c) : 1.0;
     r.s[0] = r.start ? sin((double)r.start * x_c) : 0.0;
-    for (j = 1; j < 4; ++j) {
+    for (j = 1; j < NARROW_LANES; ++j) {
         r.c[j] = r.c[j - 1] * c1 - r.s[j - 1] * s1;
         r.s[j] = r.s[j - 1] * c1 + r.c[j - 1] * s1;
     }
+    /* the rotation by 8 x_c: x_c doubled three times */
     c2 = (c1 - s1) * (c1 + s1);
     s2 = 2.0 * s1 * c1;
     r.rc = (c2 - s2) * (c2 + s2);
     r.rs = 2.0 * s2 * c2;
+    c2 = (r.rc - r.rs) * (r.rc + r.rs);
+    s2 = 2.0 * r.rs * r.rc;
+    r.rc = c2;
+    r.rs = s2;
 #if FILON_HAVE_AVX
     if (have_avx()) {
         narrow_avx(&r, moments);
@@ -880,16 +905,16 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
     if (!(avail * ((double)panels * 4.0 + 10.0) > sums_cost))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    /* the powers of the last of the last order's four (narrow_orders); a
+    /* the powers of the last of the last order's eight (narrow_orders); a
      * table gives them all at once */
-    last = (first + count - 1) | 3;
+    last = (first + count - 1) | (NARROW_LANES - 1);
     powers = tabled ? NARROW_POWERS : narrow_terms((double)last * half, 1);
     if (!kept) {
         kept = &own;
         narrow_sums_of(g, n_samples, a, b, powers, kept);
     } else if (kept->powers < powers) {
         /* all that the piece's narrow orders take, for the blocks after */
-        last = ((first + (size_t)avail - 1) | 3);
+        last = ((first + (size_t)avail - 1) | (NARROW_LANES - 1));
         narrow_sums_of(g, n_samples, a, b, narrow_terms((double)last * half, 1), kept);
     }
     narrow_orders(kept->even, kept->odd, half, centre, first, count, moments);
