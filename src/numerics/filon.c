@@ -66,44 +66,54 @@ typedef struct filon_rule {
     double *rot_c, *rot_s; /* [n] cos, sin(2 l h): advance by one panel      */
 } filon_rule;
 
-/* The phases of four chains of every fourth order, lane j the orders
- * first + 4 q + j: cos and sin of l x1 into cos_x, sin_x, of theta = l h
- * into rot_c, rot_s, theta into w_end_c; each chain advanced by rotations
- * by 4 x1 and 4 h (rx_c, rx_s, rh_c, rh_s). c*, s*, t*: the chains'
- * first values, by lane. The SSE2 and AVX paths do the same operations
- * lane by lane. */
+/* The rule's per-order constants of four chains of every fourth order,
+ * lane j the orders first + 4 q + j, in one pass: cos and sin of l x1
+ * into cos_x, sin_x; those of theta = l h, with theta, give the weights
+ * (w_end_c, w_end_s, w_mid) and, doubled, the rotation by 2 l h (rot_c,
+ * rot_s); each chain advanced by rotations by 4 x1 and 4 h (rx_c, rx_s,
+ * rh_c, rh_s). c*, s*, t*: the chains' values at the next four, by lane.
+ * The weights are panel_moments' closed forms (one division per order:
+ * the reciprocal of theta), except that the scalar loop, which takes the
+ * fours holding an order with theta <= SMALL_THETA, sums the series
+ * there. The SSE2 and AVX paths do the scalar loop's operations lane by
+ * lane. */
 typedef struct phase_chains {
     double cx[4], sx[4], ct[4], st[4], order[4];
     double rx_c, rx_s, rh_c, rh_s, h;
 } phase_chains;
 
-static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule *r,
-                          double *w_end_c)
+/* The orders l .. n - 1 (l a multiple of 4), lane by lane. */
+static void orders_scalar(phase_chains *q, size_t l, size_t n, filon_rule *r)
 {
-    double cx[4], sx[4], ct[4], st[4], order[4];
     size_t j;
-    memcpy(cx, q->cx, sizeof cx);
-    memcpy(sx, q->sx, sizeof sx);
-    memcpy(ct, q->ct, sizeof ct);
-    memcpy(st, q->st, sizeof st);
-    memcpy(order, q->order, sizeof order);
     for (; l < n; l += 4)
         for (j = 0; j < 4; ++j) {
             double next;
             if (l + j < n) {
-                w_end_c[l + j] = order[j] * q->h;
-                r->cos_x[l + j] = cx[j];
-                r->sin_x[l + j] = sx[j];
-                r->rot_c[l + j] = ct[j];
-                r->rot_s[l + j] = st[j];
+                double theta = q->order[j] * q->h, s = q->st[j], c = q->ct[j], sinc, m1, m2;
+                if (theta <= SMALL_THETA) {
+                    panel_moments(theta, s, c, &sinc, &m1, &m2);
+                } else {
+                    double inv = 1.0 / theta;
+                    sinc = s * inv;
+                    m1 = (s - theta * c) * inv * inv;
+                    m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
+                }
+                r->w_end_c[l + j] = q->h * m2;
+                r->w_end_s[l + j] = q->h * m1;
+                r->w_mid[l + j] = 2.0 * q->h * (sinc - m2);
+                r->cos_x[l + j] = q->cx[j];
+                r->sin_x[l + j] = q->sx[j];
+                r->rot_c[l + j] = (c - s) * (c + s);
+                r->rot_s[l + j] = 2.0 * s * c;
             }
-            order[j] += 4.0;
-            next = cx[j] * q->rx_c - sx[j] * q->rx_s;
-            sx[j] = sx[j] * q->rx_c + cx[j] * q->rx_s;
-            cx[j] = next;
-            next = ct[j] * q->rh_c - st[j] * q->rh_s;
-            st[j] = st[j] * q->rh_c + ct[j] * q->rh_s;
-            ct[j] = next;
+            q->order[j] += 4.0;
+            next = q->cx[j] * q->rx_c - q->sx[j] * q->rx_s;
+            q->sx[j] = q->sx[j] * q->rx_c + q->cx[j] * q->rx_s;
+            q->cx[j] = next;
+            next = q->ct[j] * q->rh_c - q->st[j] * q->rh_s;
+            q->st[j] = q->st[j] * q->rh_c + q->ct[j] * q->rh_s;
+            q->ct[j] = next;
         }
 }
 
@@ -115,9 +125,29 @@ static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule 
         c = next_;                                                                 \
     } while (0)
 
-/* The chains' whole steps of four orders; returns the orders done and
- * leaves the chains where the scalar rest goes on. */
-static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_end_c)
+/* Two orders' weights and rotation (lanes l, l + 1) from theta = o h and
+ * its sine and cosine st, ct. */
+static void weights2(__m128d o, __m128d st, __m128d ct, double h, filon_rule *r, size_t l)
+{
+    __m128d vh = _mm_set1_pd(h), two = _mm_set1_pd(2.0), theta = _mm_mul_pd(o, vh);
+    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), theta), sinc = _mm_mul_pd(st, inv);
+    __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(st, _mm_mul_pd(theta, ct)), inv), inv);
+    __m128d m2 =
+        _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), st),
+                                                    _mm_mul_pd(_mm_mul_pd(two, theta), ct)),
+                                         _mm_mul_pd(two, st)),
+                              _mm_mul_pd(inv, inv)),
+                   inv);
+    _mm_storeu_pd(r->w_end_c + l, _mm_mul_pd(vh, m2));
+    _mm_storeu_pd(r->w_end_s + l, _mm_mul_pd(vh, m1));
+    _mm_storeu_pd(r->w_mid + l, _mm_mul_pd(_mm_set1_pd(2.0 * h), _mm_sub_pd(sinc, m2)));
+    _mm_storeu_pd(r->rot_c + l, _mm_mul_pd(_mm_sub_pd(ct, st), _mm_add_pd(ct, st)));
+    _mm_storeu_pd(r->rot_s + l, _mm_mul_pd(_mm_mul_pd(two, st), ct));
+}
+
+/* The chains' whole fours from l on; returns the orders done (from l)
+ * and leaves the chains where the scalar rest goes on. */
+static size_t orders_sse2(phase_chains *q, size_t l, size_t n, filon_rule *r)
 {
     __m128d cx0 = _mm_loadu_pd(q->cx), cx1 = _mm_loadu_pd(q->cx + 2);
     __m128d sx0 = _mm_loadu_pd(q->sx), sx1 = _mm_loadu_pd(q->sx + 2);
@@ -126,19 +156,15 @@ static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_en
     __m128d o0 = _mm_loadu_pd(q->order), o1 = _mm_loadu_pd(q->order + 2);
     __m128d rxc = _mm_set1_pd(q->rx_c), rxs = _mm_set1_pd(q->rx_s);
     __m128d rhc = _mm_set1_pd(q->rh_c), rhs = _mm_set1_pd(q->rh_s);
-    __m128d h = _mm_set1_pd(q->h), four = _mm_set1_pd(4.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(o0, h));
-        _mm_storeu_pd(w_end_c + l + 2, _mm_mul_pd(o1, h));
+    __m128d four = _mm_set1_pd(4.0);
+    size_t start = l;
+    for (; l + 4 <= n; l += 4) {
+        weights2(o0, st0, ct0, q->h, r, l);
+        weights2(o1, st1, ct1, q->h, r, l + 2);
         _mm_storeu_pd(r->cos_x + l, cx0);
         _mm_storeu_pd(r->cos_x + l + 2, cx1);
         _mm_storeu_pd(r->sin_x + l, sx0);
         _mm_storeu_pd(r->sin_x + l + 2, sx1);
-        _mm_storeu_pd(r->rot_c + l, ct0);
-        _mm_storeu_pd(r->rot_c + l + 2, ct1);
-        _mm_storeu_pd(r->rot_s + l, st0);
-        _mm_storeu_pd(r->rot_s + l + 2, st1);
         o0 = _mm_add_pd(o0, four);
         o1 = _mm_add_pd(o1, four);
         ROTATE2(cx0, sx0, rxc, rxs);
@@ -156,36 +182,10 @@ static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_en
     _mm_storeu_pd(q->st + 2, st1);
     _mm_storeu_pd(q->order, o0);
     _mm_storeu_pd(q->order + 2, o1);
-    return l;
+    return l - start;
 }
 
 #undef ROTATE2
-
-/* The weights of the orders l < n (theta, sin, cos of it in w_end_c,
- * rot_s, rot_c), two per register; returns the orders done. */
-static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s, double *w_mid,
-                           const double *rot_c, const double *rot_s)
-{
-    __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
-    __m128d one = _mm_set1_pd(1.0);
-    size_t l;
-    for (l = 0; l + 2 <= n; l += 2) {
-        __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
-        __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
-        __m128d sinc = _mm_mul_pd(s, inv);
-        __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
-        __m128d m2 = _mm_mul_pd(
-            _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
-                                             _mm_mul_pd(_mm_mul_pd(two, theta), c)),
-                                  _mm_mul_pd(two, s)),
-                       _mm_mul_pd(inv, inv)),
-            inv);
-        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
-        _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
-        _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
-    }
-    return l;
-}
 #endif
 
 #if FILON_HAVE_AVX
@@ -196,23 +196,37 @@ static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s,
         c = next_;                                                                 \
     } while (0)
 
-/* phases_sse2 with the four chains in one AVX register. */
-__attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t n,
-                                                        filon_rule *r, double *w_end_c)
+/* orders_sse2 with the four chains in one AVX register. */
+__attribute__((target("avx"))) static size_t orders_avx(phase_chains *q, size_t l, size_t n,
+                                                        filon_rule *r)
 {
     __m256d cx = _mm256_loadu_pd(q->cx), sx = _mm256_loadu_pd(q->sx);
     __m256d ct = _mm256_loadu_pd(q->ct), st = _mm256_loadu_pd(q->st);
     __m256d o = _mm256_loadu_pd(q->order);
     __m256d rxc = _mm256_set1_pd(q->rx_c), rxs = _mm256_set1_pd(q->rx_s);
     __m256d rhc = _mm256_set1_pd(q->rh_c), rhs = _mm256_set1_pd(q->rh_s);
-    __m256d h = _mm256_set1_pd(q->h), four = _mm256_set1_pd(4.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(o, h));
+    __m256d vh = _mm256_set1_pd(q->h), h2 = _mm256_set1_pd(2.0 * q->h);
+    __m256d two = _mm256_set1_pd(2.0), one = _mm256_set1_pd(1.0), four = _mm256_set1_pd(4.0);
+    size_t start = l;
+    for (; l + 4 <= n; l += 4) {
+        __m256d theta = _mm256_mul_pd(o, vh), inv = _mm256_div_pd(one, theta);
+        __m256d sinc = _mm256_mul_pd(st, inv);
+        __m256d m1 =
+            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(st, _mm256_mul_pd(theta, ct)), inv), inv);
+        __m256d m2 = _mm256_mul_pd(
+            _mm256_mul_pd(
+                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), st),
+                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), ct)),
+                              _mm256_mul_pd(two, st)),
+                _mm256_mul_pd(inv, inv)),
+            inv);
+        _mm256_storeu_pd(r->w_end_c + l, _mm256_mul_pd(vh, m2));
+        _mm256_storeu_pd(r->w_end_s + l, _mm256_mul_pd(vh, m1));
+        _mm256_storeu_pd(r->w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
+        _mm256_storeu_pd(r->rot_c + l, _mm256_mul_pd(_mm256_sub_pd(ct, st), _mm256_add_pd(ct, st)));
+        _mm256_storeu_pd(r->rot_s + l, _mm256_mul_pd(_mm256_mul_pd(two, st), ct));
         _mm256_storeu_pd(r->cos_x + l, cx);
         _mm256_storeu_pd(r->sin_x + l, sx);
-        _mm256_storeu_pd(r->rot_c + l, ct);
-        _mm256_storeu_pd(r->rot_s + l, st);
         o = _mm256_add_pd(o, four);
         ROTATE4(cx, sx, rxc, rxs);
         ROTATE4(ct, st, rhc, rhs);
@@ -222,39 +236,10 @@ __attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t 
     _mm256_storeu_pd(q->ct, ct);
     _mm256_storeu_pd(q->st, st);
     _mm256_storeu_pd(q->order, o);
-    return l;
+    return l - start;
 }
 
 #undef ROTATE4
-
-/* weights_sse2 four orders per register. */
-__attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, double *w_end_c,
-                                                         double *w_end_s, double *w_mid,
-                                                         const double *rot_c,
-                                                         const double *rot_s)
-{
-    __m256d vh = _mm256_set1_pd(h), h2 = _mm256_set1_pd(2.0 * h), two = _mm256_set1_pd(2.0);
-    __m256d one = _mm256_set1_pd(1.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        __m256d theta = _mm256_loadu_pd(w_end_c + l), s = _mm256_loadu_pd(rot_s + l);
-        __m256d c = _mm256_loadu_pd(rot_c + l), inv = _mm256_div_pd(one, theta);
-        __m256d sinc = _mm256_mul_pd(s, inv);
-        __m256d m1 =
-            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(s, _mm256_mul_pd(theta, c)), inv), inv);
-        __m256d m2 = _mm256_mul_pd(
-            _mm256_mul_pd(
-                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), s),
-                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), c)),
-                              _mm256_mul_pd(two, s)),
-                _mm256_mul_pd(inv, inv)),
-            inv);
-        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(vh, m2));
-        _mm256_storeu_pd(w_end_s + l, _mm256_mul_pd(vh, m1));
-        _mm256_storeu_pd(w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
-    }
-    return l;
-}
 #endif
 
 /* The orders first .. first + n - 1; scratch: 7 n doubles. The sines and
@@ -262,32 +247,28 @@ __attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, dou
  * and cos: those of the first order are computed directly, the next three
  * orders' by rotations by x1 and h, and from there the four chains of
  * every fourth order by rotations by 4 x1 and 4 h (one rounding per four
- * orders), side by side in vector registers. The weights, which each
- * order has to itself, come after them, also by vectors (one division per
- * order: the reciprocal of theta), the few orders below SMALL_THETA by
- * their Taylor series first. Lane by lane the operations are those of
- * the scalar loops, which do the same where SSE2 or AVX is not: the
- * moments do not depend on the processor. */
+ * orders), side by side in vector registers, each four's weights and
+ * rotation computed where its phases are (the fours holding the few
+ * orders below SMALL_THETA by the scalar loop, which sums their Taylor
+ * series). Lane by lane the operations are those of the scalar loop,
+ * which does the same where SSE2 or AVX is not: the moments do not
+ * depend on the processor. */
 static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_t first,
                       size_t n, double *scratch)
 {
     double h = (b - a) / (double)(n_samples - 1), x1 = a + h, l0 = (double)first;
     double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h), c2, s2;
-    double *restrict w_end_c, *restrict w_end_s, *restrict w_mid, *restrict rot_c,
-        *restrict rot_s;
     phase_chains q;
-    size_t l = 0, j, small;
+    size_t l, j, small;
     r->n = n;
     r->panels = (n_samples - 1) / 2;
-    r->w_end_c = w_end_c = scratch;
-    r->w_end_s = w_end_s = scratch + n;
-    r->w_mid = w_mid = scratch + 2 * n;
+    r->w_end_c = scratch;
+    r->w_end_s = scratch + n;
+    r->w_mid = scratch + 2 * n;
     r->cos_x = scratch + 3 * n;
     r->sin_x = scratch + 4 * n;
-    r->rot_c = rot_c = scratch + 5 * n;
-    r->rot_s = rot_s = scratch + 6 * n;
-    /* theta = l h, its cosine and sine wait in w_end_c, rot_c and rot_s
-     * for the weights. */
+    r->rot_c = scratch + 5 * n;
+    r->rot_s = scratch + 6 * n;
     q.cx[0] = first ? cos(l0 * x1) : 1.0;
     q.sx[0] = first ? sin(l0 * x1) : 0.0;
     q.ct[0] = first ? cos(l0 * h) : 1.0;
@@ -309,51 +290,22 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     q.rh_c = (c2 - s2) * (c2 + s2);
     q.rh_s = 2.0 * s2 * c2;
     q.h = h;
+    /* the fours holding an order with theta <= SMALL_THETA (theta grows
+     * with the order) */
+    for (small = 0; small < n && (l0 + (double)small) * h <= SMALL_THETA; ++small)
+        ;
+    l = (small + 3) & ~(size_t)3;
+    if (l > n)
+        l = n;
+    orders_scalar(&q, 0, l, r);
 #if FILON_HAVE_AVX
     if (have_avx())
-        l = phases_avx(&q, n, r, w_end_c);
+        l += orders_avx(&q, l, n, r);
 #endif
 #if defined(__SSE2__)
-    if (l == 0)
-        l = phases_sse2(&q, n, r, w_end_c);
+    l += orders_sse2(&q, l, n, r);
 #endif
-    phases_scalar(&q, l, n, r, w_end_c);
-    for (small = 0; small < n && w_end_c[small] <= SMALL_THETA; ++small) {
-        double sinc, m1, m2;
-        panel_moments(w_end_c[small], rot_s[small], rot_c[small], &sinc, &m1, &m2);
-        w_end_c[small] = h * m2;
-        w_end_s[small] = h * m1;
-        w_mid[small] = 2.0 * h * (sinc - m2);
-    }
-    l = small;
-#if FILON_HAVE_AVX
-    if (have_avx())
-        l += weights_avx(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
-#endif
-#if defined(__SSE2__)
-    l += weights_sse2(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
-#endif
-    for (; l < n; ++l) {
-        double theta = w_end_c[l], s = rot_s[l], c = rot_c[l];
-        double inv = 1.0 / theta, sinc = s * inv, m1 = (s - theta * c) * inv * inv;
-        double m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
-        w_end_c[l] = h * m2;
-        w_end_s[l] = h * m1;
-        w_mid[l] = 2.0 * h * (sinc - m2);
-    }
-    l = 0;
-#if defined(__SSE2__)
-    for (; l + 2 <= n; l += 2) {
-        __m128d s = _mm_loadu_pd(rot_s + l), c = _mm_loadu_pd(rot_c + l);
-        _mm_storeu_pd(rot_c + l, _mm_mul_pd(_mm_sub_pd(c, s), _mm_add_pd(c, s)));
-        _mm_storeu_pd(rot_s + l, _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), s), c));
-    }
-#endif
-    for (; l < n; ++l) {
-        double s = rot_s[l], c = rot_c[l];
-        rot_c[l] = (c - s) * (c + s);
-        rot_s[l] = 2.0 * s * c;
-    }
+    orders_scalar(&q, l, n, r);
 }
 
 /* The panels' sum of one order is
