@@ -2,6 +2,7 @@
  * Filon quadrature of cosine moments (see filon.h).
  */
 #include "numerics/filon.h"
+#include "numerics/filon_powers.h"
 
 #include <math.h>
 #include <string.h>
@@ -65,44 +66,54 @@ typedef struct filon_rule {
     double *rot_c, *rot_s; /* [n] cos, sin(2 l h): advance by one panel      */
 } filon_rule;
 
-/* The phases of four chains of every fourth order, lane j the orders
- * first + 4 q + j: cos and sin of l x1 into cos_x, sin_x, of theta = l h
- * into rot_c, rot_s, theta into w_end_c; each chain advanced by rotations
- * by 4 x1 and 4 h (rx_c, rx_s, rh_c, rh_s). c*, s*, t*: the chains'
- * first values, by lane. The SSE2 and AVX paths do the same operations
- * lane by lane. */
+/* The rule's per-order constants of four chains of every fourth order,
+ * lane j the orders first + 4 q + j, in one pass: cos and sin of l x1
+ * into cos_x, sin_x; those of theta = l h, with theta, give the weights
+ * (w_end_c, w_end_s, w_mid) and, doubled, the rotation by 2 l h (rot_c,
+ * rot_s); each chain advanced by rotations by 4 x1 and 4 h (rx_c, rx_s,
+ * rh_c, rh_s). c*, s*, t*: the chains' values at the next four, by lane.
+ * The weights are panel_moments' closed forms (one division per order:
+ * the reciprocal of theta), except that the scalar loop, which takes the
+ * fours holding an order with theta <= SMALL_THETA, sums the series
+ * there. The SSE2 and AVX paths do the scalar loop's operations lane by
+ * lane. */
 typedef struct phase_chains {
     double cx[4], sx[4], ct[4], st[4], order[4];
     double rx_c, rx_s, rh_c, rh_s, h;
 } phase_chains;
 
-static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule *r,
-                          double *w_end_c)
+/* The orders l .. n - 1 (l a multiple of 4), lane by lane. */
+static void orders_scalar(phase_chains *q, size_t l, size_t n, filon_rule *r)
 {
-    double cx[4], sx[4], ct[4], st[4], order[4];
     size_t j;
-    memcpy(cx, q->cx, sizeof cx);
-    memcpy(sx, q->sx, sizeof sx);
-    memcpy(ct, q->ct, sizeof ct);
-    memcpy(st, q->st, sizeof st);
-    memcpy(order, q->order, sizeof order);
     for (; l < n; l += 4)
         for (j = 0; j < 4; ++j) {
             double next;
             if (l + j < n) {
-                w_end_c[l + j] = order[j] * q->h;
-                r->cos_x[l + j] = cx[j];
-                r->sin_x[l + j] = sx[j];
-                r->rot_c[l + j] = ct[j];
-                r->rot_s[l + j] = st[j];
+                double theta = q->order[j] * q->h, s = q->st[j], c = q->ct[j], sinc, m1, m2;
+                if (theta <= SMALL_THETA) {
+                    panel_moments(theta, s, c, &sinc, &m1, &m2);
+                } else {
+                    double inv = 1.0 / theta;
+                    sinc = s * inv;
+                    m1 = (s - theta * c) * inv * inv;
+                    m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
+                }
+                r->w_end_c[l + j] = q->h * m2;
+                r->w_end_s[l + j] = q->h * m1;
+                r->w_mid[l + j] = 2.0 * q->h * (sinc - m2);
+                r->cos_x[l + j] = q->cx[j];
+                r->sin_x[l + j] = q->sx[j];
+                r->rot_c[l + j] = (c - s) * (c + s);
+                r->rot_s[l + j] = 2.0 * s * c;
             }
-            order[j] += 4.0;
-            next = cx[j] * q->rx_c - sx[j] * q->rx_s;
-            sx[j] = sx[j] * q->rx_c + cx[j] * q->rx_s;
-            cx[j] = next;
-            next = ct[j] * q->rh_c - st[j] * q->rh_s;
-            st[j] = st[j] * q->rh_c + ct[j] * q->rh_s;
-            ct[j] = next;
+            q->order[j] += 4.0;
+            next = q->cx[j] * q->rx_c - q->sx[j] * q->rx_s;
+            q->sx[j] = q->sx[j] * q->rx_c + q->cx[j] * q->rx_s;
+            q->cx[j] = next;
+            next = q->ct[j] * q->rh_c - q->st[j] * q->rh_s;
+            q->st[j] = q->st[j] * q->rh_c + q->ct[j] * q->rh_s;
+            q->ct[j] = next;
         }
 }
 
@@ -114,9 +125,29 @@ static void phases_scalar(const phase_chains *q, size_t l, size_t n, filon_rule 
         c = next_;                                                                 \
     } while (0)
 
-/* The chains' whole steps of four orders; returns the orders done and
- * leaves the chains where the scalar rest goes on. */
-static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_end_c)
+/* Two orders' weights and rotation (lanes l, l + 1) from theta = o h and
+ * its sine and cosine st, ct. */
+static void weights2(__m128d o, __m128d st, __m128d ct, double h, filon_rule *r, size_t l)
+{
+    __m128d vh = _mm_set1_pd(h), two = _mm_set1_pd(2.0), theta = _mm_mul_pd(o, vh);
+    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), theta), sinc = _mm_mul_pd(st, inv);
+    __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(st, _mm_mul_pd(theta, ct)), inv), inv);
+    __m128d m2 =
+        _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), st),
+                                                    _mm_mul_pd(_mm_mul_pd(two, theta), ct)),
+                                         _mm_mul_pd(two, st)),
+                              _mm_mul_pd(inv, inv)),
+                   inv);
+    _mm_storeu_pd(r->w_end_c + l, _mm_mul_pd(vh, m2));
+    _mm_storeu_pd(r->w_end_s + l, _mm_mul_pd(vh, m1));
+    _mm_storeu_pd(r->w_mid + l, _mm_mul_pd(_mm_set1_pd(2.0 * h), _mm_sub_pd(sinc, m2)));
+    _mm_storeu_pd(r->rot_c + l, _mm_mul_pd(_mm_sub_pd(ct, st), _mm_add_pd(ct, st)));
+    _mm_storeu_pd(r->rot_s + l, _mm_mul_pd(_mm_mul_pd(two, st), ct));
+}
+
+/* The chains' whole fours from l on; returns the orders done (from l)
+ * and leaves the chains where the scalar rest goes on. */
+static size_t orders_sse2(phase_chains *q, size_t l, size_t n, filon_rule *r)
 {
     __m128d cx0 = _mm_loadu_pd(q->cx), cx1 = _mm_loadu_pd(q->cx + 2);
     __m128d sx0 = _mm_loadu_pd(q->sx), sx1 = _mm_loadu_pd(q->sx + 2);
@@ -125,19 +156,15 @@ static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_en
     __m128d o0 = _mm_loadu_pd(q->order), o1 = _mm_loadu_pd(q->order + 2);
     __m128d rxc = _mm_set1_pd(q->rx_c), rxs = _mm_set1_pd(q->rx_s);
     __m128d rhc = _mm_set1_pd(q->rh_c), rhs = _mm_set1_pd(q->rh_s);
-    __m128d h = _mm_set1_pd(q->h), four = _mm_set1_pd(4.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(o0, h));
-        _mm_storeu_pd(w_end_c + l + 2, _mm_mul_pd(o1, h));
+    __m128d four = _mm_set1_pd(4.0);
+    size_t start = l;
+    for (; l + 4 <= n; l += 4) {
+        weights2(o0, st0, ct0, q->h, r, l);
+        weights2(o1, st1, ct1, q->h, r, l + 2);
         _mm_storeu_pd(r->cos_x + l, cx0);
         _mm_storeu_pd(r->cos_x + l + 2, cx1);
         _mm_storeu_pd(r->sin_x + l, sx0);
         _mm_storeu_pd(r->sin_x + l + 2, sx1);
-        _mm_storeu_pd(r->rot_c + l, ct0);
-        _mm_storeu_pd(r->rot_c + l + 2, ct1);
-        _mm_storeu_pd(r->rot_s + l, st0);
-        _mm_storeu_pd(r->rot_s + l + 2, st1);
         o0 = _mm_add_pd(o0, four);
         o1 = _mm_add_pd(o1, four);
         ROTATE2(cx0, sx0, rxc, rxs);
@@ -155,36 +182,10 @@ static size_t phases_sse2(phase_chains *q, size_t n, filon_rule *r, double *w_en
     _mm_storeu_pd(q->st + 2, st1);
     _mm_storeu_pd(q->order, o0);
     _mm_storeu_pd(q->order + 2, o1);
-    return l;
+    return l - start;
 }
 
 #undef ROTATE2
-
-/* The weights of the orders l < n (theta, sin, cos of it in w_end_c,
- * rot_s, rot_c), two per register; returns the orders done. */
-static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s, double *w_mid,
-                           const double *rot_c, const double *rot_s)
-{
-    __m128d vh = _mm_set1_pd(h), h2 = _mm_set1_pd(2.0 * h), two = _mm_set1_pd(2.0);
-    __m128d one = _mm_set1_pd(1.0);
-    size_t l;
-    for (l = 0; l + 2 <= n; l += 2) {
-        __m128d theta = _mm_loadu_pd(w_end_c + l), s = _mm_loadu_pd(rot_s + l);
-        __m128d c = _mm_loadu_pd(rot_c + l), inv = _mm_div_pd(one, theta);
-        __m128d sinc = _mm_mul_pd(s, inv);
-        __m128d m1 = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(s, _mm_mul_pd(theta, c)), inv), inv);
-        __m128d m2 = _mm_mul_pd(
-            _mm_mul_pd(_mm_sub_pd(_mm_add_pd(_mm_mul_pd(_mm_mul_pd(theta, theta), s),
-                                             _mm_mul_pd(_mm_mul_pd(two, theta), c)),
-                                  _mm_mul_pd(two, s)),
-                       _mm_mul_pd(inv, inv)),
-            inv);
-        _mm_storeu_pd(w_end_c + l, _mm_mul_pd(vh, m2));
-        _mm_storeu_pd(w_end_s + l, _mm_mul_pd(vh, m1));
-        _mm_storeu_pd(w_mid + l, _mm_mul_pd(h2, _mm_sub_pd(sinc, m2)));
-    }
-    return l;
-}
 #endif
 
 #if FILON_HAVE_AVX
@@ -195,23 +196,37 @@ static size_t weights_sse2(size_t n, double h, double *w_end_c, double *w_end_s,
         c = next_;                                                                 \
     } while (0)
 
-/* phases_sse2 with the four chains in one AVX register. */
-__attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t n,
-                                                        filon_rule *r, double *w_end_c)
+/* orders_sse2 with the four chains in one AVX register. */
+__attribute__((target("avx"))) static size_t orders_avx(phase_chains *q, size_t l, size_t n,
+                                                        filon_rule *r)
 {
     __m256d cx = _mm256_loadu_pd(q->cx), sx = _mm256_loadu_pd(q->sx);
     __m256d ct = _mm256_loadu_pd(q->ct), st = _mm256_loadu_pd(q->st);
     __m256d o = _mm256_loadu_pd(q->order);
     __m256d rxc = _mm256_set1_pd(q->rx_c), rxs = _mm256_set1_pd(q->rx_s);
     __m256d rhc = _mm256_set1_pd(q->rh_c), rhs = _mm256_set1_pd(q->rh_s);
-    __m256d h = _mm256_set1_pd(q->h), four = _mm256_set1_pd(4.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(o, h));
+    __m256d vh = _mm256_set1_pd(q->h), h2 = _mm256_set1_pd(2.0 * q->h);
+    __m256d two = _mm256_set1_pd(2.0), one = _mm256_set1_pd(1.0), four = _mm256_set1_pd(4.0);
+    size_t start = l;
+    for (; l + 4 <= n; l += 4) {
+        __m256d theta = _mm256_mul_pd(o, vh), inv = _mm256_div_pd(one, theta);
+        __m256d sinc = _mm256_mul_pd(st, inv);
+        __m256d m1 =
+            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(st, _mm256_mul_pd(theta, ct)), inv), inv);
+        __m256d m2 = _mm256_mul_pd(
+            _mm256_mul_pd(
+                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), st),
+                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), ct)),
+                              _mm256_mul_pd(two, st)),
+                _mm256_mul_pd(inv, inv)),
+            inv);
+        _mm256_storeu_pd(r->w_end_c + l, _mm256_mul_pd(vh, m2));
+        _mm256_storeu_pd(r->w_end_s + l, _mm256_mul_pd(vh, m1));
+        _mm256_storeu_pd(r->w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
+        _mm256_storeu_pd(r->rot_c + l, _mm256_mul_pd(_mm256_sub_pd(ct, st), _mm256_add_pd(ct, st)));
+        _mm256_storeu_pd(r->rot_s + l, _mm256_mul_pd(_mm256_mul_pd(two, st), ct));
         _mm256_storeu_pd(r->cos_x + l, cx);
         _mm256_storeu_pd(r->sin_x + l, sx);
-        _mm256_storeu_pd(r->rot_c + l, ct);
-        _mm256_storeu_pd(r->rot_s + l, st);
         o = _mm256_add_pd(o, four);
         ROTATE4(cx, sx, rxc, rxs);
         ROTATE4(ct, st, rhc, rhs);
@@ -221,39 +236,10 @@ __attribute__((target("avx"))) static size_t phases_avx(phase_chains *q, size_t 
     _mm256_storeu_pd(q->ct, ct);
     _mm256_storeu_pd(q->st, st);
     _mm256_storeu_pd(q->order, o);
-    return l;
+    return l - start;
 }
 
 #undef ROTATE4
-
-/* weights_sse2 four orders per register. */
-__attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, double *w_end_c,
-                                                         double *w_end_s, double *w_mid,
-                                                         const double *rot_c,
-                                                         const double *rot_s)
-{
-    __m256d vh = _mm256_set1_pd(h), h2 = _mm256_set1_pd(2.0 * h), two = _mm256_set1_pd(2.0);
-    __m256d one = _mm256_set1_pd(1.0);
-    size_t l;
-    for (l = 0; l + 4 <= n; l += 4) {
-        __m256d theta = _mm256_loadu_pd(w_end_c + l), s = _mm256_loadu_pd(rot_s + l);
-        __m256d c = _mm256_loadu_pd(rot_c + l), inv = _mm256_div_pd(one, theta);
-        __m256d sinc = _mm256_mul_pd(s, inv);
-        __m256d m1 =
-            _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(s, _mm256_mul_pd(theta, c)), inv), inv);
-        __m256d m2 = _mm256_mul_pd(
-            _mm256_mul_pd(
-                _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(theta, theta), s),
-                                            _mm256_mul_pd(_mm256_mul_pd(two, theta), c)),
-                              _mm256_mul_pd(two, s)),
-                _mm256_mul_pd(inv, inv)),
-            inv);
-        _mm256_storeu_pd(w_end_c + l, _mm256_mul_pd(vh, m2));
-        _mm256_storeu_pd(w_end_s + l, _mm256_mul_pd(vh, m1));
-        _mm256_storeu_pd(w_mid + l, _mm256_mul_pd(h2, _mm256_sub_pd(sinc, m2)));
-    }
-    return l;
-}
 #endif
 
 /* The orders first .. first + n - 1; scratch: 7 n doubles. The sines and
@@ -261,32 +247,28 @@ __attribute__((target("avx"))) static size_t weights_avx(size_t n, double h, dou
  * and cos: those of the first order are computed directly, the next three
  * orders' by rotations by x1 and h, and from there the four chains of
  * every fourth order by rotations by 4 x1 and 4 h (one rounding per four
- * orders), side by side in vector registers. The weights, which each
- * order has to itself, come after them, also by vectors (one division per
- * order: the reciprocal of theta), the few orders below SMALL_THETA by
- * their Taylor series first. Lane by lane the operations are those of
- * the scalar loops, which do the same where SSE2 or AVX is not: the
- * moments do not depend on the processor. */
+ * orders), side by side in vector registers, each four's weights and
+ * rotation computed where its phases are (the fours holding the few
+ * orders below SMALL_THETA by the scalar loop, which sums their Taylor
+ * series). Lane by lane the operations are those of the scalar loop,
+ * which does the same where SSE2 or AVX is not: the moments do not
+ * depend on the processor. */
 static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_t first,
                       size_t n, double *scratch)
 {
     double h = (b - a) / (double)(n_samples - 1), x1 = a + h, l0 = (double)first;
     double c1 = cos(x1), s1 = sin(x1), ch = cos(h), sh = sin(h), c2, s2;
-    double *restrict w_end_c, *restrict w_end_s, *restrict w_mid, *restrict rot_c,
-        *restrict rot_s;
     phase_chains q;
-    size_t l = 0, j, small;
+    size_t l, j, small;
     r->n = n;
     r->panels = (n_samples - 1) / 2;
-    r->w_end_c = w_end_c = scratch;
-    r->w_end_s = w_end_s = scratch + n;
-    r->w_mid = w_mid = scratch + 2 * n;
+    r->w_end_c = scratch;
+    r->w_end_s = scratch + n;
+    r->w_mid = scratch + 2 * n;
     r->cos_x = scratch + 3 * n;
     r->sin_x = scratch + 4 * n;
-    r->rot_c = rot_c = scratch + 5 * n;
-    r->rot_s = rot_s = scratch + 6 * n;
-    /* theta = l h, its cosine and sine wait in w_end_c, rot_c and rot_s
-     * for the weights. */
+    r->rot_c = scratch + 5 * n;
+    r->rot_s = scratch + 6 * n;
     q.cx[0] = first ? cos(l0 * x1) : 1.0;
     q.sx[0] = first ? sin(l0 * x1) : 0.0;
     q.ct[0] = first ? cos(l0 * h) : 1.0;
@@ -308,77 +290,67 @@ static void rule_init(filon_rule *r, size_t n_samples, double a, double b, size_
     q.rh_c = (c2 - s2) * (c2 + s2);
     q.rh_s = 2.0 * s2 * c2;
     q.h = h;
+    /* the fours holding an order with theta <= SMALL_THETA (theta grows
+     * with the order) */
+    for (small = 0; small < n && (l0 + (double)small) * h <= SMALL_THETA; ++small)
+        ;
+    l = (small + 3) & ~(size_t)3;
+    if (l > n)
+        l = n;
+    orders_scalar(&q, 0, l, r);
 #if FILON_HAVE_AVX
     if (have_avx())
-        l = phases_avx(&q, n, r, w_end_c);
+        l += orders_avx(&q, l, n, r);
 #endif
 #if defined(__SSE2__)
-    if (l == 0)
-        l = phases_sse2(&q, n, r, w_end_c);
+    l += orders_sse2(&q, l, n, r);
 #endif
-    phases_scalar(&q, l, n, r, w_end_c);
-    for (small = 0; small < n && w_end_c[small] <= SMALL_THETA; ++small) {
-        double sinc, m1, m2;
-        panel_moments(w_end_c[small], rot_s[small], rot_c[small], &sinc, &m1, &m2);
-        w_end_c[small] = h * m2;
-        w_end_s[small] = h * m1;
-        w_mid[small] = 2.0 * h * (sinc - m2);
-    }
-    l = small;
-#if FILON_HAVE_AVX
-    if (have_avx())
-        l += weights_avx(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
-#endif
-#if defined(__SSE2__)
-    l += weights_sse2(n - l, h, w_end_c + l, w_end_s + l, w_mid + l, rot_c + l, rot_s + l);
-#endif
-    for (; l < n; ++l) {
-        double theta = w_end_c[l], s = rot_s[l], c = rot_c[l];
-        double inv = 1.0 / theta, sinc = s * inv, m1 = (s - theta * c) * inv * inv;
-        double m2 = ((theta * theta) * s + 2.0 * theta * c - 2.0 * s) * (inv * inv) * inv;
-        w_end_c[l] = h * m2;
-        w_end_s[l] = h * m1;
-        w_mid[l] = 2.0 * h * (sinc - m2);
-    }
-    l = 0;
-#if defined(__SSE2__)
-    for (; l + 2 <= n; l += 2) {
-        __m128d s = _mm_loadu_pd(rot_s + l), c = _mm_loadu_pd(rot_c + l);
-        _mm_storeu_pd(rot_c + l, _mm_mul_pd(_mm_sub_pd(c, s), _mm_add_pd(c, s)));
-        _mm_storeu_pd(rot_s + l, _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), s), c));
-    }
-#endif
-    for (; l < n; ++l) {
-        double s = rot_s[l], c = rot_c[l];
-        rot_c[l] = (c - s) * (c + s);
-        rot_s[l] = 2.0 * s * c;
-    }
+    orders_scalar(&q, l, n, r);
 }
 
-/* One order's step over a panel: accumulate, then advance the phase by 2h
- * (angle addition; the error grows by about one rounding per panel). */
-#define FILON_STEP(sum, c, s, l)                                                   \
+/* The panels' sum of one order is
+ *   w_end_c S_ends + w_mid S_mid + w_end_s S_diff,
+ * S_ends = sum_p cos(l x_p) (f_2p + f_2p+2), S_mid = sum_p cos(l x_p)
+ * f_2p+1, S_diff = sum_p sin(l x_p) (f_2p - f_2p+2): three products and
+ * sums per panel and order, the weights applied once at the end (where
+ * each panel took five products), and the phase advanced by 2h (angle
+ * addition; the error grows by about one rounding per panel). */
+#define FILON_STEP(se, sm, sd, c, s, l)                                            \
     do {                                                                           \
         double c_ = (c), s_ = (s);                                                 \
-        (sum) += c_ * (wc[l] * ends + wm[l] * f1) + s_ * ws[l] * diff;             \
+        (se) += c_ * ends;                                                         \
+        (sm) += c_ * f1;                                                           \
+        (sd) += s_ * diff;                                                         \
         (c) = c_ * rc[l] - s_ * rs[l];                                             \
         (s) = s_ * rc[l] + c_ * rs[l];                                             \
     } while (0)
 
+/* One order's sums into its moment. */
+#define FILON_END(acc, se, sm, sd, l) ((acc) += wc[l] * (se) + wm[l] * (sm) + ws[l] * (sd))
+
 #if defined(__SSE2__)
 /* FILON_STEP for the two orders of each of the vectors c and s (lanes l, l
- * + 1 of the weights w*): the same operations in the same order per lane,
- * so the same roundings as one order at a time. */
-#define FILON_STEP2(sum, c, s, w)                                                  \
+ * + 1 of the rotations rc, rs): the same operations in the same order per
+ * lane, so the same roundings as one order at a time. */
+#define FILON_STEP2(se, sm, sd, c, s, rc, rs)                                      \
     do {                                                                           \
         __m128d c_ = (c), s_ = (s);                                                \
-        (sum) = _mm_add_pd(                                                        \
-            (sum), _mm_add_pd(_mm_mul_pd(c_, _mm_add_pd(_mm_mul_pd(w##_end_c, ends), \
-                                                          _mm_mul_pd(w##_mid, mid))), \
-                              _mm_mul_pd(_mm_mul_pd(s_, w##_end_s), diff)));       \
-        (c) = _mm_sub_pd(_mm_mul_pd(c_, w##_rot_c), _mm_mul_pd(s_, w##_rot_s));    \
-        (s) = _mm_add_pd(_mm_mul_pd(s_, w##_rot_c), _mm_mul_pd(c_, w##_rot_s));    \
+        (se) = _mm_add_pd((se), _mm_mul_pd(c_, ends));                             \
+        (sm) = _mm_add_pd((sm), _mm_mul_pd(c_, mid));                              \
+        (sd) = _mm_add_pd((sd), _mm_mul_pd(s_, diff));                             \
+        (c) = _mm_sub_pd(_mm_mul_pd(c_, rc), _mm_mul_pd(s_, rs));                  \
+        (s) = _mm_add_pd(_mm_mul_pd(s_, rc), _mm_mul_pd(c_, rs));                  \
     } while (0)
+
+/* FILON_END for the orders l, l + 1. */
+static void filon_end2(double *acc, __m128d se, __m128d sm, __m128d sd, const double *wc,
+                       const double *wm, const double *ws)
+{
+    _mm_storeu_pd(acc, _mm_add_pd(_mm_loadu_pd(acc),
+                                  _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(wc), se),
+                                                        _mm_mul_pd(_mm_loadu_pd(wm), sm)),
+                                             _mm_mul_pd(_mm_loadu_pd(ws), sd))));
+}
 
 /* accumulate's orders in pairs, two pairs at a time while four remain
  * (the baseline of x86-64 has two doubles per register); returns the
@@ -393,34 +365,31 @@ static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double 
     for (l = 0; l + 4 <= n; l += 4) {
         __m128d c0 = _mm_loadu_pd(cx + l), c1 = _mm_loadu_pd(cx + l + 2);
         __m128d s0 = _mm_loadu_pd(sx + l), s1 = _mm_loadu_pd(sx + l + 2);
-        __m128d a0 = _mm_loadu_pd(acc + l), a1 = _mm_loadu_pd(acc + l + 2);
-        __m128d x0_end_c = _mm_loadu_pd(wc + l), x0_end_s = _mm_loadu_pd(ws + l);
-        __m128d x0_mid = _mm_loadu_pd(wm + l), x0_rot_c = _mm_loadu_pd(rc + l);
-        __m128d x0_rot_s = _mm_loadu_pd(rs + l), x1_end_c = _mm_loadu_pd(wc + l + 2);
-        __m128d x1_end_s = _mm_loadu_pd(ws + l + 2), x1_mid = _mm_loadu_pd(wm + l + 2);
-        __m128d x1_rot_c = _mm_loadu_pd(rc + l + 2), x1_rot_s = _mm_loadu_pd(rs + l + 2);
+        __m128d rc0 = _mm_loadu_pd(rc + l), rc1 = _mm_loadu_pd(rc + l + 2);
+        __m128d rs0 = _mm_loadu_pd(rs + l), rs1 = _mm_loadu_pd(rs + l + 2);
+        __m128d se0 = _mm_setzero_pd(), sm0 = _mm_setzero_pd(), sd0 = _mm_setzero_pd();
+        __m128d se1 = _mm_setzero_pd(), sm1 = _mm_setzero_pd(), sd1 = _mm_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
             __m128d mid = _mm_set1_pd(g[2 * p + 1]);
-            FILON_STEP2(a0, c0, s0, x0);
-            FILON_STEP2(a1, c1, s1, x1);
+            FILON_STEP2(se0, sm0, sd0, c0, s0, rc0, rs0);
+            FILON_STEP2(se1, sm1, sd1, c1, s1, rc1, rs1);
         }
-        _mm_storeu_pd(acc + l, a0);
-        _mm_storeu_pd(acc + l + 2, a1);
+        filon_end2(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
+        filon_end2(acc + l + 2, se1, sm1, sd1, wc + l + 2, wm + l + 2, ws + l + 2);
     }
     for (; l + 2 <= n; l += 2) {
         __m128d c0 = _mm_loadu_pd(cx + l), s0 = _mm_loadu_pd(sx + l);
-        __m128d a0 = _mm_loadu_pd(acc + l), x0_end_c = _mm_loadu_pd(wc + l);
-        __m128d x0_end_s = _mm_loadu_pd(ws + l), x0_mid = _mm_loadu_pd(wm + l);
-        __m128d x0_rot_c = _mm_loadu_pd(rc + l), x0_rot_s = _mm_loadu_pd(rs + l);
+        __m128d rc0 = _mm_loadu_pd(rc + l), rs0 = _mm_loadu_pd(rs + l);
+        __m128d se0 = _mm_setzero_pd(), sm0 = _mm_setzero_pd(), sd0 = _mm_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m128d ends = _mm_set1_pd(f0 + f2), diff = _mm_set1_pd(f0 - f2);
             __m128d mid = _mm_set1_pd(g[2 * p + 1]);
-            FILON_STEP2(a0, c0, s0, x0);
+            FILON_STEP2(se0, sm0, sd0, c0, s0, rc0, rs0);
         }
-        _mm_storeu_pd(acc + l, a0);
+        filon_end2(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
     }
     return l;
 }
@@ -432,17 +401,27 @@ static size_t accumulate_pairs(size_t panels, size_t n, const double *g, double 
 /* FILON_STEP2 for four orders per AVX register, chosen at run time
  * (docs/style.md, item 12): additions and multiplications alone, no fused
  * ones, so each order's roundings are those of the other paths. */
-#define FILON_STEP4(sum, c, s, w)                                                  \
+#define FILON_STEP4(se, sm, sd, c, s, rc, rs)                                      \
     do {                                                                           \
         __m256d c_ = (c), s_ = (s);                                                \
-        (sum) = _mm256_add_pd(                                                     \
-            (sum),                                                                 \
-            _mm256_add_pd(_mm256_mul_pd(c_, _mm256_add_pd(_mm256_mul_pd(w##_end_c, ends), \
-                                                          _mm256_mul_pd(w##_mid, mid))), \
-                          _mm256_mul_pd(_mm256_mul_pd(s_, w##_end_s), diff)));     \
-        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, w##_rot_c), _mm256_mul_pd(s_, w##_rot_s)); \
-        (s) = _mm256_add_pd(_mm256_mul_pd(s_, w##_rot_c), _mm256_mul_pd(c_, w##_rot_s)); \
+        (se) = _mm256_add_pd((se), _mm256_mul_pd(c_, ends));                       \
+        (sm) = _mm256_add_pd((sm), _mm256_mul_pd(c_, mid));                        \
+        (sd) = _mm256_add_pd((sd), _mm256_mul_pd(s_, diff));                       \
+        (c) = _mm256_sub_pd(_mm256_mul_pd(c_, rc), _mm256_mul_pd(s_, rs));         \
+        (s) = _mm256_add_pd(_mm256_mul_pd(s_, rc), _mm256_mul_pd(c_, rs));         \
     } while (0)
+
+/* filon_end2 for the orders l .. l + 3. */
+__attribute__((target("avx"))) static void filon_end4(double *acc, __m256d se, __m256d sm,
+                                                      __m256d sd, const double *wc,
+                                                      const double *wm, const double *ws)
+{
+    _mm256_storeu_pd(
+        acc, _mm256_add_pd(_mm256_loadu_pd(acc),
+                           _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(wc), se),
+                                                       _mm256_mul_pd(_mm256_loadu_pd(wm), sm)),
+                                         _mm256_mul_pd(_mm256_loadu_pd(ws), sd))));
+}
 
 /* accumulate's orders four at a time, eight while eight remain; returns
  * the orders done. */
@@ -457,34 +436,31 @@ accumulate_quads(size_t panels, size_t n, const double *g, double *restrict acc,
     for (l = 0; l + 8 <= n; l += 8) {
         __m256d c0 = _mm256_loadu_pd(cx + l), c1 = _mm256_loadu_pd(cx + l + 4);
         __m256d s0 = _mm256_loadu_pd(sx + l), s1 = _mm256_loadu_pd(sx + l + 4);
-        __m256d a0 = _mm256_loadu_pd(acc + l), a1 = _mm256_loadu_pd(acc + l + 4);
-        __m256d x0_end_c = _mm256_loadu_pd(wc + l), x0_end_s = _mm256_loadu_pd(ws + l);
-        __m256d x0_mid = _mm256_loadu_pd(wm + l), x0_rot_c = _mm256_loadu_pd(rc + l);
-        __m256d x0_rot_s = _mm256_loadu_pd(rs + l), x1_end_c = _mm256_loadu_pd(wc + l + 4);
-        __m256d x1_end_s = _mm256_loadu_pd(ws + l + 4), x1_mid = _mm256_loadu_pd(wm + l + 4);
-        __m256d x1_rot_c = _mm256_loadu_pd(rc + l + 4), x1_rot_s = _mm256_loadu_pd(rs + l + 4);
+        __m256d rc0 = _mm256_loadu_pd(rc + l), rc1 = _mm256_loadu_pd(rc + l + 4);
+        __m256d rs0 = _mm256_loadu_pd(rs + l), rs1 = _mm256_loadu_pd(rs + l + 4);
+        __m256d se0 = _mm256_setzero_pd(), sm0 = _mm256_setzero_pd(), sd0 = _mm256_setzero_pd();
+        __m256d se1 = _mm256_setzero_pd(), sm1 = _mm256_setzero_pd(), sd1 = _mm256_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
             __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
-            FILON_STEP4(a0, c0, s0, x0);
-            FILON_STEP4(a1, c1, s1, x1);
+            FILON_STEP4(se0, sm0, sd0, c0, s0, rc0, rs0);
+            FILON_STEP4(se1, sm1, sd1, c1, s1, rc1, rs1);
         }
-        _mm256_storeu_pd(acc + l, a0);
-        _mm256_storeu_pd(acc + l + 4, a1);
+        filon_end4(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
+        filon_end4(acc + l + 4, se1, sm1, sd1, wc + l + 4, wm + l + 4, ws + l + 4);
     }
     for (; l + 4 <= n; l += 4) {
         __m256d c0 = _mm256_loadu_pd(cx + l), s0 = _mm256_loadu_pd(sx + l);
-        __m256d a0 = _mm256_loadu_pd(acc + l), x0_end_c = _mm256_loadu_pd(wc + l);
-        __m256d x0_end_s = _mm256_loadu_pd(ws + l), x0_mid = _mm256_loadu_pd(wm + l);
-        __m256d x0_rot_c = _mm256_loadu_pd(rc + l), x0_rot_s = _mm256_loadu_pd(rs + l);
+        __m256d rc0 = _mm256_loadu_pd(rc + l), rs0 = _mm256_loadu_pd(rs + l);
+        __m256d se0 = _mm256_setzero_pd(), sm0 = _mm256_setzero_pd(), sd0 = _mm256_setzero_pd();
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f2 = g[2 * p + 2];
             __m256d ends = _mm256_set1_pd(f0 + f2), diff = _mm256_set1_pd(f0 - f2);
             __m256d mid = _mm256_set1_pd(g[2 * p + 1]);
-            FILON_STEP4(a0, c0, s0, x0);
+            FILON_STEP4(se0, sm0, sd0, c0, s0, rc0, rs0);
         }
-        _mm256_storeu_pd(acc + l, a0);
+        filon_end4(acc + l, se0, sm0, sd0, wc + l, wm + l, ws + l);
     }
     return l;
 }
@@ -512,35 +488,31 @@ static void accumulate(size_t panels, size_t n, const double *g, double *restric
     l += accumulate_pairs(panels, n - l, g, acc + l, cx + l, sx + l, wc + l, ws + l, wm + l,
                           rc + l, rs + l);
 #endif
-    for (; l + 4 <= n; l += 4) {
-        double c0 = cx[l], c1 = cx[l + 1], c2 = cx[l + 2], c3 = cx[l + 3];
-        double s0 = sx[l], s1 = sx[l + 1], s2 = sx[l + 2], s3 = sx[l + 3];
-        double a0 = acc[l], a1 = acc[l + 1], a2 = acc[l + 2], a3 = acc[l + 3];
+    for (; l + 2 <= n; l += 2) {
+        double c0 = cx[l], c1 = cx[l + 1], s0 = sx[l], s1 = sx[l + 1];
+        double se0 = 0.0, sm0 = 0.0, sd0 = 0.0, se1 = 0.0, sm1 = 0.0, sd1 = 0.0;
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f1 = g[2 * p + 1], f2 = g[2 * p + 2];
             double ends = f0 + f2, diff = f0 - f2;
-            FILON_STEP(a0, c0, s0, l);
-            FILON_STEP(a1, c1, s1, l + 1);
-            FILON_STEP(a2, c2, s2, l + 2);
-            FILON_STEP(a3, c3, s3, l + 3);
+            FILON_STEP(se0, sm0, sd0, c0, s0, l);
+            FILON_STEP(se1, sm1, sd1, c1, s1, l + 1);
         }
-        acc[l] = a0;
-        acc[l + 1] = a1;
-        acc[l + 2] = a2;
-        acc[l + 3] = a3;
+        FILON_END(acc[l], se0, sm0, sd0, l);
+        FILON_END(acc[l + 1], se1, sm1, sd1, l + 1);
     }
     for (; l < n; ++l) {
-        double c = cx[l], s = sx[l], sum = acc[l];
+        double c = cx[l], s = sx[l], se = 0.0, sm = 0.0, sd = 0.0;
         for (p = 0; p < panels; ++p) {
             double f0 = g[2 * p], f1 = g[2 * p + 1], f2 = g[2 * p + 2];
             double ends = f0 + f2, diff = f0 - f2;
-            FILON_STEP(sum, c, s, l);
+            FILON_STEP(se, sm, sd, c, s, l);
         }
-        acc[l] = sum;
+        FILON_END(acc[l], se, sm, sd, l);
     }
 }
 
 #undef FILON_STEP
+#undef FILON_END
 
 /* The panel integral of the quadratic q through (f0, f1, f2) at
  * x1 - h, x1, x1 + h, with q = f1 + d1 u + d2 u^2, is
@@ -564,15 +536,19 @@ void ll_filon_moments(const double *g, size_t n_samples, double a, double b,
  * cost its panels). Each order takes the powers k < K whose bound
  * (l (b - a) / 2)^k / k! on their share (relative to the integral of |q|)
  * reaches NARROW_GOAL: term_needed[k - 1] = (NARROW_GOAL k!)^(1/k) is
- * where term k starts to count, so K <= 23 at NARROW_TAU. Which orders
+ * where term k starts to count, so K <= 27 at NARROW_TAU. Which orders
  * take this form, and with how many powers, depends on the order and the
  * interval alone, not on how many orders are asked for: a series computed
- * to fewer orders is a prefix of one to more, bit for bit. The moment of
- * the panel [x1 - h, x1 + h] with q = A + B u + C u^2 in u is A P_(k+1) +
- * B P_(k+2) + C P_(k+3), P_j = (beta^j - alpha^j) / j over its ends alpha,
- * beta (the expansion about the centre costs about two digits of
- * cancellation at the outer panels). */
-#define NARROW_TAU 2.0
+ * to fewer orders is a prefix of one to more, bit for bit. Where the
+ * piece's sample count has them, M_k come from fixed weights of the
+ * samples (filon_powers.h); elsewhere the moment of the panel [x1 - h, x1
+ * + h] with q = A + B u + C u^2 in u is A P_(k+1) + B P_(k+2) + C
+ * P_(k+3), P_j = (beta^j - alpha^j) / j over its ends alpha, beta (the
+ * expansion about the centre costs about two digits of cancellation at the
+ * outer panels). The terms of the series reach tau^3 / 3! = 4.5 times the
+ * integral of |q| at NARROW_TAU: the sum's rounding stays near 1e-15 of
+ * it, as the rule's (a rounding per panel of the phase). */
+#define NARROW_TAU 3.0
 #define NARROW_POWERS LL_FILON_POWERS /* = 1 + the terms of term_needed at most
                                        * NARROW_TAU */
 
@@ -584,121 +560,231 @@ static const double term_needed[NARROW_POWERS - 1] = {
     0.39770405980972057,    0.51289582984850846,    0.64234247497797614,
     0.78530565461182733,    0.94100572489375511,    1.1086557743950802,
     1.287483945295584,      1.4767474542135719,     1.6757408354434047,
-    1.8838002279380828,
+    1.8838002279380828,     2.1003050009539264,     2.3246776287698836,
+    2.5563824486584048,     2.7949237399284534,
 };
 
-/* The powers an order with l (b - a) / 2 = tau takes, from at least k. */
+/* The powers an order with l (b - a) / 2 = tau takes, from at least k:
+ * the first k with tau below term_needed[k - 1] (or NARROW_POWERS), by
+ * bisection from k = 1 (term_needed increases), else step by step (the
+ * next eight orders' from the last eight's). */
 static size_t narrow_terms(double tau, size_t k)
 {
+    if (k == 1) {
+        size_t hi = NARROW_POWERS;
+        while (k < hi) {
+            size_t mid = k + (hi - k) / 2;
+            if (tau >= term_needed[mid - 1])
+                k = mid + 1;
+            else
+                hi = mid;
+        }
+        return k;
+    }
     while (k < NARROW_POWERS && tau >= term_needed[k - 1])
         ++k;
     return k;
 }
 
-/* The narrow sums of one order (lambda = l^2) with terms powers: the even
- * and odd parts, Horner's in l^2. */
-static void narrow_sums(const double *even, const double *odd, size_t terms, double lambda,
-                        double *ce, double *so)
+/* The narrow terms go eight orders at a time, 8q .. 8q + 7, all with the
+ * powers of the last (so an order takes the same powers whether the rest
+ * of its eight is asked for or not; Horner's steps then share their
+ * coefficients and loop), lane j the order 8q + j: its phase cos, sin(l
+ * x_c) from eight chains of rotations by 8 x_c, and its term
+ *   cos(l x_c) E(l^2) - sin(l x_c) l O(l^2),
+ * E and O the even and odd sums by Horner's rule in l^2. Lanes outside
+ * the orders asked for are computed and dropped. The AVX, SSE2 and
+ * scalar loops do the same operations lane by lane. */
+#define NARROW_LANES 8
+
+typedef struct narrow_run {
+    const double *even, *odd;
+    double half, rc, rs;     /* (b - a) / 2; the rotation by 8 x_c           */
+    double c[NARROW_LANES], s[NARROW_LANES]; /* the first eight's phases    */
+    size_t start, first, end; /* the first eight's order; the orders asked for */
+} narrow_run;
+
+/* Add lane j's term of the eight at order start to its moment where that
+ * order is asked for. */
+static void narrow_keep(const narrow_run *r, size_t start, const double *term, double *moments)
 {
-    double e = 0.0, o = 0.0;
     size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = e * lambda + even[j];
-    for (j = terms / 2; j-- > 0;)
-        o = o * lambda + odd[j];
-    *ce = e;
-    *so = o;
+    for (j = 0; j < NARROW_LANES; ++j)
+        if (start + j >= r->first && start + j < r->end)
+            moments[start + j - r->first] += term[j];
 }
 
-/* One order's narrow term with terms powers into *moment. */
-static void narrow_one(const double *even, const double *odd, size_t terms, double order,
-                       double cx, double sx, double *moment)
+#if !defined(__SSE2__)
+static void narrow_scalar(const narrow_run *r, double *moments)
 {
-    double ce, so;
-    narrow_sums(even, odd, terms, order * order, &ce, &so);
-    *moment += cx * ce - sx * order * so;
-}
-
-#if defined(__SSE2__)
-/* narrow_one for the orders order, order + 1 (lane by lane the same). */
-static void narrow_two(const double *even, const double *odd, size_t terms, double order,
-                       const double *cx, const double *sx, double *moments)
-{
-    __m128d o = _mm_set_pd(order + 1.0, order), lambda = _mm_mul_pd(o, o);
-    __m128d e = _mm_setzero_pd(), od = _mm_setzero_pd();
-    size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = _mm_add_pd(_mm_mul_pd(e, lambda), _mm_set1_pd(even[j]));
-    for (j = terms / 2; j-- > 0;)
-        od = _mm_add_pd(_mm_mul_pd(od, lambda), _mm_set1_pd(odd[j]));
-    _mm_storeu_pd(moments,
-                  _mm_add_pd(_mm_loadu_pd(moments),
-                             _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(cx), e),
-                                        _mm_mul_pd(_mm_mul_pd(_mm_loadu_pd(sx), o), od))));
-}
-#endif
-
-#if FILON_HAVE_AVX
-/* narrow_one for the orders order .. order + 3, one AVX register. */
-__attribute__((target("avx"))) static void narrow_four(const double *even, const double *odd,
-                                                       size_t terms, double order,
-                                                       const double *cx, const double *sx,
-                                                       double *moments)
-{
-    __m256d o = _mm256_set_pd(order + 3.0, order + 2.0, order + 1.0, order);
-    __m256d lambda = _mm256_mul_pd(o, o), e = _mm256_setzero_pd(), od = _mm256_setzero_pd();
-    size_t j;
-    for (j = (terms - 1) / 2 + 1; j-- > 0;)
-        e = _mm256_add_pd(_mm256_mul_pd(e, lambda), _mm256_set1_pd(even[j]));
-    for (j = terms / 2; j-- > 0;)
-        od = _mm256_add_pd(_mm256_mul_pd(od, lambda), _mm256_set1_pd(odd[j]));
-    _mm256_storeu_pd(
-        moments,
-        _mm256_add_pd(_mm256_loadu_pd(moments),
-                      _mm256_sub_pd(_mm256_mul_pd(_mm256_loadu_pd(cx), e),
-                                    _mm256_mul_pd(_mm256_mul_pd(_mm256_loadu_pd(sx), o), od))));
-}
-#endif
-
-/* The narrow terms of the orders first .. first + count - 1 with the
- * phases cx, sx of each, into moments. Orders go in fours (4q .. 4q + 3),
- * all with the powers of the last, so an order takes the same powers
- * whether the rest of its four is in the same block of orders or not:
- * whole fours share Horner's steps in one AVX register or two SSE2 ones
- * (lane by lane the operations of narrow_one, as at the ends). */
-static void narrow_orders(const double *even, const double *odd, double half, size_t first,
-                          size_t count, const double *cx, const double *sx, double *moments)
-{
-    size_t l = 0, terms = 1;
-    while (l < count) {
-        size_t order = first + l, four = order & ~(size_t)3, k, rest;
-        terms = narrow_terms((double)(four + 3) * half, terms);
-        if (order == four && l + 4 <= count) {
-#if FILON_HAVE_AVX
-            if (have_avx()) {
-                narrow_four(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
-                l += 4;
-                continue;
-            }
-#endif
-#if defined(__SSE2__)
-            narrow_two(even, odd, terms, (double)order, cx + l, sx + l, moments + l);
-            narrow_two(even, odd, terms, (double)order + 2.0, cx + l + 2, sx + l + 2,
-                       moments + l + 2);
-            l += 4;
-            continue;
-#endif
+    double c[NARROW_LANES], s[NARROW_LANES], term[NARROW_LANES];
+    size_t terms = 1, j, k, eight;
+    memcpy(c, r->c, sizeof c);
+    memcpy(s, r->s, sizeof s);
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (j = 0; j < NARROW_LANES; ++j) {
+            double order = (double)(eight + j), lambda = order * order, e = 0.0, o = 0.0, next;
+            for (k = (terms - 1) / 2 + 1; k-- > 0;)
+                e = e * lambda + r->even[k];
+            for (k = terms / 2; k-- > 0;)
+                o = o * lambda + r->odd[k];
+            term[j] = c[j] * e - s[j] * order * o;
+            next = c[j] * r->rc - s[j] * r->rs;
+            s[j] = s[j] * r->rc + c[j] * r->rs;
+            c[j] = next;
         }
-        rest = four + 4 - order;
-        if (rest > count - l)
-            rest = count - l;
-        for (k = 0; k < rest; ++k, ++l)
-            narrow_one(even, odd, terms, (double)(first + l), cx[l], sx[l], moments + l);
+        narrow_keep(r, eight, term, moments);
     }
 }
+#endif
 
-/* The powers' sums of the piece, powers of them, into kept's even and odd
- * (Horner's coefficients in l^2). */
+#if defined(__SSE2__)
+static void narrow_sse2(const narrow_run *r, double *moments)
+{
+    __m128d c[4], s[4], o[4];
+    __m128d rc = _mm_set1_pd(r->rc), rs = _mm_set1_pd(r->rs), step = _mm_set1_pd(8.0);
+    size_t eight, terms = 1, k, i;
+    for (i = 0; i < 4; ++i) {
+        c[i] = _mm_loadu_pd(r->c + 2 * i);
+        s[i] = _mm_loadu_pd(r->s + 2 * i);
+        o[i] = _mm_set_pd((double)(r->start + 2 * i + 1), (double)(r->start + 2 * i));
+    }
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        __m128d lambda[4], e[4], d[4], t[4];
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (i = 0; i < 4; ++i) {
+            lambda[i] = _mm_mul_pd(o[i], o[i]);
+            e[i] = _mm_setzero_pd();
+            d[i] = _mm_setzero_pd();
+        }
+        for (k = (terms - 1) / 2 + 1; k-- > 0;) {
+            __m128d w = _mm_set1_pd(r->even[k]);
+            for (i = 0; i < 4; ++i)
+                e[i] = _mm_add_pd(_mm_mul_pd(e[i], lambda[i]), w);
+        }
+        for (k = terms / 2; k-- > 0;) {
+            __m128d w = _mm_set1_pd(r->odd[k]);
+            for (i = 0; i < 4; ++i)
+                d[i] = _mm_add_pd(_mm_mul_pd(d[i], lambda[i]), w);
+        }
+        for (i = 0; i < 4; ++i) {
+            __m128d next = _mm_sub_pd(_mm_mul_pd(c[i], rc), _mm_mul_pd(s[i], rs));
+            t[i] = _mm_sub_pd(_mm_mul_pd(c[i], e[i]), _mm_mul_pd(_mm_mul_pd(s[i], o[i]), d[i]));
+            s[i] = _mm_add_pd(_mm_mul_pd(s[i], rc), _mm_mul_pd(c[i], rs));
+            c[i] = next;
+            o[i] = _mm_add_pd(o[i], step);
+        }
+        if (eight >= r->first && eight + NARROW_LANES <= r->end) {
+            double *m = moments + (eight - r->first);
+            for (i = 0; i < 4; ++i)
+                _mm_storeu_pd(m + 2 * i, _mm_add_pd(_mm_loadu_pd(m + 2 * i), t[i]));
+        } else {
+            double term[NARROW_LANES];
+            for (i = 0; i < 4; ++i)
+                _mm_storeu_pd(term + 2 * i, t[i]);
+            narrow_keep(r, eight, term, moments);
+        }
+    }
+}
+#endif
+
+#if FILON_HAVE_AVX
+__attribute__((target("avx"))) static void narrow_avx(const narrow_run *r, double *moments)
+{
+    __m256d c0 = _mm256_loadu_pd(r->c), c1 = _mm256_loadu_pd(r->c + 4);
+    __m256d s0 = _mm256_loadu_pd(r->s), s1 = _mm256_loadu_pd(r->s + 4);
+    __m256d rc = _mm256_set1_pd(r->rc), rs = _mm256_set1_pd(r->rs);
+    __m256d step = _mm256_set1_pd(8.0), start = _mm256_set1_pd((double)r->start);
+    __m256d o0 = _mm256_add_pd(start, _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
+    __m256d o1 = _mm256_add_pd(start, _mm256_set_pd(7.0, 6.0, 5.0, 4.0));
+    size_t eight, terms = 1, k;
+    for (eight = r->start; eight < r->end; eight += NARROW_LANES) {
+        __m256d l0 = _mm256_mul_pd(o0, o0), l1 = _mm256_mul_pd(o1, o1);
+        __m256d e0 = _mm256_setzero_pd(), e1 = _mm256_setzero_pd();
+        __m256d d0 = _mm256_setzero_pd(), d1 = _mm256_setzero_pd(), t0, t1, n0, n1;
+        terms = narrow_terms((double)(eight + NARROW_LANES - 1) * r->half, terms);
+        for (k = (terms - 1) / 2 + 1; k-- > 0;) {
+            __m256d w = _mm256_broadcast_sd(r->even + k);
+            e0 = _mm256_add_pd(_mm256_mul_pd(e0, l0), w);
+            e1 = _mm256_add_pd(_mm256_mul_pd(e1, l1), w);
+        }
+        for (k = terms / 2; k-- > 0;) {
+            __m256d w = _mm256_broadcast_sd(r->odd + k);
+            d0 = _mm256_add_pd(_mm256_mul_pd(d0, l0), w);
+            d1 = _mm256_add_pd(_mm256_mul_pd(d1, l1), w);
+        }
+        t0 = _mm256_sub_pd(_mm256_mul_pd(c0, e0), _mm256_mul_pd(_mm256_mul_pd(s0, o0), d0));
+        t1 = _mm256_sub_pd(_mm256_mul_pd(c1, e1), _mm256_mul_pd(_mm256_mul_pd(s1, o1), d1));
+        if (eight >= r->first && eight + NARROW_LANES <= r->end) {
+            double *m = moments + (eight - r->first);
+            _mm256_storeu_pd(m, _mm256_add_pd(_mm256_loadu_pd(m), t0));
+            _mm256_storeu_pd(m + 4, _mm256_add_pd(_mm256_loadu_pd(m + 4), t1));
+        } else {
+            double term[NARROW_LANES];
+            _mm256_storeu_pd(term, t0);
+            _mm256_storeu_pd(term + 4, t1);
+            narrow_keep(r, eight, term, moments);
+        }
+        n0 = _mm256_sub_pd(_mm256_mul_pd(c0, rc), _mm256_mul_pd(s0, rs));
+        n1 = _mm256_sub_pd(_mm256_mul_pd(c1, rc), _mm256_mul_pd(s1, rs));
+        s0 = _mm256_add_pd(_mm256_mul_pd(s0, rc), _mm256_mul_pd(c0, rs));
+        s1 = _mm256_add_pd(_mm256_mul_pd(s1, rc), _mm256_mul_pd(c1, rs));
+        c0 = n0;
+        c1 = n1;
+        o0 = _mm256_add_pd(o0, step);
+        o1 = _mm256_add_pd(o1, step);
+    }
+}
+#endif
+
+/* The narrow terms of the orders first .. first + count - 1 of a piece
+ * centred on x_c into moments. The phases start at the eight holding
+ * first: the first lane's directly, the next seven by rotations by x_c. */
+static void narrow_orders(const double *even, const double *odd, double half, double x_c,
+                          size_t first, size_t count, double *moments)
+{
+    narrow_run r;
+    double c1 = cos(x_c), s1 = sin(x_c), c2, s2;
+    size_t j;
+    r.even = even;
+    r.odd = odd;
+    r.half = half;
+    r.first = first;
+    r.end = first + count;
+    r.start = first & ~(size_t)(NARROW_LANES - 1);
+    r.c[0] = r.start ? cos((double)r.start * x_c) : 1.0;
+    r.s[0] = r.start ? sin((double)r.start * x_c) : 0.0;
+    for (j = 1; j < NARROW_LANES; ++j) {
+        r.c[j] = r.c[j - 1] * c1 - r.s[j - 1] * s1;
+        r.s[j] = r.s[j - 1] * c1 + r.c[j - 1] * s1;
+    }
+    /* the rotation by 8 x_c: x_c doubled three times */
+    c2 = (c1 - s1) * (c1 + s1);
+    s2 = 2.0 * s1 * c1;
+    r.rc = (c2 - s2) * (c2 + s2);
+    r.rs = 2.0 * s2 * c2;
+    c2 = (r.rc - r.rs) * (r.rc + r.rs);
+    s2 = 2.0 * r.rs * r.rc;
+    r.rc = c2;
+    r.rs = s2;
+#if FILON_HAVE_AVX
+    if (have_avx()) {
+        narrow_avx(&r, moments);
+        return;
+    }
+#endif
+#if defined(__SSE2__)
+    narrow_sse2(&r, moments);
+#else
+    narrow_scalar(&r, moments);
+#endif
+}
+
+/* The powers' sums of the piece, powers of them (or all, where the
+ * piece's sample count has a table of their weights: filon_powers.h, a
+ * fixed sum of its samples per power instead of each panel's powers),
+ * into kept's even and odd (Horner's coefficients in l^2). */
 static void narrow_sums_of(const double *g, size_t n_samples, double a, double b, size_t powers,
                            ll_filon_kept *kept)
 {
@@ -706,6 +792,10 @@ static void narrow_sums_of(const double *g, size_t n_samples, double a, double b
     double inv[NARROW_POWERS + 3], m[NARROW_POWERS], fact = 1.0;
     double *even = kept->even, *odd = kept->odd;
     size_t k, p, j, panels = (n_samples - 1) / 2;
+    if (ll_filon_power_sums(g, n_samples, 0.5 * (b - a), even, odd)) {
+        kept->powers = NARROW_POWERS;
+        return;
+    }
     for (j = 1; j < powers + 3; ++j)
         inv[j] = 1.0 / (double)j;
     memset(m, 0, sizeof m);
@@ -737,17 +827,17 @@ static void narrow_sums_of(const double *g, size_t n_samples, double a, double b
 }
 
 /* The orders first .. first + count - 1 that are narrow (at most n) into
- * moments; returns count. scratch: 2 n doubles. The powers' sums come
+ * moments; returns count. The powers' sums come
  * from kept where it holds enough of them (a block of orders after the
  * first), else are summed into it: each sum is the same whatever number
  * of powers is summed with it, so the moments do not depend on which
  * block summed them. kept NULL: summed here for this call alone. */
 static size_t narrow_moments(const double *g, size_t n_samples, double a, double b, size_t first,
-                             size_t n, double *moments, double *scratch, ll_filon_kept *kept)
+                             size_t n, double *moments, ll_filon_kept *kept)
 {
-    double half = 0.5 * (b - a), centre = 0.5 * (a + b), cx, sx, c1, s1, avail;
-    double *cos_l = scratch, *sin_l = scratch + n;
-    size_t count, powers, l, panels = (n_samples - 1) / 2, last;
+    double half = 0.5 * (b - a), centre = 0.5 * (a + b), avail, sums_cost;
+    size_t count, powers, panels = (n_samples - 1) / 2, last;
+    int tabled = ll_filon_power_tabled(n_samples);
     ll_filon_kept own;
     avail = half > 0.0 ? floor(NARROW_TAU / half) - (double)first + 1.0 : (double)n;
     if (avail <= 0.0)
@@ -756,35 +846,30 @@ static size_t narrow_moments(const double *g, size_t n_samples, double a, double
      * asked for) save more of the panels' work (about 4 instructions per
      * panel and order, with the orders side by side in vector registers,
      * and 10 more per order for the rule's weights and phases) than the
-     * powers' moments cost (about 10 per panel and power). */
-    powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
-    if (!(avail * ((double)panels * 4.0 + 10.0) > (double)(panels * powers) * 10.0))
+     * powers' moments cost (about 10 per panel and power, or 2 per sample
+     * and power from a table). */
+    if (tabled) {
+        sums_cost = 2.0 * (double)(n_samples * NARROW_POWERS);
+    } else {
+        powers = narrow_terms(fmin(NARROW_TAU, ((double)first + avail - 1.0) * half), 1);
+        sums_cost = (double)(panels * powers) * 10.0;
+    }
+    if (!(avail * ((double)panels * 4.0 + 10.0) > sums_cost))
         return 0;
     count = avail >= (double)n ? n : (size_t)avail;
-    /* the powers of the last of the last order's four (narrow_orders) */
-    last = (first + count - 1) | 3;
-    powers = narrow_terms((double)last * half, 1);
+    /* the powers of the last of the last order's eight (narrow_orders); a
+     * table gives them all at once */
+    last = (first + count - 1) | (NARROW_LANES - 1);
+    powers = tabled ? NARROW_POWERS : narrow_terms((double)last * half, 1);
     if (!kept) {
         kept = &own;
         narrow_sums_of(g, n_samples, a, b, powers, kept);
     } else if (kept->powers < powers) {
         /* all that the piece's narrow orders take, for the blocks after */
-        last = ((first + (size_t)avail - 1) | 3);
+        last = ((first + (size_t)avail - 1) | (NARROW_LANES - 1));
         narrow_sums_of(g, n_samples, a, b, narrow_terms((double)last * half, 1), kept);
     }
-    c1 = cos(centre);
-    s1 = sin(centre);
-    cx = first ? cos((double)first * centre) : 1.0;
-    sx = first ? sin((double)first * centre) : 0.0;
-    for (l = 0; l < count; ++l) {
-        double next;
-        cos_l[l] = cx;
-        sin_l[l] = sx;
-        next = cx * c1 - sx * s1;
-        sx = sx * c1 + cx * s1;
-        cx = next;
-    }
-    narrow_orders(kept->even, kept->odd, half, first, count, cos_l, sin_l, moments);
+    narrow_orders(kept->even, kept->odd, half, centre, first, count, moments);
     return count;
 }
 
@@ -800,7 +885,7 @@ void ll_filon_moments_kept(const double *g, size_t n_samples, double a, double b
 {
     filon_rule r;
     size_t narrow =
-        narrow_moments(g, n_samples, a, b, first, n_moments, moments, scratch, kept);
+        narrow_moments(g, n_samples, a, b, first, n_moments, moments, kept);
     if (narrow == n_moments)
         return;
     rule_init(&r, n_samples, a, b, first + narrow, n_moments - narrow, scratch);

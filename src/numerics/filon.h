@@ -12,7 +12,7 @@
  * through n_samples (odd, >= 3) equidistant samples g_k = g(a + k h'),
  * h' = (b - a) / (n_samples - 1), and each panel is integrated exactly, so
  * the rule stays exact however fast cos(l phi) oscillates (the orders with
- * l (b - a) / 2 <= 2 of a piece with many of them by the Taylor series of
+ * l (b - a) / 2 <= 3 of a piece with many of them by the Taylor series of
  * cos(l phi) about its centre, truncated below 1e-15 of the integral of
  * |g|: the value of an order never depends on how many are asked for).
  *
@@ -30,7 +30,7 @@ LL_INTERNAL void ll_filon_moments_from(const double *g, size_t n_samples, double
 /* The Taylor form's sums of one piece's samples (the panels summed once
  * per power of u), kept between calls of ll_filon_moments_kept for the
  * next blocks of orders of the same samples. powers = 0: none yet. */
-#define LL_FILON_POWERS 23
+#define LL_FILON_POWERS 27
 typedef struct ll_filon_kept {
     size_t powers;
     double even[LL_FILON_POWERS / 2 + 1], odd[LL_FILON_POWERS / 2 + 1];
