@@ -27,7 +27,11 @@
  * 40 to 80 degrees from the normal where D had only its floor of 2%: at
  * 64 x 64^2 x 64^2 T from below was 7.9%, 11.4% and 11.6% low at 60, 65
  * and 70 degrees. With the floor of 5% for the set seen from the denser
- * side of a lone interface: within 1.3%.
+ * side of a lone interface: within 1.3% at 60, 62.5, ..., 70 degrees, but
+ * 1.4% off at 62 degrees, between two stored elevations, which the reader
+ * blended at the same sample node. Read as a refracted set is, at the pair
+ * turned with wi to each elevation (tables_refract.c): within 0.92% at
+ * every degree from 60 to 70.
  */
 #include "test_util.h"
 #include "tables_build.h"
@@ -89,18 +93,26 @@ static void test_reflection_below_grazing(void **state)
     ll_bsdf_release(src);
 }
 
-#define N_BEYOND 5
-static const double beyond_deg[N_BEYOND] = { 60.0, 62.5, 65.0, 67.5, 70.0 };
-/* What the tables reach at this grid (0.43%, 0.42%, 1.24%, 0.32% and
- * 0.55%, the rest the blend between elevations) with a margin; the
- * writer before was 7.9%, 10.5%, 11.4%, 12.3% and 11.6% low. */
-#define BEYOND_BOUND 0.015
+/* Every degree: the file's elevations lie about 1.5 degrees apart here,
+ * so most of these fall between two, where T falls by a factor of about
+ * 1.25 per degree. */
+#define N_BEYOND 11
+static const double beyond_deg[N_BEYOND] = { 60.0, 61.0, 62.0, 63.0, 64.0, 65.0,
+                                             66.0, 67.0, 68.0, 69.0, 70.0 };
+/* What the tables reach at this grid (worst 0.92% at 62 degrees; 0.23%,
+ * 0.05%, 0.92%, 0.58%, 0.08%, 0.74%, 0.38%, 0.71%, 0.00%, 0.18% and
+ * 0.58% at 60..70) with a margin. The reader that blended the two
+ * elevations at the same sample node was 1.43% off at 62 and 1.24% at 65
+ * degrees; the writer before the flipped warp's floor of 5% was 7.9% to
+ * 12.3% low. */
+#define BEYOND_BOUND 0.011
 
 static void test_transmission_below_beyond_critical(void **state)
 {
     char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
     ll_tables_options o = LL_TABLES_OPTIONS_INIT;
     ll_bsdf *src = NULL, *tab = NULL;
+    double worst = 0.0;
     int k;
     (void)state;
     o.n_theta_i = 64;
@@ -114,8 +126,11 @@ static void test_transmission_below_beyond_critical(void **state)
         printf("frosted: T from below at %.1f degrees: table %.6f, .bsdf %.6f (%.3f%%)\n",
                beyond_deg[k], tt, ts, 100.0 * (tt / ts - 1.0));
         assert_true(ts > 0.005);
-        assert_true(fabs(tt / ts - 1.0) <= BEYOND_BOUND);
+        if (fabs(tt / ts - 1.0) > worst)
+            worst = fabs(tt / ts - 1.0);
     }
+    printf("frosted: T from below at 60-70 degrees: worst %.3f%%\n", 100.0 * worst);
+    assert_true(worst <= BEYOND_BOUND);
     ll_bsdf_release(tab);
     ll_bsdf_release(src);
 }

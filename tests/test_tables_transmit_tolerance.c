@@ -18,8 +18,8 @@
  * estimate of the .bsdf and of the table alike moves by up to 7% from one
  * stratification to another, where quadrature of eval puts the table
  * within 0.2% at these angles) and the pane's reflection at
- * 85 degrees do not, nor do the compensated glass's transmission from below
- * at 70 degrees (0.34%) and its f, nor does the coat, and are held to their
+ * 85 degrees do not, nor do the compensated glass's transmission by this
+ * estimate (0.59%) and its f, nor does the coat, and are held to their
  * present figures so that a change that worsens them fails.
  */
 #include "test_util.h"
@@ -38,20 +38,34 @@ typedef struct bounds {
  * median 0.036%, 95th 0.47%, 99th 2.72% (by lobe: reflection above 1.6%,
  * transmission from above 1.4%, reflection below 4.9%, transmission from
  * below 1.6%); frosted glass R 0.20% (was 2.39% from below at 85 degrees
- * before its reflection from below took the D from above), T 0.34% (from
- * below at 70 degrees, where T is 0.9% of the light; 3.27% before the
- * flipped warp's D took its heavier floor there),
- * median 0.077%, 95th 1.24%, 99th 4.13% (reflection above 2.4%,
- * transmission from above 3.8%, reflection below 5.9%, transmission from
- * below 3.9%); pane R 1.38% (at 85 degrees), T 0.40%, median 0.092%,
- * 95th 0.81%, 99th 2.91% (reflection 3.5%, transmission 2.1%); coat over
- * a medium R 2.43% (from below at 30 degrees, where the coat's compensation
- * returns its lost light as reflection), T 1.05%, median 0.11%, 95th 2.7%,
- * 99th 14.2% (reflection from below 20%, the rest 3.0..4.5%). */
+ * before its reflection from below took the D from above), T 0.59% (from
+ * above at 70 degrees; see below), median 0.074%, 95th 1.08%, 99th 4.01%
+ * (reflection above 2.4%, transmission from above 3.7%, reflection below
+ * 5.9%, transmission from below 3.5%; 1.24% and 4.13% at the 95th and
+ * 99th, transmission 3.8% and 3.9%, before its z-flipped sets were read at
+ * the pair turned to each elevation); pane R 1.07% (at 85 degrees), T
+ * 0.35%, median 0.091%, 95th 0.70%, 99th 2.96% (reflection 3.4%,
+ * transmission 1.7% and 2.0%; 0.82% and 3.00% at the 95th and 99th
+ * before); coat over a medium R 2.16% (from below at 30 degrees, where the
+ * coat's compensation returns its lost light as reflection), T 1.51%
+ * (blue, from below at 60 degrees; see below), median 0.15%, 95th 2.7%,
+ * 99th 14.4% (reflection from below 20%, the rest 2.7..4.4%).
+ *
+ * T here is the stratified estimate of tl_albedo (192^2 strata), which
+ * moves with the sampler's layout of the strata: a z-flipped set samples
+ * one of wi's two elevations picked by u[0] (tables_refract.c), and so the
+ * frosted glass's T from above at 70 degrees came to 1.0059 of the .bsdf's
+ * at 192^2 strata but 0.9990, 0.9997 and 1.0006 at 256^2, 384^2 and 512^2
+ * (0.9985, 0.9987, 0.9998, 0.9996 when it sampled the two elevations'
+ * blend at one node), and by quadrature of eval (ll_tables_albedo) it is
+ * 0.11% low (0.13% before); the coat's blue T from below at 60 degrees
+ * 0.9849 at 192^2, 0.9959, 0.9966 and 0.9949 at the others (0.9930,
+ * 0.9936, 0.9948, 0.9944 before), 0.41% low by quadrature (0.37%
+ * before). These two bounds hold the 192^2 figures. */
 #define BOUND_GLASS 0.003, 0.007, 0.001, 0.007, 0.03
-#define BOUND_FROSTED 0.004, 0.005, 0.002, 0.015, 0.05
-#define BOUND_PANE 0.016, 0.004, 0.002, 0.01, 0.035
-#define BOUND_COAT 0.03, 0.013, 0.002, 0.03, 0.16
+#define BOUND_FROSTED 0.004, 0.0075, 0.001, 0.013, 0.045
+#define BOUND_PANE 0.013, 0.004, 0.0015, 0.009, 0.033
+#define BOUND_COAT 0.025, 0.018, 0.002, 0.03, 0.155
 
 /* text's tables by the sizes of o (NULL: chosen by the tolerance). */
 static void check(const char *text, const char *name, const ll_tables_options *o,

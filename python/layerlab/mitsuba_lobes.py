@@ -17,8 +17,11 @@ reflection set of the z-flipped direction. A reflected set with
 vector, a refracted set with `transmittance_eta` over the Fresnel
 transmittance times the refraction's d omega_m / d omega_o at its
 refraction half vector (transmittance_at); both are multiplied back.
-A refracted set is read between two incident elevations at the pair
-turned with wi to each (TracedTables.refract_eval_pdf, refract_sample).
+A transmitted set is read between two incident elevations at the pair
+turned with wi to each (TracedTables.refract_eval_pdf, refract_sample;
+flipped_eval_pdf, flipped_sample for the z-flipped direction's warp,
+which turns wo at turn_rate and takes D / (4 sigma) at each elevation's
+own pair).
 Sampling picks the reflected
 or the transmitted lobe of wi's side in proportion to their stored
 luminance albedos (`<set>.albedo`, per incident elevation, interpolated
@@ -42,8 +45,9 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables, _flip, _fresnel_at, _fresnel_eta, _masked_call, \
-    _refraction_half, _refraction_jacobian
+from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, _fresnel_eta, \
+    _masked_call, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
+    _theta_to_u, _turn
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -81,6 +85,120 @@ def transmittance_at(wi, wo, m, eta):
     (wi above, wo below, m their refraction half vector), as the C
     reader's ll_tables_transmittance_pair."""
     return (1.0 - _fresnel_at(wi, m, eta)) * _refraction_jacobian(wi, wo, m, eta)
+
+
+def turn_rate(theta, side_eta):
+    """How fast a set of the z-flipped direction's warp turns wo with wi
+    (at elevation theta) between two elevations, as the C reader's
+    turn_rate (tables_refract.c): the refracted direction's d theta_t /
+    d theta_i = cos theta / (eta' cos theta_t), at most 1, and 1 where
+    nothing refracts or side_eta (eta', the far side over wi's) is 1."""
+    if side_eta <= 0.0 or side_eta == 1.0:
+        return 1.0
+    st = dr.sin(theta) / side_eta
+    d = side_eta * dr.safe_sqrt(1.0 - st * st)
+    r = dr.cos(theta) / dr.select(d > 0, d, 1.0)
+    return dr.select((st < 1.0) & (d > 0) & (r < 1.0), r, 1.0)
+
+
+def turned_wo(axis, rate, theta, param, c, s, wo):
+    """wo turned with wi from its elevation theta to the file's elevation
+    param (wi's own turn: cosine c, sine s) at rate (turn_rate)."""
+    if isinstance(rate, float) and rate == 1.0:
+        return _turn(axis, c, s, wo)
+    s_o, c_o = dr.sincos(rate * (param - theta))
+    return _turn(axis, c_o, s_o, wo)
+
+
+def _flipped_at(t, wi, phi_i, param, slices, wo, active, want_value, want_pdf):
+    """At one of the file's elevations (wi's own, param the warps' parameter
+    there, slices the weights that read it alone): a z-flipped set's values
+    at the pair, times D / (4 sigma) there, the elevation's density per
+    solid angle of wo, and whether the pair is one of the lobe (wo below)."""
+    active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) < 0)
+    m = dr.normalize(wi + _flip(wo))
+    u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
+    u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
+    params = t._params(phi_i, param)
+    sample, vndf_pdf = t.vndf.invert(u_m, params, active)
+    value = density = None
+    if want_value:
+        value = t.rgb(sample, phi_i, param, active, slices)
+        if t.jacobian:
+            u_wi = mi.Point2f(_theta_to_u(param), _phi_to_u(phi_i))
+            scale = t._jacobian_scale(u_m, u_wi, active)
+            value = [v * scale for v in value]
+    if want_pdf:
+        lum = t.luminance.eval(sample, params, active)
+        density = vndf_pdf * lum / (_normal_area(u_m.x, mi.Frame3f.sin_theta(m)) *
+                                    4.0 * dr.dot(wi, m))
+        density = dr.select(active & dr.isfinite(density), density, 0.0)
+    return value, density, active
+
+
+def flipped_eval_pdf(t, wi, wo, side_eta, active, want_value=True, want_pdf=True):
+    """eval_pdf of a transmitted set of the z-flipped direction's warp (wi
+    above, wo below), as the C reader's tables_refract.c reads it: between
+    two incident elevations the pair turned to each (wo at turn_rate), each
+    elevation's values times D / (4 sigma) at its own pair, blended with
+    the elevations' weights; the pdf the mixture of their densities."""
+    active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) < 0)
+    value = [0.0, 0.0, 0.0] if want_value else None
+    pdf = 0.0 if want_pdf else None
+    elevations, axis, phi_i = t._elevations(wi)
+    theta = _elevation(wi)
+    rate = turn_rate(theta, side_eta)
+    for weight, wi_k, c, s, param, slices in elevations:
+        o = turned_wo(axis, rate, theta, param, c, s, wo)
+        v, p, ok_k = _flipped_at(t, wi_k, phi_i, param, slices, o, active & (weight > 0),
+                                 want_value, want_pdf)
+        if want_value:
+            value = [dr.select(ok_k, dr.fma(v[i], weight, value[i]), value[i])
+                     for i in range(3)]
+        if want_pdf:
+            pdf = dr.select(ok_k, dr.fma(p, weight, pdf), pdf)
+    if want_value:
+        value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
+    if want_pdf:
+        pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
+    return value, pdf
+
+
+def flipped_sample(t, wi, sample2, side_eta, active):
+    """sample of a transmitted set of the z-flipped direction's warp (as
+    flipped_eval_pdf): one of wi's two elevations picked by sample2.x with
+    its weight (rescaled and passed on), wi turned to it reflected about
+    the normal its warps give, z negated and turned back at turn_rate; the
+    pdf and value are flipped_eval_pdf's there. (wo, pdf, f cos theta_o as
+    a list of 3 Float, ok)."""
+    active = active & (mi.Frame3f.cos_theta(wi) > 0)
+    (e0, e1), axis, phi_i = t._elevations(wi)
+    theta = _elevation(wi)
+    rate = turn_rate(theta, side_eta)
+    w0 = e0[0]
+    second = sample2.x >= w0
+    u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
+                   sample2.x / dr.select(w0 > 0, w0, 1.0))
+    pick = [dr.select(second, b, a) for a, b in zip(e0[1:5], e1[1:5])]
+    wi_k, c_k, s_k, param = pick
+    params = t._params(phi_i, param)
+    sample, lum_pdf = t.luminance.sample(
+        mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
+    u_m, vndf_pdf = t.vndf.sample(sample, params, active)
+    m, _ = _normal_at(u_m, phi_i)
+    c = dr.dot(wi_k, m)
+    r = dr.fma(m, 2.0 * c, -wi_k)
+    o = _flip(r)
+    if isinstance(rate, float) and rate == 1.0:
+        wo = _turn(axis, c_k, -s_k, o)
+    else:
+        s_o, c_o = dr.sincos(rate * (param - theta))
+        wo = _turn(axis, c_o, -s_o, o)
+    ok = active & (c > 0) & (r.z > 0) & (wo.z < 0) & (lum_pdf > 0) & (vndf_pdf > 0)
+    value, pdf = flipped_eval_pdf(t, wi, wo, side_eta, ok, True, True)
+    ok = ok & (pdf > 0)
+    value = [dr.select(ok, v, 0.0) for v in value]
+    return wo, dr.select(ok, pdf, 0.0), value, ok
 
 
 def _scalar_false(mask):
@@ -133,6 +251,8 @@ class TracedLobes:
             if self.jit:
                 t.albedo = mi.Float(albedo)
             t.warp_eta = 0.0
+            # (The far side's index over wi's: how a z-flipped set turns wo.)
+            t.side_eta = (1.0 / self.eta if bottom else self.eta) if transmit else 0.0
             if transmit:
                 t.warp_eta = float(np.asarray(fields[prefix + "warp_eta"],
                                               dtype=np.float32).ravel()[0])
@@ -196,7 +316,7 @@ class TracedLobes:
                 k = transmittance_at(w, o, m, t.warp_eta)
                 v = [x * k for x in v]
             return v, p
-        return t.eval_pdf(w, _flip(o), mask, want_value, want_pdf)
+        return flipped_eval_pdf(t, w, o, t.side_eta, mask, want_value, want_pdf)
 
     # ------------------------------------------------------ the three calls
 
@@ -284,8 +404,7 @@ class TracedLobes:
                         k = transmittance_at(w, o, m, t.warp_eta)
                         val = [x * k for x in val]
                 else:
-                    o, p, val, found = t.reflect_sample(w, v, mask)
-                    o = _flip(o)
+                    o, p, val, found = flipped_sample(t, w, v, t.side_eta, mask)
                 return mi.Vector3f(o), mi.Float(p), tuple(val), mi.Bool(found)
 
             o, p, val, found = self._branch(

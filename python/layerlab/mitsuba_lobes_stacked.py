@@ -10,7 +10,9 @@ reaches. The VNDF and luminance are read through mitsuba_warp.SliceWarp,
 which takes the slice and the point per lane: a reflected lane reads the
 two slices about wi's elevation at one point, a refracted lane (which
 reads two elevations, at the pair turned with wi to each:
-TracedTables.refract_eval_pdf) one slice at each elevation's own point,
+TracedTables.refract_eval_pdf; a lane of the z-flipped direction's warp
+likewise, mitsuba_lobes.flipped_eval_pdf) one slice at each elevation's
+own point,
 so that either is one look-up of two slices; sampling reads the picked
 elevation's slice alone. For files whose four sets share their grids and
 have one incident azimuth (what the writer makes); the others use
@@ -30,7 +32,7 @@ from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, \
     _fresnel_eta, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
     _theta_to_u, _turn
 from .mitsuba_warp import SliceWarp
-from .mitsuba_lobes import transmittance_at, transmittance_eta
+from .mitsuba_lobes import transmittance_at, transmittance_eta, turn_rate
 from .tensor_file import TensorFileError
 
 
@@ -153,6 +155,20 @@ class StackedLobes:
         e = dr.select(bottom, bottom_e, top_e)
         return e, e > 0
 
+    def _wo_turns(self, w, bottom, flipped, elevations):
+        """The turns of wo to each of wi's two elevations (cosine, sine):
+        wi's own, or for a lane of the z-flipped direction's warp wi's at
+        its side's turn_rate (mitsuba_lobes.flipped_eval_pdf)."""
+        (_, _, c0, s0, p0, _), (_, _, c1, s1, p1, _) = elevations
+        if self.eta == 1.0:
+            return (c0, s0), (c1, s1)
+        theta = _elevation(w)
+        rate = dr.select(bottom, turn_rate(theta, 1.0 / self.eta), turn_rate(theta, self.eta))
+        s0r, c0r = dr.sincos(rate * (p0 - theta))
+        s1r, c1r = dr.sincos(rate * (p1 - theta))
+        return ((dr.select(flipped, c0r, c0), dr.select(flipped, s0r, s0)),
+                (dr.select(flipped, c1r, c1), dr.select(flipped, s1r, s1)))
+
     def _fresnel(self, w, m, bottom, reflected):
         """The factor of a reflected lane's value: the Fresnel reflectance
         at m where its side's set is stored over it, else 1."""
@@ -173,21 +189,29 @@ class StackedLobes:
         stored = refract & (e > 0)
         return dr.select(stored, transmittance_at(w, o, m, dr.select(e > 0, e, 1.5)), 1.0)
 
-    def _slice_at(self, wi, phi_i, k, wo, eta, active):
-        """A refracted pair at one of wi's elevations, read from its one
-        slice k (TracedTables._stored_at without the neighbour's weight
-        0): the stored values, the density per solid angle of wo, and
-        whether the pair refracts."""
-        m, ok = _refraction_half(wi, wo, eta)
-        active = active & ok
+    def _slice_at(self, wi, phi_i, k, wo, eta, flipped, param, stack, active):
+        """A transmitted pair at one of wi's elevations (param), read from
+        its one slice k (TracedTables._stored_at without the neighbour's
+        weight 0): the stored values (a z-flipped lane's times D / (4 sigma)
+        at the pair, mitsuba_lobes._flipped_at), the density per solid
+        angle of wo, and whether the pair is one of the lobe."""
+        m_t, ok_t = _refraction_half(wi, wo, eta)
+        m_f = dr.normalize(wi + _flip(wo))
+        ok_f = (wi.z > 0) & (wo.z < 0)
+        m = dr.select(flipped, m_f, m_t)
+        active = active & dr.select(flipped, ok_f, ok_t)
         u = _square(m, phi_i)
         cell = self.vndf.cell(u)
         sample, vndf_pdf = self.vndf.invert(self.vndf.read(k, cell, active), cell)
         value = self.table.rgb_slice(sample, k, active)
+        if self.table.jacobian:
+            u_wi = mi.Point2f(_theta_to_u(param), _phi_to_u(phi_i))
+            jac = self.table._jacobian_scale(u, u_wi, active & flipped, stack)
+            value = [dr.select(flipped, v * jac, v) for v in value]
         lum_cell = self.lum.cell(sample)
         lum = self.lum.density(self.lum.read(k, lum_cell, active, cdf=False), lum_cell)
         density = vndf_pdf * lum / _normal_area(u.x, mi.Frame3f.sin_theta(m)) * \
-            _refraction_jacobian(wi, wo, m, eta)
+            dr.select(flipped, 1.0 / (4.0 * dr.dot(wi, m)), _refraction_jacobian(wi, wo, m, eta))
         return value, dr.select(active & dr.isfinite(density), density, 0.0), active
 
     # ------------------------------------------------------ the three calls
@@ -206,53 +230,69 @@ class StackedLobes:
         stack = self._stack(bottom, transmits, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmits & refracts
+        flipped = transmits & ~refracts if self.jit else (transmits and not refracts)
         # Reflection and the z-flipped direction: the reflection half vector.
-        o2 = dr.select(transmits & ~refracts if self.jit else (transmits and not refracts),
-                       _flip(o), o)
+        o2 = dr.select(flipped, _flip(o), o)
         m_r = dr.normalize(w + o2)
         ok_r = (w.z > 0) & (o2.z > 0)
         e_safe = dr.select(refracts, e, 1.0)
         m_t, ok_t = _refraction_half(w, o, e_safe)
         m = dr.select(refract, m_t, m_r)
         active = active & dr.select(refract, ok_t, ok_r)
-        # A refracted lane reads its two elevations at the pair turned to
-        # each (TracedTables.refract_eval_pdf), one slice each; a reflected
-        # lane reads the two slices around wi's elevation at one point.
-        # Either way slice j at one point and slice j + 1 at another: one
-        # look-up of two slices for every lane (mitsuba_warp).
+        # A transmitted lane reads its two elevations at the pair turned to
+        # each (TracedTables.refract_eval_pdf, mitsuba_lobes.flipped_eval_pdf),
+        # one slice each; a reflected lane reads the two slices around wi's
+        # elevation at one point. Either way slice j at one point and slice
+        # j + 1 at another: one look-up of two slices for every lane
+        # (mitsuba_warp).
         elevations, axis, phi_w = self.table._elevations(w, stack)
-        (w0, wi0, c0, s0, _, _), (w1, wi1, c1, s1, _, _) = elevations
-        m0, ok0 = _refraction_half(wi0, _turn(axis, c0, s0, o), e_safe)
-        m1, ok1 = _refraction_half(wi1, _turn(axis, c1, s1, o), e_safe)
-        ok0, ok1 = ok0 & (w0 > 0), ok1 & (w1 > 0)
+        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, _) = elevations
+        (c0o, s0o), (c1o, s1o) = self._wo_turns(w, bottom, flipped, elevations)
+        o0, o1 = _turn(axis, c0o, s0o, o), _turn(axis, c1o, s1o, o)
+        m0, ok0 = _refraction_half(wi0, o0, e_safe)
+        m1, ok1 = _refraction_half(wi1, o1, e_safe)
+        m0 = dr.select(flipped, dr.normalize(wi0 + _flip(o0)), m0)
+        m1 = dr.select(flipped, dr.normalize(wi1 + _flip(o1)), m1)
+        ok0 = dr.select(flipped, (wi0.z > 0) & (o0.z < 0), ok0) & (w0 > 0)
+        ok1 = dr.select(flipped, (wi1.z > 0) & (o1.z < 0), ok1) & (w1 > 0)
         j, a0, a1 = stack[1]
-        m_a, m_b = dr.select(refract, m0, m), dr.select(refract, m1, m)
-        read_a = active & dr.select(refract, ok0, True)
-        read_b = active & dr.select(refract, ok1, a1 > 0)
-        # (A reflected lane's mixture; a refracted lane's slice j alone.)
-        mix_a = (dr.select(refract, 1.0, a0), dr.select(refract, 0.0, a1))
+        m_a, m_b = dr.select(transmits, m0, m), dr.select(transmits, m1, m)
+        read_a = active & dr.select(transmits, ok0, True)
+        read_b = active & dr.select(transmits, ok1, a1 > 0)
+        # (A reflected lane's mixture; a transmitted lane's slice j alone.)
+        mix_a = (dr.select(transmits, 1.0, a0), dr.select(transmits, 0.0, a1))
         u_a, u_b = _square(m_a, phi_w), _square(m_b, phi_w)
         cell_a, cell_b = self.vndf.cell(u_a), self.vndf.cell(u_b)
         va = self.vndf.read(j, cell_a, read_a)
         vb = self.vndf.read(j + 1, cell_b, read_b)
         sample_a, pdf_a = self.vndf.invert(self.vndf.mix(va, vb, *mix_a), cell_a)
         sample_b, pdf_b = self.vndf.invert(vb, cell_b)
-        sample_b = dr.select(refract, sample_b, sample_a)
+        sample_b = dr.select(transmits, sample_b, sample_a)
         value = pdf = None
         if want_value:
             ra = self.table.rgb_slice(sample_a, j, read_a)
             rb = self.table.rgb_slice(sample_b, j + 1, read_b)
-            value = [dr.select(refract, dr.select(ok0, x * w0, 0.0) + dr.select(ok1, y * w1, 0.0),
-                               dr.fma(x, a0, y * a1)) for x, y in zip(ra, rb)]
+            # D / (4 sigma): at the pair itself (reflected and refracted
+            # lanes, after the blend), or at each elevation's own pair (a
+            # z-flipped lane: ja, jb).
+            ja = jb = jp = 1.0
+            if self.table.jacobian:
+                u_m = dr.select(refract, _square(m, phi_w), u_a)
+                u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
+                u_wi0 = mi.Point2f(_theta_to_u(p0), _phi_to_u(phi_w))
+                u_wi1 = mi.Point2f(_theta_to_u(p1), _phi_to_u(phi_w))
+                jac = self.table._jacobian_scale(u_m, dr.select(flipped, u_wi0, u_wi), active,
+                                                 stack)
+                jac_b = self.table._jacobian_scale(u_b, u_wi1, active & flipped, stack)
+                ja, jb = dr.select(flipped, jac, 1.0), dr.select(flipped, jac_b, 1.0)
+                jp = dr.select(flipped, 1.0, jac)
+            value = [dr.select(transmits,
+                               dr.select(ok0, x * w0 * ja, 0.0) + dr.select(ok1, y * w1 * jb, 0.0),
+                               dr.fma(x, a0, y * a1)) * jp for x, y in zip(ra, rb)]
             scale = dr.select(transmits, self._transport(wi, radiance) *
                               self._transmittance(w, o, m, bottom, refract),
                               self._fresnel(w, m, bottom, ~transmits if self.jit
                                             else not transmits))
-            if self.table.jacobian:
-                u_m = dr.select(refract, _square(m, phi_w), u_a)
-                u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
-                jac = self.table._jacobian_scale(u_m, u_wi, active, stack)
-                value = [v * jac for v in value]
             value = [dr.select(active, dr.maximum(v, 0.0) * scale, 0.0) for v in value]
             value = [dr.select(dr.isfinite(v) & (v > 0), v, 0.0) for v in value]
         if want_pdf:
@@ -269,7 +309,12 @@ class StackedLobes:
                              (dr.select(ok0, density_a * w0, 0.0) +
                               dr.select(ok1, density_b * w1, 0.0)) *
                              _refraction_jacobian(w, o, m, e_safe),
-                             density_a / (4.0 * dr.dot(w, m)))
+                             dr.select(flipped,
+                                       dr.select(ok0, density_a * w0 / (4.0 * dr.dot(wi0, m0)),
+                                                 0.0) +
+                                       dr.select(ok1, density_b * w1 / (4.0 * dr.dot(wi1, m1)),
+                                                 0.0),
+                                       density_a / (4.0 * dr.dot(w, m))))
             share = self._share(weights, bottom)
             pdf = lobe * dr.select(transmits, 1.0 - share, share)
             pdf = dr.select(active & dr.isfinite(pdf) & (pdf > 0), pdf, 0.0)
@@ -294,22 +339,25 @@ class StackedLobes:
         stack = self._stack(bottom, transmitted, weights)
         e, refracts = self._side_eta(bottom)
         refract = transmitted & refracts
-        # A refracted lane samples one of its two elevations, picked by v.x
-        # with its weight and rescaled (TracedTables.refract_sample), in the
-        # one pair of warp look-ups every lane makes, at wi turned to it.
+        flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
+        # A transmitted lane samples one of its two elevations, picked by v.x
+        # with its weight and rescaled (TracedTables.refract_sample,
+        # mitsuba_lobes.flipped_sample), in the one pair of warp look-ups
+        # every lane makes, at wi turned to it.
         e_safe = dr.select(refracts, e, 1.0)
         elevations, axis, phi_w = self.table._elevations(w, stack)
-        (w0, wi0, c0, s0, _, _), (w1, wi1, c1, s1, _, _) = elevations
-        second = refract & (v.x >= w0)
+        (w0, wi0, c0, s0, p0, _), (w1, wi1, c1, s1, p1, _) = elevations
+        (c0o, s0o), (c1o, s1o) = self._wo_turns(w, bottom, flipped, elevations)
+        second = transmitted & (v.x >= w0)
         u_el = dr.select(second, (v.x - w0) / dr.select(w1 > 0, w1, 1.0),
                          v.x / dr.select(w0 > 0, w0, 1.0))
-        v_s = mi.Point2f(dr.select(refract, dr.clip(u_el, 0.0, 1.0), v.x), v.y)
+        v_s = mi.Point2f(dr.select(transmitted, dr.clip(u_el, 0.0, 1.0), v.x), v.y)
         # The slices j, j + 1 mixed as wi's elevation weighs them; a
-        # refracted lane's picked one alone (the other is not read).
+        # transmitted lane's picked one alone (the other is not read).
         j, a0, a1 = stack[1]
-        b0 = dr.select(refract, dr.select(second, 0.0, 1.0), a0)
-        b1 = dr.select(refract, dr.select(second, 1.0, 0.0), a1)
-        w_k = dr.select(refract, dr.select(second, wi1, wi0), w)
+        b0 = dr.select(transmitted, dr.select(second, 0.0, 1.0), a0)
+        b1 = dr.select(transmitted, dr.select(second, 1.0, 0.0), a1)
+        w_k = dr.select(transmitted, dr.select(second, wi1, wi0), w)
         # (Mitsuba's `measured` takes the numbers as (y, x) into the
         # luminance warp, as TracedTables._sample_normal.)
         sample, lum_pdf = self.lum.sample(j, j + 1, b0, b1, mi.Point2f(v_s.y, v_s.x), active)
@@ -320,10 +368,14 @@ class StackedLobes:
         raw_j1 = self.table.rgb_slice(sample, j + 1, active & (b1 > 0))
         raw = [dr.fma(x, b0, y * b1) for x, y in zip(raw_j, raw_j1)]
         c = dr.dot(w_k, m)
-        # Reflected about m (reflection; the z-flipped direction then flips).
-        wo_r = dr.fma(m, 2.0 * c, -w)
+        # Reflected about m (reflection; the z-flipped direction then flips
+        # and turns back).
+        wo_r = dr.fma(m, 2.0 * c, -w_k)
         pdf_r = density / (4.0 * c)
         ok_r = wo_r.z > 0
+        wo_f = _turn(axis, dr.select(second, c1o, c0o), -dr.select(second, s1o, s0o),
+                     _flip(wo_r))
+        ok_f = (c > 0) & ok_r & (wo_f.z < 0) & (density > 0)
         # Refracted through m at wi turned to the elevation, turned back.
         inv = 1.0 / e_safe
         k = 1.0 - inv * inv * (1.0 - c * c)
@@ -332,26 +384,34 @@ class StackedLobes:
         m_t, ok_m = _refraction_half(w, wo_t, e_safe)
         ok_t = (c > 0) & (k > 0) & (wo_k.z < 0) & (wo_t.z < 0) & ok_m & (density > 0)
         # The other elevation at the pair turned to it.
+        wo_x = dr.select(flipped, wo_f, wo_t)
+        ok_x = dr.select(flipped, ok_f, ok_t)
         w_o = dr.select(second, w0, w1)
-        o_o = _turn(axis, dr.select(second, c0, c1), dr.select(second, s0, s1), wo_t)
+        o_o = _turn(axis, dr.select(second, c0o, c1o), dr.select(second, s0o, s1o), wo_x)
         raw_o, density_o, ok_o = self._slice_at(
             dr.select(second, wi0, wi1), phi_w, dr.select(second, j, j + 1), o_o, e_safe,
-            active & refract & ok_t & (w_o > 0))
+            flipped, dr.select(second, p0, p1), stack, active & transmitted & ok_x & (w_o > 0))
         w_s = dr.select(second, w1, w0)
-        pdf_t = w_s * density * _refraction_jacobian(w, wo_t, m_t, e_safe) + w_o * density_o
-        value = [dr.select(refract, w_s * v_k + dr.select(ok_o, w_o * v_o, 0.0), v_k)
-                 for v_k, v_o in zip(raw, raw_o)]
+        pdf_t = w_s * density * dr.select(flipped, 1.0 / (4.0 * c),
+                                          _refraction_jacobian(w, wo_t, m_t, e_safe)) + \
+            w_o * density_o
+        # D / (4 sigma) at the sampled normal (a reflected lane; a z-flipped
+        # lane's at its elevation's wi, before the blend), or at a refracted
+        # pair's own refraction half vector: one look-up for either.
+        js = jp = 1.0
         if self.table.jacobian:
-            # D / (4 sigma) at the sampled normal, or at a refracted pair's
-            # own refraction half vector: one look-up for either.
             u_j = dr.select(refract, _square(m_t, phi_w), u_m)
             u_wi = mi.Point2f(_theta_to_u(_elevation(w)), _phi_to_u(phi_w))
-            jac = self.table._jacobian_scale(u_j, u_wi, active, stack)
-            value = [v * jac for v in value]
-        flipped = transmitted & ~refracts if self.jit else (transmitted and not refracts)
-        wo = dr.select(refract, wo_t, dr.select(flipped, _flip(wo_r), wo_r))
-        pdf = dr.select(refract, pdf_t, pdf_r)
-        ok = active & dr.select(refract, ok_t, ok_r) & dr.isfinite(pdf) & (pdf > 0)
+            u_wi_s = mi.Point2f(_theta_to_u(dr.select(second, p1, p0)), _phi_to_u(phi_w))
+            jac = self.table._jacobian_scale(u_j, dr.select(flipped, u_wi_s, u_wi), active,
+                                             stack)
+            js, jp = dr.select(flipped, jac, 1.0), dr.select(flipped, 1.0, jac)
+        value = [dr.select(transmitted, w_s * v_k * js + dr.select(ok_o, w_o * v_o, 0.0), v_k) *
+                 jp for v_k, v_o in zip(raw, raw_o)]
+        wo = dr.select(refract, wo_t, dr.select(flipped, wo_f, wo_r))
+        pdf = dr.select(transmitted, pdf_t, pdf_r)
+        ok = active & dr.select(refract, ok_t, dr.select(flipped, ok_f, ok_r)) & \
+            dr.isfinite(pdf) & (pdf > 0)
         pdf = pdf * dr.select(transmitted, 1.0 - share, share)
         ok = ok & (pdf > 0)
         # (A refracted lane's transmittance at wo's own refraction half

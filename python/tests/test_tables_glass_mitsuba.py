@@ -4,9 +4,11 @@ mitsuba_lobes_stacked) against the C reader (ll_bsdf_eval_dir, ll_bsdf_pdf_dir,
 ll_bsdf_sample_dir through layerlab.BSDFStorage) on the same file, and a render of rough glass
 from its tables against Mitsuba's native roughdielectric.
 
-Files: rough glass (eta 1.5, alpha 0.3, compensate=0: the refraction half vector's warp) and
-a frosted pane (the same interface and its inverse, eta 1 overall: the z-flipped direction's
-warp), written by `llbuild --format measured`.
+Files: rough glass (eta 1.5, alpha 0.3, compensate=0: the refraction half vector's warp), a
+frosted pane (the same interface and its inverse, eta 1 overall: the z-flipped direction's
+warp) and frosted glass (examples/frosted-glass.layers, the glass compensated: the z-flipped
+direction's warp across a net interface, which turns wo between elevations slower than wi
+from above), written by `llbuild --format measured`.
 
 Pairs: 10^4 per file, wi on either side, wo on either side, half of them about the lobe (wi
 reflected or refracted about a normal drawn about the surface's), both with |cos theta| in
@@ -35,6 +37,12 @@ mi = pytest.importorskip("mitsuba")
 ETA = 1.5
 GLASS = "dielectric eta=1.5 alpha=0.3 compensate=0\n"
 PANE = "set nodes=60 orders=60\ndielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n"
+FROSTED = "dielectric eta=1.5 alpha=0.3\n"
+# Each file's relative index, and whether its transmitted sets take the z-flipped direction's
+# warp (the writer's choice: the refraction half vector reaches too little of a compensated
+# interface's transmitted lobe).
+ETA_OF = {"glass": ETA, "pane": 1.0, "frosted": ETA}
+FLIPPED = {"glass": False, "pane": True, "frosted": True}
 
 
 def _llbuild(text, out, *grid):
@@ -56,7 +64,8 @@ def tables(tmp_path_factory):
     d = tmp_path_factory.mktemp("glass-tables")
     grid = ("--theta-i", "24", "--vndf", "48", "--sample", "32")
     return {"glass": _llbuild(GLASS, d / "glass.tab", *grid),
-            "pane": _llbuild(PANE, d / "pane.tab", *grid)}
+            "pane": _llbuild(PANE, d / "pane.tab", *grid),
+            "frosted": _llbuild(FROSTED, d / "frosted.tab", *grid)}
 
 
 def _plugin(variant, path, **props):
@@ -111,14 +120,13 @@ def _pairs(rng, n, eta):
     return np.array(wi), np.array(wo)
 
 
-def _warp_elevation(wi, wo, eta):
+def _warp_elevation(wi, wo, eta, flipped):
     """The elevation of the half vector the file's warp reads for each pair (in wi's side's
-    frame: reflection's, the refraction's for eta != 1, the z-flipped direction's for
-    eta 1)."""
+    frame: reflection's, the refraction's, or with flipped the z-flipped direction's)."""
     flip = np.where(wi[:, 2:3] < 0, np.array([1.0, 1.0, -1.0]), 1.0)
     w, o = wi * flip, wo * flip
     transmitted = o[:, 2] < 0
-    if eta == 1.0:
+    if flipped:
         h = w + o * np.where(transmitted[:, None], np.array([1.0, 1.0, -1.0]), 1.0)
     else:
         e = np.where(wi[:, 2] > 0, eta, 1.0 / eta)[:, None]
@@ -134,6 +142,23 @@ def _warp_elevation(wi, wo, eta):
 POLE = 1e-3
 
 
+def _sampled_direction_close(name, swo, cwo, spdf):
+    """The sampled directions within 1e-3 of the C reader's; for frosted glass where the pdf
+    is above 1e-3 of its largest, and within 1e-2 elsewhere: its z-flipped sets' D is narrow
+    (alpha 0.05-0.07), and in the lobe's far tail at grazing wi (pdf 3e-4 of the largest) the
+    float32 warps' inverse CDF moves the direction by up to 4e-3 (measured: 2.6e-4 where
+    strong), the pdf there agreeing within 2e-5 at the direction sampled."""
+    dist = np.linalg.norm(swo - cwo, axis=1)
+    if name != "frosted":
+        assert dist.max() < 1e-3, dist.max()
+        return dist.max()
+    strong = spdf > 1e-3 * spdf.max()
+    assert np.count_nonzero(strong) > 0.9 * len(dist)
+    assert dist[strong].max() < 1e-3, dist[strong].max()
+    assert dist.max() < 1e-2, dist.max()
+    return dist[strong].max()
+
+
 def _close_where_strong(ours, theirs, strong, rtol, what):
     err = np.abs(ours[strong] - theirs[strong]) / theirs[strong]
     worst = float(err.max()) if err.size else 0.0
@@ -141,7 +166,7 @@ def _close_where_strong(ours, theirs, strong, rtol, what):
     return worst
 
 
-@pytest.mark.parametrize("name", ["glass", "pane"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
 def test_tables_are_the_c_reader_llvm(tables, name, timings):
     """eval, pdf and sample of the plugin's "tables" mode (llvm_ad_rgb, 10^4 pairs) against the
     C reader on the same transmissive table file, radiance transport."""
@@ -152,9 +177,9 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     assert bsdf.flags() & mi.BSDFFlags.GlossyTransmission
     assert bsdf.flags() & mi.BSDFFlags.BackSide
     c = ll.BSDFStorage(path)
-    rng = np.random.default_rng(17 if name == "glass" else 19)
+    rng = np.random.default_rng({"glass": 17, "pane": 19, "frosted": 29}[name])
     n = 10000
-    wi, wo = _pairs(rng, n, ETA if name == "glass" else 1.0)
+    wi, wo = _pairs(rng, n, ETA_OF[name])
     si = mi.SurfaceInteraction3f()
     si.wi = mi.Vector3f(wi.T)
     si.n = mi.Normal3f(0, 0, 1)
@@ -173,7 +198,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     for side in (wi[:, 2] > 0, wi[:, 2] < 0):
         for lobe in (transmitted, ~transmitted):
             assert np.count_nonzero(strong & side & lobe) > 200
-    pole = _warp_elevation(wi, wo, ETA if name == "glass" else 1.0) < POLE
+    pole = _warp_elevation(wi, wo, ETA_OF[name], FLIPPED[name]) < POLE
     worst_value = max(_close_where_strong(value[:, k], want[:, k], strong & ~pole, 1e-4,
                                           "eval") for k in range(3))
     worst_pdf = _close_where_strong(pdf, want_pdf, strong & ~pole, 1e-4, "pdf")
@@ -204,7 +229,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     assert np.count_nonzero(found) > 0.9 * n
     assert np.array_equal(found, spdf > 0)
     dist = np.linalg.norm(swo[found] - cwo[found], axis=1)
-    assert dist.max() < 1e-3, dist.max()
+    _sampled_direction_close(name, swo[found], cwo[found], spdf[found])
     # The pdf and weight of our sample: the C reader's pdf and f |cos| / pdf at our sampled
     # direction (the same direction: the C sampler's own differs by the float32 warps' rounding
     # of the direction, which the refraction's change of variables amplifies in the pdf).
@@ -227,7 +252,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     glossy_t = int(mi.BSDFFlags.GlossyTransmission)
     glossy_r = int(mi.BSDFFlags.GlossyReflection)
     assert np.all(stype[crossed] == glossy_t) and np.all(stype[found & ~crossed] == glossy_r)
-    eta = ETA if name == "glass" else 1.0
+    eta = ETA_OF[name]
     want_eta = np.where(wi[:, 2] > 0, eta, 1.0 / eta)
     np.testing.assert_allclose(seta[crossed], want_eta[crossed], rtol=1e-6)
     assert np.all(seta[found & ~crossed] == 1.0)
@@ -237,7 +262,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
         float(dist.max()) * 1e6, "x 1e-6")
 
 
-@pytest.mark.parametrize("name", ["glass", "pane"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
 def test_tables_are_the_c_reader_scalar(tables, name):
     """The same in scalar_rgb (500 pairs), and importance transport (no eta^2)."""
     import layerlab as ll
@@ -246,7 +271,7 @@ def test_tables_are_the_c_reader_scalar(tables, name):
     assert "mode=tables" in str(bsdf)
     c = ll.BSDFStorage(path)
     rng = np.random.default_rng(23)
-    wi, wo = _pairs(rng, 500, ETA if name == "glass" else 1.0)
+    wi, wo = _pairs(rng, 500, ETA_OF[name])
     rows = []
     for mode, ctx in (("radiance", mi.BSDFContext()),
                       ("importance", mi.BSDFContext(mi.TransportMode.Importance))):
@@ -336,7 +361,7 @@ def test_glass_tables_render_as_roughdielectric(tmp_path, timings):
     assert abs(np.mean(a[0]) / np.mean(b[0]) - 1) < 0.03
 
 
-@pytest.mark.parametrize("name", ["glass", "pane"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
 def test_set_by_set_lobes_are_the_c_reader(tables, name):
     """The set-by-set evaluation (layerlab.mitsuba_lobes.TracedLobes, which the plugin uses
     for files whose sets' grids differ, so cannot be stacked) on the same files, llvm_ad_rgb,
@@ -350,14 +375,14 @@ def test_set_by_set_lobes_are_the_c_reader(tables, name):
     lobes = TracedLobes(read_tensor_file(path), path)
     c = ll.BSDFStorage(path)
     rng = np.random.default_rng(37)
-    wi, wo = _pairs(rng, 2000, ETA if name == "glass" else 1.0)
+    wi, wo = _pairs(rng, 2000, ETA_OF[name])
     value, pdf = lobes.eval_pdf(mi.Vector3f(wi.T), mi.Vector3f(wo.T), mi.Bool(True), True)
     value = np.array([np.array(v) for v in value]).T
     pdf = np.array(pdf)
     want = np.array([c.evalDir(a, b) * abs(b[2]) for a, b in zip(wi, wo)])
     want_pdf = np.array([c.pdfDir(a, b) for a, b in zip(wi, wo)])
     strong = (want[:, 1] > 1e-3 * want[:, 1].max()) & \
-        (_warp_elevation(wi, wo, ETA if name == "glass" else 1.0) >= POLE)
+        (_warp_elevation(wi, wo, ETA_OF[name], FLIPPED[name]) >= POLE)
     assert np.count_nonzero(strong) > 300
     for k in range(3):
         _close_where_strong(value[:, k], want[:, k], strong, 1e-4, "eval")
@@ -372,7 +397,7 @@ def test_set_by_set_lobes_are_the_c_reader(tables, name):
     found = cpdf > 0
     assert np.count_nonzero(found) > 1800
     assert np.array_equal(found, spdf > 0)
-    assert np.linalg.norm(swo[found] - cwo[found], axis=1).max() < 1e-3
+    _sampled_direction_close(name, swo[found], cwo[found], spdf[found])
 
 
 def test_transmissive_bsdf_without_tables_stays_on_the_fourier_path(tmp_path, monkeypatch):

@@ -43,6 +43,11 @@ typedef struct ll_measured {
      * its refraction's transmittance (field "transmittance_eta",
      * tables_refract.h), its refract_eta, else 0. */
     double *weight;
+    /* A transmitted lobe's relative index of the far side over the fixed
+     * direction's side (the file's eta for transmit_top, its inverse for
+     * transmit_bottom): how fast a set of the z-flipped warp turns wo with
+     * wi between elevations (tables_refract.c). */
+    double side_eta;
     double refract_eta;
     double fresnel_eta;
     double transmittance_eta;
@@ -68,8 +73,9 @@ LL_INTERNAL double ll_measured_lobes_pdf(const ll_measured *m, const double wi[3
 LL_INTERNAL int ll_measured_lobes_sample(const ll_measured *m, const double wi[3],
                                          const double u[2], double wo[3], double *pdf,
                                          double value[3]);
-/* One transmitted lobe with the refraction warp (tables_refract.c), in its
- * own frame: wi above, wo below, relative index m->refract_eta. */
+/* One transmitted lobe (tables_refract.c), in its own frame: wi above, wo
+ * below; the refraction warp of relative index m->refract_eta, or where
+ * that is 0 the warp of the z-flipped direction. */
 LL_INTERNAL void ll_measured_refract_eval(const ll_measured *m, const double wi[3],
                                           const double wo[3], double value[3]);
 LL_INTERNAL double ll_measured_refract_pdf(const ll_measured *m, const double wi[3],

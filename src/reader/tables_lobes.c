@@ -12,8 +12,9 @@
  * peak into wi's mirror direction, and the transmitted lobe of a pane
  * (two rough interfaces whose deviations largely cancel) into a lobe about
  * it like a reflected one, so such a set is a reflection set of the
- * z-flipped direction and reuses its warp, evaluation and sampler
- * unchanged.
+ * z-flipped direction and reuses its warp. Both kinds of transmitted set
+ * are read between two incident elevations at the pair turned with wi to
+ * each (tables_refract.c).
  *
  * A reflected set with a "fresnel_eta" (one seen from the denser side)
  * holds its values over the Fresnel reflectance at its half vector, which
@@ -85,28 +86,20 @@ static void fresnel(const ll_measured *set, const double wi[3], const double wo[
 static void lobe_eval(const ll_measured *set, int transmit, const double wi[3],
                       const double wo[3], double value[3])
 {
-    double f[3];
     if (!transmit) {
         ll_measured_eval(set, wi, wo, value);
         fresnel(set, wi, wo, value);
-    } else if (set->refract_eta > 0.0) {
-        ll_measured_refract_eval(set, wi, wo, value);
     } else {
-        flip(wo, f);
-        ll_measured_eval(set, wi, f, value);
+        ll_measured_refract_eval(set, wi, wo, value);
     }
 }
 
 static double lobe_pdf(const ll_measured *set, int transmit, const double wi[3],
                        const double wo[3])
 {
-    double f[3];
     if (!transmit)
         return ll_measured_pdf(set, wi, wo);
-    if (set->refract_eta > 0.0)
-        return ll_measured_refract_pdf(set, wi, wo);
-    flip(wo, f);
-    return ll_measured_pdf(set, wi, f);
+    return ll_measured_refract_pdf(set, wi, wo);
 }
 
 /* The set's luminance albedo at wi's elevation, interpolated as the
@@ -208,11 +201,8 @@ int ll_measured_lobes_sample(const ll_measured *m, const double wi[3], const dou
         ok = ll_measured_sample(r, w, v, wo, pdf, value);
         if (ok)
             fresnel(r, w, wo, value);
-    } else if (t->refract_eta > 0.0) {
-        ok = ll_measured_refract_sample(t, w, v, wo, pdf, value);
     } else {
-        ok = ll_measured_sample(t, w, v, wo, pdf, value);
-        wo[2] = -wo[2];
+        ok = ll_measured_refract_sample(t, w, v, wo, pdf, value);
     }
     if (!ok) {
         wo[0] = wo[1] = 0.0;

@@ -532,6 +532,10 @@ ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const 
                 FAIL(LL_ERROR_OUT_OF_MEMORY, "ll_bsdf_open: %s: out of memory", file);
             if ((s = read_set(t, base, ll_measured_lobe_prefix(k), &sh, m->lobe[k])) != LL_OK)
                 goto done;
+            if (k == LL_LOBE_TRANSMIT_TOP)
+                m->lobe[k]->side_eta = eta;
+            else if (k == LL_LOBE_TRANSMIT_BOTTOM)
+                m->lobe[k]->side_eta = 1.0 / eta;
         }
     }
 done:
