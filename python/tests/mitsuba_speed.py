@@ -116,7 +116,7 @@ def _grids():
     return grids
 
 
-def _images(out, entries, scenes, spp):
+def _images(entries, scenes, spp):
     """Each entry's render (seed 1) against native's (seed 2), and native's
     own two seeds: the relative RMSE and the mean's difference."""
     native = S.render(mi, scenes[0][1], spp, 2)
@@ -255,7 +255,7 @@ def tables(out, size, spps, pictures):
                          wall[name] / wall[base], rounds[len(rounds) // 2], rounds[0],
                          rounds[-1]), flush=True)
             if material == "gold":
-                _images(out, entries, scenes, spp)
+                _images(entries, scenes, spp)
             if pictures:
                 for k, (name, scn) in enumerate(scenes):
                     if material == "gold" and name.startswith("Mitsuba measured"):
