@@ -319,6 +319,10 @@ class TracedTables:
         if self.jit:
             self.values = mi.Float(packed.ravel())
             self.theta = mi.Float(theta)
+            # The elevations' sines and cosines (_elevations: read, not
+            # computed per lane), rounded from double.
+            self.theta_sin = mi.Float(np.sin(self.theta_host).astype(np.float32))
+            self.theta_cos = mi.Float(np.cos(self.theta_host).astype(np.float32))
             self.phi = mi.Float(phi)
         self.grid_text = "%d x %dx%d x %dx%d" % (n_ti, vndf.shape[2], vndf.shape[3],
                                                 rgb.shape[3], rgb.shape[4])
@@ -502,11 +506,15 @@ class TracedTables:
             j, w0, w1 = stack[1]
         last = len(self.theta_host) - 1
         if self.jit:
-            params = [dr.gather(mi.Float, self.theta, j),
-                      dr.gather(mi.Float, self.theta, dr.minimum(j + 1, last))]
+            at = [j, dr.minimum(j + 1, last)]
+            params = [dr.gather(mi.Float, self.theta, i) for i in at]
+            sines = [dr.gather(mi.Float, self.theta_sin, i) for i in at]
+            cosines = [dr.gather(mi.Float, self.theta_cos, i) for i in at]
         else:
-            params = [float(np.float32(self.theta_host[int(j)])),
-                      float(np.float32(self.theta_host[min(int(j) + 1, last)]))]
+            at = [self.theta_host[int(j)], self.theta_host[min(int(j) + 1, last)]]
+            params = [float(np.float32(t)) for t in at]
+            sines = [float(np.float32(np.sin(t))) for t in at]
+            cosines = [float(np.float32(np.cos(t))) for t in at]
         r = dr.sqrt(dr.square(wi.x) + dr.square(wi.y))
         has = r > 0
         phi_i = dr.atan2(wi.y, wi.x)
@@ -514,10 +522,14 @@ class TracedTables:
         sin_p, cos_p = dr.sincos(phi_i)
         cp = dr.select(has, wi.x / dr.select(has, r, 1.0), cos_p)
         sp = dr.select(has, wi.y / dr.select(has, r, 1.0), sin_p)
+        # The turns' angles, elevation minus wi's, by the difference
+        # formulas from the elevations' sines and cosines and wi's.
+        sin_t, cos_t = dr.sincos(theta)
         out = []
         for k, (weight, slices) in enumerate(((w0, (j, 1.0, 0.0)), (w1, (j, 0.0, 1.0)))):
-            sin_d, cos_d = dr.sincos(params[k] - theta)
-            sin_n, cos_n = dr.sincos(params[k])
+            sin_n, cos_n = sines[k], cosines[k]
+            sin_d = dr.fma(sin_n, cos_t, -cos_n * sin_t)
+            cos_d = dr.fma(cos_n, cos_t, sin_n * sin_t)
             out.append((weight, mi.Vector3f(sin_n * cp, sin_n * sp, cos_n), cos_d, sin_d,
                         params[k], slices))
         return out, (-sp, cp), phi_i

@@ -30,6 +30,13 @@ one before (7 for 96 nodes, in each of two warps a sample); here each
 search starts from a guide table (_guides) that leaves a lane a few
 nodes, mostly one or two, and finds in them the node the full search
 finds.
+
+A sample's mixture reads slices k and k + 1 at the same rows and nodes;
+in the JIT variants each slice's entries (rows, guide steps and, while
+the tables stay small, nodes) hold the next slice's beside their own, so
+that both are one read of one cache line. The arithmetic is the same:
+the slice of weight 0 adds its value times 0 where it used to add the 0
+of a read left out.
 """
 
 import numpy as np
@@ -65,14 +72,27 @@ class SliceWarp:
                                  axis=-1).astype(np.float32)
         self.jit = dr.is_jit_v(mi.Float)
         if self.jit:
-            self.node = mi.Float(self.node_host.ravel())
-            self.row = mi.Float(self.row_host.ravel())
+            # A sample reads slices k and k + 1 at the same nodes: each
+            # slice's entries hold the next slice's beside their own (the
+            # last slice's next is 0), so that a row, a node or a guide's
+            # step of both is one read of one cache line (_paired). The
+            # rows (and the marginal's guide) are paired always; the nodes
+            # (and the conditional's guide) only while the paired tables
+            # stay small: pairing doubles them, and a table that no longer
+            # fits in the processor's cache then loses more to the misses
+            # of its other reads (eval_pdf's at one slice) than a sample
+            # gains (docs/benchmarks.md, "Transmissive table files").
+            self.paired = self.node_host.size * 8 <= PAIRED_NODES_BYTES
+            self.node = mi.Float((_paired(self.node_host) if self.paired
+                                  else self.node_host).ravel())
+            self.row = mi.Float(_paired(self.row_host).ravel())
             # Where the searches' answers lie (_guides): per slice for the
-            # marginal, per slice and pair of rows for the conditional.
+            # marginal, per slice and pair of rows for the conditional,
+            # paired the same.
             self.bits_row, self.bits_node = _bits(h), _bits(w)
             guide_row, guide_node = _guides(self.node_host, self.row_host)
-            self.guide_row = mi.UInt32(_pack(*guide_row, self.bits_row))
-            self.guide_node = mi.UInt32(_pack(*guide_node, self.bits_node))
+            self.guide_row = mi.UInt32(_pack(*guide_row, self.bits_row, True))
+            self.guide_node = mi.UInt32(_pack(*guide_node, self.bits_node, self.paired))
         else:
             self.node_host = self.node_host.reshape(-1, 2)
             self.row_host = self.row_host.reshape(-1, 2)
@@ -99,11 +119,17 @@ class SliceWarp:
         base = k * (self.w * self.h) + node
         rbase = k * self.h + row
         if self.jit:
+            # (Slice k's floats of its paired entry, 0 and 2: one read of
+            # the entry's four.)
             def at(i):
-                return dr.gather(mi.Array2f, self.node, i, active)
+                if not self.paired:
+                    return dr.gather(mi.Array2f, self.node, i, active)
+                v = dr.gather(mi.Array4f, self.node, i, active)
+                return v[0], v[2]
 
             def at_row(i):
-                return dr.gather(mi.Array2f, self.row, i, active)
+                v = dr.gather(mi.Array4f, self.row, i, active)
+                return v[0], v[2]
         elif not active:
             # (A lane that reads nothing: its slice may lie past the last.)
             return [0.0] * (9 if cdf else 4)
@@ -159,23 +185,32 @@ class SliceWarp:
         return i - 1
 
     @staticmethod
-    def _interval(guide, size, bits, base, u, on0, on1, i0, i1, n):
+    def _interval(guide, size, bits, paired, base, u, on0, on1, i0, i1, n):
         """The nodes [first, last] where a search of the integral for u
         answers (_guides; size entries a row, packed by _pack with bits):
-        the smallest first and the largest last of the rows base + i0,
-        base + i1 that are read (on0, on1)."""
+        the smallest first and the largest last of the row base + i0 and
+        the next slice's same row (their entries side by side), of those
+        that are read (on0, on1)."""
         j = dr.minimum(mi.UInt32(mi.Int32(u * float(size))), size - 1)
         mask = (1 << bits) - 1
-
-        def entry(i, on):
-            e = (base + i) * size + j
-            if bits == 8:
-                # (Two entries a word.)
-                return dr.gather(mi.UInt32, guide, e >> 1, on) >> ((e & 1) << 4)
-            return dr.gather(mi.UInt32, guide, e, on)
-        g0, g1 = entry(i0, on0), entry(i1, on1)
+        e = (base + i0) * size + j
+        if not paired:
+            def entry(i, on):
+                e = (base + i) * size + j
+                if bits == 8:
+                    # (Two entries a word.)
+                    return dr.gather(mi.UInt32, guide, e >> 1, on) >> ((e & 1) << 4)
+                return dr.gather(mi.UInt32, guide, e, on)
+            g0, g1 = entry(i0, on0), entry(i1, on1)
+        elif bits == 8:
+            # (The two slices' entries in one word.)
+            g0 = dr.gather(mi.UInt32, guide, e, on0 | on1)
+            g1 = g0 >> 16
+        else:
+            g0, g1 = dr.gather(mi.Array2u, guide, e, on0 | on1)
         first = dr.minimum(dr.select(on0, g0 & mask, n - 2), dr.select(on1, g1 & mask, n - 2))
-        last = dr.maximum((g0 >> bits) & mask, (g1 >> bits) & mask)
+        last = dr.maximum(dr.select(on0, (g0 >> bits) & mask, 0),
+                          dr.select(on1, (g1 >> bits) & mask, 0))
         return first, dr.maximum(first, last)
 
     @staticmethod
@@ -203,23 +238,32 @@ class SliceWarp:
 
     def sample(self, k0, k1, a0, a1, u, active):
         """(the point the warp maps u in [0, 1]^2 to, the density there) of
-        slices k0 and k1 mixed with weights a0, a1 (a slice of weight 0 is
-        not read): the row from the marginal, then the column from the
-        conditional at that y, each inside its interval the root of the
-        quadratic that the linear density integrates to."""
+        slices k0 and k1 = k0 + 1 mixed with weights a0, a1 (a slice of
+        weight 0 is not read): the row from the marginal, then the column
+        from the conditional at that y, each inside its interval the root
+        of the quadratic that the linear density integrates to."""
         w, h = self.w, self.h
         on0, on1 = active & (a0 > 0), active & (a1 > 0)
         if self.jit:
             k0, k1 = mi.UInt32(k0), mi.UInt32(k1)
+            on = on0 | on1
 
             def pair(arr, i0, i1):
-                return self.mix(dr.gather(mi.Array2f, arr, i0, on0),
-                                dr.gather(mi.Array2f, arr, i1, on1), a0, a1)
+                if arr is self.node and not self.paired:
+                    return self.mix(dr.gather(mi.Array2f, arr, i0, on0),
+                                    dr.gather(mi.Array2f, arr, i1, on1), a0, a1)
+                # (Slice k0's entry holds k1's beside it: one read; a
+                # slice of weight 0 adds its value times 0.)
+                v = dr.gather(mi.Array4f, arr, i0, on)
+                return [dr.fma(v[0], a0, v[1] * a1), dr.fma(v[2], a0, v[3] * a1)]
 
             def second(arr, i0, i1):
                 # (A search reads the running integrals alone.)
-                return dr.fma(dr.gather(mi.Float, arr, 2 * i0 + 1, on0), a0,
-                              dr.gather(mi.Float, arr, 2 * i1 + 1, on1) * a1)
+                if arr is self.node and not self.paired:
+                    return dr.fma(dr.gather(mi.Float, arr, 2 * i0 + 1, on0), a0,
+                                  dr.gather(mi.Float, arr, 2 * i1 + 1, on1) * a1)
+                v = dr.gather(mi.Array2f, arr, 2 * i0 + 1, on)
+                return dr.fma(v[0], a0, v[1] * a1)
             node_arr, row_arr = self.node, self.row
         else:
             def pair(host, i0, i1):
@@ -236,8 +280,8 @@ class SliceWarp:
         def above_row(i):
             return second(row_arr, rb0 + i, rb1 + i) <= uy
         if self.jit:
-            r = self._halve(*self._interval(self.guide_row, GUIDE_ROW, self.bits_row, 0, uy,
-                                            on0, on1, k0, k1, h),
+            r = self._halve(*self._interval(self.guide_row, GUIDE_ROW, self.bits_row, True, 0,
+                                            uy, on0, on1, k0, k1, h),
                             above_row)
         else:
             r = self._search(1, h - 1, above_row)
@@ -256,8 +300,9 @@ class SliceWarp:
                            second(node_arr, nb0 + w + i, nb1 + w + i), ty) <= target
 
         if self.jit:
-            first, last = self._interval(self.guide_node, GUIDE_NODE, self.bits_node, r, ux,
-                                         on0, on1, k0 * (h - 1), k1 * (h - 1), w)
+            first, last = self._interval(self.guide_node, GUIDE_NODE, self.bits_node,
+                                         self.paired, r, ux, on0, on1, k0 * (h - 1),
+                                         k1 * (h - 1), w)
             # The guide leaves out the rows without mass; a mixture of
             # (almost) nothing but those -- its rows with mass weighted 0,
             # as at the edge of the support -- is searched over all nodes.
@@ -275,6 +320,11 @@ class SliceWarp:
                 dr.lerp(g0, g1, tx))
 
 
+# The largest paired node table (bytes) that SliceWarp keeps (above it
+# its nodes are stored one slice at a time): a fraction of a current
+# processor's last-level cache, between the tables measured in
+# docs/benchmarks.md.
+PAIRED_NODES_BYTES = 16 << 20
 # A guide's entries per unit of the normalised integral (_guides): of the
 # marginal's (a slice's, few) and of the conditional's (a pair of rows').
 GUIDE_ROW = 256
@@ -321,14 +371,37 @@ def _bits(n):
     return 8 if n - 2 < 256 else 16
 
 
-def _pack(first, last, bits):
-    """The entries first | last << bits, flat, in 32-bit words (two a word
-    with 8 bits, the first in the low half)."""
-    e = (first.astype(np.uint32) | (last.astype(np.uint32) << bits)).ravel()
+def _paired(a):
+    """A per-slice table ([slices, ..., 2]: a value and an integral) with
+    each slice's entries followed by the next slice's, [slices, ..., 4]:
+    (value, next slice's value, integral, next slice's integral); the last
+    slice's next is 0."""
+    nxt = np.zeros_like(a)
+    nxt[:-1] = a[1:]
+    return np.ascontiguousarray(np.stack([a[..., 0], nxt[..., 0], a[..., 1], nxt[..., 1]],
+                                         axis=-1), dtype=np.float32)
+
+
+def _pack(first, last, bits, paired):
+    """The entries first | last << bits of a guide ([slices, ...,
+    entries]), each slice's entry paired with the next slice's same entry
+    (the last slice's next 0), flat, in 32-bit words: with 8 bits both in
+    one word (the slice's in the low half), with 16 bits in two words one
+    after the other."""
+    e = first.astype(np.uint32) | (last.astype(np.uint32) << bits)
+    if not paired:
+        e = e.ravel()
+        if bits == 8:
+            e = e.reshape(-1, 2)   # (every row has an even number of entries)
+            e = e[:, 0] | (e[:, 1] << 16)
+        return np.ascontiguousarray(e, dtype=np.uint32)
+    nxt = np.zeros_like(e)
+    nxt[:-1] = e[1:]
     if bits == 8:
-        e = e.reshape(-1, 2)   # (every row has an even number of entries)
-        e = e[:, 0] | (e[:, 1] << 16)
-    return np.ascontiguousarray(e, dtype=np.uint32)
+        e = e | (nxt << 16)
+    else:
+        e = np.stack([e, nxt], axis=-1)
+    return np.ascontiguousarray(e.ravel(), dtype=np.uint32)
 
 
 def _guides(node, row):

@@ -424,17 +424,19 @@ def test_transmissive_bsdf_without_tables_stays_on_the_fourier_path(tmp_path, mo
     assert "mode=traced" in str(_plugin("llvm_ad_rgb", str(source)))
 
 
-def test_stacked_warps_are_mitsubas(tables):
+def test_stacked_warps_are_mitsubas(tables, monkeypatch):
     """mitsuba_warp.SliceWarp, which the stacked sets read their VNDF and luminance through,
     against Mitsuba's own warp (mi.MarginalContinuous2D1) over the same stacked slices at
     points between two elevations: the inversion and the density to 1e-5 (float32 rounding),
     a sample mapped back by Mitsuba's inversion to within 2e-5 of its random numbers, with
-    the density there (to 1e-4 relative: a point on a cell edge may round into the next); and a slice of weight 1 read alone as Mitsuba reads it at its node."""
+    the density there (to 1e-4 relative: a point on a cell edge may round into the next); and a slice of weight 1 read alone as Mitsuba reads it at its node. Both of its
+    layouts (the nodes a slice at a time, and paired with the next slice's)."""
     from layerlab.tensor_file import read_tensor_file
     mi.set_variant("llvm_ad_rgb")
     from layerlab.mitsuba_lobes import SETS
     from layerlab.mitsuba_lobes_stacked import ORDER
     from layerlab.mitsuba_tables import stack_sets
+    from layerlab import mitsuba_warp
     from layerlab.mitsuba_warp import SliceWarp
     stacked = stack_sets(read_tensor_file(tables["glass"]), [SETS[k][0] for k in ORDER])
     # Mitsuba's warp takes a rising parameter list: the slices' indices
@@ -442,10 +444,14 @@ def test_stacked_warps_are_mitsubas(tables):
     theta = np.arange(stacked["vndf"].shape[1], dtype=np.float32)
     rng = np.random.default_rng(29)
     n = 20000
-    for key in ("vndf", "luminance"):
+    for key, pairs in (("vndf", 0), ("luminance", 0), ("vndf", 1 << 40),
+                       ("luminance", 1 << 40)):
         data = np.ascontiguousarray(stacked[key][0])
         theirs = mi.MarginalContinuous2D1(data, [theta.tolist()])
-        ours = SliceWarp(data)
+        with monkeypatch.context() as m:
+            m.setattr(mitsuba_warp, "PAIRED_NODES_BYTES", pairs)
+            ours = SliceWarp(data)
+        assert ours.paired == (pairs > 0)
         k = rng.integers(0, len(theta) - 1, n)
         t = rng.uniform(size=n).astype(np.float32)
         param = mi.Float((theta[k] * (1 - t) + theta[k + 1] * t).astype(np.float32))
@@ -481,7 +487,8 @@ def test_guided_searches_find_what_a_full_search_finds(tables, monkeypatch):
     for a made-up warp of 300 nodes a row (16-bit guide entries) with rows and runs of
     nodes without mass, at mixtures of two slices (weights 0 and 1 among them) and at
     random numbers that fall on the guides' steps and on the stored marginals' own values
-    (ties of the comparison)."""
+    (ties of the comparison); and the same, bit for bit, with the nodes stored a slice at
+    a time and paired with the next slice's (SliceWarp's two layouts)."""
     from layerlab.tensor_file import read_tensor_file
     mi.set_variant("llvm_ad_rgb")
     from layerlab import mitsuba_warp
@@ -497,7 +504,13 @@ def test_guided_searches_find_what_a_full_search_finds(tables, monkeypatch):
     made_up[3, 5:, :] = 0.0
     for key, data in (("vndf", stacked["vndf"][0]), ("luminance", stacked["luminance"][0]),
                       ("made-up", made_up)):
-        warp = mitsuba_warp.SliceWarp(np.ascontiguousarray(data))
+        with monkeypatch.context() as m:
+            m.setattr(mitsuba_warp, "PAIRED_NODES_BYTES", 0)
+            single = mitsuba_warp.SliceWarp(np.ascontiguousarray(data))
+        with monkeypatch.context() as m:
+            m.setattr(mitsuba_warp, "PAIRED_NODES_BYTES", 1 << 40)
+            warp = mitsuba_warp.SliceWarp(np.ascontiguousarray(data))
+        assert warp.paired and not single.paired
         slices = warp.node_host.shape[0]
         k = rng.integers(0, slices - 1, n)
         a = rng.uniform(size=n)
@@ -515,6 +528,8 @@ def test_guided_searches_find_what_a_full_search_finds(tables, monkeypatch):
                 mi.Point2f(mi.Float(u[0].astype(np.float32)), mi.Float(u[1].astype(np.float32))),
                 mi.Bool(True))
         guided = [np.array(x) for x in warp.sample(*args)]
+        for ours, theirs in zip(guided, [np.array(x) for x in single.sample(*args)]):
+            assert np.array_equal(ours, theirs), key
         with monkeypatch.context() as m:
             m.setattr(mitsuba_warp.SliceWarp, "_interval",
                       staticmethod(lambda *args: (mi.UInt32(0), mi.UInt32(args[-1] - 2))))
