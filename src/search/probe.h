@@ -21,7 +21,7 @@
  * library's version (material/resolution_cache.c), so that a build of the
  * same version number with another search does not take a choice it would
  * no longer make: raise it with every change that can change a choice. */
-#define LL_SEARCH_REVISION 3
+#define LL_SEARCH_REVISION 4
 
 /* Where the lobes are compared: pairs of layer cosines (ll_layer_eval's
  * mu_o, mu_i; |mu| >= mu_min), each evaluated at every azimuth of phi[].
