@@ -12,13 +12,16 @@ incident azimuths), as the C reader. A spectral file (`spectra`,
 sRGB (docs/formats.md, "Spectral files"), which this module would
 have to repeat; the plugin renders such a file through the C reader.
 
-The 2D warps are Mitsuba's own (mi.MarginalContinuous2D0/1/2, the
-Marginal2D<Float, Dim, true> that its `measured` plugin builds from the same
-fields): the VNDF and luminance warps normalised, the NDF and sigma tables
-evaluated as stored. Where the file has one incident azimuth the warps take
-the elevation as their only parameter (Mitsuba's take the azimuth too and
+The 2D warps are those that Mitsuba's `measured` plugin builds from the same
+fields (the Marginal2D<Float, Dim, true> of mi.MarginalContinuous2D0/1/2): the
+VNDF and luminance warps normalised, the NDF and sigma tables evaluated as
+stored. Where the file has one incident azimuth the VNDF and luminance warps
+take the elevation as their only parameter (Mitsuba's take the azimuth too and
 give it the weights 1 and 0 over one slice, the same values with twice the
-memory reads). A stacked table (stack_sets) is read by its own warps
+memory reads), and are mitsuba_warp.ParamWarp: Mitsuba's interface and points
+to float32 rounding, read with guided searches and both slices in one look-up
+(half a sample's time); with two azimuths they are Mitsuba's own
+(mi.MarginalContinuous2D2). A stacked table (stack_sets) is read by its own warps
 instead (mitsuba_warp.SliceWarp, D and sigma per set as _StackedGrid). The values (`rgb`) are interpolated here, all three channels
 of a node in one 4-float read (the layout below), with the same arithmetic
 as Mitsuba's interpolation per channel: per corner of the sample's cell
@@ -42,6 +45,7 @@ import numpy as np
 
 from . import _native
 from ._native import lib
+from .mitsuba_warp import ParamWarp
 from .tensor_file import TensorFileError, read_tensor_file
 
 import drjit as dr
@@ -289,9 +293,13 @@ class TracedTables:
             self.vndf = mi.MarginalContinuous2D2(np.ascontiguousarray(vndf), params)
             self.luminance = mi.MarginalContinuous2D2(np.ascontiguousarray(lum), params)
         else:
-            params = [theta.tolist()]
-            self.vndf = mi.MarginalContinuous2D1(np.ascontiguousarray(vndf[0]), params)
-            self.luminance = mi.MarginalContinuous2D1(np.ascontiguousarray(lum[0]), params)
+            # One parameter: the warps of mitsuba_warp.ParamWarp, Mitsuba's
+            # interface and points, over slices read with guided searches.
+            def slices_at(theta_i):
+                return self._weights(self.theta_host, self.theta if self.jit else None,
+                                     theta_i)
+            self.vndf = ParamWarp(vndf[0], slices_at)
+            self.luminance = ParamWarp(lum[0], slices_at)
         if self.stacked:
             # Bilinear look-ups of the lane's set's grid (_grid_eval):
             # what Mitsuba's warps evaluated as stored compute, without

@@ -2,7 +2,9 @@
 (docs/formats.md, "The 2D warp": a density bilinear over a grid of the
 unit square, sampled by its marginal along y and the conditional along x)
 one slice at a time, for the stacked lobe sets of a transmissive table
-(mitsuba_lobes_stacked).
+(mitsuba_lobes_stacked), and behind Mitsuba's interface for the warps of
+one parameter (ParamWarp: a table set of one incident azimuth,
+mitsuba_tables.TracedTables).
 
 Mitsuba's warps (mi.MarginalContinuous2D1) find the slices of a parameter
 themselves and read both neighbours at one point. A refracted lane reads
@@ -318,6 +320,46 @@ class SliceWarp:
             c, r = mi.Float(c), mi.Float(r)
         return (mi.Point2f((c + tx) * (1.0 / (w - 1)), (r + ty) * (1.0 / (h - 1))),
                 dr.lerp(g0, g1, tx))
+
+
+class ParamWarp:
+    """A warp of slices over one parameter (the incident elevation) with
+    the interface of Mitsuba's mi.MarginalContinuous2D1 -- eval(pos,
+    [x]), invert(u, [x]), sample(u, [x]) -- read through SliceWarp: the
+    two slices about x and their weights from slices_at(x), which finds
+    them as Mitsuba's interpolation over a parameter does
+    (TracedTables._weights), then each slice read at the point and the two
+    mixed as fma(v0, w0, v1 w1), Mitsuba's order. The searches of a sample
+    start from SliceWarp's guides and read both slices in one look-up
+    where Mitsuba's halve the whole marginal and row; the points agree
+    with Mitsuba's warp to float32 rounding (test_tables_mitsuba.py, against
+    Mitsuba's `measured` on the same file)."""
+
+    def __init__(self, data, slices_at):
+        self.warp = SliceWarp(data)
+        self.slices_at = slices_at
+
+    def _read(self, params, cell, active, cdf):
+        j, w0, w1 = self.slices_at(params[0])
+        # (A slice of weight 0 is not read: it adds 0 times its value.)
+        a = self.warp.read(j, cell, active & (w0 > 0), cdf)
+        b = self.warp.read(j + 1, cell, active & (w1 > 0), cdf)
+        return self.warp.mix(a, b, w0, w1)
+
+    def eval(self, pos, params, active=True):
+        """The density at the point pos of the square."""
+        cell = self.warp.cell(pos)
+        return self.warp.density(self._read(params, cell, active, False), cell)
+
+    def invert(self, pos, params, active=True):
+        """(the square's point that the warp maps to pos, the density)."""
+        cell = self.warp.cell(pos)
+        return self.warp.invert(self._read(params, cell, active, True), cell)
+
+    def sample(self, u, params, active=True):
+        """(the point the warp maps u to, the density there)."""
+        j, w0, w1 = self.slices_at(params[0])
+        return self.warp.sample(j, j + 1, w0, w1, u, active)
 
 
 # The largest paired node table (bytes) that SliceWarp keeps (above it
