@@ -46,7 +46,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, _fresnel_eta, \
-    _masked_call, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
+    _masked_call, _normal_area, _phi_to_u, _refraction_half, _refraction_jacobian, \
     _theta_to_u, _turn
 from .tensor_file import TensorFileError
 
@@ -172,20 +172,9 @@ def flipped_sample(t, wi, sample2, side_eta, active):
     pdf and value are flipped_eval_pdf's there. (wo, pdf, f cos theta_o as
     a list of 3 Float, ok)."""
     active = active & (mi.Frame3f.cos_theta(wi) > 0)
-    (e0, e1), axis, phi_i = t._elevations(wi)
     theta = _elevation(wi)
     rate = turn_rate(theta, side_eta)
-    w0 = e0[0]
-    second = sample2.x >= w0
-    u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
-                   sample2.x / dr.select(w0 > 0, w0, 1.0))
-    pick = [dr.select(second, b, a) for a, b in zip(e0[1:5], e1[1:5])]
-    wi_k, c_k, s_k, param = pick
-    params = t._params(phi_i, param)
-    sample, lum_pdf = t.luminance.sample(
-        mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
-    u_m, vndf_pdf = t.vndf.sample(sample, params, active)
-    m, _ = _normal_at(u_m, phi_i)
+    axis, (wi_k, c_k, s_k, param), m, drawn = t.sample_turned_normal(wi, sample2, active)
     c = dr.dot(wi_k, m)
     r = dr.fma(m, 2.0 * c, -wi_k)
     o = _flip(r)
@@ -194,7 +183,7 @@ def flipped_sample(t, wi, sample2, side_eta, active):
     else:
         s_o, c_o = dr.sincos(rate * (param - theta))
         wo = _turn(axis, c_o, -s_o, o)
-    ok = active & (c > 0) & (r.z > 0) & (wo.z < 0) & (lum_pdf > 0) & (vndf_pdf > 0)
+    ok = active & (c > 0) & (r.z > 0) & (wo.z < 0) & drawn
     value, pdf = flipped_eval_pdf(t, wi, wo, side_eta, ok, True, True)
     ok = ok & (pdf > 0)
     value = [dr.select(ok, v, 0.0) for v in value]

@@ -635,6 +635,27 @@ class TracedTables:
         weight = [dr.select(ok, v / dr.select(ok, pdf, 1.0), 0.0) for v in value]
         return wo, pdf, weight, ok
 
+    def sample_turned_normal(self, wi, sample2, active):
+        """The normal of a set read at wi's two elevations (refracted or
+        z-flipped), drawn as their samplers draw it: one of the
+        elevations picked by sample2.x with its weight (sample2.x rescaled
+        and passed on), m from that elevation's two warps. (the turns'
+        axis, the picked elevation's (wi turned to it, the turn's cosine
+        and sine, the warps' parameter), m, whether both warps gave it a
+        density.)"""
+        (e0, e1), axis, phi_i = self._elevations(wi)
+        w0 = e0[0]
+        second = sample2.x >= w0
+        u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
+                       sample2.x / dr.select(w0 > 0, w0, 1.0))
+        pick = [dr.select(second, b, a) for a, b in zip(e0[1:5], e1[1:5])]
+        params = self._params(phi_i, pick[3])
+        sample, lum_pdf = self.luminance.sample(
+            mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
+        u_m, vndf_pdf = self.vndf.sample(sample, params, active)
+        m, _ = _normal_at(u_m, phi_i)
+        return axis, pick, m, (lum_pdf > 0) & (vndf_pdf > 0)
+
     def refract_sample(self, wi, sample2, eta, active):
         """sample of a transmitted lobe warped about the refraction half
         vector (as refract_eval_pdf): one of wi's two elevations picked by
@@ -644,25 +665,13 @@ class TracedTables:
         and value are refract_eval_pdf's there. (wo, pdf, f cos theta_o as
         a list of 3 Float, ok)."""
         active = active & (mi.Frame3f.cos_theta(wi) > 0)
-        (e0, e1), axis, phi_i = self._elevations(wi)
-        w0 = e0[0]
-        second = sample2.x >= w0
-        u0 = dr.select(second, (sample2.x - w0) / dr.select(e1[0] > 0, e1[0], 1.0),
-                       sample2.x / dr.select(w0 > 0, w0, 1.0))
-        pick = [dr.select(second, b, a) for a, b in zip(e0[1:5], e1[1:5])]
-        wi_k, c_k, s_k, param = pick
-        params = self._params(phi_i, param)
-        sample, lum_pdf = self.luminance.sample(
-            mi.Point2f(sample2.y, dr.clip(u0, 0.0, 1.0)), params, active)
-        u_m, vndf_pdf = self.vndf.sample(sample, params, active)
-        m, _ = _normal_at(u_m, phi_i)
+        axis, (wi_k, c_k, s_k, _), m, drawn = self.sample_turned_normal(wi, sample2, active)
         inv = 1.0 / eta
         c = dr.dot(wi_k, m)
         k = 1.0 - inv * inv * (1.0 - c * c)
         o = (inv * c - dr.safe_sqrt(k)) * m - inv * wi_k
         wo = _turn(axis, c_k, -s_k, o)
-        ok = active & (c > 0) & (k > 0) & (o.z < 0) & (wo.z < 0) & (lum_pdf > 0) & \
-            (vndf_pdf > 0)
+        ok = active & (c > 0) & (k > 0) & (o.z < 0) & (wo.z < 0) & drawn
         value, pdf = self.refract_eval_pdf(wi, wo, eta, ok, True, True)
         ok = ok & (pdf > 0)
         value = [dr.select(ok, v, 0.0) for v in value]
