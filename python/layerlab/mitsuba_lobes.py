@@ -46,7 +46,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, _fresnel_eta, \
-    _masked_call, _normal_area, _phi_to_u, _refraction_half, _refraction_jacobian, \
+    _masked_call, _phi_to_u, _refraction_half, _refraction_jacobian, \
     _theta_to_u, _turn
 from .tensor_file import TensorFileError
 
@@ -117,21 +117,14 @@ def _flipped_at(t, wi, phi_i, param, slices, wo, active, want_value, want_pdf):
     solid angle of wo, and whether the pair is one of the lobe (wo below)."""
     active = active & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) < 0)
     m = dr.normalize(wi + _flip(wo))
-    u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
-    u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
-    params = t._params(phi_i, param)
-    sample, vndf_pdf = t.vndf.invert(u_m, params, active)
-    value = density = None
-    if want_value:
-        value = t.rgb(sample, phi_i, param, active, slices)
-        if t.jacobian:
-            u_wi = mi.Point2f(_theta_to_u(param), _phi_to_u(phi_i))
-            scale = t._jacobian_scale(u_m, u_wi, active)
-            value = [v * scale for v in value]
+    u_m, value, density = t.read_at_normal(m, phi_i, param, slices, active, want_value,
+                                           want_pdf)
+    if want_value and t.jacobian:
+        u_wi = mi.Point2f(_theta_to_u(param), _phi_to_u(phi_i))
+        scale = t._jacobian_scale(u_m, u_wi, active)
+        value = [v * scale for v in value]
     if want_pdf:
-        lum = t.luminance.eval(sample, params, active)
-        density = vndf_pdf * lum / (_normal_area(u_m.x, mi.Frame3f.sin_theta(m)) *
-                                    4.0 * dr.dot(wi, m))
+        density = density / (4.0 * dr.dot(wi, m))
         density = dr.select(active & dr.isfinite(density), density, 0.0)
     return value, density, active
 

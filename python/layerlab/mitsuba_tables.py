@@ -542,14 +542,12 @@ class TracedTables:
                         params[k], slices))
         return out, (-sp, cp), phi_i
 
-    def _stored_at(self, wi, phi_i, param, slices, wo, eta, active, want_value, want_pdf):
-        """At one of the file's elevations (wi's own, param the warps'
-        parameter there, slices the weights that read it alone): the
-        stored values of the refracted pair (without the factors they are
-        multiplied by), the elevation's density per solid angle of wo, and
-        whether the pair refracts."""
-        m, ok = _refraction_half(wi, wo, eta)
-        active = active & ok
+    def read_at_normal(self, m, phi_i, param, slices, active, want_value, want_pdf):
+        """The set at the half vector m for an incident elevation (param the
+        warps' parameter there, slices the weights that read it alone, wi's
+        azimuth phi_i): (m's point of the VNDF square; the stored values
+        there, or None; the density of m per steradian of normals, or
+        None)."""
         u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
         u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
         params = self._params(phi_i, param)
@@ -559,8 +557,21 @@ class TracedTables:
             value = self.rgb(sample, phi_i, param, active, slices)
         if want_pdf:
             lum = self.luminance.eval(sample, params, active)
-            density = vndf_pdf * lum / _normal_area(u_m.x, mi.Frame3f.sin_theta(m)) * \
-                _refraction_jacobian(wi, wo, m, eta)
+            density = vndf_pdf * lum / _normal_area(u_m.x, mi.Frame3f.sin_theta(m))
+        return u_m, value, density
+
+    def _stored_at(self, wi, phi_i, param, slices, wo, eta, active, want_value, want_pdf):
+        """At one of the file's elevations (wi's own, param the warps'
+        parameter there, slices the weights that read it alone): the
+        stored values of the refracted pair (without the factors they are
+        multiplied by), the elevation's density per solid angle of wo, and
+        whether the pair refracts."""
+        m, ok = _refraction_half(wi, wo, eta)
+        active = active & ok
+        _, value, density = self.read_at_normal(m, phi_i, param, slices, active, want_value,
+                                                want_pdf)
+        if want_pdf:
+            density = density * _refraction_jacobian(wi, wo, m, eta)
             density = dr.select(active & dr.isfinite(density), density, 0.0)
         return value, density, active
 
