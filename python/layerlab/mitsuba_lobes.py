@@ -45,9 +45,9 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, _fresnel_eta, \
-    _masked_call, _phi_to_u, _refraction_half, _refraction_jacobian, \
-    _theta_to_u, _turn
+from .mitsuba_tables import TracedTables, blend_elevation, _elevation, _flip, _fresnel_at, \
+    _fresnel_eta, _masked_call, _phi_to_u, _refraction_half, _refraction_jacobian, _theta_to_u, \
+    _turn
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -143,13 +143,9 @@ def flipped_eval_pdf(t, wi, wo, side_eta, active, want_value=True, want_pdf=True
     rate = turn_rate(theta, side_eta)
     for weight, wi_k, c, s, param, slices in elevations:
         o = turned_wo(axis, rate, theta, param, c, s, wo)
-        v, p, ok_k = _flipped_at(t, wi_k, phi_i, param, slices, o, active & (weight > 0),
-                                 want_value, want_pdf)
-        if want_value:
-            value = [dr.select(ok_k, dr.fma(v[i], weight, value[i]), value[i])
-                     for i in range(3)]
-        if want_pdf:
-            pdf = dr.select(ok_k, dr.fma(p, weight, pdf), pdf)
+        reading = _flipped_at(t, wi_k, phi_i, param, slices, o, active & (weight > 0),
+                              want_value, want_pdf)
+        value, pdf = blend_elevation(value, pdf, reading, weight)
     if want_value:
         value = [dr.select(active, dr.maximum(v, 0.0), 0.0) for v in value]
     if want_pdf:

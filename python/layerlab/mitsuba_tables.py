@@ -199,6 +199,18 @@ def _turn(axis, c, s, v):
                        v.z * c + (ax * v.y - ay * v.x) * s)
 
 
+def blend_elevation(value, pdf, reading, weight):
+    """The blend of a set read at wi's two elevations, one more: the
+    elevation's (values, density, where it has them) added with its weight
+    to value and pdf (each None if not wanted)."""
+    v, p, ok = reading
+    if value is not None:
+        value = [dr.select(ok, dr.fma(v[i], weight, value[i]), value[i]) for i in range(3)]
+    if pdf is not None:
+        pdf = dr.select(ok, dr.fma(p, weight, pdf), pdf)
+    return value, pdf
+
+
 def _masked_call(jit, mask, fn, args, zeros):
     """fn(*args) where mask holds, zeros() elsewhere. In the JIT variants a
     symbolic conditional (dr.if_stmt), so that a packet of lanes none of
@@ -591,13 +603,9 @@ class TracedTables:
         elevations, axis, phi_i = self._elevations(wi)
         for weight, wi_k, c, s, param, slices in elevations:
             o = _turn(axis, c, s, wo)
-            v, p, ok_k = self._stored_at(wi_k, phi_i, param, slices, o, eta,
-                                         active & (weight > 0), want_value, want_pdf)
-            if want_value:
-                value = [dr.select(ok_k, dr.fma(v[i], weight, value[i]), value[i])
-                         for i in range(3)]
-            if want_pdf:
-                pdf = dr.select(ok_k, dr.fma(p, weight, pdf), pdf)
+            reading = self._stored_at(wi_k, phi_i, param, slices, o, eta,
+                                      active & (weight > 0), want_value, want_pdf)
+            value, pdf = blend_elevation(value, pdf, reading, weight)
         if want_value:
             if self.jacobian:
                 u_wi = mi.Point2f(_theta_to_u(_elevation(wi)), _phi_to_u(phi_i))
