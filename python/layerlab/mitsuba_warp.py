@@ -83,7 +83,8 @@ class SliceWarp:
             # stay small: pairing doubles them, and a table that no longer
             # fits in the processor's cache then loses more to the misses
             # of its other reads (eval_pdf's at one slice) than a sample
-            # gains (docs/benchmarks.md, "Transmissive table files").
+            # gains (docs/benchmarks.md, "Table files", the "tables"
+            # mode's paragraph on transmissive table files).
             self.paired = self.node_host.size * 8 <= PAIRED_NODES_BYTES
             self.node = mi.Float((_paired(self.node_host) if self.paired
                                   else self.node_host).ravel())
