@@ -306,12 +306,9 @@ class TracedTables:
             self.luminance = mi.MarginalContinuous2D2(np.ascontiguousarray(lum), params)
         else:
             # One parameter: the warps of mitsuba_warp.ParamWarp, Mitsuba's
-            # interface and points, over slices read with guided searches.
-            def slices_at(theta_i):
-                return self._weights(self.theta_host, self.theta if self.jit else None,
-                                     theta_i)
-            self.vndf = ParamWarp(vndf[0], slices_at)
-            self.luminance = ParamWarp(lum[0], slices_at)
+            # calls and points, over slices read with guided searches.
+            self.vndf = ParamWarp(vndf[0])
+            self.luminance = ParamWarp(lum[0])
         if self.stacked:
             # Bilinear look-ups of the lane's set's grid (_grid_eval):
             # what Mitsuba's warps evaluated as stored compute, without
@@ -350,8 +347,21 @@ class TracedTables:
 
     # ------------------------------------------------------------ helpers
 
-    def _params(self, phi_i, theta_i):
-        return [phi_i, theta_i] if self.use_phi else [theta_i]
+    def _params(self, phi_i, theta_i, slices=None):
+        """The warps' parameters for the incident direction: Mitsuba's
+        [phi_i, theta_i] for a file of two azimuths; else ParamWarp's
+        [(j, w0, w1)], the slices and weights of theta_i (slices, where the
+        caller reads one slice it knows), found once for both warps and
+        the values (rgb's theta_weights)."""
+        if self.use_phi:
+            return [phi_i, theta_i]
+        if slices is None:
+            slices = self._weights(self.theta_host, self.theta if self.jit else None, theta_i)
+        return [slices]
+
+    def _theta_weights(self, params):
+        """rgb's theta_weights from _params' result (None: rgb finds them)."""
+        return None if self.use_phi else params[0]
 
     def _weights(self, values_host, values, x):
         """Mitsuba's interpolation over one parameter (Distribution2D's
@@ -488,7 +498,7 @@ class TracedTables:
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
-            value = self.rgb(sample, phi_i, theta_i, active)
+            value = self.rgb(sample, phi_i, theta_i, active, self._theta_weights(params))
             if self.jacobian:
                 scale = self._jacobian_scale(u_m, u_wi, active)
                 value = [v * scale for v in value]
@@ -562,7 +572,7 @@ class TracedTables:
         None)."""
         u_phi = _phi_to_u(dr.atan2(m.y, m.x) - phi_i)
         u_m = mi.Point2f(_theta_to_u(_elevation(m)), u_phi - dr.floor(u_phi))
-        params = self._params(phi_i, param)
+        params = self._params(phi_i, param, slices)
         sample, vndf_pdf = self.vndf.invert(u_m, params, active)
         value = density = None
         if want_value:
@@ -630,7 +640,7 @@ class TracedTables:
         u_m, vndf_pdf = self.vndf.sample(sample, params, active)
         m, sin_theta = _normal_at(u_m, phi_i)
         density = vndf_pdf * lum_pdf / _normal_area(u_m.x, sin_theta)
-        value = self.rgb(sample, phi_i, theta_i, active)
+        value = self.rgb(sample, phi_i, theta_i, active, self._theta_weights(params))
         if self.jacobian:
             scale = self._jacobian_scale(u_m, u_wi, active)
             value = [v * scale for v in value]

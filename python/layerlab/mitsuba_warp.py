@@ -325,23 +325,23 @@ class SliceWarp:
 
 class ParamWarp:
     """A warp of slices over one parameter (the incident elevation) with
-    the interface of Mitsuba's mi.MarginalContinuous2D1 -- eval(pos,
-    [x]), invert(u, [x]), sample(u, [x]) -- read through SliceWarp: the
-    two slices about x and their weights from slices_at(x), which finds
-    them as Mitsuba's interpolation over a parameter does
-    (TracedTables._weights), then each slice read at the point and the two
-    mixed as fma(v0, w0, v1 w1), Mitsuba's order. The searches of a sample
+    the calls of Mitsuba's mi.MarginalContinuous2D1 -- eval(pos, params),
+    invert(u, params), sample(u, params) -- read through SliceWarp. Its
+    params are [(j, w0, w1)]: the two slices j, j + 1 about the parameter
+    and their weights, as Mitsuba's interpolation over a parameter finds
+    them (TracedTables._params, which finds them once for both warps and
+    the values); each slice is read at the point and the two mixed as
+    fma(v0, w0, v1 w1), Mitsuba's order. The searches of a sample
     start from SliceWarp's guides and read both slices in one look-up
     where Mitsuba's halve the whole marginal and row; the points agree
     with Mitsuba's warp to float32 rounding (test_tables_mitsuba.py, against
     Mitsuba's `measured` on the same file)."""
 
-    def __init__(self, data, slices_at):
+    def __init__(self, data):
         self.warp = SliceWarp(data)
-        self.slices_at = slices_at
 
     def _read(self, params, cell, active, cdf):
-        j, w0, w1 = self.slices_at(params[0])
+        j, w0, w1 = params[0]
         # (A slice of weight 0 is not read: it adds 0 times its value.)
         a = self.warp.read(j, cell, active & (w0 > 0), cdf)
         b = self.warp.read(j + 1, cell, active & (w1 > 0), cdf)
@@ -359,7 +359,7 @@ class ParamWarp:
 
     def sample(self, u, params, active=True):
         """(the point the warp maps u to, the density there)."""
-        j, w0, w1 = self.slices_at(params[0])
+        j, w0, w1 = params[0]
         return self.warp.sample(j, j + 1, w0, w1, u, active)
 
 
