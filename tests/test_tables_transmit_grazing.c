@@ -56,21 +56,28 @@ static double albedo_below(const ll_bsdf *b, double theta, int transmitted)
     return transmitted ? t[1] : r[1];
 }
 
-static void test_reflection_below_grazing(void **state)
+/* Frosted glass's tables at n_theta_i incident elevations x 64^2 x 64^2
+ * and its .bsdf, both opened. */
+static void frosted_tables(size_t n_theta_i, const char *name, ll_bsdf **src, ll_bsdf **tab)
 {
     char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
     ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    o.n_theta_i = n_theta_i;
+    o.vndf_size = 64;
+    o.sample_size = 64;
+    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\n", name, &o, bsdf_path, tab_path, src,
+                         tab);
+}
+
+static void test_reflection_below_grazing(void **state)
+{
     ll_bsdf *src = NULL, *tab = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     double alpha[4];
     const char *at;
     int k;
     (void)state;
-    o.n_theta_i = 32;
-    o.vndf_size = 64;
-    o.sample_size = 64;
-    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\n", "frosted", &o, bsdf_path, tab_path,
-                         &src, &tab);
+    frosted_tables(32, "frosted", &src, &tab);
     for (k = 0; k < N_VIEWERS; ++k) {
         double th = viewers_deg[k] * LL_PI / 180.0, rs = albedo_below(src, th, 0),
                rt = albedo_below(tab, th, 0);
@@ -109,17 +116,11 @@ static const double beyond_deg[N_BEYOND] = { 60.0, 61.0, 62.0, 63.0, 64.0, 65.0,
 
 static void test_transmission_below_beyond_critical(void **state)
 {
-    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
-    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
     ll_bsdf *src = NULL, *tab = NULL;
     double worst = 0.0;
     int k;
     (void)state;
-    o.n_theta_i = 64;
-    o.vndf_size = 64;
-    o.sample_size = 64;
-    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\n", "frosted_t", &o, bsdf_path, tab_path,
-                         &src, &tab);
+    frosted_tables(64, "frosted_t", &src, &tab);
     for (k = 0; k < N_BEYOND; ++k) {
         double th = beyond_deg[k] * LL_PI / 180.0, ts = albedo_below(src, th, 1),
                tt = albedo_below(tab, th, 1);
