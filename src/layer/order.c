@@ -480,6 +480,95 @@ ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out)
     return LL_OK;
 }
 
+/* ------------------------------------------- builder, reciprocal half */
+
+/* The mirror of node k: the same cosine on the other side. */
+static size_t mirror_node(size_t k, size_t h) { return k < h ? k + h : k - h; }
+
+/* Segment s = 2 col + half scatters to one row of the other half (row
+ * col mod h, in half 1 when col < h), each entry to the mirror column of
+ * its own row; every entry lands on a zero (order.h), so the result does
+ * not depend on the order the segments are visited in. */
+ll_status ll_order_builder_mirror(ll_order_builder *b, const double *row_scale,
+                                  const double *col_scale)
+{
+    size_t n = b->n, h = n / 2, segs = 2 * n, s, t;
+    uint32_t *lo = ll_alloc_array(segs, 4 * sizeof *lo), *hi, *old_lo, *old_len;
+    double **old = ll_alloc_array(segs, sizeof *old);
+    ll_status st = LL_OK;
+    if (!lo || !old) {
+        ll_free(lo);
+        ll_free(old);
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory mirroring a %zu-node order", n);
+    }
+    hi = lo + segs;
+    old_lo = hi + segs;
+    old_len = old_lo + segs;
+    /* The runs as they are (read below, whatever gets replaced), and the
+     * extent of what lands in each segment (lo > hi: nothing). */
+    for (s = 0; s < segs; ++s) {
+        old[s] = b->seg[s];
+        old_lo[s] = b->lo[s];
+        old_len[s] = b->len[s];
+        lo[s] = UINT32_MAX;
+        hi[s] = 0;
+    }
+    for (s = 0; s < segs; ++s) {
+        size_t col = s / 2, first = (s % 2) * h, fixed = mirror_node(col, h);
+        uint32_t to_row = (uint32_t)(col % h);
+        for (t = 0; t < old_len[s]; ++t) {
+            size_t row = first + old_lo[s] + t, d;
+            if (old[s][t] == 0.0 || row == fixed)
+                continue;
+            d = 2 * mirror_node(row, h) + (col < h);
+            if (to_row < lo[d])
+                lo[d] = to_row;
+            if (to_row + 1 > hi[d])
+                hi[d] = to_row + 1;
+        }
+    }
+    /* Each segment that receives entries gets a new run: the old one and
+     * the new rows' extent together (zero between). */
+    for (s = 0; s < segs && st == LL_OK; ++s) {
+        uint32_t a = lo[s], e = hi[s];
+        double *run;
+        if (a >= e)
+            continue;
+        if (old_len[s]) {
+            a = old_lo[s] < a ? old_lo[s] : a;
+            e = old_lo[s] + old_len[s] > e ? old_lo[s] + old_len[s] : e;
+        }
+        run = ll_calloc_array(e - a, sizeof(double));
+        if (!run) {
+            st = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory mirroring a %zu-node order", n);
+            break;
+        }
+        if (old_len[s])
+            memcpy(run + (old_lo[s] - a), old[s], old_len[s] * sizeof(double));
+        b->seg[s] = run;
+        b->lo[s] = a;
+        b->len[s] = e - a;
+    }
+    for (s = 0; s < segs && st == LL_OK; ++s) {
+        size_t col = s / 2, first = (s % 2) * h, fixed = mirror_node(col, h);
+        size_t to_row = mirror_node(col, h), to_half = col < h;
+        double left = row_scale[to_row];
+        for (t = 0; t < old_len[s]; ++t) {
+            size_t row = first + old_lo[s] + t, to_col = mirror_node(row, h);
+            size_t d = 2 * to_col + to_half;
+            if (old[s][t] == 0.0 || row == fixed)
+                continue;
+            b->seg[d][to_row - to_half * h - b->lo[d]] += old[s][t] * left * col_scale[to_col];
+        }
+    }
+    for (s = 0; s < segs; ++s)
+        if (b->seg[s] != old[s])
+            ll_free(old[s]);
+    ll_free(lo);
+    ll_free(old);
+    return st;
+}
+
 /* ------------------------------------------- orders without dense work */
 
 /* Is segment s (= 2 col + half) in a transmission block? */

@@ -104,6 +104,18 @@ LL_INTERNAL ll_status ll_order_builder_set_column_range(ll_order_builder *b, siz
  * a term added to the columns once they are all known. */
 LL_INTERNAL void ll_order_builder_get_column(const ll_order_builder *b, size_t col,
                                              double *column);
+/* The other half of a reciprocal order (an interface's: entry (r, c) is
+ * entry (M(c), M(r)) times factors of its row and column, M(k) = k +- h
+ * being the same cosine on the other side), from the half that is set:
+ * every stored entry (r, c) off the fixed points r = M(c) is written at
+ * (M(c), M(r)) as well, times row_scale[M(c)] col_scale[M(r)] (n each).
+ * The builder must hold at most one entry of each pair, the other zero:
+ * then every written entry lands on a zero, and the result is the same
+ * whatever order the columns were set in. Exact zeros are not written, so
+ * each run still ends on a stored value, as a column set whole would.
+ * Costs the stored entries, not n^2. */
+LL_INTERNAL ll_status ll_order_builder_mirror(ll_order_builder *b, const double *row_scale,
+                                              const double *col_scale);
 /* Finish: *out = the order (NULL if all zero); frees the builder. */
 LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
 LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);
