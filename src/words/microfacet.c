@@ -52,8 +52,27 @@ ll_status ll_microfacet_read(const ll_microfacet *in, ll_microfacet *out, const 
     return LL_OK;
 }
 
+/* Is every node's mirror (k +- h) exactly its negative? Then a pair's
+ * mirror is the same pair of cosines, and one series serves both
+ * (microfacet_columns.c); ll_layer_create accepts nodes symmetric to
+ * 1e-12 only, whose mirrors would be other cosines. */
+static int nodes_mirrored(const ll_layer *layer)
+{
+    size_t h = layer->n / 2, k;
+    for (k = 0; k < h; ++k)
+        if (layer->nodes[k] != -layer->nodes[k + h])
+            return 0;
+    return 1;
+}
+
 ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfacet,
                                   const ll_monitor *monitor)
+{
+    return ll_microfacet_set_layer(layer, microfacet, monitor, 0);
+}
+
+ll_status ll_microfacet_set_layer(ll_layer *layer, const ll_microfacet *microfacet,
+                                  const ll_monitor *monitor, int every_pair)
 {
     static const char fn[] = "ll_layer_set_microfacet";
     size_t n, m, h, k, n_orders_internal;
@@ -129,6 +148,7 @@ ll_status ll_layer_set_microfacet(ll_layer *layer, const ll_microfacet *microfac
     job.eta_re = eta_re;
     job.eta_im = eta_im;
     job.conserve_energy = conserve_energy;
+    job.reciprocal = !every_pair && nodes_mirrored(layer);
     s = ll_watch_stage(&watch, "interface", 0.1, 0.85, n) ? ll_watch_check(&watch, fn) : LL_OK;
     if (s == LL_OK) {
         /* ll_microfacet_finish_order0 reads order 0 (and the mirror's) whole. */

@@ -1,6 +1,30 @@
 /*
  * The columns of an interface layer and the energy compensation of its
  * order 0 (words/microfacet_columns.h).
+ *
+ * Reciprocity. The BSDF of Walter et al. 2007 with the separable Smith
+ * term is reciprocal: f(wi, wo) = f(wo, wi) for reflection and
+ * f_t(wi -> wo) / eta_o^2 = f_t(wo -> wi) / eta_i^2 for refraction (eta_o,
+ * eta_i: the indices of the media the two directions lie in; radiance
+ * transport, Veach's thesis, section 5.2). In the layer's matrices (rows
+ * outgoing, columns incident; node k and its mirror M(k) = k +- h are the
+ * same cosine on the two sides) that makes the unweighted entry (o, i) of
+ * every Fourier order (cos(l phi) is even in phi) equal to the entry
+ * (M(i), M(o)) times index(o)^2 / index(i)^2, where a row lies in the
+ * medium below (eta) when o >= h (light going down) and a column in the
+ * medium above (1) when i >= h (light arriving from above): R^t and R^b
+ * are each their own mirror, T^bt is T^tb's. The series of a pair and of
+ * its mirror take the same plan (microfacet_plan.c's products and sums of
+ * the same cosines) and agree to rounding, with the same truncation
+ * (tests/test_microfacet_reciprocal.c). So each column computes the
+ * series of about half its rows, one entry of each pair, and the finish
+ * step writes the others from them. Column i >= h computes rows
+ * i - h .. i: the rows a >= i - h of R^t (the mirror of (a, i) is
+ * (i - h, a + h); row i - h is the fixed point, its own mirror) and
+ * T^tb's rows h .. i, on and above its diagonal; column c < h computes
+ * rows c + h .. n - 1 (R^b, the same way) and 0 .. c - 1 (T^bt above its
+ * diagonal, whose mirrors lie below T^tb's): h + 1 or h pairs per column,
+ * so the parallel columns stay even, and each half column's rows one run.
  */
 #include "words/microfacet_columns.h"
 #include "words/microfacet_pair.h"
@@ -42,6 +66,14 @@ static int longer_first(const void *a, const void *b)
  * n x m values. */
 static ll_status fill_column(size_t col, const ll_microfacet_job *job);
 
+void ll_microfacet_column_rows(size_t col, size_t n, int reciprocal, size_t *first,
+                               size_t *count)
+{
+    size_t h = n / 2;
+    *first = reciprocal ? (col < h ? col + h : col - h) : 0;
+    *count = reciprocal ? (col < h ? h : h + 1) : n;
+}
+
 ll_status ll_microfacet_layer_column(size_t col, void *ctx)
 {
     const ll_microfacet_job *job = ctx;
@@ -56,7 +88,7 @@ ll_status ll_microfacet_layer_column(size_t col, void *ctx)
 static ll_status fill_column(size_t col, const ll_microfacet_job *job)
 {
     const ll_layer *l = job->layer;
-    size_t n = l->n, m = l->m, h = n / 2, row, k, j, count;
+    size_t n = l->n, m = l->m, h = n / 2, row, k, j, count, first;
     double *pool, *scratch, *column, factor;
     row_length *rows = ll_alloc_array(n, sizeof *rows);
     size_t slot = ll_parallel_slot();
@@ -77,24 +109,28 @@ static ll_status fill_column(size_t col, const ll_microfacet_job *job)
     pool = memory;                                   /* row r's series at r m */
     scratch = pool + n * m;
     column = scratch + ll_microfacet_scratch_size(m); /* n, kept zero between uses */
-    for (row = 0; row < n && s == LL_OK; ++row) {
+    /* (The rows not computed stay zero in order0 and ref0, which start
+     * zero, until the finish mirrors them.) */
+    ll_microfacet_column_rows(col, n, job->reciprocal, &first, &count);
+    for (j = 0; j < count && s == LL_OK; ++j) {
         /* The reference (F = 1) is only needed for R^t: up from above. */
-        double *ref = job->ref0 && row < h && col >= h ? &job->ref0[col * n + row] : NULL;
+        double *ref;
+        row = first + j < n ? first + j : first + j - n;
+        ref = job->ref0 && row < h && col >= h ? &job->ref0[col * n + row] : NULL;
         if (ll_watch_poll(job->watch)) {
             s = ll_fail(LL_ERROR_CANCELLED, "ll_layer_set_microfacet: cancelled");
             break;
         }
         /* Depth grows opposite to the normal: the series takes -mu. */
-        rows[row].row = row;
+        rows[j].row = row;
         s = ll_microfacet_series(job->mf, -l->nodes[row], -l->nodes[col], m, pool + row * m,
-                                 &rows[row].len, ref, scratch);
-        job->order0[col * n + row] = rows[row].len ? pool[row * m] : 0.0;
+                                 &rows[j].len, ref, scratch);
+        job->order0[col * n + row] = rows[j].len ? pool[row * m] : 0.0;
     }
     if (s == LL_OK) {
-        qsort(rows, n, sizeof *rows, longer_first);
+        qsort(rows, count, sizeof *rows, longer_first);
         memset(column, 0, n * sizeof(double));
         factor = ll_layer_surface_factor(l, col, 1);
-        count = n;
         /* Orders past the column's longest series stay empty in the builders. */
         for (k = 1; k < rows[0].len && s == LL_OK; ++k) {
             size_t lo = n, hi = 0;
@@ -229,8 +265,70 @@ static ll_status compensate(const ll_microfacet_job *job, size_t n, double *work
     return spread_orders(job, &c);
 }
 
-/* After the columns: energy compensation on the unweighted order 0, then
- * the weights, and order 0 into its builder. */
+/* index(o)^2 / index(i)^2 of the reciprocity (the comment at the top)
+ * as a factor of the row and one of the column: the row's square, and
+ * one over the column's. A conductor only reflects, within one medium. */
+static double row_index2(const ll_microfacet_job *job, size_t row, size_t h)
+{
+    return job->eta_im == 0.0 && row >= h ? job->eta_re * job->eta_re : 1.0;
+}
+
+static double col_index2(const ll_microfacet_job *job, size_t col, size_t h)
+{
+    return job->eta_im == 0.0 && col < h ? job->eta_re * job->eta_re : 1.0;
+}
+
+/* The entries the columns left out (ll_microfacet_column_rows), from
+ * their mirrors: in the dense order 0 (and the conductor's reference,
+ * R^t alone), complete on every process, and in each order past 0 whose
+ * builder this process holds (all of them, or in a distributed build the
+ * orders it owns, whole after the exchange). Serial, in a fixed order:
+ * each entry is one product of its mirror, so the bits do not depend on
+ * the thread count or the split. */
+static ll_status mirror_rest(const ll_microfacet_job *job)
+{
+    const ll_layer *l = job->layer;
+    size_t n = l->n, m = l->m, h = n / 2, col, row, j, k, first, count;
+    double *left, *right;
+    ll_status s = LL_OK;
+    for (col = 0; col < n; ++col) {
+        size_t to = col < h ? col + h : col - h; /* M(col) */
+        double c = col_index2(job, col, h);
+        ll_microfacet_column_rows(col, n, 1, &first, &count);
+        for (j = count; j < n; ++j) {
+            size_t from;
+            row = first + j < n ? first + j : first + j - n;
+            from = (row < h ? row + h : row - h) * n + to; /* (M(i), M(o)) */
+            job->order0[col * n + row] = job->order0[from] * (row_index2(job, row, h) / c);
+            if (job->ref0 && row < h && col >= h)
+                job->ref0[col * n + row] = job->ref0[from];
+        }
+    }
+    if (m < 2)
+        return LL_OK;
+    left = ll_alloc_array(n, 2 * sizeof(double));
+    if (!left)
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
+    right = left + n;
+    /* The builders hold the weighted entries f(o, i) W_i: the mirror's
+     * weight M(o) divided out, the column's own put in. */
+    for (k = 0; k < n; ++k) {
+        size_t mk = k < h ? k + h : k - h;
+        left[k] = row_index2(job, k, h) / ll_layer_surface_factor(l, mk, 1);
+        right[k] = ll_layer_surface_factor(l, k, 1) / col_index2(job, k, h);
+    }
+    for (k = 1; k < m && s == LL_OK; ++k) {
+        if (job->builders[k])
+            s = ll_order_builder_mirror(job->builders[k], left, right);
+        if (s == LL_OK)
+            s = ll_watch_check(job->watch, "ll_layer_set_microfacet");
+    }
+    ll_free(left);
+    return s;
+}
+
+/* After the columns: the entries not computed, then energy compensation
+ * on the unweighted order 0, the weights, and order 0 into its builder. */
 ll_status ll_microfacet_finish_order0(void *ctx)
 {
     const ll_microfacet_job *job = ctx;
@@ -239,7 +337,9 @@ ll_status ll_microfacet_finish_order0(void *ctx)
     ll_status s = LL_OK;
     if (ll_watch_stage(job->watch, "interface", 0.95, 0.05, n))
         return ll_watch_check(job->watch, "ll_layer_set_microfacet");
-    if (job->conserve_energy)
+    if (job->reciprocal)
+        s = mirror_rest(job);
+    if (s == LL_OK && job->conserve_energy)
         s = compensate(job, n, job->work);
     /* (In a distributed build only the owner of order 0 holds its builder.) */
     for (col = 0; col < n && s == LL_OK && job->builders[0]; ++col) {
