@@ -485,87 +485,100 @@ ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out)
 /* The mirror of node k: the same cosine on the other side. */
 static size_t mirror_node(size_t k, size_t h) { return k < h ? k + h : k - h; }
 
-/* Segment s = 2 col + half scatters to one row of the other half (row
- * col mod h, in half 1 when col < h), each entry to the mirror column of
- * its own row; every entry lands on a zero (order.h), so the result does
- * not depend on the order the segments are visited in. */
-ll_status ll_order_builder_mirror(ll_order_builder *b, const double *row_scale,
-                                  const double *col_scale)
+/* A run that has entries to mirror, as it was before any was written. */
+typedef struct mirror_source {
+    const double *val;
+    size_t seg;
+    uint32_t lo, len;
+} mirror_source;
+
+size_t ll_order_builder_mirror_bytes(size_t n)
 {
-    size_t n = b->n, h = n / 2, segs = 2 * n, s, t;
-    uint32_t *lo = ll_alloc_array(segs, 4 * sizeof *lo), *hi, *old_lo, *old_len;
-    double **old = ll_alloc_array(segs, sizeof *old);
+    size_t segs, each = sizeof(mirror_source) + sizeof(size_t) + sizeof(double *) +
+                        2 * sizeof(uint32_t);
+    return n <= (SIZE_MAX - 1) / 2 && ll_size_mul(2 * n, each, &segs) ? segs : 0;
+}
+
+/* Segment s = 2 col + half scatters to one row of the other half (row
+ * col mod h, in half 1 when col < h), entry t to the mirror column of its
+ * own row. So in the order of s each segment's landing rows come in
+ * increasing order (col mod h grows with col in either half of the
+ * columns): the first sets a segment's lo, the last its hi. Every entry
+ * lands on a zero (order.h), and the result does not depend on the order
+ * the segments are visited in. */
+ll_status ll_order_builder_mirror(ll_order_builder *b, const double *row_scale,
+                                  const double *col_scale, void *scratch)
+{
+    size_t n = b->n, h = n / 2, segs = 2 * n, s, t, k, n_src = 0, n_dst = 0;
+    mirror_source *src = scratch;
+    size_t *dst = (size_t *)(src + segs);
+    double **old = (double **)(dst + segs);
+    uint32_t *lo = (uint32_t *)(old + segs), *hi = lo + segs;
     ll_status st = LL_OK;
-    if (!lo || !old) {
-        ll_free(lo);
-        ll_free(old);
-        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory mirroring a %zu-node order", n);
-    }
-    hi = lo + segs;
-    old_lo = hi + segs;
-    old_len = old_lo + segs;
-    /* The runs as they are (read below, whatever gets replaced), and the
-     * extent of what lands in each segment (lo > hi: nothing). */
-    for (s = 0; s < segs; ++s) {
-        old[s] = b->seg[s];
-        old_lo[s] = b->lo[s];
-        old_len[s] = b->len[s];
-        lo[s] = UINT32_MAX;
-        hi[s] = 0;
-    }
+    memset(lo, 0xff, segs * sizeof *lo); /* UINT32_MAX: nothing lands yet */
     for (s = 0; s < segs; ++s) {
         size_t col = s / 2, first = (s % 2) * h, fixed = mirror_node(col, h);
+        size_t to_half = col < h, c0;
         uint32_t to_row = (uint32_t)(col % h);
-        for (t = 0; t < old_len[s]; ++t) {
-            size_t row = first + old_lo[s] + t, d;
-            if (old[s][t] == 0.0 || row == fixed)
+        const double *v = b->seg[s];
+        if (!b->len[s])
+            continue;
+        src[n_src].val = v;
+        src[n_src].seg = s;
+        src[n_src].lo = b->lo[s];
+        src[n_src].len = b->len[s];
+        ++n_src;
+        c0 = mirror_node(first + b->lo[s], h); /* the columns c0, c0 + 1, ... */
+        for (t = 0; t < b->len[s]; ++t) {
+            size_t d = 2 * (c0 + t) + to_half;
+            if (v[t] == 0.0 || first + b->lo[s] + t == fixed)
                 continue;
-            d = 2 * mirror_node(row, h) + (col < h);
-            if (to_row < lo[d])
+            if (lo[d] == UINT32_MAX) {
                 lo[d] = to_row;
-            if (to_row + 1 > hi[d])
-                hi[d] = to_row + 1;
+                dst[n_dst++] = d;
+            }
+            hi[d] = to_row + 1;
         }
     }
     /* Each segment that receives entries gets a new run: the old one and
-     * the new rows' extent together (zero between). */
-    for (s = 0; s < segs && st == LL_OK; ++s) {
-        uint32_t a = lo[s], e = hi[s];
+     * the landing rows together, zero between. */
+    for (k = 0; k < n_dst && st == LL_OK; ++k) {
+        uint32_t a, e;
         double *run;
-        if (a >= e)
-            continue;
-        if (old_len[s]) {
-            a = old_lo[s] < a ? old_lo[s] : a;
-            e = old_lo[s] + old_len[s] > e ? old_lo[s] + old_len[s] : e;
+        s = dst[k];
+        a = lo[s];
+        e = hi[s];
+        old[k] = b->seg[s];
+        if (b->len[s]) {
+            a = b->lo[s] < a ? b->lo[s] : a;
+            e = b->lo[s] + b->len[s] > e ? b->lo[s] + b->len[s] : e;
         }
         run = ll_calloc_array(e - a, sizeof(double));
         if (!run) {
             st = ll_fail(LL_ERROR_OUT_OF_MEMORY, "out of memory mirroring a %zu-node order", n);
+            n_dst = k; /* (the ones replaced so far free their old runs) */
             break;
         }
-        if (old_len[s])
-            memcpy(run + (old_lo[s] - a), old[s], old_len[s] * sizeof(double));
+        if (b->len[s])
+            memcpy(run + (b->lo[s] - a), old[k], b->len[s] * sizeof(double));
         b->seg[s] = run;
         b->lo[s] = a;
         b->len[s] = e - a;
     }
-    for (s = 0; s < segs && st == LL_OK; ++s) {
-        size_t col = s / 2, first = (s % 2) * h, fixed = mirror_node(col, h);
-        size_t to_row = mirror_node(col, h), to_half = col < h;
-        double left = row_scale[to_row];
-        for (t = 0; t < old_len[s]; ++t) {
-            size_t row = first + old_lo[s] + t, to_col = mirror_node(row, h);
-            size_t d = 2 * to_col + to_half;
-            if (old[s][t] == 0.0 || row == fixed)
+    for (k = 0; k < n_src && st == LL_OK; ++k) {
+        const mirror_source *r = &src[k];
+        size_t col = r->seg / 2, first = (r->seg % 2) * h, fixed = mirror_node(col, h);
+        size_t to_half = col < h, to_row = col % h, c0 = mirror_node(first + r->lo, h);
+        double left = row_scale[mirror_node(col, h)];
+        for (t = 0; t < r->len; ++t) {
+            size_t d = 2 * (c0 + t) + to_half;
+            if (r->val[t] == 0.0 || first + r->lo + t == fixed)
                 continue;
-            b->seg[d][to_row - to_half * h - b->lo[d]] += old[s][t] * left * col_scale[to_col];
+            b->seg[d][to_row - b->lo[d]] += r->val[t] * left * col_scale[c0 + t];
         }
     }
-    for (s = 0; s < segs; ++s)
-        if (b->seg[s] != old[s])
-            ll_free(old[s]);
-    ll_free(lo);
-    ll_free(old);
+    for (k = 0; k < n_dst; ++k)
+        ll_free(old[k]);
     return st;
 }
 

@@ -113,9 +113,12 @@ LL_INTERNAL void ll_order_builder_get_column(const ll_order_builder *b, size_t c
  * then every written entry lands on a zero, and the result is the same
  * whatever order the columns were set in. Exact zeros are not written, so
  * each run still ends on a stored value, as a column set whole would.
- * Costs the stored entries, not n^2. */
+ * Costs the stored entries, not n^2. scratch: ll_order_builder_mirror_bytes(n)
+ * bytes (0 if that overflows), suitably aligned for doubles and pointers
+ * (from ll_malloc), its contents on entry unused. */
+LL_INTERNAL size_t ll_order_builder_mirror_bytes(size_t n);
 LL_INTERNAL ll_status ll_order_builder_mirror(ll_order_builder *b, const double *row_scale,
-                                              const double *col_scale);
+                                              const double *col_scale, void *scratch);
 /* Finish: *out = the order (NULL if all zero); frees the builder. */
 LL_INTERNAL ll_status ll_order_builder_finish(ll_order_builder *b, ll_order **out);
 LL_INTERNAL void ll_order_builder_destroy(ll_order_builder *b);

@@ -278,19 +278,42 @@ static double col_index2(const ll_microfacet_job *job, size_t col, size_t h)
     return job->eta_im == 0.0 && col < h ? job->eta_re * job->eta_re : 1.0;
 }
 
+/* The orders past 0 mirrored in parallel, one order per item (each
+ * thread's scratch made by its first order and reused). */
+typedef struct mirror_job {
+    ll_order_builder **builders;
+    const double *left, *right;
+    void **scratch; /* [slots] */
+    size_t slots, bytes;
+} mirror_job;
+
+static ll_status mirror_order(size_t i, void *ctx)
+{
+    mirror_job *mj = ctx;
+    size_t slot = ll_parallel_slot();
+    if (!mj->builders[i + 1])
+        return LL_OK;
+    if (slot < mj->slots && !mj->scratch[slot])
+        mj->scratch[slot] = ll_malloc(mj->bytes);
+    if (slot >= mj->slots || !mj->scratch[slot])
+        return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
+    return ll_order_builder_mirror(mj->builders[i + 1], mj->left, mj->right, mj->scratch[slot]);
+}
+
 /* The entries the columns left out (ll_microfacet_column_rows), from
  * their mirrors: in the dense order 0 (and the conductor's reference,
  * R^t alone), complete on every process, and in each order past 0 whose
  * builder this process holds (all of them, or in a distributed build the
- * orders it owns, whole after the exchange). Serial, in a fixed order:
- * each entry is one product of its mirror, so the bits do not depend on
- * the thread count or the split. */
+ * orders it owns, whole after the exchange). Each entry is one product
+ * of its mirror, and each order one item of the parallel loop, so the
+ * bits depend on neither the thread count nor the split. */
 static ll_status mirror_rest(const ll_microfacet_job *job)
 {
     const ll_layer *l = job->layer;
     size_t n = l->n, m = l->m, h = n / 2, col, row, j, k, first, count;
-    double *left, *right;
-    ll_status s = LL_OK;
+    double *left;
+    mirror_job mj;
+    ll_status s;
     for (col = 0; col < n; ++col) {
         size_t to = col < h ? col + h : col - h; /* M(col) */
         double c = col_index2(job, col, h);
@@ -306,23 +329,29 @@ static ll_status mirror_rest(const ll_microfacet_job *job)
     }
     if (m < 2)
         return LL_OK;
+    mj.builders = job->builders;
+    mj.slots = job->slots;
+    mj.bytes = ll_order_builder_mirror_bytes(n);
     left = ll_alloc_array(n, 2 * sizeof(double));
-    if (!left)
+    mj.scratch = ll_calloc_array(mj.slots, sizeof *mj.scratch);
+    if (!left || !mj.scratch || !mj.bytes) {
+        ll_free(left);
+        ll_free(mj.scratch);
         return ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_layer_set_microfacet: out of memory");
-    right = left + n;
+    }
     /* The builders hold the weighted entries f(o, i) W_i: the mirror's
-     * weight M(o) divided out, the column's own put in. */
+     * weight W_M(o) divided out, the column's own put in. */
     for (k = 0; k < n; ++k) {
         size_t mk = k < h ? k + h : k - h;
         left[k] = row_index2(job, k, h) / ll_layer_surface_factor(l, mk, 1);
-        right[k] = ll_layer_surface_factor(l, k, 1) / col_index2(job, k, h);
+        left[n + k] = ll_layer_surface_factor(l, k, 1) / col_index2(job, k, h);
     }
-    for (k = 1; k < m && s == LL_OK; ++k) {
-        if (job->builders[k])
-            s = ll_order_builder_mirror(job->builders[k], left, right);
-        if (s == LL_OK)
-            s = ll_watch_check(job->watch, "ll_layer_set_microfacet");
-    }
+    mj.left = left;
+    mj.right = left + n;
+    s = ll_parallel_for_watched(m - 1, mirror_order, &mj, job->watch);
+    for (k = 0; k < mj.slots; ++k)
+        ll_free(mj.scratch[k]);
+    ll_free(mj.scratch);
     ll_free(left);
     return s;
 }
