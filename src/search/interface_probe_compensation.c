@@ -1,7 +1,7 @@
 /*
  * The energy compensation of an interface layer at the probes
  * (search/probe.h): the albedos of the single-scattering layer of n nodes
- * (order 0 only, every node pair, as ll_layer_set_microfacet computes them:
+ * (order 0 only, every node pair, as ll_layer_set_microfacet makes them:
  * the same series, nodes, weights and order of summation, except that
  * order 0 on the Filon path is Simpson's rule on Filon's samples, the same
  * integral to rounding: ll_microfacet_order0_simpson), then the same
@@ -16,8 +16,9 @@
  * stands for Filon's moments of every order). Each reflection pair is computed once for
  * itself and its reciprocal (bit for bit the same series), and each
  * transmission pair once for itself and for the reverse pair from the
- * other side, which is eta^2 (or 1 / eta^2) times it: the layer computes
- * both, which agree to 3.4e-12 relative (eta 1.5, alpha 0.1, 200 nodes,
+ * other side, which is eta^2 (or 1 / eta^2) times it, as the layer also
+ * mirrors each reciprocal pair (words/microfacet_columns.c); computed both
+ * ways, the two agree to 3.4e-12 relative (eta 1.5, alpha 0.1, 200 nodes,
  * the worst of the 4922 non-zero pairs), so 2 (n / 2)^2 series make a
  * dielectric's albedos instead of 3 (n / 2)^2.
  */
