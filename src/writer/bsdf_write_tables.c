@@ -225,7 +225,7 @@ static void floor_slice(writer *w, size_t t, double top)
 /* The n values v rounded to float16 in place, or an error naming the
  * table if one lies beyond float16's range: the values are f cos
  * 4 sigma / D and densities over the unit square, of order 1
- * (docs/formats.md, "Why float16"), so one near 65504 would be a fault of
+ * (docs/formats.md, "Textured files"), so one near 65504 would be a fault of
  * the source rather than a value to clamp. */
 ll_status ll_tables_round_half(float *v, size_t n, const char *table)
 {
