@@ -152,8 +152,8 @@ static void set_ratios(const ll_bsdf *src, const ll_bsdf *tab, const ll_tensor_f
         }
     for (q = 0; q < plane; ++q) {
         for (c = 0; c < 3; ++c)
-            planes[c * plane + q] = ll_tensor_f32(rgb, (t * 3 + c) * plane + q);
-        planes[3 * plane + q] = ll_tensor_f32(lum, t * plane + q);
+            planes[c * plane + q] = ll_tensor_value(rgb, (t * 3 + c) * plane + q);
+        planes[3 * plane + q] = ll_tensor_value(lum, t * plane + q);
     }
     assert_int_equal(ll_tables_horizon_target(src, th, bottom, target), LL_OK);
     want[0] = target[0];

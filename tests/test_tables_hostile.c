@@ -7,10 +7,10 @@
  * transmissive (extended) table: its layout, eta and the fields of its
  * sets, which errors name with their prefix. A textured table file too:
  * its parameter block, its layout, each basis' fields named in full
- * (reader/tables_textured.c), and its float16 grids: a NaN, an infinity or
- * a negative value there is refused as in a float32 field, and float16 is
- * refused outside a textured file's grids (the format's fields, which
- * Mitsuba's and pbrt-v4's `measured` read, are float32).
+ * (reader/tables_textured.c), and its float16 grids, as a transmissive
+ * file's: a NaN, an infinity or a negative value there is refused as in a
+ * float32 field, and float16 is refused outside those grids (the format's
+ * fields, which Mitsuba's and pbrt-v4's `measured` read, are float32).
  */
 #include "test_bsdf_util.h"
 #include "support/support.h"
@@ -513,9 +513,11 @@ static void test_transmissive_fields(void **state)
     d[off - 4] = 'x';
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_top.ndf\" is missing");
     free(d);
-    /* A NaN in a set's luminance. */
+    /* A NaN in a set's luminance (float16, as a transmissive file's grids
+     * are: element 1 the bits 0x7e00). */
     d = copy_of(tgood, tgood_size);
-    memcpy(d + data_at(d, "transmit_bottom.luminance") + 4, nan_bytes, 4);
+    d[data_at(d, "transmit_bottom.luminance") + 2] = 0x00;
+    d[data_at(d, "transmit_bottom.luminance") + 3] = 0x7e;
     expect(d, tgood_size, LL_ERROR_FORMAT, "\"transmit_bottom.luminance\": element 1");
     free(d);
     /* A reflected set's Fresnel index of 1 (no interface); without the
@@ -646,21 +648,27 @@ static void test_textured_float16(void **state)
 {
     /* binary16: a quiet NaN, +infinity, -1, -0 (which is >= 0: read). */
     static const unsigned bad[3] = { 0x7e00u, 0x7c00u, 0xbc00u };
-    static const char *const grids[3] = { "basis1.vndf", "basis1.luminance", "basis6.rgb" };
+    static const char *const grids[6] = { "basis1.vndf",           "basis1.luminance",
+                                          "basis6.rgb",            "reflect_top.vndf",
+                                          "transmit_bottom.luminance", "transmit_top.rgb" };
     unsigned char *d;
     size_t off, shape, rank;
     ll_bsdf *b = NULL;
     char what[64];
     int g, k;
     (void)state;
-    for (g = 0; g < 3; ++g) {
-        locate(tex, grids[g], &off, &shape, &rank);
-        assert_int_equal(tex[off - 1], 9); /* float16 */
+    for (g = 0; g < 6; ++g) {
+        /* (The first three a textured file's, the others a transmissive
+         * one's.) */
+        const unsigned char *file = g < 3 ? tex : tgood;
+        size_t size = g < 3 ? tex_size : tgood_size;
+        locate(file, grids[g], &off, &shape, &rank);
+        assert_int_equal(file[off - 1], 9); /* float16 */
         for (k = 0; k < 3; ++k) {
-            d = copy_of(tex, tex_size);
+            d = copy_of(file, size);
             set_f16(d, grids[g], 1, bad[k]);
             snprintf(what, sizeof what, "\"%s\": element 1 = ", grids[g]);
-            expect(d, tex_size, LL_ERROR_FORMAT, what);
+            expect(d, size, LL_ERROR_FORMAT, what);
             free(d);
         }
     }
@@ -669,20 +677,22 @@ static void test_textured_float16(void **state)
     assert_int_equal(ll_bsdf_open_memory(d, tex_size, NULL, &b), LL_OK);
     ll_bsdf_release(b);
     free(d);
-    /* Float16 anywhere else is refused: a textured file's small fields
-     * are float32 as an opaque file's, and an untextured file's grids
-     * float32, as `measured` reads them. */
+    /* Float16 anywhere else is refused: a textured or transmissive
+     * file's small fields are float32 as an opaque file's, and an opaque
+     * file's grids float32, as `measured` reads them. */
     {
         const struct {
             const unsigned char *file;
             size_t size;
             const char *field;
-        } float32_only[5] = { { tex, tex_size, "basis2.theta_i" },
+        } float32_only[7] = { { tex, tex_size, "basis2.theta_i" },
                               { tex, tex_size, "basis2.sigma" },
                               { good, good_size, "vndf" },
                               { good, good_size, "rgb" },
-                              { tgood, tgood_size, "reflect_top.luminance" } };
-        for (k = 0; k < 5; ++k) {
+                              { tgood, tgood_size, "reflect_top.ndf" },
+                              { tgood, tgood_size, "transmit_top.albedo" },
+                              { tgood, tgood_size, "transmit_bottom.warp_eta" } };
+        for (k = 0; k < 7; ++k) {
             d = copy_of(float32_only[k].file, float32_only[k].size);
             set_dtype(d, float32_only[k].field, 9);
             snprintf(what, sizeof what, "\"%s\" is float16", float32_only[k].field);

@@ -58,8 +58,9 @@ static ll_status require_as(const ll_tensor_file *t, const char *name, size_t ra
     if (f->dtype == LL_TENSOR_F16 && !half)
         return ll_fail(LL_ERROR_FORMAT,
                        "ll_bsdf_open: %s: field \"%s\" is float16, which only the grids of a "
-                       "textured file's bases (vndf, luminance, rgb, spectra) may be; the "
-                       "format's fields are float32",
+                       "textured file's bases (vndf, luminance, rgb, spectra) and of a "
+                       "transmissive file's sets (vndf, luminance, rgb) may be; the format's "
+                       "fields are float32",
                        file, name);
     if ((f->dtype != LL_TENSOR_F32 && f->dtype != LL_TENSOR_F16) || f->rank != rank)
         return ll_fail(LL_ERROR_FORMAT,
@@ -213,7 +214,8 @@ static ll_status spectra_to_rgb(const ll_tensor_field *spectra, const double *la
 typedef struct shared {
     const char *file;
     int spectral, jacobian, extended;
-    int half;                /* the grids may be float16 (a textured set) */
+    int half;                /* the grids may be float16 (a textured or
+                                an extended set)                      */
     size_t n_ti, n_pi;
     const ll_tensor_field *lam;
     double *theta_v, *phi_v, *lambda_v;
@@ -473,6 +475,9 @@ ll_status ll_measured_read_set(const ll_tensor_file *t, const char *base, const 
     sh.spectral = find_named(t, base, "wavelengths") != NULL;
     layout = find_named(t, base, "layerlab_layout");
     sh.extended = layout != NULL;
+    /* An extended (transmissive) file is ours alone too: its writer
+     * stores the grids as float16, earlier ones as float32. */
+    sh.half = sh.half || sh.extended;
     /* The layout first: a file this version does not read is said so. */
     if ((layout && (s = ll_measured_read_layout(layout, file, present, &textured)) != LL_OK) ||
         (s = require_named(t, base, "theta_i", 1, file, &theta)) != LL_OK ||

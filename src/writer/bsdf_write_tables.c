@@ -45,9 +45,6 @@
 /* Light transmitted beyond this fraction of the largest reflected a_0
  * makes a file transmissive (a conductor's transmitted blocks are 0). */
 #define TRANSMISSION_TOLERANCE 1e-6
-/* The smallest positive float16 (a subnormal): a float16 table's
- * luminance floor stays above it, so that rounding keeps it positive. */
-#define HALF_TINY 0x1p-24
 
 typedef struct writer {
     const ll_bsdf *b;
@@ -218,33 +215,38 @@ static void floor_slice(writer *w, size_t t, double top)
             if ((double)lum[x] > top)
                 top = (double)lum[x];
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
-    if (w->half && floor_v < HALF_TINY)
-        floor_v = HALF_TINY;
+    if (w->half && floor_v < LL_TABLES_HALF_TINY)
+        floor_v = LL_TABLES_HALF_TINY;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
             lum[x] = (float)floor_v;
 }
 
-/* The n values v rounded to float16 in place (w->half), or an error naming
- * the table if one lies beyond float16's range: the values are f cos
+/* The n values v rounded to float16 in place, or an error naming the
+ * table if one lies beyond float16's range: the values are f cos
  * 4 sigma / D and densities over the unit square, of order 1
- * (docs/formats.md, "Textured files"), so one near 65504 would be a fault
- * of the source rather than a value to clamp. */
-static ll_status round_half(const writer *w, float *v, size_t n, const char *table)
+ * (docs/formats.md, "Textured files"), so one near 65504 would be a fault of
+ * the source rather than a value to clamp. */
+ll_status ll_tables_round_half(float *v, size_t n, const char *table)
 {
     size_t i;
-    if (!w->half)
-        return LL_OK;
     for (i = 0; i < n; ++i) {
         float r = ll_half_round(v[i]);
         if (!(r <= LL_HALF_MAX))
             return ll_fail(LL_ERROR_INVALID_ARGUMENT,
                            FN ": table \"%s\": element %zu = %g is beyond float16's range "
-                           "(65504), in which a textured file's tables are stored",
+                           "(65504), in which a textured or transmissive file's tables are "
+                           "stored",
                            table, i, (double)v[i]);
         v[i] = r;
     }
     return LL_OK;
+}
+
+/* ll_tables_round_half where the grids are float16 (w->half). */
+static ll_status round_half(const writer *w, float *v, size_t n, const char *table)
+{
+    return w->half ? ll_tables_round_half(v, n, table) : LL_OK;
 }
 
 /* Steps 3 and 4 for slice t; a spectral file keeps each node's direction
@@ -384,11 +386,12 @@ ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path, const ll_tabl
         return ll_fail(LL_ERROR_INVALID_ARGUMENT, FN ": bsdf or path is NULL");
     if ((s = check_options(opts, &o)) != LL_OK || (s = check_source(b)) != LL_OK)
         return s;
-    /* A transmissive file: every lobe, both sides, in an extended file
-     * (float32: a textured file's bases are opaque). */
+    /* A transmissive file: every lobe, both sides, in an extended file,
+     * whose grids are always float16 (a textured file's bases are
+     * opaque, so half is never asked for here). */
     if (ll_tables_transmits(b))
         return half ? ll_fail(LL_ERROR_UNSUPPORTED,
-                              FN ": float16 tables of a transmissive file are not written")
+                              FN ": a textured file's basis transmits")
                     : ll_tables_write_lobes(b, path, &o, figures, monitor);
     if ((s = ll_watch_begin(&watch, monitor, FN)) != LL_OK)
         return s;

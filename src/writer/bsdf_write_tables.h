@@ -96,7 +96,8 @@ LL_INTERNAL size_t ll_tables_json_string(char *buf, size_t at, size_t cap, const
 LL_INTERNAL int ll_tables_transmits(const ll_bsdf *b);
 /* The tables of every lobe of a transmissive b, both sides
  * (bsdf_write_tables_lobes.c), at the grid opts gives; as
- * ll_tables_write_grid. */
+ * ll_tables_write_grid with half set: the VNDF, luminance and values of
+ * every set are stored as float16. */
 LL_INTERNAL ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path,
                                             const ll_tables_options *opts, const char *figures,
                                             const ll_monitor *monitor);
@@ -139,6 +140,13 @@ LL_INTERNAL void ll_tables_spectra_close(ll_tables_spectra *sp);
 LL_INTERNAL ll_status ll_tables_write_grid(const ll_bsdf *b, const char *path,
                                            const ll_tables_options *opts, const char *figures,
                                            int half, const ll_monitor *monitor);
+
+/* The smallest positive float16 (a subnormal): a float16 table's
+ * luminance floor stays above it, so that rounding keeps it positive. */
+#define LL_TABLES_HALF_TINY 0x1p-24
+/* The n values v rounded to float16 in place; LL_ERROR_INVALID_ARGUMENT,
+ * naming the table, if one lies beyond float16's range. */
+LL_INTERNAL ll_status ll_tables_round_half(float *v, size_t n, const char *table);
 
 /* ll_tables_write_from_bsdf of the untextured, opaque b (one basis of a
  * textured file) with its grids rounded to float16 as

@@ -25,6 +25,12 @@
  * A set's "albedo" field holds its luminance albedo per incident
  * elevation (the .bsdf's order-0 integral), by which the reader's sampler
  * picks between the reflected and the transmitted lobe.
+ * Every set's VNDF, luminance and values are stored as float16, as a
+ * textured file's bases are (bsdf_write_tables.c): four sets are large,
+ * and a renderer's look-ups walk through them. The VNDF is rounded before
+ * the warp that places the sample nodes is built from it, the values and
+ * luminance once a slice is complete, so that the tolerance search
+ * measures the tables as stored.
  */
 #include "layerlab/ll_tables.h"
 #include "writer/bsdf_write_tables.h"
@@ -44,6 +50,10 @@
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
+static const char *const field_names[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
+                                                          "luminance", "rgb",   "albedo",
+                                                          "warp_eta",  "fresnel_eta",
+                                                          "transmittance_eta" };
 
 typedef struct lobe {
     int bottom, transmit;
@@ -241,7 +251,15 @@ static int direction(const lobe *l, const double wi[3], const double um[2], doub
 
 /* A set stored over its refraction's transmittance has no value where
  * the node's normal refracts nothing (beyond the edge of total internal
- * reflection, or a refracted direction above the surface). There the
+ * reflection, or a refracted direction above the surface), nor where
+ * that factor is below TRANSMITTANCE_FLOOR: at the edge the factor falls
+ * to 0 like |wo.m|^2 and f with it, but the .bsdf's series does not follow
+ * f so far down, and the quotient of the two came out thousands of times
+ * the lobe's values (rough glass at 32 x 48^2 x 48^2, seen from below at
+ * 42.5 degrees: a node with a factor of 1.2e-6 and f 1.2e-4 stored 6124,
+ * its continuation beyond the edge up to 12,249, where every other value
+ * of the file is at most 5: renders 1.7% bright, with fireflies). Nodes
+ * with a factor of 6e-4 and more hold values of the lobe's order. There the
  * smooth quotient is continued ring after ring outwards until every node
  * has one: a node next to valid ones takes the mean of their linear
  * extrapolations (2 v1 - v2 along each line of two valid nodes, at least
@@ -250,6 +268,7 @@ static int direction(const lobe *l, const double wi[3], const double um[2], doub
  * it, and so does the interpolation between two slices, whose edges lie
  * at different nodes. */
 #define LINE_RINGS 1
+#define TRANSMITTANCE_FLOOR 1e-4
 static int valid_at(const writer *w, size_t x, size_t y, int dx, int dy, int k, size_t *j)
 {
     ptrdiff_t px = (ptrdiff_t)x + k * dx, py = (ptrdiff_t)y + k * dy, ns = (ptrdiff_t)w->ns;
@@ -362,8 +381,10 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
                 if (l->transmittance_eta > 0.0) {
                     double tr = ll_tables_transmittance_pair(wi, wo, l->transmittance_eta);
                     over = tr > 0.0 ? 1.0 / tr : 0.0;
-                    w->valid[y * ns + x] = tr > 0.0 && ll_is_finite(over);
-                    if (!ll_is_finite(over))
+                    w->valid[y * ns + x] = tr >= TRANSMITTANCE_FLOOR && ll_is_finite(over);
+                    /* (A node left invalid holds 0 until extend_slice
+                     * continues the quotient there.) */
+                    if (!w->valid[y * ns + x])
                         over = 0.0;
                 }
             }
@@ -389,10 +410,15 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
                 top = (double)lum[x];
     }
     floor_v = top > 0.0 ? LUMINANCE_FLOOR * top : 1.0;
+    if (floor_v < LL_TABLES_HALF_TINY)
+        floor_v = LL_TABLES_HALF_TINY;
     for (x = 0; x < plane; ++x)
         if (!((double)lum[x] >= floor_v))
             lum[x] = (float)floor_v;
-    return LL_OK;
+    {
+        ll_status s = ll_tables_round_half(rgb, 3 * plane, l->names[4]);
+        return s != LL_OK ? s : ll_tables_round_half(lum, plane, l->names[3]);
+    }
 }
 
 /* The luminance albedo of each lobe at each incident elevation, from the
@@ -547,6 +573,9 @@ static ll_status build_lobe(writer *w, lobe *l, ll_watch *watch)
         return s;
     for (t = 0; t < w->n_ti; ++t)
         vndf_slice(w, l, t);
+    /* (allocate() checked the product.) */
+    if ((s = ll_tables_round_half(l->vndf, w->n_ti * w->nv * w->nv, l->names[2])) != LL_OK)
+        return s;
     params[0] = phi;
     params[1] = w->theta_d;
     sizes[0] = 1;
@@ -595,6 +624,9 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     w.lone = lone_interface(b);
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w.l[k];
+        int j;
+        for (j = 0; j < FIELDS_PER_LOBE; ++j)
+            snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], field_names[j]);
         l->bottom = k == 1 || k == 3;
         l->transmit = k >= 2;
         if (l->transmit && fabs(b->eta - 1.0) > 1e-6 &&
@@ -646,22 +678,16 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     }
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w.l[k];
-        static const char *const base[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
-                                                           "luminance", "rgb",   "albedo",
-                                                           "warp_eta",  "fresnel_eta",
-                                                           "transmittance_eta" };
         int j;
-        for (j = 0; j < FIELDS_PER_LOBE; ++j)
-            snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], base[j]);
         {
             ll_tensor_out_field set[FIELDS_PER_LOBE] = {
                 { l->names[0], LL_TENSOR_F32, 2, { 2, nd }, l->ndf, NULL, NULL },
                 { l->names[1], LL_TENSOR_F32, 2, { 2, nd }, l->sigma, NULL, NULL },
-                { l->names[2], LL_TENSOR_F32, 4, { 1, w.n_ti, w.nv, w.nv }, l->vndf, NULL,
+                { l->names[2], LL_TENSOR_F16, 4, { 1, w.n_ti, w.nv, w.nv }, l->vndf, NULL,
                   NULL },
-                { l->names[3], LL_TENSOR_F32, 4, { 1, w.n_ti, w.ns, w.ns }, l->lum, NULL,
+                { l->names[3], LL_TENSOR_F16, 4, { 1, w.n_ti, w.ns, w.ns }, l->lum, NULL,
                   NULL },
-                { l->names[4], LL_TENSOR_F32, 5, { 1, w.n_ti, 3, w.ns, w.ns }, l->rgb, NULL,
+                { l->names[4], LL_TENSOR_F16, 5, { 1, w.n_ti, 3, w.ns, w.ns }, l->rgb, NULL,
                   NULL },
                 { l->names[5], LL_TENSOR_F32, 1, { w.n_ti }, l->albedo, NULL, NULL },
                 { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },

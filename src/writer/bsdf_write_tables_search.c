@@ -136,7 +136,11 @@ static int grow_ladders(search *s, const ll_tables_figures *f)
     return grow_theta || grow_sample;
 }
 
-/* The tables' bytes at grid g (the small tables and text aside). */
+/* The tables' bytes at grid g as float32 grids (the small tables and text
+ * aside). A transmissive file's grids are float16 and take half, but the
+ * cap stays on this count: it is what a renderer holds in memory (the
+ * Mitsuba plugin keeps them as float32), and the search stops at the grids
+ * it did before. */
 static double grid_bytes(const ll_tables_options *g)
 {
     double n_ti = (double)g->n_theta_i, nv = (double)g->vndf_size, ns = (double)g->sample_size;

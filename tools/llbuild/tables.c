@@ -196,11 +196,11 @@ static double table_bytes(const ll_tables_options *o, int transmissive)
            ns = (double)o->sample_size;
     double values = o->format == LL_TABLES_SPECTRAL ? (double)o->n_wavelengths : 3.0;
     /* A transmissive stack: a set per lobe and side, each with its
-     * albedo per elevation. */
-    double sets = transmissive ? 4.0 : 1.0;
-    return 4.0 * (sets * (2.0 * 2 * 256 + n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns +
-                          (transmissive ? n_ti : 0.0)) +
-                  n_ti + 1 + (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
+     * albedo per elevation, and its grids float16. */
+    double sets = transmissive ? 4.0 : 1.0, grid = transmissive ? 2.0 : 4.0;
+    return grid * sets * (n_ti * nv * nv + (1.0 + values) * n_ti * ns * ns) +
+           4.0 * (sets * (2.0 * 2 * 256 + (transmissive ? n_ti : 0.0)) + n_ti + 1 +
+                  (o->format == LL_TABLES_SPECTRAL ? values : 0.0));
 }
 
 /* " x N wavelengths (A..B nm)" of a spectral file, nothing otherwise. */

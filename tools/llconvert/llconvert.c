@@ -106,12 +106,13 @@ static void print_written(const char *out, const ll_bsdf_info *info, double sour
 }
 
 /* The data the tables hold (the field table and text add a few hundred
- * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb. */
+ * bytes): ndf and sigma (2 x 256 each), theta_i, vndf, luminance, rgb;
+ * a transmissive source's four sets with their grids float16. */
 static double table_bytes(size_t n_ti, size_t nv, size_t ns, int transmissive)
 {
-    double sets = transmissive ? 4.0 : 1.0;
-    return 4.0 * (sets * (2.0 * 2 * 256 + (double)n_ti * nv * nv + 4.0 * (double)n_ti * ns * ns +
-                          (transmissive ? (double)n_ti : 0.0)) +
+    double sets = transmissive ? 4.0 : 1.0, grid = transmissive ? 2.0 : 4.0;
+    return grid * sets * ((double)n_ti * nv * nv + 4.0 * (double)n_ti * ns * ns) +
+           4.0 * (sets * (2.0 * 2 * 256 + (transmissive ? (double)n_ti : 0.0)) +
                   (double)n_ti + 1);
 }
 
