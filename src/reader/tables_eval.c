@@ -77,11 +77,13 @@ static double jacobian(const ll_measured *t, const double um[2], const incident 
     return isfinite(r) ? r : 0.0;
 }
 
-/* pdf of the reflected direction from the densities over the two squares. */
-static double reflected_pdf(double p_v, double p_l, double u_theta_m, double theta_m,
+/* pdf of the reflected direction from the densities over the two squares
+ * (sin_theta_m: the sine of the normal's elevation). */
+static double reflected_pdf(double p_v, double p_l, double u_theta_m, double sin_theta_m,
                             double wi_dot_m)
 {
-    double pdf = p_v * p_l / (ll_measured_normal_area(u_theta_m, theta_m) * 4.0 * wi_dot_m);
+    double pdf =
+        p_v * p_l / (ll_measured_normal_area_sin(u_theta_m, sin_theta_m) * 4.0 * wi_dot_m);
     return isfinite(pdf) && pdf > 0.0 ? pdf : 0.0;
 }
 
@@ -141,7 +143,7 @@ double ll_measured_look_pdf(const ll_measured *t, const ll_measured_look *lk)
 {
     const double *wi = lk->wi, *m = lk->m;
     double p_l = ll_warp2d_eval_at(&t->luminance, &lk->in.sl, lk->s);
-    return reflected_pdf(lk->p_v, p_l, lk->um[0], lk->theta_m,
+    return reflected_pdf(lk->p_v, p_l, lk->um[0], sin(lk->theta_m),
                          wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
 }
 
@@ -205,14 +207,14 @@ static int draw_tail(const ll_measured *t, const double wi[3], const incident *i
                      const double s[2], double p_l, const double um[2], double p_v,
                      double wo[3], double *pdf, double value[3])
 {
-    double theta_m, m[3];
-    double d = ll_tables_mirror_dir(wi, um, in->ax, in->ay, &theta_m, m, wo);
+    double theta_m, sin_m, m[3];
+    double d = ll_tables_mirror_dir(wi, um, in->ax, in->ay, &theta_m, &sin_m, m, wo);
     if (!(wo[2] > 0.0) || !(d > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;
         return 0;
     }
-    *pdf = reflected_pdf(p_v, p_l, um[0], theta_m, d);
+    *pdf = reflected_pdf(p_v, p_l, um[0], sin_m, d);
     if (!(*pdf > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;

@@ -228,10 +228,15 @@ static inline void ll_measured_values_at(const ll_measured *t, const ll_warp_sli
     }
 }
 
+static inline double ll_measured_normal_area_sin(double u_theta_m, double sin_theta_m)
+{
+    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin_theta_m;
+    return area < 1e-6 ? 1e-6 : area;
+}
+
 static inline double ll_measured_normal_area(double u_theta_m, double theta_m)
 {
-    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin(theta_m);
-    return area < 1e-6 ? 1e-6 : area;
+    return ll_measured_normal_area_sin(u_theta_m, sin(theta_m));
 }
 
 #endif /* LL_TABLES_INTERNAL_H */

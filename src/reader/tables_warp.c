@@ -185,6 +185,8 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     memset(wp, 0, sizeof *wp);
     wp->w = w;
     wp->h = h;
+    wp->inv_cells[0] = 1.0 / (double)(w - 1);
+    wp->inv_cells[1] = 1.0 / (double)(h - 1);
     wp->area = 1.0;
     wp->n_params = n_params;
     for (p = 0; p < n_params; ++p) {
@@ -597,28 +599,61 @@ double ll_warp2d_eval(const ll_warp2d *wp, const double pos[2], const double *pa
     return ll_warp2d_eval_at(wp, &s, pos);
 }
 
-/* The t in [0, 1] where the integral of the linear density a + (b - a) t
- * from 0 reaches d, in the form without cancellation. */
-static double invert_linear(double a, double b, double d)
+/* The stored running integrals are float sums, so a cell's stored mass
+ * (the difference of its two ends) and the mass of its linear density
+ * (the mean of its end values) differ by rounding. sample and invert
+ * scale the inside of a cell by their ratio linear / stored, which keeps
+ * the two exact inverses of each other whatever the rounding; the ratio
+ * is 1 for an empty cell. cell_masses gives the pair (stored, linear)
+ * whose ratio that is, both 1 for an empty cell, so that the callers
+ * fold the ratio into their one division instead of dividing for it
+ * first (a division waits for the one before it: a sample is a chain of
+ * them). */
+static inline void cell_masses(double stored, double linear, double *s, double *l)
 {
-    double disc = a * a + 2.0 * (b - a) * d, den, t;
+    int full = stored > 0.0 && linear > 0.0;
+    *s = full ? stored : 1.0;
+    *l = full ? linear : 1.0;
+}
+
+/* The t in [0, 1] where the integral of the linear density a + (b - a) t
+ * from 0 reaches d linear / stored (d scaled by the cell's mass ratio,
+ * cell_masses), in the form without cancellation, 2 e / (a + sqrt(a^2 +
+ * 2 (b - a) e)) for e = d l / s, multiplied through by s > 0: one
+ * division and one square root. */
+static double invert_linear(double a, double b, double d, double stored, double linear)
+{
+    double s, l, dl, disc, den, t;
+    cell_masses(stored, linear, &s, &l);
+    dl = d * l;
+    disc = s * (s * a * a + 2.0 * (b - a) * dl);
     if (!(disc > 0.0))
         disc = 0.0;
-    den = a + sqrt(disc);
-    t = den > 0.0 ? 2.0 * d / den : 0.0;
+    den = s * a + sqrt(disc);
+    t = den > 0.0 ? 2.0 * dl / den : 0.0;
     if (!(t > 0.0))
         t = 0.0;
     return t > 1.0 ? 1.0 : t;
 }
 
-/* The stored running integrals are float sums, so a cell's stored mass
- * (the difference of its two ends) and the mass of its linear density
- * (the mean of its end values) differ by rounding. sample and invert
- * scale the inside of a cell by their ratio, which keeps the two exact
- * inverses of each other whatever the rounding. 1 for an empty cell. */
-static double mass_ratio(double stored, double linear)
+/* The inverse's share of the cell: m0 + x / ratio (x the mass of the
+ * linear density up to the point), and the same divided by total (> 0)
+ * in one division. */
+static inline double uninvert_row(double m0, double x, double stored, double linear)
 {
-    return stored > 0.0 && linear > 0.0 ? linear / stored : 1.0;
+    double s, l;
+    cell_masses(stored, linear, &s, &l);
+    return m0 + x * s / l;
+}
+
+static inline double uninvert_column(double cdf, double x, double stored, double linear,
+                                     double total)
+{
+    double s, l;
+    if (!(total > 0.0))
+        return 0.0;
+    cell_masses(stored, linear, &s, &l);
+    return (cdf * l + x * s) / (l * total);
 }
 
 /* Largest i in [0, n - 2] with value(i) <= target (0 if none), for
@@ -799,7 +834,7 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
     m1 = pmix(&marg, r + 1);
-    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    ty = invert_linear(r0, r1, target - m0, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
     dr->ty = ty;
@@ -843,9 +878,9 @@ static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
-    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
-    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
+    tx = invert_linear(v0, v1, target - cdf_c, cdf_c1 - cdf_c, 0.5 * (v0 + v1));
+    pos[0] = (index_to_double(c) + tx) * wp->inv_cells[0];
+    pos[1] = (index_to_double(r) + ty) * wp->inv_cells[1];
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -959,7 +994,7 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     r1 = mix(&cond, (r + 1) * w + w - 1);
     m0 = mix(&marg, r);
     m1 = mix(&marg, r + 1);
-    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    ty = invert_linear(r0, r1, target - m0, m1 - m0, 0.5 * (r0 + r1));
     /* Column interval from the conditional row at ty. */
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
@@ -968,9 +1003,9 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
-    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
-    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
+    tx = invert_linear(v0, v1, target - cdf_c, cdf_c1 - cdf_c, 0.5 * (v0 + v1));
+    pos[0] = (index_to_double(c) + tx) * wp->inv_cells[0];
+    pos[1] = (index_to_double(r) + ty) * wp->inv_cells[1];
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -990,16 +1025,14 @@ static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double po
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
     m1 = pmix(&marg, r + 1);
-    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    u[1] = uninvert_row(m0, r0 * ty + 0.5 * (r1 - r0) * ty * ty, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = pair_at2(&cond, at, w, ty, c);
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
-    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
-                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
-                                 row_total
-                           : 0.0;
+    u[0] = uninvert_column(cdf_c, v0 * tx + 0.5 * (v1 - v0) * tx * tx, cdf_c1 - cdf_c,
+                           0.5 * (v0 + v1), row_total);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -1023,15 +1056,13 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double p
     r1 = mix(&cond, (r + 1) * w + w - 1);
     m0 = mix(&marg, r);
     m1 = mix(&marg, r + 1);
-    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    u[1] = uninvert_row(m0, r0 * ty + 0.5 * (r1 - r0) * ty * ty, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = pair_at(&cond, r * w, w, ty, c);
     cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
-    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
-                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
-                                 row_total
-                           : 0.0;
+    u[0] = uninvert_column(cdf_c, v0 * tx + 0.5 * (v1 - v0) * tx * tx, cdf_c1 - cdf_c,
+                           0.5 * (v0 + v1), row_total);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
