@@ -701,27 +701,6 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
 }
 
-/* Ask for the bytes [p, p + n) ahead of their use. */
-static inline void prefetch(const float *p, size_t n)
-{
-#if defined(__GNUC__)
-    const char *c = (const char *)p, *end = (const char *)(p + n);
-    /* Four lines a turn: a sample asks for about eighty lines, and the
-     * loop's own count and branch were most of its instructions. */
-    for (; c + 3 * 64 < end; c += 4 * 64) {
-        __builtin_prefetch(c);
-        __builtin_prefetch(c + 64);
-        __builtin_prefetch(c + 2 * 64);
-        __builtin_prefetch(c + 3 * 64);
-    }
-    for (; c < end; c += 64)
-        __builtin_prefetch(c);
-#else
-    (void)p;
-    (void)n;
-#endif
-}
-
 /* SEARCH's answer for values that do not decrease with i, found as the
  * count of i in [1, n - 2] with value(i) <= target (which is what the
  * halving finds for such values), in two rounds: the multiples of stride
@@ -884,15 +863,6 @@ static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-/* Rows r and r + 1 of both slices (values and running integrals side by
- * side). */
-static inline void prefetch_pair_rows(const ll_warp2d *wp, const slice_set *s, size_t r)
-{
-    size_t w = wp->w, plane = 2 * w * wp->h, j;
-    for (j = 0; j < s->count; ++j)
-        prefetch(wp->data + s->index[j] * plane + 2 * r * w, 4 * w);
-}
-
 /* u_in kept off the edges of the square, as the renderers' samplers keep
  * it. */
 static inline void off_edges(const double u_in[2], double u[2])
@@ -969,10 +939,11 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
         return;
     }
     dr.r = sample_pair_row(wp, s, dr.u);
-    /* Rows r and r + 1 of both slices, while the guide is read: their
-     * fetch from memory then overlaps the guide's instead of following it. */
-    prefetch_pair_rows(wp, s, dr.r);
+    /* The stretch of rows r and r + 1 that the column search reads, as
+     * soon as the guide gives it (a few lines, where the whole rows were
+     * about forty that crowded the caches). */
     sample_pair_guide(wp, s, dr.u, &dr);
+    ll_warp2d_prefetch_draw(wp, s, &dr);
     sample_pair_rest(wp, s, &dr, pos, pdf);
 }
 
