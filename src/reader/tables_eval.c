@@ -9,6 +9,7 @@
  */
 #include "reader/tables_internal.h"
 #include "reader/bsdf_format.h"
+#include "reader/tables_atan.h"
 
 #include <math.h>
 
@@ -56,8 +57,10 @@ static void normal_coords(const double m[3], const incident *in, double um[2], d
     double u, phi;
     *theta_m = ll_tables_elevation(m);
     um[0] = ll_tables_theta_to_u(*theta_m);
+    /* ll_tables_atan2: the wait for this angle is a good part of a cold
+     * eval's (tables_atan.h). */
     if (in->has_azimuth)
-        phi = atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
+        phi = ll_tables_atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
     else
         phi = atan2(m[1], m[0]) - in->phi;
     u = ll_tables_phi_to_u(phi);

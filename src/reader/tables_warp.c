@@ -16,6 +16,16 @@
 
 typedef ll_warp_slices slice_set;
 
+/* The look-ups' steps start on a cache line. Otherwise where they start
+ * within a line follows from wherever the code before them in the
+ * library ends, and the time of a sample moved with that alone
+ * (docs/benchmarks.md, "Table files"). */
+#if defined(__GNUC__)
+#define LL_WARP_HOT __attribute__((aligned(64)))
+#else
+#define LL_WARP_HOT
+#endif
+
 void ll_warp2d_free(ll_warp2d *wp)
 {
     size_t p;
@@ -490,7 +500,7 @@ static void corners(const slice_pair *q, size_t step, size_t w, size_t r, double
     wt[7] = q->w1 * e;
 }
 
-void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
+LL_WARP_HOT void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
                           const double pos[2], double *out)
 {
     double tx, ty, scale = area_scale(wp);
@@ -778,7 +788,8 @@ static inline size_t max2(size_t a, size_t b) { return a > b ? a : b; }
  * table of megabytes. The general form's arithmetic, in the same order,
  * so both give the same numbers; the searches find what COUNT_SEARCH
  * finds. */
-static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, const double u[2])
+static inline LL_WARP_HOT size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s,
+                                                  const double u[2])
 {
     size_t h = wp->h, hs = wp->marg_stride, r;
     double target = u[1];
@@ -800,7 +811,8 @@ static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, co
     return r;
 }
 
-static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, const double u[2],
+static inline LL_WARP_HOT void sample_pair_guide(const ll_warp2d *wp, const slice_set *s,
+                                                  const double u[2],
                                      ll_warp_draw *dr)
 {
     size_t w = wp->w, h = wp->h, st = w * h, r = dr->r, at = r * w, gs = wp->guide_stride;
@@ -837,7 +849,7 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     dr->top = min2(dr->base + gs - 1, w - 2);
 }
 
-static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
+static inline LL_WARP_HOT void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
                                     const ll_warp_draw *dr, double pos[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h, c = 0, r = dr->r, at = r * w, gs = wp->guide_stride;
@@ -929,7 +941,7 @@ void ll_warp2d_draw_end(const ll_warp2d *wp, const slice_set *s, const ll_warp_d
         sample_pair_rest(wp, s, dr, pos, pdf);
 }
 
-void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
+LL_WARP_HOT void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
                          double pos[2], double *pdf)
 {
     ll_warp_draw dr;
@@ -1007,7 +1019,7 @@ static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double po
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
+LL_WARP_HOT void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
