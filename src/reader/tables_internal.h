@@ -157,7 +157,9 @@ typedef struct ll_measured_incident {
 typedef struct ll_measured_look {
     ll_measured_incident in;
     double wi[3];             /* the fixed direction                       */
-    double m[3], um[2];       /* the normal and its square's coordinates   */
+    double m[3], um[2];       /* the normal and its square's coordinates
+                                 (eval and pdf: m is wi + wo, the normal
+                                 times a positive length)                */
     double theta_m;
     ll_warp_draw dr;          /* draw: the current warp's sampling        */
     double s[2];              /* the sample square's point                 */
