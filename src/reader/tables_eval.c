@@ -9,6 +9,7 @@
  */
 #include "reader/tables_internal.h"
 #include "reader/bsdf_format.h"
+#include "reader/tables_atan.h"
 
 #include <math.h>
 
@@ -22,9 +23,11 @@ typedef ll_measured_incident incident;
 
 static void incident_of(const ll_measured *t, const double wi[3], int unit, incident *in)
 {
-    double param[2];
+    double param[2], r = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
     int need_phi = t->vndf.param_size[0] > 1 || (t->jacobian && !t->sigma.rows_equal);
-    in->theta = ll_tables_elevation(wi);
+    /* The elevation of unit wi as atan2's (tables_atan.h), exact at the
+     * pole and the horizon alike. */
+    in->theta = ll_tables_atan2(r, wi[2]);
     in->u_theta = ll_tables_theta_to_u(in->theta);
     in->ax = wi[0];
     in->ay = wi[1];
@@ -37,7 +40,6 @@ static void incident_of(const ll_measured *t, const double wi[3], int unit, inci
         in->ax = cos(in->phi);
         in->ay = sin(in->phi);
     } else if (unit) {
-        double r = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
         in->ax = wi[0] / r;
         in->ay = wi[1] / r;
     }
@@ -48,16 +50,19 @@ static void incident_of(const ll_measured *t, const double wi[3], int unit, inci
     ll_warp2d_slices(&t->vndf, param, &in->sl);
 }
 
-/* The unit-square coordinates (u_theta, u_phi) of the normal m, with its
- * azimuth relative to phi_i, are stored with u_theta as the last axis:
- * warp x = u_theta, y = u_phi. */
+/* The unit-square coordinates (u_theta, u_phi) of the normal along m (of
+ * any positive length), with its azimuth relative to phi_i, are stored
+ * with u_theta as the last axis: warp x = u_theta, y = u_phi. Both angles
+ * by ll_tables_atan2 of m as it is: an eval waits for them before it can
+ * read the tables, and the C library's atan2 and asin, and making m unit
+ * first, were most of that wait (tables_atan.h). */
 static void normal_coords(const double m[3], const incident *in, double um[2], double *theta_m)
 {
     double u, phi;
-    *theta_m = ll_tables_elevation(m);
+    *theta_m = ll_tables_atan2(sqrt(m[0] * m[0] + m[1] * m[1]), m[2]);
     um[0] = ll_tables_theta_to_u(*theta_m);
     if (in->has_azimuth)
-        phi = atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
+        phi = ll_tables_atan2(m[1] * in->ax - m[0] * in->ay, m[0] * in->ax + m[1] * in->ay);
     else
         phi = atan2(m[1], m[0]) - in->phi;
     u = ll_tables_phi_to_u(phi);
@@ -77,27 +82,26 @@ static double jacobian(const ll_measured *t, const double um[2], const incident 
     return isfinite(r) ? r : 0.0;
 }
 
-/* pdf of the reflected direction from the densities over the two squares. */
-static double reflected_pdf(double p_v, double p_l, double u_theta_m, double theta_m,
+/* pdf of the reflected direction from the densities over the two squares
+ * (sin_theta_m: the sine of the normal's elevation). */
+static double reflected_pdf(double p_v, double p_l, double u_theta_m, double sin_theta_m,
                             double wi_dot_m)
 {
-    double pdf = p_v * p_l / (ll_measured_normal_area(u_theta_m, theta_m) * 4.0 * wi_dot_m);
+    double pdf =
+        p_v * p_l / (ll_measured_normal_area_sin(u_theta_m, sin_theta_m) * 4.0 * wi_dot_m);
     return isfinite(pdf) && pdf > 0.0 ? pdf : 0.0;
 }
 
-/* The half vector of wi and wo, or 0 if both do not lie above the surface. */
+/* The half vector of wi and wo as wi + wo, not made unit (normal_coords
+ * and the pdf's cosines take any length), or 0 if both do not lie above
+ * the surface. */
 static int half_vector(const double wi[3], const double wo[3], double m[3])
 {
-    double inv;
     if (!(wi[2] > 0.0 && wo[2] > 0.0))
         return 0;
     m[0] = wi[0] + wo[0];
     m[1] = wi[1] + wo[1];
     m[2] = wi[2] + wo[2];
-    inv = 1.0 / sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    m[0] *= inv;
-    m[1] *= inv;
-    m[2] *= inv;
     return 1;
 }
 
@@ -141,8 +145,10 @@ double ll_measured_look_pdf(const ll_measured *t, const ll_measured_look *lk)
 {
     const double *wi = lk->wi, *m = lk->m;
     double p_l = ll_warp2d_eval_at(&t->luminance, &lk->in.sl, lk->s);
-    return reflected_pdf(lk->p_v, p_l, lk->um[0], lk->theta_m,
-                         wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]);
+    /* The unit normal's sine of elevation and wi . m, m being wi + wo. */
+    double inv = 1.0 / sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    return reflected_pdf(lk->p_v, p_l, lk->um[0], sqrt(m[0] * m[0] + m[1] * m[1]) * inv,
+                         (wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2]) * inv);
 }
 
 void ll_measured_eval(const ll_measured *t, const double wi[3], const double wo[3],
@@ -205,14 +211,14 @@ static int draw_tail(const ll_measured *t, const double wi[3], const incident *i
                      const double s[2], double p_l, const double um[2], double p_v,
                      double wo[3], double *pdf, double value[3])
 {
-    double theta_m, m[3];
-    double d = ll_tables_mirror_dir(wi, um, in->ax, in->ay, &theta_m, m, wo);
+    double theta_m, sin_m, m[3];
+    double d = ll_tables_mirror_dir(wi, um, in->ax, in->ay, &theta_m, &sin_m, m, wo);
     if (!(wo[2] > 0.0) || !(d > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;
         return 0;
     }
-    *pdf = reflected_pdf(p_v, p_l, um[0], theta_m, d);
+    *pdf = reflected_pdf(p_v, p_l, um[0], sin_m, d);
     if (!(*pdf > 0.0)) {
         wo[0] = wo[1] = 0.0;
         wo[2] = 1.0;

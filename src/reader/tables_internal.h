@@ -157,7 +157,9 @@ typedef struct ll_measured_incident {
 typedef struct ll_measured_look {
     ll_measured_incident in;
     double wi[3];             /* the fixed direction                       */
-    double m[3], um[2];       /* the normal and its square's coordinates   */
+    double m[3], um[2];       /* the normal and its square's coordinates
+                                 (eval and pdf: m is wi + wo, the normal
+                                 times a positive length)                */
     double theta_m;
     ll_warp_draw dr;          /* draw: the current warp's sampling        */
     double s[2];              /* the sample square's point                 */
@@ -228,10 +230,15 @@ static inline void ll_measured_values_at(const ll_measured *t, const ll_warp_sli
     }
 }
 
+static inline double ll_measured_normal_area_sin(double u_theta_m, double sin_theta_m)
+{
+    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin_theta_m;
+    return area < 1e-6 ? 1e-6 : area;
+}
+
 static inline double ll_measured_normal_area(double u_theta_m, double theta_m)
 {
-    double area = 2.0 * LL_PI * LL_PI * u_theta_m * sin(theta_m);
-    return area < 1e-6 ? 1e-6 : area;
+    return ll_measured_normal_area_sin(u_theta_m, sin(theta_m));
 }
 
 #endif /* LL_TABLES_INTERNAL_H */

@@ -16,6 +16,16 @@
 
 typedef ll_warp_slices slice_set;
 
+/* The look-ups' steps start on a cache line. Otherwise where they start
+ * within a line follows from wherever the code before them in the
+ * library ends, and the time of a sample moved with that alone
+ * (docs/benchmarks.md, "Table files"). */
+#if defined(__GNUC__)
+#define LL_WARP_HOT __attribute__((aligned(64)))
+#else
+#define LL_WARP_HOT
+#endif
+
 void ll_warp2d_free(ll_warp2d *wp)
 {
     size_t p;
@@ -185,6 +195,8 @@ ll_status ll_warp2d_init(ll_warp2d *wp, size_t w, size_t h, size_t n_params,
     memset(wp, 0, sizeof *wp);
     wp->w = w;
     wp->h = h;
+    wp->inv_cells[0] = 1.0 / (double)(w - 1);
+    wp->inv_cells[1] = 1.0 / (double)(h - 1);
     wp->area = 1.0;
     wp->n_params = n_params;
     for (p = 0; p < n_params; ++p) {
@@ -488,7 +500,7 @@ static void corners(const slice_pair *q, size_t step, size_t w, size_t r, double
     wt[7] = q->w1 * e;
 }
 
-void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
+LL_WARP_HOT void ll_warp2d_eval_nodes(const ll_warp2d *wp, const slice_set *s, size_t n,
                           const double pos[2], double *out)
 {
     double tx, ty, scale = area_scale(wp);
@@ -597,28 +609,61 @@ double ll_warp2d_eval(const ll_warp2d *wp, const double pos[2], const double *pa
     return ll_warp2d_eval_at(wp, &s, pos);
 }
 
-/* The t in [0, 1] where the integral of the linear density a + (b - a) t
- * from 0 reaches d, in the form without cancellation. */
-static double invert_linear(double a, double b, double d)
+/* The stored running integrals are float sums, so a cell's stored mass
+ * (the difference of its two ends) and the mass of its linear density
+ * (the mean of its end values) differ by rounding. sample and invert
+ * scale the inside of a cell by their ratio linear / stored, which keeps
+ * the two exact inverses of each other whatever the rounding; the ratio
+ * is 1 for an empty cell. cell_masses gives the pair (stored, linear)
+ * whose ratio that is, both 1 for an empty cell, so that the callers
+ * fold the ratio into their one division instead of dividing for it
+ * first (a division waits for the one before it: a sample is a chain of
+ * them). */
+static inline void cell_masses(double stored, double linear, double *s, double *l)
 {
-    double disc = a * a + 2.0 * (b - a) * d, den, t;
+    int full = stored > 0.0 && linear > 0.0;
+    *s = full ? stored : 1.0;
+    *l = full ? linear : 1.0;
+}
+
+/* The t in [0, 1] where the integral of the linear density a + (b - a) t
+ * from 0 reaches d linear / stored (d scaled by the cell's mass ratio,
+ * cell_masses), in the form without cancellation, 2 e / (a + sqrt(a^2 +
+ * 2 (b - a) e)) for e = d l / s, multiplied through by s > 0: one
+ * division and one square root. */
+static double invert_linear(double a, double b, double d, double stored, double linear)
+{
+    double s, l, dl, disc, den, t;
+    cell_masses(stored, linear, &s, &l);
+    dl = d * l;
+    disc = s * (s * a * a + 2.0 * (b - a) * dl);
     if (!(disc > 0.0))
         disc = 0.0;
-    den = a + sqrt(disc);
-    t = den > 0.0 ? 2.0 * d / den : 0.0;
+    den = s * a + sqrt(disc);
+    t = den > 0.0 ? 2.0 * dl / den : 0.0;
     if (!(t > 0.0))
         t = 0.0;
     return t > 1.0 ? 1.0 : t;
 }
 
-/* The stored running integrals are float sums, so a cell's stored mass
- * (the difference of its two ends) and the mass of its linear density
- * (the mean of its end values) differ by rounding. sample and invert
- * scale the inside of a cell by their ratio, which keeps the two exact
- * inverses of each other whatever the rounding. 1 for an empty cell. */
-static double mass_ratio(double stored, double linear)
+/* The inverse's share of the cell: m0 + x / ratio (x the mass of the
+ * linear density up to the point), and the same divided by total (> 0)
+ * in one division. */
+static inline double uninvert_row(double m0, double x, double stored, double linear)
 {
-    return stored > 0.0 && linear > 0.0 ? linear / stored : 1.0;
+    double s, l;
+    cell_masses(stored, linear, &s, &l);
+    return m0 + x * s / l;
+}
+
+static inline double uninvert_column(double cdf, double x, double stored, double linear,
+                                     double total)
+{
+    double s, l;
+    if (!(total > 0.0))
+        return 0.0;
+    cell_masses(stored, linear, &s, &l);
+    return (cdf * l + x * s) / (l * total);
 }
 
 /* Largest i in [0, n - 2] with value(i) <= target (0 if none), for
@@ -664,27 +709,6 @@ void ll_warp2d_invert(const ll_warp2d *wp, const double pos[2], const double *pa
     slice_set s;
     ll_warp2d_slices(wp, param, &s);
     ll_warp2d_invert_at(wp, &s, pos, u, pdf);
-}
-
-/* Ask for the bytes [p, p + n) ahead of their use. */
-static inline void prefetch(const float *p, size_t n)
-{
-#if defined(__GNUC__)
-    const char *c = (const char *)p, *end = (const char *)(p + n);
-    /* Four lines a turn: a sample asks for about eighty lines, and the
-     * loop's own count and branch were most of its instructions. */
-    for (; c + 3 * 64 < end; c += 4 * 64) {
-        __builtin_prefetch(c);
-        __builtin_prefetch(c + 64);
-        __builtin_prefetch(c + 2 * 64);
-        __builtin_prefetch(c + 3 * 64);
-    }
-    for (; c < end; c += 64)
-        __builtin_prefetch(c);
-#else
-    (void)p;
-    (void)n;
-#endif
 }
 
 /* SEARCH's answer for values that do not decrease with i, found as the
@@ -764,7 +788,8 @@ static inline size_t max2(size_t a, size_t b) { return a > b ? a : b; }
  * table of megabytes. The general form's arithmetic, in the same order,
  * so both give the same numbers; the searches find what COUNT_SEARCH
  * finds. */
-static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, const double u[2])
+static inline LL_WARP_HOT size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s,
+                                                  const double u[2])
 {
     size_t h = wp->h, hs = wp->marg_stride, r;
     double target = u[1];
@@ -786,7 +811,8 @@ static inline size_t sample_pair_row(const ll_warp2d *wp, const slice_set *s, co
     return r;
 }
 
-static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, const double u[2],
+static inline LL_WARP_HOT void sample_pair_guide(const ll_warp2d *wp, const slice_set *s,
+                                                  const double u[2],
                                      ll_warp_draw *dr)
 {
     size_t w = wp->w, h = wp->h, st = w * h, r = dr->r, at = r * w, gs = wp->guide_stride;
@@ -799,7 +825,7 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
     m1 = pmix(&marg, r + 1);
-    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    ty = invert_linear(r0, r1, target - m0, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
     dr->ty = ty;
@@ -823,7 +849,7 @@ static inline void sample_pair_guide(const ll_warp2d *wp, const slice_set *s, co
     dr->top = min2(dr->base + gs - 1, w - 2);
 }
 
-static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
+static inline LL_WARP_HOT void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
                                     const ll_warp_draw *dr, double pos[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h, c = 0, r = dr->r, at = r * w, gs = wp->guide_stride;
@@ -843,19 +869,10 @@ static inline void sample_pair_rest(const ll_warp2d *wp, const slice_set *s,
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
-    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
-    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
+    tx = invert_linear(v0, v1, target - cdf_c, cdf_c1 - cdf_c, 0.5 * (v0 + v1));
+    pos[0] = (index_to_double(c) + tx) * wp->inv_cells[0];
+    pos[1] = (index_to_double(r) + ty) * wp->inv_cells[1];
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
-}
-
-/* Rows r and r + 1 of both slices (values and running integrals side by
- * side). */
-static inline void prefetch_pair_rows(const ll_warp2d *wp, const slice_set *s, size_t r)
-{
-    size_t w = wp->w, plane = 2 * w * wp->h, j;
-    for (j = 0; j < s->count; ++j)
-        prefetch(wp->data + s->index[j] * plane + 2 * r * w, 4 * w);
 }
 
 /* u_in kept off the edges of the square, as the renderers' samplers keep
@@ -924,7 +941,7 @@ void ll_warp2d_draw_end(const ll_warp2d *wp, const slice_set *s, const ll_warp_d
         sample_pair_rest(wp, s, dr, pos, pdf);
 }
 
-void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
+LL_WARP_HOT void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u_in[2],
                          double pos[2], double *pdf)
 {
     ll_warp_draw dr;
@@ -934,10 +951,11 @@ void ll_warp2d_sample_at(const ll_warp2d *wp, const slice_set *s, const double u
         return;
     }
     dr.r = sample_pair_row(wp, s, dr.u);
-    /* Rows r and r + 1 of both slices, while the guide is read: their
-     * fetch from memory then overlaps the guide's instead of following it. */
-    prefetch_pair_rows(wp, s, dr.r);
+    /* The stretch of rows r and r + 1 that the column search reads, as
+     * soon as the guide gives it (a few lines, where the whole rows were
+     * about forty that crowded the caches). */
     sample_pair_guide(wp, s, dr.u, &dr);
+    ll_warp2d_prefetch_draw(wp, s, &dr);
     sample_pair_rest(wp, s, &dr, pos, pdf);
 }
 
@@ -959,7 +977,7 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     r1 = mix(&cond, (r + 1) * w + w - 1);
     m0 = mix(&marg, r);
     m1 = mix(&marg, r + 1);
-    ty = invert_linear(r0, r1, (target - m0) * mass_ratio(m1 - m0, 0.5 * (r0 + r1)));
+    ty = invert_linear(r0, r1, target - m0, m1 - m0, 0.5 * (r0 + r1));
     /* Column interval from the conditional row at ty. */
     row_total = (1.0 - ty) * r0 + ty * r1;
     target = u[0] * row_total;
@@ -968,9 +986,9 @@ static void sample_general(const ll_warp2d *wp, const slice_set *s, const double
     cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
-    tx = invert_linear(v0, v1, (target - cdf_c) * mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1)));
-    pos[0] = (index_to_double(c) + tx) / index_to_double(w - 1);
-    pos[1] = (index_to_double(r) + ty) / index_to_double(h - 1);
+    tx = invert_linear(v0, v1, target - cdf_c, cdf_c1 - cdf_c, 0.5 * (v0 + v1));
+    pos[0] = (index_to_double(c) + tx) * wp->inv_cells[0];
+    pos[1] = (index_to_double(r) + ty) * wp->inv_cells[1];
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
@@ -990,20 +1008,18 @@ static void invert_pair(const ll_warp2d *wp, const slice_set *s, const double po
     r1 = pmix(&tot, r + 1);
     m0 = pmix(&marg, r);
     m1 = pmix(&marg, r + 1);
-    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    u[1] = uninvert_row(m0, r0 * ty + 0.5 * (r1 - r0) * ty * ty, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = pair_at2(&cond, at, w, ty, c);
     cdf_c1 = pair_at2(&cond, at, w, ty, c + 1);
     v0 = pair_at2(&data, at, w, ty, c);
     v1 = pair_at2(&data, at, w, ty, c + 1);
-    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
-                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
-                                 row_total
-                           : 0.0;
+    u[0] = uninvert_column(cdf_c, v0 * tx + 0.5 * (v1 - v0) * tx * tx, cdf_c1 - cdf_c,
+                           0.5 * (v0 + v1), row_total);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }
 
-void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
+LL_WARP_HOT void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double pos[2],
                          double u[2], double *pdf)
 {
     size_t w = wp->w, h = wp->h, st = w * h;
@@ -1023,15 +1039,13 @@ void ll_warp2d_invert_at(const ll_warp2d *wp, const slice_set *s, const double p
     r1 = mix(&cond, (r + 1) * w + w - 1);
     m0 = mix(&marg, r);
     m1 = mix(&marg, r + 1);
-    u[1] = m0 + (r0 * ty + 0.5 * (r1 - r0) * ty * ty) / mass_ratio(m1 - m0, 0.5 * (r0 + r1));
+    u[1] = uninvert_row(m0, r0 * ty + 0.5 * (r1 - r0) * ty * ty, m1 - m0, 0.5 * (r0 + r1));
     row_total = (1.0 - ty) * r0 + ty * r1;
     cdf_c = pair_at(&cond, r * w, w, ty, c);
     cdf_c1 = pair_at(&cond, r * w, w, ty, c + 1);
     v0 = pair_at(&data, r * w, w, ty, c);
     v1 = pair_at(&data, r * w, w, ty, c + 1);
-    u[0] = row_total > 0.0 ? (cdf_c + (v0 * tx + 0.5 * (v1 - v0) * tx * tx) /
-                                          mass_ratio(cdf_c1 - cdf_c, 0.5 * (v0 + v1))) /
-                                 row_total
-                           : 0.0;
+    u[0] = uninvert_column(cdf_c, v0 * tx + 0.5 * (v1 - v0) * tx * tx, cdf_c1 - cdf_c,
+                           0.5 * (v0 + v1), row_total);
     *pdf = ((1.0 - tx) * v0 + tx * v1) * area_scale(wp);
 }

@@ -97,6 +97,11 @@ typedef struct ll_warp2d {
     int guide_wide;                           /* entries uint16_t, else bytes     */
     void *marg_guide;                         /* [n_slices][marg_buckets + 1]     */
     void *cond_guide;                         /* [n_slices][h][cond_buckets + 1]  */
+    /* 1 / (w - 1) and 1 / (h - 1): a sampled point's coordinates are its
+     * node index and fraction times these (a multiplication where a
+     * division would lengthen the chain of a sample that feeds one warp's
+     * point to the next). */
+    double inv_cells[2];
 } ll_warp2d;
 
 /* Entry k of a guide of wp (ll_warp2d.marg_guide, cond_guide). */
@@ -266,10 +271,11 @@ static inline double ll_tables_mirror(const double wi[3], const double um[2], do
 /* The same mapping for a wi of any azimuth phi_i, given as its unit
  * vector (cos phi_i, sin phi_i): the normal is made at phi_i = 0 and
  * turned, which spares the reader's sampler an atan2 of wi; the
- * directions are those of ll_tables_mirror to rounding. */
+ * directions are those of ll_tables_mirror to rounding. *sin_theta_m:
+ * sin(theta_m), which the sampler's pdf needs too. */
 static inline double ll_tables_mirror_dir(const double wi[3], const double um[2],
                                           double cos_phi_i, double sin_phi_i, double *theta_m,
-                                          double m[3], double wo[3])
+                                          double *sin_theta_m, double m[3], double wo[3])
 {
     double tm = um[0] * um[0] * (LL_PI / 2), pm = (2.0 * um[1] - 1.0) * LL_PI;
     double st = sin(tm), x = st * cos(pm), y = st * sin(pm);
@@ -277,6 +283,7 @@ static inline double ll_tables_mirror_dir(const double wi[3], const double um[2]
     m[1] = y * cos_phi_i + x * sin_phi_i;
     m[2] = cos(tm);
     *theta_m = tm;
+    *sin_theta_m = st;
     return ll_tables_reflect_about(wi, m, wo);
 }
 
