@@ -63,6 +63,14 @@ LL_INTERNAL ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *
  * retro-reflected direction below the surface), or the top (side 1). */
 LL_INTERNAL ll_status ll_tables_derive_ndf_side(const ll_bsdf *b, int side, double *d,
                                                 double *sigma, double *alpha);
+/* The same for a reflected set of a transmissive stack that reflects
+ * alike from both sides: where the fitted roughness is well above the
+ * width of D's central peak (a sharp reflection on a broad pedestal of
+ * light that came back through the stack), the mixture's lobes follow
+ * the peak (bsdf_write_tables_ndf.c says how and why). *alpha receives
+ * the fitted roughness all the same. */
+LL_INTERNAL ll_status ll_tables_derive_ndf_pedestal(const ll_bsdf *b, int side, double *d,
+                                                    double *sigma, double *alpha);
 /* The pieces of the derivation that the transmitted lobes' D shares
  * (bsdf_write_tables_tndf.c): the quadrature nodes theta_j = u_j^2 pi / 2
  * and their weights (sin theta included), sigma from D at the nodes, and
