@@ -12,13 +12,13 @@
  * within 0.3% at 0..85 degrees; f's median, 95th and 99th percentiles at
  * most 0.2%, 1% and 3%) are printed with the figures reached; the
  * assertions hold what the tables reach today: the glass seen from above,
- * the glass's f and the pane's f meet the targets; the glass's
+ * the glass's f and the pane's R and f meet the targets; the glass's
  * transmission from below at 60 degrees by this stratified estimate
  * (0.52%: the lobe takes 3% of the samples there, and the
  * estimate of the .bsdf and of the table alike moves by up to 7% from one
  * stratification to another, where quadrature of eval puts the table
- * within 0.2% at these angles) and the pane's reflection at
- * 85 degrees do not, nor do the compensated glass's transmission by this
+ * within 0.2% at these angles) and the pane's transmission at
+ * 80 degrees (0.35%) do not, nor do the compensated glass's transmission by this
  * estimate (0.59%) and its f, nor does the coat, and are held to their
  * present figures so that a change that worsens them fails.
  */
@@ -43,10 +43,12 @@ typedef struct bounds {
  * (reflection above 2.4%, transmission from above 3.7%, reflection below
  * 5.9%, transmission from below 3.5%; 1.24% and 4.13% at the 95th and
  * 99th, transmission 3.8% and 3.9%, before its z-flipped sets were read at
- * the pair turned to each elevation); pane R 1.07% (at 85 degrees), T
- * 0.35%, median 0.091%, 95th 0.70%, 99th 2.96% (reflection 3.4%,
- * transmission 1.7% and 2.0%; 0.82% and 3.00% at the 95th and 99th
- * before); coat over a medium R 2.16% (from below at 30 degrees, where the
+ * the pair turned to each elevation); pane R 0.12% (1.07% at 85 degrees
+ * before its reflected sets' D followed its retro-reflection's peak), T
+ * 0.35%, median 0.069%, 95th 0.55%, 99th 1.57% (reflection 1.45% from
+ * above and 1.30% from below, transmission 1.7% and 2.0%; 0.091%, 0.70%
+ * and 2.96% before that, 0.82% and 3.00% at the 95th and 99th before its
+ * z-flipped sets were read at the pair turned to each elevation); coat over a medium R 2.16% (from below at 30 degrees, where the
  * coat's compensation returns its lost light as reflection), T 1.51%
  * (blue, from below at 60 degrees; see below), median 0.15%, 95th 2.7%,
  * 99th 14.4% (reflection from below 20%, the rest 2.7..4.4%).
@@ -64,7 +66,7 @@ typedef struct bounds {
  * before). These two bounds hold the 192^2 figures. */
 #define BOUND_GLASS 0.003, 0.007, 0.001, 0.007, 0.03
 #define BOUND_FROSTED 0.004, 0.0075, 0.001, 0.013, 0.045
-#define BOUND_PANE 0.013, 0.004, 0.0015, 0.009, 0.033
+#define BOUND_PANE 0.002, 0.004, 0.001, 0.007, 0.02
 #define BOUND_COAT 0.025, 0.018, 0.002, 0.03, 0.155
 
 /* text's tables by the sizes of o (NULL: chosen by the tolerance). */
