@@ -62,29 +62,20 @@
  * A peak on a pedestal (ll_tables_derive_ndf_pedestal, for the reflected
  * sets of a transmissive stack that reflects alike from both sides). A
  * frosted pane's retro-reflection is its first surface's microfacets,
- * seen through F at normal incidence (4% for eta 1.5), on a broad
- * pedestal of the light that crossed that surface and came back from the
- * second: the fitted roughness comes out 0.51 while the peak is 0.33 wide
- * (a lone rough interface of alpha 0.3: 0.30 and 0.30). At grazing
- * incidence F rises to 1 and the reflection is that sharp first-surface
- * lobe, which a wide lobe three times 0.51 wide and a peak lobe of weight
- * 0.2 left few columns of the sample grid: R 1.1% low at 85 degrees at
- * 64 x 96^2 x 96^2 (0.75% at 32 x 64^2 x 64^2). Where the fitted
- * roughness exceeds PEDESTAL_RATIO times the peak's width, the wide lobe
- * is three times the peak's width and the peak lobe weighs 0.4: 0.09% at
- * 85 degrees at both grids, and f's median, 95th and 99th percentiles
- * by the search's pairs 0.066%, 0.54% and 1.66% against 0.087%, 0.70%
- * and 2.94%. Either change alone left 0.68% (the wide lobe) and 0.25%
- * (the weight) at 85 degrees; a peak weight of 0.3 left 0.44%, one of
- * 0.55 reached 0.02% but a 99th percentile of 3.8%; a D of Beckmann
- * lobes alone at the peak's width, without the derived pedestal, 0.03%
- * but a 99th percentile of 36% (f / D explodes where the pedestal's
- * light falls beyond the narrow D). The reflection of more incident
- * elevations does not help: 128 of them with the wide D left 0.85%.
+ * seen through F at normal incidence, on a broad pedestal of the light
+ * that crossed that surface and came back from the second, so the fitted
+ * roughness comes out well above the width of the central peak (a lone
+ * rough interface's two agree). At grazing incidence F rises to 1 and
+ * the reflection is that sharp first-surface lobe, which a wide lobe
+ * scaled from the fitted roughness leaves too few columns of the sample
+ * grid. Where the fitted roughness exceeds PEDESTAL_RATIO times the
+ * peak's width, the wide lobe is scaled from the peak's width instead and
+ * the peak lobe weighs more; the derived D keeps its share, without which
+ * f / D explodes where the pedestal's light falls beyond a narrow D.
  * Opaque stacks keep the mixture above: a coat over a bright base has
- * the same shape (plastic: 0.40 against 0.20), but there the broad lobe
- * is the base's own reflection at every angle, and peak weights of 0.35
- * and 0.5 did worse on it.
+ * the same shape, but there the broad lobe is the base's own reflection
+ * at every angle. The options measured and their figures: docs/formats.md,
+ * "Transmission".
  */
 #include "writer/bsdf_write_tables.h"
 
