@@ -20,6 +20,7 @@
 #include "test_util.h"
 #include "tables_lobe_figures.h"
 #include "tables_build.h"
+#include "tables_float32.h"
 #include "reader/bsdf_internal.h"
 #include "reader/tables_internal.h"
 #include "reader/tables_refract.h"
@@ -225,52 +226,13 @@ static void check_nodes(const ll_bsdf *src, const ll_bsdf *tab)
  * opens, and evaluates, gives the pdf and samples bit for bit as tab. */
 static void check_float16(const ll_bsdf *tab, const char *tab_path)
 {
-    size_t size = 0, k, e, n_grids = 0;
-    unsigned char *bytes = ll_test_read_file(tab_path, &size);
-    ll_tensor_file tf;
-    ll_tensor_out_field *out;
-    float **decoded;
+    size_t k;
     ll_bsdf *t32 = NULL;
     char path[LL_TEST_PATH_SIZE];
     uint64_t rng = 11;
     int c, side;
-    assert_non_null(bytes);
-    assert_int_equal(ll_tensor_parse(bytes, size, tab_path, &tf), LL_OK);
-    out = calloc(tf.n_fields, sizeof *out);
-    decoded = calloc(tf.n_fields, sizeof *decoded);
-    assert_true(out && decoded);
-    for (k = 0; k < tf.n_fields; ++k) {
-        const ll_tensor_field *f = &tf.fields[k];
-        const char *dot = strchr(f->name, '.');
-        const char *base = dot ? dot + 1 : "";
-        int grid = strcmp(base, "vndf") == 0 || strcmp(base, "luminance") == 0 ||
-                   strcmp(base, "rgb") == 0;
-        if (f->dtype != LL_TENSOR_U8)
-            assert_int_equal(f->dtype, grid ? LL_TENSOR_F16 : LL_TENSOR_F32);
-        n_grids += (size_t)grid;
-        out[k].name = f->name;
-        out[k].dtype = f->dtype == LL_TENSOR_U8 ? LL_TENSOR_U8 : LL_TENSOR_F32;
-        out[k].rank = f->rank;
-        memcpy(out[k].shape, f->shape, sizeof f->shape);
-        if (f->dtype == LL_TENSOR_U8) {
-            out[k].data = f->data;
-            continue;
-        }
-        decoded[k] = malloc((f->count ? f->count : 1) * sizeof(float));
-        assert_non_null(decoded[k]);
-        for (e = 0; e < f->count; ++e)
-            decoded[k][e] = ll_tensor_value(f, e);
-        out[k].data = decoded[k];
-    }
-    assert_int_equal(n_grids, 12);
     snprintf(path, sizeof path, "%s/transmit32.tab", ll_test_dir());
-    assert_int_equal(ll_tensor_write(path, "test", out, tf.n_fields), LL_OK);
-    for (k = 0; k < tf.n_fields; ++k)
-        free(decoded[k]);
-    free(decoded);
-    free(out);
-    ll_tensor_file_free(&tf);
-    free(bytes);
+    tables_rewrite_float32(tab_path, path, 12);
     assert_int_equal(ll_bsdf_open(path, NULL, &t32), LL_OK);
     for (side = 0; side < 2; ++side)
         for (k = 0; k < 300; ++k) {
