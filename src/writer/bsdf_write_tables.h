@@ -89,12 +89,13 @@ LL_INTERNAL void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[
 /* D and sigma at the LL_TABLES_NDF_NODES nodes for a transmitted lobe
  * (bsdf_write_tables_tndf.c): from its density over the half vector at
  * normal incidence; refract_eta > 0 the refraction warp's relative index,
- * 0 the warp of the z-flipped direction; dense_lone: the set is seen from
- * the denser side of a lone interface (a heavier floor for the flipped
- * warp). LL_ERROR_INVALID_ARGUMENT if the lobe transmits nothing at normal
- * incidence. */
+ * 0 the warp of the z-flipped direction; heavy_floor: the set is seen from
+ * the denser side of a lone interface or crosses no net interface (eta 1),
+ * where the flipped warp takes a heavier floor (bsdf_write_tables_tndf.c
+ * says why). LL_ERROR_INVALID_ARGUMENT if the lobe transmits nothing at
+ * normal incidence. */
 LL_INTERNAL ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom,
-                                                    double refract_eta, int dense_lone,
+                                                    double refract_eta, int heavy_floor,
                                                     double *d, double *sigma, double *alpha);
 /* s as JSON text (quotes and escapes) at buf[at], cap bytes at most
  * written; returns the end it would have without the cap. */

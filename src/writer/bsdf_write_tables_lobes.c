@@ -222,9 +222,10 @@ static ll_status reflected_ndf(const writer *w, lobe *l, double *d, double *sigm
 static ll_status ndf_tables(const writer *w, lobe *l)
 {
     double d[LL_TABLES_NDF_NODES], sigma[LL_TABLES_NDF_NODES], eta = w->b->eta;
-    int dense_lone = w->lone && fabs(eta - 1.0) > 1e-6 && l->bottom == (eta > 1.0);
+    int net = fabs(eta - 1.0) > 1e-6;
+    int heavy_floor = !net || (w->lone && l->bottom == (eta > 1.0));
     ll_status s = l->transmit ? ll_tables_derive_transmit_ndf(w->b, l->bottom, l->refract_eta,
-                                                              dense_lone, d, sigma, &l->alpha)
+                                                              heavy_floor, d, sigma, &l->alpha)
                               : reflected_ndf(w, l, d, sigma);
     if (s != LL_OK)
         return s;
