@@ -17,10 +17,10 @@
  * (0.52%: the lobe takes 3% of the samples there, and the
  * estimate of the .bsdf and of the table alike moves by up to 7% from one
  * stratification to another, where quadrature of eval puts the table
- * within 0.2% at these angles) and the pane's transmission at
- * 80 degrees (0.35%) do not, nor do the compensated glass's transmission by this
- * estimate (0.59%) and its f, nor does the coat, and are held to their
- * present figures so that a change that worsens them fails.
+ * within 0.2% at these angles) does not, nor do the compensated glass's
+ * transmission by this estimate (0.59%) and its f, nor does the coat, and
+ * are held to their present figures so that a change that worsens them
+ * fails. The pane meets every target.
  */
 #include "test_util.h"
 #include "tables_lobe_figures.h"
@@ -32,8 +32,9 @@ typedef struct bounds {
     double r, t, p50, p95, p99;
 } bounds;
 
-/* What the tables reach (64 x 96^2 x 96^2 for both, the largest grid the
- * size cap lets the search take), with a margin: glass R 0.18%, T 0.51%
+/* What the tables reach (64 x 96^2 x 96^2 for the glasses, the largest grid
+ * the size cap lets the search take; the pane 48 x 96^2 x 96^2, where the
+ * search meets its aims), with a margin: glass R 0.18%, T 0.51%
  * (0.02% from the top; from below 0.23% at 50 and 0.52% at 60 degrees),
  * median 0.036%, 95th 0.47%, 99th 2.72% (by lobe: reflection above 1.6%,
  * transmission from above 1.4%, reflection below 4.9%, transmission from
@@ -43,12 +44,12 @@ typedef struct bounds {
  * (reflection above 2.4%, transmission from above 3.7%, reflection below
  * 5.9%, transmission from below 3.5%; 1.24% and 4.13% at the 95th and
  * 99th, transmission 3.8% and 3.9%, before its z-flipped sets were read at
- * the pair turned to each elevation); pane R 0.12% (1.07% at 85 degrees
- * before its reflected sets' D followed its retro-reflection's peak), T
- * 0.35%, median 0.069%, 95th 0.55%, 99th 1.57% (reflection 1.45% from
- * above and 1.30% from below, transmission 1.7% and 2.0%; 0.091%, 0.70%
- * and 2.96% before that, 0.82% and 3.00% at the 95th and 99th before its
- * z-flipped sets were read at the pair turned to each elevation); coat over a medium R 2.16% (from below at 30 degrees, where the
+ * the pair turned to each elevation); pane R 0.18% (at 85 degrees), T
+ * 0.04%, median 0.097%, 95th 0.61%, 99th 1.55% (reflection 1.45% from
+ * above and 1.40% from below, transmission 1.6% and 1.7%), where with its
+ * transmitted sets' D on the floor of 0.02 the search stopped at the
+ * size cap with T 0.35% (at 80 degrees), median 0.069%, 95th 0.55% and
+ * 99th 1.57%; coat over a medium R 2.16% (from below at 30 degrees, where the
  * coat's compensation returns its lost light as reflection), T 1.51%
  * (blue, from below at 60 degrees; see below), median 0.15%, 95th 2.7%,
  * 99th 14.4% (reflection from below 20%, the rest 2.7..4.4%).
@@ -66,7 +67,7 @@ typedef struct bounds {
  * before). These two bounds hold the 192^2 figures. */
 #define BOUND_GLASS 0.003, 0.007, 0.001, 0.007, 0.03
 #define BOUND_FROSTED 0.004, 0.0075, 0.001, 0.013, 0.045
-#define BOUND_PANE 0.002, 0.004, 0.001, 0.007, 0.02
+#define BOUND_PANE 0.002, 0.001, 0.001, 0.007, 0.02
 #define BOUND_COAT 0.025, 0.018, 0.002, 0.03, 0.155
 
 /* text's tables by the sizes of o (NULL: chosen by the tolerance). */
