@@ -61,27 +61,16 @@
  * percentile of its transmitted f from 10% to 2.2%). */
 #define FLIPPED_WIDE_WEIGHT 0.45
 #define FLIPPED_WIDE_WIDTH 5.0
-/* The floor of a flipped warp's D seen from the denser side of a lone
- * interface (above). Chosen by measuring examples/frosted-glass.layers at
- * 64 x 96^2 x 96^2 (docs/formats.md): with the floor of 0.02 its
- * transmission from below was 2 to 4% high at 62 to 70 degrees by
- * quadrature (RMS 2.2% over 55 to 72 degrees); 0.05 took it to 0.66%
- * (worst 1.5%, between elevations), 0.1 to 0.76% and 0.2 to 0.84%. The
- * coat over a medium of that table, which is not a lone interface, keeps
- * the floor of 0.02: a heavier one moved its median error of f from
- * 0.165% to 0.166% and the 99th percentile of its transmission from below
- * from 2.98% to 3.10%. */
-/* The frosted pane of docs/formats.md at 64 x 96^2 x 96^2 with the floor
- * of 0.02: its transmission (quadrature of eval, both sides alike) was
- * 0.41 to 0.49% low at 72.5 to 80 degrees, the same at 32 and at 128
- * elevations and 0.18 to 0.31% with a sample grid of 128^2; with 0.05
- * within 0.12% at every angle from 60 to 85 degrees (0.03: 0.39%, 0.04:
- * 0.15%, 0.07: 0.08%, 0.1: 0.05%, at some cost in the 95th percentile of
- * f, 0.56% at 0.05 against 0.54% at 0.02, and 0.62% at 0.1). At 64^2 it
- * took the worst of T from 1.96% to 0.28%. A heavier floor for every
- * flipped set moved the compensated glass's median of f from 0.0760% to
- * 0.0776% and the coat's from 0.1576% to 0.1579%, so a set across a net
- * interface that is not a lone one's denser side keeps 0.02. */
+/* The heavier floor of a flipped warp's D, for two kinds of set whose
+ * light lies where the mixture above has little but its floor: seen from
+ * the denser side of a lone interface (above), and across no net
+ * interface (a pane), whose transmitted lobe at grazing elevations
+ * spreads out of the plane of incidence beyond the wide lobe's reach, a
+ * share that more elevations did not bring back and a finer sample grid
+ * did. Other sets keep FLOOR_WEIGHT: a heavier floor for every flipped set
+ * moved the compensated glass's and the coat's figures the wrong way. The
+ * floors measured and their figures: docs/formats.md, "Transmission",
+ * "D of a transmitted set". */
 #define HEAVY_FLOOR_WEIGHT 0.05
 
 ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom, double refract_eta,
