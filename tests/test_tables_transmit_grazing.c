@@ -151,18 +151,9 @@ static const double pane_deg[N_PANE] = { 75.0, 80.0, 85.0 };
 /* What the tables reach (0.008%, 0.031%, 0.090%) with a margin. */
 static const double pane_bound[N_PANE] = { 0.001, 0.001, 0.002 };
 
-static void test_pane_reflection_grazing(void **state)
+static void check_pane_reflection(const ll_bsdf *src, const ll_bsdf *tab)
 {
-    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
-    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
-    ll_bsdf *src = NULL, *tab = NULL;
     int k;
-    (void)state;
-    o.n_theta_i = 32;
-    o.vndf_size = 64;
-    o.sample_size = 64;
-    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n",
-                         "pane", &o, bsdf_path, tab_path, &src, &tab);
     for (k = 0; k < N_PANE; ++k) {
         double th = pane_deg[k] * LL_PI / 180.0, wo[3] = { sin(th), 0.0, cos(th) };
         double peak[2] = { th, th }, rs[3], ts[3], rt[3], tt[3];
@@ -173,8 +164,6 @@ static void test_pane_reflection_grazing(void **state)
         assert_true(rs[1] > 0.4);
         assert_true(fabs(rt[1] / rs[1] - 1.0) <= pane_bound[k]);
     }
-    ll_bsdf_release(tab);
-    ll_bsdf_release(src);
 }
 
 /* The pane's transmission at grazing incidence, from both sides: its sets
@@ -191,18 +180,9 @@ static const double pane_t_deg[N_PANE_T] = { 60.0, 70.0, 75.0, 80.0, 85.0 };
 /* What the tables reach with a margin. */
 #define PANE_T_BOUND 0.005
 
-static void test_pane_transmission_grazing(void **state)
+static void check_pane_transmission(const ll_bsdf *src, const ll_bsdf *tab)
 {
-    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
-    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
-    ll_bsdf *src = NULL, *tab = NULL;
     int k, side;
-    (void)state;
-    o.n_theta_i = 32;
-    o.vndf_size = 64;
-    o.sample_size = 64;
-    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n",
-                         "pane_t", &o, bsdf_path, tab_path, &src, &tab);
     for (side = 0; side < 2; ++side)
         for (k = 0; k < N_PANE_T; ++k) {
             double th = pane_t_deg[k] * LL_PI / 180.0;
@@ -216,6 +196,22 @@ static void test_pane_transmission_grazing(void **state)
             assert_true(ts[1] > 0.05);
             assert_true(fabs(tt[1] / ts[1] - 1.0) <= PANE_T_BOUND);
         }
+}
+
+/* The pane's tables at 32 x 64^2 x 64^2, made once for both checks. */
+static void test_pane_grazing(void **state)
+{
+    char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
+    ll_tables_options o = LL_TABLES_OPTIONS_INIT;
+    ll_bsdf *src = NULL, *tab = NULL;
+    (void)state;
+    o.n_theta_i = 32;
+    o.vndf_size = 64;
+    o.sample_size = 64;
+    ll_test_build_tables("dielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n",
+                         "pane", &o, bsdf_path, tab_path, &src, &tab);
+    check_pane_reflection(src, tab);
+    check_pane_transmission(src, tab);
     ll_bsdf_release(tab);
     ll_bsdf_release(src);
 }
@@ -225,8 +221,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reflection_below_grazing),
         cmocka_unit_test(test_transmission_below_beyond_critical),
-        cmocka_unit_test(test_pane_reflection_grazing),
-        cmocka_unit_test(test_pane_transmission_grazing),
+        cmocka_unit_test(test_pane_grazing),
     };
     return cmocka_run_group_tests(tests, ll_test_dir_setup, ll_test_dir_teardown);
 }
