@@ -312,6 +312,7 @@ $(BUILD)/bin/llbuild-mpi: $(LLBUILD_MPI_SRC) $(wildcard tools/llbuild-mpi/*.h to
                           tools/llbuild/*.h) $(SHARED) | need-tools
 	@mkdir -p $(dir $@)
 	OMPI_CC=$(CC) $(MPICC) $(TOOL_CFLAGS) -o $@ $(LLBUILD_MPI_SRC) tools/llbuild/progress.c tools/llbuild/time_model.c \
+	    tools/llbuild/energy.c \
 	    -L$(BUILD)/lib -Wl,-rpath,'$$ORIGIN/../lib' -llayerlab -lm
 
 $(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(STATIC) | need-test

@@ -228,6 +228,27 @@ expect 0 "--mono --threads 1" -- "$llbuild" --mono --threads 1 --nodes 16 --orde
     examples/coated-gold.layers -o "$tmp/mono.bsdf"
 contains "$tmp/out" "16 nodes x 8 Fourier orders, 1 channel" "--mono"
 
+# --- a file that reflects and transmits more light than it receives: a
+# coat of alpha 0.02 on 80 nodes (its spline overshoots the peak at normal
+# incidence) is built, and llbuild says so and how to resolve it; a
+# textured file names the basis; a lossless glass with its energy
+# compensation at the tolerance's resolution (R + T = 1 up to quadrature)
+# is not warned about.
+printf 'set nodes=80 orders=200\ndielectric eta=1.5 alpha=0.02\nconductor eta=Au alpha=0.2\n' \
+    >"$tmp/sharp.layers"
+expect 0 "an unresolved coat" -- "$llbuild" "$tmp/sharp.layers" -o "$tmp/sharp.bsdf"
+contains "$tmp/err" "warning: .*sharp.bsdf reflects and transmits more light than it receives: R + T = 15.2 at 0 degrees from above. Its resolution does not resolve" \
+    "the unresolved coat's warning"
+contains "$tmp/err" "without a given resolution .* the tolerance chooses one that does" \
+    "the warning says how to resolve it"
+printf 'set nodes=80 orders=200\ndielectric name=coat eta=1.5 alpha=[0.02 0.2]\nconductor eta=Au alpha=0.2\n' \
+    >"$tmp/sharpsweep.layers"
+expect 0 "an unresolved basis" -- "$llbuild" "$tmp/sharpsweep.layers" -o "$tmp/sharpsweep.bsdf"
+contains "$tmp/err" "R + T = 15.2 at 0 degrees from above at coat.alpha = 0.02 (1 of its 2 bases exceed 1)" \
+    "the textured warning names the basis"
+expect 0 "frosted glass" -- "$llbuild" examples/frosted-glass.layers -o "$tmp/frosted.bsdf"
+if grep -q "warning" "$tmp/err"; then bad "a lossless glass warned: $(grep warning "$tmp/err")"; else ok; fi
+
 # --- interrupted builds leave no file. A thick forward-scattering medium
 # (about 0.5 s of doubling on 300 nodes, idle): signalled as soon as its
 # progress names the medium (tests/lib/stage_wait.sh), not after a sleep.

@@ -22,6 +22,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "energy.h"
 #include "progress.h"
 #include "time_model.h"
 #ifndef LLBUILD_NO_MAIN
@@ -456,6 +457,15 @@ static void print_axes(const ll_material *m)
     }
 }
 
+/* The nodes and orders were given (set nodes= orders=, --nodes --orders),
+ * not chosen by the tolerance. */
+static int resolution_given(const ll_material *m, const ll_build_options *o)
+{
+    double tolerance = 0.0, mu_min = 0.0;
+    int chosen = 0;
+    return ll_material_goal(m, o, &tolerance, &mu_min, &chosen) == LL_OK && !chosen;
+}
+
 /* The goal the resolution met: the tolerance and the error measured
  * (ll_build_estimate.resolution_error: against twice the resolution, HUGE_VAL
  * when some word is beyond the search's reach), or that it was given.
@@ -654,6 +664,8 @@ static void print_summary(const args *a, const ll_material *m, const ll_build_op
     print_albedo(sum, ll_material_transmits(m));
     printf("wall time    %.2f s\n", seconds);
     ll_bsdf_release(b);
+    fflush(stdout);
+    llbuild_warn_energy(stderr, a->output, resolution_given(m, o));
 }
 
 static void print_textured_summary(const args *a, const ll_material *m,
@@ -680,6 +692,8 @@ static void print_textured_summary(const args *a, const ll_material *m,
     printf("file         %zu bytes, %zu coefficients\n", info.file_size, info.n_coeffs);
     printf("wall time    %.2f s\n", seconds);
     ll_bsdf_release(b);
+    fflush(stdout);
+    llbuild_warn_energy(stderr, a->output, resolution_given(m, o));
 }
 
 /* Stop: no file was written. End by the signal, so that the shell sees
