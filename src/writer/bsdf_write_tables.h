@@ -48,6 +48,22 @@ LL_INTERNAL ll_monitor ll_tables_share_of(ll_tables_share *sh, double lo, double
 /* Luminance of an RGB value (the Rec. 709 / sRGB weights Mitsuba uses). */
 LL_INTERNAL double ll_tables_luminance(const double rgb[3]);
 
+/* The edge of total internal reflection in a reflected set seen from the
+ * denser side (bsdf_write_tables_edge.c). ll_tables_lone_interface:
+ * whether b reflects alike from both sides at normal incidence, as a lone
+ * interface does. ll_tables_edge_width: for the reflected set of side
+ * bottom of b (lone: ll_tables_lone_interface(b)), the width in wi.h about
+ * the critical cosine within which the .bsdf does not follow f, so that
+ * the set's values there are continued from beside it and the figures
+ * count those pairs apart; 0 for any other set. ll_tables_edge_near:
+ * whether the pair (wi, wo), both above in the set's frame, lies within
+ * that width of the edge of a smooth interface of relative index
+ * fresnel_eta (< 1). */
+LL_INTERNAL int ll_tables_lone_interface(const ll_bsdf *b);
+LL_INTERNAL double ll_tables_edge_width(const ll_bsdf *b, int lone, int bottom);
+LL_INTERNAL int ll_tables_edge_near(const double wi[3], const double wo[3], double fresnel_eta,
+                                    double width);
+
 /* D(theta) and sigma(theta) at the LL_TABLES_NDF_NODES nodes
  * theta_j = u_j^2 pi / 2, u_j = j / (n - 1), for the opaque isotropic b:
  * the dominant eigenvector of the retro-reflection operator, normalised,

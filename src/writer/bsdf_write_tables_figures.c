@@ -25,7 +25,16 @@
  * A transmissive source (its tables a set per lobe and side): the pairs a
  * quarter per lobe and side, the light near the lobe's peak (the mirror,
  * the refracted, or the straight-through direction) for half of them, and
- * 1% of the largest f cos taken per lobe and side.
+ * 1% of the largest f cos taken per lobe and side. The reflected pairs of
+ * a lone interface's denser side within ll_tables_edge_width of the edge
+ * of total internal reflection are not counted: there the source's f is
+ * off its own model by more than the aims (rough glass, eta 1.5, alpha
+ * 0.3: 17% at the 99th percentile against Mitsuba's roughdielectric),
+ * the tables hold the model instead (bsdf_write_tables_edge.c), and no
+ * grid follows the source's error (rough glass's search figure of the
+ * 99th percentile was 2.0% at 64 x 96^2 x 96^2 with them, 1.1% without;
+ * 1.5% without them at 64 x 80^2 x 80^2, which the search now takes).
+ * tests/test_tables_transmit_tolerance.c still counts every pair.
  */
 #include "writer/bsdf_write_tables.h"
 
@@ -127,22 +136,36 @@ static void light_of(size_t k, const double wo[3], double tv, int transmissive, 
         wi[2] = -wi[2];
 }
 
+/* Whether the reflected pair (wo, wi), both on one side, lies within
+ * width of the edge of total internal reflection seen from that side. */
+static int near_edge(const double wo[3], const double wi[3], double eta, double width)
+{
+    double a[3] = { wo[0], wo[1], fabs(wo[2]) }, b[3] = { wi[0], wi[1], fabs(wi[2]) };
+    return ll_tables_edge_near(a, b, wo[2] < 0.0 ? 1.0 / eta : eta, width);
+}
+
 static ll_status f_errors(const ll_bsdf *src, const ll_bsdf *table, ll_tables_figures *out)
 {
     const double lim = LIMIT_DEG * LL_PI / 180.0;
     double *ref = ll_alloc_array(PAIRS, 4 * sizeof(double));
     double *got = ll_alloc_array(PAIRS, 3 * sizeof(double));
-    double *err = ll_alloc_array(PAIRS, 3 * sizeof(double)), top[4][3];
+    double *err = ll_alloc_array(PAIRS, 3 * sizeof(double)), top[4][3], edge[2] = { 0.0, 0.0 };
+    unsigned char *apart = ll_alloc_array(PAIRS, 1);
     int transmissive = ll_tables_transmits(src);
     uint64_t rng = 0x7ab1e5;
     size_t k, n = 0;
     int c, g;
     ll_status s = LL_OK;
-    if (!ref || !got || !err) {
+    if (!ref || !got || !err || !apart) {
         s = ll_fail(LL_ERROR_OUT_OF_MEMORY, "ll_tables_write_from_bsdf: out of memory (figures)");
         goto done;
     }
     memset(top, 0, sizeof top);
+    if (transmissive) {
+        int lone = ll_tables_lone_interface(src);
+        edge[0] = ll_tables_edge_width(src, lone, 0);
+        edge[1] = ll_tables_edge_width(src, lone, 1);
+    }
     for (k = 0; k < PAIRS && s == LL_OK; ++k) {
         double wo[3], wi[3], tv = acos(1.0 - uniform(&rng) * (1.0 - cos(lim)));
         direction(tv, 0.0, wo);
@@ -156,6 +179,7 @@ static ll_status f_errors(const ll_bsdf *src, const ll_bsdf *table, ll_tables_fi
             break;
         ref[4 * k + 3] = fabs(wi[2]);
         g = transmissive ? (int)(k % 4 / 2 * 2 + (k / 4) % 2) : 0;
+        apart[k] = g % 2 == 0 && edge[g / 2] > 0.0 && near_edge(wo, wi, src->eta, edge[g / 2]);
         for (c = 0; c < 3; ++c)
             if (ref[4 * k + c] * ref[4 * k + 3] > top[g][c])
                 top[g][c] = ref[4 * k + c] * ref[4 * k + 3];
@@ -164,7 +188,7 @@ static ll_status f_errors(const ll_bsdf *src, const ll_bsdf *table, ll_tables_fi
         goto done;
     for (k = 0; k < PAIRS; ++k) {
         g = transmissive ? (int)(k % 4 / 2 * 2 + (k / 4) % 2) : 0;
-        for (c = 0; c < 3; ++c)
+        for (c = 0; c < 3 && !apart[k]; ++c)
             if (ref[4 * k + c] * ref[4 * k + 3] > 0.01 * top[g][c])
                 err[n++] = fabs(got[3 * k + c] / ref[4 * k + c] - 1.0);
     }
@@ -181,6 +205,7 @@ done:
     ll_free(ref);
     ll_free(got);
     ll_free(err);
+    ll_free(apart);
     return s;
 }
 

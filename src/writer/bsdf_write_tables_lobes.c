@@ -59,6 +59,7 @@ typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
     double fresnel_eta;                     /* > 0: values over F (reflected) */
+    double edge_width;                      /* > 0: f / F continued there     */
     double transmittance_eta;               /* > 0: values over (1 - F) J     */
     float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
     float transmittance_f[1];
@@ -72,9 +73,10 @@ typedef struct writer {
     size_t n_ti, nv, ns;
     float *theta_i, phi_i[1], eta[1];
     double *theta_d;
-    unsigned char *valid, *next;            /* [ns * ns]: extend_slice's,
+    unsigned char *valid, *next;            /* [ns * ns]: extend_slice's (valid
+                                               1, to continue 0, neither 2),
                                                next also fit_slice's below    */
-    int lone;                               /* lone_interface(b)             */
+    int lone;                               /* ll_tables_lone_interface(b)   */
     lobe l[LOBES];
 } writer;
 
@@ -137,26 +139,6 @@ static void release(writer *w)
         ll_warp2d_free(&l->sigma_w);
         ll_warp2d_free(&l->vndf_w);
     }
-}
-
-/* Whether the stack reflects light at normal incidence alike from both
- * sides, as a lone interface does (Fresnel's reflectance is the same
- * from either side; roughness moves it a little: examples/frosted-glass
- * 0.0402 from above, 0.0422 from below), within LONE_RATIO. A layer that
- * sends light back on one side only adds its own (the coat over a
- * medium without a base of docs/formats.md: 0.0513 from above, 0.1078
- * from below). */
-#define LONE_RATIO 1.25
-
-static int lone_interface(const ll_bsdf *b)
-{
-    double r_top[3], r_bottom[3], t[3], a, c;
-    if (ll_bsdf_albedo(b, 1.0, NULL, r_top, t) != LL_OK ||
-        ll_bsdf_albedo(b, -1.0, NULL, r_bottom, t) != LL_OK)
-        return 0;
-    a = ll_tables_luminance(r_top);
-    c = ll_tables_luminance(r_bottom);
-    return a > 0.0 && c > 0.0 && c <= LONE_RATIO * a && a <= LONE_RATIO * c;
 }
 
 /* A reflected set's D from retro-reflection: its own side's, except for
@@ -293,7 +275,7 @@ static int valid_at(const writer *w, size_t x, size_t y, int dx, int dy, int k, 
     if (px < 0 || py < 0 || px >= ns || py >= ns)
         return 0;
     *j = (size_t)(py * ns + px);
-    return w->valid[*j];
+    return w->valid[*j] == 1;
 }
 
 static void extend_slice(const writer *w, float *rgb)
@@ -377,6 +359,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
     size_t ns = w->ns, x, y, c, plane = ns * ns;
     double th = w->theta_d[t], wi[3] = { sin(th), 0.0, cos(th) };
     double param[2] = { 0.0, th }, top = 0.0, floor_v;
+    size_t n_edge = 0;
     double four_sigma = 4.0 * ll_tables_sigma_at(&l->sigma_w, th);
     float *lum = l->lum + t * plane, *rgb = l->rgb + t * 3 * plane;
     for (y = 0; y < ns; ++y) {
@@ -389,6 +372,8 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
             ll_warp2d_sample(&l->vndf_w, sq, param, um, &pdf);
             reached = wi[2] > 0.0 && direction(l, wi, um, wo, &sampling);
             w->next[y * ns + x] = !reached;
+            if (l->edge_width > 0.0)
+                w->valid[y * ns + x] = reached ? 1 : 2;
             if (reached) {
                 ll_tables_lobe_f(w->b, l->bottom, wi, wo, f);
                 scale = fabs(wo[2]) * four_sigma / ll_warp2d_eval(&l->ndf_w, um, NULL);
@@ -396,6 +381,11 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
                     scale = 0.0;
                 if (l->fresnel_eta > 0.0)
                     over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
+                if (l->edge_width > 0.0 &&
+                    ll_tables_edge_near(wi, wo, l->fresnel_eta, l->edge_width)) {
+                    w->valid[y * ns + x] = 0;
+                    ++n_edge;
+                }
                 if (l->transmittance_eta > 0.0) {
                     double tr = ll_tables_transmittance_pair(wi, wo, l->transmittance_eta);
                     over = tr > 0.0 ? 1.0 / tr : 0.0;
@@ -419,6 +409,14 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
     }
     if (l->transmittance_eta > 0.0)
         extend_slice(w, rgb);
+    /* f / F continued across the edge of total internal reflection
+     * (bsdf_write_tables_edge.c); fit_slice's mask is again the nodes
+     * beyond the horizon. */
+    if (n_edge) {
+        extend_slice(w, rgb);
+        for (x = 0; x < plane; ++x)
+            w->next[x] = w->valid[x] == 2;
+    }
     if (!l->transmit) {
         ll_status s = fit_slice(w, l, t, th);
         if (s != LL_OK)
@@ -639,7 +637,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
     if ((s = allocate(&w)) != LL_OK)
         goto done;
     elevations(&w);
-    w.lone = lone_interface(b);
+    w.lone = ll_tables_lone_interface(b);
     for (k = 0; k < LOBES; ++k) {
         lobe *l = &w.l[k];
         int j;
@@ -658,6 +656,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
         if (!l->transmit && fabs(b->eta - 1.0) > 1e-6 && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
             l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->fresnel_f[0] = (float)l->fresnel_eta;
+        l->edge_width = l->transmit ? 0.0 : ll_tables_edge_width(b, w.lone, l->bottom);
         /* A refracted set: f |cos| / D vanishes at the edge of total
          * internal reflection (seen from the denser side) like |wo.m|^2,
          * as the Fresnel transmittance and the change of variables to
