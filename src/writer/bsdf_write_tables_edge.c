@@ -8,24 +8,21 @@
  * edge, while F rises to 1 with an infinite slope at the critical cosine
  * of wi.h. The .bsdf's spline in mu through its nodes cannot follow that
  * edge: within about one node interval of it the .bsdf's f is off its own
- * model by far more than elsewhere (rough glass, eta 1.5, alpha 0.3,
- * compensate=0, 230 nodes, against Mitsuba 3's roughdielectric: where
- * wi.h lies within 0.02 of the critical cosine the 95th and 99th
- * percentiles of |f_bsdf / f - 1| are 10% and 17%, elsewhere 0.06% and
- * 0.16%; 690 nodes: 2.3-3.9% and 7-8%). The writer stores f / F (the
- * reader multiplies F back), and there f_bsdf / F is not smooth: a table
- * interpolating it was off the model by 6.8% (99th percentile) at 32 x
- * 64^2 x 64^2 and 8.8% at 64 x 96^2 x 96^2, and a larger grid only
- * followed the .bsdf's error more closely. So a set's nodes within that
- * width of the edge take the continuation of f / F from the nodes beside
- * them instead (bsdf_write_tables_lobes.c), as a refracted set's nodes at
- * its edge do: 1.7% and 1.5% at those grids
- * (tests/test_tables_transmit_edge.c).
+ * model by far more than the tables' aims, elsewhere by far less. The
+ * writer stores f / F (the reader multiplies F back), and there f_bsdf / F
+ * is not smooth: a table interpolating it followed the .bsdf's error, the
+ * more closely the larger its grid. So a set's nodes within that width of
+ * the edge take the continuation of f / F from the nodes beside them
+ * instead (bsdf_write_tables_lobes.c), as a refracted set's nodes at its
+ * edge do, and the table follows the model there
+ * (tests/test_tables_transmit_edge.c compares both with the closed form;
+ * docs/formats.md, "The edge of total internal reflection", has the
+ * figures).
  *
  * A lone interface only: behind a coat (over a medium without a base) the
  * light the medium sends back does not follow F, f / F is not smooth
- * across the edge whatever the .bsdf, and the continuation moved that
- * coat's 95th percentile of f from 2.71% to 2.85%.
+ * across the edge whatever the .bsdf, and the continuation made that
+ * coat's figures worse.
  */
 #include "writer/bsdf_write_tables.h"
 
@@ -33,10 +30,9 @@
 
 /* Whether the stack reflects light at normal incidence alike from both
  * sides, as a lone interface does (Fresnel's reflectance is the same
- * from either side; roughness moves it a little: examples/frosted-glass
- * 0.0402 from above, 0.0422 from below), within LONE_RATIO. A layer that
- * sends light back on one side only adds its own (the coat over a
- * medium without a base of docs/formats.md: 0.0513 from above, 0.1078
+ * from either side; roughness moves it a little), within LONE_RATIO. A
+ * layer that sends light back on one side only adds its own (the coat
+ * over a medium without a base of docs/formats.md reflects twice as much
  * from below). */
 #define LONE_RATIO 1.25
 
@@ -51,16 +47,10 @@ int ll_tables_lone_interface(const ll_bsdf *b)
     return a > 0.0 && c > 0.0 && c <= LONE_RATIO * a && a <= LONE_RATIO * c;
 }
 
-/* The width is the .bsdf's widest node interval in mu (0.0137 for 230
- * nodes, 0.0046 for 690): a spline cannot follow an edge narrower than
- * its intervals. Measured on rough glass at 64 x 80^2 x 80^2, the 99th
- * percentile of the table's f against Mitsuba's over that set's pairs
- * (the tests' pairs) was 3.03% without the continuation, 1.49% over a
- * width of 0.005, 0.96% over 0.01 and over the widest interval, 1.10%
- * over 0.02 (and its albedo at 85 degrees 0.85% off over 0.03: farther
- * from their source, the rings of the continuation flatten); at 690
- * nodes 0.96% over 0.0036, 0.95% over the widest interval and 0.97% over
- * 0.01. */
+/* The width is the .bsdf's widest node interval in mu: a spline cannot
+ * follow an edge narrower than its intervals. Narrower widths left more
+ * of the .bsdf's error in the table, wider ones continued f / F farther
+ * from its source (docs/formats.md has the widths measured). */
 static double widest_interval(const ll_bsdf *b)
 {
     double widest = 0.0;

@@ -28,12 +28,9 @@
  * 1% of the largest f cos taken per lobe and side. The reflected pairs of
  * a lone interface's denser side within ll_tables_edge_width of the edge
  * of total internal reflection are not counted: there the source's f is
- * off its own model by more than the aims (rough glass, eta 1.5, alpha
- * 0.3: 17% at the 99th percentile against Mitsuba's roughdielectric),
- * the tables hold the model instead (bsdf_write_tables_edge.c), and no
- * grid follows the source's error (rough glass's search figure of the
- * 99th percentile was 2.0% at 64 x 96^2 x 96^2 with them, 1.1% without;
- * 1.5% without them at 64 x 80^2 x 80^2, which the search now takes).
+ * off its own model by more than the aims, the tables hold the model
+ * instead (bsdf_write_tables_edge.c), and no grid follows the source's
+ * error, so counting them would only grow the grid to the size cap.
  * tests/test_tables_transmit_tolerance.c still counts every pair.
  */
 #include "writer/bsdf_write_tables.h"

@@ -119,9 +119,9 @@ static int grow_ladders(search *s, const ll_tables_figures *f)
     if (!albedo_met(s, f)) {
         /* A transmissive file whose f is met misses its albedo between
          * incident elevations (the transmission from below, whose lobe
-         * sweeps to the horizon near the critical angle): rough glass's
-         * albedo figure was 0.44% at 48 x 80^2 x 80^2, 0.39% at 48 x 96^2 x
-         * 96^2 and 0.18% at 64 x 80^2 x 80^2. So the elevations grow. */
+         * sweeps to the horizon near the critical angle), which a finer
+         * sample grid hardly moves (docs/formats.md): so the elevations
+         * grow. */
         if (s->sets > 1.0 && !grow_sample)
             grow_theta = 1;
         else if (s->albedo_grows_sample && !grow_sample)
