@@ -101,6 +101,15 @@ static inline double ll_tables_fresnel_pair(const double wi[3], const double wo[
     return c > 0.0 ? ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta) : 1.0;
 }
 
+/* The factor of a reflected set stored over F with a floor k ("fresnel_floor"):
+ * (F + k) / (1 + k), which is F for k = 0 and 1 beyond the edge of total
+ * internal reflection for every k (tables_lobes.c says why). */
+static inline double ll_tables_fresnel_floor_pair(const double wi[3], const double wo[3],
+                                                  double eta, double floor)
+{
+    return (ll_tables_fresnel_pair(wi, wo, eta) + floor) / (1.0 + floor);
+}
+
 /* The factor a transmitted set stored over its refraction's transmittance
  * ("transmittance_eta") is multiplied by: 1 - F(wi.m) times d omega_m /
  * d omega_o at the refraction half vector m of (wi above, wo below). Both factors vanish like |wo.m| at the edge of
