@@ -40,8 +40,9 @@ typedef struct ll_measured {
      * lobe whose values are stored over the Fresnel reflectance of its
      * half vector (field "fresnel_eta", tables_lobes.c), that relative
      * index, else 0, and its floor k (field "fresnel_floor": the values
-     * are over (F + k) / (1 + k); 0 without the field); for a refracted lobe whose values are stored over
-     * its refraction's transmittance (field "transmittance_eta",
+     * are over (F + k) / (1 + k); 0 without the field); for a refracted
+     * lobe whose values are stored over its refraction's transmittance
+     * (field "transmittance_eta",
      * tables_refract.h), its refract_eta, else 0. */
     double *weight;
     /* A transmitted lobe's relative index of the far side over the fixed
