@@ -259,6 +259,26 @@ def _fresnel_eta(fields, prefix, transmit, name):
     return float(value[0])
 
 
+def _fresnel_floor(fields, prefix, transmit, fresnel_eta, name):
+    """A reflected set's "fresnel_floor" k (only with its fresnel_eta: its
+    values are then stored over (F + k) / (1 + k), the C reader's
+    tables_lobes.c), or 0 where the set has none."""
+    key = prefix + "fresnel_floor"
+    if transmit or key not in fields:
+        return 0.0
+    value = np.asarray(fields[key], dtype=np.float32).ravel()
+    if fresnel_eta <= 0.0 or value.shape != (1,) or not (0.0 <= float(value[0]) <= 1000.0):
+        raise TensorFileError("%s: field `%s` is not one value in [0, 1000] in a set with "
+                              "fresnel_eta" % (name, key))
+    return float(value[0])
+
+
+def _fresnel_floor_at(wi, m, eta, floor):
+    """The factor of a set stored over F with the floor k: (F + k) / (1 + k)
+    (F itself for k = 0)."""
+    return (_fresnel_at(wi, m, eta) + floor) / (1.0 + floor)
+
+
 class TracedTables:
     """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
     current variant, and eval / pdf / sample in Mitsuba's convention."""
