@@ -163,9 +163,10 @@ static int lone_interface(const ll_bsdf *b)
 }
 
 /* A reflected set's D from retro-reflection: its own side's, except for
- * a set seen from the denser side of a lone interface (fresnel_eta set)
+ * a set seen from the denser side (fresnel_eta set) of a stack that is not
+ * a lone interface, which takes the other side's, and of a lone interface
  * whose D comes out more than WIDER times as wide as the other side's,
- * which takes the other side's. Retro-reflection sees the microfacets
+ * which takes the other side's too. Retro-reflection sees the microfacets
  * through F at normal incidence, 4% for eta 1.5 from either side. From
  * the rarer side little else comes back, but from the denser side the
  * light the microfacets scatter among themselves is trapped by total
@@ -181,10 +182,22 @@ static int lone_interface(const ll_bsdf *b)
  * give the same width (rough glass: 0.3001 from above, 0.3005 from
  * below) and the set keeps its own D: the D from above moved the
  * search's 99th percentile of f from 2.21% to 2.34%, over its aim of
- * 2.25%, by nothing but a slightly other grid. Behind a coat a medium's
- * own broad lobe is what the set holds, and its D stays: the D from
- * above took that coat's median error of f from 0.165% to 0.26%
- * (tests/test_tables_transmit_tolerance.c). */
+ * 2.25%, by nothing but a slightly other grid. Behind a coat the
+ * retro-reflection from below is mostly a medium's light, which grows
+ * towards grazing angles: the coat over a medium of docs/formats.md
+ * derives a D that rises from 0.39 at the pole to 0.57 at 72 degrees
+ * (alpha 0.84 against 0.38 from above), and at a viewer 70 degrees from
+ * below the first column of the sample grid then spans normals 0 to 11
+ * degrees from the pole, the coat's own reflection beyond the critical
+ * angle (f up to 0.88 there): f was 20% low over 50-68 degrees in the
+ * mirror plane, and the reflection from below's 99th percentile of f was
+ * 20% (tests/tables_lobe_figures.h at 64 x 96^2 x 96^2). With the D from
+ * above it is 10.3%, and 6.2% with the floor of FRESNEL_FLOOR below, the
+ * medium's broad lobe keeping enough cells (the median of all four lobes
+ * 0.155% before, 0.074% with both); mixtures of the two D did worse
+ * (11.7% half and half without the floor, 6.4-6.6% three quarters from
+ * above with it). Two other coats over media gained alike (reflection
+ * from below 25.5% to 8.2% and 36.6% to 10.6% with both). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -209,11 +222,11 @@ static ll_status reflected_ndf(const writer *w, lobe *l, double *d, double *sigm
     double d2[LL_TABLES_NDF_NODES], sigma2[LL_TABLES_NDF_NODES], alpha2;
     int side = l->bottom ? -1 : 1;
     ll_status s = side_ndf(w, side, d, sigma, &l->alpha);
-    if (s != LL_OK || !(l->fresnel_eta > 0.0) || !w->lone)
+    if (s != LL_OK || !(l->fresnel_eta > 0.0))
         return s;
     if ((s = side_ndf(w, -side, d2, sigma2, &alpha2)) != LL_OK)
         return s;
-    if (l->alpha > WIDER * alpha2) {
+    if (!w->lone || l->alpha > WIDER * alpha2) {
         memcpy(d, d2, sizeof d2);
         memcpy(sigma, sigma2, sizeof sigma2);
         l->alpha = alpha2;
@@ -451,15 +464,20 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * the edge, relatively large where C outweighs S F. Stored over
  * (F + k) / (1 + k) instead (1 beyond the edge for every k, F for k = 0),
  * the kink's share of a value goes as |k - C / S| / ((F + k) (F + C / S)):
- * k = 0 suits a lobe that is S, a larger k one that is mostly C. A
- * constant k measured at 64 x 96^2 x 96^2 (the search's figures, and
- * tests/test_tables_transmit_tolerance.c's): behind a coat, where C is
- * the medium's back-scattered light, k = 0.2 took the coat over a medium
- * of docs/formats.md from a 99th percentile of f of 14.2% to 12.1%
- * (reflection from below 20.1% to 17.3%, median 0.158% to 0.110%; 0.1
- * and 0.3 were within 0.7% of it, 0.5 and more worse) and helped two
- * other coats over media alike (reflection from below 28.4% to 21.3% and
- * 10.6% to 10.3%). A lone interface (lone_interface) gains nothing: C is
+ * k = 0 suits a lobe that is S, a larger k one that is mostly C. Behind a
+ * coat C is a medium's back-scattered light, and the worst errors of f
+ * from below lay just beyond the edge (wi.h 0.73-0.75 for eta 1.5), the
+ * table high by up to 87% in the lobe's flanks, where C outweighs S most.
+ * A constant k measured at 64 x 96^2 x 96^2 with the D from above
+ * (reflected_ndf; tests/tables_lobe_figures.h, 99th percentile of f from
+ * below): the coat over a medium of docs/formats.md 10.3% at k = 0, 6.1%
+ * at 0.5, 6.1% at 0.7, 6.2% at 1, 6.6% at 2, 7.5% at 5; two other coats
+ * over media (alpha 0.1 over a grey medium of tau 1; alpha 0.5 over a
+ * coloured one of g 0.8 and tau 2) 16.2% and 23.4% at k = 0, 11.3% and
+ * 17.8% at 0.2, 8.2% and 10.6% at 1, 6.4% and 7.4% at 2. The best k
+ * grows with the medium's share, and 1 is within 0.1% of the best for
+ * the first coat while taking most of the gain for the others. A lone
+ * interface (lone_interface) gains nothing: C is
  * at most the compensation's share, a few percent of S at the edge over
  * the lobe's core (examples/frosted-glass.layers, median 0.3-3% at 20-60
  * degrees), whose 99th percentile stayed at 3.6-3.8% for k up to 0.05
@@ -467,7 +485,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * glass without the compensation, where C is 0, grew from 2.22% to 2.73%
  * at 0.2. So the floor is FRESNEL_FLOOR where the stack is not a lone
  * interface, else 0 (and the file has no "fresnel_floor"). */
-#define FRESNEL_FLOOR 0.2
+#define FRESNEL_FLOOR 1.0
 
 /* The luminance albedo of each lobe at each incident elevation, from the
  * .bsdf's order-0 integral (the file's incident cosine is the fixed
