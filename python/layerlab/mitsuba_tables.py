@@ -273,10 +273,26 @@ def _fresnel_floor(fields, prefix, transmit, fresnel_eta, name):
     return float(value[0])
 
 
-def _fresnel_floor_at(wi, m, eta, floor):
-    """The factor of a set stored over F with the floor k: (F + k) / (1 + k)
-    (F itself for k = 0)."""
-    return (_fresnel_at(wi, m, eta) + floor) / (1.0 + floor)
+# The largest share of a Fresnel floor, also where D(m) is 0 (the C
+# reader's LL_TABLES_FLOOR_SHARE_MAX).
+FLOOR_SHARE_MAX = 1e6
+
+
+def _ndf_point(m):
+    """The point of a set's (isotropic) normal distribution at m's elevation,
+    read at u_phi 0.5 as the C reader's floor reads it."""
+    return mi.Point2f(_theta_to_u(_elevation(m)), 0.5)
+
+
+def _fresnel_floor_at(wi, m, eta, floor, d_pole, d_m):
+    """The factor of a set stored over F with the floor k: (F + q) / (1 + q),
+    q = k D(0) / D(m) with d_pole and d_m the set's normal distribution at
+    the pole and at m (F itself for k = 0; the C reader's
+    tables_refract.h)."""
+    share = dr.select(d_m > 0, floor * d_pole / dr.select(d_m > 0, d_m, 1.0),
+                      dr.select(floor > 0, FLOOR_SHARE_MAX, 0.0))
+    share = dr.minimum(share, FLOOR_SHARE_MAX)
+    return (_fresnel_at(wi, m, eta) + share) / (1.0 + share)
 
 
 class TracedTables:

@@ -40,7 +40,8 @@ typedef struct ll_measured {
      * lobe whose values are stored over the Fresnel reflectance of its
      * half vector (field "fresnel_eta", tables_lobes.c), that relative
      * index, else 0, and its floor k (field "fresnel_floor": the values
-     * are over (F + k) / (1 + k); 0 without the field); for a refracted
+     * are over (F + q) / (1 + q), q = k D(0) / D(m) by the set's ndf,
+     * tables_refract.h; 0 without the field); for a refracted
      * lobe whose values are stored over its refraction's transmittance
      * (field "transmittance_eta",
      * tables_refract.h), its refract_eta, else 0. */

@@ -227,8 +227,9 @@ static int warp_eta_ok(double e)
 }
 
 #define NAME_CAP (LL_TENSOR_MAX_NAME + 1)
-/* A reflected set's "fresnel_floor" at most: beyond it (F + k) / (1 + k)
- * is 1 to float precision, and the field would only hide f's own values. */
+/* A reflected set's "fresnel_floor" at most: beyond it (F + q) / (1 + q)
+ * (q = k D(0) / D(m) >= k at the peak of D, tables_refract.h) is 1 to float
+ * precision, and the field would only hide f's own values. */
 #define FRESNEL_FLOOR_MAX 1000.0
 
 /* a + b into name, or 0 if the result is longer than a field name may be
@@ -320,7 +321,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
                     ll_tensor_f32(fresnel, 0) == 0.0f))
         return shape_error(file, nf, "must be one value: a relative index in [0.001, 1000] "
                                      "other than 1");
-    /* Its floor k (optional: values over (F + k) / (1 + k)), only with
+    /* Its floor k (optional: values over (F + q) / (1 + q), q = k D(0) /
+     * D(m), tables_refract.h), only with
      * fresnel_eta; require() has checked it finite and >= 0. */
     if (floor_k && (!fresnel || floor_k->count != 1 ||
                     !((double)ll_tensor_f32(floor_k, 0) <= FRESNEL_FLOOR_MAX)))

@@ -69,8 +69,8 @@
  * visible normals as a reader interpolates them (ideally the same for all
  * points, the jacobian's purpose; it is not quite, by the bilinear VNDF
  * table). *fresnel receives F of the pair (1 without fresnel_eta), or
- * (F + k) / (1 + k) with the set's floor k, the further factor of a plane
- * stored over it. */
+ * with the set's floor k (F + q) / (1 + q), q = k D(0) / D(m) by the set's
+ * D (tables_refract.h), the further factor of a plane stored over it. */
 static double weight(const ll_tables_horizon *h, const double wi[3], const double sq[2],
                      double *fresnel)
 {
@@ -83,7 +83,8 @@ static double weight(const ll_tables_horizon *h, const double wi[3], const doubl
     /* A plane stored over F (with its floor): the reader multiplies it
      * back. */
     if (h->fresnel_eta > 0.0)
-        *fresnel = ll_tables_fresnel_floor_pair(wi, wo, h->fresnel_eta, h->fresnel_floor);
+        *fresnel = ll_tables_fresnel_floor_pair(wi, wo, h->fresnel_eta, h->fresnel_floor,
+                                                h->ndf_w);
     return ll_warp2d_eval(h->ndf_w, um, NULL) * d * 2.0 * LL_PI * LL_PI * um[0] * sin(tm) /
            (h->sigma * pdf);
 }

@@ -61,7 +61,7 @@ typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
     double fresnel_eta;                     /* > 0: values over F (reflected) */
-    double fresnel_floor;                   /* k: over (F + k) / (1 + k)      */
+    double fresnel_floor;                   /* k: over (F + q) / (1 + q)      */
     double transmittance_eta;               /* > 0: values over (1 - F) J     */
     float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
     float transmittance_f[1], floor_f[1];
@@ -192,12 +192,13 @@ static int lone_interface(const ll_bsdf *b)
  * angle (f up to 0.88 there): f was 20% low over 50-68 degrees in the
  * mirror plane, and the reflection from below's 99th percentile of f was
  * 20% (tests/tables_lobe_figures.h at 64 x 96^2 x 96^2). With the D from
- * above it is 10.3%, and 6.2% with the floor of FRESNEL_FLOOR below, the
+ * above it is 10.3% (4.8% with the floor of FRESNEL_FLOOR below), the
  * medium's broad lobe keeping enough cells (the median of all four lobes
- * 0.155% before, 0.074% with both); mixtures of the two D did worse
- * (11.7% half and half without the floor, 6.4-6.6% three quarters from
- * above with it). Two other coats over media gained alike (reflection
- * from below 25.5% to 8.2% and 36.6% to 10.6% with both). */
+ * 0.155% before, 0.067% with both); mixtures of the two D did worse
+ * (11.7% half and half without a floor, 6.4-6.6% three quarters from
+ * above with a constant one that gave 6.1-6.2% with the D from above).
+ * Two other coats over media gained alike (reflection from below 25.5%
+ * to 5.0% and 36.6% to 8.9% with both). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -413,7 +414,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
                     scale = 0.0;
                 if (l->fresnel_eta > 0.0)
                     over = 1.0 / ll_tables_fresnel_floor_pair(wi, wo, l->fresnel_eta,
-                                                              l->fresnel_floor);
+                                                              l->fresnel_floor, &l->ndf_w);
                 if (l->transmittance_eta > 0.0) {
                     double tr = ll_tables_transmittance_pair(wi, wo, l->transmittance_eta);
                     over = tr > 0.0 ? 1.0 / tr : 0.0;
@@ -462,26 +463,31 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * denser side f = S F + C: S the microfacets' own single reflection, C
  * light that does not follow F, and C / F keeps a kink of F's shape at
  * the edge, relatively large where C outweighs S F. Stored over
- * (F + k) / (1 + k) instead (1 beyond the edge for every k, F for k = 0),
- * the kink's share of a value goes as |k - C / S| / ((F + k) (F + C / S)):
- * k = 0 suits a lobe that is S, a larger k one that is mostly C. Behind a
+ * (F + q) / (1 + q) instead (1 beyond the edge for every q, F for q = 0),
+ * the kink's share of a value goes as |q - C / S| / ((F + q) (F + C / S)):
+ * q = 0 suits a lobe that is S, a larger q one that is mostly C. Behind a
  * coat C is a medium's back-scattered light, and the worst errors of f
  * from below lay just beyond the edge (wi.h 0.73-0.75 for eta 1.5), the
- * table high by up to 87% in the lobe's flanks, where C outweighs S most.
- * A constant k measured at 64 x 96^2 x 96^2 with the D from above
- * (reflected_ndf; tests/tables_lobe_figures.h, 99th percentile of f from
- * below): the coat over a medium of docs/formats.md 10.3% at k = 0, 6.1%
- * at 0.5, 6.1% at 0.7, 6.2% at 1, 6.6% at 2, 7.5% at 5; two other coats
- * over media (alpha 0.1 over a grey medium of tau 1; alpha 0.5 over a
- * coloured one of g 0.8 and tau 2) 16.2% and 23.4% at k = 0, 11.3% and
- * 17.8% at 0.2, 8.2% and 10.6% at 1, 6.4% and 7.4% at 2. The best k
- * grows with the medium's share, and 1 is within 0.1% of the best for
- * the first coat while taking most of the gain for the others. A lone
+ * table high by up to 87% in the lobe's flanks, where C outweighs S most:
+ * S follows the microfacets' D, C is broad. So q = k D(0) / D(m), D the
+ * set's own (the D from above, reflected_ndf, which is the coat's lobe),
+ * m the half vector (tables_refract.h). Measured at 64 x 96^2 x 96^2
+ * (tests/tables_lobe_figures.h, 99th percentile of f from below) for the
+ * coat over a medium of docs/formats.md and two other coats over media
+ * (alpha 0.1 over a grey medium of tau 1; alpha 0.5 over a coloured one
+ * of g 0.8 and tau 2): over F alone 10.3%, 16.2% and 23.4%; with a
+ * constant q = k 6.1%, 9.4% and 13.7% at k = 0.5, 6.2%, 8.2% and 10.6%
+ * at 1, 6.6%, 6.4% and 7.4% at 2 (7.5% at 5 for the first); with q = k
+ * D(0) / D(m) 4.0%, 4.7% and 12.1% at k = 0.5, 4.3%, 4.8% and 10.4% at
+ * 0.7, 4.8%, 5.0% and 8.9% at 1; with q = k (D(0) / D(m))^(1/2) 5.1%,
+ * 5.0% and 9.6% at k = 1, 6.2%, 5.1% and 6.7% at 2. k = 1 with D's own
+ * ratio beats every constant measured for the first two coats, and the
+ * constant 1 for the third (whose best, 7.4%, was the constant 2). A lone
  * interface (lone_interface) gains nothing: C is
  * at most the compensation's share, a few percent of S at the edge over
  * the lobe's core (examples/frosted-glass.layers, median 0.3-3% at 20-60
- * degrees), whose 99th percentile stayed at 3.6-3.8% for k up to 0.05
- * and grew beyond (4.35% at 0.2), and rough
+ * degrees), whose 99th percentile stayed at 3.6-3.8% for a constant k up
+ * to 0.05 and grew beyond (4.35% at 0.2), and rough
  * glass without the compensation, where C is 0, grew from 2.22% to 2.73%
  * at 0.2. So the floor is FRESNEL_FLOOR where the stack is not a lone
  * interface, else 0 (and the file has no "fresnel_floor"). */
