@@ -139,6 +139,7 @@ static void set_ratios(const ll_bsdf *src, const ll_bsdf *tab, const ll_tensor_f
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = m->fresnel_eta;
+    h.fresnel_floor = m->fresnel_floor;
     h.over_f = 0u;
     /* Which nodes the writer found beyond the horizon: their normals
      * reflect wi below it. */

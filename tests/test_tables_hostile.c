@@ -15,8 +15,8 @@
 #include "test_bsdf_util.h"
 #include "support/support.h"
 
-static unsigned char *good, *tgood, *rgood;
-static size_t good_size, tgood_size, rgood_size;
+static unsigned char *good, *tgood, *rgood, *cgood;
+static size_t good_size, tgood_size, rgood_size, cgood_size;
 /* A textured table file (seven bases of one parameter, coat alpha 0.1 to
  * 0.22 over a conductor: more fields than an opaque file's writer ever
  * wrote), as tiny. */
@@ -69,11 +69,16 @@ static int setup(void **state)
      * half vector and stored over its transmittance. */
     rgood = table_of("set nodes=24 orders=16\ndielectric eta=1.5 alpha=0.3 compensate=0\n",
                      "refracted", &o, &rgood_size);
+    /* A coat over a medium without a base: its reflected set from below
+     * is stored over F with a floor ("fresnel_floor"). */
+    cgood = table_of("set nodes=12 orders=6\ndielectric eta=1.5 alpha=0.3\n"
+                     "medium albedo=0.8,0.6,0.4 g=0.5 tau=0.5\n",
+                     "coat", &o, &cgood_size);
     tex = table_of("set nodes=12 orders=6\n"
                    "dielectric name=coat eta=1.5 alpha=[0.1 0.12 0.14 0.16 0.18 0.2 0.22]\n"
                    "conductor eta=2+3i alpha=0.2\n",
                    "textured", &o, &tex_size);
-    return good && tgood && rgood && tex ? 0 : 1;
+    return good && tgood && rgood && cgood && tex ? 0 : 1;
 }
 
 static int teardown(void **state)
@@ -81,6 +86,7 @@ static int teardown(void **state)
     free(good);
     free(tgood);
     free(rgood);
+    free(cgood);
     free(tex);
     return ll_test_dir_teardown(state);
 }
@@ -481,6 +487,8 @@ static void test_transmissive_fields(void **state)
 {
     static const unsigned char nan_bytes[4] = { 0x00, 0x00, 0xc0, 0x7f };
     static const unsigned char one_bytes[4] = { 0x00, 0x00, 0x80, 0x3f };
+    static const unsigned char minus_one_bytes[4] = { 0x00, 0x00, 0x80, 0xbf };
+    static const unsigned char big_bytes[4] = { 0x00, 0x00, 0xfa, 0x44 }; /* 2000 */
     ll_bsdf *b = NULL;
     ll_bsdf_info info = LL_BSDF_INFO_INIT;
     unsigned char *d;
@@ -532,6 +540,22 @@ static void test_transmissive_fields(void **state)
     expect_scalar_refused(rgood, rgood_size, "transmit_top.transmittance_eta", one_bytes);
     expect_scalar_refused(rgood, rgood_size, "transmit_top.transmittance_eta", nan_bytes);
     expect_opens_without(rgood, rgood_size, "transmit_top.transmittance_eta");
+    /* A reflected set's Fresnel floor: not a number, negative, beyond
+     * 1000, of no value, or without the set's fresnel_eta; without the
+     * floor (a file written before it) the file opens, its values then
+     * over F itself. */
+    assert_int_equal(ll_bsdf_open_memory(cgood, cgood_size, NULL, &b), LL_OK);
+    ll_bsdf_release(b);
+    expect_scalar_refused(cgood, cgood_size, "reflect_bottom.fresnel_floor", nan_bytes);
+    expect_scalar_refused(cgood, cgood_size, "reflect_bottom.fresnel_floor", minus_one_bytes);
+    expect_scalar_refused(cgood, cgood_size, "reflect_bottom.fresnel_floor", big_bytes);
+    expect_extent(cgood, cgood_size, "reflect_bottom.fresnel_floor", 0, 0);
+    d = copy_of(cgood, cgood_size);
+    locate(d, "reflect_bottom.fresnel_eta", &off, &shape, &rank);
+    d[off - 4] = 'x';
+    expect(d, cgood_size, LL_ERROR_FORMAT, "\"reflect_bottom.fresnel_floor\"");
+    free(d);
+    expect_opens_without(cgood, cgood_size, "reflect_bottom.fresnel_floor");
     /* Shapes: a set's rgb of 2 channels, an albedo of too few values. */
     expect_extent(tgood, tgood_size, "reflect_bottom.rgb", 2, 2);
     expect_extent(tgood, tgood_size, "transmit_top.albedo", 0, 2);

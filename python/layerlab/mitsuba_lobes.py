@@ -46,8 +46,8 @@ import drjit as dr
 import mitsuba as mi
 
 from .mitsuba_tables import TracedTables, blend_elevation, _elevation, _flip, _fresnel_at, \
-    _fresnel_eta, _masked_call, _phi_to_u, _refraction_half, _refraction_jacobian, _theta_to_u, \
-    _turn
+    _fresnel_eta, _fresnel_floor, _fresnel_floor_at, _masked_call, _ndf_point, _phi_to_u, \
+    _refraction_half, _refraction_jacobian, _theta_to_u, _turn
 from .tensor_file import TensorFileError
 
 # (prefix, side of wi: bottom, lobe: transmit) in the C reader's order.
@@ -202,6 +202,17 @@ def traced_lobes(fields, name=""):
     return TracedLobes(fields, name)
 
 
+def _set_fresnel(t, w, o, active):
+    """The factor of the reflected set t stored over F (t.fresnel_eta > 0),
+    with its floor: _fresnel_floor_at at the half vector of (w, o)."""
+    m = dr.normalize(w + o)
+    if t.fresnel_floor <= 0.0:
+        return _fresnel_floor_at(w, m, t.fresnel_eta, 0.0, 1.0, 1.0)
+    return _fresnel_floor_at(w, m, t.fresnel_eta, t.fresnel_floor,
+                             t.ndf.eval(mi.Point2f(0.0, 0.5), active=active),
+                             t.ndf.eval(_ndf_point(m), active=active))
+
+
 class TracedLobes:
     """The lobe sets of a transmissive table file, and eval / pdf / sample
     in Mitsuba's convention on both sides."""
@@ -235,6 +246,7 @@ class TracedLobes:
                 t.warp_eta = float(np.asarray(fields[prefix + "warp_eta"],
                                               dtype=np.float32).ravel()[0])
             t.fresnel_eta = _fresnel_eta(fields, prefix, transmit, name)
+            t.fresnel_floor = _fresnel_floor(fields, prefix, transmit, t.fresnel_eta, name)
             t.transmittance_eta = transmittance_eta(fields, prefix, t.warp_eta, name) \
                 if transmit and t.warp_eta > 0.0 else 0.0
             self.sets.append(t)
@@ -284,7 +296,7 @@ class TracedLobes:
         if not transmit:
             v, p = t.eval_pdf(w, o, mask, want_value, want_pdf)
             if want_value and t.fresnel_eta > 0.0:
-                k = _fresnel_at(w, dr.normalize(w + o), t.fresnel_eta)
+                k = _set_fresnel(t, w, o, mask)
                 v = [x * k for x in v]
             return v, p
         if t.warp_eta > 0.0:
@@ -373,7 +385,7 @@ class TracedLobes:
                 if not transmit:
                     o, p, val, found = t.reflect_sample(w, v, mask)
                     if t.fresnel_eta > 0.0:
-                        k = _fresnel_at(w, dr.normalize(w + o), t.fresnel_eta)
+                        k = _set_fresnel(t, w, o, mask)
                         val = [x * k for x in val]
                 elif t.warp_eta > 0.0:
                     o, p, val, found = t.refract_sample(w, v, t.warp_eta, mask)

@@ -28,9 +28,9 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_at, \
-    _fresnel_eta, _normal_area, _normal_at, _phi_to_u, _refraction_half, _refraction_jacobian, \
-    _theta_to_u, _turn
+from .mitsuba_tables import TracedTables, _elevation, _flip, _fresnel_eta, _fresnel_floor, \
+    _fresnel_floor_at, _ndf_point, _normal_area, _normal_at, _phi_to_u, _refraction_half, \
+    _refraction_jacobian, _theta_to_u, _turn
 from .mitsuba_warp import SliceWarp
 from .mitsuba_lobes import transmittance_at, transmittance_eta, turn_rate
 from .tensor_file import TensorFileError
@@ -92,6 +92,10 @@ class StackedLobes:
         # stored over the Fresnel reflectance of the half vector.
         self.fresnel_eta = [_fresnel_eta(fields, p, transmit, name)
                             for p, _, transmit in sets if not transmit]
+        # Their fresnel_floor k (top, bottom): values over (F + k) / (1 + k).
+        self.fresnel_floor = [_fresnel_floor(fields, p, transmit, e, name)
+                              for (p, _, transmit), e in
+                              zip([x for x in sets if not x[2]], self.fresnel_eta)]
         self.grid_text = "4 sets of %d x %dx%d x %dx%d, stacked" % (
             n_ti, stacked["vndf"].shape[2], stacked["vndf"].shape[3], stacked["rgb"].shape[3],
             stacked["rgb"].shape[4])
@@ -171,13 +175,25 @@ class StackedLobes:
 
     def _fresnel(self, w, m, bottom, reflected):
         """The factor of a reflected lane's value: the Fresnel reflectance
-        at m where its side's set is stored over it, else 1."""
+        at m where its side's set is stored over it (with its floor k:
+        _fresnel_floor_at, D that set's stacked ndf), else 1."""
         top_e, bottom_e = self.fresnel_eta
         if top_e <= 0.0 and bottom_e <= 0.0:
             return 1.0
+        top_k, bottom_k = self.fresnel_floor
         e = dr.select(bottom, bottom_e, top_e)
+        k = dr.select(bottom, bottom_k, top_k)
         stored = reflected & (e > 0)
-        return dr.select(stored, _fresnel_at(w, m, dr.select(e > 0, e, 1.5)), 1.0)
+        if top_k <= 0.0 and bottom_k <= 0.0:
+            d_pole = d_m = 1.0
+        else:
+            # The side's reflected set in the stack (ORDER: by SETS index).
+            j = dr.select(bottom, float(ORDER.index(1)), float(ORDER.index(0)))
+            j = mi.UInt32(j) if self.jit else int(j)
+            d_pole = self.table.ndf.eval(mi.Point2f(0.0, 0.5), j, stored)
+            d_m = self.table.ndf.eval(_ndf_point(m), j, stored)
+        return dr.select(stored, _fresnel_floor_at(w, m, dr.select(e > 0, e, 1.5), k, d_pole,
+                                                   d_m), 1.0)
 
     def _transmittance(self, w, o, m, bottom, refract):
         """The factor of a refracted lane's value: transmittance_at where

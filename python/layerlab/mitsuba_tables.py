@@ -259,6 +259,42 @@ def _fresnel_eta(fields, prefix, transmit, name):
     return float(value[0])
 
 
+def _fresnel_floor(fields, prefix, transmit, fresnel_eta, name):
+    """A reflected set's "fresnel_floor" k (only with its fresnel_eta: its
+    values are then stored over (F + k) / (1 + k), the C reader's
+    tables_lobes.c), or 0 where the set has none."""
+    key = prefix + "fresnel_floor"
+    if transmit or key not in fields:
+        return 0.0
+    value = np.asarray(fields[key], dtype=np.float32).ravel()
+    if fresnel_eta <= 0.0 or value.shape != (1,) or not (0.0 <= float(value[0]) <= 1000.0):
+        raise TensorFileError("%s: field `%s` is not one value in [0, 1000] in a set with "
+                              "fresnel_eta" % (name, key))
+    return float(value[0])
+
+
+# The largest share of a Fresnel floor, also where D(m) is 0 (the C
+# reader's LL_TABLES_FLOOR_SHARE_MAX).
+FLOOR_SHARE_MAX = 1e6
+
+
+def _ndf_point(m):
+    """The point of a set's (isotropic) normal distribution at m's elevation,
+    read at u_phi 0.5 as the C reader's floor reads it."""
+    return mi.Point2f(_theta_to_u(_elevation(m)), 0.5)
+
+
+def _fresnel_floor_at(wi, m, eta, floor, d_pole, d_m):
+    """The factor of a set stored over F with the floor k: (F + q) / (1 + q),
+    q = k D(0) / D(m) with d_pole and d_m the set's normal distribution at
+    the pole and at m (F itself for k = 0; the C reader's
+    tables_refract.h)."""
+    share = dr.select(d_m > 0, floor * d_pole / dr.select(d_m > 0, d_m, 1.0),
+                      dr.select(floor > 0, FLOOR_SHARE_MAX, 0.0))
+    share = dr.minimum(share, FLOOR_SHARE_MAX)
+    return (_fresnel_at(wi, m, eta) + share) / (1.0 + share)
+
+
 class TracedTables:
     """An RGB table file's fields as Mitsuba warps and Dr.Jit arrays of the
     current variant, and eval / pdf / sample in Mitsuba's convention."""

@@ -38,11 +38,14 @@ ETA = 1.5
 GLASS = "dielectric eta=1.5 alpha=0.3 compensate=0\n"
 PANE = "set nodes=60 orders=60\ndielectric eta=1.5 alpha=0.3\ndielectric eta=0.6666667 alpha=0.3\n"
 FROSTED = "dielectric eta=1.5 alpha=0.3\n"
+# A coat over a medium without a base: its reflection from below is stored over F with a
+# floor ("fresnel_floor").
+COAT = "dielectric eta=1.5 alpha=0.3\nmedium albedo=0.8,0.6,0.4 g=0.5 tau=0.5\n"
 # Each file's relative index, and whether its transmitted sets take the z-flipped direction's
 # warp (the writer's choice: the refraction half vector reaches too little of a compensated
 # interface's transmitted lobe).
-ETA_OF = {"glass": ETA, "pane": 1.0, "frosted": ETA}
-FLIPPED = {"glass": False, "pane": True, "frosted": True}
+ETA_OF = {"glass": ETA, "pane": 1.0, "frosted": ETA, "coat": ETA}
+FLIPPED = {"glass": False, "pane": True, "frosted": True, "coat": True}
 
 
 def _llbuild(text, out, *grid):
@@ -65,7 +68,8 @@ def tables(tmp_path_factory):
     grid = ("--theta-i", "24", "--vndf", "48", "--sample", "32")
     return {"glass": _llbuild(GLASS, d / "glass.tab", *grid),
             "pane": _llbuild(PANE, d / "pane.tab", *grid),
-            "frosted": _llbuild(FROSTED, d / "frosted.tab", *grid)}
+            "frosted": _llbuild(FROSTED, d / "frosted.tab", *grid),
+            "coat": _llbuild(COAT, d / "coat.tab", *grid)}
 
 
 def _plugin(variant, path, **props):
@@ -166,7 +170,7 @@ def _close_where_strong(ours, theirs, strong, rtol, what):
     return worst
 
 
-@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted", "coat"])
 def test_tables_are_the_c_reader_llvm(tables, name, timings):
     """eval, pdf and sample of the plugin's "tables" mode (llvm_ad_rgb, 10^4 pairs) against the
     C reader on the same transmissive table file, radiance transport."""
@@ -177,7 +181,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     assert bsdf.flags() & mi.BSDFFlags.GlossyTransmission
     assert bsdf.flags() & mi.BSDFFlags.BackSide
     c = ll.BSDFStorage(path)
-    rng = np.random.default_rng({"glass": 17, "pane": 19, "frosted": 29}[name])
+    rng = np.random.default_rng({"glass": 17, "pane": 19, "frosted": 29, "coat": 31}[name])
     n = 10000
     wi, wo = _pairs(rng, n, ETA_OF[name])
     si = mi.SurfaceInteraction3f()
@@ -210,9 +214,11 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
     timings["glass tables (%s) vs C reader: worst there" % name] = (near_pole * 1e6, "x 1e-6")
     np.testing.assert_array_equal(only_value, value)
     np.testing.assert_array_equal(only_pdf, pdf)
-    # zero where the C reader has nothing (within float32 rounding of the tail)
+    # zero where the C reader has nothing (within float32 rounding of the tail); a coloured
+    # lobe (the coat's) may have a channel above that where green is weak, and there no more
+    # than the C reader's own value of it
     weak = ~strong
-    assert np.all(value[weak] <= 1e-3 * want[:, 1].max() * 1.01)
+    assert np.all(value[weak] <= np.maximum(want[weak], 1e-3 * want[:, 1].max()) * 1.01)
 
     u = rng.uniform(size=(n, 2))
     bs, weight = bsdf.sample(ctx, si, mi.Float(0.5), mi.Point2f(u.T))
@@ -262,7 +268,7 @@ def test_tables_are_the_c_reader_llvm(tables, name, timings):
         float(dist.max()) * 1e6, "x 1e-6")
 
 
-@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted", "coat"])
 def test_tables_are_the_c_reader_scalar(tables, name):
     """The same in scalar_rgb (500 pairs), and importance transport (no eta^2)."""
     import layerlab as ll
@@ -361,7 +367,7 @@ def test_glass_tables_render_as_roughdielectric(tmp_path, timings):
     assert abs(np.mean(a[0]) / np.mean(b[0]) - 1) < 0.03
 
 
-@pytest.mark.parametrize("name", ["glass", "pane", "frosted"])
+@pytest.mark.parametrize("name", ["glass", "pane", "frosted", "coat"])
 def test_set_by_set_lobes_are_the_c_reader(tables, name):
     """The set-by-set evaluation (layerlab.mitsuba_lobes.TracedLobes, which the plugin uses
     for files whose sets' grids differ, so cannot be stacked) on the same files, llvm_ad_rgb,

@@ -39,8 +39,11 @@ typedef struct ll_measured {
      * direction where the stack has no net interface); for a reflected
      * lobe whose values are stored over the Fresnel reflectance of its
      * half vector (field "fresnel_eta", tables_lobes.c), that relative
-     * index, else 0; for a refracted lobe whose values are stored over
-     * its refraction's transmittance (field "transmittance_eta",
+     * index, else 0, and its floor k (field "fresnel_floor": the values
+     * are over (F + q) / (1 + q), q = k D(0) / D(m) by the set's ndf,
+     * tables_refract.h; 0 without the field); for a refracted
+     * lobe whose values are stored over its refraction's transmittance
+     * (field "transmittance_eta",
      * tables_refract.h), its refract_eta, else 0. */
     double *weight;
     /* A transmitted lobe's relative index of the far side over the fixed
@@ -50,6 +53,7 @@ typedef struct ll_measured {
     double side_eta;
     double refract_eta;
     double fresnel_eta;
+    double fresnel_floor;
     double transmittance_eta;
 } ll_measured;
 

@@ -19,7 +19,10 @@
  * A reflected set with a "fresnel_eta" (one seen from the denser side)
  * holds its values over the Fresnel reflectance at its half vector, which
  * is multiplied back here: f over F is smooth across the edge of total
- * internal reflection, which F restores exactly. A refracted set with a
+ * internal reflection, which F restores exactly. With a "fresnel_floor" k
+ * the values are over (F + q) / (1 + q) instead, q = k D(0) / D(m) by the
+ * set's own D (a coat's set, where much of f does not follow F:
+ * tables_refract.h, bsdf_write_tables_lobes.c). A refracted set with a
  * "transmittance_eta" holds its values over the Fresnel transmittance
  * times the refraction's d omega_m / d omega_o (tables_refract.h), both
  * of which vanish at the edge of total internal reflection seen from the
@@ -69,14 +72,15 @@ static void to_side(int bottom, const double in[3], double out[3])
 /* A reflected set stored over the Fresnel reflectance of its half vector
  * (a set seen from the denser side, whose reflection has the edge of total
  * internal reflection: f over F is smooth across it, so the tables need
- * not resolve the edge, which F puts back exactly): the value times F. */
+ * not resolve the edge, which F puts back exactly): the value times F, or
+ * with the set's floor k times (F + q) / (1 + q), q = k D(0) / D(m). */
 static void fresnel(const ll_measured *set, const double wi[3], const double wo[3],
                     double value[3])
 {
     double k;
     if (!(set->fresnel_eta > 0.0))
         return;
-    k = ll_tables_fresnel_pair(wi, wo, set->fresnel_eta);
+    k = ll_tables_fresnel_floor_pair(wi, wo, set->fresnel_eta, set->fresnel_floor, &set->ndf);
     value[0] *= k;
     value[1] *= k;
     value[2] *= k;

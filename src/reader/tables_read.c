@@ -227,6 +227,10 @@ static int warp_eta_ok(double e)
 }
 
 #define NAME_CAP (LL_TENSOR_MAX_NAME + 1)
+/* A reflected set's "fresnel_floor" at most: beyond it (F + q) / (1 + q)
+ * (q = k D(0) / D(m) >= k at the peak of D, tables_refract.h) is 1 to float
+ * precision, and the field would only hide f's own values. */
+#define FRESNEL_FLOOR_MAX 1000.0
 
 /* a + b into name, or 0 if the result is longer than a field name may be
  * (a textured file's basis prefix comes from the file's own counts). */
@@ -270,11 +274,12 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
 {
     char prefix[NAME_CAP];
     char nn[NAME_CAP], ns[NAME_CAP], nv[NAME_CAP], nl[NAME_CAP], nr[NAME_CAP], na[NAME_CAP];
-    char ne[NAME_CAP], nf[NAME_CAP], nt[NAME_CAP];
+    char ne[NAME_CAP], nf[NAME_CAP], nt[NAME_CAP], nk[NAME_CAP];
     /* NULL until require sets them: at -O3 the compiler cannot see that
      * every path that reads them went through require's LL_OK. */
     const ll_tensor_field *ndf = NULL, *sigma = NULL, *vndf = NULL, *lum = NULL, *rgb = NULL;
     const ll_tensor_field *alb = NULL, *warp = NULL, *fresnel = NULL, *trans = NULL;
+    const ll_tensor_field *floor_k = NULL;
     int transmit = strncmp(lobe, "transmit_", 9) == 0;
     const char *file = sh->file;
     double channels[3] = { 0.0, 1.0, 2.0 }, *converted = NULL;
@@ -286,7 +291,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         !join_name(nv, prefix, "vndf") || !join_name(nl, prefix, "luminance") ||
         !join_name(nr, prefix, sh->spectral ? "spectra" : "rgb") ||
         !join_name(na, prefix, "albedo") || !join_name(ne, prefix, "warp_eta") ||
-        !join_name(nf, prefix, "fresnel_eta") || !join_name(nt, prefix, "transmittance_eta"))
+        !join_name(nf, prefix, "fresnel_eta") || !join_name(nt, prefix, "transmittance_eta") ||
+        !join_name(nk, prefix, "fresnel_floor"))
         return name_error(sh->file, prefix, "luminance");
     if ((s = require(t, nn, 2, file, &ndf)) != LL_OK ||
         (s = require(t, ns, 2, file, &sigma)) != LL_OK ||
@@ -298,7 +304,9 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         (sh->extended && !transmit && ll_tensor_find(t, nf) &&
          (s = require(t, nf, 1, file, &fresnel)) != LL_OK) ||
         (sh->extended && transmit && ll_tensor_find(t, nt) &&
-         (s = require(t, nt, 1, file, &trans)) != LL_OK))
+         (s = require(t, nt, 1, file, &trans)) != LL_OK) ||
+        (sh->extended && !transmit && ll_tensor_find(t, nk) &&
+         (s = require(t, nk, 1, file, &floor_k)) != LL_OK))
         return s;
     /* The refraction warp's relative index, or 0: the z-flipped
      * direction's (tables_lobes.c); 1 would have no refraction half
@@ -313,6 +321,13 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
                     ll_tensor_f32(fresnel, 0) == 0.0f))
         return shape_error(file, nf, "must be one value: a relative index in [0.001, 1000] "
                                      "other than 1");
+    /* Its floor k (optional: values over (F + q) / (1 + q), q = k D(0) /
+     * D(m), tables_refract.h), only with
+     * fresnel_eta; require() has checked it finite and >= 0. */
+    if (floor_k && (!fresnel || floor_k->count != 1 ||
+                    !((double)ll_tensor_f32(floor_k, 0) <= FRESNEL_FLOOR_MAX)))
+        return shape_error(file, nk, "must be one value in [0, 1000], and only in a set with "
+                                     "fresnel_eta");
     /* A refracted set's values over its refraction's transmittance
      * (optional: without it the values are f's own); the refraction is
      * the set's warp, so the index is warp_eta's. */
@@ -377,6 +392,8 @@ static ll_status read_set(const ll_tensor_file *t, const char *base, const char 
         m->refract_eta = (double)ll_tensor_f32(warp, 0);
     if (fresnel)
         m->fresnel_eta = (double)ll_tensor_f32(fresnel, 0);
+    if (floor_k)
+        m->fresnel_floor = (double)ll_tensor_f32(floor_k, 0);
     if (trans)
         m->transmittance_eta = (double)ll_tensor_f32(trans, 0);
     return LL_OK;

@@ -12,6 +12,7 @@
 #define LL_TABLES_REFRACT_H
 
 #include "support/support.h"
+#include "reader/tables_warp.h"
 
 #include <math.h>
 
@@ -99,6 +100,38 @@ static inline double ll_tables_fresnel_pair(const double wi[3], const double wo[
         return 1.0;
     c = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / len;
     return c > 0.0 ? ll_tables_fresnel(c > 1.0 ? 1.0 : c, eta) : 1.0;
+}
+
+/* The largest share q of the floor below: beyond it (F + q) / (1 + q) is 1
+ * to double precision's use here, and D(m) = 0 (a normal the set's D does
+ * not reach) takes it. */
+#define LL_TABLES_FLOOR_SHARE_MAX 1e6
+
+/* The factor of a reflected set stored over F with a floor k
+ * ("fresnel_floor"): (F + q) / (1 + q) with q = k D(0) / D(m), D the set's
+ * own normal distribution (its "ndf" table, ndf: isotropic, read at
+ * u_phi 0.5) and m the reflection half vector of (wi, wo). F for k = 0,
+ * and 1 beyond the edge of total internal reflection for every k; the
+ * share of the floor grows where D, and with it the microfacets' own
+ * reflection that F describes, falls off (bsdf_write_tables_lobes.c says
+ * why). Shared by the writer, its horizon fit and the reader, so that
+ * all three divide and multiply by the same factor. */
+static inline double ll_tables_fresnel_floor_pair(const double wi[3], const double wo[3],
+                                                  double eta, double floor,
+                                                  const ll_warp2d *ndf)
+{
+    double f = ll_tables_fresnel_pair(wi, wo, eta), q, d;
+    double h[3] = { wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2] };
+    double pole[2] = { 0.0, 0.5 }, um[2];
+    if (!(floor > 0.0))
+        return f;
+    um[0] = ll_tables_theta_to_u(atan2(sqrt(h[0] * h[0] + h[1] * h[1]), h[2]));
+    um[1] = 0.5;
+    d = ll_warp2d_eval(ndf, um, NULL);
+    q = d > 0.0 ? floor * ll_warp2d_eval(ndf, pole, NULL) / d : LL_TABLES_FLOOR_SHARE_MAX;
+    if (!(q <= LL_TABLES_FLOOR_SHARE_MAX))
+        q = LL_TABLES_FLOOR_SHARE_MAX;
+    return (f + q) / (1.0 + q);
 }
 
 /* The factor a transmitted set stored over its refraction's transmittance

@@ -229,6 +229,10 @@ typedef struct ll_tables_horizon {
     double fresnel_eta;              /* > 0: the index of F for the planes
                                         over_f names (a set's "fresnel_eta"),
                                         0: no plane stored over F           */
+    double fresnel_floor;            /* with fresnel_eta > 0: those planes
+                                        are over (F + q) / (1 + q), q this
+                                        k times D(0) / D(m) by ndf_w (a
+                                        set's "fresnel_floor", 0: F)       */
     unsigned over_f;                 /* bit c set: plane c is stored over F
                                         (a reflected set's RGB, not its
                                         luminance), read if fresnel_eta > 0 */
@@ -248,7 +252,9 @@ LL_INTERNAL ll_status ll_tables_horizon_fit_rgb(const ll_tables_horizon *h, size
                                                 float *lum);
 /* The slice's albedo of one stored plane (ns x ns) as the fit integrates
  * it: stored value times the square's area element in f cos d omega,
- * times F if over_f and h->fresnel_eta > 0; below as for the fit (which
+ * times F (or (F + q) / (1 + q), q = k D(0) / D(m), k h->fresnel_floor,
+ * D h->ndf_w) if over_f and
+ * h->fresnel_eta > 0; below as for the fit (which
  * cells cross the horizon). What a test holds a written slice to. */
 LL_INTERNAL double ll_tables_horizon_albedo(const ll_tables_horizon *h, size_t ns,
                                             const unsigned char *below, const float *plane,

@@ -68,8 +68,9 @@
  * u_theta sin(theta_m) / (sigma pdf), D, sigma and the density pdf of the
  * visible normals as a reader interpolates them (ideally the same for all
  * points, the jacobian's purpose; it is not quite, by the bilinear VNDF
- * table). *fresnel receives F of the pair (1 without fresnel_eta), the
- * further factor of a plane stored over it. */
+ * table). *fresnel receives F of the pair (1 without fresnel_eta), or
+ * with the set's floor k (F + q) / (1 + q), q = k D(0) / D(m) by the set's
+ * D (tables_refract.h), the further factor of a plane stored over it. */
 static double weight(const ll_tables_horizon *h, const double wi[3], const double sq[2],
                      double *fresnel)
 {
@@ -79,9 +80,11 @@ static double weight(const ll_tables_horizon *h, const double wi[3], const doubl
     d = ll_tables_mirror(wi, um, 0.0, &tm, m, wo);
     if (!(wo[2] > 0.0) || !(pdf > 0.0))
         return 0.0;
-    /* A plane stored over F: the reader multiplies F back. */
+    /* A plane stored over F (with its floor): the reader multiplies it
+     * back. */
     if (h->fresnel_eta > 0.0)
-        *fresnel = ll_tables_fresnel_pair(wi, wo, h->fresnel_eta);
+        *fresnel = ll_tables_fresnel_floor_pair(wi, wo, h->fresnel_eta, h->fresnel_floor,
+                                                h->ndf_w);
     return ll_warp2d_eval(h->ndf_w, um, NULL) * d * 2.0 * LL_PI * LL_PI * um[0] * sin(tm) /
            (h->sigma * pdf);
 }

@@ -21,7 +21,9 @@
  * half vector reaches the lobe, else 0 for the z-flipped direction's (the
  * reader takes either per set). A reflected set seen from the denser side
  * stores its values over the Fresnel reflectance of its half vector and
- * names that index in "fresnel_eta" (the reader multiplies it back).
+ * names that index in "fresnel_eta" (the reader multiplies it back);
+ * behind a coat, over that reflectance with a floor, "fresnel_floor"
+ * (FRESNEL_FLOOR says why).
  * A set's "albedo" field holds its luminance albedo per incident
  * elevation (the .bsdf's order-0 integral), by which the reader's sampler
  * picks between the reflected and the transmitted lobe.
@@ -46,23 +48,24 @@
 #define FN "ll_tables_write_from_bsdf"
 #define LUMINANCE_FLOOR 1e-3
 #define LOBES 4
-#define FIELDS_PER_LOBE 9
+#define FIELDS_PER_LOBE 10
 
 static const char *const prefixes[LOBES] = { "reflect_top.", "reflect_bottom.", "transmit_top.",
                                              "transmit_bottom." };
 static const char *const field_names[FIELDS_PER_LOBE] = { "ndf",       "sigma", "vndf",
                                                           "luminance", "rgb",   "albedo",
                                                           "warp_eta",  "fresnel_eta",
-                                                          "transmittance_eta" };
+                                                          "transmittance_eta", "fresnel_floor" };
 
 typedef struct lobe {
     int bottom, transmit;
     double refract_eta;                     /* > 0: the refraction warp      */
     double fresnel_eta;                     /* > 0: values over F (reflected) */
     double edge_width;                      /* > 0: f / F continued there     */
+    double fresnel_floor;                   /* k: over (F + q) / (1 + q)      */
     double transmittance_eta;               /* > 0: values over (1 - F) J     */
     float *ndf, *sigma, *vndf, *lum, *rgb, *albedo, warp_eta[1], fresnel_f[1];
-    float transmittance_f[1];
+    float transmittance_f[1], floor_f[1];
     ll_warp2d ndf_w, sigma_w, vndf_w;
     double alpha;
     char names[FIELDS_PER_LOBE][40];
@@ -142,9 +145,10 @@ static void release(writer *w)
 }
 
 /* A reflected set's D from retro-reflection: its own side's, except for
- * a set seen from the denser side of a lone interface (fresnel_eta set)
+ * a set seen from the denser side (fresnel_eta set) of a stack that is not
+ * a lone interface, which takes the other side's, and of a lone interface
  * whose D comes out more than WIDER times as wide as the other side's,
- * which takes the other side's. Retro-reflection sees the microfacets
+ * which takes the other side's too. Retro-reflection sees the microfacets
  * through F at normal incidence, 4% for eta 1.5 from either side. From
  * the rarer side little else comes back, but from the denser side the
  * light the microfacets scatter among themselves is trapped by total
@@ -160,10 +164,23 @@ static void release(writer *w)
  * give the same width (rough glass: 0.3001 from above, 0.3005 from
  * below) and the set keeps its own D: the D from above moved the
  * search's 99th percentile of f from 2.21% to 2.34%, over its aim of
- * 2.25%, by nothing but a slightly other grid. Behind a coat a medium's
- * own broad lobe is what the set holds, and its D stays: the D from
- * above took that coat's median error of f from 0.165% to 0.26%
- * (tests/test_tables_transmit_tolerance.c). */
+ * 2.25%, by nothing but a slightly other grid. Behind a coat the
+ * retro-reflection from below is mostly a medium's light, which grows
+ * towards grazing angles: the coat over a medium of docs/formats.md
+ * derives a D that rises from 0.39 at the pole to 0.57 at 72 degrees
+ * (alpha 0.84 against 0.38 from above), and at a viewer 70 degrees from
+ * below the first column of the sample grid then spans normals 0 to 11
+ * degrees from the pole, the coat's own reflection beyond the critical
+ * angle (f up to 0.88 there): f was 20% low over 50-68 degrees in the
+ * mirror plane, and the reflection from below's 99th percentile of f was
+ * 20% (tests/tables_lobe_figures.h at 64 x 96^2 x 96^2). With the D from
+ * above it is 10.3% (4.8% with the floor of FRESNEL_FLOOR below), the
+ * medium's broad lobe keeping enough cells (the median of all four lobes
+ * 0.155% before, 0.067% with both); mixtures of the two D did worse
+ * (11.7% half and half without a floor, 6.4-6.6% three quarters from
+ * above with a constant one that gave 6.1-6.2% with the D from above).
+ * Two other coats over media gained alike (reflection from below 25.5%
+ * to 5.0% and 36.6% to 8.9% with both). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -188,11 +205,11 @@ static ll_status reflected_ndf(const writer *w, lobe *l, double *d, double *sigm
     double d2[LL_TABLES_NDF_NODES], sigma2[LL_TABLES_NDF_NODES], alpha2;
     int side = l->bottom ? -1 : 1;
     ll_status s = side_ndf(w, side, d, sigma, &l->alpha);
-    if (s != LL_OK || !(l->fresnel_eta > 0.0) || !w->lone)
+    if (s != LL_OK || !(l->fresnel_eta > 0.0))
         return s;
     if ((s = side_ndf(w, -side, d2, sigma2, &alpha2)) != LL_OK)
         return s;
-    if (l->alpha > WIDER * alpha2) {
+    if (!w->lone || l->alpha > WIDER * alpha2) {
         memcpy(d, d2, sizeof d2);
         memcpy(sigma, sigma2, sizeof sigma2);
         l->alpha = alpha2;
@@ -348,6 +365,7 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     h.param[0] = 0.0;
     h.param[1] = th;
     h.fresnel_eta = l->fresnel_eta;
+    h.fresnel_floor = l->fresnel_floor;
     h.over_f = 0u; /* set by the fit of RGB and luminance */
     return ll_tables_horizon_fit_rgb(&h, w->ns, w->next, target, l->rgb + t * 3 * plane,
                                      l->lum + t * plane);
@@ -380,7 +398,8 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
                 if (!ll_is_finite(scale))
                     scale = 0.0;
                 if (l->fresnel_eta > 0.0)
-                    over = 1.0 / ll_tables_fresnel_pair(wi, wo, l->fresnel_eta);
+                    over = 1.0 / ll_tables_fresnel_floor_pair(wi, wo, l->fresnel_eta,
+                                                              l->fresnel_floor, &l->ndf_w);
                 if (l->edge_width > 0.0 &&
                     ll_tables_edge_near(wi, wo, l->fresnel_eta, l->edge_width)) {
                     w->valid[y * ns + x] = 0;
@@ -436,6 +455,27 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
         return s != LL_OK ? s : ll_tables_round_half(lum, plane, l->names[3]);
     }
 }
+
+/* A set stored over F holds f / F, smooth across the edge of total
+ * internal reflection only where f is proportional to F. Seen from the
+ * denser side f = S F + C: S the microfacets' own single reflection, C
+ * light that does not follow F, and C / F keeps a kink of F's shape at
+ * the edge, relatively large where C outweighs S F. Stored over
+ * (F + q) / (1 + q) instead (1 beyond the edge for every q, F for q = 0),
+ * the kink's share of a value goes as |q - C / S| / ((F + q) (F + C / S)):
+ * q = 0 suits a lobe that is S, a larger q one that is mostly C. Behind a
+ * coat C is a medium's back-scattered light, broad, while S follows the
+ * microfacets' D, so the worst errors lay in the lobe's flanks just beyond
+ * the edge, where C outweighs S most: q = k D(0) / D(m), D the set's own
+ * (the D from above, reflected_ndf, which is the coat's lobe), m the half
+ * vector (tables_refract.h). k = 1 did best over the coats measured, with
+ * constant floors and other powers of D's ratio (docs/formats.md,
+ * "Reflected sets", has the sweep). A lone interface gains nothing: there
+ * C is at most the compensation's share, a few percent of S at the edge,
+ * and a floor made the figures worse. So the floor is FRESNEL_FLOOR where
+ * the stack is not a lone interface, else 0 (and the file has no
+ * "fresnel_floor"). */
+#define FRESNEL_FLOOR 1.0
 
 /* The luminance albedo of each lobe at each incident elevation, from the
  * .bsdf's order-0 integral (the file's incident cosine is the fixed
@@ -657,6 +697,10 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
             l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->fresnel_f[0] = (float)l->fresnel_eta;
         l->edge_width = l->transmit ? 0.0 : ll_tables_edge_width(b, w.lone, l->bottom);
+        if (l->fresnel_eta > 0.0 && !w.lone)
+            l->fresnel_floor = FRESNEL_FLOOR;
+        l->floor_f[0] = (float)l->fresnel_floor;
+        l->fresnel_floor = (double)l->floor_f[0]; /* as a reader takes it */
         /* A refracted set: f |cos| / D vanishes at the edge of total
          * internal reflection (seen from the denser side) like |wo.m|^2,
          * as the Fresnel transmittance and the change of variables to
@@ -710,11 +754,12 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                 { l->names[6], LL_TENSOR_F32, 1, { 1 }, l->warp_eta, NULL, NULL },
                 { l->names[7], LL_TENSOR_F32, 1, { 1 }, l->fresnel_f, NULL, NULL },
                 { l->names[8], LL_TENSOR_F32, 1, { 1 }, l->transmittance_f, NULL, NULL },
+                { l->names[9], LL_TENSOR_F32, 1, { 1 }, l->floor_f, NULL, NULL },
             };
             /* warp_eta: transmitted sets only; fresnel_eta: reflected sets
              * stored over F only; transmittance_eta: refracted sets stored
              * over (1 - F) J only. */
-            for (j = 0; j < FIELDS_PER_LOBE - 3; ++j)
+            for (j = 0; j < FIELDS_PER_LOBE - 4; ++j)
                 f[nf++] = set[j];
             if (l->transmit)
                 f[nf++] = set[6];
@@ -722,6 +767,8 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
                 f[nf++] = set[7];
             if (l->transmittance_eta > 0.0)
                 f[nf++] = set[8];
+            if (l->fresnel_eta > 0.0 && l->fresnel_floor > 0.0)
+                f[nf++] = set[9];
         }
     }
     if ((s = ll_watch_finish(&watch, LL_OK, FN)) != LL_OK)
