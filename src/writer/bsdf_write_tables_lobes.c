@@ -166,21 +166,13 @@ static void release(writer *w)
  * search's 99th percentile of f from 2.21% to 2.34%, over its aim of
  * 2.25%, by nothing but a slightly other grid. Behind a coat the
  * retro-reflection from below is mostly a medium's light, which grows
- * towards grazing angles: the coat over a medium of docs/formats.md
- * derives a D that rises from 0.39 at the pole to 0.57 at 72 degrees
- * (alpha 0.84 against 0.38 from above), and at a viewer 70 degrees from
- * below the first column of the sample grid then spans normals 0 to 11
- * degrees from the pole, the coat's own reflection beyond the critical
- * angle (f up to 0.88 there): f was 20% low over 50-68 degrees in the
- * mirror plane, and the reflection from below's 99th percentile of f was
- * 20% (tests/tables_lobe_figures.h at 64 x 96^2 x 96^2). With the D from
- * above it is 10.3% (4.8% with the floor of FRESNEL_FLOOR below), the
- * medium's broad lobe keeping enough cells (the median of all four lobes
- * 0.155% before, 0.067% with both); mixtures of the two D did worse
- * (11.7% half and half without a floor, 6.4-6.6% three quarters from
- * above with a constant one that gave 6.1-6.2% with the D from above).
- * Two other coats over media gained alike (reflection from below 25.5%
- * to 5.0% and 36.6% to 8.9% with both). */
+ * towards grazing angles, so the D derived from it is wide and rises off
+ * the pole; at grazing viewers from below the sample grid then gave the
+ * coat's own sharp reflection beyond the critical angle a column or two
+ * and f came out far too low there. The D from above is the coat's lobe
+ * and the medium's broad light keeps enough cells under it; mixtures of
+ * the two did worse (docs/formats.md, "Reflected sets", has the
+ * figures). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
