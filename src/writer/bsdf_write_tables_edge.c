@@ -16,7 +16,7 @@
  * instead (bsdf_write_tables_lobes.c), as a refracted set's nodes at its
  * edge do, and the table follows the model there
  * (tests/test_tables_transmit_edge.c compares both with the closed form;
- * docs/formats.md, "The edge of total internal reflection", has the
+ * docs/formats.md, "Transmission", has the
  * figures).
  *
  * A lone interface only: behind a coat (over a medium without a base) the

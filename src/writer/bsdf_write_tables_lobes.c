@@ -171,7 +171,7 @@ static void release(writer *w)
  * coat's own sharp reflection beyond the critical angle a column or two
  * and f came out far too low there. The D from above is the coat's lobe
  * and the medium's broad light keeps enough cells under it; mixtures of
- * the two did worse (docs/formats.md, "Reflected sets", has the
+ * the two did worse (docs/formats.md, "Transmission", has the
  * figures). */
 #define WIDER 1.1
 
@@ -462,7 +462,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * (the D from above, reflected_ndf, which is the coat's lobe), m the half
  * vector (tables_refract.h). k = 1 did best over the coats measured, with
  * constant floors and other powers of D's ratio (docs/formats.md,
- * "Reflected sets", has the sweep). A lone interface gains nothing: there
+ * "Transmission", has the sweep). A lone interface gains nothing: there
  * C is at most the compensation's share, a few percent of S at the edge,
  * and a floor made the figures worse. So the floor is FRESNEL_FLOOR where
  * the stack is not a lone interface, else 0 (and the file has no
