@@ -1,8 +1,8 @@
 /*
  * A transmissive table's transmitted lobes where they take the warp of the
  * z-flipped direction across a net interface (ll_tables.h;
- * docs/formats.md, "Transmitted sets without a net interface" and "D of a
- * transmitted set"): the material of examples/frosted-glass.layers (one
+ * docs/formats.md, "Transmission": the transmitted sets without a net
+ * interface and the D of a transmitted set): the material of examples/frosted-glass.layers (one
  * rough interface, eta 1.5, alpha 0.3, compensated), whose transmitted
  * light lies partly where no refraction half vector leads, so both its
  * transmitted sets take that warp. Its lobe is the refracted peak, which
