@@ -87,18 +87,24 @@ def transmittance_at(wi, wo, m, eta):
     return (1.0 - _fresnel_at(wi, m, eta)) * _refraction_jacobian(wi, wo, m, eta)
 
 
+# The C reader's MAX_TURN_RATE (tables_refract.c).
+MAX_TURN_RATE = 1.5
+
+
 def turn_rate(theta, side_eta):
     """How fast a set of the z-flipped direction's warp turns wo with wi
     (at elevation theta) between two elevations, as the C reader's
     turn_rate (tables_refract.c): the refracted direction's d theta_t /
-    d theta_i = cos theta / (eta' cos theta_t), at most 1, and 1 where
-    nothing refracts or side_eta (eta', the far side over wi's) is 1."""
+    d theta_i = cos theta / (eta' cos theta_t), at most MAX_TURN_RATE, and
+    1 where nothing refracts or side_eta (eta', the far side over wi's) is
+    1."""
     if side_eta <= 0.0 or side_eta == 1.0:
         return 1.0
     st = dr.sin(theta) / side_eta
     d = side_eta * dr.safe_sqrt(1.0 - st * st)
     r = dr.cos(theta) / dr.select(d > 0, d, 1.0)
-    return dr.select((st < 1.0) & (d > 0) & (r < 1.0), r, 1.0)
+    r = dr.minimum(r, MAX_TURN_RATE)
+    return dr.select((st < 1.0) & (d > 0), r, 1.0)
 
 
 def turned_wo(axis, rate, theta, param, c, s, wo):

@@ -8,7 +8,7 @@ Files: rough glass (eta 1.5, alpha 0.3, compensate=0: the refraction half vector
 frosted pane (the same interface and its inverse, eta 1 overall: the z-flipped direction's
 warp) and frosted glass (examples/frosted-glass.layers, the glass compensated: the z-flipped
 direction's warp across a net interface, which turns wo between elevations slower than wi
-from above), written by `llbuild --format measured`.
+from above and faster from below), written by `llbuild --format measured`.
 
 Pairs: 10^4 per file, wi on either side, wo on either side, half of them about the lobe (wi
 reflected or refracted about a normal drawn about the surface's), both with |cos theta| in

@@ -30,8 +30,8 @@
  * keeps solid angle).
  *
  * A set of the z-flipped warp is read between elevations the same way,
- * except that wo turns at the rate of the refracted direction where the
- * set is seen from the rarer side of a net interface (turn_rate), and that
+ * except that wo turns at the rate of the refracted direction across a net
+ * interface (turn_rate, at most MAX_TURN_RATE), and that
  * each elevation's values take D / (4 sigma) at their own turned pair
  * (own_factor). Read at the same sample node of both elevations, frosted
  * glass's transmission from below beyond the critical angle, where T falls
@@ -42,6 +42,11 @@
 #include "reader/tables_refract.h"
 
 #include <math.h>
+
+/* The largest rate at which a z-flipped set turns wo with wi (turn_rate),
+ * chosen by measuring frosted glass's transmission from below
+ * (docs/formats.md, "Transmission"). */
+#define MAX_TURN_RATE 1.5
 
 static void normal_coords(const double m[3], double phi_i, double um[2], double *theta_m)
 {
@@ -93,17 +98,21 @@ typedef struct elevations {
 /* The rate at which a set of the z-flipped warp turns wo with wi between
  * two elevations: that of the refracted direction, d theta_t / d theta_i
  * = cos theta_i / (eta' cos theta_t) by Snell's law (eta' the side's
- * relative index), at most 1, and 1 (wo turned as wi is) where nothing
- * refracts or the set has no net interface. Seen from the rarer side the
- * transmitted lobe follows the refracted direction, which moves by a third
- * to two thirds of wi's step at eta 1.5: turned as wi, the lobe read at
- * the neighbouring elevation lay up to 0.6 of a step off its peak, and
- * frosted glass's transmission from above came out worse (99th percentile
- * of f) than read at the same sample node. Seen from the denser side the
- * rate exceeds 1 and grows without bound at the critical angle; beyond it
- * the lobe is the light the compensation returns, spread over the
- * azimuths, which wi's full turn follows. A set of the refraction warp
- * turns wo as wi: that keeps wi.m and wo.m. */
+ * relative index), at most MAX_TURN_RATE, and 1 (wo turned as wi is) where
+ * nothing refracts or the set has no net interface. Seen from the rarer
+ * side the transmitted lobe follows the refracted direction, which moves
+ * by a third to two thirds of wi's step at eta 1.5: turned as wi, the lobe
+ * read at the neighbouring elevation lay up to 0.6 of a step off its peak,
+ * and frosted glass's transmission from above came out worse (99th
+ * percentile of f) than read at the same sample node. Seen from the
+ * denser side the refracted direction moves faster than wi (1.6 times at
+ * 20 degrees, 2.4 times at 35 at eta 1.5) and without bound at the
+ * critical angle: turned as wi, or at that full rate, the lobe's f
+ * between elevations was further off than turned at a rate held to
+ * MAX_TURN_RATE (docs/formats.md). Beyond the critical angle the lobe is
+ * the light the compensation returns, spread over the azimuths, which
+ * wi's own turn follows (rate 1). A set of the refraction warp turns wo
+ * as wi: that keeps wi.m and wo.m. */
 static double turn_rate(const ll_measured *t, double theta)
 {
     double e = t->side_eta, st, r;
@@ -113,7 +122,7 @@ static double turn_rate(const ll_measured *t, double theta)
     if (!(st < 1.0))
         return 1.0;
     r = cos(theta) / (e * sqrt(1.0 - st * st));
-    return r < 1.0 ? r : 1.0;
+    return r < MAX_TURN_RATE ? r : MAX_TURN_RATE;
 }
 
 static void elevations_of(const ll_measured *t, const double wi[3], elevations *e)

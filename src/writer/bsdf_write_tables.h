@@ -107,12 +107,15 @@ LL_INTERNAL void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[
  * normal incidence; refract_eta > 0 the refraction warp's relative index,
  * 0 the warp of the z-flipped direction; heavy_floor: the set is seen from
  * the denser side of a lone interface or crosses no net interface (eta 1),
- * where the flipped warp takes a heavier floor (bsdf_write_tables_tndf.c
+ * where the flipped warp takes a heavier floor; sweep: the set is seen
+ * from the rarer side of a lone interface, where the flipped warp's D
+ * follows the lobe over the incident elevations (bsdf_write_tables_tndf.c
  * says why). LL_ERROR_INVALID_ARGUMENT if the lobe transmits nothing at
  * normal incidence. */
 LL_INTERNAL ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom,
                                                     double refract_eta, int heavy_floor,
-                                                    double *d, double *sigma, double *alpha);
+                                                    int sweep, double *d, double *sigma,
+                                                    double *alpha);
 /* s as JSON text (quotes and escapes) at buf[at], cap bytes at most
  * written; returns the end it would have without the cap. */
 LL_INTERNAL size_t ll_tables_json_string(char *buf, size_t at, size_t cap, const char *s);

@@ -215,8 +215,10 @@ static ll_status ndf_tables(const writer *w, lobe *l)
     double d[LL_TABLES_NDF_NODES], sigma[LL_TABLES_NDF_NODES], eta = w->b->eta;
     int net = fabs(eta - 1.0) > 1e-6;
     int heavy_floor = !net || (w->lone && l->bottom == (eta > 1.0));
+    int sweep = net && w->lone && l->bottom != (eta > 1.0);
     ll_status s = l->transmit ? ll_tables_derive_transmit_ndf(w->b, l->bottom, l->refract_eta,
-                                                              heavy_floor, d, sigma, &l->alpha)
+                                                              heavy_floor, sweep, d, sigma,
+                                                              &l->alpha)
                               : reflected_ndf(w, l, d, sigma);
     if (s != LL_OK)
         return s;

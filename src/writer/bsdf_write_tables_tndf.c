@@ -34,6 +34,20 @@
  * 80 degrees from the normal, where the mixture above has only its floor.
  * There the floor is heavier (HEAVY_FLOOR_WEIGHT).
  *
+ * Seen from the rarer side of a lone interface (the compensated rough
+ * dielectric above, seen from the air) the flipped warp's lobe is the
+ * refracted peak, which at normal incidence lies at the flipped half
+ * vector's normal but moves off it as wi tilts: the refracted direction
+ * turns by a third to two thirds of wi's turn, so the flipped half vector
+ * of the peak lies half the difference from the normal (15 degrees at 70
+ * degrees from above at eta 1.5), where a D of the shape at normal
+ * incidence has few cells. There the measured part of D is the lobe's
+ * own visible-normal density averaged over incident elevations
+ * (sweep_ndf) rather than the one at normal incidence; the peak's width,
+ * which sets the Beckmann lobes of the mixture, is still that at normal
+ * incidence. Under a coat (not a lone interface) the medium's light does
+ * not follow the refracted direction, and its D stays.
+ *
  * A stack without a net interface (a pane: eta 1) has only the flipped
  * warp, and at grazing elevations its transmitted lobe spreads out of the
  * plane of incidence, so that a share of it lies at half vectors beyond
@@ -73,8 +87,59 @@
  * "D of a transmitted set". */
 #define HEAVY_FLOOR_WEIGHT 0.05
 
+/* The incident elevations (0 to SWEEP_LAST degrees, evenly) and the
+ * azimuths of the normals over which sweep_ndf averages. */
+#define SWEEP_ELEVATIONS 9
+#define SWEEP_LAST 80.0
+#define SWEEP_AZIMUTHS 64
+
+/* The measured part of a flipped warp's D from the lobe at several
+ * incident elevations: at each, the visible normals' density of a D is
+ * D(m) (wi.m) / sigma(wi), and the lobe's density over the flipped half
+ * vector m is f |cos theta_o| times d omega_o / d omega_m = 4 (wo'.m) =
+ * 4 (wi.m) (wo' the mirror direction of wi about m, the z-flipped wo), so
+ * the D whose visible normals follow the lobe is f |cos theta_o| up to a
+ * constant. Averaged over the azimuths of m (D is isotropic), normalised
+ * per elevation so that each counts alike, and averaged over the
+ * elevations; n nodes theta, quadrature weights w. */
+static void sweep_ndf(const ll_bsdf *b, int bottom, size_t n, const double *theta,
+                      const double *w, double *d)
+{
+    double de[LL_TABLES_NDF_NODES];
+    size_t e, j, k;
+    for (j = 0; j < n; ++j)
+        d[j] = 0.0;
+    for (e = 0; e < SWEEP_ELEVATIONS; ++e) {
+        double te = SWEEP_LAST * (LL_PI / 180) * (double)e / (double)(SWEEP_ELEVATIONS - 1);
+        double wi[3] = { sin(te), 0.0, cos(te) }, norm = 0.0;
+        for (j = 0; j < n; ++j) {
+            double sum = 0.0;
+            for (k = 0; k < SWEEP_AZIMUTHS; ++k) {
+                double ph = 2.0 * LL_PI * ((double)k + 0.5) / SWEEP_AZIMUTHS, f[3], y, c;
+                double m[3] = { sin(theta[j]) * cos(ph), sin(theta[j]) * sin(ph), cos(theta[j]) };
+                double wo[3];
+                c = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+                wo[0] = 2.0 * c * m[0] - wi[0];
+                wo[1] = 2.0 * c * m[1] - wi[1];
+                wo[2] = -(2.0 * c * m[2] - wi[2]); /* z-flipped: the transmitted side */
+                if (!(c > 0.0) || !(wo[2] < 0.0))
+                    continue;
+                ll_tables_lobe_f(b, bottom, wi, wo, f);
+                y = ll_tables_luminance(f) * -wo[2];
+                if (y > 0.0 && ll_is_finite(y))
+                    sum += y;
+            }
+            de[j] = sum / SWEEP_AZIMUTHS;
+            norm += 2.0 * LL_PI * w[j] * de[j] * cos(theta[j]);
+        }
+        if (norm > 0.0)
+            for (j = 0; j < n; ++j)
+                d[j] += de[j] / norm / SWEEP_ELEVATIONS;
+    }
+}
+
 ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom, double refract_eta,
-                                        int heavy_floor, double *d, double *sigma,
+                                        int heavy_floor, int sweep, double *d, double *sigma,
                                         double *alpha)
 {
     enum { N = LL_TABLES_NDF_NODES };
@@ -136,6 +201,8 @@ ll_status ll_tables_derive_transmit_ndf(const ll_bsdf *b, int bottom, double ref
         join = 0.0;
     for (j = last + 1; j < N; ++j)
         d[j] = join * ll_tables_beckmann(theta[j], peak_alpha);
+    if (sweep && refract_eta <= 0.0)
+        sweep_ndf(b, bottom, N, theta, w, d);
     norm = 0.0;
     for (j = 0; j < N; ++j)
         norm += 2.0 * LL_PI * w[j] * d[j] * cos(theta[j]);
