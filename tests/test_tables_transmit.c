@@ -395,7 +395,7 @@ static double below_quantile(const ll_bsdf *src, const ll_bsdf *tab, double firs
 
 /* The coat over a medium of docs/formats.md ("Transmission"): not a lone
  * interface, so its reflected set from below is stored over
- * (F + q) / (1 + q), q = k D(0) / D(m) with k = 0.5, and carries
+ * (F + q) / (1 + q), q = k D(0) / D(m) with k = 1, and carries
  * "fresnel_floor" (the set from
  * above, the rarer side, has neither field). Read with the floor, f from
  * below follows the .bsdf's; the same file with the field's name damaged
@@ -424,7 +424,7 @@ static void test_fresnel_floor(void **state)
     assert_int_equal(ll_tensor_parse(bytes, size, tab_path, &tf), LL_OK);
     assert_non_null(ll_tensor_find(&tf, "reflect_bottom.fresnel_eta"));
     assert_non_null(k = ll_tensor_find(&tf, "reflect_bottom.fresnel_floor"));
-    assert_true(k->count == 1 && ll_tensor_value(k, 0) == 0.5f);
+    assert_true(k->count == 1 && ll_tensor_value(k, 0) == 1.0f);
     assert_null(ll_tensor_find(&tf, "reflect_top.fresnel_eta"));
     assert_null(ll_tensor_find(&tf, "reflect_top.fresnel_floor"));
     ll_tensor_file_free(&tf);
@@ -463,8 +463,7 @@ static void test_fresnel_floor(void **state)
  * pole. Warped by that D, the sample grid left the sharp lobe a column or
  * two (f up to 20% low in the mirror plane at 70 degrees); the set takes
  * the D from above (bsdf_write_tables_lobes.c). At this grid, median and
- * 95th percentile: 0.49% and 10.2% (9.5% with the floor k = 1, which
- * left the 99th percentile at 64 x 96^2 x 96^2 4.8% against 4.0%); with its own D 2.26% and 36.8% (over
+ * 95th percentile: 0.49% and 9.5%; with its own D 2.26% and 36.8% (over
  * F) or 0.86% and 28.6% (over F with a constant floor of 0.2), with the
  * D from above and a constant floor of 1 0.60% and 13.0%. */
 static void test_coat_from_below_at_grazing(void **state)

@@ -471,14 +471,15 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * microfacets' D, so the worst errors lay in the lobe's flanks just beyond
  * the edge, where C outweighs S most: q = k D(0) / D(m), D the set's own
  * (the D from above, reflected_ndf, which is the coat's lobe), m the half
- * vector (tables_refract.h). k = 0.5 did best of the floors measured on
- * the coat (k = 0.35 to 1), as did a D ratio over constant floors and
- * other powers of it (docs/formats.md, "Reflected sets", has the sweeps). A lone interface gains nothing: there
+ * vector (tables_refract.h). k = 1 did best over the coats measured, with
+ * constant floors and other powers of D's ratio (docs/formats.md,
+ * "Reflected sets", has the sweep): a smaller k did better on some coats
+ * and far worse on a rough one over a thick medium. A lone interface gains nothing: there
  * C is at most the compensation's share, a few percent of S at the edge,
  * and a floor made the figures worse. So the floor is FRESNEL_FLOOR where
  * the stack is not a lone interface, else 0 (and the file has no
  * "fresnel_floor"). */
-#define FRESNEL_FLOOR 0.5
+#define FRESNEL_FLOOR 1.0
 
 /* The luminance albedo of each lobe at each incident elevation, from the
  * .bsdf's order-0 integral (the file's incident cosine is the fixed
