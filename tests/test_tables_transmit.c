@@ -497,7 +497,7 @@ static void test_coat_from_below_at_grazing(void **state)
  * normals 0..4 degrees from it, across which f was interpolated up to 14%
  * high in the mirror plane at this grid; the set takes the heavier peak
  * of ll_tables_derive_ndf_coat. Worst in the mirror plane and 99th
- * percentile over the lobe: 9.6% and 6.8%, were 13.9% and 12.0%. */
+ * percentile over the lobe: 8.5% and 6.3%, were 13.9% and 12.0%. */
 static void test_coat_from_above_at_grazing(void **state)
 {
     char bsdf_path[LL_TEST_PATH_SIZE], tab_path[LL_TEST_PATH_SIZE];
@@ -528,8 +528,8 @@ static void test_coat_from_above_at_grazing(void **state)
     printf("coat, f from above at 60-80 degrees in its reflected lobe: 99th percentile of "
            "the error %.2f%%; in the mirror plane by the pole at most %.2f%%\n",
            100 * p99, 100 * worst);
-    assert_true(p99 < 0.08);
-    assert_true(worst < 0.11);
+    assert_true(p99 < 0.075);
+    assert_true(worst < 0.1);
     ll_bsdf_release(tab);
     ll_bsdf_release(src);
 }
