@@ -190,8 +190,8 @@ static void release(writer *w)
  * and that set (own: the set's own side) takes ll_tables_derive_ndf_coat's
  * heavier peak. The denser side's set, which takes the D from the rarer
  * side (reflected_ndf), keeps the plain mixture: the heavier peak there
- * did better at 64 x 96^2 x 96^2 but worse at small grids
- * (docs/formats.md, "Reflected sets"). */
+ * did better at a large grid but worse at small ones (docs/formats.md,
+ * "Reflected sets"). */
 static ll_status side_ndf(const writer *w, int side, int own, double *d, double *sigma,
                           double *alpha)
 {

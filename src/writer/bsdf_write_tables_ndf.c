@@ -85,13 +85,13 @@
  * of the normals, where the visible normals are few (their density in the
  * square goes as u_theta^3 by the area element, and wi.m is smallest
  * there): with the plain mixture the first column of the sample grid
- * spanned the normals 0..4.4 degrees from the pole for a viewer at 72
- * degrees, and f interpolated across it came out up to 10% high in the
- * mirror plane. More weight on the peak's own lobe, taken from the wider
- * one, gives the pole columns of its own, while the derived D keeps its
- * share of the medium's light (weights and figures: docs/formats.md,
- * "Reflected sets"). The fitted roughness and the peak's width are
- * close here (0.38 and 0.32), so the pedestal rule above does not apply.
+ * spanned several degrees of normals from the pole, and f interpolated
+ * across it came out well above the .bsdf's in the mirror plane. More
+ * weight on the peak's own lobe, taken from the wider one, gives the pole
+ * columns of its own, while the derived D keeps its share of the medium's
+ * light (the weights measured and their figures: docs/formats.md,
+ * "Reflected sets"). The fitted roughness and the peak's width are close
+ * here, so the pedestal rule above does not apply.
  */
 #include "writer/bsdf_write_tables.h"
 
