@@ -474,11 +474,11 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * vector (tables_refract.h). k = 1 did best over the coats measured, with
  * constant floors and other powers of D's ratio (docs/formats.md,
  * "Reflected sets", has the sweep): a smaller k did better on some coats
- * and far worse on a rough one over a thick medium. A lone interface gains nothing: there
- * C is at most the compensation's share, a few percent of S at the edge,
- * and a floor made the figures worse. So the floor is FRESNEL_FLOOR where
- * the stack is not a lone interface, else 0 (and the file has no
- * "fresnel_floor"). */
+ * and far worse on a rough one over a thick medium. A lone interface
+ * gains nothing: there C is at most the compensation's share, a few
+ * percent of S at the edge, and a floor made the figures worse. So the
+ * floor is FRESNEL_FLOOR where the stack is not a lone interface, else 0
+ * (and the file has no "fresnel_floor"). */
 #define FRESNEL_FLOOR 1.0
 
 /* The luminance albedo of each lobe at each incident elevation, from the
