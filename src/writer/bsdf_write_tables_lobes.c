@@ -171,8 +171,8 @@ static void release(writer *w)
  * coat's own sharp reflection beyond the critical angle a column or two
  * and f came out far too low there. The D from above is the coat's lobe
  * and the medium's broad light keeps enough cells under it; mixtures of
- * the two did worse (docs/formats.md, "Reflected sets", has the
- * figures). */
+ * the two did worse (docs/formats.md, "Transmission", has the figures
+ * under its reflected sets). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -191,7 +191,7 @@ static void release(writer *w)
  * heavier peak. The denser side's set, which takes the D from the rarer
  * side (reflected_ndf), keeps the plain mixture: the heavier peak there
  * did better at a large grid but worse at small ones (docs/formats.md,
- * "Reflected sets"). */
+ * "Transmission": its reflected sets). */
 static ll_status side_ndf(const writer *w, int side, int own, double *d, double *sigma,
                           double *alpha)
 {
@@ -473,7 +473,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * (the D from above, reflected_ndf, which is the coat's lobe), m the half
  * vector (tables_refract.h). k = 1 did best over the coats measured, with
  * constant floors and other powers of D's ratio (docs/formats.md,
- * "Reflected sets", has the sweep): a smaller k did better on some coats
+ * "Transmission", has the sweep under its reflected sets): a smaller k did better on some coats
  * and far worse on a rough one over a thick medium. A lone interface
  * gains nothing: there C is at most the compensation's share, a few
  * percent of S at the edge, and a floor made the figures worse. So the

@@ -90,7 +90,7 @@
  * weight on the peak's own lobe, taken from the wider one, gives the pole
  * columns of its own, while the derived D keeps its share of the medium's
  * light (the weights measured and their figures: docs/formats.md,
- * "Reflected sets"). The fitted roughness and the peak's width are close
+ * "Transmission", its reflected sets). The fitted roughness and the peak's width are close
  * here, so the pedestal rule above does not apply.
  */
 #include "writer/bsdf_write_tables.h"
