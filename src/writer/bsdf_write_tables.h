@@ -87,6 +87,13 @@ LL_INTERNAL ll_status ll_tables_derive_ndf_side(const ll_bsdf *b, int side, doub
  * the fitted roughness all the same. */
 LL_INTERNAL ll_status ll_tables_derive_ndf_pedestal(const ll_bsdf *b, int side, double *d,
                                                     double *sigma, double *alpha);
+/* The same for the reflected set seen from the rarer side of a
+ * transmissive stack that is not a lone interface (a coat over a medium
+ * without a base): the mixture's peak lobe weighs more, so that the
+ * coat's lobe at the pole of the normals keeps columns of the sample grid
+ * at grazing viewers (bsdf_write_tables_ndf.c says why). */
+LL_INTERNAL ll_status ll_tables_derive_ndf_coat(const ll_bsdf *b, int side, double *d,
+                                                double *sigma, double *alpha);
 /* The pieces of the derivation that the transmitted lobes' D shares
  * (bsdf_write_tables_tndf.c): the quadrature nodes theta_j = u_j^2 pi / 2
  * and their weights (sin theta included), sigma from D at the nodes, and

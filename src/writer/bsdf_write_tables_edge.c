@@ -16,8 +16,8 @@
  * instead (bsdf_write_tables_lobes.c), as a refracted set's nodes at its
  * edge do, and the table follows the model there
  * (tests/test_tables_transmit_edge.c compares both with the closed form;
- * docs/formats.md, "Transmission", has the
- * figures).
+ * docs/formats.md, "Transmission", has the figures under the edge of
+ * total internal reflection).
  *
  * A lone interface only: behind a coat (over a medium without a base) the
  * light the medium sends back does not follow F, f / F is not smooth

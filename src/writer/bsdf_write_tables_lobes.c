@@ -171,8 +171,8 @@ static void release(writer *w)
  * coat's own sharp reflection beyond the critical angle a column or two
  * and f came out far too low there. The D from above is the coat's lobe
  * and the medium's broad light keeps enough cells under it; mixtures of
- * the two did worse (docs/formats.md, "Transmission", has the
- * figures). */
+ * the two did worse (docs/formats.md, "Transmission", has the figures
+ * under its reflected sets). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -185,21 +185,32 @@ static void release(writer *w)
  * keep the plain mixture; so does the D from the rarer side that the
  * denser side takes below (frosted glass 0.32 and 0.30). A coat over a
  * medium is not lone, and its pedestal is the medium's own lobe at every
- * angle, which the plain mixture gives its cells. */
-static ll_status side_ndf(const writer *w, int side, double *d, double *sigma, double *alpha)
+ * angle, which the derived D gives its cells; seen from the rarer side
+ * the coat's lobe lies at the pole of the normals for a grazing viewer,
+ * and that set (own: the set's own side) takes ll_tables_derive_ndf_coat's
+ * heavier peak. The denser side's set, which takes the D from the rarer
+ * side (reflected_ndf), keeps the plain mixture: the heavier peak there
+ * did better at a large grid but worse at small ones (docs/formats.md,
+ * "Transmission": its reflected sets). */
+static ll_status side_ndf(const writer *w, int side, int own, double *d, double *sigma,
+                          double *alpha)
 {
-    return w->lone ? ll_tables_derive_ndf_pedestal(w->b, side, d, sigma, alpha)
-                   : ll_tables_derive_ndf_side(w->b, side, d, sigma, alpha);
+    double eta = w->b->eta;
+    int rarer = fabs(eta - 1.0) > 1e-6 && side == (eta > 1.0 ? 1 : -1);
+    if (w->lone)
+        return ll_tables_derive_ndf_pedestal(w->b, side, d, sigma, alpha);
+    return rarer && own ? ll_tables_derive_ndf_coat(w->b, side, d, sigma, alpha)
+                        : ll_tables_derive_ndf_side(w->b, side, d, sigma, alpha);
 }
 
 static ll_status reflected_ndf(const writer *w, lobe *l, double *d, double *sigma)
 {
     double d2[LL_TABLES_NDF_NODES], sigma2[LL_TABLES_NDF_NODES], alpha2;
     int side = l->bottom ? -1 : 1;
-    ll_status s = side_ndf(w, side, d, sigma, &l->alpha);
+    ll_status s = side_ndf(w, side, 1, d, sigma, &l->alpha);
     if (s != LL_OK || !(l->fresnel_eta > 0.0))
         return s;
-    if ((s = side_ndf(w, -side, d2, sigma2, &alpha2)) != LL_OK)
+    if ((s = side_ndf(w, -side, 0, d2, sigma2, &alpha2)) != LL_OK)
         return s;
     if (!w->lone || l->alpha > WIDER * alpha2) {
         memcpy(d, d2, sizeof d2);
@@ -464,11 +475,13 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * (the D from above, reflected_ndf, which is the coat's lobe), m the half
  * vector (tables_refract.h). k = 1 did best over the coats measured, with
  * constant floors and other powers of D's ratio (docs/formats.md,
- * "Transmission", has the sweep). A lone interface gains nothing: there
- * C is at most the compensation's share, a few percent of S at the edge,
- * and a floor made the figures worse. So the floor is FRESNEL_FLOOR where
- * the stack is not a lone interface, else 0 (and the file has no
- * "fresnel_floor"). */
+ * "Transmission", has the sweep under its reflected sets): a smaller k
+ * did better on some coats and far worse on a rough one over a thick
+ * medium. A lone interface
+ * gains nothing: there C is at most the compensation's share, a few
+ * percent of S at the edge, and a floor made the figures worse. So the
+ * floor is FRESNEL_FLOOR where the stack is not a lone interface, else 0
+ * (and the file has no "fresnel_floor"). */
 #define FRESNEL_FLOOR 1.0
 
 /* The luminance albedo of each lobe at each incident elevation, from the

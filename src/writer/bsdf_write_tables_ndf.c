@@ -76,6 +76,22 @@
  * the same shape, but there the broad lobe is the base's own reflection
  * at every angle. The options measured and their figures: docs/formats.md,
  * "Transmission".
+ *
+ * A coat's peak (ll_tables_derive_ndf_coat, for the reflected set seen
+ * from the rarer side of a transmissive stack that is not a lone
+ * interface). Seen from there, a coat over a medium without a base reflects
+ * its microfacets' lobe on the medium's broad light, and for a viewer
+ * towards grazing the coat's lobe, the mirror direction, lies at the pole
+ * of the normals, where the visible normals are few (their density in the
+ * square goes as u_theta^3 by the area element, and wi.m is smallest
+ * there): with the plain mixture the first column of the sample grid
+ * spanned several degrees of normals from the pole, and f interpolated
+ * across it came out well above the .bsdf's in the mirror plane. More
+ * weight on the peak's own lobe, taken from the wider one, gives the pole
+ * columns of its own, while the derived D keeps its share of the medium's
+ * light (the weights measured and their figures: docs/formats.md,
+ * "Transmission", its reflected sets). The fitted roughness and the peak's width are close
+ * here, so the pedestal rule above does not apply.
  */
 #include "writer/bsdf_write_tables.h"
 
@@ -89,6 +105,10 @@
 #define FLOOR_WEIGHT 0.02
 #define PEDESTAL_RATIO 1.25
 #define PEDESTAL_PEAK_WEIGHT 0.4
+#define COAT_PEAK_WEIGHT 0.7
+#define COAT_BECKMANN_WEIGHT 0.1
+
+enum { PLAIN, PEDESTAL, COAT };
 
 double ll_tables_luminance(const double rgb[3])
 {
@@ -159,12 +179,13 @@ static double peak_roughness(const double *d, const double *theta, double fallba
 }
 
 /* D of side, with the pedestal rule of ll_tables_derive_ndf_pedestal
- * where pedestal is set. */
-static ll_status derive(const ll_bsdf *b, int side, int pedestal, double *d, double *sigma,
+ * (rule PEDESTAL) or the weights of ll_tables_derive_ndf_coat (COAT). */
+static ll_status derive(const ll_bsdf *b, int side, int rule, double *d, double *sigma,
                         double *alpha)
 {
     enum { N = LL_TABLES_NDF_NODES };
     double theta[N], w[N], g[N], next[N], norm, peak, peak_alpha, wide, peak_weight;
+    double wide_weight = BECKMANN_WEIGHT;
     size_t j, it;
     ll_tables_ndf_quadrature(N, theta, w);
     /* g = cos(theta) f(k, k) in luminance, k at azimuth 0. */
@@ -208,13 +229,17 @@ static ll_status derive(const ll_bsdf *b, int side, int pedestal, double *d, dou
     peak_alpha = peak_roughness(d, theta, *alpha);
     wide = *alpha;
     peak_weight = PEAK_WEIGHT;
-    if (pedestal && *alpha > PEDESTAL_RATIO * peak_alpha) {
+    if (rule == PEDESTAL && *alpha > PEDESTAL_RATIO * peak_alpha) {
         wide = peak_alpha;
         peak_weight = PEDESTAL_PEAK_WEIGHT;
     }
+    if (rule == COAT) {
+        peak_weight = COAT_PEAK_WEIGHT;
+        wide_weight = COAT_BECKMANN_WEIGHT;
+    }
     for (j = 0; j < N; ++j)
-        d[j] = (1.0 - BECKMANN_WEIGHT - peak_weight - FLOOR_WEIGHT) * d[j] +
-               BECKMANN_WEIGHT * ll_tables_beckmann(theta[j], BECKMANN_WIDTH * wide) +
+        d[j] = (1.0 - wide_weight - peak_weight - FLOOR_WEIGHT) * d[j] +
+               wide_weight * ll_tables_beckmann(theta[j], BECKMANN_WIDTH * wide) +
                peak_weight * ll_tables_beckmann(theta[j], peak_alpha) + FLOOR_WEIGHT / LL_PI;
     ll_tables_projected_area(N, theta, w, d, sigma);
     return LL_OK;
@@ -222,17 +247,23 @@ static ll_status derive(const ll_bsdf *b, int side, int pedestal, double *d, dou
 
 ll_status ll_tables_derive_ndf(const ll_bsdf *b, double *d, double *sigma, double *alpha)
 {
-    return derive(b, 1, 0, d, sigma, alpha);
+    return derive(b, 1, PLAIN, d, sigma, alpha);
 }
 
 ll_status ll_tables_derive_ndf_side(const ll_bsdf *b, int side, double *d, double *sigma,
                                     double *alpha)
 {
-    return derive(b, side, 0, d, sigma, alpha);
+    return derive(b, side, PLAIN, d, sigma, alpha);
 }
 
 ll_status ll_tables_derive_ndf_pedestal(const ll_bsdf *b, int side, double *d, double *sigma,
                                         double *alpha)
 {
-    return derive(b, side, 1, d, sigma, alpha);
+    return derive(b, side, PEDESTAL, d, sigma, alpha);
+}
+
+ll_status ll_tables_derive_ndf_coat(const ll_bsdf *b, int side, double *d, double *sigma,
+                                    double *alpha)
+{
+    return derive(b, side, COAT, d, sigma, alpha);
 }
