@@ -393,6 +393,11 @@ static double below_quantile(const ll_bsdf *src, const ll_bsdf *tab, double firs
     return side_quantile(src, tab, -1.0, first, 10.0, count, q);
 }
 
+/* The coat over a medium of docs/formats.md ("Transmission") at a small
+ * resolution, which the checks below build tables of. */
+static const char COAT[] = "set nodes=40 orders=40\ndielectric eta=1.5 alpha=0.3\n"
+                           "medium albedo=0.8,0.6,0.4 g=0.5 tau=0.5\n";
+
 /* The coat over a medium of docs/formats.md ("Transmission"): not a lone
  * interface, so its reflected set from below is stored over
  * (F + q) / (1 + q), q = k D(0) / D(m) with k = 1, and carries
@@ -476,9 +481,7 @@ static void test_coat_reflection_from_below(void **state)
     o.n_theta_i = 24;
     o.vndf_size = 48;
     o.sample_size = 32;
-    ll_test_build_tables("set nodes=40 orders=40\ndielectric eta=1.5 alpha=0.3\n"
-                         "medium albedo=0.8,0.6,0.4 g=0.5 tau=0.5\n",
-                         "coat", &o, bsdf_path, tab_path, &src, &tab);
+    ll_test_build_tables(COAT, "coat", &o, bsdf_path, tab_path, &src, &tab);
     check_fresnel_floor(src, tab, tab_path);
     check_from_below_at_grazing(src, tab);
     ll_bsdf_release(tab);
@@ -503,9 +506,7 @@ static void test_coat_from_above_at_grazing(void **state)
     o.n_theta_i = 32;
     o.vndf_size = 64;
     o.sample_size = 64;
-    ll_test_build_tables("set nodes=40 orders=40\ndielectric eta=1.5 alpha=0.3\n"
-                         "medium albedo=0.8,0.6,0.4 g=0.5 tau=0.5\n",
-                         "coat", &o, bsdf_path, tab_path, &src, &tab);
+    ll_test_build_tables(COAT, "coat", &o, bsdf_path, tab_path, &src, &tab);
     p99 = side_quantile(src, tab, 1.0, 60.0, 5.0, 5, 0.99);
     /* The mirror plane, the light 1..8 degrees nearer the normal than
      * the mirror direction: normals 0.5..4 degrees from the pole. */
