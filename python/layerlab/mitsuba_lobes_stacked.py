@@ -92,7 +92,8 @@ class StackedLobes:
         # stored over the Fresnel reflectance of the half vector.
         self.fresnel_eta = [_fresnel_eta(fields, p, transmit, name)
                             for p, _, transmit in sets if not transmit]
-        # Their fresnel_floor k (top, bottom): values over (F + k) / (1 + k).
+        # Their fresnel_floor k (top, bottom): values over (F + q) / (1 + q),
+        # q = k D(0) / D(m) (_fresnel_floor_at).
         self.fresnel_floor = [_fresnel_floor(fields, p, transmit, e, name)
                               for (p, _, transmit), e in
                               zip([x for x in sets if not x[2]], self.fresnel_eta)]

@@ -261,8 +261,9 @@ def _fresnel_eta(fields, prefix, transmit, name):
 
 def _fresnel_floor(fields, prefix, transmit, fresnel_eta, name):
     """A reflected set's "fresnel_floor" k (only with its fresnel_eta: its
-    values are then stored over (F + k) / (1 + k), the C reader's
-    tables_lobes.c), or 0 where the set has none."""
+    values are then stored over (F + q) / (1 + q), q = k D(0) / D(m),
+    _fresnel_floor_at, as the C reader's tables_lobes.c reads them), or 0
+    where the set has none."""
     key = prefix + "fresnel_floor"
     if transmit or key not in fields:
         return 0.0
