@@ -345,7 +345,16 @@ static void extend_slice(const writer *w, float *rgb)
  * fitted per channel to the side's reflected albedo at the slice's
  * elevation as the opaque writer's are: without them the cells that cross
  * the horizon pull a grazing viewer's lobe down (rough glass seen from
- * above at 85 degrees, 32 x 64^2: 0.79% low). The luminance is fitted as
+ * above at 85 degrees, 32 x 64^2: 0.79% low). A transmitted set of the
+ * z-flipped direction's warp is fitted alike to the side's transmitted
+ * albedo: its square maps onto directions as a reflected set's does, with
+ * z negated, so its nodes beyond the horizon (wo above the surface) and
+ * the area element are the reflection's, and light that leaves a medium
+ * into the denser side without an interface there (a coat over a medium
+ * without a base) is bright up to the grazing exit, where the cells that
+ * cross the horizon held its transmission low (docs/benchmarks.md, "Table
+ * files: the writer's choices, measured"). A refracted set's horizon lies
+ * elsewhere in its square and is not fitted. The luminance is fitted as
  * a plane of its own to the side's luminance albedo, by the opaque
  * writer's code (ll_tables_horizon_fit_rgb says why). The RGB of a set
  * stored over F is weighed with F there; its luminance, f cos itself, is
@@ -360,7 +369,15 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     double target[3];
     ll_tables_horizon h;
     ll_status s;
-    if ((s = ll_tables_horizon_target(w->b, th, l->bottom, target)) != LL_OK)
+    if (l->transmit) {
+        double mu = cos(th), reflected[3];
+        if (l->bottom)
+            mu = -(mu > 1e-4 ? mu : 1e-4);
+        s = ll_bsdf_albedo(w->b, mu, NULL, reflected, target);
+    } else {
+        s = ll_tables_horizon_target(w->b, th, l->bottom, target);
+    }
+    if (s != LL_OK)
         return s;
     if (!(target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0))
         return LL_OK;
@@ -374,6 +391,18 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     h.over_f = 0u; /* set by the fit of RGB and luminance */
     return ll_tables_horizon_fit_rgb(&h, w->ns, w->next, target, l->rgb + t * 3 * plane,
                                      l->lum + t * plane);
+}
+
+/* Whether transmitted set l is fitted at the horizon (fit_slice): one of
+ * the z-flipped direction's warp across a net interface that is not a
+ * lone one (a coat over a medium without a base). A lone interface's or a
+ * pane's transmitted light leaves through an interface, whose
+ * transmittance falls to 0 at the grazing exit, so their horizon cells
+ * hold little; fitted, the compensated glass's albedo figure and the
+ * pane's sampled T came out further from their .bsdf's. */
+static int fits_transmitted(const writer *w, const lobe *l)
+{
+    return l->transmit && l->refract_eta == 0.0 && fabs(w->b->eta - 1.0) > 1e-6 && !w->lone;
 }
 
 /* The values and luminance of slice t at the sample grid's nodes. */
@@ -441,7 +470,7 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
         for (x = 0; x < plane; ++x)
             w->next[x] = w->valid[x] == 2;
     }
-    if (!l->transmit) {
+    if (!l->transmit || fits_transmitted(w, l)) {
         ll_status s = fit_slice(w, l, t, th);
         if (s != LL_OK)
             return s;
