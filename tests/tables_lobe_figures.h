@@ -188,7 +188,8 @@ static inline void tl_print(const char *label, const tl_figures *fig)
                        fig->ratio[side][lobe][a][1], fig->ratio[side][lobe][a][2]);
             printf("\n");
         }
-    printf("%s: worst R %.3f%%, worst T %.3f%%; f over %zu values: median %.4f%% 95th "
+    printf("%s: worst R %.3f%%, worst T %.3f%% (each file's sampler); f over %zu values: "
+           "median %.4f%% 95th "
            "%.3f%% 99th %.3f%%\n",
            label, 100 * fig->worst_r, 100 * fig->worst_t, fig->n_values, 100 * fig->p50,
            100 * fig->p95, 100 * fig->p99);
