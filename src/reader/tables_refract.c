@@ -45,7 +45,7 @@
 
 /* The largest rate at which a z-flipped set turns wo with wi (turn_rate),
  * chosen by measuring frosted glass's transmission from below
- * (docs/formats.md, "Transmission"). */
+ * (docs/benchmarks.md, "Transmitted sets' warps"). */
 #define MAX_TURN_RATE 1.5
 
 static void normal_coords(const double m[3], double phi_i, double um[2], double *theta_m)
@@ -109,7 +109,7 @@ typedef struct elevations {
  * 20 degrees, 2.4 times at 35 at eta 1.5) and without bound at the
  * critical angle: turned as wi, or at that full rate, the lobe's f
  * between elevations was further off than turned at a rate held to
- * MAX_TURN_RATE (docs/formats.md). Beyond the critical angle the lobe is
+ * MAX_TURN_RATE (docs/benchmarks.md, "Transmitted sets' warps"). Beyond the critical angle the lobe is
  * the light the compensation returns, spread over the azimuths, which
  * wi's own turn follows (rate 1). A set of the refraction warp turns wo
  * as wi: that keeps wi.m and wo.m. */

@@ -16,8 +16,8 @@
  * instead (bsdf_write_tables_lobes.c), as a refracted set's nodes at its
  * edge do, and the table follows the model there
  * (tests/test_tables_transmit_edge.c compares both with the closed form;
- * docs/formats.md, "Transmission", has the figures under the edge of
- * total internal reflection).
+ * docs/benchmarks.md, "The edge of total internal reflection", has the
+ * figures).
  *
  * A lone interface only: behind a coat (over a medium without a base) the
  * light the medium sends back does not follow F, f / F is not smooth
@@ -50,7 +50,8 @@ int ll_tables_lone_interface(const ll_bsdf *b)
 /* The width is the .bsdf's widest node interval in mu: a spline cannot
  * follow an edge narrower than its intervals. Narrower widths left more
  * of the .bsdf's error in the table, wider ones continued f / F farther
- * from its source (docs/formats.md has the widths measured). */
+ * from its source (docs/benchmarks.md, "The edge of total internal
+ * reflection", has the widths measured). */
 static double widest_interval(const ll_bsdf *b)
 {
     double widest = 0.0;

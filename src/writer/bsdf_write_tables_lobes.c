@@ -171,8 +171,8 @@ static void release(writer *w)
  * coat's own sharp reflection beyond the critical angle a column or two
  * and f came out far too low there. The D from above is the coat's lobe
  * and the medium's broad light keeps enough cells under it; mixtures of
- * the two did worse (docs/formats.md, "Transmission", has the figures
- * under its reflected sets). */
+ * the two did worse (docs/benchmarks.md, "Reflected sets' D", has the
+ * figures). */
 #define WIDER 1.1
 
 /* D from one side's retro-reflection. For a stack that reflects alike
@@ -190,8 +190,8 @@ static void release(writer *w)
  * and that set (own: the set's own side) takes ll_tables_derive_ndf_coat's
  * heavier peak. The denser side's set, which takes the D from the rarer
  * side (reflected_ndf), keeps the plain mixture: the heavier peak there
- * did better at a large grid but worse at small ones (docs/formats.md,
- * "Transmission": its reflected sets). */
+ * did better at a large grid but worse at small ones (docs/benchmarks.md,
+ * "Reflected sets' D"). */
 static ll_status side_ndf(const writer *w, int side, int own, double *d, double *sigma,
                           double *alpha)
 {
@@ -503,8 +503,8 @@ static ll_status value_slice(const writer *w, lobe *l, size_t t)
  * the edge, where C outweighs S most: q = k D(0) / D(m), D the set's own
  * (the D from above, reflected_ndf, which is the coat's lobe), m the half
  * vector (tables_refract.h). k = 1 did best over the coats measured, with
- * constant floors and other powers of D's ratio (docs/formats.md,
- * "Transmission", has the sweep under its reflected sets): a smaller k
+ * constant floors and other powers of D's ratio (docs/benchmarks.md,
+ * "The Fresnel floor", has the sweep): a smaller k
  * did better on some coats and far worse on a rough one over a thick
  * medium. A lone interface
  * gains nothing: there C is at most the compensation's share, a few
@@ -547,7 +547,8 @@ static void albedos(writer *w)
  * one uniform in that exit angle (0.15), which packs them towards the
  * critical angle from below, and one uniform over the 30 degrees beyond it
  * (0.1). The shares were chosen by measuring rough glass (eta 1.5, alpha
- * 0.3; docs/formats.md): larger ones left the reflection from below,
+ * 0.3; docs/benchmarks.md, "Incident elevations of transmissive
+ * files"): larger ones left the reflection from below,
  * whose sampling needs the opaque grid's elevations, further off. */
 #define EXIT_SHARE 0.15
 #define BEYOND_SHARE 0.1
@@ -598,7 +599,8 @@ static void elevations(writer *w)
  * lies there entirely (its microfacets refract through that very half
  * vector: rough glass, at most 0.03% unreached); light scattered by a
  * medium under a coat leaves in directions it cannot give (the coat over
- * a medium without a base of docs/formats.md: 4% to 96% unreached), which
+ * a medium without a base of docs/formats.md, "Transmission": 4% to 96%
+ * unreached), which
  * the warp of the z-flipped direction, defined for every pair, covers. */
 #define REACHED 0.995
 #define REACH_ELEVATIONS 5

@@ -74,8 +74,8 @@
  * f / D explodes where the pedestal's light falls beyond a narrow D.
  * Opaque stacks keep the mixture above: a coat over a bright base has
  * the same shape, but there the broad lobe is the base's own reflection
- * at every angle. The options measured and their figures: docs/formats.md,
- * "Transmission".
+ * at every angle. The options measured and their figures:
+ * docs/benchmarks.md, "Reflected sets' D".
  *
  * A coat's peak (ll_tables_derive_ndf_coat, for the reflected set seen
  * from the rarer side of a transmissive stack that is not a lone
@@ -89,8 +89,8 @@
  * across it came out well above the .bsdf's in the mirror plane. More
  * weight on the peak's own lobe, taken from the wider one, gives the pole
  * columns of its own, while the derived D keeps its share of the medium's
- * light (the weights measured and their figures: docs/formats.md,
- * "Transmission", its reflected sets). The fitted roughness and the peak's width are close
+ * light (the weights measured and their figures: docs/benchmarks.md,
+ * "Reflected sets' D"). The fitted roughness and the peak's width are close
  * here, so the pedestal rule above does not apply.
  */
 #include "writer/bsdf_write_tables.h"

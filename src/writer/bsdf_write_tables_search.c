@@ -120,7 +120,8 @@ static int grow_ladders(search *s, const ll_tables_figures *f)
         /* A transmissive file whose f is met misses its albedo between
          * incident elevations (the transmission from below, whose lobe
          * sweeps to the horizon near the critical angle), which a finer
-         * sample grid hardly moves (docs/formats.md): so the elevations
+         * sample grid hardly moves (docs/benchmarks.md, "Incident elevations
+         * of transmissive files"): so the elevations
          * grow. */
         if (s->sets > 1.0 && !grow_sample)
             grow_theta = 1;

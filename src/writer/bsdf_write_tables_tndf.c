@@ -71,8 +71,9 @@
  * elevations, a transmitted lobe that spreads out of the plane of
  * incidence far wider than its shape at normal incidence: normals up to
  * 45 degrees and beyond. A wider and heavier lobe gives them grid cells
- * (chosen by measuring the frosted pane of docs/formats.md: the 99th
- * percentile of its transmitted f from 10% to 2.2%). */
+ * (chosen by measuring the frosted pane, docs/benchmarks.md, "D of the
+ * transmitted sets": the 99th percentile of its transmitted f from 10%
+ * to 2.2%). */
 #define FLIPPED_WIDE_WEIGHT 0.45
 #define FLIPPED_WIDE_WIDTH 5.0
 /* The heavier floor of a flipped warp's D, for two kinds of set whose
@@ -83,8 +84,8 @@
  * share that more elevations did not bring back and a finer sample grid
  * did. Other sets keep FLOOR_WEIGHT: a heavier floor for every flipped set
  * moved the compensated glass's and the coat's figures the wrong way. The
- * floors measured and their figures: docs/formats.md, "Transmission",
- * "D of a transmitted set". */
+ * floors measured and their figures: docs/benchmarks.md, "D of the
+ * transmitted sets". */
 #define HEAVY_FLOOR_WEIGHT 0.05
 
 /* The incident elevations (0 to SWEEP_LAST degrees, evenly) and the
