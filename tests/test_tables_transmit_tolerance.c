@@ -7,7 +7,7 @@
  * overall, the warp of the z-flipped direction), each built to a .bsdf at
  * its default resolution and written as tables with every size chosen by
  * the default tolerance, and a coat over a scattering medium without a
- * base at a given grid (the search would take a larger one).
+ * base at the size cap's grid, where the search stops for it.
  *
  * Each table is measured against its .bsdf twice:
  *  - by the search's own measure (ll_tables_measure): R and T by quadrature

@@ -109,8 +109,9 @@ typedef struct elevations {
  * 20 degrees, 2.4 times at 35 at eta 1.5) and without bound at the
  * critical angle: turned as wi, or at that full rate, the lobe's f
  * between elevations was further off than turned at a rate held to
- * MAX_TURN_RATE (docs/benchmarks.md, "Transmitted sets' warps"). Beyond the critical angle the lobe is
- * the light the compensation returns, spread over the azimuths, which
+ * MAX_TURN_RATE (docs/benchmarks.md, "Transmitted sets' warps"). Beyond
+ * the critical angle the lobe is the light the compensation returns,
+ * spread over the azimuths, which
  * wi's own turn follows (rate 1). A set of the refraction warp turns wo
  * as wi: that keeps wi.m and wo.m. */
 static double turn_rate(const ll_measured *t, double theta)
