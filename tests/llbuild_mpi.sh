@@ -102,9 +102,11 @@ grep -q '^llbuild: rank 0 of 2: .*estimated peak of this rank' "$tmp/err" && ok 
 # --- a rank killed (SIGKILL, no chance to clean up) and an interrupt to
 # mpirun: no file, no temporary. The kill and the interrupt follow rank 0's
 # progress line naming a stage (tests/lib/stage_wait.sh), not a sleep: the
-# first layer's ("conductor interface", 0.6 s into a 4.4 s build on 3 ranks
-# of an idle 2-core machine; mpirun takes up to a second to pass an
-# interrupt on), and for the textured build its first line ("choosing the
+# first layer's ("conductor interface", the build's first stage; mpirun
+# takes up to a second to pass an interrupt on, so the build runs several
+# seconds on 3 ranks of a 2-core machine: at 300 nodes and 600 orders one
+# can finish in about a second, and the interrupt then lands after the
+# file is committed), and for the textured build its first line ("choosing the
 # resolution": its shared words take 5 s before the first basis is written,
 # and the 8 bases then follow within 1.3 s, too close to the end for a
 # kill to land before the file is committed).
@@ -113,7 +115,7 @@ cat >"$tmp/long.layers" <<'LAYERS'
 dielectric  eta=1.5 alpha=0.1
 medium      albedo=0.9 g=0.8 tau=4
 conductor   eta=Au alpha=0.1
-set nodes=300 orders=600
+set nodes=500 orders=1500
 LAYERS
 # start_until LAYERS PATTERN: start a build of LAYERS on 3 ranks; return
 # once rank 0's progress matches PATTERN (1: it never did).
