@@ -1,9 +1,12 @@
 /*
  * llbuild's time model: the seconds a build takes, from the counts of work
  * that ll_material_estimate reports, at rates measured stage by stage on
- * one machine (x86-64, 2 cores, OpenBLAS; docs/material-language.md,
- * "Estimates", has the measurements and the model's error on the
- * examples). The library reports counts only: rates belong to a machine.
+ * one machine (x86-64, 2 cores, OpenBLAS) and scaled to the machine of
+ * docs/benchmarks.md (time_model.c; docs/material-language.md,
+ * "Estimates (`--dry-run`)", says how; docs/benchmarks.md, "Choosing the
+ * resolution: cold, remembered and dry runs", has the model's error on
+ * the examples). The library reports counts only: rates belong to a
+ * machine.
  */
 #ifndef LLBUILD_TIME_MODEL_H
 #define LLBUILD_TIME_MODEL_H
