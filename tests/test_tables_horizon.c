@@ -156,7 +156,7 @@ static void set_ratios(const ll_bsdf *src, const ll_bsdf *tab, const ll_tensor_f
             planes[c * plane + q] = ll_tensor_value(rgb, (t * 3 + c) * plane + q);
         planes[3 * plane + q] = ll_tensor_value(lum, t * plane + q);
     }
-    assert_int_equal(ll_tables_horizon_target(src, th, bottom, target), LL_OK);
+    assert_int_equal(ll_tables_horizon_target(src, th, bottom, 0, target), LL_OK);
     want[0] = target[0];
     want[1] = target[1];
     want[2] = target[2];

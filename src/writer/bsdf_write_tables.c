@@ -305,7 +305,7 @@ static ll_status value_slice(writer *w, size_t t, unsigned char *below)
     h.param[1] = th;
     h.fresnel_eta = 0.0;
     h.over_f = 0u;
-    if ((s = ll_tables_horizon_target(w->b, th, 0, target)) != LL_OK)
+    if ((s = ll_tables_horizon_target(w->b, th, 0, 0, target)) != LL_OK)
         return s;
     /* The values per channel, and the luminance (what sampling follows)
      * as a plane of its own in the same fit, to the source's luminance

@@ -269,12 +269,12 @@ LL_INTERNAL ll_status ll_tables_horizon_fit_rgb(const ll_tables_horizon *h, size
 LL_INTERNAL double ll_tables_horizon_albedo(const ll_tables_horizon *h, size_t ns,
                                             const unsigned char *below, const float *plane,
                                             int over_f);
-/* The reflected albedo per channel of the untextured b at incident
- * elevation theta, seen from below if bottom (ll_bsdf_albedo), into out;
- * 0 if b is a table file, which has none (its slices are then not
- * fitted). */
+/* The reflected (or, if transmitted, the transmitted) albedo per channel
+ * of the untextured b at incident elevation theta, seen from below if
+ * bottom (ll_bsdf_albedo), into out; 0 if b is a table file, which has
+ * none (its slices are then not fitted). */
 LL_INTERNAL ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom,
-                                               double out[3]);
+                                               int transmitted, double out[3]);
 
 /* Basis k of the textured b as an untextured handle of its own (its
  * coefficients and per-row tables copied; release it with

@@ -237,9 +237,10 @@ double ll_tables_horizon_albedo(const ll_tables_horizon *h, size_t ns, const uns
     return a0;
 }
 
-ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom, double out[3])
+ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom, int transmitted,
+                                   double out[3])
 {
-    double mu = cos(theta);
+    double mu = cos(theta), reflected[3];
     out[0] = out[1] = out[2] = 0.0;
     if (b->measured)
         return LL_OK;
@@ -247,5 +248,6 @@ ll_status ll_tables_horizon_target(const ll_bsdf *b, double theta, int bottom, d
      * under it. */
     if (bottom)
         mu = -(mu > 1e-4 ? mu : 1e-4);
-    return ll_bsdf_albedo(b, mu, NULL, out, NULL);
+    return transmitted ? ll_bsdf_albedo(b, mu, NULL, reflected, out)
+                       : ll_bsdf_albedo(b, mu, NULL, out, NULL);
 }

@@ -369,20 +369,7 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
     double target[3];
     ll_tables_horizon h;
     ll_status s;
-    if (l->transmit) {
-        /* The side's transmitted albedo, as ll_tables_horizon_target
-         * takes the reflected one (a table source has none: left as it
-         * is). */
-        double mu = cos(th), reflected[3];
-        if (w->b->measured)
-            return LL_OK;
-        if (l->bottom)
-            mu = -(mu > 1e-4 ? mu : 1e-4);
-        s = ll_bsdf_albedo(w->b, mu, NULL, reflected, target);
-    } else {
-        s = ll_tables_horizon_target(w->b, th, l->bottom, target);
-    }
-    if (s != LL_OK)
+    if ((s = ll_tables_horizon_target(w->b, th, l->bottom, l->transmit, target)) != LL_OK)
         return s;
     if (!(target[0] > 0.0 || target[1] > 0.0 || target[2] > 0.0))
         return LL_OK;

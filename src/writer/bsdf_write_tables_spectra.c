@@ -45,7 +45,7 @@ static ll_status fit_slice(const ll_tables_spectra *sp, const ll_bsdf *b, size_t
     ll_status s;
     /* The values are the luminance of the wavelength's file (its one
      * channel), and so is the target. */
-    if ((s = ll_tables_horizon_target(b, th, 0, rgb)) != LL_OK)
+    if ((s = ll_tables_horizon_target(b, th, 0, 0, rgb)) != LL_OK)
         return s;
     target = ll_tables_luminance(rgb);
     if (!(target > 0.0))
