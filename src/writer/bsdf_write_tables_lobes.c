@@ -96,6 +96,13 @@ void ll_tables_lobe_f(const ll_bsdf *b, int bottom, const double wi[3], const do
             f[k] = 0.0;
 }
 
+/* Whether b's stack has a net interface (eta not 1): its transmitted
+ * light refracts, and one side is the denser. */
+static int net_interface(const ll_bsdf *b)
+{
+    return fabs(b->eta - 1.0) > 1e-6;
+}
+
 static ll_status allocate(writer *w)
 {
     size_t nd = LL_TABLES_NDF_NODES, v, s;
@@ -196,7 +203,7 @@ static ll_status side_ndf(const writer *w, int side, int own, double *d, double 
                           double *alpha)
 {
     double eta = w->b->eta;
-    int rarer = fabs(eta - 1.0) > 1e-6 && side == (eta > 1.0 ? 1 : -1);
+    int rarer = net_interface(w->b) && side == (eta > 1.0 ? 1 : -1);
     if (w->lone)
         return ll_tables_derive_ndf_pedestal(w->b, side, d, sigma, alpha);
     return rarer && own ? ll_tables_derive_ndf_coat(w->b, side, d, sigma, alpha)
@@ -224,7 +231,7 @@ static ll_status reflected_ndf(const writer *w, lobe *l, double *d, double *sigm
 static ll_status ndf_tables(const writer *w, lobe *l)
 {
     double d[LL_TABLES_NDF_NODES], sigma[LL_TABLES_NDF_NODES], eta = w->b->eta;
-    int net = fabs(eta - 1.0) > 1e-6;
+    int net = net_interface(w->b);
     int heavy_floor = !net || (w->lone && l->bottom == (eta > 1.0));
     int sweep = net && w->lone && l->bottom != (eta > 1.0);
     ll_status s = l->transmit ? ll_tables_derive_transmit_ndf(w->b, l->bottom, l->refract_eta,
@@ -394,7 +401,7 @@ static ll_status fit_slice(const writer *w, lobe *l, size_t t, double th)
  * pane's sampled T came out further from their .bsdf's. */
 static int fits_transmitted(const writer *w, const lobe *l)
 {
-    return l->transmit && l->refract_eta == 0.0 && fabs(w->b->eta - 1.0) > 1e-6 && !w->lone;
+    return l->transmit && l->refract_eta == 0.0 && net_interface(w->b) && !w->lone;
 }
 
 /* The values and luminance of slice t at the sample grid's nodes. */
@@ -564,7 +571,7 @@ static void elevations(writer *w)
     double eta = w->b->eta, dense = eta > 1.0 ? eta : 1.0 / eta;
     size_t t;
     int it;
-    if (fabs(eta - 1.0) <= 1e-6)
+    if (!net_interface(w->b))
         dense = 1.0;
     for (t = 0; t < w->n_ti; ++t) {
         double v = (double)t / (double)(w->n_ti - 1), lo = 0.0, hi = LL_PI / 2;
@@ -715,7 +722,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
             snprintf(l->names[j], sizeof l->names[j], "%s%s", prefixes[k], field_names[j]);
         l->bottom = k == 1 || k == 3;
         l->transmit = k >= 2;
-        if (l->transmit && fabs(b->eta - 1.0) > 1e-6 &&
+        if (l->transmit && net_interface(b) &&
             refraction_reaches(b, l->bottom, l->bottom ? 1.0 / b->eta : b->eta))
             l->refract_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->warp_eta[0] = (float)l->refract_eta;
@@ -723,7 +730,7 @@ ll_status ll_tables_write_lobes(const ll_bsdf *b, const char *path, const ll_tab
          * internal reflection, where F, and with it f, rises to 1 with an
          * infinite slope: stored over F(wi.h) the values are smooth
          * across it, and the reader multiplies F back exactly. */
-        if (!l->transmit && fabs(b->eta - 1.0) > 1e-6 && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
+        if (!l->transmit && net_interface(b) && (l->bottom ? b->eta > 1.0 : b->eta < 1.0))
             l->fresnel_eta = l->bottom ? 1.0 / b->eta : b->eta;
         l->fresnel_f[0] = (float)l->fresnel_eta;
         l->edge_width = l->transmit ? 0.0 : ll_tables_edge_width(b, w.lone, l->bottom);
