@@ -220,6 +220,12 @@ typedef struct ll_tables_source {
     double albedo[2][LL_TABLES_ANGLES][6]; /* [bottom][viewer elevation][R, T rgb] */
 } ll_tables_source;
 LL_INTERNAL ll_status ll_tables_reference(const ll_bsdf *src, ll_tables_source *ref);
+/* The same albedos of b (src, or a table of it) by the same quadrature,
+ * finest where src's lobes peak: ll_tables_reference is b = src. The
+ * viewer elevations, in degrees: ll_tables_angles_deg. */
+LL_INTERNAL ll_status ll_tables_albedos(const ll_bsdf *b, const ll_bsdf *src,
+                                        ll_tables_source *out);
+LL_INTERNAL extern const double ll_tables_angles_deg[LL_TABLES_ANGLES];
 LL_INTERNAL ll_status ll_tables_measure(const ll_bsdf *src, const ll_tables_source *ref,
                                         const ll_bsdf *table, ll_tables_figures *out);
 

@@ -44,7 +44,7 @@
 #define ANGLES LL_TABLES_ANGLES
 #define LIMIT_DEG 80.0
 
-static const double angles_deg[ANGLES] = { 0, 10, 20, 30, 40, 50, 60, 70, 80, 85 };
+const double ll_tables_angles_deg[LL_TABLES_ANGLES] = { 0, 10, 20, 30, 40, 50, 60, 70, 80, 85 };
 
 static double uniform(uint64_t *s)
 {
@@ -85,17 +85,22 @@ static ll_status albedo(const ll_bsdf *b, const ll_bsdf *src, double theta, int 
     return ll_tables_albedo(b, wo, peak, ll_tables_transmits(src), out, out + 3);
 }
 
-ll_status ll_tables_reference(const ll_bsdf *src, ll_tables_source *ref)
+ll_status ll_tables_albedos(const ll_bsdf *b, const ll_bsdf *src, ll_tables_source *out)
 {
     int k, bottom, sides = ll_tables_transmits(src) ? 2 : 1;
     ll_status s;
-    memset(ref, 0, sizeof *ref);
+    memset(out, 0, sizeof *out);
     for (bottom = 0; bottom < sides; ++bottom)
         for (k = 0; k < ANGLES; ++k)
-            if ((s = albedo(src, src, angles_deg[k] * LL_PI / 180.0, bottom,
-                            ref->albedo[bottom][k])) != LL_OK)
+            if ((s = albedo(b, src, ll_tables_angles_deg[k] * LL_PI / 180.0, bottom,
+                            out->albedo[bottom][k])) != LL_OK)
                 return s;
     return LL_OK;
+}
+
+ll_status ll_tables_reference(const ll_bsdf *src, ll_tables_source *ref)
+{
+    return ll_tables_albedos(src, src, ref);
 }
 
 static int compare(const void *a, const void *b)
@@ -210,14 +215,14 @@ ll_status ll_tables_measure(const ll_bsdf *src, const ll_tables_source *ref,
                             const ll_bsdf *table, ll_tables_figures *out)
 {
     int k, c, bottom, sides = ll_tables_transmits(src) ? 2 : 1;
+    ll_tables_source got;
     ll_status s;
     out->albedo = 0.0;
+    if ((s = ll_tables_albedos(table, src, &got)) != LL_OK)
+        return s;
     for (bottom = 0; bottom < sides; ++bottom)
         for (k = 0; k < ANGLES; ++k) {
-            const double *as = ref->albedo[bottom][k];
-            double at[6];
-            if ((s = albedo(table, src, angles_deg[k] * LL_PI / 180.0, bottom, at)) != LL_OK)
-                return s;
+            const double *as = ref->albedo[bottom][k], *at = got.albedo[bottom][k];
             for (c = 0; c < 6; ++c) {
                 double all = as[c % 3] + as[c % 3 + 3];
                 double r = as[c] > 0.0 && as[c] >= FLOOR * all ? fabs(at[c] / as[c] - 1.0) : 0.0;
